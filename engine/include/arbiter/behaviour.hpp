@@ -1,0 +1,192 @@
+#pragma once
+// The C++ API for behaviour and interface classes: typed port handles and the narrow context each
+// callback receives. Handles are indices resolved once in init(); the step reads and writes
+// through them without looking up a name.
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <typeinfo>
+#include <variant>
+#include <vector>
+
+#include "arbiter/diagnostics.hpp"
+#include "arbiter/document.hpp"
+#include "arbiter/value.hpp"
+
+namespace arbiter {
+
+inline constexpr std::uint32_t kUnbound = std::numeric_limits<std::uint32_t>::max();
+
+/// Reads the actuator a sensor names. Unbound (an optional port with nothing to bind) reads the
+/// type's zero value.
+template <typename T>
+struct Input {
+  std::uint32_t actuator = kUnbound;
+  bool bound() const { return actuator != kUnbound; }
+};
+
+/// Writes one behaviour's contribution to an actuator of its own layer.
+template <typename T>
+struct Output {
+  std::uint32_t slot = kUnbound;
+  bool bound() const { return slot != kUnbound; }
+};
+
+/// An output whose type is known only at load (e.g. the scripted behaviour's `writes`).
+struct AnyOutput {
+  std::uint32_t slot = kUnbound;
+  const ValueType* type = nullptr;
+};
+
+/// A value of a type known only at load, owned; built by InitContext::make_value.
+class ValueBox {
+ public:
+  ValueBox() = default;
+  explicit ValueBox(const ValueType& type);
+  ValueBox(ValueBox&& other) noexcept;
+  ValueBox& operator=(ValueBox&& other) noexcept;
+  ValueBox(const ValueBox&) = delete;
+  ValueBox& operator=(const ValueBox&) = delete;
+  ~ValueBox();
+
+  const ValueType* type() const { return type_; }
+  void* data() { return storage_.get(); }
+  const void* data() const { return storage_.get(); }
+
+ private:
+  const ValueType* type_ = nullptr;
+  std::unique_ptr<std::max_align_t[]> storage_;
+};
+
+namespace detail {
+
+/// The manager's flat buffers, as the contexts see them. Owned by the Program.
+struct StepData {
+  std::byte* values = nullptr;
+  const std::uint32_t* actuator_offset = nullptr;
+  const bool* actuator_written = nullptr;
+  const std::uint32_t* slot_offset = nullptr;
+  const ValueType* const* slot_type = nullptr;
+  bool* slot_written = nullptr;
+  std::uint64_t step = 0;
+  double period = 0.0;  ///< seconds per step, 1 / rate_hz
+  /// Events reported this step (see StepContext::report), in a buffer sized at load.
+  struct Event {
+    std::uint32_t source;  ///< a behaviour index, or the number of behaviours + a layer index
+    const char* text;
+  };
+  Event* events = nullptr;
+  std::size_t event_capacity = 0;
+  std::size_t event_count = 0;
+};
+
+template <typename T>
+const T& zero_value() {
+  static const T kZero{};
+  return kZero;
+}
+
+}  // namespace detail
+
+/// What every step callback may do: read sensors and know the step.
+class StepContext {
+ public:
+  StepContext(detail::StepData& data, std::uint32_t self) : data_(&data), self_(self) {}
+
+  template <typename T>
+  const T& read(Input<T> input) const {
+    if (!input.bound()) return detail::zero_value<T>();
+    return *reinterpret_cast<const T*>(data_->values + data_->actuator_offset[input.actuator]);
+  }
+  /// Whether the value read was written in the step it comes from (see DESIGN 3.3 for which).
+  template <typename T>
+  bool written(Input<T> input) const {
+    return input.bound() && data_->actuator_written[input.actuator];
+  }
+  /// The step being executed, counting from 1.
+  std::uint64_t step() const { return data_->step; }
+  /// The nominal time between steps, 1 / rate_hz of the config, in seconds.
+  double period() const { return data_->period; }
+  /// Tells observers (the terminal view of `arbiter run`, ...) that something happened this
+  /// step, e.g. "ball kicked". `text` must outlive the step (a string literal). Allocation-free;
+  /// beyond a per-step capacity further events are dropped.
+  void report(const char* text) const {
+    if (data_->event_count < data_->event_capacity) {
+      data_->events[data_->event_count] = {self_, text};
+    }
+    ++data_->event_count;
+  }
+
+ protected:
+  detail::StepData* data_;
+  std::uint32_t self_;
+};
+
+/// execute(): reads sensors and writes actuators; a second write to one output replaces the first.
+class ExecuteContext : public StepContext {
+ public:
+  ExecuteContext(detail::StepData& data, std::uint32_t self, double activation, bool just_activated)
+      : StepContext(data, self), activation_(activation), just_activated_(just_activated) {}
+
+  template <typename T>
+  void write(Output<T> output, const T& value) {
+    if (!output.bound()) return;
+    *reinterpret_cast<T*>(data_->values + data_->slot_offset[output.slot]) = value;
+    data_->slot_written[output.slot] = true;
+  }
+  void write(AnyOutput output, const ValueBox& value) {
+    if (output.slot == kUnbound) return;
+    output.type->assign(data_->values + data_->slot_offset[output.slot], value.data());
+    data_->slot_written[output.slot] = true;
+  }
+  /// This behaviour's refined activation level this step, in (0, 1].
+  double activation() const { return activation_; }
+  bool just_activated() const { return just_activated_; }
+
+ private:
+  double activation_;
+  bool just_activated_;
+};
+
+/// inhibited(): the behaviour is inactive this step; it may read sensors but not write.
+class InhibitedContext : public StepContext {
+ public:
+  InhibitedContext(detail::StepData& data, std::uint32_t self, bool just_deactivated)
+      : StepContext(data, self), just_deactivated_(just_deactivated) {}
+  bool just_deactivated() const { return just_deactivated_; }
+
+ private:
+  bool just_deactivated_;
+};
+
+class InitContext;
+
+/// A behaviour of the BCF. Callbacks run in this order each step (DESIGN 3.2): update(), then
+/// activation() for every behaviour of the layer, then execute() or inhibited().
+class Behaviour {
+ public:
+  virtual ~Behaviour() = default;
+  /// Reads params and resolves ports; problems go to ctx.error() and fail the load.
+  virtual void init(InitContext& /*ctx*/) {}
+  virtual void update(const StepContext& /*ctx*/) {}
+  /// The requested activation level; clamped to [0, 1], NaN counts as 0.
+  virtual double activation(const StepContext& ctx) = 0;
+  virtual void execute(ExecuteContext& /*ctx*/) {}
+  virtual void inhibited(const InhibitedContext& /*ctx*/) {}
+};
+
+/// The class behind an interface layer: moves data between the engine and the outside world.
+class Interface {
+ public:
+  virtual ~Interface() = default;
+  virtual void init(InitContext& /*ctx*/) {}
+  /// Input pass: writes this layer's actuators (its output ports).
+  virtual void input(ExecuteContext& /*ctx*/) {}
+  /// Output pass: reads this layer's sensors (its input ports).
+  virtual void output(const StepContext& /*ctx*/) {}
+};
+
+}  // namespace arbiter

@@ -1,0 +1,162 @@
+#pragma once
+// An SCL state controller, compiled: its states, the pool of single-use instances sized at load,
+// the queue, and the step of DESIGN 3.5. Built by compile(), stepped by its owner (a behaviour or
+// a parent state) or, when standalone, by the manager after the output pass.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "arbiter/model.hpp"
+#include "arbiter/state.hpp"
+
+namespace spdlog {
+class logger;
+}
+
+namespace arbiter {
+
+struct CompiledState {
+  std::string name;
+  const ClassInfo* cls = nullptr;
+  SourceLocation location;
+  std::vector<Param> params;       ///< as written for the state (no class defaults)
+  std::uint32_t child = kUnbound;  ///< index of the controller this state owns
+};
+
+class Controller {
+ public:
+  struct Event {
+    enum class Kind : std::uint8_t { kActivate, kExecute, kDeactivate };
+    Kind kind;
+    std::uint32_t state;
+  };
+  static constexpr std::size_t kMaxEventsPerStep = 64;
+
+  Controller(std::string name, SourceLocation location, std::size_t capacity);
+  Controller(Controller&&) = delete;  // states and contexts point at their controller
+
+  const std::string& name() const { return name_; }
+  const SourceLocation& location() const { return location_; }
+  ControllerStatus status() const { return status_; }
+  std::uint64_t cycle() const { return cycle_; }
+  std::size_t capacity() const { return capacity_; }
+  const std::vector<CompiledState>& states() const { return states_; }
+
+  /// One controller step (DESIGN 3.5). `execute` is the owner's execute context, through which
+  /// states write actuators; null for a standalone controller (its states cannot write).
+  void step(const StepContext& context, ExecuteContext* execute = nullptr);
+  /// Back to cycle 0 with the configured initial queue; a current state is deactivated first.
+  void restart(const StepContext& context);
+
+  /// The current state's name, or "" before the first step and once finished.
+  std::string_view current_state() const;
+  std::size_t queue_size() const { return queue_.size(); }
+  std::string_view queued(std::size_t index) const;
+  const Event* events() const { return events_.data(); }
+  std::size_t event_count() const { return std::min(event_count_, kMaxEventsPerStep); }
+  /// Called by the manager at the start of every step, so a paused controller shows no events.
+  void clear_events() { event_count_ = 0; }
+
+  /// Not owned; the hooks must outlive the controller or be reset.
+  void set_hooks(ControllerHooks* hooks) { hooks_ = hooks; }
+  void set_logger(spdlog::logger* logger) { logger_ = logger; }
+
+  /// The child controller a state owns (`machine:`), or nullptr.
+  const Controller* child_of(std::uint32_t state) const {
+    const auto child = states_[state].child;
+    return child == kUnbound ? nullptr : children_[child];
+  }
+  /// Whether a behaviour or a parent state steps it (else the manager does: standalone).
+  bool owned() const { return owned_; }
+
+  /// The message of the error that stopped the controller ("" unless status is error).
+  const std::string& error() const { return error_; }
+
+  // --- set up by compile() ---------------------------------------------------------------------
+  std::uint32_t add_state(CompiledState state);
+  void set_initial_queue(std::vector<PlannedState> queue) { initial_ = std::move(queue); }
+  void add_preemption(std::uint64_t cycle, PlannedState go_to) {
+    preemptions_.push_back({cycle, std::move(go_to)});
+  }
+  void set_owned() { owned_ = true; }
+  /// Creates `capacity` pooled objects of every state; call init on each through `init`.
+  template <typename Init>
+  void build_pool(Init&& init) {
+    pools_.resize(states_.size());
+    for (std::uint32_t s = 0; s < states_.size(); ++s) {
+      for (std::size_t i = 0; i < capacity_; ++i) {
+        Instance instance;
+        instance.state = s;
+        instance.object = states_[s].cls->make_state();
+        instance.args.reserve(states_[s].cls->params.size());
+        init(s, *instance.object);
+        pools_[s].push_back(static_cast<std::uint32_t>(instances_.size()));
+        instances_.push_back(std::move(instance));
+      }
+    }
+    reset_queue();
+  }
+  std::optional<std::uint32_t> find_state(std::string_view name) const;
+  void set_children(std::vector<Controller*> children) { children_ = std::move(children); }
+  void set_state_child(std::uint32_t state, std::uint32_t child) { states_[state].child = child; }
+
+ private:
+  friend class Plan;
+  friend class StateContext;
+
+  struct Instance {
+    std::uint32_t state = 0;
+    std::unique_ptr<State> object;
+    const std::vector<Param>* planned = nullptr;  ///< per-instance params from the config
+    std::vector<std::pair<std::uint32_t, ParamValue>> args;  ///< from Plan calls, by param index
+    std::uint64_t executions = 0;
+  };
+
+  std::optional<std::uint32_t> create(std::uint32_t state, const std::vector<Param>* planned,
+                                      std::initializer_list<Arg> args);
+  std::optional<std::uint32_t> create(std::string_view state, std::initializer_list<Arg> args);
+  bool insert(std::size_t index, std::optional<std::uint32_t> instance);
+  void release(std::uint32_t instance);
+  void reset_queue();
+  void record(Event::Kind kind, std::uint32_t instance);
+  void fail(std::string message);
+  const ParamValue* find_param(std::uint32_t instance, std::string_view name) const;
+  void deactivate_current(StateContext& context);
+  void finish();
+
+  std::string name_;
+  SourceLocation location_;
+  std::size_t capacity_;
+  std::vector<CompiledState> states_;
+  std::vector<Instance> instances_;
+  std::vector<std::vector<std::uint32_t>> pools_;  ///< free instances per state
+  std::size_t live_ = 0;
+  std::vector<std::uint32_t> queue_;  ///< reserved to capacity: edits never allocate
+  std::uint32_t current_ = kUnbound;
+  std::vector<PlannedState> initial_;
+  struct Preempt {
+    std::uint64_t cycle;
+    PlannedState go_to;
+  };
+  std::vector<Preempt> preemptions_;
+  std::vector<Controller*> children_;
+  ControllerStatus status_ = ControllerStatus::kRunning;
+  std::uint64_t cycle_ = 0;
+  bool proceed_ = false;
+  bool terminate_ = false;
+  bool stepping_ = false;
+  bool owned_ = false;
+  std::array<Event, kMaxEventsPerStep> events_{};
+  std::size_t event_count_ = 0;
+  ControllerHooks* hooks_ = nullptr;
+  spdlog::logger* logger_ = nullptr;
+  std::string error_;
+  std::uint32_t failing_state_ = kUnbound;
+};
+
+}  // namespace arbiter

@@ -1,0 +1,83 @@
+#pragma once
+// Load-time problems are diagnostics, collected in one pass and reported together.
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace arbiter {
+
+/// A place in a config file. Lines and columns are 1-based; 0 means "unknown" (e.g. a whole file).
+struct SourceLocation {
+  std::string file;
+  int line = 0;
+  int column = 0;
+
+  /// The location `offset` characters further along the same line.
+  SourceLocation shifted(int offset) const { return {file, line, column + offset}; }
+};
+
+enum class Severity { kError, kWarning };
+
+struct Diagnostic {
+  SourceLocation location;
+  Severity severity = Severity::kError;
+  std::string code;  ///< stable, kebab-case; listed in docs/diagnostics.md
+  std::string message;
+  std::vector<std::string> notes;
+};
+
+/// The sink every pipeline stage reports into. Stages keep going after an error so that one run
+/// shows every problem; the caller stops before the next stage when has_errors().
+class Diagnostics {
+ public:
+  Diagnostic& error(const SourceLocation& where, std::string code, std::string message);
+  Diagnostic& warning(const SourceLocation& where, std::string code, std::string message);
+
+  bool has_errors() const { return error_count_ > 0; }
+  std::size_t error_count() const { return error_count_; }
+  std::size_t warning_count() const { return items_.size() - error_count_; }
+  const std::vector<Diagnostic>& items() const { return items_; }
+  bool empty() const { return items_.empty(); }
+
+  /// Turns every warning into an error (`--strict`).
+  void promote_warnings();
+
+  /// Sorted by file, line and column, keeping the order of reports at the same place.
+  void sort();
+
+ private:
+  std::vector<Diagnostic> items_;
+  std::size_t error_count_ = 0;
+};
+
+/// `file:line:col: error: message` followed by one `file:line:col: note: ...` line per note.
+std::string format(const Diagnostic& diagnostic);
+std::string format(const Diagnostics& diagnostics);
+
+/// A JSON array of {file, line, column, severity, code, message, notes}.
+std::string format_json(const Diagnostics& diagnostics);
+
+/// "did you mean 'x'? known: a, b, c" for a misspelt name, or "known: ..." when nothing is close
+/// (`label` replaces "known", e.g. "allowed"). Empty when `known` is empty. A name differing only
+/// in case, a prefix of at least 3 characters, or one within a third of its length in edits
+/// (a swap of neighbours counts as one) is close.
+std::string suggest(std::string_view wrong, const std::vector<std::string>& known,
+                    std::string_view label = "known");
+
+/// The name suggest() would offer for `wrong`, if any is close.
+std::optional<std::string> closest(std::string_view wrong, const std::vector<std::string>& known);
+
+/// Thrown by the convenience API (load_program) when any stage reported an error.
+class ConfigError : public std::runtime_error {
+ public:
+  explicit ConfigError(Diagnostics diagnostics);
+  const Diagnostics& diagnostics() const { return diagnostics_; }
+
+ private:
+  Diagnostics diagnostics_;
+};
+
+}  // namespace arbiter

@@ -1,0 +1,105 @@
+#pragma once
+// Stage 1 of the data path: a config file (YAML or JSON) parsed into one tree type in which every
+// node carries its file:line:column. Nothing after read_document sees a yaml-cpp or nlohmann type.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "arbiter/diagnostics.hpp"
+
+namespace arbiter {
+
+class Node {
+ public:
+  enum class Kind { kNull, kScalar, kSequence, kMapping };
+
+  struct Entry;
+
+  Node() = default;
+  Node(Kind kind, SourceLocation location) : kind_(kind), location_(std::move(location)) {}
+
+  Kind kind() const { return kind_; }
+  const SourceLocation& location() const { return location_; }
+  bool is_null() const { return kind_ == Kind::kNull; }
+  bool is_scalar() const { return kind_ == Kind::kScalar; }
+  bool is_sequence() const { return kind_ == Kind::kSequence; }
+  bool is_mapping() const { return kind_ == Kind::kMapping; }
+
+  /// The scalar's text as written (without quotes).
+  const std::string& text() const { return text_; }
+  /// Where the character at byte `offset` of text() was written, when the text appears verbatim
+  /// on one line of the file (no escapes, no folding); otherwise location().
+  SourceLocation text_location(std::size_t offset) const;
+  /// True for a quoted YAML scalar and every JSON string: never a number, boolean or null.
+  bool quoted() const { return quoted_; }
+
+  const std::vector<Node>& items() const { return items_; }
+  const std::vector<Entry>& entries() const { return entries_; }
+  /// The value at `key` in a mapping, or nullptr.
+  const Node* find(std::string_view key) const;
+
+  /// Typed readings of a scalar under the YAML 1.2 core schema; nullopt when it is not one.
+  std::optional<bool> as_bool() const;
+  std::optional<long long> as_int() const;
+  std::optional<double> as_double() const;  ///< ints count as doubles; may be inf or nan
+  /// True for a plain scalar that reads as null (`~`, `null`) or an empty node.
+  bool reads_as_null() const;
+
+  /// What the node is, for messages: "a mapping", "a list of 3 items", "the string 'x'",
+  /// "the number 2", "the boolean true", "null".
+  std::string describe() const;
+
+  // Builders, used by the readers.
+  void set_scalar(std::string text, bool quoted);
+  /// Records that text() appears verbatim in the file from this 1-based column of the node's line.
+  void set_text_column(int column) { text_column_ = column; }
+  Node& push_item(Node item);
+  Entry& add_entry(std::string key, SourceLocation key_location, Node value);
+  std::size_t size() const { return is_mapping() ? entries_.size() : items_.size(); }
+
+ private:
+  Kind kind_ = Kind::kNull;
+  SourceLocation location_;
+  std::string text_;
+  bool quoted_ = false;
+  int text_column_ = 0;  // 0: the text is not verbatim in the file
+  std::vector<Node> items_;
+  std::vector<Entry> entries_;
+};
+
+struct Node::Entry {
+  std::string key;
+  SourceLocation key_location;
+  Node value;
+};
+
+/// Bounds that keep hostile files from exhausting time or memory.
+struct ReadLimits {
+  std::size_t max_file_bytes = 16u << 20;
+  std::size_t max_depth = 200;
+  std::size_t max_nodes = 1u << 20;  ///< after alias expansion
+};
+
+enum class DocumentFormat { kYaml, kJson };
+
+/// The format a path's extension names (`.json` is JSON, everything else YAML).
+DocumentFormat format_of(std::string_view path);
+
+/// Parses `text` (named `file` in diagnostics). JSON is checked strictly first. Duplicate keys,
+/// non-scalar keys, multiple documents, excess depth and alias expansion past the node limit are
+/// errors. Returns nullopt after reporting when the text cannot be read; after an error that
+/// leaves a usable tree (a duplicate key is dropped, a second document ignored) it returns the
+/// tree, so that later stages can report their problems in the same pass. Columns count
+/// characters (code points), not bytes.
+std::optional<Node> parse_document(std::string_view text, const std::string& file,
+                                   DocumentFormat format, Diagnostics& diagnostics,
+                                   const ReadLimits& limits = {});
+
+/// Reads and parses a file; unreadable paths, directories and oversized files are reported.
+std::optional<Node> read_document(const std::string& path, Diagnostics& diagnostics,
+                                  const ReadLimits& limits = {});
+
+}  // namespace arbiter

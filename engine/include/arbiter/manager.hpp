@@ -1,0 +1,129 @@
+#pragma once
+// Stage 4 of the data path: the behaviour manager steps a compiled program. step() walks flat
+// arrays sized at compile: it allocates nothing, looks up no name and lets no exception out.
+
+#include <algorithm>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "arbiter/behaviour.hpp"
+#include "arbiter/program.hpp"
+
+namespace spdlog {
+class logger;
+}
+
+namespace arbiter {
+
+class Manager;
+
+/// Receives every step's outcome (trace writers, loggers, live views). Called after the step,
+/// on the stepping thread; an observer may allocate, the step itself does not.
+class Observer {
+ public:
+  virtual ~Observer() = default;
+  virtual void on_start(const Manager& /*manager*/) {}
+  virtual void on_step(const Manager& manager) = 0;
+  virtual void on_finish(const Manager& /*manager*/) {}
+};
+
+class Manager {
+ public:
+  /// Takes the program; run-time warnings go to `logger` (default: spdlog's default logger).
+  explicit Manager(Program program, std::shared_ptr<spdlog::logger> logger = nullptr);
+  ~Manager();
+  Manager(Manager&&) noexcept = default;  // buffers live on the heap: their addresses survive
+  Manager& operator=(Manager&&) = delete;
+  Manager(const Manager&) = delete;
+  Manager& operator=(const Manager&) = delete;
+
+  /// One step of DESIGN 3.2: input pass, every layer, output pass, then the observers.
+  /// Does nothing once stopped().
+  void step();
+
+  /// True once behaviour or interface code under `on_exception: stop` threw (or, under a
+  /// config-wide stop, a state machine stopped with an error): the step in which it happened was
+  /// completed and seen by the observers; later step() calls do nothing. The host should end
+  /// the run (and call finish()).
+  bool stopped() const { return stopped_; }
+  /// Why the manager stopped: the exception's report (who, where, what); "" unless stopped().
+  const std::string& stop_reason() const { return stop_reason_; }
+
+  /// Observers are not owned; they must outlive the manager or be removed.
+  void add_observer(Observer& observer);
+  void remove_observer(Observer& observer);
+  /// Tells the observers that the run is over (e.g. to close a trace).
+  void finish();
+
+  const Program& program() const { return program_; }
+  /// Steps completed so far.
+  std::uint64_t steps() const { return data_.step; }
+
+  double requested(std::uint32_t behaviour) const { return requested_[behaviour]; }
+  double activation(std::uint32_t behaviour) const { return activation_[behaviour]; }
+  bool active(std::uint32_t behaviour) const { return active_[behaviour] != 0; }
+  /// The actuator's current value (of its ValueType) and whether it was written this step.
+  const void* actuator_value(std::uint32_t actuator) const {
+    return values_.get() + program_.actuator_offsets[actuator];
+  }
+  bool actuator_written(std::uint32_t actuator) const { return actuator_written_[actuator] != 0; }
+  /// Events that behaviour and interface code reported in the last step (StepContext::report).
+  std::size_t event_count() const { return std::min(data_.event_count, data_.event_capacity); }
+  const detail::StepData::Event& event(std::size_t index) const { return events_[index]; }
+  /// Who reported an event: a behaviour's or an interface layer's name.
+  const std::string& event_source(const detail::StepData::Event& event) const;
+
+  template <typename T>
+  const T& actuator(std::uint32_t actuator) const {
+    return *static_cast<const T*>(actuator_value(actuator));
+  }
+
+ private:
+  void run_layer(const CompiledLayer& layer);
+  // The passes of run_layer() over behaviours [begin, end) (DESIGN 3.2 b-e).
+  void update_behaviours(std::uint32_t begin, std::uint32_t end);
+  void request_and_refine(std::uint32_t begin, std::uint32_t end);
+  void execute_behaviours(std::uint32_t begin, std::uint32_t end);
+  void resolve_actuators(const CompiledLayer& layer);
+  // Faults of behaviour code (docs/robustness.md).
+  void init_fault_handling();
+  void report_exception(std::uint32_t behaviour, const char* callback, const char* what);
+  void finish_faults();
+  double non_finite_level(std::uint32_t behaviour, double level);
+  void report_non_finite_write(std::uint32_t slot);
+
+  Program program_;
+  std::shared_ptr<spdlog::logger> logger_;
+  std::unique_ptr<std::byte[]> values_;
+  // bool vectors are bit-packed; the contexts need addressable flags.
+  std::unique_ptr<bool[]> actuator_written_;
+  std::unique_ptr<bool[]> slot_written_;
+  std::vector<double> requested_;
+  std::vector<double> activation_;
+  std::vector<double> factors_;        // two per behaviour: see Inhibitions::recipes()
+  std::vector<Behaviour*> instances_;  // the behaviours' objects, contiguous for the passes
+  std::vector<char> active_;
+  std::vector<char> nan_reported_;
+  std::vector<char> exception_reported_;
+  // Fault handling: a behaviour whose code threw is replaced in instances_ by inert_ for the
+  // step (suspended_) or for good (disabled_, which also covers interfaces: behaviours first,
+  // then one per layer); faulted_step_ is the step in which each last threw.
+  std::unique_ptr<Behaviour> inert_;
+  std::vector<std::uint64_t> faulted_step_;
+  std::vector<char> disabled_;
+  std::vector<std::uint32_t> suspended_;
+  std::vector<std::uint8_t> finite_components_;  // per slot: doubles to check (double, vec2, vec3)
+  std::vector<char> non_finite_reported_;        // per slot
+  bool stopping_ = false;
+  bool stopped_ = false;
+  std::string stop_reason_;
+  std::vector<const void*> mean_values_;  // scratch for aggregation, sized max_writers
+  std::vector<double> mean_weights_;
+  std::vector<Observer*> observers_;
+  std::vector<detail::StepData::Event> events_;
+  detail::StepData data_;
+};
+
+}  // namespace arbiter

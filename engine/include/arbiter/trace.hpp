@@ -1,0 +1,31 @@
+#pragma once
+// Stage 5 of the data path: the JSON-lines trace of DESIGN 5, written by an observer.
+
+#include <ostream>
+#include <string>
+
+#include "arbiter/manager.hpp"
+
+namespace arbiter {
+
+/// Writes the header when attached and one line per step. The stream must outlive the writer.
+class TraceWriter : public Observer {
+ public:
+  explicit TraceWriter(std::ostream& out) : out_(out) {}
+  void on_start(const Manager& manager) override;
+  void on_step(const Manager& manager) override;
+  void on_finish(const Manager& manager) override;
+
+ private:
+  std::ostream& out_;
+  std::string line_;  // reused between steps
+};
+
+/// The header line `{"arbiter_trace": 1, ...}` without the newline.
+std::string trace_header(const Program& program);
+/// "activate walk_to_pose", as in the trace.
+std::string event_text(const Controller& controller, const Controller::Event& event);
+/// The record of the manager's last step, without the newline.
+void append_step_record(const Manager& manager, std::string& out);
+
+}  // namespace arbiter

@@ -1,0 +1,431 @@
+#include "arbiter/controller.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace arbiter {
+
+const char* to_string(ControllerStatus status) {
+  switch (status) {
+    case ControllerStatus::kRunning:
+      return "running";
+    case ControllerStatus::kFinished:
+      return "finished";
+    case ControllerStatus::kError:
+      return "error";
+  }
+  return "?";
+}
+
+// --- Plan ----------------------------------------------------------------------------------------
+
+bool Plan::append(std::string_view state, std::initializer_list<Arg> args) {
+  return controller_->insert(controller_->queue_.size(), controller_->create(state, args));
+}
+bool Plan::prepend(std::string_view state, std::initializer_list<Arg> args) {
+  return controller_->insert(0, controller_->create(state, args));
+}
+bool Plan::insert_before(std::size_t index, std::string_view state,
+                         std::initializer_list<Arg> args) {
+  return controller_->insert(index, controller_->create(state, args));
+}
+bool Plan::insert_after(std::size_t index, std::string_view state,
+                        std::initializer_list<Arg> args) {
+  return controller_->insert(index + 1, controller_->create(state, args));
+}
+bool Plan::append(const PlannedState& planned) {
+  return controller_->insert(controller_->queue_.size(),
+                             controller_->create(planned.state, &planned.params, {}));
+}
+bool Plan::prepend(const PlannedState& planned) {
+  return controller_->insert(0, controller_->create(planned.state, &planned.params, {}));
+}
+bool Plan::remove(std::size_t index) {
+  auto& queue = controller_->queue_;
+  if (index >= queue.size()) {
+    controller_->fail(fmt::format("plan.remove({}) on a queue of {} states", index, queue.size()));
+    return false;
+  }
+  controller_->release(queue[index]);
+  queue.erase(queue.begin() + static_cast<std::ptrdiff_t>(index));
+  return true;
+}
+void Plan::clear() {
+  for (auto instance : controller_->queue_) controller_->release(instance);
+  controller_->queue_.clear();
+}
+bool Plan::go_to(std::string_view state, std::initializer_list<Arg> args) {
+  clear();
+  return append(state, args);
+}
+bool Plan::go_to(const PlannedState& planned) {
+  clear();
+  return append(planned);
+}
+std::string_view Plan::peek(std::size_t index) const {
+  const auto& queue = controller_->queue_;
+  if (index >= queue.size()) return {};
+  return controller_->states_[controller_->instances_[queue[index]].state].name;
+}
+std::size_t Plan::size() const {
+  return controller_->queue_.size();
+}
+bool Plan::contains(std::string_view state) const {
+  for (auto instance : controller_->queue_) {
+    if (controller_->states_[controller_->instances_[instance].state].name == state) return true;
+  }
+  return false;
+}
+void Plan::terminate() {
+  controller_->terminate_ = true;
+}
+
+// --- StateContext --------------------------------------------------------------------------------
+
+StateContext::StateContext(const StepContext& step, ExecuteContext* execute, Controller& controller,
+                           std::uint32_t instance)
+    : StepContext(step),
+      execute_(execute),
+      controller_(&controller),
+      instance_(instance),
+      plan_(controller) {}
+
+std::uint64_t StateContext::cycle() const {
+  return controller_->cycle_;
+}
+std::uint64_t StateContext::executions() const {
+  return controller_->instances_[instance_].executions;
+}
+const ParamValue* StateContext::find_param(std::string_view name) const {
+  return controller_->find_param(instance_, name);
+}
+Controller* StateContext::child() const {
+  const auto state = controller_->instances_[instance_].state;
+  const auto child = controller_->states_[state].child;
+  return child == kUnbound ? nullptr : controller_->children_[child];
+}
+
+// --- Controller ----------------------------------------------------------------------------------
+
+Controller::Controller(std::string name, SourceLocation location, std::size_t capacity)
+    : name_(std::move(name)), location_(std::move(location)), capacity_(capacity) {
+  queue_.reserve(capacity_);
+}
+
+std::uint32_t Controller::add_state(CompiledState state) {
+  states_.push_back(std::move(state));
+  return static_cast<std::uint32_t>(states_.size() - 1);
+}
+
+std::optional<std::uint32_t> Controller::find_state(std::string_view name) const {
+  for (std::uint32_t s = 0; s < states_.size(); ++s) {
+    if (states_[s].name == name) return s;
+  }
+  return std::nullopt;
+}
+
+std::string_view Controller::current_state() const {
+  return current_ == kUnbound ? std::string_view{} : states_[instances_[current_].state].name;
+}
+
+std::string_view Controller::queued(std::size_t index) const {
+  return index < queue_.size() ? std::string_view(states_[instances_[queue_[index]].state].name)
+                               : std::string_view{};
+}
+
+void Controller::fail(std::string message) {
+  if (status_ == ControllerStatus::kError) return;
+  status_ = ControllerStatus::kError;
+  std::string where = fmt::format("controller '{}' ({}:{}:{})", name_, location_.file,
+                                  location_.line, location_.column);
+  if (current_ != kUnbound) {
+    const auto& state = states_[instances_[current_].state];
+    where += fmt::format(", state '{}' ({}:{}:{})", state.name, state.location.file,
+                         state.location.line, state.location.column);
+  }
+  error_ = fmt::format("{}: {}", where, message);
+  if (logger_ != nullptr) {
+    logger_->error("{}; the controller stops with status error", error_);
+  } else {
+    spdlog::error("{}; the controller stops with status error", error_);
+  }
+}
+
+std::optional<std::uint32_t> Controller::create(std::string_view state,
+                                                std::initializer_list<Arg> args) {
+  const auto index = find_state(state);
+  if (!index) {
+    std::vector<std::string> known;
+    for (const auto& candidate : states_) known.push_back(candidate.name);
+    fail(fmt::format("unknown state '{}' planned at run time; {}", state, suggest(state, known)));
+    return std::nullopt;
+  }
+  return create(*index, nullptr, args);
+}
+
+namespace {
+
+// Converts a run-time argument to the param's kind; empty string when it fits.
+std::string convert_arg(const ParamSpec& spec, const Arg::Value& value, ParamValue& out) {
+  const auto in_range = [&](double number) {
+    return std::isfinite(number) && (!spec.minimum || number >= *spec.minimum) &&
+           (!spec.maximum || number <= *spec.maximum);
+  };
+  switch (spec.kind) {
+    case ParamKind::kBool:
+      if (const bool* flag = std::get_if<bool>(&value)) {
+        out = *flag;
+        return {};
+      }
+      return "a boolean";
+    case ParamKind::kInt:
+      if (const auto* number = std::get_if<std::int64_t>(&value)) {
+        if (!in_range(static_cast<double>(*number))) return "an integer in range";
+        out = *number;
+        return {};
+      }
+      return "an integer";
+    case ParamKind::kDouble: {
+      double number = 0.0;
+      if (const auto* real = std::get_if<double>(&value)) {
+        number = *real;
+      } else if (const auto* integer = std::get_if<std::int64_t>(&value)) {
+        number = static_cast<double>(*integer);
+      } else {
+        return "a number";
+      }
+      if (!in_range(number)) return "a finite number in range";
+      out = number;
+      return {};
+    }
+    case ParamKind::kVec2:
+      if (const auto* vec = std::get_if<Vec2>(&value)) {
+        out = *vec;
+        return {};
+      }
+      return "a vec2";
+    case ParamKind::kVec3:
+      if (const auto* vec = std::get_if<Vec3>(&value)) {
+        out = *vec;
+        return {};
+      }
+      return "a vec3";
+    default:
+      return fmt::format("a {} (not settable at run time)", to_string(spec.kind));
+  }
+}
+
+}  // namespace
+
+std::optional<std::uint32_t> Controller::create(std::uint32_t state,
+                                                const std::vector<Param>* planned,
+                                                std::initializer_list<Arg> args) {
+  const auto& compiled = states_[state];
+  if (live_ >= capacity_ || pools_[state].empty()) {
+    fail(
+        fmt::format("planning state '{}' exceeds the controller's capacity of {} instances "
+                    "(the current state and the queue); raise 'capacity:'",
+                    compiled.name, capacity_));
+    return std::nullopt;
+  }
+  const std::uint32_t instance = pools_[state].back();
+  pools_[state].pop_back();
+  ++live_;
+  Instance& created = instances_[instance];
+  created.planned = planned;
+  created.args.clear();
+  created.executions = 0;
+  const auto& specs = compiled.cls->params;
+  for (const Arg& arg : args) {
+    std::uint32_t param = 0;
+    while (param < specs.size() && specs[param].name != arg.name) ++param;
+    if (param == specs.size()) {
+      std::vector<std::string> known;
+      for (const auto& spec : specs) known.push_back(spec.name);
+      fail(fmt::format("state '{}' ({}) has no param '{}'; {}", compiled.name, compiled.cls->name,
+                       arg.name, suggest(arg.name, known)));
+      release(instance);
+      return std::nullopt;
+    }
+    ParamValue value;
+    if (auto expected = convert_arg(specs[param], arg.value, value); !expected.empty()) {
+      fail(fmt::format("param '{}' of state '{}' must be {}", arg.name, compiled.name, expected));
+      release(instance);
+      return std::nullopt;
+    }
+    created.args.emplace_back(param, std::move(value));
+  }
+  for (const auto& spec : specs) {
+    if (spec.required() && find_param(instance, spec.name) == nullptr) {
+      fail(fmt::format("state '{}' ({}) planned without its required param '{}'", compiled.name,
+                       compiled.cls->name, spec.name));
+      release(instance);
+      return std::nullopt;
+    }
+  }
+  return instance;
+}
+
+bool Controller::insert(std::size_t index, std::optional<std::uint32_t> instance) {
+  if (!instance) return false;
+  if (index > queue_.size()) {
+    fail(fmt::format("plan insertion at index {} of a queue of {} states", index, queue_.size()));
+    release(*instance);
+    return false;
+  }
+  queue_.insert(queue_.begin() + static_cast<std::ptrdiff_t>(index), *instance);
+  return true;
+}
+
+void Controller::release(std::uint32_t instance) {
+  pools_[instances_[instance].state].push_back(instance);
+  --live_;
+}
+
+const ParamValue* Controller::find_param(std::uint32_t instance, std::string_view name) const {
+  const Instance& of = instances_[instance];
+  const auto& specs = states_[of.state].cls->params;
+  for (const auto& [param, value] : of.args) {
+    if (specs[param].name == name) return &value;
+  }
+  if (of.planned != nullptr) {
+    for (const auto& param : *of.planned) {
+      if (param.name == name) return &param.value;
+    }
+  }
+  for (const auto& param : states_[of.state].params) {
+    if (param.name == name) return &param.value;
+  }
+  for (const auto& spec : specs) {
+    if (spec.name == name && spec.default_value) return &*spec.default_value;
+  }
+  return nullptr;
+}
+
+void Controller::reset_queue() {
+  if (current_ != kUnbound) release(current_);
+  current_ = kUnbound;
+  for (auto instance : queue_) release(instance);
+  queue_.clear();
+  status_ = ControllerStatus::kRunning;
+  error_.clear();
+  cycle_ = 0;
+  proceed_ = false;
+  terminate_ = false;
+  for (const auto& planned : initial_) {
+    insert(queue_.size(), create(planned.state, &planned.params, {}));
+  }
+}
+
+void Controller::record(Event::Kind kind, std::uint32_t instance) {
+  if (event_count_ < kMaxEventsPerStep) events_[event_count_] = {kind, instances_[instance].state};
+  ++event_count_;
+}
+
+void Controller::deactivate_current(StateContext& context) {
+  record(Event::Kind::kDeactivate, current_);
+  instances_[current_].object->deactivate(context);
+  release(current_);
+  current_ = kUnbound;
+}
+
+void Controller::finish() {
+  if (status_ == ControllerStatus::kRunning) status_ = ControllerStatus::kFinished;
+  for (auto instance : queue_) release(instance);
+  queue_.clear();
+  if (hooks_ != nullptr) hooks_->on_terminate(*this);
+}
+
+void Controller::restart(const StepContext& context) {
+  if (stepping_) {
+    fail("restarted from inside its own callback");
+    return;
+  }
+  if (current_ != kUnbound) {
+    StateContext state_context(context, nullptr, *this, current_);
+    instances_[current_].object->deactivate(state_context);
+    record(Event::Kind::kDeactivate, current_);
+    release(current_);
+    current_ = kUnbound;
+  }
+  reset_queue();
+}
+
+void Controller::step(const StepContext& context, ExecuteContext* execute) {
+  if (stepping_) {
+    fail(
+        "stepped from inside its own callback; a controller is stepped once per step, by its "
+        "owner");
+    return;
+  }
+  if (status_ != ControllerStatus::kRunning) return;
+  stepping_ = true;
+  ++cycle_;
+  try {
+    Plan plan(*this);
+    bool leave = proceed_ || current_ == kUnbound;
+    for (const auto& preemption : preemptions_) {
+      if (preemption.cycle == cycle_ && plan.go_to(preemption.go_to)) leave = true;
+    }
+    if (hooks_ != nullptr && hooks_->pre_step(*this, plan)) leave = true;
+    if (status_ != ControllerStatus::kRunning) {
+      stepping_ = false;
+      return;
+    }
+    if (leave) {
+      if (current_ != kUnbound) {
+        StateContext old_context(context, execute, *this, current_);
+        deactivate_current(old_context);
+      }
+      proceed_ = false;
+      if (queue_.empty()) {
+        finish();
+        stepping_ = false;
+        return;
+      }
+      current_ = queue_.front();
+      queue_.erase(queue_.begin());
+      const auto& name = states_[instances_[current_].state].name;
+      if (hooks_ != nullptr) hooks_->pre_activate(*this, name);
+      StateContext activate_context(context, execute, *this, current_);
+      record(Event::Kind::kActivate, current_);
+      instances_[current_].object->activate(activate_context);
+    }
+    if (terminate_ || status_ != ControllerStatus::kRunning) {
+      if (current_ != kUnbound) {
+        StateContext end_context(context, execute, *this, current_);
+        deactivate_current(end_context);
+      }
+      finish();
+      stepping_ = false;
+      return;
+    }
+    const auto& name = states_[instances_[current_].state].name;
+    if (hooks_ != nullptr) hooks_->pre_execute(*this, name);
+    StateContext execute_context(context, execute, *this, current_);
+    record(Event::Kind::kExecute, current_);
+    StateResult result = instances_[current_].object->execute(execute_context);
+    ++instances_[current_].executions;
+    if (hooks_ != nullptr && hooks_->post_execute(*this, name, result)) {
+      result = StateResult::kProceed;
+    }
+    if (terminate_ || status_ != ControllerStatus::kRunning) {
+      deactivate_current(execute_context);
+      finish();
+      stepping_ = false;
+      return;
+    }
+    proceed_ = result == StateResult::kProceed;
+    if (hooks_ != nullptr) hooks_->post_step(*this);
+  } catch (const std::exception& error) {
+    fail(fmt::format("a state threw: {}", error.what()));
+  } catch (...) {
+    fail("a state threw an unknown exception");
+  }
+  stepping_ = false;
+}
+
+}  // namespace arbiter

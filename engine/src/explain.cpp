@@ -1,0 +1,503 @@
+#include "arbiter/explain.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+namespace arbiter {
+
+namespace {
+
+using Json = nlohmann::json;
+using Status = Explanation::Status;
+
+std::string number(double value) {
+  return fmt::format("{:.6g}", value);
+}
+
+std::string where(const SourceLocation& location) {
+  return fmt::format("{}:{}:{}", location.file, location.line, location.column);
+}
+
+/// The member `key` of `object`, or null (nlohmann's const operator[] asserts on a missing key).
+const Json& at(const Json& object, const std::string& key) {
+  static const Json kNull;
+  if (!object.is_object()) return kNull;
+  const auto found = object.find(key);
+  return found == object.end() ? kNull : *found;
+}
+
+Explanation failure(Status status, std::string text, std::vector<std::string> notes = {}) {
+  Explanation out;
+  out.status = status;
+  out.text = std::move(text);
+  out.notes = std::move(notes);
+  return out;
+}
+
+std::string join(const std::vector<std::string>& items, std::string_view separator) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (i > 0) out += separator;
+    out += items[i];
+  }
+  return out;
+}
+
+/// "a", "a and b", "a, b and c".
+std::string listing(const std::vector<std::string>& items) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    out += (i == 0 ? "" : i + 1 == items.size() ? " and " : ", ") + items[i];
+  }
+  return out;
+}
+
+struct Target {
+  bool controller = false;
+  std::uint32_t index = 0;
+};
+
+std::optional<Target> resolve(const Program& program, std::string_view target, Explanation& error) {
+  std::vector<std::string> known;
+  for (const auto& behaviour : program.behaviours) {
+    known.push_back(behaviour.name);
+    known.push_back(program.layers[behaviour.layer].name + "/" + behaviour.name);
+  }
+  for (const auto& controller : program.controllers) known.push_back(controller->name());
+  const auto not_found = [&](std::string text) {
+    std::vector<std::string> notes;
+    if (auto hint = suggest(target, known); !hint.empty()) notes.push_back(std::move(hint));
+    error = failure(Status::kNotFound, std::move(text), std::move(notes));
+    return std::nullopt;
+  };
+  std::vector<Target> found;
+  const auto slash = target.find('/');
+  if (slash != std::string_view::npos) {
+    const auto scope = target.substr(0, slash);
+    const auto name = target.substr(slash + 1);
+    if (scope == "state_machines") {
+      for (std::uint32_t c = 0; c < program.controllers.size(); ++c) {
+        if (program.controllers[c]->name() == name) found.push_back({true, c});
+      }
+    } else if (const auto b = program.find_behaviour(scope, name)) {
+      found.push_back({false, *b});
+    }
+  } else {
+    for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
+      if (program.behaviours[b].name == target) found.push_back({false, b});
+    }
+    for (std::uint32_t c = 0; c < program.controllers.size(); ++c) {
+      if (program.controllers[c]->name() == target) found.push_back({true, c});
+    }
+  }
+  if (found.empty()) {
+    return not_found(
+        fmt::format("'{}' names no behaviour and no state machine of '{}'", target, program.name));
+  }
+  if (found.size() > 1) {
+    std::vector<std::string> candidates;
+    for (const auto& candidate : found) {
+      candidates.push_back(candidate.controller
+                               ? "state_machines/" + program.controllers[candidate.index]->name()
+                               : program.layers[program.behaviours[candidate.index].layer].name +
+                                     "/" + program.behaviours[candidate.index].name);
+    }
+    error = failure(Status::kNotFound, fmt::format("'{}' is ambiguous", target),
+                    {"write one of: " + join(candidates, ", ")});
+    return std::nullopt;
+  }
+  return found.front();
+}
+
+/// The records around the step asked for (null where the trace has none).
+struct Records {
+  Json previous;
+  Json current;
+  Json next;
+  std::uint64_t last_step = 0;
+};
+
+/// The step number of a record line, read without parsing the whole line.
+std::optional<std::uint64_t> step_of(const std::string& line) {
+  const auto key = line.find("\"step\":");
+  if (key == std::string::npos) return std::nullopt;
+  const char* begin = line.c_str() + key + 7;
+  char* end = nullptr;
+  const auto value = std::strtoull(begin, &end, 10);
+  if (end == begin) return std::nullopt;
+  return value;
+}
+
+std::optional<Explanation> check_header(const Program& program, const Json& header) {
+  const auto bad = [](std::string text, std::vector<std::string> notes = {}) {
+    return failure(Status::kBadTrace, std::move(text), std::move(notes));
+  };
+  if (!header.is_object() || header.value("arbiter_trace", 0) != 1) {
+    return bad("the trace does not start with an 'arbiter_trace: 1' header",
+               {"write one with 'arbiter run CONFIG --trace FILE.jsonl'"});
+  }
+  const std::string name = header.value("name", "");
+  if (name != program.name) {
+    return bad(fmt::format("the trace was written for '{}', not for '{}'", name, program.name));
+  }
+  const Json& layers = at(header, "layers");
+  std::vector<std::string> differences;
+  if (!layers.is_array() || layers.size() != program.layers.size()) {
+    differences.push_back(fmt::format("the config has {} layers, the trace {}",
+                                      program.layers.size(),
+                                      layers.is_array() ? layers.size() : 0));
+  } else {
+    for (std::size_t l = 0; l < layers.size(); ++l) {
+      const auto& layer = program.layers[l];
+      std::vector<std::string> order;
+      for (auto b = layer.behaviour_begin; b < layer.behaviour_end; ++b) {
+        order.push_back(program.behaviours[b].name);
+      }
+      const Json& recorded = layers[l];
+      if (recorded.value("name", "") != layer.name ||
+          recorded.value("order", std::vector<std::string>{}) != order) {
+        differences.push_back(fmt::format("layer {} is '{}' [{}] in the config", l + 1, layer.name,
+                                          join(order, ", ")));
+      }
+    }
+  }
+  if (!differences.empty()) {
+    return bad("the trace was written for another version of this config", differences);
+  }
+  return std::nullopt;
+}
+
+std::optional<Explanation> read_trace(const Program& program, std::istream& in, std::uint64_t step,
+                                      Records& records) {
+  std::string line;
+  std::size_t line_number = 0;
+  const auto parse = [&](Json& out) -> std::optional<Explanation> {
+    try {
+      out = Json::parse(line);
+      return std::nullopt;
+    } catch (const Json::exception& error) {
+      return failure(Status::kBadTrace, fmt::format("line {} of the trace is not JSON: {}",
+                                                    line_number, error.what()));
+    }
+  };
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (!line.empty()) break;
+  }
+  Json header;
+  if (line.empty()) return failure(Status::kBadTrace, "the trace is empty");
+  if (auto error = parse(header)) return error;
+  if (auto error = check_header(program, header)) return error;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty()) continue;
+    const auto at = step_of(line);
+    if (!at) {
+      return failure(Status::kBadTrace,
+                     fmt::format("line {} of the trace is not a step record", line_number));
+    }
+    records.last_step = *at;
+    Json* slot = *at + 1 == step   ? &records.previous
+                 : *at == step     ? &records.current
+                 : *at == step + 1 ? &records.next
+                                   : nullptr;
+    if (slot != nullptr) {
+      if (auto error = parse(*slot)) return error;
+    }
+    if (*at > step) break;
+  }
+  if (records.current.is_null()) {
+    return failure(
+        Status::kNotFound,
+        records.last_step == 0
+            ? fmt::format("the trace has no step records, so no step {}", step)
+            : fmt::format("the trace has steps 1 to {}, not step {}", records.last_step, step));
+  }
+  return std::nullopt;
+}
+
+/// The closed inhibitors of `behaviour`, in execution order.
+std::vector<CompiledInhibition> inhibitors_of(const Program& program, std::uint32_t behaviour) {
+  std::vector<CompiledInhibition> out;
+  for (const auto inhibitor : program.inhibitions.closed(behaviour)) {
+    if (const auto declared = program.declared(inhibitor, behaviour)) {
+      out.push_back(*declared);
+    } else {
+      CompiledInhibition implicit;
+      implicit.inhibitor = inhibitor;
+      implicit.inhibited = behaviour;
+      implicit.chaining = true;
+      implicit.implicit = true;
+      out.push_back(std::move(implicit));
+    }
+  }
+  return out;
+}
+
+Explanation explain_behaviour(const Program& program, std::uint32_t target, std::uint64_t step,
+                              const Json& record) {
+  const auto& behaviour = program.behaviours[target];
+  const auto& layer = program.layers[behaviour.layer];
+  const Json& levels = at(at(record, "layers"), layer.name);
+  // Refinement over the whole layer, from the recorded requested levels (DESIGN 3.2 d).
+  const std::size_t n = layer.behaviour_end - layer.behaviour_begin;
+  std::vector<double> refined(n, 0.0);
+  double sum = 0.0;
+  for (auto b = layer.behaviour_begin; b < layer.behaviour_end; ++b) {
+    const Json& requested = at(at(levels, program.behaviours[b].name), "requested");
+    if (!requested.is_number()) {
+      return failure(Status::kBadTrace,
+                     fmt::format("step {} of the trace has no requested level of {}/{}", step,
+                                 layer.name, program.behaviours[b].name));
+    }
+    double level = requested.get<double>();
+    for (const auto inhibitor : program.inhibitions.closed(b)) {
+      level *= 1.0 - refined[inhibitor - layer.behaviour_begin];
+    }
+    refined[b - layer.behaviour_begin] = level;
+    sum += level;
+  }
+  const auto level_of = [&](std::uint32_t b) { return refined[b - layer.behaviour_begin]; };
+  const Json& own = at(levels, behaviour.name);
+  const double requested = at(own, "requested").get<double>();
+  const double raw = level_of(target);
+  const double activation = layer.normalise && sum > 0.0 ? raw / sum : raw;
+  const bool active = activation > 0.0;
+
+  Explanation out;
+  std::string& text = out.text;
+  text = fmt::format("behaviour {} (layer {}) at step {}: {}, activation {}\n", behaviour.name,
+                     layer.name, step, active ? "active" : "inactive", number(activation));
+  text += fmt::format("  requested: {}\n", number(requested));
+  const auto inhibitors = inhibitors_of(program, target);
+  std::string product = number(requested);
+  std::vector<std::string> blockers;
+  if (inhibitors.empty()) {
+    text += "  no inhibitors\n";
+  } else {
+    text += fmt::format(
+        "  inhibitors after closure, in execution order; each multiplies the level by "
+        "1 - its {}activation:\n",
+        layer.normalise ? "refined (not yet normalised) " : "");
+    std::size_t width = 0;
+    std::size_t level_width = 0;
+    std::size_t factor_width = 0;
+    for (const auto& inhibition : inhibitors) {
+      width = std::max(width, program.behaviours[inhibition.inhibitor].name.size());
+      const double level = level_of(inhibition.inhibitor);
+      level_width = std::max(level_width, number(level).size());
+      factor_width = std::max(factor_width, number(1.0 - level).size());
+    }
+    for (const auto& inhibition : inhibitors) {
+      const auto& name = program.behaviours[inhibition.inhibitor].name;
+      const double level = level_of(inhibition.inhibitor);
+      const double factor = 1.0 - level;
+      product += " × " + number(factor);
+      if (factor <= 0.0) blockers.push_back(name);
+      std::string how;
+      if (inhibition.implicit) {
+        std::vector<std::string> chain;
+        std::vector<std::string> declared;
+        const auto links = program.chain(inhibition.inhibitor, target);
+        for (std::size_t i = 0; i < links.size(); ++i) {
+          chain.push_back(program.behaviours[links[i]].name);
+          if (i == 0) continue;
+          if (const auto edge = program.declared(links[i - 1], links[i])) {
+            declared.push_back(where(edge->location));
+          }
+        }
+        how = fmt::format("implicit, from chaining {} (declared at {})", join(chain, " => "),
+                          join(declared, ", "));
+      } else {
+        how = fmt::format("declared {} {} {} at {}", name, inhibition.chaining ? "=>" : "->",
+                          behaviour.name, where(inhibition.location));
+      }
+      text += fmt::format("    {:<{}}  activation {:<{}}  factor {:<{}}  {}\n", name, width,
+                          number(level), level_width, number(factor), factor_width, how);
+    }
+  }
+  if (layer.normalise) {
+    text += fmt::format("  refined = {} = {}\n", product, number(raw));
+    text += sum > 0.0 ? fmt::format(
+                            "  normalised (layer {} normalises): {} / {} (the sum of the layer's "
+                            "refined levels) = {}\n",
+                            layer.name, number(raw), number(sum), number(activation))
+                      : fmt::format(
+                            "  normalised (layer {} normalises): every refined level is 0, "
+                            "so nothing is divided\n",
+                            layer.name);
+  } else {
+    text += fmt::format("  activation = {} = {}\n", product, number(activation));
+  }
+  if (active) {
+    text += "  active: its activation is above 0\n";
+  } else if (requested <= 0.0) {
+    text += "  inactive: it requested 0\n";
+  } else if (!blockers.empty()) {
+    text += fmt::format("  inactive: {} {} fully active (factor 0)\n", listing(blockers),
+                        blockers.size() == 1 ? "is" : "are");
+  } else {
+    text += "  inactive: its activation is 0\n";
+  }
+  if (const Json& recorded_json = at(own, "activation"); recorded_json.is_number()) {
+    const double recorded = recorded_json.get<double>();
+    if (std::abs(recorded - activation) > 1e-9 * std::max(1.0, std::abs(recorded))) {
+      text += fmt::format(
+          "  note: the trace records activation {}, not {}: was it written with another version "
+          "of the config?\n",
+          number(recorded), number(activation));
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> strings(const Json& list) {
+  std::vector<std::string> out;
+  if (!list.is_array()) return out;
+  for (const auto& item : list) {
+    if (item.is_string()) out.push_back(item.get<std::string>());
+  }
+  return out;
+}
+
+std::string state_of(const Json& record) {
+  const Json& state = at(record, "state");
+  return state.is_string() ? state.get<std::string>() : std::string();
+}
+
+std::string describe_state(const Json& record) {
+  const std::string state = state_of(record);
+  const auto queue = strings(at(record, "queue"));
+  return fmt::format("state {}; queue: {}", state.empty() ? "(none)" : state,
+                     queue.empty() ? "(empty)" : join(queue, ", "));
+}
+
+Explanation explain_controller(const Program& program, std::uint32_t target, std::uint64_t step,
+                               const Records& records) {
+  const Controller& controller = *program.controllers[target];
+  const auto entry = [&](const Json& record) -> const Json* {
+    const Json& found = at(at(record, "controllers"), controller.name());
+    return found.is_object() ? &found : nullptr;
+  };
+  const Json* now = entry(records.current);
+  if (now == nullptr) {
+    return failure(Status::kBadTrace, fmt::format("step {} of the trace has no record of state "
+                                                  "machine {}",
+                                                  step, controller.name()));
+  }
+  const Json* before = entry(records.previous);
+  const Json* after = entry(records.next);
+  const std::string status = now->value("status", "");
+  const auto events = strings(at(*now, "events"));
+
+  Explanation out;
+  std::string& text = out.text;
+  text = fmt::format("state machine {} at step {}: cycle {}, {}\n", controller.name(), step,
+                     now->value("cycle", 0), status);
+  text +=
+      fmt::format("  stepped by: {}\n",
+                  controller.owned() ? "its owner (a state_machine behaviour, or a parent state)"
+                                     : "the manager, after the output pass (it is standalone)");
+  if (before != nullptr) {
+    text += "  before the step: " + describe_state(*before) + "\n";
+  } else if (step == 1) {
+    text += "  before the step: (none; the initial queue)\n";
+  }
+  text +=
+      "  events, in order: " + (events.empty() ? std::string("(none)") : join(events, ", ")) + "\n";
+  text += "  after the step: " + describe_state(*now) + "\n";
+
+  std::vector<std::string> meaning;
+  if (events.empty()) {
+    if (status == "finished") {
+      meaning.push_back("it has finished: no state runs");
+    } else if (status == "error") {
+      meaning.push_back("it stopped with an error (see the run's log)");
+    } else if (controller.owned()) {
+      meaning.push_back(
+          "it was not stepped: its owner did not step it in this step (a state_machine behaviour "
+          "steps its controller only while it is active)");
+    } else {
+      meaning.push_back("it was not stepped in this step");
+    }
+  }
+  std::string popped;
+  for (const auto& event : events) {
+    const auto space = event.find(' ');
+    const std::string verb = event.substr(0, space);
+    const std::string state = space == std::string::npos ? "" : event.substr(space + 1);
+    if (verb == "deactivate") {
+      meaning.push_back(fmt::format(
+          "{} was deactivated: it had asked to proceed, the plan was pre-empted, or the "
+          "controller was terminated",
+          state));
+    } else if (verb == "activate") {
+      popped = state;
+      meaning.push_back(fmt::format(
+          "{} became the current state (the head of the queue) and was activated", state));
+    } else if (verb == "execute") {
+      std::string outcome;
+      if (after != nullptr) {
+        const auto next_events = strings(at(*after, "events"));
+        if (!next_events.empty() && next_events.front() == "deactivate " + state) {
+          outcome = fmt::format(
+              " and is deactivated at step {}: it asked to proceed (or the plan "
+              "was pre-empted)",
+              step + 1);
+        } else if (std::find(next_events.begin(), next_events.end(), "execute " + state) !=
+                   next_events.end()) {
+          outcome = fmt::format(" and held: it runs again at step {}", step + 1);
+        } else if (next_events.empty()) {
+          outcome = fmt::format(" (the controller is not stepped at step {})", step + 1);
+        }
+      }
+      meaning.push_back(fmt::format("{} executed{}", state, outcome));
+    }
+  }
+  if (before != nullptr) {
+    auto expected = strings(at(*before, "queue"));
+    if (!popped.empty() && !expected.empty() && expected.front() == popped) {
+      expected.erase(expected.begin());
+    }
+    const auto queue = strings(at(*now, "queue"));
+    if (queue != expected) {
+      meaning.push_back(
+          fmt::format("the plan was edited in this step: the queue would have been "
+                      "[{}], it is [{}]",
+                      join(expected, ", "), join(queue, ", ")));
+    }
+    const std::string was = before->value("status", "");
+    if (was != status && status == "finished") meaning.push_back("the controller finished");
+    if (was != status && status == "error")
+      meaning.push_back("the controller stopped with an error");
+  }
+  text += "  so:\n";
+  for (const auto& line : meaning) text += "    - " + line + "\n";
+  return out;
+}
+
+}  // namespace
+
+Explanation explain(const Program& program, std::istream& trace, std::uint64_t step,
+                    std::string_view target) {
+  Explanation error;
+  const auto resolved = resolve(program, target, error);
+  if (!resolved) return error;
+  if (step == 0) return failure(Status::kNotFound, "steps count from 1");
+  try {
+    Records records;
+    if (auto failed = read_trace(program, trace, step, records)) return *failed;
+    return resolved->controller
+               ? explain_controller(program, resolved->index, step, records)
+               : explain_behaviour(program, resolved->index, step, records.current);
+  } catch (const Json::exception& malformed) {  // a member of the wrong JSON type
+    return failure(Status::kBadTrace, fmt::format("the trace is malformed: {}", malformed.what()));
+  }
+}
+
+}  // namespace arbiter

@@ -1,0 +1,444 @@
+#include "arbiter/manager.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <string_view>
+#include <typeinfo>
+
+namespace arbiter {
+
+Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
+    : program_(std::move(program)), logger_(logger ? std::move(logger) : spdlog::default_logger()) {
+  const std::size_t behaviours = program_.behaviours.size();
+  const std::size_t actuators = program_.actuators.size();
+  const std::size_t slots = program_.slots.size();
+  values_ = std::make_unique<std::byte[]>(std::max<std::size_t>(program_.value_bytes, 1));
+  actuator_written_ = std::make_unique<bool[]>(std::max<std::size_t>(actuators, 1));
+  slot_written_ = std::make_unique<bool[]>(std::max<std::size_t>(slots, 1));
+  requested_.assign(behaviours, 0.0);
+  activation_.assign(behaviours, 0.0);
+  factors_.assign(2 * behaviours, 1.0);
+  instances_.reserve(behaviours);
+  for (const auto& behaviour : program_.behaviours) instances_.push_back(behaviour.instance.get());
+  active_.assign(behaviours, 0);
+  nan_reported_.assign(behaviours, 0);
+  exception_reported_.assign(behaviours + program_.layers.size(), 0);
+  init_fault_handling();
+  mean_values_.assign(program_.max_writers, nullptr);
+  mean_weights_.assign(program_.max_writers, 0.0);
+
+  for (const auto& actuator : program_.actuators) {
+    void* at = values_.get() + actuator.offset;
+    actuator.type->construct(at);
+    if (actuator.default_value) {
+      std::string expected;
+      actuator.type->from_node(*actuator.default_value, at, expected);  // validated at load
+    }
+  }
+  for (std::size_t s = 0; s < slots; ++s) {
+    program_.slot_types[s]->construct(values_.get() + program_.slot_offsets[s]);
+  }
+  data_.values = values_.get();
+  data_.actuator_offset = program_.actuator_offsets.data();
+  data_.actuator_written = actuator_written_.get();
+  data_.slot_offset = program_.slot_offsets.data();
+  data_.slot_type = program_.slot_types.data();
+  data_.slot_written = slot_written_.get();
+  data_.step = 0;
+  data_.period = 1.0 / program_.rate_hz;
+  constexpr std::size_t kEventsPerStep = 64;
+  events_.resize(kEventsPerStep);
+  data_.events = events_.data();
+  data_.event_capacity = events_.size();
+  for (const auto& controller : program_.controllers) controller->set_logger(logger_.get());
+}
+
+Manager::~Manager() {
+  if (!values_) return;  // moved from
+  for (const auto& actuator : program_.actuators) {
+    actuator.type->destroy(values_.get() + actuator.offset);
+  }
+  for (std::size_t s = 0; s < program_.slots.size(); ++s) {
+    program_.slot_types[s]->destroy(values_.get() + program_.slot_offsets[s]);
+  }
+}
+
+const std::string& Manager::event_source(const detail::StepData::Event& event) const {
+  static const std::string kStandalone = "state machines";
+  if (event.source == kUnbound) return kStandalone;
+  if (event.source < program_.behaviours.size()) return program_.behaviours[event.source].name;
+  return program_.layers[event.source - program_.behaviours.size()].name;
+}
+
+void Manager::add_observer(Observer& observer) {
+  observers_.push_back(&observer);
+  observer.on_start(*this);
+}
+
+void Manager::remove_observer(Observer& observer) {
+  observers_.erase(std::remove(observers_.begin(), observers_.end(), &observer), observers_.end());
+}
+
+void Manager::finish() {
+  for (Observer* observer : observers_) observer->on_finish(*this);
+}
+
+namespace {
+
+// Stands in for a behaviour that is inactive because its code threw (docs/robustness.md).
+class Inert final : public Behaviour {
+ public:
+  double activation(const StepContext&) override { return 0.0; }
+};
+
+// How many doubles of a value a non-finite check looks at: double, vec2 and vec3 values.
+std::uint8_t finite_components(const ValueType& type) {
+  if (type.cpp_type == nullptr) return 0;
+  if (*type.cpp_type == typeid(double)) return 1;
+  if (*type.cpp_type == typeid(Vec2)) return 2;
+  if (*type.cpp_type == typeid(Vec3)) return 3;
+  return 0;
+}
+
+bool is_finite(const void* value, std::uint8_t components) {
+  switch (components) {
+    case 1:
+      return std::isfinite(*static_cast<const double*>(value));
+    case 2: {
+      const auto& v = *static_cast<const Vec2*>(value);
+      return std::isfinite(v.x) && std::isfinite(v.y);
+    }
+    case 3: {
+      const auto& v = *static_cast<const Vec3*>(value);
+      return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    }
+    default:
+      return true;
+  }
+}
+
+}  // namespace
+
+void Manager::init_fault_handling() {
+  const std::size_t behaviours = program_.behaviours.size();
+  inert_ = std::make_unique<Inert>();
+  faulted_step_.assign(behaviours + program_.layers.size(), 0);
+  disabled_.assign(behaviours + program_.layers.size(), 0);
+  suspended_.reserve(behaviours);
+  non_finite_reported_.assign(program_.slots.size(), 0);
+  finite_components_.resize(program_.slots.size());
+  for (std::size_t s = 0; s < program_.slots.size(); ++s) {
+    finite_components_[s] = finite_components(*program_.slot_types[s]);
+  }
+}
+
+// Called from ARBITER_GUARDED's handlers: reports the exception once and applies the thrower's
+// on_exception policy. Every policy drops the thrower's writes of this step (resolve_actuators
+// skips a writer whose faulted_step_ is this step).
+void Manager::report_exception(std::uint32_t index, const char* callback, const char* what) {
+  const bool is_behaviour = index < program_.behaviours.size();
+  const FaultPolicy policy =
+      is_behaviour ? program_.behaviours[index].on_exception : program_.on_exception;
+  faulted_step_[index] = data_.step;
+  if (is_behaviour && instances_[index] != inert_.get()) {
+    // A throw from update() leaves nothing to ask for a level: the behaviour sits out the
+    // rest of the step (and, when disabled, the rest of the run).
+    if (policy == FaultPolicy::kDisable) {
+      instances_[index] = inert_.get();
+    } else if (std::string_view(callback) == "update") {
+      instances_[index] = inert_.get();
+      suspended_.push_back(index);
+    }
+  }
+  if (policy == FaultPolicy::kDisable) disabled_[index] = 1;
+  const char* outcome = "it counts as inactive in each step where it throws (on_exception: "
+                        "inactive; reported once)";
+  if (policy == FaultPolicy::kDisable) {
+    outcome = "it is disabled for the rest of the run (on_exception: disable)";
+  } else if (policy == FaultPolicy::kStop) {
+    outcome = "the manager stops after this step (on_exception: stop)";
+  }
+  std::string message;
+  if (is_behaviour) {
+    const auto& behaviour = program_.behaviours[index];
+    message = fmt::format("{}:{}:{}: behaviour '{}' ({}) threw from {}() in step {}: {}",
+                          behaviour.location.file, behaviour.location.line,
+                          behaviour.location.column, behaviour.name, behaviour.cls->name,
+                          callback, data_.step, what);
+  } else {
+    const auto& layer = program_.layers[index - program_.behaviours.size()];
+    message = fmt::format("{}:{}:{}: interface of layer '{}' ({}) threw from {}() in step {}: {}",
+                          layer.location.file, layer.location.line, layer.location.column,
+                          layer.name, layer.interface_class->name, callback, data_.step, what);
+  }
+  if (policy == FaultPolicy::kStop && !stopping_) {
+    stopping_ = true;
+    stop_reason_ = message;
+  }
+  if (exception_reported_[index] != 0) return;
+  exception_reported_[index] = 1;
+  logger_->error("{}; {}", message, outcome);
+}
+
+// End of a step: behaviours that sat out this step come back; a stop takes effect.
+void Manager::finish_faults() {
+  for (const std::uint32_t b : suspended_) {
+    if (disabled_[b] == 0) instances_[b] = program_.behaviours[b].instance.get();
+  }
+  suspended_.clear();
+  if (program_.on_exception == FaultPolicy::kStop && !stopping_) {
+    // A state's exception stops its controller with status error (DESIGN 3.5); under
+    // `on_exception: stop` it stops the manager too.
+    for (const auto& controller : program_.controllers) {
+      if (controller->status() != ControllerStatus::kError) continue;
+      stopping_ = true;
+      stop_reason_ = fmt::format("state machine '{}' stopped with an error: {}",
+                                 controller->name(), controller->error());
+      logger_->error("{}; the manager stops after this step (on_exception: stop)", stop_reason_);
+      break;
+    }
+  }
+  if (stopping_) stopped_ = true;
+}
+
+void Manager::report_non_finite_write(std::uint32_t slot) {
+  if (non_finite_reported_[slot] != 0) return;
+  non_finite_reported_[slot] = 1;
+  const WriterSlot& writer = program_.slots[slot];
+  const CompiledActuator& actuator = program_.actuators[writer.actuator];
+  const SourceLocation* where = &program_.layers[actuator.layer].location;
+  std::string who = fmt::format("the interface of layer '{}'", program_.layers[actuator.layer].name);
+  if (writer.owner != kUnbound) {
+    where = &program_.behaviours[writer.owner].location;
+    who = fmt::format("behaviour '{}' ({})", program_.behaviours[writer.owner].name,
+                      program_.behaviours[writer.owner].cls->name);
+  }
+  logger_->warn(
+      "{}:{}:{}: {} wrote a non-finite value (NaN or infinity) to actuator '{}' in step {}; "
+      "such writes are ignored (reported once)",
+      where->file, where->line, where->column, who, actuator.name, data_.step);
+}
+
+#if defined(__GNUC__)
+#define ARBITER_NOINLINE __attribute__((noinline))
+#else
+#define ARBITER_NOINLINE
+#endif
+// GCC guesses that a virtual call goes to the one override it sees in this file (Inert) and
+// moves the real call out of line behind a comparison: for activation() that costs ~5 % of a
+// step (callgrind), while the same guess for update() (the base's no-op) saves the call.
+#if defined(__GNUC__) && !defined(__clang__)
+#define ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION \
+  __attribute__((optimize("no-devirtualize-speculatively")))
+#else
+#define ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION
+#endif
+
+// Runs one callback of behaviour code; an exception stops at the step boundary.
+// `index` is captured by value: a loop counter captured by reference would live on the stack.
+#define ARBITER_GUARDED(index, callback, statement)                   \
+  [&, guarded_index = static_cast<std::uint32_t>(index)]() -> bool {  \
+    try {                                                             \
+      statement;                                                      \
+      return true;                                                    \
+    } catch (const std::exception& error) {                           \
+      report_exception(guarded_index, callback, error.what());        \
+    } catch (...) {                                                   \
+      report_exception(guarded_index, callback, "unknown exception"); \
+    }                                                                 \
+    return false;                                                     \
+  }()
+
+void Manager::step() {
+  if (stopped_) return;
+  ++data_.step;
+  data_.event_count = 0;
+  const bool first_step = data_.step == 1;
+  for (const auto& controller : program_.controllers) controller->clear_events();
+  const auto interface_index = [&](const CompiledLayer& layer) {
+    return static_cast<std::uint32_t>(program_.behaviours.size() +
+                                      (&layer - program_.layers.data()));
+  };
+
+  for (const auto& layer : program_.layers) {
+    if (!layer.is_interface()) continue;
+    for (std::uint32_t a = layer.actuator_begin; a < layer.actuator_end; ++a) {
+      for (auto s = program_.actuator_slot_begin[a]; s < program_.actuator_slot_begin[a + 1]; ++s) {
+        slot_written_[program_.actuator_slots[s]] = false;
+      }
+    }
+    ExecuteContext context(data_, interface_index(layer), 1.0, first_step);
+    if (disabled_[interface_index(layer)] == 0) {
+      ARBITER_GUARDED(interface_index(layer), "input", layer.interface->input(context));
+    }
+    resolve_actuators(layer);
+  }
+
+  for (const auto& layer : program_.layers) {
+    if (!layer.is_interface()) run_layer(layer);
+  }
+
+  for (const auto& layer : program_.layers) {
+    if (!layer.is_interface()) continue;
+    const StepContext context(data_, interface_index(layer));
+    if (disabled_[interface_index(layer)] == 0) {
+      ARBITER_GUARDED(interface_index(layer), "output", layer.interface->output(context));
+    }
+  }
+
+  // Standalone controllers run after the output pass (DESIGN 3.5); a controller contains the
+  // exceptions of its states itself.
+  const StepContext standalone(data_, kUnbound);
+  for (const auto& controller : program_.controllers) {
+    if (!controller->owned()) controller->step(standalone);
+  }
+  finish_faults();
+
+  for (Observer* observer : observers_) observer->on_step(*this);
+}
+
+void Manager::run_layer(const CompiledLayer& layer) {
+  const std::uint32_t begin = layer.behaviour_begin;
+  const std::uint32_t end = layer.behaviour_end;
+  // Sensors read actuators in place: an actuator of this or a later layer still holds last
+  // step's value and written flag until resolve_actuators() below, which is DESIGN 3.3's timing.
+  for (std::uint32_t a = layer.actuator_begin; a < layer.actuator_end; ++a) {
+    for (auto s = program_.actuator_slot_begin[a]; s < program_.actuator_slot_begin[a + 1]; ++s) {
+      slot_written_[program_.actuator_slots[s]] = false;
+    }
+  }
+  update_behaviours(begin, end);
+  request_and_refine(begin, end);
+  if (layer.normalise) {
+    double sum = 0.0;
+    for (std::uint32_t b = begin; b < end; ++b) sum += activation_[b];
+    if (sum > 0.0) {
+      for (std::uint32_t b = begin; b < end; ++b) activation_[b] /= sum;
+    }
+  }
+  execute_behaviours(begin, end);
+  resolve_actuators(layer);
+}
+
+// Each pass over a layer's behaviours is a function of its own (never inlined into one big
+// one), so that its loop keeps its counters in registers across the calls into behaviour code.
+
+ARBITER_NOINLINE void Manager::update_behaviours(std::uint32_t begin, std::uint32_t end) {
+  for (std::uint32_t b = begin; b < end; ++b) {
+    const StepContext context(data_, b);
+    ARBITER_GUARDED(b, "update", instances_[b]->update(context));
+  }
+}
+
+// Queries each behaviour's level (DESIGN 3.2 c) and refines it at once (d): refinement reads
+// only requested levels and the refined levels of behaviours earlier in the order, and no
+// behaviour code sees a refined level before execute(), so the result is that of two passes.
+// In one loop the products' latency overlaps the calls into behaviour code instead of adding to
+// them. a[b] = r[b] * Π (1 - a[i]) over b's closed inhibitors is computed through b's recipe:
+// the product Q[b] over its chained inhibitors from earlier behaviours' block products, then
+// the rest.
+ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_NOINLINE void Manager::request_and_refine(
+    std::uint32_t begin, std::uint32_t end) {
+  const auto& recipes = program_.inhibitions.recipes();
+  const std::uint32_t* recipe = recipes.begin.data();
+  const std::uint32_t* split = recipes.split.data();
+  const std::uint32_t* terms = recipes.terms.data();
+  double* factor = factors_.data();
+  for (std::uint32_t b = begin; b < end; ++b) {
+    const StepContext context(data_, b);
+    double level = 0.0;
+    if (!ARBITER_GUARDED(b, "activation", level = instances_[b]->activation(context))) level = 0.0;
+    if (!std::isfinite(level)) level = non_finite_level(b, level);
+    level = std::clamp(level, 0.0, 1.0);
+    requested_[b] = level;
+
+    // The first factor starts the product: a multiplication by 1.0 would lengthen a chain's
+    // latency, which runs from behaviour to behaviour.
+    double chained = 1.0;
+    if (recipe[b] < split[b]) {
+      chained = factor[terms[recipe[b]]];
+      for (auto t = recipe[b] + 1; t < split[b]; ++t) chained *= factor[terms[t]];
+    }
+    level *= chained;
+    for (auto t = split[b]; t < recipe[b + 1]; ++t) level *= factor[terms[t]];
+    activation_[b] = level;
+    factor[2 * b] = 1.0 - level;
+    factor[2 * b + 1] = (1.0 - level) * chained;
+  }
+}
+
+// NaN counts as 0, ±infinity is clamped; each reported once per behaviour.
+double Manager::non_finite_level(std::uint32_t b, double level) {
+  const double clamped = std::isnan(level) ? 0.0 : std::clamp(level, 0.0, 1.0);
+  if (nan_reported_[b] != 0) return clamped;
+  nan_reported_[b] = 1;
+  const auto& where = program_.behaviours[b].location;
+  logger_->warn(
+      "{}:{}:{}: behaviour '{}' requested a{} activation level; it counts as {} (reported "
+      "once)",
+      where.file, where.line, where.column, program_.behaviours[b].name,
+      std::isnan(level) ? " NaN" : level > 0 ? "n infinite" : " negative infinite", clamped);
+  return clamped;
+}
+
+ARBITER_NOINLINE void Manager::execute_behaviours(std::uint32_t begin, std::uint32_t end) {
+  for (std::uint32_t b = begin; b < end; ++b) {
+    Behaviour& behaviour = *instances_[b];
+    const bool was_active = active_[b] != 0;
+    const bool is_active = activation_[b] > 0.0;
+    active_[b] = is_active ? 1 : 0;
+    if (is_active) {
+      ExecuteContext context(data_, b, activation_[b], !was_active);
+      ARBITER_GUARDED(b, "execute", behaviour.execute(context));
+    } else {
+      const InhibitedContext context(data_, b, was_active);
+      ARBITER_GUARDED(b, "inhibited", behaviour.inhibited(context));
+    }
+  }
+}
+
+void Manager::resolve_actuators(const CompiledLayer& layer) {
+  const auto interface =
+      static_cast<std::uint32_t>(program_.behaviours.size() + (&layer - program_.layers.data()));
+  for (std::uint32_t a = layer.actuator_begin; a < layer.actuator_end; ++a) {
+    const CompiledActuator& actuator = program_.actuators[a];
+    void* value = values_.get() + actuator.offset;
+    std::size_t count = 0;
+    double best = 0.0;
+    std::uint32_t winner = kUnbound;
+    for (auto s = program_.actuator_slot_begin[a]; s < program_.actuator_slot_begin[a + 1]; ++s) {
+      const std::uint32_t slot = program_.actuator_slots[s];
+      if (!slot_written_[slot]) continue;
+      const std::uint32_t owner = program_.slots[slot].owner;
+      const double weight = owner == kUnbound ? 1.0 : activation_[owner];
+      if (weight <= 0.0) continue;  // writes of inactive behaviours are ignored
+      // Writes of a writer that threw this step, and non-finite numbers, are ignored too.
+      if (faulted_step_[owner == kUnbound ? interface : owner] == data_.step) continue;
+      if (finite_components_[slot] != 0 &&
+          !is_finite(values_.get() + program_.slot_offsets[slot], finite_components_[slot])) {
+        report_non_finite_write(slot);
+        continue;
+      }
+      mean_values_[count] = values_.get() + program_.slot_offsets[slot];
+      mean_weights_[count] = weight;
+      ++count;
+      if (weight > best) {  // strictly greater: on a tie the earlier writer wins
+        best = weight;
+        winner = slot;
+      }
+    }
+    actuator_written_[a] = count > 0;
+    if (count == 0) continue;  // values persist
+    if (actuator.aggregate) {
+      actuator.type->mean(value, mean_values_.data(), mean_weights_.data(), count);
+    } else {
+      actuator.type->assign(value, values_.get() + program_.slot_offsets[winner]);
+    }
+  }
+}
+
+}  // namespace arbiter

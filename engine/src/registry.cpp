@@ -1,0 +1,164 @@
+#include "arbiter/registry.hpp"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace arbiter {
+
+const char* to_string(ClassKind kind) {
+  switch (kind) {
+    case ClassKind::kBehaviour:
+      return "behaviour";
+    case ClassKind::kState:
+      return "state";
+    case ClassKind::kInterface:
+      return "interface";
+  }
+  return "?";
+}
+
+const char* to_string(ParamKind kind) {
+  switch (kind) {
+    case ParamKind::kBool:
+      return "bool";
+    case ParamKind::kInt:
+      return "int";
+    case ParamKind::kDouble:
+      return "double";
+    case ParamKind::kString:
+      return "string";
+    case ParamKind::kVec2:
+      return "vec2";
+    case ParamKind::kVec3:
+      return "vec3";
+    case ParamKind::kDoubleList:
+      return "list of double";
+    case ParamKind::kStringList:
+      return "list of string";
+    case ParamKind::kAny:
+      return "any";
+  }
+  return "?";
+}
+
+const Param* ParamSet::find(std::string_view name) const {
+  for (const auto& item : items) {
+    if (item.name == name) return &item;
+  }
+  return nullptr;
+}
+
+const ParamSpec* ClassInfo::find_param(std::string_view param_name) const {
+  for (const auto& spec : params) {
+    if (spec.name == param_name) return &spec;
+  }
+  return nullptr;
+}
+
+const PortSpec* ClassInfo::find_port(std::string_view port_name) const {
+  for (const auto& spec : ports) {
+    if (spec.name == port_name) return &spec;
+  }
+  return nullptr;
+}
+
+Registry::Registry() {
+  add_value_type<bool>("bool");
+  add_value_type<std::int64_t>("int");
+  add_value_type<double>("double");
+  add_value_type<Vec2>("vec2");
+  add_value_type<Vec3>("vec3");
+  add_value_type<std::string>("string");
+}
+
+ValueType& Registry::add_value_type(ValueType type) {
+  if (find_value_type(type.name) != nullptr) {
+    throw std::logic_error(fmt::format("value type '{}' registered twice", type.name));
+  }
+  if (type.cpp_type != nullptr && value_type_of(*type.cpp_type) != nullptr) {
+    throw std::logic_error(fmt::format("C++ type of value type '{}' is already registered as '{}'",
+                                       type.name, value_type_of(*type.cpp_type)->name));
+  }
+  type.origin = origin_;
+  return *value_types_.emplace_back(std::make_unique<ValueType>(std::move(type)));
+}
+
+ClassInfo& Registry::add_class(std::string name, ClassKind kind) {
+  if (find_class(kind, name) != nullptr) {
+    throw std::logic_error(fmt::format("{} class '{}' registered twice", to_string(kind), name));
+  }
+  ClassInfo info;
+  info.name = name;
+  info.kind = kind;
+  info.origin = origin_;
+  return classes_.emplace(std::make_pair(std::move(name), kind), std::move(info)).first->second;
+}
+
+const ClassInfo* Registry::find_class(ClassKind kind, std::string_view name) const {
+  const auto found = classes_.find(std::make_pair(std::string(name), kind));
+  return found == classes_.end() ? nullptr : &found->second;
+}
+
+const ClassInfo* Registry::find_any_class(std::string_view name) const {
+  const auto found = classes_.lower_bound(std::make_pair(std::string(name), ClassKind{}));
+  return found != classes_.end() && found->first.first == name ? &found->second : nullptr;
+}
+
+const ValueType* Registry::find_value_type(std::string_view name) const {
+  for (const auto& type : value_types_) {
+    if (type->name == name) return type.get();
+  }
+  return nullptr;
+}
+
+const ValueType* Registry::value_type_of(const std::type_info& type) const {
+  for (const auto& candidate : value_types_) {
+    if (candidate->cpp_type != nullptr && *candidate->cpp_type == type) return candidate.get();
+  }
+  return nullptr;
+}
+
+std::string Registry::value_type_name(const std::type_info& type) const {
+  const ValueType* found = value_type_of(type);
+  return found != nullptr ? found->name : fmt::format("<unregistered C++ type {}>", type.name());
+}
+
+std::vector<std::string> Registry::class_names(ClassKind kind) const {
+  std::vector<std::string> names;
+  for (const auto& [key, info] : classes_) {
+    if (info.kind == kind) names.push_back(info.name);
+  }
+  return names;
+}
+
+std::vector<std::string> Registry::value_type_names() const {
+  std::vector<std::string> names;
+  for (const auto& type : value_types_) names.push_back(type->name);
+  return names;
+}
+
+void Registry::merge(Registry&& other, const SourceLocation& where, Diagnostics& diagnostics) {
+  for (auto& [key, info] : other.classes_) {
+    if (const ClassInfo* existing = find_class(info.kind, info.name)) {
+      diagnostics.error(where, "class-clash",
+                        fmt::format("{} class '{}' from {} clashes with the one from {}",
+                                    to_string(info.kind), info.name, info.origin,
+                                    existing->origin));
+      continue;
+    }
+    classes_.emplace(key, std::move(info));
+  }
+  for (auto& type : other.value_types_) {
+    if (type->origin == "built-in") continue;  // every registry starts with these
+    if (const ValueType* existing = find_value_type(type->name)) {
+      diagnostics.error(where, "class-clash",
+                        fmt::format("value type '{}' from {} clashes with the one from {}",
+                                    type->name, type->origin, existing->origin));
+      continue;
+    }
+    value_types_.push_back(std::move(type));
+  }
+}
+
+}  // namespace arbiter

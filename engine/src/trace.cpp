@@ -1,0 +1,125 @@
+#include "arbiter/trace.hpp"
+
+#include <fmt/format.h>
+
+namespace arbiter {
+
+namespace {
+
+void append_name(const std::string& name, std::string& out) {
+  detail::append_json_string(name, out);
+}
+
+}  // namespace
+
+std::string event_text(const Controller& controller, const Controller::Event& event) {
+  const char* verb = event.kind == Controller::Event::Kind::kActivate  ? "activate"
+                     : event.kind == Controller::Event::Kind::kExecute ? "execute"
+                                                                       : "deactivate";
+  return fmt::format("{} {}", verb, controller.states()[event.state].name);
+}
+
+std::string trace_header(const Program& program) {
+  std::string out = R"({"arbiter_trace": 1, "name": )";
+  append_name(program.name, out);
+  out += R"(, "layers": [)";
+  for (std::size_t l = 0; l < program.layers.size(); ++l) {
+    const auto& layer = program.layers[l];
+    if (l > 0) out += ", ";
+    out += R"({"name": )";
+    append_name(layer.name, out);
+    out += R"(, "order": [)";
+    for (auto b = layer.behaviour_begin; b < layer.behaviour_end; ++b) {
+      if (b > layer.behaviour_begin) out += ", ";
+      append_name(program.behaviours[b].name, out);
+    }
+    out += "]}";
+  }
+  out += "]}";
+  return out;
+}
+
+void append_step_record(const Manager& manager, std::string& out) {
+  const Program& program = manager.program();
+  fmt::format_to(std::back_inserter(out), R"({{"step": {}, "layers": {{)", manager.steps());
+  std::vector<std::uint32_t> inhibitors;
+  for (std::size_t l = 0; l < program.layers.size(); ++l) {
+    const auto& layer = program.layers[l];
+    if (l > 0) out += ", ";
+    append_name(layer.name, out);
+    out += ": {";
+    for (auto b = layer.behaviour_begin; b < layer.behaviour_end; ++b) {
+      if (b > layer.behaviour_begin) out += ", ";
+      append_name(program.behaviours[b].name, out);
+      out += R"(: {"requested": )";
+      detail::append_json_number(manager.requested(b), out);
+      out += R"(, "activation": )";
+      detail::append_json_number(manager.activation(b), out);
+      out += manager.active(b) ? R"(, "active": true)" : R"(, "active": false)";
+      out += R"(, "inhibited_by": [)";
+      bool first = true;
+      program.inhibitions.closed(b, inhibitors);
+      for (const auto inhibitor : inhibitors) {
+        if (manager.activation(inhibitor) <= 0.0) continue;
+        if (!first) out += ", ";
+        first = false;
+        append_name(program.behaviours[inhibitor].name, out);
+      }
+      out += "]}";
+    }
+    out += "}";
+  }
+  out += R"(}, "actuators": {)";
+  for (std::uint32_t a = 0; a < program.actuators.size(); ++a) {
+    if (a > 0) out += ", ";
+    append_name(program.actuators[a].name, out);
+    out += R"(: {"value": )";
+    program.actuators[a].type->append_json(manager.actuator_value(a), out);
+    out += manager.actuator_written(a) ? R"(, "written": true})" : R"(, "written": false})";
+  }
+  out += R"(}, "controllers": {)";
+  for (std::size_t c = 0; c < program.controllers.size(); ++c) {
+    const Controller& controller = *program.controllers[c];
+    if (c > 0) out += ", ";
+    append_name(controller.name(), out);
+    fmt::format_to(std::back_inserter(out), R"(: {{"cycle": {}, "state": )", controller.cycle());
+    const auto current = controller.current_state();
+    if (current.empty()) {
+      out += "null";
+    } else {
+      append_name(std::string(current), out);
+    }
+    out += R"(, "queue": [)";
+    for (std::size_t i = 0; i < controller.queue_size(); ++i) {
+      if (i > 0) out += ", ";
+      append_name(std::string(controller.queued(i)), out);
+    }
+    out += R"(], "events": [)";
+    for (std::size_t e = 0; e < controller.event_count(); ++e) {
+      const auto& event = controller.events()[e];
+      if (e > 0) out += ", ";
+      append_name(event_text(controller, event), out);
+    }
+    out += R"(], "status": ")";
+    out += to_string(controller.status());
+    out += "\"}";
+  }
+  out += "}}";
+}
+
+void TraceWriter::on_start(const Manager& manager) {
+  out_ << trace_header(manager.program()) << '\n';
+}
+
+void TraceWriter::on_step(const Manager& manager) {
+  line_.clear();
+  append_step_record(manager, line_);
+  line_ += '\n';
+  out_ << line_;
+}
+
+void TraceWriter::on_finish(const Manager&) {
+  out_.flush();
+}
+
+}  // namespace arbiter
