@@ -1,0 +1,15 @@
+#pragma once
+// The classes every Arbiter config can use without a plugin (DESIGN 6).
+
+#include "arbiter/registry.hpp"
+
+namespace arbiter {
+
+/// Registers the built-in classes (`scripted` behaviour, ...) into `registry`.
+void register_builtin_behaviours(Registry& registry);
+
+void register_scripted_behaviour(Registry& registry);
+void register_scripted_state(Registry& registry);
+void register_state_machine_behaviour(Registry& registry);
+
+}  // namespace arbiter
