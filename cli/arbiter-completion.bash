@@ -1,0 +1,94 @@
+# Bash completion for `arbiter`: commands, options, option values, config files, and the layer
+# and behaviour names of the config on the command line (read with `arbiter dump`).
+# Installed as share/bash-completion/completions/arbiter; to try it from the sources:
+#   source cli/arbiter-completion.bash
+
+_arbiter_config_of() {  # the first config file among the words typed so far
+  local word
+  for word in "${COMP_WORDS[@]:2:COMP_CWORD-2}"; do
+    case "$word" in
+      *.yaml | *.yml | *.json) [[ -f $word ]] && { printf '%s\n' "$word"; return; } ;;
+    esac
+  done
+}
+
+_arbiter_files() {  # files whose names match the regex $1, and directories, completing $cur
+  compgen -f -- "$cur" | grep -E -- "$1"
+  compgen -d -- "$cur"
+}
+
+_arbiter_names() {  # layers|behaviours|machines of a config, from its text dump
+  local config what=$1
+  config=$(_arbiter_config_of)
+  [[ -n $config ]] || return
+  "${COMP_WORDS[0]}" dump "$config" 2>/dev/null | awk -v what="$what" '
+    /^layer / { layer = $2; if (what == "layers") print $2 }
+    /^state machine / { if (what == "machines") print $3 }
+    /^    [0-9]+\. / { if (what == "behaviours") { print $2; print layer "/" $2 } }'
+}
+
+_arbiter() {
+  local cur prev command word i
+  cur=${COMP_WORDS[COMP_CWORD]}
+  prev=${COMP_WORDS[COMP_CWORD - 1]}
+  local commands="validate run dump explain plugins schema"
+  local global="--help --version --log-level --plugin-path"
+
+  command=""
+  for ((i = 1; i < COMP_CWORD; ++i)); do
+    word=${COMP_WORDS[i]}
+    case "$word" in
+      --log-level | --plugin-path) ((++i)) ;;
+      -*) ;;
+      *) command=$word; break ;;
+    esac
+  done
+
+  case "$prev" in
+    --log-level) mapfile -t COMPREPLY < <(compgen -W "trace debug info warn error off" -- "$cur"); return ;;
+    --plugin-path) mapfile -t COMPREPLY < <(compgen -d -- "$cur"); return ;;
+    --format)
+      case "$command" in
+        dump) mapfile -t COMPREPLY < <(compgen -W "text dot json" -- "$cur") ;;
+        *) mapfile -t COMPREPLY < <(compgen -W "text json" -- "$cur") ;;
+      esac
+      return ;;
+    --trace) mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$'); return ;;
+    --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
+    --steps | --step | --load) return ;;
+  esac
+
+  if [[ -z $command ]]; then
+    if [[ $cur == -* ]]; then
+      mapfile -t COMPREPLY < <(compgen -W "$global" -- "$cur")
+    else
+      mapfile -t COMPREPLY < <(compgen -W "$commands" -- "$cur")
+    fi
+    return
+  fi
+
+  local options
+  case "$command" in
+    validate) options="--format --strict --help" ;;
+    run) options="--steps --trace --quiet --realtime --strict --help" ;;
+    dump) options="--format --layer --help" ;;
+    explain) options="--trace --step --help" ;;
+    plugins) options="--format --load --builtin --help" ;;
+    schema) options="--load --builtin --help" ;;
+  esac
+  if [[ $cur == -* ]]; then
+    mapfile -t COMPREPLY < <(compgen -W "$options" -- "$cur")
+    return
+  fi
+  case "$command" in
+    plugins | schema) return ;;
+    explain)
+      if [[ -n $(_arbiter_config_of) ]]; then
+        mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names behaviours) $(_arbiter_names machines)" -- "$cur")
+        return
+      fi ;;
+  esac
+  mapfile -t COMPREPLY < <(_arbiter_files '\.(yaml|yml|json)$')
+}
+
+complete -o filenames -F _arbiter arbiter

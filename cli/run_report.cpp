@@ -1,0 +1,112 @@
+#include "run_report.hpp"
+
+#include <fmt/format.h>
+
+namespace arbiter::cli {
+
+namespace {
+
+std::string inhibitors_of(const Manager& manager, std::uint32_t behaviour) {
+  const Program& program = manager.program();
+  std::string names;
+  for (const auto inhibitor : program.inhibitions.closed(behaviour)) {
+    if (manager.activation(inhibitor) <= 0.0) continue;
+    names += (names.empty() ? "" : ", ") + program.behaviours[inhibitor].name;
+  }
+  return names;
+}
+
+}  // namespace
+
+void RunReport::on_start(const Manager& manager) {
+  const Program& program = manager.program();
+  was_active_.assign(program.behaviours.size(), 0);
+  active_steps_.assign(program.behaviours.size(), 0);
+  controller_status_.assign(program.controllers.size(), ControllerStatus::kRunning);
+  if (quiet_) return;
+  out_ << fmt::format("running {}: {} layers, {} behaviours, {} state machines\n", program.name,
+                      program.layers.size(), program.behaviours.size(), program.controllers.size());
+}
+
+void RunReport::on_step(const Manager& manager) {
+  const Program& program = manager.program();
+  for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
+    const bool active = manager.active(b);
+    if (active) ++active_steps_[b];
+    if (active == (was_active_[b] != 0)) continue;
+    was_active_[b] = active ? 1 : 0;
+    if (quiet_) continue;
+    const auto& behaviour = program.behaviours[b];
+    const auto& layer = program.layers[behaviour.layer].name;
+    if (active) {
+      out_ << fmt::format("step {:>4}  {}/{} activated (activation {:.3g})\n", manager.steps(),
+                          layer, behaviour.name, manager.activation(b));
+    } else if (manager.requested(b) > 0.0) {
+      out_ << fmt::format("step {:>4}  {}/{} inhibited by {}\n", manager.steps(), layer,
+                          behaviour.name, inhibitors_of(manager, b));
+    } else {
+      out_ << fmt::format("step {:>4}  {}/{} deactivated (requests 0)\n", manager.steps(), layer,
+                          behaviour.name);
+    }
+  }
+  report_controllers(manager);
+  for (std::size_t e = 0; e < manager.event_count(); ++e) {
+    const auto& event = manager.event(e);
+    ++event_counts_[fmt::format("{}: {}", manager.event_source(event), event.text)];
+    if (quiet_) continue;
+    out_ << fmt::format("step {:>4}  {}: {}\n", manager.steps(), manager.event_source(event),
+                        event.text);
+  }
+}
+
+void RunReport::report_controllers(const Manager& manager) {
+  const Program& program = manager.program();
+  for (std::size_t c = 0; c < program.controllers.size(); ++c) {
+    const Controller& controller = *program.controllers[c];
+    const bool status_changed = controller.status() != controller_status_[c];
+    controller_status_[c] = controller.status();
+    if (quiet_) continue;
+    for (std::size_t e = 0; e < controller.event_count(); ++e) {
+      const auto& event = controller.events()[e];
+      if (event.kind != Controller::Event::Kind::kActivate) continue;
+      std::string queue;
+      for (std::size_t i = 0; i < controller.queue_size(); ++i) {
+        queue += fmt::format("{}{}", i == 0 ? "" : ", ", controller.queued(i));
+      }
+      out_ << fmt::format("step {:>4}  {}: {} (cycle {}; queued: {})\n", manager.steps(),
+                          controller.name(), controller.states()[event.state].name,
+                          controller.cycle(), queue.empty() ? "nothing" : queue);
+    }
+    if (!status_changed) continue;
+    if (controller.status() == ControllerStatus::kError) {
+      out_ << fmt::format("step {:>4}  {}: error: {}\n", manager.steps(), controller.name(),
+                          controller.error());
+    } else {
+      out_ << fmt::format("step {:>4}  {}: {}\n", manager.steps(), controller.name(),
+                          to_string(controller.status()));
+    }
+  }
+}
+
+void RunReport::on_finish(const Manager& manager) {
+  if (quiet_) return;
+  const Program& program = manager.program();
+  out_ << fmt::format("\n{} steps.\n", manager.steps());
+  for (const auto& controller : program.controllers) {
+    out_ << fmt::format("State machine {}: {} after {} cycles.\n", controller->name(),
+                        to_string(controller->status()), controller->cycle());
+  }
+  for (const auto& [event, count] : event_counts_) {
+    out_ << fmt::format("{} ({} time{})\n", event, count, count == 1 ? "" : "s");
+  }
+  if (program.behaviours.empty()) return;
+  out_ << "Active steps per behaviour:\n";
+  for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
+    out_ << fmt::format(
+        "  {:<32} {:>6}  (final activation {:.3g})\n",
+        program.layers[program.behaviours[b].layer].name + "/" + program.behaviours[b].name,
+        active_steps_[b], manager.activation(b));
+  }
+}
+
+}  // namespace arbiter::cli

@@ -1,0 +1,30 @@
+#pragma once
+// What `arbiter run` tells a person: a line per change of activity, then a summary.
+
+#include <map>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "arbiter/manager.hpp"
+
+namespace arbiter::cli {
+
+class RunReport : public Observer {
+ public:
+  RunReport(std::ostream& out, bool quiet) : out_(out), quiet_(quiet) {}
+  void on_start(const Manager& manager) override;
+  void on_step(const Manager& manager) override;
+  void on_finish(const Manager& manager) override;
+
+ private:
+  void report_controllers(const Manager& manager);
+  std::ostream& out_;
+  bool quiet_;
+  std::vector<char> was_active_;
+  std::vector<std::uint64_t> active_steps_;
+  std::vector<ControllerStatus> controller_status_;
+  std::map<std::string, std::uint64_t> event_counts_;  ///< "source: text" → how often
+};
+
+}  // namespace arbiter::cli
