@@ -1,0 +1,179 @@
+#include "world_link.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "arbiter/init_context.hpp"
+
+namespace arbiter::soccer {
+
+void WorldLink::init(InitContext& ctx) {
+  WorldConfig config;
+  config.seed = static_cast<std::uint32_t>(ctx.param<std::int64_t>("seed"));
+  // Unless told otherwise, simulated time runs at the config's nominal rate.
+  const double dt = ctx.param<double>("dt");
+  config.dt = dt > 0.0 ? dt : 1.0 / ctx.rate_hz();
+  const Vec3 robot = ctx.param<Vec3>("robot_start");
+  config.robot_start = {robot.x, robot.y, robot.z};
+  const Vec2 ball = ctx.param<Vec2>("ball_start");
+  config.ball_start = {ball.x, ball.y};
+  config.noise = ctx.param<double>("noise");
+  config.button_step = ctx.param<std::int64_t>("button_step");
+  config.shot_step = ctx.param<std::int64_t>("shot_step");
+  const Vec2 shot_target = ctx.param<Vec2>("shot_target");
+  config.shot_target = {shot_target.x, shot_target.y};
+  config.shot_speed = ctx.param<double>("shot_speed");
+
+  // Vector params carry no range in the schema, so the field's bounds are checked here.
+  const double half_length = 0.5 * config.field_length;
+  const double half_width = 0.5 * config.field_width;
+  if (std::abs(ball.x) > half_length || std::abs(ball.y) > half_width) {
+    ctx.error(ctx.param_location("ball_start"),
+              fmt::format("ball_start [{}, {}] is off the field (|x| <= {}, |y| <= {})", ball.x,
+                          ball.y, half_length, half_width));
+  }
+  const double x_limit = half_length + config.robot_margin;
+  const double y_limit = half_width + config.robot_margin;
+  if (std::abs(robot.x) > x_limit || std::abs(robot.y) > y_limit) {
+    ctx.error(ctx.param_location("robot_start"),
+              fmt::format("robot_start [{}, {}, {}] is off the field (|x| <= {}, |y| <= {})",
+                          robot.x, robot.y, robot.z, x_limit, y_limit));
+  }
+  world_ = std::make_unique<World>(config);
+
+  ball_visible_ = ctx.output<bool>("ball_visible");
+  ball_position_ = ctx.output<Vec2>("ball_position");
+  ball_velocity_ = ctx.output<Vec2>("ball_velocity");
+  robot_pose_ = ctx.output<Vec3>("robot_pose");
+  button_ = ctx.output<bool>("button");
+  ball_kicked_ = ctx.output<bool>("ball_kicked");
+  goal_scored_ = ctx.output<bool>("goal_scored");
+  gait_velocity_ = ctx.input<Vec3>("gait_velocity");
+  head_angle_ = ctx.input<double>("head_angle");
+  kick_ = ctx.input<bool>("kick");
+  dive_ = ctx.input<std::int64_t>("dive");
+}
+
+void WorldLink::input(ExecuteContext& ctx) {
+  const Observation seen = world_->observe();
+  ctx.write(ball_visible_, seen.ball_visible);
+  // Left unwritten when the ball is not seen: the actuator keeps the last measurement and its
+  // written flag tells a fresh one from an old one.
+  if (seen.ball_visible) {
+    ctx.write(ball_position_, Vec2{seen.ball.x, seen.ball.y});
+    ctx.write(ball_velocity_, Vec2{seen.ball_velocity.x, seen.ball_velocity.y});
+  }
+  ctx.write(robot_pose_, Vec3{seen.robot.x, seen.robot.y, seen.robot.theta});
+  ctx.write(button_, seen.button);
+  ctx.write(ball_kicked_, seen.ball_kicked);
+  ctx.write(goal_scored_, seen.goal != 0);
+
+  if (seen.button) ctx.report("button pressed");
+  if (seen.shot) ctx.report("shot on goal");
+  if (seen.ball_kicked) ctx.report("ball kicked");
+  if (seen.ball_saved) ctx.report("ball saved");
+  if (seen.goal != 0) ctx.report("goal!");
+}
+
+void WorldLink::output(const StepContext& ctx) {
+  Command command;
+  // Walking and kicking are commands for this step: one that no active behaviour gave this step
+  // means stand still and do not kick, not "repeat the last one". The head angle is a position
+  // target, so the last one holds.
+  if (ctx.written(gait_velocity_)) {
+    const Vec3& walk = ctx.read(gait_velocity_);
+    command.walk = {walk.x, walk.y, walk.z};
+  }
+  command.kick = ctx.written(kick_) && ctx.read(kick_);
+  if (ctx.written(dive_)) {
+    command.dive = static_cast<int>(std::clamp<std::int64_t>(ctx.read(dive_), -1, 1));
+  }
+  command.head_angle = head_angle_.bound() ? ctx.read(head_angle_) : world_->head_yaw();
+  world_->step(command);
+}
+
+void register_world_link(Registry& registry) {
+  auto& info =
+      registry.add_interface<WorldLink>("soccer.WorldLink")
+          .describe(
+              "A simulated 9 m x 6 m soccer field with one robot and a ball. The input pass "
+              "publishes what the robot senses; the output pass applies the walk, head, kick and "
+              "dive commands and advances the world by dt. Reports the events 'button pressed', "
+              "'shot on goal', 'ball kicked', 'ball saved' and 'goal!'.");
+  info.param("seed", ParamKind::kInt)
+      .fallback(std::int64_t{0})
+      .range(0.0, 4294967295.0)
+      .describe("seed of the measurement noise");
+  info.param("dt", ParamKind::kDouble)
+      .fallback(0.0)
+      .range(0.0, 1.0)
+      .describe(
+          "simulated time per step in seconds; 0 (the default) takes the step period, "
+          "1 / rate_hz, so that simulated time runs at the nominal rate");
+  info.param("robot_start", ParamKind::kVec3)
+      .fallback(Vec3{-3.0, 0.0, 0.0})
+      .describe("the robot's pose at the start: x, y (m, field frame) and heading (rad)");
+  info.param("ball_start", ParamKind::kVec2)
+      .fallback(Vec2{0.0, 0.0})
+      .describe("the ball's position at the start (m, field frame, origin at the centre spot)");
+  info.param("noise", ParamKind::kDouble)
+      .fallback(0.02)
+      .range(0.0, 1.0)
+      .describe("standard deviation of each axis of the ball measurement (m)");
+  info.param("button_step", ParamKind::kInt)
+      .fallback(std::int64_t{-1})
+      .at_least(-1.0)
+      .describe("the step (from 1) in which the button is pressed; -1 for never");
+  info.param("shot_step", ParamKind::kInt)
+      .fallback(std::int64_t{-1})
+      .at_least(-1.0)
+      .describe(
+          "the step (from 1) at the end of which an opponent shoots the ball from where it lies "
+          "towards shot_target; -1 for never");
+  info.param("shot_target", ParamKind::kVec2)
+      .fallback(Vec2{-4.5, 0.0})
+      .describe(
+          "where the shot is aimed (m, field frame); the default is the centre of the goal "
+          "at x = -4.5");
+  info.param("shot_speed", ParamKind::kDouble)
+      .fallback(3.5)
+      .range(0.1, 10.0)
+      .describe("the ball's speed when shot (m/s); it then slows down at 0.6 m/s²");
+
+  info.output<bool>("ball_visible").describe("whether the head camera sees the ball");
+  info.output<Vec2>("ball_position")
+      .describe(
+          "the measured ball position relative to the robot (m, x forward, y left); written "
+          "only in steps where the ball is seen");
+  info.output<Vec2>("ball_velocity")
+      .make_optional()
+      .describe(
+          "the ball's velocity over the ground in the robot frame (m/s, x forward, y left), as a "
+          "ball filter would estimate it; written only in steps where the ball is seen");
+  info.output<Vec3>("robot_pose")
+      .make_optional()
+      .describe("the robot's pose on the field: x, y (m) and heading (rad)");
+  info.output<bool>("button").make_optional().describe("true in the step the button is pressed");
+  info.output<bool>("ball_kicked")
+      .make_optional()
+      .describe("true in the step after a kick hit the ball");
+  info.output<bool>("goal_scored")
+      .make_optional()
+      .describe("true in the step after the ball crossed a goal line between the posts");
+  info.input<Vec3>("gait_velocity")
+      .describe(
+          "walk command: forward (m/s), sideways (m/s, left), turn rate (rad/s); stands still "
+          "in a step where it was not written");
+  info.input<double>("head_angle")
+      .make_optional()
+      .describe("head yaw target relative to the body (rad, limited to ±1.5)");
+  info.input<bool>("kick").make_optional().describe(
+      "kick in a step where it is written true and the ball is within reach");
+  info.input<std::int64_t>("dive").make_optional().describe(
+      "in a step where it is written +1 (left) or -1 (right), the robot dives to that side: it "
+      "lies across the ball's path, reaching 0.7 m, and cannot walk for 2 s");
+}
+
+}  // namespace arbiter::soccer
