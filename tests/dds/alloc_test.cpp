@@ -1,0 +1,218 @@
+// The DDS bridge in the step loop: after warm-up, a step that publishes and receives values of
+// every type allocates nothing with operator new (the engine's and the bridge's code). Cyclone
+// DDS is C and allocates with malloc; this binary counts that too (where no sanitizer owns
+// malloc) and reports it. It replaces the global allocation functions, so it stands apart.
+
+#include <catch2/catch.hpp>
+
+#include <signal.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "dds_support.hpp"
+
+namespace {
+
+std::atomic<bool> counting{false};
+thread_local bool stepping_thread = false;  // static TLS: reading it does not allocate
+std::atomic<std::size_t> new_calls{0};
+std::atomic<std::size_t> step_mallocs{0};   // on the stepping thread, during step()
+std::atomic<std::size_t> other_mallocs{0};  // on other threads (Cyclone's), meanwhile
+
+void count_malloc() {
+  if (!counting.load(std::memory_order_relaxed)) return;
+  (stepping_thread ? step_mallocs : other_mallocs).fetch_add(1, std::memory_order_relaxed);
+}
+
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (counting.load(std::memory_order_relaxed) && stepping_thread) new_calls.fetch_add(1);
+  if (void* memory = std::malloc(size == 0 ? 1 : size)) return memory;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  return operator new(size);
+}
+void operator delete(void* memory) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory) noexcept {
+  std::free(memory);
+}
+void operator delete(void* memory, std::size_t) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory, std::size_t) noexcept {
+  std::free(memory);
+}
+// The nothrow and over-aligned forms too (std::stable_sort's buffer is nothrow-new'd, and its
+// delete must match the new under a sanitizer).
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  if (counting.load(std::memory_order_relaxed) && stepping_thread) new_calls.fetch_add(1);
+  return std::malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+  return operator new(size, tag);
+}
+void operator delete(void* memory, const std::nothrow_t&) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory, const std::nothrow_t&) noexcept {
+  std::free(memory);
+}
+void* operator new(std::size_t size, std::align_val_t align) {
+  if (counting.load(std::memory_order_relaxed) && stepping_thread) new_calls.fetch_add(1);
+  const auto alignment = static_cast<std::size_t>(align);
+  const std::size_t rounded =
+      (std::max<std::size_t>(size, 1) + alignment - 1) / alignment * alignment;
+  if (void* memory = std::aligned_alloc(alignment, rounded)) return memory;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t align) {
+  return operator new(size, align);
+}
+void operator delete(void* memory, std::align_val_t) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory, std::align_val_t) noexcept {
+  std::free(memory);
+}
+void operator delete(void* memory, std::size_t, std::align_val_t) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory, std::size_t, std::align_val_t) noexcept {
+  std::free(memory);
+}
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kCountsMalloc = false;
+#else
+constexpr bool kCountsMalloc = true;
+// glibc's own functions, under their internal names: malloc is replaced by forwarding to them.
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t count, std::size_t size);
+void* __libc_realloc(void* memory, std::size_t size);
+void __libc_free(void* memory);
+
+void* malloc(std::size_t size) {
+  count_malloc();
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t count, std::size_t size) {
+  count_malloc();
+  return __libc_calloc(count, size);
+}
+void* realloc(void* memory, std::size_t size) {
+  count_malloc();
+  return __libc_realloc(memory, size);
+}
+void free(void* memory) {
+  __libc_free(memory);
+}
+}
+#endif
+
+using namespace arbiter;
+using namespace arbiter::dds_test;
+using namespace std::chrono_literals;
+
+namespace {
+
+// Publishes probe.Stamp's values of every type; receives the peer's.
+constexpr const char* kSide = R"(
+arbiter: 1
+name: {self}
+rate_hz: 100
+{plugins}
+layers:
+  - name: link
+    interface: dds.Bridge
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml}
+      namespace: {self}
+      topics:
+        {other}_flag: /{other}/flag
+        {other}_count: /{other}/count
+        {other}_level: /{other}/level
+        {other}_point: /{other}/point
+        {other}_vector: /{other}/vector
+        {other}_text: /{other}/text
+    actuators:
+      {other}_flag: bool
+      {other}_count: int
+      {other}_level: double
+      {other}_point: vec2
+      {other}_vector: vec3
+      {other}_text: string
+    sensors: [flag, count, level, point, vector, text]
+  - name: source
+    sensors: [{other}_vector]
+    actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string,
+                held: vec3}
+    behaviours:
+      stamp: probe.Stamp
+      hold: {type: dds.HoldVec3, ports: {from: {other}_vector, to: held}}
+)";
+
+}  // namespace
+
+TEST_CASE("a step that publishes and receives over DDS allocates nothing with operator new",
+          "[dds][alloc]") {
+  DomainLease domain;
+  TempDir dir;
+  const auto config = [&](const std::string& self, const std::string& other, bool cli) {
+    return dir.write(self + ".yaml",
+                     fill(kSide, {{"self", self},
+                                  {"other", other},
+                                  {"plugins", cli ? "plugins: [dds, dds_probe]" : ""},
+                                  {"domain", std::to_string(domain.id())},
+                                  {"xml", loopback_xml()}}));
+  };
+  Child peer(arbiter_run(config("peer", "host", true), 100000, ""), dir.file("peer.out"));
+  Registry registry = make_registry();
+  Manager host(load_file(config("host", "peer", false), registry));
+  const auto& bridge = bridge_of(host, "link");
+  REQUIRE(step_until(
+      host, [&] { return written(host, "peer_text"); }, 20s));
+  // Warm-up: the first steps after discovery may still grow Cyclone's and the engine's buffers.
+  REQUIRE_FALSE(step_until(
+      host, [] { return false; }, 500ms));
+
+  const auto taken_before = bridge.stats().samples_taken;
+  const auto published_before = bridge.stats().published;
+  constexpr int kSteps = 200;
+  int steps = 0;
+  stepping_thread = true;
+  counting = true;
+  REQUIRE(step_until(
+      host,
+      [&] {
+        counting = false;  // the check below allocates; count step() only
+        const bool done = ++steps == kSteps;
+        counting = !done;
+        return done;
+      },
+      20s));
+  counting = false;
+  stepping_thread = false;
+
+  const auto taken = bridge.stats().samples_taken - taken_before;
+  const auto published = bridge.stats().published - published_before;
+  CHECK(published == 6u * kSteps);
+  CHECK(taken > 0);
+  CHECK(new_calls.load() == 0);
+  if (kCountsMalloc) {
+    WARN("over " << kSteps << " steps (" << published << " samples published, " << taken
+                 << " taken): operator new " << new_calls.load() << "; malloc in step() "
+                 << step_mallocs.load() << " (" << static_cast<double>(step_mallocs.load()) / kSteps
+                 << " per step), on Cyclone DDS's threads meanwhile " << other_mallocs.load());
+  }
+  peer.signal(SIGTERM);
+  CHECK(peer.wait(20s));
+}

@@ -1,0 +1,283 @@
+// arbiter_dds_bench: latency and throughput of dds.Bridge between two processes on loopback
+// (figures in docs/dds.md). The sender is this program run again as a child (`--sender CONFIG
+// SECONDS`); the receiver is stepped here.
+//
+//   latency:    the sender writes the monotonic clock into an actuator and publishes it in its
+//               output pass; the receiver's behaviour reads it in the step in which it becomes
+//               visible (the input pass of the receiver's next step) and subtracts it from the
+//               clock. So it is publish to next-step visibility: transport plus the wait for the
+//               receiver's next step.
+//   throughput: N double actuators published every step at rate R (N × R values per second);
+//               what arrives, and what a step costs on either side.
+//
+// Usage: arbiter_dds_bench [--quick]   (--quick: a short smoke run, for the test suite)
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "arbiter/init_context.hpp"
+#include "dds_support.hpp"
+#include "probe.hpp"
+#include "test_support.hpp"
+
+using namespace arbiter;
+using namespace arbiter::dds_test;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+/// Records, in each step in which its `time` sensor was written, how old that time is.
+class Latency final : public Behaviour {
+ public:
+  void init(InitContext& ctx) override {
+    time_ = ctx.input<double>("time");
+    ages_.reserve(1 << 20);
+  }
+  void update(const StepContext& ctx) override {
+    if (recording && ctx.written(time_) && ages_.size() < ages_.capacity()) {
+      ages_.push_back(monotonic_seconds() - ctx.read(time_));
+    }
+  }
+  double activation(const StepContext& /*ctx*/) override { return 0.0; }
+
+  bool recording = false;
+  const std::vector<double>& ages() const { return ages_; }
+
+ private:
+  Input<double> time_;
+  std::vector<double> ages_;
+};
+
+Registry bench_registry() {
+  Registry registry = make_registry();
+  registry.set_origin("bench");
+  registry.add_behaviour<Latency>("bench.Latency").input<double>("time");
+  return registry;
+}
+
+double percentile(std::vector<double> values, double p) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const auto index = static_cast<std::size_t>(p * static_cast<double>(values.size() - 1) + 0.5);
+  return values[std::min(index, values.size() - 1)];
+}
+
+struct Scenario {
+  int values = 1;            // double actuators besides `time`
+  double sender_hz = 100;    // 0: as fast as it can
+  double receiver_hz = 100;  // 0: as fast as it can
+  double seconds = 2.0;
+};
+
+std::string values_list(int count, const char* format) {
+  std::string out;
+  for (int i = 0; i < count; ++i) {
+    out += fmt::format(fmt::runtime(format), i);
+  }
+  return out;
+}
+
+std::string sender_config(const Scenario& scenario, int domain) {
+  return fmt::format(
+      R"(arbiter: 1
+name: sender
+rate_hz: {rate}
+layers:
+  - name: source
+    actuators:
+      time: double
+{actuators}    behaviours:
+      stamp: probe.Stamp
+      values:
+        type: scripted
+        params:
+          writes:
+{writes}  - name: out
+    interface: dds.Bridge
+    params: {{domain_id: {domain}, cyclone_config: {xml}}}
+    sensors: [time{sensors}]
+)",
+      fmt::arg("rate", scenario.sender_hz > 0 ? scenario.sender_hz : 1000.0),
+      fmt::arg("actuators", values_list(scenario.values, "      v{}: double\n")),
+      fmt::arg("writes", values_list(scenario.values, "            v{}: 1.5\n")),
+      fmt::arg("domain", domain), fmt::arg("xml", loopback_xml()),
+      fmt::arg("sensors", values_list(scenario.values, ", v{}")));
+}
+
+std::string receiver_config(const Scenario& scenario, int domain) {
+  return fmt::format(
+      R"(arbiter: 1
+name: receiver
+rate_hz: {rate}
+layers:
+  - name: in
+    interface: dds.Bridge
+    params: {{domain_id: {domain}, cyclone_config: {xml}}}
+    actuators:
+      time: double
+{actuators}  - name: measure
+    sensors: [time]
+    actuators: {{unused: double}}
+    behaviours: {{latency: bench.Latency}}
+)",
+      fmt::arg("rate", scenario.receiver_hz > 0 ? scenario.receiver_hz : 1000.0),
+      fmt::arg("actuators", values_list(scenario.values, "      v{}: double\n")),
+      fmt::arg("domain", domain), fmt::arg("xml", loopback_xml()));
+}
+
+/// Steps `manager` for `seconds` at `hz` (0: back to back); returns each step's duration (µs).
+std::vector<double> run_steps(Manager& manager, double hz, double seconds) {
+  std::vector<double> durations;
+  durations.reserve(static_cast<std::size_t>(seconds * (hz > 0 ? hz : 100000.0)) + 16);
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(hz > 0 ? 1.0 / hz : 0.0));
+  const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(seconds));
+  auto next = Clock::now();
+  while (Clock::now() < end) {
+    const auto start = Clock::now();
+    manager.step();
+    const double micros = std::chrono::duration<double, std::micro>(Clock::now() - start).count();
+    if (durations.size() < durations.capacity()) durations.push_back(micros);
+    if (hz > 0) {
+      next += period;
+      std::this_thread::sleep_until(next);
+    }
+  }
+  return durations;
+}
+
+/// The child: steps the sender for `seconds`, then prints its figures as one line.
+int run_sender(const std::string& config, double seconds, bool unpaced) {
+  Registry registry = bench_registry();
+  Manager manager(load_file(config, registry));
+  const auto& bridge = bridge_of(manager, "out");
+  // Values written before the receiver is there would be lost: wait for it.
+  if (!bridge.wait_for_peers(std::chrono::seconds(30))) {
+    std::cerr << "sender: no receiver\n";
+    return 1;
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const auto durations = run_steps(manager, unpaced ? 0.0 : manager.program().rate_hz, seconds);
+  std::cout << fmt::format(
+      "steps {} published {} failed {} p50 {:.2f} p99 {:.2f} max {:.2f}\n", durations.size(),
+      bridge.stats().published, bridge.stats().publish_failures, percentile(durations, 0.5),
+      percentile(durations, 0.99), *std::max_element(durations.begin(), durations.end()));
+  return 0;
+}
+
+struct SenderFigures {
+  double steps = 0, published = 0, failed = 0, p50 = 0, p99 = 0, max = 0;
+};
+
+SenderFigures parse_sender(const std::string& text) {
+  SenderFigures figures;
+  std::istringstream in(text);
+  std::string word;
+  while (in >> word) {
+    double* field = word == "steps"       ? &figures.steps
+                    : word == "published" ? &figures.published
+                    : word == "failed"    ? &figures.failed
+                    : word == "p50"       ? &figures.p50
+                    : word == "p99"       ? &figures.p99
+                    : word == "max"       ? &figures.max
+                                          : nullptr;
+    if (field != nullptr) in >> *field;
+  }
+  return figures;
+}
+
+std::string rate_text(double hz) {
+  return hz > 0 ? fmt::format("{:g} Hz", hz) : std::string("unpaced");
+}
+
+void run_scenario(const Scenario& scenario, const std::string& self) {
+  DomainLease domain;
+  TempDir dir;
+  const std::string sender_file = dir.write("sender.yaml", sender_config(scenario, domain.id()));
+  Registry registry = bench_registry();
+  Manager receiver(
+      load_file(dir.write("receiver.yaml", receiver_config(scenario, domain.id())), registry));
+  auto& latency = test::instance<Latency>(receiver.program(), "measure", "latency");
+  const auto& bridge = bridge_of(receiver, "in");
+
+  // The sender runs a little longer than the receiver measures, so that it is sending all along.
+  const double sender_seconds = scenario.seconds + 0.6;
+  Child sender({self, "--sender", sender_file, fmt::format("{}", sender_seconds),
+                scenario.sender_hz > 0 ? "paced" : "unpaced"},
+               dir.file("sender.out"));
+  // Step until the first value arrives, then measure.
+  if (!step_until(
+          receiver, [&] { return bridge.stats().values_written > 0; }, std::chrono::seconds(60))) {
+    std::cerr << "no data from the sender\n" << sender.output();
+    return;
+  }
+  run_steps(receiver, scenario.receiver_hz, 0.2);
+  const auto before = bridge.stats();
+  latency.recording = true;
+  const auto durations = run_steps(receiver, scenario.receiver_hz, scenario.seconds);
+  latency.recording = false;
+  const auto after = bridge.stats();
+  sender.wait(std::chrono::seconds(60));
+  const SenderFigures sent = parse_sender(sender.output());
+
+  const double taken_per_s =
+      static_cast<double>(after.samples_taken - before.samples_taken) / scenario.seconds;
+  const double values_per_s = sent.published / sender_seconds;
+  std::vector<double> ages_us;
+  for (double age : latency.ages()) ages_us.push_back(age * 1e6);
+  std::cout << fmt::format(
+      "| {} | {} | {} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.1f} / {:.1f} | {:.1f} / "
+      "{:.1f} |\n",
+      scenario.values + 1, rate_text(scenario.sender_hz), rate_text(scenario.receiver_hz),
+      values_per_s, taken_per_s, percentile(ages_us, 0.5), percentile(ages_us, 0.99),
+      ages_us.empty() ? 0.0 : *std::max_element(ages_us.begin(), ages_us.end()), sent.p50, sent.p99,
+      percentile(durations, 0.5), percentile(durations, 0.99));
+  std::cout.flush();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc == 5 && std::strcmp(argv[1], "--sender") == 0) {
+    return run_sender(argv[2], std::stod(argv[3]), std::strcmp(argv[4], "unpaced") == 0);
+  }
+  const bool quick = argc == 2 && std::strcmp(argv[1], "--quick") == 0;
+  if (argc > 1 && !quick) {
+    std::cerr << "usage: arbiter_dds_bench [--quick]\n";
+    return 2;
+  }
+  const std::string self = "/proc/self/exe";
+  char path[4096];
+  const auto length = readlink(self.c_str(), path, sizeof path - 1);
+  if (length <= 0) return 1;
+  path[length] = '\0';
+
+  std::cout << "| topics | sender | receiver | values/s sent | samples/s taken | latency p50 "
+               "(µs) | p99 (µs) | max (µs) | sender step p50 / p99 (µs) | receiver step p50 / "
+               "p99 (µs) |\n"
+               "|---|---|---|---|---|---|---|---|---|---|\n";
+  // {values besides time, sender Hz, receiver Hz (0: back to back), seconds}
+  static const Scenario kQuick[] = {{0, 100, 100, 0.5}, {9, 100, 100, 0.5}};
+  static const Scenario kFull[] = {
+      {0, 100, 100, 3.0},   {0, 100, 1000, 3.0},  {0, 100, 0, 3.0},    {0, 1000, 1000, 3.0},
+      {9, 100, 100, 3.0},   {9, 1000, 1000, 3.0}, {99, 100, 100, 3.0}, {99, 1000, 1000, 3.0},
+      {999, 100, 100, 3.0}, {9, 0, 0, 3.0},
+  };
+  const Scenario* begin = quick ? std::begin(kQuick) : std::begin(kFull);
+  const Scenario* end = quick ? std::end(kQuick) : std::end(kFull);
+  for (const Scenario* scenario = begin; scenario != end; ++scenario) run_scenario(*scenario, path);
+  return 0;
+}

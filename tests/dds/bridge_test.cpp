@@ -1,0 +1,293 @@
+// dds.Bridge in one process: two managers on one DDS domain, stepped by the test, so that what
+// each step sees can be checked exactly (DESIGN 3.6; docs/dds.md).
+
+#include <catch2/catch.hpp>
+
+#include <memory>
+#include <string>
+
+#include "dds_support.hpp"
+#include "layer_items.hpp"
+
+using namespace arbiter;
+using namespace arbiter::dds_test;
+using namespace std::chrono_literals;
+
+namespace {
+
+// Publishes what probe.Stamp writes: one value of every type the bridge carries.
+constexpr const char* kSender = R"(
+arbiter: 1
+name: sender
+rate_hz: 100
+layers:
+  - name: source
+    actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string}
+    behaviours:
+      stamp: {type: probe.Stamp, params: {every: {every}}}
+  - name: to_dds
+    interface: dds.Bridge
+    params: {domain_id: {domain}, cyclone_config: {xml}, publish: {publish}}
+    sensors: [flag, count, level, point, vector, text]
+)";
+
+constexpr const char* kReceiver = R"(
+arbiter: 1
+name: receiver
+rate_hz: 100
+layers:
+  - name: from_dds
+    interface: dds.Bridge
+    params: {domain_id: {domain}, cyclone_config: {xml}}
+    actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string}
+  - name: user
+    sensors: [count]
+    actuators: {unused: double}
+)";
+
+const std::vector<std::string> kValues = {"flag", "count", "level", "point", "vector", "text"};
+
+struct Pair {
+  DomainLease domain;
+  TempDir dir;
+  Registry registry = make_registry();
+  std::string sender_path;
+  std::unique_ptr<Manager> sender;
+  std::unique_ptr<Manager> receiver;
+
+  explicit Pair(int every = 1, const std::string& publish = "written") {
+    const std::vector<std::pair<std::string, std::string>> values = {
+        {"domain", std::to_string(domain.id())},
+        {"xml", loopback_xml()},
+        {"every", std::to_string(every)},
+        {"publish", publish}};
+    sender_path = dir.write("sender.yaml", fill(kSender, values));
+    start_sender();
+    receiver = std::make_unique<Manager>(
+        load_file(dir.write("receiver.yaml", fill(kReceiver, values)), registry));
+    REQUIRE(bridge_of(*sender, "to_dds").wait_for_peers(10s));
+    REQUIRE(bridge_of(*receiver, "from_dds").wait_for_peers(10s));
+  }
+
+  void start_sender() { sender = std::make_unique<Manager>(load_file(sender_path, registry)); }
+
+  dds::Bridge& from_dds() const { return bridge_of(*receiver, "from_dds"); }
+
+  /// Steps the sender `steps` times, then the receiver once, after every topic delivered.
+  void send_and_receive(int steps = 1) {
+    for (int i = 0; i < steps; ++i) sender->step();
+    REQUIRE(from_dds().wait_for_data(10s));
+    receiver->step();
+  }
+};
+
+bool events_contain(const Manager& manager, const std::string& text) {
+  for (std::size_t e = 0; e < manager.event_count(); ++e) {
+    if (std::string(manager.event(e).text).find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("values of every type arrive with their types and are written in the next step",
+          "[dds]") {
+  Pair pair;
+  for (const auto& name : kValues) {
+    CHECK_FALSE(written(*pair.receiver, name));
+  }
+  pair.send_and_receive();
+  CHECK(value_of(*pair.receiver, "flag") == true);
+  CHECK(value_of(*pair.receiver, "count") == 1);
+  CHECK(value_of(*pair.receiver, "level") == 0.5);
+  CHECK(value_of(*pair.receiver, "point") == nlohmann::json::parse("[1.0, -1.0]"));
+  CHECK(value_of(*pair.receiver, "vector") == nlohmann::json::parse("[1.0, 2.0, -0.5]"));
+  CHECK(value_of(*pair.receiver, "text") == "step 1");
+  for (const auto& name : kValues) {
+    INFO(name);
+    CHECK(written(*pair.receiver, name));
+  }
+  CHECK(pair.from_dds().stats().values_written == kValues.size());
+}
+
+TEST_CASE("a step without a delivery reads the last value, unwritten", "[dds]") {
+  Pair pair;
+  pair.send_and_receive();
+  pair.receiver->step();
+  for (const auto& name : kValues) {
+    INFO(name);
+    CHECK_FALSE(written(*pair.receiver, name));
+  }
+  CHECK(value_of(*pair.receiver, "count") == 1);
+  CHECK(value_of(*pair.receiver, "text") == "step 1");
+}
+
+TEST_CASE("of several values sent between two steps, the newest is the one read", "[dds]") {
+  Pair pair;
+  pair.send_and_receive(4);
+  CHECK(value_of(*pair.receiver, "count") == 4);
+  CHECK(value_of(*pair.receiver, "vector") == nlohmann::json::parse("[4.0, 8.0, -0.5]"));
+  CHECK(written(*pair.receiver, "count"));
+}
+
+TEST_CASE("a sensor is published only in steps in which its actuator was written", "[dds]") {
+  SECTION("by default") {
+    Pair pair(/*every=*/2);
+    pair.sender->step();  // step 1: probe.Stamp inactive, nothing written
+    pair.send_and_receive();
+    CHECK(value_of(*pair.receiver, "count") == 2);
+    CHECK(pair.from_dds().stats().samples_taken == kValues.size());
+    CHECK(bridge_of(*pair.sender, "to_dds").stats().published == kValues.size());
+  }
+  SECTION("with publish: every_step, every step") {
+    Pair pair(/*every=*/2, "every_step");
+    pair.sender->step();
+    pair.send_and_receive();
+    CHECK(value_of(*pair.receiver, "count") == 2);
+    CHECK(bridge_of(*pair.sender, "to_dds").stats().published == 2 * kValues.size());
+  }
+}
+
+TEST_CASE("a publisher that disappears leaves its values stale, not lost, until it is back",
+          "[dds]") {
+  Pair pair;
+  pair.send_and_receive(3);
+  REQUIRE(value_of(*pair.receiver, "count") == 3);
+
+  pair.sender.reset();
+  bool lost = false;
+  REQUIRE(step_until(
+      *pair.receiver,
+      [&] {
+        lost = lost || events_contain(*pair.receiver, "count: publisher lost");
+        return lost;
+      },
+      10s));
+  for (int i = 0; i < 3; ++i) {
+    pair.receiver->step();
+    for (const auto& name : kValues) {
+      INFO(name);
+      CHECK_FALSE(written(*pair.receiver, name));
+    }
+    CHECK(value_of(*pair.receiver, "count") == 3);
+    CHECK(value_of(*pair.receiver, "text") == "step 3");
+  }
+
+  pair.start_sender();
+  REQUIRE(bridge_of(*pair.sender, "to_dds").wait_for_peers(10s));
+  pair.send_and_receive();
+  CHECK(written(*pair.receiver, "count"));
+  CHECK(value_of(*pair.receiver, "count") == 1);  // the new sender's first step
+}
+
+TEST_CASE("per-topic options: a late subscriber gets the last value, a vector travels as Vector3",
+          "[dds]") {
+  DomainLease domain;
+  TempDir dir;
+  Registry registry = make_registry();
+  const std::vector<std::pair<std::string, std::string>> values = {
+      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
+  // The same options on both sides: a topic's type and QoS must agree to match.
+  constexpr const char* kTopics = R"(
+      topics:
+        count: {topic: /probe/count, durability: transient_local}
+        point: {topic: /probe/point, message: geometry_msgs/msg/Vector3, reliability: best_effort}
+)";
+  Manager sender(load_file(dir.write("sender.yaml", fill(std::string(R"(
+arbiter: 1
+name: sender
+layers:
+  - name: source
+    actuators: {count: int, point: vec2}
+    behaviours: {stamp: probe.Stamp}
+  - name: to_dds
+    interface: dds.Bridge
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml})") + kTopics + R"(
+    sensors: [count, point]
+)",
+                                                         values)),
+                           registry));
+  sender.step();
+  sender.step();
+  CHECK(bridge_of(sender, "to_dds").topic_of("point") == "rt/probe/point");
+
+  Manager receiver(load_file(dir.write("receiver.yaml", fill(std::string(R"(
+arbiter: 1
+name: receiver
+layers:
+  - name: from_dds
+    interface: dds.Bridge
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml})") + kTopics + R"(
+    actuators: {count: int, point: vec2}
+)",
+                                                             values)),
+                             registry));
+  auto& from_dds = bridge_of(receiver, "from_dds");
+  // The count was published before the receiver existed; transient_local keeps it for it.
+  REQUIRE(step_until(
+      receiver, [&] { return written(receiver, "count"); }, 10s));
+  CHECK(value_of(receiver, "count") == 2);
+  CHECK_FALSE(written(receiver, "point"));  // volatile: the earlier points are gone
+
+  REQUIRE(from_dds.wait_for_peers(10s));
+  sender.step();
+  REQUIRE(from_dds.wait_for_data(10s));
+  receiver.step();
+  CHECK(value_of(receiver, "count") == 3);
+  CHECK(value_of(receiver, "point") == nlohmann::json::parse("[3.0, -3.0]"));
+}
+
+TEST_CASE("the bridge's layer items agree with the compiled program, includes and all", "[dds]") {
+  DomainLease domain;
+  TempDir dir;
+  dir.write("first.yaml", R"(
+arbiter: 1
+layers:
+  - name: early
+    actuators: {a1: double, a2: {type: vec3}}
+)");
+  dir.write("second.yaml", R"(
+arbiter: 1
+include: [first.yaml]
+layers:
+  - name: middle
+    actuators: {b1: bool}
+)");
+  const std::string root = dir.write(
+      "root.yaml", fill(R"(
+arbiter: 1
+name: includes
+include: [second.yaml, first.yaml]
+layers:
+  - name: before
+    actuators: {c1: string, c2: int}
+  - name: bridge
+    interface: dds.Bridge
+    params: {domain_id: {domain}, cyclone_config: {xml}}
+    actuators: {d1: vec2}
+    sensors: {c2: int, a2: vec3, e1: double, b1: bool}
+  - name: after
+    sensors: [d1]
+    actuators: {e1: double}
+)",
+                        {{"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}}));
+  dds::LayerItems items;
+  Diagnostics diagnostics;
+  REQUIRE(dds::read_layer_items(root, "bridge", {root, 1, 1}, items, diagnostics));
+  REQUIRE(diagnostics.empty());
+  Registry registry = make_registry();
+  const Program program = load_file(root, registry);
+  REQUIRE(items.actuators.size() == 1);
+  CHECK(items.actuators[0].actuator == *program.find_actuator("d1"));
+  CHECK(items.actuators[0].type == "vec2");
+  REQUIRE(items.sensors.size() == 4);
+  for (const auto& sensor : items.sensors) {
+    INFO(sensor.name);
+    CHECK(sensor.actuator == *program.find_actuator(sensor.name));
+    CHECK(sensor.type == program.actuators[sensor.actuator].type->name);
+  }
+}

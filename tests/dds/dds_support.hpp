@@ -1,0 +1,108 @@
+#pragma once
+// Shared by the DDS bridge's tests and benchmark: domain ids that no concurrent test uses,
+// temporary config files, child processes with bounded waits, traces.
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "arbiter/manager.hpp"
+#include "arbiter/program.hpp"
+#include "arbiter/registry.hpp"
+#include "bridge.hpp"
+
+namespace arbiter::dds_test {
+
+/// A DDS domain id that no other holder on this machine has while this lives (a file lock per
+/// id, in [100, 230)), so that tests and test runs in parallel never hear each other.
+class DomainLease {
+ public:
+  DomainLease();
+  ~DomainLease();
+  DomainLease(const DomainLease&) = delete;
+  DomainLease& operator=(const DomainLease&) = delete;
+  int id() const { return id_; }
+
+ private:
+  int id_ = -1;
+  int fd_ = -1;
+};
+
+/// A temporary directory, removed with everything in it.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::string& path() const { return path_; }
+  /// Writes `text` to `name` in the directory; returns the file's path.
+  std::string write(const std::string& name, const std::string& text) const;
+  std::string file(const std::string& name) const { return path_ + "/" + name; }
+
+ private:
+  std::string path_;
+};
+
+/// The Cyclone DDS configuration of the tests and the split demo: loopback only.
+std::string loopback_xml();
+
+/// `text` with every "{key}" replaced by its value.
+std::string fill(std::string text, const std::vector<std::pair<std::string, std::string>>& values);
+
+/// A child process with its stdout and stderr in a file; killed (SIGKILL) and reaped when the
+/// object goes, if it still runs.
+class Child {
+ public:
+  /// Starts `argv` in `directory` (empty: this one).
+  Child(const std::vector<std::string>& argv, const std::string& output,
+        const std::string& directory = {});
+  ~Child();
+  Child(const Child&) = delete;
+  Child& operator=(const Child&) = delete;
+
+  void signal(int signal);
+  /// The exit code once it exits within `timeout` (128 + signal when killed); nullopt otherwise.
+  std::optional<int> wait(std::chrono::milliseconds timeout);
+  const std::string& output_file() const { return output_; }
+  std::string output() const;
+
+ private:
+  pid_t pid_ = -1;
+  std::optional<int> status_;
+  std::string output_;
+};
+
+/// `arbiter run FILE --realtime --steps N --trace TRACE --quiet`, with the test plugins on the
+/// plugin path.
+std::vector<std::string> arbiter_run(const std::string& config, std::uint64_t steps,
+                                     const std::string& trace, bool quiet = true);
+
+/// The step records of a trace (the header skipped).
+std::vector<nlohmann::json> read_trace(const std::string& path);
+
+/// The test registry (built-ins and test classes), dds.* and probe.Stamp.
+Registry make_registry();
+
+/// Loads a config file; throws ConfigError with its diagnostics.
+Program load_file(const std::string& path, Registry& registry);
+
+/// The bridge of interface layer `layer`.
+dds::Bridge& bridge_of(const Manager& manager, const std::string& layer);
+
+/// Steps `manager` at its rate_hz (sleeping between steps) until `done()` holds after a step,
+/// or `timeout` passes. Returns whether `done()` held.
+bool step_until(Manager& manager, const std::function<bool()>& done,
+                std::chrono::milliseconds timeout);
+
+/// An actuator's current value as JSON, as a trace shows it.
+nlohmann::json value_of(const Manager& manager, const std::string& actuator);
+bool written(const Manager& manager, const std::string& actuator);
+
+}  // namespace arbiter::dds_test

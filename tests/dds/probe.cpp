@@ -1,0 +1,85 @@
+#include "probe.hpp"
+
+#include <time.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include "arbiter/init_context.hpp"
+
+namespace arbiter::dds_test {
+namespace {
+
+/// In a step N that is a multiple of `every`, writes flag = N odd, count = N, level = N / 2,
+/// point = (N, -N), vector = (N, 2N, -0.5), text = "step N" and time = the monotonic clock.
+class Stamp final : public Behaviour {
+ public:
+  void init(InitContext& ctx) override {
+    every_ = ctx.param<std::int64_t>("every");
+    flag_ = ctx.output<bool>("flag");
+    count_ = ctx.output<std::int64_t>("count");
+    level_ = ctx.output<double>("level");
+    point_ = ctx.output<Vec2>("point");
+    vector_ = ctx.output<Vec3>("vector");
+    text_ = ctx.output<std::string>("text");
+    time_ = ctx.output<double>("time");
+    scratch_.reserve(kStringCapacity);
+  }
+
+  double activation(const StepContext& ctx) override {
+    return static_cast<std::int64_t>(ctx.step()) % every_ == 0 ? 1.0 : 0.0;
+  }
+
+  void execute(ExecuteContext& ctx) override {
+    const auto n = static_cast<std::int64_t>(ctx.step());
+    const auto x = static_cast<double>(n);
+    ctx.write(flag_, n % 2 == 1);
+    ctx.write(count_, n);
+    ctx.write(level_, x / 2.0);
+    ctx.write(point_, Vec2{x, -x});
+    ctx.write(vector_, Vec3{x, 2.0 * x, -0.5});
+    char text[32];
+    std::snprintf(text, sizeof text, "step %lld", static_cast<long long>(n));
+    scratch_.assign(text);  // within the reserved capacity: no allocation
+    ctx.write(text_, scratch_);
+    ctx.write(time_, monotonic_seconds());
+  }
+
+ private:
+  std::int64_t every_ = 1;
+  Output<bool> flag_;
+  Output<std::int64_t> count_;
+  Output<double> level_;
+  Output<Vec2> point_;
+  Output<Vec3> vector_;
+  Output<std::string> text_;
+  Output<double> time_;
+  std::string scratch_;
+};
+
+}  // namespace
+
+double monotonic_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
+}
+
+void register_probe(Registry& registry) {
+  auto& info = registry.add_behaviour<Stamp>("probe.Stamp")
+                   .describe("Writes values of every type, derived from the step number.");
+  info.param("every", ParamKind::kInt)
+      .fallback(std::int64_t{1})
+      .at_least(1)
+      .describe("active (and writing) only in steps that are a multiple of this");
+  info.output<bool>("flag").make_optional().describe("step is odd");
+  info.output<std::int64_t>("count").make_optional().describe("the step");
+  info.output<double>("level").make_optional().describe("step / 2");
+  info.output<Vec2>("point").make_optional().describe("(step, -step)");
+  info.output<Vec3>("vector").make_optional().describe("(step, 2 step, -0.5)");
+  info.output<std::string>("text").make_optional().describe("'step N'");
+  info.output<double>("time").make_optional().describe("the monotonic clock (s)");
+}
+
+}  // namespace arbiter::dds_test
