@@ -1,0 +1,237 @@
+// The benchmarks (docs/performance.md): the step over generated graphs, an SCL plan, load and
+// memory. Names are `<what>/<graph>/<N>`; per-item costs are user counters.
+
+#include <benchmark/benchmark.h>
+#include <spdlog/sinks/null_sink.h>
+#include <spdlog/spdlog.h>
+
+#include <time.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "arbiter/manager.hpp"
+#include "benchmarks.hpp"
+#include "generator.hpp"
+#include "support.hpp"
+
+namespace arbiter::bench {
+
+namespace {
+
+constexpr const char* kTrivial = "bench.Trivial";
+
+const Registry& registry() {
+  static const Registry instance = make_registry();
+  return instance;
+}
+
+std::shared_ptr<spdlog::logger> quiet() {
+  return std::make_shared<spdlog::logger>("bench", std::make_shared<spdlog::sinks::null_sink_mt>());
+}
+
+/// This thread's CPU time: on a shared machine, time spent descheduled is not the engine's.
+double cpu_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) + static_cast<double>(now.tv_nsec) * 1e-9;
+}
+
+/// Runs `step` for the benchmark's iterations; returns CPU nanoseconds per step.
+template <typename F>
+double timed_loop(benchmark::State& state, F&& step) {
+  const double start = cpu_seconds();
+  for (auto _ : state) step();
+  const double seconds = cpu_seconds() - start;
+  return state.iterations() == 0 ? 0.0 : seconds * 1e9 / static_cast<double>(state.iterations());
+}
+
+void step(benchmark::State& state, Graph graph, const std::string& behaviour_class) {
+  const auto n = static_cast<std::size_t>(state.range(0));
+  GeneratorOptions options;
+  options.graph = graph;
+  options.behaviours = n;
+  options.behaviour_class = behaviour_class;
+  Manager manager(compile_text(generate_config(options), registry()), quiet());
+  const std::size_t behaviours = manager.program().behaviours.size();
+  manager.step();  // the first step may size what it needs; every later one allocates nothing
+  const double ns = timed_loop(state, [&] { manager.step(); });
+  state.counters["ns_per_behaviour"] = ns / static_cast<double>(behaviours);
+  state.counters["closure"] = static_cast<double>(manager.program().inhibitions.size());
+  state.counters["terms"] =
+      static_cast<double>(manager.program().inhibitions.recipes().terms.size());
+}
+
+const char* const kPlan = R"(arbiter: 1
+name: replan
+state_machines:
+  plan:
+    states:
+      s0: STATE
+      s1: STATE
+      s2: STATE
+      s3: STATE
+      s4: {type: STATE, params: {append: [s0, s1, s2, s3, s4]}}
+    queue: [s0, s1, s2, s3, s4]
+)";
+
+/// A standalone controller whose 5-state plan is appended again by its last state: every step
+/// is one transition (deactivate, pop, activate, execute), every fifth also five queue edits.
+void scl(benchmark::State& state, const std::string& state_class) {
+  std::string text = kPlan;
+  for (auto at = text.find("STATE"); at != std::string::npos; at = text.find("STATE", at)) {
+    text.replace(at, 5, state_class);
+  }
+  Manager manager(compile_text(text, registry()), quiet());
+  manager.step();
+  const double ns = timed_loop(state, [&] { manager.step(); });
+  const Controller& controller = *manager.program().controllers.front();
+  if (controller.status() != ControllerStatus::kRunning) {
+    state.SkipWithError("the plan stopped running");
+  }
+  state.counters["ns_per_step"] = ns;
+}
+
+/// A generated dag config written to a file once per size, as users' configs are read.
+const std::string& config_file(std::size_t n) {
+  static std::map<std::size_t, std::string> files;
+  auto& path = files[n];
+  if (path.empty()) {
+    GeneratorOptions options;
+    options.graph = Graph::kDag;
+    options.behaviours = n;
+    path = (std::filesystem::temp_directory_path() /
+            ("arbiter_bench_dag_" + std::to_string(n) + ".yaml"))
+               .string();
+    std::ofstream(path) << generate_config(options);
+  }
+  return path;
+}
+
+enum class Stage { kParse, kValidate, kCompile, kTotal };
+
+/// One stage of arbiter::load() (or all of it) for the dag config of N behaviours, 3N
+/// inhibitions.
+void load(benchmark::State& state, Stage stage) {
+  const auto n = static_cast<std::size_t>(state.range(0));
+  const std::string& path = config_file(n);
+  Registry fresh = make_registry();
+  Diagnostics diagnostics;
+  const auto document = read_document(path, diagnostics);
+  const Model model = build_model(*document, fresh, diagnostics);
+  if (diagnostics.has_errors()) {
+    state.SkipWithError(format(diagnostics).c_str());
+    return;
+  }
+  double paused = 0.0;
+  const auto discard = [&](std::optional<Program>& program) {
+    const double before = cpu_seconds();
+    state.PauseTiming();  // destroying the program is not part of loading it
+    program.reset();
+    state.ResumeTiming();
+    paused += cpu_seconds() - before;
+  };
+  const double start = cpu_seconds();
+  for (auto _ : state) {
+    Diagnostics each;
+    switch (stage) {
+      case Stage::kParse:
+        benchmark::DoNotOptimize(read_document(path, each));
+        break;
+      case Stage::kValidate:
+        load_plugins(*document, {}, fresh, each);
+        benchmark::DoNotOptimize(build_model(*document, fresh, each));
+        break;
+      case Stage::kCompile: {
+        auto program = compile(model, fresh, each);
+        discard(program);
+        break;
+      }
+      case Stage::kTotal: {
+        auto program = arbiter::load(path, fresh, each);
+        if (!program) state.SkipWithError(format(each).c_str());
+        discard(program);
+        break;
+      }
+    }
+  }
+  const double seconds = cpu_seconds() - start - paused;
+  state.counters["us_per_behaviour"] =
+      seconds * 1e6 / static_cast<double>(state.iterations()) / static_cast<double>(n);
+}
+
+/// Heap held by a running manager (its program included), per behaviour, after the first step.
+void memory(benchmark::State& state, Graph graph) {
+  const auto n = static_cast<std::size_t>(state.range(0));
+  GeneratorOptions options;
+  options.graph = graph;
+  options.behaviours = n;
+  options.behaviour_class = kTrivial;
+  const std::string text = generate_config(options);
+  const auto logger = quiet();
+  for (auto _ : state) {
+    const std::size_t before = heap_in_use();
+    Manager manager(compile_text(text, registry(), "/tmp/arbiter_bench/generated.yaml"), logger);
+    manager.step();
+    const std::size_t after = heap_in_use();
+    state.counters["bytes_per_behaviour"] =
+        static_cast<double>(after - before) / static_cast<double>(n);
+  }
+}
+
+constexpr Graph kGraphs[] = {Graph::kNone, Graph::kChain, Graph::kDag, Graph::kLayers};
+
+double fastest(const std::vector<double>& values) {
+  return values.empty() ? 0.0 : *std::min_element(values.begin(), values.end());
+}
+
+}  // namespace
+
+void register_benchmarks() {
+  for (Graph graph : kGraphs) {
+    const std::string name = "step/" + std::string(to_string(graph));
+    benchmark::RegisterBenchmark(name.c_str(), step, graph, std::string(kTrivial))
+        ->ComputeStatistics("min", fastest)
+        ->Arg(10)
+        ->Arg(100)
+        ->Arg(1000)
+        ->Arg(10000);
+  }
+  // The same graphs of the built-in `scripted` behaviour, whose own cost (a level list, writes
+  // of any type through the value type's functions) comes on top.
+  for (Graph graph : kGraphs) {
+    const std::string name = "step_scripted/" + std::string(to_string(graph));
+    benchmark::RegisterBenchmark(name.c_str(), step, graph, std::string("scripted"))
+        ->ComputeStatistics("min", fastest)
+        ->Arg(1000);
+  }
+  benchmark::RegisterBenchmark("scl/replan5", scl, std::string("bench.Proceed"))
+      ->ComputeStatistics("min", fastest);
+  benchmark::RegisterBenchmark("scl/replan5_scripted", scl, std::string("scripted"))
+      ->ComputeStatistics("min", fastest);
+  const std::pair<const char*, Stage> stages[] = {{"load/parse", Stage::kParse},
+                                                  {"load/validate", Stage::kValidate},
+                                                  {"load/compile", Stage::kCompile},
+                                                  {"load/total", Stage::kTotal}};
+  for (const auto& [name, stage] : stages) {
+    benchmark::RegisterBenchmark(name, load, stage)
+        ->ComputeStatistics("min", fastest)
+        ->Arg(1000)
+        ->Arg(10000)
+        ->Unit(benchmark::kMillisecond);
+  }
+  for (Graph graph : kGraphs) {
+    const std::string name = "memory/" + std::string(to_string(graph));
+    benchmark::RegisterBenchmark(name.c_str(), memory, graph)
+        ->ComputeStatistics("min", fastest)
+        ->Arg(1000)
+        ->Arg(10000)
+        ->Iterations(1)
+        ->Unit(benchmark::kMillisecond);
+  }
+}
+
+}  // namespace arbiter::bench

@@ -1,0 +1,121 @@
+#include "support.hpp"
+
+#include <malloc.h>
+
+#include <iostream>
+#include <vector>
+
+#include "arbiter/init_context.hpp"
+#include "arbiter/plugin.hpp"
+#include "arbiter/state.hpp"
+#include "builtins.hpp"
+
+namespace arbiter::bench {
+
+namespace {
+
+/// Proceeds after every execution; appends `append` when it does. Costs the engine nothing
+/// beyond the transition and the queue edits, so the SCL benchmark measures the controller.
+class Proceed final : public State {
+ public:
+  void init(InitContext& ctx) override {
+    for (const auto& state : ctx.param<std::vector<std::string>>("append")) {
+      PlannedState planned;
+      if (ctx.plan_state(state, nullptr, ctx.param_location("append"), planned)) {
+        append_.push_back(std::move(planned));
+      }
+    }
+  }
+
+  StateResult execute(StateContext& ctx) override {
+    for (const auto& planned : append_) ctx.plan().append(planned);
+    return StateResult::kProceed;
+  }
+
+ private:
+  std::vector<PlannedState> append_;
+};
+
+/// Requests a fixed level; while active, writes half its input plus one to its output. The
+/// ports are optional: unbound, they cost one branch.
+class Trivial final : public Behaviour {
+ public:
+  void init(InitContext& ctx) override {
+    level_ = ctx.param<double>("activation");
+    in_ = ctx.input<double>("in");
+    out_ = ctx.output<double>("out");
+  }
+  double activation(const StepContext&) override { return level_; }
+  void execute(ExecuteContext& ctx) override { ctx.write(out_, 0.5 * ctx.read(in_) + 1.0); }
+
+ private:
+  double level_ = 0.0;
+  Input<double> in_;
+  Output<double> out_;
+};
+
+}  // namespace
+
+Registry make_registry() {
+  Registry registry;
+  register_builtin_behaviours(registry);
+  auto& trivial = registry.add_behaviour<Trivial>("bench.Trivial")
+                      .describe("Requests a fixed level; writes 0.5 * in + 1 to out while active.");
+  trivial.param("activation", ParamKind::kDouble).range(0.0, 1.0).describe("the requested level");
+  trivial.input<double>("in").make_optional().describe("read while active");
+  trivial.output<double>("out").make_optional().describe("written while active");
+  add_state_class<Proceed>(registry, "bench.Proceed")
+      .describe("Proceeds after every execution, appending `append` to the plan when it does.")
+      .param("append", ParamKind::kStringList)
+      .fallback(std::vector<std::string>{})
+      .describe("states to append when proceeding");
+  return registry;
+}
+
+Program compile_text(const std::string& text, const Registry& registry, const std::string& file) {
+  Diagnostics diagnostics;
+  auto document = parse_document(text, file, format_of(file), diagnostics);
+  if (!document) throw ConfigError(std::move(diagnostics));
+  const Model model = build_model(*document, registry, diagnostics);
+  if (diagnostics.has_errors()) throw ConfigError(std::move(diagnostics));
+  auto program = compile(model, registry, diagnostics);
+  if (!program) throw ConfigError(std::move(diagnostics));
+  return std::move(*program);
+}
+
+std::size_t heap_in_use() {
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+  const struct mallinfo2 info = mallinfo2();
+  return info.uordblks + info.hblkhd;  // small chunks in use + mmapped ones
+#else
+  return 0;
+#endif
+}
+
+std::optional<Program> load_timed(const std::string& path, Registry& registry,
+                                  const LoadOptions& options, LoadTimes& times) {
+  Diagnostics diagnostics;
+  const auto report = [&] {
+    diagnostics.sort();
+    std::cerr << format(diagnostics);
+    return std::nullopt;
+  };
+  auto start = std::chrono::steady_clock::now();
+  auto document = read_document(path, diagnostics, options.limits);
+  times.parse_ms = milliseconds_since(start);
+  if (!document) return report();
+
+  start = std::chrono::steady_clock::now();
+  load_plugins(*document, options.plugins, registry, diagnostics);
+  const Model model = build_model(*document, registry, diagnostics, options.limits);
+  times.validate_ms = milliseconds_since(start);
+  if (diagnostics.has_errors()) return report();
+
+  start = std::chrono::steady_clock::now();
+  auto program = compile(model, registry, diagnostics);
+  times.compile_ms = milliseconds_since(start);
+  if (!program) return report();
+  return program;
+}
+
+}  // namespace arbiter::bench

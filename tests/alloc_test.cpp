@@ -1,0 +1,228 @@
+// The step loop is a real-time path: after the first step it must not touch the heap. This
+// binary replaces the global operator new with a counting one, so it stands apart from the rest.
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <new>
+#include <sstream>
+#include <vector>
+
+#include "test_support.hpp"
+
+namespace {
+std::atomic<bool> counting{false};
+std::atomic<std::size_t> allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  if (void* memory = std::malloc(size == 0 ? 1 : size)) return memory;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  return operator new(size);
+}
+void operator delete(void* memory) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory) noexcept {
+  std::free(memory);
+}
+void operator delete(void* memory, std::size_t) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory, std::size_t) noexcept {
+  std::free(memory);
+}
+// The nothrow forms (std::stable_sort's buffer) must pair with the delete above, and count too.
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  return std::malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+  return operator new(size, tag);
+}
+void operator delete(void* memory, const std::nothrow_t&) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory, const std::nothrow_t&) noexcept {
+  std::free(memory);
+}
+// Over-aligned types have operators of their own; they count too.
+void* operator new(std::size_t size, std::align_val_t align) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  const auto alignment = static_cast<std::size_t>(align);
+  const std::size_t rounded =
+      (std::max<std::size_t>(size, 1) + alignment - 1) / alignment * alignment;
+  if (void* memory = std::aligned_alloc(alignment, rounded)) return memory;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t align) {
+  return operator new(size, align);
+}
+void operator delete(void* memory, std::align_val_t) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory, std::align_val_t) noexcept {
+  std::free(memory);
+}
+void operator delete(void* memory, std::size_t, std::align_val_t) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory, std::size_t, std::align_val_t) noexcept {
+  std::free(memory);
+}
+void* operator new(std::size_t size, std::align_val_t align, const std::nothrow_t&) noexcept {
+  try {
+    return operator new(size, align);
+  } catch (const std::bad_alloc&) {
+    return nullptr;
+  }
+}
+void* operator new[](std::size_t size, std::align_val_t align, const std::nothrow_t& tag) noexcept {
+  return operator new(size, align, tag);
+}
+void operator delete(void* memory, std::align_val_t, const std::nothrow_t&) noexcept {
+  std::free(memory);
+}
+void operator delete[](void* memory, std::align_val_t, const std::nothrow_t&) noexcept {
+  std::free(memory);
+}
+
+using namespace arbiter;
+
+namespace {
+
+std::string read_config(const std::string& relative) {
+  std::ifstream in(std::string(ARBITER_SOURCE_DIR) + "/" + relative);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// Allocations made by steps 2..steps of `manager`.
+std::size_t allocations_in_steps(Manager& manager, int steps) {
+  manager.step();
+  allocations = 0;
+  counting = true;
+  for (int i = 1; i < steps; ++i) manager.step();
+  counting = false;
+  return allocations.load();
+}
+
+/// Allocations made by steps 2..steps of a manager built from `text`.
+std::size_t allocations_per_run(const std::string& text, int steps) {
+  static const Registry registry = test::make_test_registry();
+  Manager manager(test::compile_text(text, registry));
+  return allocations_in_steps(manager, steps);
+}
+
+/// Every config under configs/, sorted, relative to the source directory.
+std::vector<std::string> shipped_configs() {
+  namespace fs = std::filesystem;
+  std::vector<std::string> out;
+  const fs::path root = fs::path(ARBITER_SOURCE_DIR) / "configs";
+  for (const auto& entry : fs::recursive_directory_iterator(root)) {
+    const auto extension = entry.path().extension();
+    if (entry.is_regular_file() && (extension == ".yaml" || extension == ".json")) {
+      out.push_back(fs::relative(entry.path(), ARBITER_SOURCE_DIR).string());
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("the counter sees allocations", "[alloc]") {
+  counting = true;
+  allocations = 0;
+  auto* probe = new std::vector<int>(100);
+  counting = false;
+  delete probe;
+  CHECK(allocations.load() >= 2);
+}
+
+TEST_CASE("behaviour layers step without allocating", "[alloc]") {
+  CHECK(allocations_per_run(read_config("configs/paper/walk_and_kick.yaml"), 200) == 0);
+  CHECK(allocations_per_run(R"(
+arbiter: 1
+name: layered
+layers:
+  - name: world
+    interface: test.Feed
+    ports: {out: measured}
+    actuators: {measured: double}
+  - name: upper
+    sensors: [measured]
+    actuators:
+      target: {type: vec2, aggregate: true}
+      label: {type: string}
+    behaviours:
+      a: {type: scripted, params: {activation: [0.2, 0.9, 0], writes: {target: [1, 2], label: left}}}
+      b: {type: scripted, params: {activation: 0.5, writes: {target: [3, 4], label: right}}}
+      c: {type: test.Probe, params: {levels: [1, 0, 1], record: false}, ports: {in: measured}}
+    inhibitions: [a => b, b -> c]
+  - name: lower
+    sensors: [target, label]
+    actuators:
+      command: {type: double, aggregate: true}
+    behaviours:
+      d: {type: test.Probe, params: {levels: 0.7, value: 2, record: false}, ports: {out: command}}
+      e: {type: test.Probe, params: {levels: 0.3, value: 4, record: false}, ports: {out: command}}
+)",
+                            200) == 0);
+}
+
+TEST_CASE("state controllers step, transition and re-plan without allocating", "[alloc]") {
+  // goalie_plan re-plans (append) every few cycles, prepends, and is pre-empted.
+  CHECK(allocations_per_run(read_config("configs/paper/goalie_plan.yaml"), 60) == 0);
+  CHECK(allocations_per_run(read_config("configs/paper/hierarchical.yaml"), 30) == 0);
+  CHECK(allocations_per_run(R"(
+arbiter: 1
+name: replanning
+state_machines:
+  loop:
+    states:
+      a: {type: test.Planner, params: {op: append, target: p, x: 1.5}}
+      p: {type: test.Planner, params: {op: insert_after, target: p}}
+      again: {type: scripted, params: {append: [a], hold: 2}}
+    queue: [a, again]
+)",
+                            300) == 0);
+}
+
+TEST_CASE("every config in configs/ steps without allocating", "[alloc]") {
+  // Loaded as `arbiter run` loads them: the plugins they name come from the build's plugin
+  // directory. 300 steps reach the soccer demo's kick and the goalie plan's re-planning. A config
+  // whose plugin this build does not have (an optional one, e.g. dds without Cyclone DDS) is
+  // skipped, and says so.
+  const auto configs = shipped_configs();
+  REQUIRE(configs.size() >= 4);
+  for (const auto& config : configs) {
+    DYNAMIC_SECTION(config) {
+      Registry registry = test::make_test_registry();
+      LoadOptions options;
+      options.plugins.path.push_back(ARBITER_PLUGIN_DIR);
+      Diagnostics diagnostics;
+      auto program =
+          load(std::string(ARBITER_SOURCE_DIR) + "/" + config, registry, diagnostics, options);
+      const auto missing_plugin = std::find_if(
+          diagnostics.items().begin(), diagnostics.items().end(),
+          [](const Diagnostic& diagnostic) { return diagnostic.code == "plugin-not-found"; });
+      if (!program && missing_plugin != diagnostics.items().end()) {
+        WARN(config << " skipped: " << missing_plugin->message);
+        continue;
+      }
+      INFO(format(diagnostics));
+      REQUIRE(program);
+      Manager manager(std::move(*program));
+      CHECK(allocations_in_steps(manager, 300) == 0);
+    }
+  }
+}
