@@ -1,0 +1,1034 @@
+// Robustness (docs/robustness.md): hostile config files are answered with an error in bounded
+// time and memory, never a crash; behaviour code that throws, asks for a non-finite level or
+// writes non-finite values is contained at the step boundary, reported once, and handled by the
+// config's `on_exception` policy.
+
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "arbiter/program.hpp"
+#include "arbiter/state.hpp"
+#include "arbiter/trace.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace arbiter;
+
+namespace {
+
+const fs::path kHostileDir = fs::path(ARBITER_SOURCE_DIR) / "tests" / "data" / "hostile";
+
+// Generous: the suite also runs under the sanitizers, on slow machines. What these bounds catch
+// is time that grows faster than the input (minutes, not seconds).
+constexpr double kMaxSeconds = 20.0;
+
+// --- behaviour code that misbehaves --------------------------------------------------------------
+
+/// Throws from `callback` (update, activation, execute, inhibited) in steps [from, until];
+/// otherwise requests `level`. Writes `value` to `out` at the start of execute(), so a throw from
+/// execute() leaves a write behind. Counts its calls.
+class Faulty : public Behaviour {
+ public:
+  void init(InitContext& ctx) override {
+    callback = ctx.param<std::string>("callback");
+    from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
+    until = static_cast<std::uint64_t>(ctx.param<std::int64_t>("until"));
+    level = ctx.param<double>("level");
+    value = ctx.param<double>("value");
+    out = ctx.output<double>("out");
+  }
+  void update(const StepContext& ctx) override {
+    ++updates;
+    fail("update", ctx);
+  }
+  double activation(const StepContext& ctx) override {
+    ++activations;
+    fail("activation", ctx);
+    return level;
+  }
+  void execute(ExecuteContext& ctx) override {
+    ++executions;
+    ctx.write(out, value);
+    fail("execute", ctx);
+  }
+  void inhibited(const InhibitedContext& ctx) override {
+    ++inhibitions;
+    fail("inhibited", ctx);
+  }
+
+  std::string callback;
+  std::uint64_t from = 1;
+  std::uint64_t until = 0;
+  double level = 1.0;
+  double value = 0.0;
+  Output<double> out;
+  int updates = 0;
+  int activations = 0;
+  int executions = 0;
+  int inhibitions = 0;
+
+ private:
+  void fail(const std::string& here, const StepContext& ctx) const {
+    if (here == callback && ctx.step() >= from && ctx.step() <= until) {
+      throw std::runtime_error("faulty " + here);
+    }
+  }
+};
+
+double number_of(const std::string& text) {
+  if (text == "nan") return std::numeric_limits<double>::quiet_NaN();
+  if (text == "inf") return std::numeric_limits<double>::infinity();
+  if (text == "-inf") return -std::numeric_limits<double>::infinity();
+  return std::stod(text);
+}
+
+/// Requests `level` and writes `value` to `out` (double), `out2` (vec2, as x) and `out3` (vec3,
+/// as z), each given as text so that "nan", "inf" and "-inf" can be written; `from` is the first
+/// step in which it writes.
+class Odd : public Behaviour {
+ public:
+  void init(InitContext& ctx) override {
+    level = number_of(ctx.param<std::string>("level"));
+    value = number_of(ctx.param<std::string>("value"));
+    from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
+    out = ctx.output<double>("out");
+    out2 = ctx.output<Vec2>("out2");
+    out3 = ctx.output<Vec3>("out3");
+  }
+  double activation(const StepContext&) override { return level; }
+  void execute(ExecuteContext& ctx) override {
+    if (ctx.step() < from) return;
+    ctx.write(out, value);
+    ctx.write(out2, Vec2{value, 0.0});
+    ctx.write(out3, Vec3{0.0, 0.0, value});
+  }
+
+  double level = 1.0;
+  double value = 0.0;
+  std::uint64_t from = 1;
+  Output<double> out;
+  Output<Vec2> out2;
+  Output<Vec3> out3;
+};
+
+/// An interface that writes the step number to `out` in the input pass and throws from
+/// `callback` (input or output) in steps [from, until].
+class FaultyFeed : public Interface {
+ public:
+  void init(InitContext& ctx) override {
+    callback = ctx.param<std::string>("callback");
+    from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
+    until = static_cast<std::uint64_t>(ctx.param<std::int64_t>("until"));
+    out = ctx.output<double>("out");
+  }
+  void input(ExecuteContext& ctx) override {
+    ++inputs;
+    ctx.write(out, static_cast<double>(ctx.step()));
+    if (callback == "input" && ctx.step() >= from && ctx.step() <= until) {
+      throw std::runtime_error("feed input");
+    }
+  }
+  void output(const StepContext& ctx) override {
+    ++outputs;
+    if (callback == "output" && ctx.step() >= from && ctx.step() <= until) throw 42;
+  }
+
+  std::string callback;
+  std::uint64_t from = 1;
+  std::uint64_t until = 0;
+  Output<double> out;
+  int inputs = 0;
+  int outputs = 0;
+};
+
+/// The test registry plus the classes above.
+Registry make_registry() {
+  Registry r = test::make_test_registry();
+  r.set_origin("robustness_test");
+  constexpr std::int64_t kForever = std::numeric_limits<std::int64_t>::max();
+  auto& faulty = r.add_behaviour<Faulty>("robust.Faulty");
+  faulty.param("callback", ParamKind::kString)
+      .fallback(std::string("activation"))
+      .one_of({"update", "activation", "execute", "inhibited"});
+  faulty.param("from", ParamKind::kInt).fallback(std::int64_t{1});
+  faulty.param("until", ParamKind::kInt).fallback(kForever);
+  faulty.param("level", ParamKind::kDouble).fallback(1.0);
+  faulty.param("value", ParamKind::kDouble).fallback(0.0);
+  faulty.output<double>("out").make_optional();
+  auto& odd = r.add_behaviour<Odd>("robust.Odd");
+  odd.param("level", ParamKind::kString).fallback(std::string("1"));
+  odd.param("value", ParamKind::kString).fallback(std::string("0"));
+  odd.param("from", ParamKind::kInt).fallback(std::int64_t{1});
+  odd.output<double>("out").make_optional();
+  odd.output<Vec2>("out2").make_optional();
+  odd.output<Vec3>("out3").make_optional();
+  auto& feed = r.add_interface<FaultyFeed>("robust.FaultyFeed");
+  feed.param("callback", ParamKind::kString).fallback(std::string("input"));
+  feed.param("from", ParamKind::kInt).fallback(std::int64_t{1});
+  feed.param("until", ParamKind::kInt).fallback(kForever);
+  feed.output<double>("out").make_optional();
+  return r;
+}
+
+const Registry& registry() {
+  static const Registry instance = make_registry();
+  return instance;
+}
+
+/// A logger whose lines ("error: ..." / "warning: ...") the test can read.
+class Log {
+ public:
+  Log()
+      : logger(std::make_shared<spdlog::logger>(
+            "robustness", std::make_shared<spdlog::sinks::ostream_sink_st>(text_))) {
+    logger->set_pattern("%l: %v");
+    logger->set_level(spdlog::level::trace);
+  }
+  Log(const Log&) = delete;
+  Log& operator=(const Log&) = delete;
+
+  std::string text() const { return text_.str(); }
+  std::size_t count(const std::string& needle) const {
+    const std::string all = text_.str();
+    std::size_t n = 0;
+    for (auto at = all.find(needle); at != std::string::npos; at = all.find(needle, at + 1)) ++n;
+    return n;
+  }
+  std::size_t lines() const { return count("\n"); }
+
+  std::shared_ptr<spdlog::logger> logger;
+
+ private:
+  std::ostringstream text_;
+};
+
+Manager make(const std::string& yaml, Log& log) {
+  return Manager(test::compile_text(yaml, registry()), log.logger);
+}
+
+template <typename T>
+T& behaviour(const Manager& manager, const std::string& layer, const std::string& name) {
+  return test::instance<T>(manager.program(), layer, name);
+}
+
+double actuator(const Manager& manager, const std::string& name) {
+  return manager.actuator<double>(*manager.program().find_actuator(name));
+}
+
+bool written(const Manager& manager, const std::string& name) {
+  return manager.actuator_written(*manager.program().find_actuator(name));
+}
+
+/// Collects the trace of every step as parsed JSON: a non-finite number would not parse.
+class JsonTrace {
+ public:
+  explicit JsonTrace(Manager& manager) : writer_(out_) { manager.add_observer(writer_); }
+  std::vector<nlohmann::json> records() const {
+    std::vector<nlohmann::json> parsed;
+    std::istringstream in(out_.str());
+    std::string line;
+    while (std::getline(in, line)) parsed.push_back(nlohmann::json::parse(line));
+    return parsed;
+  }
+
+ private:
+  std::ostringstream out_;
+  TraceWriter writer_;
+};
+
+// --- config files --------------------------------------------------------------------------------
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+}
+
+/// A fresh directory under the system's temporary one, removed at the end of the scope.
+class TempDir {
+ public:
+  TempDir() {
+    static int counter = 0;
+    path_ = fs::temp_directory_path() /
+            ("arbiter_robustness_" + std::to_string(::getpid()) + "_" + std::to_string(++counter));
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ignored;
+    fs::permissions(path_, fs::perms::owner_all, fs::perm_options::add, ignored);
+    for (const auto& entry : fs::recursive_directory_iterator(path_, ignored)) {
+      fs::permissions(entry.path(), fs::perms::owner_all, fs::perm_options::add, ignored);
+    }
+    fs::remove_all(path_, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const fs::path& path() const { return path_; }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  fs::path path_;
+};
+
+/// Peak resident memory of this process so far, in MiB.
+double peak_rss_mib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+struct Outcome {
+  Diagnostics diagnostics;
+  bool loaded = false;
+  double seconds = 0.0;
+};
+
+/// The whole pipeline (read, plugins, validate, compile) on a file.
+Outcome load_file(const fs::path& path, const LoadOptions& options = {}) {
+  Registry fresh = make_registry();  // loading may add plugins to it
+  Outcome outcome;
+  const auto start = std::chrono::steady_clock::now();
+  outcome.loaded = load(path.string(), fresh, outcome.diagnostics, options).has_value();
+  outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // Every message must be printable as text and as JSON (which needs valid UTF-8).
+  if (outcome.diagnostics.error_count() > 0) CHECK_FALSE(format(outcome.diagnostics).empty());
+  CHECK_NOTHROW(nlohmann::json::parse(format_json(outcome.diagnostics)));
+  return outcome;
+}
+
+/// The codes of the errors reported, in order.
+std::vector<std::string> error_codes(const Diagnostics& diagnostics) {
+  std::vector<std::string> codes;
+  for (const auto& item : diagnostics.items()) {
+    if (item.severity == Severity::kError) codes.push_back(item.code);
+  }
+  return codes;
+}
+
+bool has_error(const Outcome& outcome, const std::string& code) {
+  const auto codes = error_codes(outcome.diagnostics);
+  return std::find(codes.begin(), codes.end(), code) != codes.end();
+}
+
+/// Checks that loading `path` fails with an error `code`, in bounded time.
+void expect_rejected(const fs::path& path, const std::string& code,
+                     const LoadOptions& options = {}) {
+  const double before = peak_rss_mib();
+  const Outcome outcome = load_file(path, options);
+  INFO(path.filename().string() << ":\n" << format(outcome.diagnostics));
+  CHECK_FALSE(outcome.loaded);
+  CHECK(has_error(outcome, code));
+  CHECK(outcome.seconds < kMaxSeconds);
+  // Sanitizer builds use several times the memory of a plain one; the bound is for runaways.
+  CHECK(peak_rss_mib() - before < 1500.0);
+}
+
+struct CliResult {
+  int exit_code = -1;
+  bool signalled = false;
+  std::string err;
+};
+
+/// Runs `arbiter ARGUMENTS` (already shell-quoted), capturing stderr.
+CliResult run_cli(const std::string& arguments) {
+  const fs::path err_path =
+      fs::temp_directory_path() / ("arbiter_robustness_" + std::to_string(::getpid()) + ".err");
+  const std::string command = "\"" + std::string(ARBITER_CLI) + "\" " + arguments +
+                              " >/dev/null 2>\"" + err_path.string() + "\" </dev/null";
+  const int status = std::system(command.c_str());
+  CliResult result;
+  result.signalled = WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) > 125);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.err = read_text(err_path);
+  fs::remove(err_path);
+  return result;
+}
+
+std::string quoted(const fs::path& path) {
+  return "\"" + path.string() + "\"";
+}
+
+/// Every file of tests/data/hostile with the error code it must be rejected with.
+const std::map<std::string, std::string>& hostile_cases() {
+  static const std::map<std::string, std::string> cases = {
+      {"activation_overflow.yaml", "out-of-range"},
+      {"binary_garbage.json", "binary-file"},
+      {"capacity_overflow.yaml", "wrong-type"},
+      {"deep_nesting.json", "too-deep"},
+      {"deep_nesting_block.yaml", "too-deep"},
+      {"deep_nesting_objects.json", "too-deep"},
+      {"default_overflow.yaml", "wrong-type"},
+      {"default_vec_infinite.yaml", "wrong-type"},
+      {"empty.json", "wrong-type"},
+      {"fuzz_control_characters.yaml", "yaml-syntax"},
+      {"fuzz_nel_escape.yaml", "wrong-type"},
+      {"include_binary.yaml", "binary-file"},
+      {"include_directory.yaml", "not-a-file"},
+      {"include_self.yaml", "include-cycle"},
+      {"latin1.yaml", "invalid-utf8"},
+      {"list.json", "wrong-type"},
+      {"merge_key_bomb.yaml", "too-large"},
+      {"nul_byte.yaml", "binary-file"},
+      {"null.json", "wrong-type"},
+      {"rate_infinite.yaml", "out-of-range"},
+      {"rate_nan.yaml", "out-of-range"},
+      {"rate_negative.json", "out-of-range"},
+      {"rate_negative.yaml", "out-of-range"},
+      {"rate_overflow.json", "json-syntax"},
+      {"rate_overflow.yaml", "out-of-range"},
+      {"scalar.json", "wrong-type"},
+      {"utf16.yaml", "invalid-utf8"},
+      {"whitespace_only.json", "wrong-type"},
+      {"write_infinite.yaml", "wrong-type"},
+  };
+  return cases;
+}
+
+}  // namespace
+
+// --- hostile files -------------------------------------------------------------------------------
+
+TEST_CASE("every hostile file is rejected with its error code, quickly", "[robustness][hostile]") {
+  for (const auto& [name, code] : hostile_cases()) {
+    DYNAMIC_SECTION(name) {
+      expect_rejected(kHostileDir / name, code);
+    }
+  }
+}
+
+TEST_CASE("every file in tests/data/hostile is a listed case", "[robustness][hostile]") {
+  for (const auto& entry : fs::directory_iterator(kHostileDir)) {
+    INFO(entry.path().filename().string());
+    CHECK(hostile_cases().count(entry.path().filename().string()) == 1);
+  }
+}
+
+TEST_CASE("arbiter validate exits 1 on every hostile file, without a crash", "[robustness][cli]") {
+  for (const auto& [name, code] : hostile_cases()) {
+    DYNAMIC_SECTION(name) {
+      const auto result = run_cli("validate " + quoted(kHostileDir / name));
+      INFO(result.err);
+      CHECK_FALSE(result.signalled);
+      CHECK(result.exit_code == 1);
+      CHECK(result.err.find("error:") != std::string::npos);
+      const auto json = run_cli("validate --format json " + quoted(kHostileDir / name));
+      CHECK(json.exit_code == 1);
+    }
+  }
+}
+
+TEST_CASE("a YAML escape that yaml-cpp decodes to invalid UTF-8 is repaired",
+          "[robustness][hostile][fuzz]") {
+  // Found by the fuzzer: "\N" (next line, U+0085) became the lone byte 0x85, and printing the
+  // diagnostics as JSON threw.
+  const Diagnostics diagnostics =
+      test::diagnose_text("arbiter: 1\nname: x\nlayers: \"a\\N\\_b\"\n", registry());
+  REQUIRE(diagnostics.error_count() == 1);
+  CHECK(diagnostics.items()[0].message.find("'a\xC2\x85\xC2\xA0"
+                                            "b'") != std::string::npos);
+  CHECK_NOTHROW(nlohmann::json::parse(format_json(diagnostics)));
+}
+
+TEST_CASE("generated big inputs are rejected in bounded time and memory",
+          "[robustness][hostile][big]") {
+  TempDir dir;
+  SECTION("a file over the size limit, and the limit is configurable") {
+    const std::string config = "arbiter: 1\nname: big\n";
+    write_text(dir / "big.yaml", config + "# " + std::string(ReadLimits{}.max_file_bytes, 'x'));
+    expect_rejected(dir / "big.yaml", "file-too-large");
+    LoadOptions small;
+    small.limits.max_file_bytes = 100;
+    write_text(dir / "small.yaml", config + "# " + std::string(200, 'x') + "\n");
+    expect_rejected(dir / "small.yaml", "file-too-large", small);
+    CHECK(load_file(dir / "small.yaml").diagnostics.error_count() == 0);
+  }
+  SECTION("nesting 100 000 levels deep") {
+    const std::size_t n = 100000;
+    write_text(dir / "flow.yaml",
+               "arbiter: 1\nname: deep\nlayers: " + std::string(n, '[') + std::string(n, ']'));
+    expect_rejected(dir / "flow.yaml", "too-deep");
+    write_text(dir / "arrays.json", "{\"arbiter\": 1, \"name\": \"deep\", \"layers\": " +
+                                        std::string(n, '[') + std::string(n, ']') + "}");
+    expect_rejected(dir / "arrays.json", "too-deep");
+    std::string objects;
+    for (std::size_t i = 0; i < n; ++i) objects += "{\"a\":";
+    write_text(dir / "objects.json", "{\"arbiter\": 1, \"name\": \"deep\", \"layers\": " + objects +
+                                         "1" + std::string(n, '}') + "}");
+    expect_rejected(dir / "objects.json", "too-deep");
+    std::string block = "arbiter: 1\nname: deep\nq:\n";
+    for (std::size_t i = 1; i <= 3000; ++i) block += std::string(i, ' ') + "k:\n";
+    write_text(dir / "block.yaml", block);
+    expect_rejected(dir / "block.yaml", "too-deep");
+  }
+  SECTION("a one-line flow list with more nodes than the limit") {
+    // Locating nodes once cost time quadratic in the length of a line.
+    LoadOptions options;
+    options.limits.max_nodes = 100000;
+    std::string items;
+    for (int i = 0; i < 200000; ++i) items += "1,";
+    write_text(dir / "wide.yaml", "arbiter: 1\nname: wide\nlayers: [" + items + "1]\n");
+    expect_rejected(dir / "wide.yaml", "too-large", options);
+  }
+  SECTION("an alias bomb with the default limits") {
+    std::string bomb = "arbiter: 1\nname: bomb\na: &a [x, x, x, x, x, x, x, x, x, x]\n";
+    for (char c = 'b'; c <= 'k'; ++c) {
+      bomb += std::string(1, c) + ": &" + c + " [";
+      for (int k = 0; k < 10; ++k)
+        bomb += std::string(k > 0 ? ", " : "") + "*" + static_cast<char>(c - 1);
+      bomb += "]\n";
+    }
+    write_text(dir / "bomb.yaml", bomb);
+    expect_rejected(dir / "bomb.yaml", "too-large");
+  }
+  SECTION("long keys and names") {
+    // Suggestions compared names with a full edit-distance table, quadratic in their length.
+    // yaml-cpp reads keys (so names) of up to 1024 characters; a value can be longer.
+    const std::string name(1000, 'a');
+    write_text(dir / "key.json", "{\"arbiter\": 1, \"name\": \"x\", \"" + name + "\": 1}");
+    expect_rejected(dir / "key.json", "unknown-key");
+    write_text(dir / "names.yaml",
+               "arbiter: 1\nname: x\nlayers:\n  - name: l\n    behaviours:\n"
+               "      " +
+                   name + ": scripted\n    inhibitions: [" + name + "b -> " + name + "]\n");
+    expect_rejected(dir / "names.yaml", "unknown-behaviour");
+    write_text(dir / "value.yaml",
+               "arbiter: 1\nname: x\non_exception: " + std::string(1 << 20, 's') + "\n");
+    expect_rejected(dir / "value.yaml", "out-of-range");
+  }
+  SECTION("many inhibitions, valid and not") {
+    // Duplicate inhibitions were found by a linear search per inhibition, and every unknown
+    // name was compared with every behaviour name for a suggestion.
+    std::string behaviours;
+    std::string valid;
+    std::string invalid;
+    for (int i = 0; i < 2000; ++i) {
+      behaviours += "      b" + std::to_string(i) + ": scripted\n";
+      for (int j = i + 1; j < std::min(2000, i + 11); ++j) {
+        valid += "      - b" + std::to_string(i) + " -> b" + std::to_string(j) + "\n";
+      }
+      for (int k = 0; k < 3; ++k) {
+        invalid += "      - c" + std::to_string(3 * i + k) + " -> b" + std::to_string(i) + "\n";
+      }
+    }
+    const std::string head = "arbiter: 1\nname: many\nlayers:\n  - name: l\n    behaviours:\n";
+    write_text(dir / "valid.yaml", head + behaviours + "    inhibitions:\n" + valid);
+    const Outcome outcome = load_file(dir / "valid.yaml");
+    INFO(format(outcome.diagnostics).substr(0, 2000));
+    CHECK(outcome.loaded);
+    CHECK(outcome.seconds < kMaxSeconds);
+    write_text(dir / "invalid.yaml", head + behaviours + "    inhibitions:\n" + invalid);
+    expect_rejected(dir / "invalid.yaml", "unknown-behaviour");
+  }
+  SECTION("random bytes, and random printable text") {
+    std::mt19937 random(20240611);
+    for (int round = 0; round < 40; ++round) {
+      std::string bytes(4096, '\0');
+      for (auto& c : bytes) c = static_cast<char>(random() & 0xFF);
+      if (round % 2 == 1) {
+        for (auto& c : bytes) c = static_cast<char>(' ' + (static_cast<unsigned char>(c) % 95));
+        if (round % 4 == 1) bytes = "arbiter: 1\nname: x\n" + bytes;
+      }
+      const fs::path path =
+          dir / ("random" + std::to_string(round) + (round % 3 == 0 ? ".json" : ".yaml"));
+      write_text(path, bytes);
+      const Outcome outcome = load_file(path);
+      INFO(path.filename().string() << ": " << format(outcome.diagnostics).substr(0, 500));
+      CHECK_FALSE(outcome.loaded);
+      CHECK(outcome.diagnostics.error_count() > 0);
+      CHECK(outcome.seconds < kMaxSeconds);
+    }
+  }
+}
+
+TEST_CASE("paths that are not config files are reported", "[robustness][hostile][files]") {
+  TempDir dir;
+  SECTION("a missing file") {
+    expect_rejected(dir / "missing.yaml", "file-not-found");
+  }
+  SECTION("a directory") {
+    fs::create_directories(dir / "configs.yaml");
+    expect_rejected(dir / "configs.yaml", "not-a-file");
+  }
+  SECTION("a FIFO, which would block the reader") {
+    REQUIRE(::mkfifo((dir / "pipe.yaml").c_str(), 0600) == 0);
+    expect_rejected(dir / "pipe.yaml", "not-a-file");
+  }
+  SECTION("a device that never ends") {
+    if (fs::exists("/dev/zero")) expect_rejected("/dev/zero", "not-a-file");
+  }
+  SECTION("an include that is a FIFO") {
+    REQUIRE(::mkfifo((dir / "pipe.yaml").c_str(), 0600) == 0);
+    write_text(dir / "main.yaml", "arbiter: 1\nname: x\ninclude: [pipe.yaml]\n");
+    expect_rejected(dir / "main.yaml", "not-a-file");
+  }
+  SECTION("an unreadable file") {
+    write_text(dir / "secret.yaml", "arbiter: 1\nname: secret\n");
+    fs::permissions(dir / "secret.yaml", fs::perms::none);
+    if (::access((dir / "secret.yaml").c_str(), R_OK) == 0) {
+      // Root reads it anyway: chmod does not stop the superuser.
+      WARN("running as a user who can read a chmod 000 file (root?): checked that it loads");
+      CHECK(load_file(dir / "secret.yaml").loaded);
+    } else {
+      expect_rejected(dir / "secret.yaml", "unreadable-file");
+    }
+  }
+  SECTION("arbiter validate on a directory and on a FIFO exits 1") {
+    REQUIRE(::mkfifo((dir / "pipe.yaml").c_str(), 0600) == 0);
+    for (const auto& path : {dir.path(), dir / "pipe.yaml"}) {
+      const auto result = run_cli("validate " + quoted(path));
+      INFO(result.err);
+      CHECK(result.exit_code == 1);
+      CHECK(result.err.find("error:") != std::string::npos);
+    }
+  }
+}
+
+// --- on_exception ------------------------------------------------------------------------------
+
+TEST_CASE("a throwing behaviour counts as inactive in that step and is reported once",
+          "[robustness][faults]") {
+  Log log;
+  auto manager = make(R"(arbiter: 1
+name: t
+layers:
+  - name: l
+    actuators:
+      speed: {type: double}
+    behaviours:
+      broken: {type: robust.Faulty, params: {callback: activation, from: 2, until: 3, value: 9},
+               ports: {out: speed}}
+      fine: {type: test.Probe, params: {levels: 0.5, value: 1}, ports: {out: speed}}
+    inhibitions: [broken -> fine]
+)",
+                      log);
+  std::vector<double> broken_levels;
+  std::vector<double> fine_levels;
+  std::vector<double> speeds;
+  for (int step = 0; step < 5; ++step) {
+    manager.step();
+    broken_levels.push_back(test::activation_of(manager, "l", "broken"));
+    fine_levels.push_back(test::activation_of(manager, "l", "fine"));
+    speeds.push_back(actuator(manager, "speed"));
+  }
+  CHECK(broken_levels == std::vector<double>{1, 0, 0, 1, 1});
+  CHECK(fine_levels == std::vector<double>{0, 0.5, 0.5, 0, 0});
+  CHECK(speeds == std::vector<double>{9, 1, 1, 9, 9});
+  CHECK_FALSE(manager.stopped());
+  INFO(log.text());
+  CHECK(log.lines() == 1);
+  CHECK(log.count("inline.yaml:8:7: behaviour 'broken' (robust.Faulty) threw from activation() "
+                  "in step 2: faulty activation") == 1);
+  CHECK(log.count("on_exception: inactive") == 1);
+}
+
+TEST_CASE("a throw from update() or execute() leaves no level and no write for that step",
+          "[robustness][faults]") {
+  Log log;
+  auto manager = make(R"(arbiter: 1
+name: t
+layers:
+  - name: l
+    actuators:
+      speed: {type: double, aggregate: true}
+    behaviours:
+      in_update: {type: robust.Faulty, params: {callback: update, from: 2, until: 2, value: 5},
+                  ports: {out: speed}}
+      in_execute: {type: robust.Faulty, params: {callback: execute, from: 3, until: 3, value: 7},
+                   ports: {out: speed}}
+      in_inhibited: {type: robust.Faulty, params: {callback: inhibited, level: 0}}
+)",
+                      log);
+  auto& in_update = behaviour<Faulty>(manager, "l", "in_update");
+  auto& in_inhibited = behaviour<Faulty>(manager, "l", "in_inhibited");
+  manager.step();
+  CHECK(actuator(manager, "speed") == 6.0);  // (5 + 7) / 2
+  manager.step();
+  // in_update threw from update(): not asked for a level, not executed, and back next step.
+  CHECK(test::activation_of(manager, "l", "in_update") == 0.0);
+  CHECK(in_update.activations == 1);
+  CHECK(in_update.executions == 1);
+  CHECK(actuator(manager, "speed") == 7.0);
+  manager.step();
+  // in_execute wrote 7, then threw: the write is dropped; its level stays as refined.
+  CHECK(test::activation_of(manager, "l", "in_execute") == 1.0);
+  CHECK(actuator(manager, "speed") == 5.0);
+  CHECK(in_update.activations == 2);
+  manager.step();
+  CHECK(actuator(manager, "speed") == 6.0);
+  CHECK(in_inhibited.inhibitions == 4);  // it throws every step: reported once, called on
+  INFO(log.text());
+  CHECK(log.count("threw from update() in step 2") == 1);
+  CHECK(log.count("threw from execute() in step 3") == 1);
+  CHECK(log.count("threw from inhibited() in step 1") == 1);
+  CHECK(log.lines() == 3);
+}
+
+TEST_CASE("on_exception: disable takes a behaviour out for the rest of the run",
+          "[robustness][faults]") {
+  Log log;
+  auto manager = make(R"(arbiter: 1
+name: t
+layers:
+  - name: l
+    actuators:
+      speed: {type: double}
+    behaviours:
+      broken: {type: robust.Faulty, params: {callback: execute, from: 2, until: 2, value: 9},
+               ports: {out: speed}, on_exception: disable}
+      fine: {type: test.Probe, params: {levels: 0.5, value: 1}, ports: {out: speed}}
+    inhibitions: [broken -> fine]
+)",
+                      log);
+  auto& broken = behaviour<Faulty>(manager, "l", "broken");
+  manager.step();
+  CHECK(actuator(manager, "speed") == 9.0);
+  manager.step();  // broken writes 9 and throws: dropped; fine is still inhibited this step
+  CHECK(actuator(manager, "speed") == 9.0);
+  CHECK_FALSE(written(manager, "speed"));
+  for (int step = 0; step < 3; ++step) manager.step();
+  CHECK(test::activation_of(manager, "l", "broken") == 0.0);
+  CHECK(manager.requested(*manager.program().find_behaviour("l", "broken")) == 0.0);
+  CHECK(test::activation_of(manager, "l", "fine") == 0.5);
+  CHECK(actuator(manager, "speed") == 1.0);
+  CHECK(broken.updates == 2);
+  CHECK(broken.activations == 2);
+  CHECK(broken.executions == 2);
+  CHECK(broken.inhibitions == 0);
+  CHECK_FALSE(manager.stopped());
+  INFO(log.text());
+  CHECK(log.lines() == 1);
+  CHECK(log.count("'broken' (robust.Faulty) threw from execute() in step 2: faulty execute; it "
+                  "is disabled for the rest of the run (on_exception: disable)") == 1);
+}
+
+TEST_CASE("on_exception: stop completes the step, then the manager stops", "[robustness][faults]") {
+  Log log;
+  auto manager = make(R"(arbiter: 1
+name: t
+on_exception: stop
+layers:
+  - name: l
+    actuators:
+      speed: {type: double}
+    behaviours:
+      broken: {type: robust.Faulty, params: {callback: activation, from: 3, value: 9},
+               ports: {out: speed}}
+      fine: {type: test.Probe, params: {levels: 0.5, value: 1}, ports: {out: speed}}
+    inhibitions: [broken -> fine]
+)",
+                      log);
+  JsonTrace trace(manager);
+  for (int step = 0; step < 10 && !manager.stopped(); ++step) manager.step();
+  CHECK(manager.stopped());
+  CHECK(manager.steps() == 3);
+  // The step in which it threw ran to the end for everyone else, and was observed.
+  CHECK(test::activation_of(manager, "l", "fine") == 0.5);
+  CHECK(actuator(manager, "speed") == 1.0);
+  const auto records = trace.records();
+  REQUIRE(records.size() == 4);  // header and three steps
+  CHECK(records[3]["layers"]["l"]["fine"]["active"] == true);
+  CHECK_THAT(manager.stop_reason(),
+             Catch::Matchers::Contains("inline.yaml:9:7: behaviour 'broken' (robust.Faulty) "
+                                       "threw from activation() in step 3"));
+  manager.step();
+  CHECK(manager.steps() == 3);
+  CHECK(behaviour<test::Probe>(manager, "l", "fine").events.size() == 6);  // 3 × update+execute
+  INFO(log.text());
+  CHECK(log.count("the manager stops after this step (on_exception: stop)") == 1);
+}
+
+TEST_CASE("a behaviour's on_exception overrides the config's", "[robustness][faults]") {
+  Log log;
+  auto manager = make(R"(arbiter: 1
+name: t
+on_exception: stop
+layers:
+  - name: l
+    behaviours:
+      tolerated: {type: robust.Faulty, on_exception: inactive}
+      fine: {type: test.Probe}
+)",
+                      log);
+  for (int step = 0; step < 3; ++step) manager.step();
+  CHECK_FALSE(manager.stopped());
+  CHECK(manager.steps() == 3);
+  CHECK(test::activation_of(manager, "l", "fine") == 1.0);
+  CHECK(manager.program().behaviours[0].on_exception == FaultPolicy::kInactive);
+}
+
+TEST_CASE("an interface that throws loses that pass's writes and follows the policy",
+          "[robustness][faults]") {
+  const std::string config = R"(arbiter: 1
+name: t
+on_exception: POLICY
+layers:
+  - name: world
+    interface: robust.FaultyFeed
+    params: {callback: input, from: 2, until: 2}
+    ports: {out: ticks}
+    actuators:
+      ticks: {type: double}
+  - name: l
+    sensors: [ticks]
+    behaviours:
+      fine: test.Probe
+)";
+  const auto with = [&](const std::string& policy) {
+    std::string text = config;
+    text.replace(text.find("POLICY"), 6, policy);
+    return text;
+  };
+  SECTION("inactive") {
+    Log log;
+    auto manager = make(with("inactive"), log);
+    std::vector<double> ticks;
+    std::vector<bool> fresh;
+    for (int step = 0; step < 3; ++step) {
+      manager.step();
+      ticks.push_back(actuator(manager, "ticks"));
+      fresh.push_back(written(manager, "ticks"));
+    }
+    CHECK(ticks == std::vector<double>{1, 1, 3});
+    CHECK(fresh == std::vector<bool>{true, false, true});
+    INFO(log.text());
+    CHECK(log.count("inline.yaml:5:11: interface of layer 'world' (robust.FaultyFeed) threw "
+                    "from input() in step 2: feed input") == 1);
+  }
+  SECTION("disable") {
+    Log log;
+    auto manager = make(with("disable"), log);
+    for (int step = 0; step < 4; ++step) manager.step();
+    const auto& program = manager.program();
+    const auto& feed = dynamic_cast<const FaultyFeed&>(*program.layers[0].interface);
+    CHECK(feed.inputs == 2);
+    CHECK(feed.outputs == 1);
+    CHECK(actuator(manager, "ticks") == 1.0);
+    CHECK_FALSE(written(manager, "ticks"));
+  }
+  SECTION("stop") {
+    Log log;
+    auto manager = make(with("stop"), log);
+    for (int step = 0; step < 4 && !manager.stopped(); ++step) manager.step();
+    CHECK(manager.stopped());
+    CHECK(manager.steps() == 2);
+  }
+  SECTION("a throw of something that is not an exception") {
+    Log log;
+    std::string text = with("inactive");
+    text.replace(text.find("callback: input"), 15, "callback: output");
+    auto manager = make(text, log);
+    for (int step = 0; step < 3; ++step) manager.step();
+    INFO(log.text());
+    CHECK(log.count("threw from output() in step 2: unknown exception") == 1);
+  }
+}
+
+TEST_CASE("a throwing state stops its controller and, under a config-wide stop, the manager",
+          "[robustness][faults][scl]") {
+  const std::string config = R"(arbiter: 1
+name: t
+POLICY
+layers:
+  - name: l
+    behaviours:
+      fine: test.Probe
+state_machines:
+  plan:
+    states:
+      boom: {type: test.Planner, params: {op: throw, hold: 2}}
+    queue: [boom]
+)";
+  for (const std::string policy : {"on_exception: inactive", "on_exception: stop"}) {
+    DYNAMIC_SECTION(policy) {
+      std::string text = config;
+      text.replace(text.find("POLICY"), 6, policy);
+      Log log;
+      auto manager = make(text, log);
+      for (int step = 0; step < 5 && !manager.stopped(); ++step) manager.step();
+      const Controller* plan = manager.program().find_controller("plan");
+      CHECK(plan->status() == ControllerStatus::kError);
+      CHECK_THAT(plan->error(), Catch::Matchers::Contains("state failure"));
+      if (policy == "on_exception: inactive") {
+        CHECK_FALSE(manager.stopped());
+        CHECK(manager.steps() == 5);
+      } else {
+        CHECK(manager.stopped());
+        CHECK(manager.steps() == 2);
+        CHECK_THAT(manager.stop_reason(),
+                   Catch::Matchers::Contains("state machine 'plan' stopped with an error"));
+      }
+      CHECK(test::activation_of(manager, "l", "fine") == 1.0);
+    }
+  }
+}
+
+TEST_CASE("on_exception is checked like any other key", "[robustness][faults][config]") {
+  const auto codes = [](const std::string& text) {
+    return error_codes(test::diagnose_text(text, registry()));
+  };
+  CHECK(codes("arbiter: 1\nname: t\non_exception: abort\n") ==
+        std::vector<std::string>{"out-of-range"});
+  const auto diagnostics =
+      test::diagnose_text("arbiter: 1\nname: t\non_exception: disabled\n", registry());
+  REQUIRE(diagnostics.items().size() == 1);
+  CHECK(diagnostics.items()[0].message ==
+        "'on_exception' must be inactive, disable or stop, found the string 'disabled'");
+  CHECK(diagnostics.items()[0].notes ==
+        std::vector<std::string>{"did you mean 'disable'? allowed: disable, inactive, stop"});
+  CHECK(codes("arbiter: 1\nname: t\non_exception: [stop]\n") ==
+        std::vector<std::string>{"wrong-type"});
+  CHECK(codes("arbiter: 1\nname: t\nlayers:\n  - name: l\n    behaviours:\n      b: {type: "
+              "scripted, on_exception: 1}\n") == std::vector<std::string>{"out-of-range"});
+  CHECK(codes("arbiter: 1\nname: t\nlayers:\n  - name: l\n    behaviours:\n      b: {type: "
+              "scripted, on_exception: stop}\n")
+            .empty());
+  TempDir dir;
+  write_text(dir / "part.yaml", "arbiter: 1\non_exception: stop\n");
+  write_text(dir / "main.yaml", "arbiter: 1\nname: t\ninclude: [part.yaml]\n");
+  const Outcome outcome = load_file(dir / "main.yaml");
+  CHECK(error_codes(outcome.diagnostics) == std::vector<std::string>{"unknown-key"});
+}
+
+// --- non-finite numbers
+// ---------------------------------------------------------------------------
+
+TEST_CASE("non-finite activation levels count as 0 or 1 and are reported once",
+          "[robustness][levels]") {
+  Log log;
+  auto manager = make(R"(arbiter: 1
+name: t
+layers:
+  - name: l
+    behaviours:
+      nan: {type: robust.Odd, params: {level: nan}}
+      high: {type: robust.Odd, params: {level: inf}}
+      low: {type: robust.Odd, params: {level: -inf}}
+      fine: {type: test.Probe, params: {levels: 0.5}}
+)",
+                      log);
+  for (int step = 0; step < 4; ++step) manager.step();
+  CHECK(test::activation_of(manager, "l", "nan") == 0.0);
+  CHECK(test::activation_of(manager, "l", "high") == 1.0);
+  CHECK(test::activation_of(manager, "l", "low") == 0.0);
+  CHECK(test::activation_of(manager, "l", "fine") == 0.5);
+  INFO(log.text());
+  CHECK(log.lines() == 3);
+  CHECK(log.count("inline.yaml:6:7: behaviour 'nan' requested a NaN activation level; it counts "
+                  "as 0") == 1);
+  CHECK(log.count("behaviour 'high' requested an infinite activation level; it counts as 1") == 1);
+  CHECK(log.count("behaviour 'low' requested a negative infinite activation level; it counts as "
+                  "0") == 1);
+}
+
+TEST_CASE("non-finite values written to actuators are ignored and reported once",
+          "[robustness][actuators]") {
+  for (const std::string value : {"nan", "inf", "-inf"}) {
+    DYNAMIC_SECTION(value) {
+      Log log;
+      auto manager = make(R"(arbiter: 1
+name: t
+layers:
+  - name: l
+    actuators:
+      speed: {type: double, default: 2}
+      mean: {type: double, aggregate: true}
+      walk: {type: vec2}
+      turn: {type: vec3, aggregate: true}
+    behaviours:
+      odd: {type: robust.Odd, params: {value: )" +
+                              value + R"(, from: 2},
+            ports: {out: speed, out2: walk, out3: turn}}
+      odd_too: {type: robust.Odd, params: {value: )" +
+                              value + R"(}, ports: {out: mean}}
+      fine: {type: test.Probe, params: {value: 4}, ports: {out: mean}}
+)",
+                          log);
+      JsonTrace trace(manager);
+      for (int step = 0; step < 3; ++step) manager.step();
+      CHECK(actuator(manager, "speed") == 2.0);  // its default: never written
+      CHECK_FALSE(written(manager, "speed"));
+      CHECK(actuator(manager, "mean") == 4.0);  // fine's alone, not a NaN mean
+      CHECK(written(manager, "mean"));
+      CHECK(manager.actuator<Vec2>(*manager.program().find_actuator("walk")) == Vec2{});
+      CHECK(manager.actuator<Vec3>(*manager.program().find_actuator("turn")) == Vec3{});
+      CHECK(trace.records().size() == 4);  // every record parses: no NaN in the trace
+      INFO(log.text());
+      CHECK(log.lines() == 4);  // one per writer and actuator
+      CHECK(log.count("inline.yaml:11:7: behaviour 'odd' (robust.Odd) wrote a non-finite value "
+                      "(NaN or infinity) to actuator 'speed' in step 2; such writes are ignored") ==
+            1);
+      CHECK(log.count("to actuator 'walk' in step 2") == 1);
+      CHECK(log.count("to actuator 'turn' in step 2") == 1);
+      CHECK(log.count("behaviour 'odd_too' (robust.Odd) wrote a non-finite value (NaN or "
+                      "infinity) to actuator 'mean' in step 1") == 1);
+    }
+  }
+}
+
+TEST_CASE("a behaviour that fails every way at once leaves the others and the trace intact",
+          "[robustness][faults]") {
+  // The same config with and without the faulty behaviours gives the same records for the rest.
+  const std::string base = R"(arbiter: 1
+name: t
+layers:
+  - name: l
+    actuators:
+      speed: {type: double, aggregate: true}
+    behaviours:
+      a: {type: test.Probe, params: {levels: [1, 0, 0.5], value: 1}, ports: {out: speed}}
+      b: {type: test.Probe, params: {levels: 0.5, value: 3}, ports: {out: speed}}
+)";
+  const std::string faulty =
+      base + R"(      t1: {type: robust.Faulty, params: {callback: update, level: 0}}
+      t2: {type: robust.Faulty, params: {callback: execute, level: 0.000001}, ports: {out: speed}}
+      t3: {type: robust.Odd, params: {level: nan, value: nan}, ports: {out: speed}}
+      t4: {type: test.Thrower, on_exception: disable}
+)";
+  const auto records_of = [](const std::string& text) {
+    Log log;
+    auto manager = make(text, log);
+    JsonTrace trace(manager);
+    std::vector<double> speeds;
+    for (int step = 0; step < 6; ++step) {
+      manager.step();
+      speeds.push_back(actuator(manager, "speed"));
+    }
+    auto records = trace.records();
+    for (auto& record : records) {
+      if (!record.contains("step")) continue;
+      for (const auto* name : {"t1", "t2", "t3", "t4"}) record["layers"]["l"].erase(name);
+    }
+    return std::make_pair(records, speeds);
+  };
+  const auto [plain_records, plain_speeds] = records_of(base);
+  const auto [faulty_records, faulty_speeds] = records_of(faulty);
+  REQUIRE(plain_records.size() == faulty_records.size());
+  for (std::size_t i = 1; i < plain_records.size(); ++i) {
+    CHECK(plain_records[i]["layers"] == faulty_records[i]["layers"]);
+  }
+  CHECK(plain_speeds == faulty_speeds);
+}
