@@ -1,0 +1,52 @@
+#!/bin/bash
+# The bash completion script: commands, options, option values, and names read from a config.
+set -eu
+script=$1
+cli=$2
+source_dir=$3
+cd "$source_dir"
+# shellcheck source=/dev/null
+source "$script"
+
+failed=0
+passed=0
+# expect "WORDS..." -- EXPECTED...: completes the last word and compares the sorted replies.
+expect() {
+  local words=() expected=()
+  while [[ $1 != -- ]]; do words+=("$1"); shift; done
+  shift
+  expected=("$@")
+  COMP_WORDS=("$cli" "${words[@]}")
+  COMP_CWORD=${#words[@]}
+  COMPREPLY=()
+  _arbiter
+  local got want
+  got=$(printf '%s\n' "${COMPREPLY[@]}" | sort | tr '\n' ' ')
+  want=$(printf '%s\n' "${expected[@]}" | sort | tr '\n' ' ')
+  if [[ $got == "$want" ]]; then
+    passed=$((passed + 1))
+  else
+    echo "FAIL: arbiter ${words[*]}<TAB>: got [$got], want [$want]"
+    failed=$((failed + 1))
+  fi
+}
+
+expect "" -- validate run dump explain plugins schema
+expect "ex" -- explain
+expect "--log-level" "warn" "d" -- dump
+expect "--plu" -- --plugin-path
+expect "dump" "--fo" -- --format
+expect "dump" "--format" "" -- text dot json
+expect "validate" "--format" "" -- text json
+expect "--log-level" "" -- trace debug info warn error off
+expect "dump" "configs/paper/walk_and_kick.yaml" "--layer" "" -- control
+expect "explain" "configs/paper/walk_and_kick.yaml" "--trace" "x.jsonl" "--step" "3" "search" -- \
+  search_for_ball
+expect "explain" "configs/paper/walk_and_kick.yaml" "control/k" -- control/kick_ball
+expect "explain" "configs/paper/goalie_plan.yaml" "go" -- goalie
+expect "run" "configs/paper/walk_and_k" -- configs/paper/walk_and_kick.yaml \
+  configs/paper/walk_and_kick.json
+expect "plugins" "-" -- --format --load --builtin --help
+
+echo "completion: $passed passed, $failed failed"
+[[ $failed -eq 0 ]]

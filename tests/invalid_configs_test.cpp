@@ -1,0 +1,251 @@
+// Error messages are API: every config in tests/data/invalid is loaded and its diagnostics are
+// compared, as text, with the approved `<case>.expected` beside it. Run with
+// ARBITER_UPDATE_GOLDEN=1 to rewrite the expected files from the current output (then review the
+// diff by eye; never in CI).
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+
+#include "arbiter/program.hpp"
+#include "arbiter/state.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace arbiter;
+
+namespace {
+
+const fs::path kDataDir = fs::path(ARBITER_SOURCE_DIR) / "tests" / "data";
+
+bool update_golden() {
+  const char* value = std::getenv("ARBITER_UPDATE_GOLDEN");
+  return value != nullptr && std::string(value) == "1";
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+}
+
+bool is_config(const fs::path& path) {
+  const auto extension = path.extension();
+  return extension == ".yaml" || extension == ".yml" || extension == ".json";
+}
+
+/// The top-level configs of `dir`, sorted by name. Subfolders hold included files only.
+std::vector<fs::path> configs_in(const fs::path& dir) {
+  std::vector<fs::path> configs;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.is_regular_file() && is_config(entry.path())) configs.push_back(entry.path());
+  }
+  std::sort(configs.begin(), configs.end());
+  return configs;
+}
+
+/// The cases: top-level configs with an `.expected` sibling (in update mode, every config).
+std::vector<fs::path> golden_cases(const fs::path& dir) {
+  std::vector<fs::path> cases;
+  for (const auto& config : configs_in(dir)) {
+    if (update_golden() || fs::exists(fs::path(config).replace_extension(".expected"))) {
+      cases.push_back(config);
+    }
+  }
+  return cases;
+}
+
+/// Makes `dir` the working directory for the scope, so that diagnostics show relative paths.
+class WorkingDirectory {
+ public:
+  explicit WorkingDirectory(const fs::path& dir) : previous_(fs::current_path()) {
+    fs::current_path(dir);
+  }
+  ~WorkingDirectory() { fs::current_path(previous_); }
+  WorkingDirectory(const WorkingDirectory&) = delete;
+  WorkingDirectory& operator=(const WorkingDirectory&) = delete;
+
+ private:
+  fs::path previous_;
+};
+
+/// Requests nothing; it exists for its params.
+class Tuned : public Behaviour {
+ public:
+  double activation(const StepContext&) override { return 0.0; }
+};
+
+/// Proceeds at once; it exists for its params.
+class Wait : public State {
+ public:
+  StateResult execute(StateContext&) override { return StateResult::kProceed; }
+};
+
+/// The test registry plus classes whose params exercise every param check (required, ranged,
+/// restricted to choices), for behaviours and for states.
+Registry golden_registry() {
+  Registry registry = test::make_test_registry();
+  registry.set_origin("invalid_configs_test");
+  auto& tuned = registry.add_behaviour<Tuned>("test.Tuned");
+  tuned.param("gain", ParamKind::kDouble).range(0.0, 1.0);
+  tuned.param("mode", ParamKind::kString).fallback(std::string("soft")).one_of({"soft", "hard"});
+  tuned.param("retries", ParamKind::kInt).fallback(std::int64_t{3}).at_least(0);
+  tuned.param("offset", ParamKind::kVec2).fallback(Vec2{});
+  auto& wait = add_state_class<Wait>(registry, "test.Wait");
+  wait.param("ticks", ParamKind::kInt).at_least(1);
+  wait.param("label", ParamKind::kString).fallback(std::string());
+  return registry;
+}
+
+bool starts_with(const std::string& text, const std::string& prefix) {
+  return text.compare(0, prefix.size(), prefix) == 0;
+}
+
+}  // namespace
+
+TEST_CASE("every invalid config reports the approved diagnostics", "[diagnostics]") {
+  const fs::path dir = kDataDir / "invalid";
+  const auto cases = golden_cases(dir);
+  REQUIRE(cases.size() >= 30);
+
+  for (const auto& path : cases) {
+    const std::string name = path.filename().string();
+    DYNAMIC_SECTION(name) {
+      Registry registry = golden_registry();  // fresh: loading may add a config's plugins
+      Diagnostics diagnostics;
+      std::optional<Program> program;
+      {
+        WorkingDirectory here(dir);
+        program = load(name, registry, diagnostics);
+      }
+      const std::string actual = format(diagnostics);
+      const fs::path expected_path = fs::path(path).replace_extension(".expected");
+      if (update_golden()) {
+        write_text(expected_path, actual);
+        WARN("rewrote " << expected_path.filename().string());
+      } else {
+        CHECK(actual == read_text(expected_path));
+      }
+      if (starts_with(name, "warn_")) {
+        CHECK(program.has_value());
+        CHECK(diagnostics.error_count() == 0);
+        CHECK(diagnostics.warning_count() > 0);
+      } else {
+        CHECK_FALSE(program.has_value());
+        CHECK(diagnostics.error_count() > 0);
+      }
+    }
+  }
+}
+
+TEST_CASE("every config in tests/data/invalid has an expected file", "[diagnostics]") {
+  for (const auto& config : configs_in(kDataDir / "invalid")) {
+    INFO(config.filename().string());
+    CHECK(fs::exists(fs::path(config).replace_extension(".expected")));
+  }
+}
+
+TEST_CASE("every config in tests/data/valid loads without any diagnostic", "[diagnostics]") {
+  const auto configs = configs_in(kDataDir / "valid");
+  REQUIRE(configs.size() >= 3);
+  for (const auto& path : configs) {
+    DYNAMIC_SECTION(path.filename().string()) {
+      Registry registry = golden_registry();
+      Diagnostics diagnostics;
+      const auto program = load(path.string(), registry, diagnostics);
+      INFO(format(diagnostics));
+      CHECK(diagnostics.empty());
+      CHECK(program.has_value());
+    }
+  }
+}
+
+TEST_CASE("a JSON config and its YAML twin compile to the same graph", "[diagnostics]") {
+  Registry registry = golden_registry();
+  const auto yaml = load_program((kDataDir / "valid" / "twin.yaml").string(), registry);
+  const auto json = load_program((kDataDir / "valid" / "twin.json").string(), registry);
+  REQUIRE(yaml.behaviours.size() == json.behaviours.size());
+  for (std::size_t b = 0; b < yaml.behaviours.size(); ++b) {
+    CHECK(yaml.behaviours[b].name == json.behaviours[b].name);
+  }
+  REQUIRE(yaml.inhibitions.size() == json.inhibitions.size());
+  for (std::size_t i = 0; i < yaml.inhibitions.size(); ++i) {
+    CHECK(yaml.inhibitions[i].inhibitor == json.inhibitions[i].inhibitor);
+    CHECK(yaml.inhibitions[i].inhibited == json.inhibitions[i].inhibited);
+    CHECK(yaml.inhibitions[i].chaining == json.inhibitions[i].chaining);
+    CHECK(yaml.inhibitions[i].implicit == json.inhibitions[i].implicit);
+  }
+  REQUIRE(yaml.actuators.size() == json.actuators.size());
+  for (std::size_t a = 0; a < yaml.actuators.size(); ++a) {
+    CHECK(yaml.actuators[a].name == json.actuators[a].name);
+    CHECK(yaml.actuators[a].type == json.actuators[a].type);
+    CHECK(yaml.actuators[a].aggregate == json.actuators[a].aggregate);
+  }
+}
+
+namespace {
+
+struct CliResult {
+  int exit_code = -1;
+  std::string err;
+};
+
+/// Runs the `arbiter` CLI with `arguments` (already shell-quoted), capturing stderr.
+CliResult run_cli(const std::string& arguments) {
+  const fs::path err_path =
+      fs::temp_directory_path() / ("arbiter_cli_test_" + std::to_string(::getpid()) + ".err");
+  const std::string command = "\"" + std::string(ARBITER_CLI) + "\" " + arguments +
+                              " >/dev/null 2>\"" + err_path.string() + "\"";
+  const int status = std::system(command.c_str());
+  CliResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.err = read_text(err_path);
+  fs::remove(err_path);
+  return result;
+}
+
+std::string quoted(const fs::path& path) {
+  return "\"" + path.string() + "\"";
+}
+
+}  // namespace
+
+TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
+  SECTION("a valid config") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
+    CHECK(result.exit_code == 0);
+  }
+  SECTION("an invalid config prints its diagnostics to stderr") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "invalid" / "unknown_key.yaml"));
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("unknown_key.yaml:") != std::string::npos);
+    CHECK(result.err.find("error: unknown key") != std::string::npos);
+  }
+  SECTION("one invalid config among valid ones fails the run") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml") + " " +
+                                quoted(kDataDir / "invalid" / "self_inhibition.yaml"));
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("cannot inhibit itself") != std::string::npos);
+  }
+  SECTION("an unknown option is a usage error") {
+    const auto result =
+        run_cli("validate --no-such-option " + quoted(kDataDir / "valid" / "twin.yaml"));
+    CHECK(result.exit_code == 2);
+  }
+  SECTION("a missing command is a usage error") {
+    CHECK(run_cli("").exit_code == 2);
+  }
+}

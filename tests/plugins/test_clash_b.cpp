@@ -1,0 +1,16 @@
+// Registers clash.Same, as test_clash_a does too.
+
+#include "arbiter/plugin.hpp"
+
+namespace {
+
+class Same final : public arbiter::Behaviour {
+ public:
+  double activation(const arbiter::StepContext&) override { return 1.0; }
+};
+
+}  // namespace
+
+ARBITER_PLUGIN(registry) {
+  registry.add_behaviour<Same>("clash.Same");
+}

@@ -1,0 +1,182 @@
+#include "test_support.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "arbiter/trace.hpp"
+#include "builtins.hpp"
+
+namespace arbiter::test {
+
+void Probe::init(InitContext& ctx) {
+  levels = ctx.param<std::vector<double>>("levels");
+  value = ctx.param<double>("value");
+  overwrite = ctx.param<bool>("overwrite");
+  record = ctx.param<bool>("record");
+  in = ctx.input<double>("in");
+  out = ctx.output<double>("out");
+}
+
+double Probe::activation(const StepContext& ctx) {
+  const auto index = static_cast<std::size_t>(ctx.step() - 1);
+  return levels[std::min(index, levels.size() - 1)];
+}
+
+void Probe::update(const StepContext& ctx) {
+  if (!record) return;
+  events.push_back("update " + std::to_string(ctx.step()));
+}
+
+void Probe::execute(ExecuteContext& ctx) {
+  if (overwrite) ctx.write(out, 1000.0);
+  ctx.write(out, value);
+  if (!record) return;
+  events.push_back("execute " + std::to_string(ctx.step()) +
+                   (ctx.just_activated() ? " just_activated" : ""));
+  seen.push_back(ctx.read(in));
+  seen_written.push_back(ctx.written(in));
+}
+
+void Probe::inhibited(const InhibitedContext& ctx) {
+  if (!record) return;
+  events.push_back("inhibited " + std::to_string(ctx.step()) +
+                   (ctx.just_deactivated() ? " just_deactivated" : ""));
+  seen.push_back(ctx.read(in));
+  seen_written.push_back(ctx.written(in));
+}
+
+double NanLevel::activation(const StepContext&) {
+  return std::nan("");
+}
+
+double Thrower::activation(const StepContext&) {
+  throw std::runtime_error("sensor unplugged");
+}
+
+void Feed::init(InitContext& ctx) {
+  out = ctx.output<double>("out");
+  in = ctx.input<double>("in");
+}
+
+void Feed::input(ExecuteContext& ctx) {
+  ctx.write(out, static_cast<double>(ctx.step()) * 10.0);
+}
+
+void Feed::output(const StepContext& ctx) {
+  if (in.bound()) seen.push_back(ctx.read(in));
+}
+
+void Planner::init(InitContext& ctx) {
+  op = ctx.param<std::string>("op");
+  target = ctx.param<std::string>("target");
+  hold = ctx.param<std::int64_t>("hold");
+}
+
+void Planner::activate(StateContext& ctx) {
+  if (op == "terminate_in_activate") ctx.terminate();
+}
+
+StateResult Planner::execute(StateContext& ctx) {
+  if (static_cast<std::int64_t>(ctx.executions()) + 1 < hold) return StateResult::kHold;
+  auto& plan = ctx.plan();
+  // x is passed only when set, so that targets without an x param can be planned too.
+  const double x = ctx.param<double>("x");
+  const auto edit = [&](std::initializer_list<Arg> args) {
+    if (op == "append") plan.append(target, args);
+    if (op == "prepend") plan.prepend(target, args);
+    if (op == "go_to") plan.go_to(target, args);
+    if (op == "insert_before") plan.insert_before(1, target, args);
+    if (op == "insert_after") plan.insert_after(0, target, args);
+  };
+  if (x != 0.0) {
+    edit({{"x", x}});
+  } else {
+    edit({});
+  }
+  if (op == "remove") plan.remove(static_cast<std::size_t>(std::stoul(target)));
+  if (op == "clear") plan.clear();
+  if (op == "terminate_in_execute") ctx.terminate();
+  if (op == "throw") throw std::runtime_error("state failure");
+  return StateResult::kProceed;
+}
+
+void Pose::activate(StateContext& ctx) {
+  seen_x().push_back(ctx.param<double>("x"));
+}
+
+StateResult Pose::execute(StateContext&) {
+  return StateResult::kProceed;
+}
+
+std::vector<double>& Pose::seen_x() {
+  static std::vector<double> values;
+  return values;
+}
+
+void ControllerLog::on_step(const Manager& manager) {
+  const Controller* controller = manager.program().find_controller(controller_);
+  std::string line = "cycle " + std::to_string(controller->cycle()) + ":";
+  for (std::size_t e = 0; e < controller->event_count(); ++e) {
+    line += (e == 0 ? " " : ", ") + event_text(*controller, controller->events()[e]);
+  }
+  if (controller->status() != ControllerStatus::kRunning) {
+    line += std::string(" [") + to_string(controller->status()) + "]";
+  }
+  lines.push_back(line);
+}
+
+Registry make_test_registry() {
+  Registry registry;
+  register_builtin_behaviours(registry);
+  registry.set_origin("tests");
+  auto& probe = registry.add_behaviour<Probe>("test.Probe");
+  probe.param("levels", ParamKind::kDoubleList).fallback(std::vector<double>{1.0});
+  probe.param("value", ParamKind::kDouble).fallback(0.0);
+  probe.param("overwrite", ParamKind::kBool).fallback(false);
+  probe.param("record", ParamKind::kBool).fallback(true);
+  probe.input<double>("in").make_optional();
+  probe.output<double>("out").make_optional();
+  registry.add_behaviour<NanLevel>("test.NanLevel");
+  registry.add_behaviour<Thrower>("test.Thrower");
+  auto& feed = registry.add_interface<Feed>("test.Feed");
+  feed.output<double>("out").make_optional();
+  feed.input<double>("in").make_optional();
+  auto& planner = add_state_class<Planner>(registry, "test.Planner");
+  planner.param("op", ParamKind::kString).fallback(std::string("none"));
+  planner.param("target", ParamKind::kString).fallback(std::string());
+  planner.param("hold", ParamKind::kInt).fallback(std::int64_t{1}).at_least(1);
+  planner.param("x", ParamKind::kDouble).fallback(0.0);
+  auto& pose = add_state_class<Pose>(registry, "test.Pose");
+  pose.param("x", ParamKind::kDouble).range(-10.0, 10.0);
+  return registry;
+}
+
+Diagnostics diagnose_text(const std::string& text, const Registry& registry,
+                          const std::string& file) {
+  Diagnostics diagnostics;
+  auto document = parse_document(text, file, format_of(file), diagnostics);
+  if (!document) return diagnostics;
+  Model model = build_model(*document, registry, diagnostics);
+  if (!diagnostics.has_errors()) compile(model, registry, diagnostics);
+  diagnostics.sort();
+  return diagnostics;
+}
+
+Program compile_text(const std::string& text, const Registry& registry, const std::string& file) {
+  Diagnostics diagnostics;
+  auto document = parse_document(text, file, format_of(file), diagnostics);
+  if (!document) throw ConfigError(std::move(diagnostics));
+  Model model = build_model(*document, registry, diagnostics);
+  if (diagnostics.has_errors()) throw ConfigError(std::move(diagnostics));
+  auto program = compile(model, registry, diagnostics);
+  if (!program) throw ConfigError(std::move(diagnostics));
+  return std::move(*program);
+}
+
+double activation_of(const Manager& manager, const std::string& layer, const std::string& name) {
+  const auto index = manager.program().find_behaviour(layer, name);
+  if (!index) throw std::runtime_error("no behaviour " + layer + "/" + name);
+  return manager.activation(*index);
+}
+
+}  // namespace arbiter::test

@@ -1,0 +1,120 @@
+#pragma once
+// Shared by the test binaries: classes that expose the engine's semantics, and helpers that
+// compile a config written inline.
+
+#include <string>
+#include <vector>
+
+#include "arbiter/controller.hpp"
+#include "arbiter/init_context.hpp"
+#include "arbiter/manager.hpp"
+#include "arbiter/program.hpp"
+#include "arbiter/registry.hpp"
+
+namespace arbiter::test {
+
+/// Requests `levels[step-1]` (last held; any finite number, so clamping can be tested) and writes
+/// `value` to its `out` port while active (with `overwrite`, after first writing 1000). Records
+/// every value its `in` port read in execute() or inhibited(), and the callbacks it saw.
+class Probe : public Behaviour {
+ public:
+  void init(InitContext& ctx) override;
+  double activation(const StepContext& ctx) override;
+  void update(const StepContext& ctx) override;
+  void execute(ExecuteContext& ctx) override;
+  void inhibited(const InhibitedContext& ctx) override;
+
+  std::vector<double> levels;
+  double value = 0.0;
+  bool overwrite = false;
+  bool record = true;  ///< false keeps the probe allocation-free
+  Input<double> in;
+  Output<double> out;
+  std::vector<double> seen;         ///< value of `in` each step
+  std::vector<bool> seen_written;   ///< its written flag each step
+  std::vector<std::string> events;  ///< "update 1", "execute 1 just_activated", ...
+};
+
+/// Always requests NaN.
+class NanLevel : public Behaviour {
+ public:
+  double activation(const StepContext&) override;
+};
+
+/// Always throws from activation().
+class Thrower : public Behaviour {
+ public:
+  double activation(const StepContext&) override;
+};
+
+/// An interface class: the input pass writes `step * 10` to `out`; the output pass records `in`.
+class Feed : public Interface {
+ public:
+  void init(InitContext& ctx) override;
+  void input(ExecuteContext& ctx) override;
+  void output(const StepContext& ctx) override;
+
+  Output<double> out;
+  Input<double> in;
+  std::vector<double> seen;
+};
+
+/// A state that edits the plan in the execution where it proceeds (after `hold` executions):
+/// `op` is one of none, append, prepend, go_to, insert_before, insert_after, remove, clear,
+/// terminate_in_activate, terminate_in_execute, throw; `target` names the state (for remove:
+/// the index as text), `x` is passed as the target's param `x`.
+class Planner : public State {
+ public:
+  void init(InitContext& ctx) override;
+  void activate(StateContext& ctx) override;
+  StateResult execute(StateContext& ctx) override;
+
+  std::string op;
+  std::string target;
+  std::int64_t hold = 1;
+};
+
+/// A state with a param `x` (default 0) that records the x of each activation in `seen_x`.
+class Pose : public State {
+ public:
+  void activate(StateContext& ctx) override;
+  StateResult execute(StateContext& ctx) override;
+  static std::vector<double>& seen_x();
+};
+
+/// Collects each step's controller events as "cycle N: activate a, execute a".
+class ControllerLog : public Observer {
+ public:
+  explicit ControllerLog(std::string controller) : controller_(std::move(controller)) {}
+  void on_step(const Manager& manager) override;
+  std::vector<std::string> lines;
+
+ private:
+  std::string controller_;
+};
+
+/// The built-ins plus test.Probe, test.NanLevel, test.Thrower, test.Feed (behaviours and an
+/// interface) and the states test.Planner and test.Pose.
+Registry make_test_registry();
+
+/// Parses, validates and compiles `text` (YAML, or JSON when `file` ends in .json). Throws
+/// ConfigError with every diagnostic when it is invalid.
+Program compile_text(const std::string& text, const Registry& registry,
+                     const std::string& file = "inline.yaml");
+
+/// The diagnostics of a config that is expected to be invalid (or to warn).
+Diagnostics diagnose_text(const std::string& text, const Registry& registry,
+                          const std::string& file = "inline.yaml");
+
+/// A behaviour instance of the compiled program, by layer and name.
+template <typename T>
+T& instance(const Program& program, const std::string& layer, const std::string& name) {
+  const auto index = program.find_behaviour(layer, name);
+  if (!index) throw std::runtime_error("no behaviour " + layer + "/" + name);
+  return dynamic_cast<T&>(*program.behaviours[*index].instance);
+}
+
+/// The activation level of `layer/name` after the manager's last step.
+double activation_of(const Manager& manager, const std::string& layer, const std::string& name);
+
+}  // namespace arbiter::test

@@ -1,0 +1,971 @@
+// The tools around the engine: the JSON Schema (checked with valijson against every config), the
+// dumps (golden files), the lints, `explain`, `plugins`, `validate --format json` and the help.
+// Run with ARBITER_UPDATE_GOLDEN=1 to rewrite the golden files in tests/data/golden from the
+// current output (then review the diff by eye; never in CI).
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <random>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <valijson/adapters/nlohmann_json_adapter.hpp>
+#include <valijson/schema.hpp>
+#include <valijson/schema_parser.hpp>
+#include <valijson/validation_results.hpp>
+#include <valijson/validator.hpp>
+
+#include "arbiter/catalog.hpp"
+#include "arbiter/dump.hpp"
+#include "arbiter/explain.hpp"
+#include "arbiter/lint.hpp"
+#include "arbiter/schema.hpp"
+#include "arbiter/state.hpp"
+#include "arbiter/trace.hpp"
+#include "builtins.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace arbiter;
+using Json = nlohmann::json;
+
+namespace {
+
+const fs::path kSourceDir = ARBITER_SOURCE_DIR;
+const fs::path kDataDir = kSourceDir / "tests" / "data";
+const fs::path kGoldenDir = kDataDir / "golden";
+
+bool update_golden() {
+  const char* value = std::getenv("ARBITER_UPDATE_GOLDEN");
+  return value != nullptr && std::string(value) == "1";
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+}
+
+/// Compares `actual` with the golden file `name` (or rewrites it in update mode).
+void check_golden(const std::string& name, const std::string& actual) {
+  const fs::path path = kGoldenDir / name;
+  if (update_golden()) {
+    write_text(path, actual);
+    WARN("rewrote tests/data/golden/" << name);
+    return;
+  }
+  INFO("golden file tests/data/golden/" << name);
+  REQUIRE(fs::exists(path));
+  CHECK(actual == read_text(path));
+}
+
+/// Makes `dir` the working directory for the scope, so that outputs show relative paths.
+class WorkingDirectory {
+ public:
+  explicit WorkingDirectory(const fs::path& dir) : previous_(fs::current_path()) {
+    fs::current_path(dir);
+  }
+  ~WorkingDirectory() { fs::current_path(previous_); }
+  WorkingDirectory(const WorkingDirectory&) = delete;
+  WorkingDirectory& operator=(const WorkingDirectory&) = delete;
+
+ private:
+  fs::path previous_;
+};
+
+/// Requests nothing; it exists for its params (as in invalid_configs_test.cpp).
+class Tuned : public Behaviour {
+ public:
+  double activation(const StepContext&) override { return 0.0; }
+};
+
+/// Proceeds at once; it exists for its params.
+class Wait : public State {
+ public:
+  StateResult execute(StateContext&) override { return StateResult::kProceed; }
+};
+
+/// The test registry plus the classes the invalid configs use (tests/data/invalid).
+Registry tooling_registry() {
+  Registry registry = test::make_test_registry();
+  registry.set_origin("tooling_test");
+  auto& tuned = registry.add_behaviour<Tuned>("test.Tuned");
+  tuned.param("gain", ParamKind::kDouble).range(0.0, 1.0);
+  tuned.param("mode", ParamKind::kString).fallback(std::string("soft")).one_of({"soft", "hard"});
+  tuned.param("retries", ParamKind::kInt).fallback(std::int64_t{3}).at_least(0);
+  tuned.param("offset", ParamKind::kVec2).fallback(Vec2{});
+  auto& wait = add_state_class<Wait>(registry, "test.Wait");
+  wait.param("ticks", ParamKind::kInt).at_least(1);
+  wait.param("label", ParamKind::kString).fallback(std::string());
+  return registry;
+}
+
+Registry builtin_registry() {
+  Registry registry;
+  register_builtin_behaviours(registry);
+  return registry;
+}
+
+bool is_config(const fs::path& path) {
+  const auto extension = path.extension();
+  return extension == ".yaml" || extension == ".yml" || extension == ".json";
+}
+
+/// Every config file under `dir`, recursively, sorted.
+std::vector<fs::path> configs_under(const fs::path& dir) {
+  std::vector<fs::path> configs;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (entry.is_regular_file() && is_config(entry.path())) configs.push_back(entry.path());
+  }
+  std::sort(configs.begin(), configs.end());
+  return configs;
+}
+
+// --- the schema, through valijson ---
+
+/// A document as JSON. JSON files are parsed as they are; YAML goes through the engine's own
+/// reader, so that scalars get the YAML 1.2 core-schema types the engine gives them ("yes" is a
+/// string, 1 an integer). valijson's yaml-cpp adapter cannot do this: it sees every scalar as a
+/// string and converts on demand, so `name: 5` and `kick: "true"` would pass as what they are not.
+Json document_json(const Node& node) {
+  switch (node.kind()) {
+    case Node::Kind::kNull:
+      return nullptr;
+    case Node::Kind::kScalar:
+      if (node.quoted()) return node.text();
+      if (node.reads_as_null()) return nullptr;
+      if (const auto value = node.as_bool()) return *value;
+      if (const auto value = node.as_int()) return *value;
+      if (const auto value = node.as_double()) return *value;
+      return node.text();
+    case Node::Kind::kSequence: {
+      Json out = Json::array();
+      for (const auto& item : node.items()) out.push_back(document_json(item));
+      return out;
+    }
+    case Node::Kind::kMapping: {
+      Json out = Json::object();
+      for (const auto& entry : node.entries()) out[entry.key] = document_json(entry.value);
+      return out;
+    }
+  }
+  return nullptr;
+}
+
+/// The config as JSON; nullopt when it cannot be read at all (a syntax error).
+std::optional<Json> config_json(const fs::path& path) {
+  if (path.extension() == ".json") {
+    try {
+      return Json::parse(read_text(path));
+    } catch (const Json::exception&) {
+      return std::nullopt;
+    }
+  }
+  Diagnostics diagnostics;
+  const auto document = read_document(path.string(), diagnostics);
+  if (!document) return std::nullopt;
+  return document_json(*document);
+}
+
+class SchemaValidator {
+ public:
+  explicit SchemaValidator(const Json& schema) : schema_json_(schema) {
+    valijson::SchemaParser parser(valijson::SchemaParser::kDraft7);
+    valijson::adapters::NlohmannJsonAdapter adapter(schema_json_);
+    parser.populateSchema(adapter, schema_);
+  }
+
+  /// The errors, one per line ("<path>: <description>"); empty when `document` is valid.
+  std::string errors(const Json& document) const {
+    valijson::Validator validator;
+    valijson::ValidationResults results;
+    valijson::adapters::NlohmannJsonAdapter target(document);
+    if (validator.validate(schema_, target, &results)) return {};
+    std::string out;
+    valijson::ValidationResults::Error error;
+    while (results.popError(error)) {
+      std::string where;
+      for (const auto& part : error.context) where += part;
+      out += where + ": " + error.description + "\n";
+    }
+    return out.empty() ? "invalid\n" : out;
+  }
+
+ private:
+  Json schema_json_;
+  valijson::Schema schema_;
+};
+
+const SchemaValidator& base_schema() {
+  static const SchemaValidator validator(Json::parse(config_schema()));
+  return validator;
+}
+
+/// A schema whose root is the definition `name` of the base schema (e.g. included_file).
+std::unique_ptr<SchemaValidator> definition_schema(const std::string& name) {
+  Json schema = Json::parse(config_schema());
+  Json root = {{"$ref", "#/definitions/" + name}, {"definitions", schema["definitions"]}};
+  return std::make_unique<SchemaValidator>(root);
+}
+
+/// Whether the plugins a config names are built here (a plugin with optional dependencies, such
+/// as dds, may not be); tells the test log when one is not.
+bool plugins_built(const fs::path& config) {
+  Registry registry;
+  Diagnostics diagnostics;
+  if (const auto document = read_document(config.string(), diagnostics)) {
+    load_plugins(*document, PluginOptions{}, registry, diagnostics);
+  }
+  for (const auto& item : diagnostics.items()) {
+    if (item.code == "plugin-not-found") {
+      WARN(config.filename().string() << ": not checked with its classes: " << item.message);
+      return false;
+    }
+  }
+  return true;
+}
+
+/// The schema extended with the test classes and the plugins `config` names.
+std::unique_ptr<SchemaValidator> extended_schema(const fs::path& config) {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  if (const auto document = read_document(config.string(), diagnostics)) {
+    load_plugins(*document, PluginOptions{}, registry, diagnostics);
+  }
+  INFO(format(diagnostics));
+  CHECK_FALSE(diagnostics.has_errors());
+  return std::make_unique<SchemaValidator>(Json::parse(config_schema(registry)));
+}
+
+// --- the CLI ---
+
+struct CliResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+/// Runs `arbiter ARGUMENTS` in the source directory (paths relative to it), capturing both streams.
+CliResult run_cli(const std::string& arguments) {
+  const fs::path base =
+      fs::temp_directory_path() / ("arbiter_tooling_test_" + std::to_string(::getpid()));
+  const std::string out_path = base.string() + ".out";
+  const std::string err_path = base.string() + ".err";
+  const std::string command = "cd \"" + kSourceDir.string() + "\" && \"" +
+                              std::string(ARBITER_CLI) + "\" " + arguments + " >\"" + out_path +
+                              "\" 2>\"" + err_path + "\"";
+  const int status = std::system(command.c_str());
+  CliResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.out = read_text(out_path);
+  result.err = read_text(err_path);
+  fs::remove(out_path);
+  fs::remove(err_path);
+  return result;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+/// Loads a config as `arbiter` does (relative to the source directory), with the test classes.
+Program load_config(const std::string& relative, Registry& registry, Diagnostics& diagnostics) {
+  WorkingDirectory here(kSourceDir);
+  auto program = load(relative, registry, diagnostics);
+  INFO(format(diagnostics));
+  REQUIRE(program.has_value());
+  return std::move(*program);
+}
+
+/// The trace of `steps` steps of a config, as `arbiter run --trace` writes it.
+std::string trace_of(const std::string& relative, int steps) {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  Manager manager(load_config(relative, registry, diagnostics));
+  std::ostringstream out;
+  TraceWriter trace(out);
+  manager.add_observer(trace);
+  for (int i = 0; i < steps; ++i) manager.step();
+  manager.finish();
+  return out.str();
+}
+
+const char* const kWalkAndKick = "configs/paper/walk_and_kick.yaml";
+
+}  // namespace
+
+// --- schema ---
+
+TEST_CASE("schema/arbiter.schema.json is the schema the engine prints", "[schema]") {
+  const Json file = Json::parse(read_text(kSourceDir / "schema" / "arbiter.schema.json"));
+  CHECK(Json::parse(config_schema()) == file);
+  std::vector<std::string> codes;
+  for (const auto& lint : lint_codes()) codes.emplace_back(lint.code);
+  CHECK(file["definitions"]["lint"]["properties"]["ignore"]["items"]["enum"] == Json(codes));
+}
+
+TEST_CASE("every config in configs/ and tests/data/valid fits both schemas", "[schema]") {
+  std::vector<fs::path> configs = configs_under(kSourceDir / "configs");
+  const auto valid = configs_under(kDataDir / "valid");
+  configs.insert(configs.end(), valid.begin(), valid.end());
+  REQUIRE(configs.size() >= 8);
+  const auto included = definition_schema("included_file");
+  for (const auto& path : configs) {
+    const std::string name = fs::relative(path, kSourceDir).string();
+    DYNAMIC_SECTION(name) {
+      const auto document = config_json(path);
+      REQUIRE(document.has_value());
+      // Subfolders of tests/data/valid hold included files, which set no name or version.
+      if (path.parent_path().filename() == "includes") {
+        CHECK(included->errors(*document).empty());
+        continue;
+      }
+      CHECK(base_schema().errors(*document).empty());
+      if (plugins_built(path)) CHECK(extended_schema(path)->errors(*document).empty());
+    }
+  }
+}
+
+TEST_CASE("configs in configs/ point editors at the schema", "[schema]") {
+  for (const auto& path : configs_under(kSourceDir / "configs")) {
+    INFO(path.string());
+    const std::string schema =
+        fs::relative(kSourceDir / "schema" / "arbiter.schema.json", path.parent_path()).string();
+    const std::string text = read_text(path);
+    if (path.extension() == ".json") {
+      CHECK(Json::parse(text).value("$schema", "") == schema);
+    } else {
+      CHECK(text.rfind("# yaml-language-server: $schema=" + schema + "\n", 0) == 0);
+    }
+  }
+}
+
+TEST_CASE("invalid configs whose errors are structural are rejected by the schema", "[schema]") {
+  // Wrong shapes, unknown and missing keys, names that are not identifiers: the schema alone
+  // catches these, without the classes.
+  const std::vector<std::string> structural = {"unknown_key.yaml",
+                                               "wrong_type.yaml",
+                                               "missing_key.yaml",
+                                               "bad_identifier.yaml",
+                                               "bad_version.yaml",
+                                               "bad_version_string.json",
+                                               "missing_version.yaml",
+                                               "document_list.yaml",
+                                               "document_scalar.yaml",
+                                               "bad_inhibition_syntax.yaml",
+                                               "interface_with_behaviours.yaml",
+                                               "duplicate_sensor.yaml"};
+  // Params, ports, class names and value types: the schema extended with the classes does.
+  const std::vector<std::string> per_class = {
+      "not_aggregatable.yaml", "unknown_class.yaml",      "unknown_param.yaml",
+      "wrong_param_type.yaml", "missing_param.yaml",      "param_out_of_range.yaml",
+      "wrong_class_kind.yaml", "unknown_value_type.yaml", "interface_layer.yaml"};
+  const fs::path dir = kDataDir / "invalid";
+  for (const auto& name : structural) {
+    DYNAMIC_SECTION("structural: " << name) {
+      REQUIRE(fs::exists(dir / name));
+      const auto document = config_json(dir / name);
+      REQUIRE(document.has_value());
+      CHECK_FALSE(base_schema().errors(*document).empty());
+    }
+  }
+  for (const auto& name : per_class) {
+    DYNAMIC_SECTION("per class: " << name) {
+      REQUIRE(fs::exists(dir / name));
+      const auto document = config_json(dir / name);
+      REQUIRE(document.has_value());
+      CHECK_FALSE(extended_schema(dir / name)->errors(*document).empty());
+    }
+  }
+}
+
+TEST_CASE("the extended schema names each class and checks its params", "[schema]") {
+  const Json schema = Json::parse(config_schema(tooling_registry()));
+  const Json& definitions = schema["definitions"];
+  std::vector<std::string> behaviours;
+  for (const auto& choice : definitions["behaviour_class"]["anyOf"]) {
+    behaviours.push_back(choice["const"]);
+  }
+  CHECK(behaviours == std::vector<std::string>{"scripted", "state_machine", "test.NanLevel",
+                                               "test.Probe", "test.Thrower", "test.Tuned"});
+  // test.Tuned has a required param, so it has no short form (`name: test.Tuned`).
+  const auto& short_form = definitions["behaviour_short_class"]["anyOf"];
+  CHECK(std::none_of(short_form.begin(), short_form.end(),
+                     [](const Json& choice) { return choice["const"] == "test.Tuned"; }));
+  CHECK(definitions["value_type"]["enum"] ==
+        Json({"bool", "int", "double", "vec2", "vec3", "string"}));
+
+  const SchemaValidator validator(schema);
+  const auto with_behaviour = [](Json behaviour) {
+    return Json{
+        {"arbiter", 1},
+        {"name", "x"},
+        {"layers", {{{"name", "control"}, {"behaviours", {{"kick_ball", std::move(behaviour)}}}}}}};
+  };
+  CHECK(validator.errors(with_behaviour({{"type", "test.Tuned"}, {"params", {{"gain", 0.5}}}}))
+            .empty());
+  CHECK_FALSE(validator.errors(with_behaviour({{"type", "test.Tuned"}, {"params", {{"gain", 2}}}}))
+                  .empty());
+  CHECK_FALSE(validator.errors(with_behaviour({{"type", "test.Tuned"}})).empty());
+  CHECK_FALSE(validator
+                  .errors(with_behaviour(
+                      {{"type", "test.Tuned"}, {"params", {{"gain", 0.5}, {"mode", "medium"}}}}))
+                  .empty());
+  CHECK_FALSE(validator.errors(with_behaviour({{"type", "test.Probe"}, {"ports", {{"nope", "x"}}}}))
+                  .empty());
+  CHECK(validator.errors(with_behaviour("scripted")).empty());
+  CHECK_FALSE(validator.errors(with_behaviour("test.Tuned")).empty());
+}
+
+TEST_CASE("arbiter schema prints the schema with the registered classes", "[schema][cli]") {
+  const auto builtin = run_cli("schema --builtin");
+  REQUIRE(builtin.exit_code == 0);
+  CHECK(Json::parse(builtin.out) == Json::parse(config_schema(builtin_registry())));
+
+  const auto with_soccer = run_cli("schema --load soccer");
+  REQUIRE(with_soccer.exit_code == 0);
+  CHECK(contains(with_soccer.out, "\"const\": \"soccer.KickBall\""));
+
+  const auto missing = run_cli("schema --load no_such_plugin");
+  CHECK(missing.exit_code == 1);
+  CHECK(contains(missing.err, "plugin 'no_such_plugin' not found"));
+}
+
+// --- dump ---
+
+TEST_CASE("arbiter dump prints the paper example the same way every time", "[dump][cli]") {
+  for (const std::string format : {"text", "dot", "json"}) {
+    DYNAMIC_SECTION(format) {
+      const std::string command = std::string("dump ") + kWalkAndKick + " --format " + format;
+      const auto first = run_cli(command);
+      const auto second = run_cli(command);
+      INFO(first.err);
+      REQUIRE(first.exit_code == 0);
+      CHECK(first.out == second.out);
+      check_golden("walk_and_kick." + format, first.out);
+    }
+  }
+}
+
+TEST_CASE("a multi-layer config dumps as text, DOT and JSON", "[dump]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  WorkingDirectory here(kGoldenDir);
+  const auto program = load("relay.yaml", registry, diagnostics);
+  INFO(format(diagnostics));
+  REQUIRE(program.has_value());
+  CHECK(diagnostics.empty());  // its delayed sensor's lint is silenced in its layer
+  check_golden("relay.text", dump_text(*program));
+  check_golden("relay.dot", dump_dot(*program));
+  check_golden("relay.json", dump_json(*program));
+  CHECK(dump_dot(*program) == dump_dot(*program));
+
+  SECTION("one layer") {
+    const std::string dot = dump_dot(*program, "control");
+    CHECK(contains(dot, "cluster_layer_control"));
+    CHECK_FALSE(contains(dot, "cluster_layer_planning"));
+    CHECK(contains(dot, "\"a:target\" [label=\"target\\nlayer planning\""));
+    const Json json = Json::parse(dump_json(*program, "control"));
+    REQUIRE(json["layers"].size() == 1);
+    CHECK(json["state_machines"].empty());
+  }
+}
+
+TEST_CASE("the DOT dump draws chaining double, non-chaining single and implicit dashed", "[dump]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const auto dot = dump_dot(load_config(kWalkAndKick, registry, diagnostics));
+  CHECK(contains(dot,
+                 "\"b:control/kick_ball\" -> \"b:control/go_behind_ball\" [color=\"black:invis:"
+                 "black\""));
+  CHECK(contains(dot, "\"b:control/search_for_ball\" -> \"b:control/head_control\" [tooltip="));
+  CHECK(
+      contains(dot, "\"b:control/kick_ball\" -> \"b:control/search_for_ball\" [style=\"dashed\""));
+  CHECK(contains(dot, "implicit: kick_ball => go_behind_ball => search_for_ball"));
+}
+
+TEST_CASE("arbiter dump rejects an unknown layer as a usage error", "[dump][cli]") {
+  const auto result = run_cli(std::string("dump ") + kWalkAndKick + " --layer contrl");
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "did you mean 'control'?"));
+  CHECK(run_cli(std::string("dump ") + kWalkAndKick + " --format svg").exit_code == 2);
+}
+
+// --- lints ---
+
+TEST_CASE("each lint is reported once, located, with its code", "[lint]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  WorkingDirectory here(kGoldenDir);
+  const auto program = load("lints.yaml", registry, diagnostics);
+  REQUIRE(program.has_value());
+  CHECK(diagnostics.error_count() == 0);
+  check_golden("lints.expected", format(diagnostics));
+  std::vector<std::string> codes;
+  for (const auto& item : diagnostics.items()) {
+    CHECK(item.severity == Severity::kWarning);
+    codes.push_back(item.code);
+  }
+  for (const auto& lint : lint_codes()) {
+    CHECK(std::count(codes.begin(), codes.end(), std::string(lint.code)) == 1);
+  }
+}
+
+TEST_CASE("lints are silenced by code, for the config or for one layer", "[lint]") {
+  const std::string text = read_text(kGoldenDir / "lints.yaml");
+  const auto diagnose = [](const std::string& config) {
+    const Registry registry = tooling_registry();
+    Diagnostics diagnostics;
+    auto document = parse_document(config, "lints.yaml", DocumentFormat::kYaml, diagnostics);
+    REQUIRE(document.has_value());
+    const Model model = build_model(*document, registry, diagnostics);
+    REQUIRE_FALSE(diagnostics.has_errors());
+    auto program = compile(model, registry, diagnostics);
+    REQUIRE(program.has_value());
+    lint(model, *program, diagnostics);
+    std::vector<std::string> codes;
+    for (const auto& item : diagnostics.items()) codes.push_back(item.code);
+    return codes;
+  };
+  SECTION("every lint at the top level") {
+    std::string ignore_all = "lint: {ignore: [";
+    for (const auto& lint : lint_codes()) ignore_all += std::string(lint.code) + ", ";
+    ignore_all += "]}\n";
+    std::string config = text;
+    config.insert(config.find("layers:"), ignore_all);
+    CHECK(diagnose(config).empty());
+  }
+  SECTION("in one layer: that layer's only") {
+    std::string config = text;
+    config.insert(config.find("    sensors: [distance, kick]"),
+                  "    lint: {ignore: [delayed-sensor, unread-actuator, conflicting-writers]}\n");
+    CHECK(diagnose(config) ==
+          std::vector<std::string>{"redundant-inhibition", "never-active", "unread-actuator"});
+  }
+  SECTION("an unknown code is reported with the known ones") {
+    std::string config = text;
+    config.insert(config.find("layers:"), "lint: {ignore: [never-activ]}\n");
+    const auto codes = diagnose(config);
+    CHECK(std::count(codes.begin(), codes.end(), "unknown-lint") == 1);
+    CHECK(std::count(codes.begin(), codes.end(), "never-active") == 1);
+  }
+}
+
+TEST_CASE("the configs in configs/ have no lint", "[lint]") {
+  for (const auto& path : configs_under(kSourceDir / "configs")) {
+    DYNAMIC_SECTION(fs::relative(path, kSourceDir).string()) {
+      if (!plugins_built(path)) continue;
+      Registry registry = builtin_registry();
+      Diagnostics diagnostics;
+      const auto program = load(path.string(), registry, diagnostics);
+      INFO(format(diagnostics));
+      CHECK(program.has_value());
+      CHECK(diagnostics.empty());
+    }
+  }
+}
+
+TEST_CASE("a chain of always-full scripted behaviours is followed through the closure", "[lint]") {
+  // a requests 1 and nothing inhibits it: b is never active. b never active leaves c free, but
+  // a => b => c also makes a inhibit c: c is never active too, through the chain.
+  const std::string config = R"(
+arbiter: 1
+name: chain
+layers:
+  - name: l
+    behaviours:
+      a: scripted
+      b: {type: scripted, params: {activation: 0.5}}
+      c: {type: scripted, params: {activation: [1, 0]}}
+      d: {type: scripted, params: {activation: 0}}
+      e: scripted
+    inhibitions: [a => b, b => c, d -> e]
+)";
+  const Registry registry = builtin_registry();
+  Diagnostics diagnostics;
+  auto document = parse_document(config, "chain.yaml", DocumentFormat::kYaml, diagnostics);
+  const Model model = build_model(*document, registry, diagnostics);
+  auto program = compile(model, registry, diagnostics);
+  REQUIRE(program.has_value());
+  lint(model, *program, diagnostics);
+  std::string text = format(diagnostics);
+  CHECK(contains(text, "behaviour 'b' can never be active: 'a' inhibits it"));
+  CHECK(contains(text, "behaviour 'c' can never be active: 'a' inhibits it"));
+  CHECK(contains(text, "'a' inhibits 'c' through chaining: a => b => c"));
+  CHECK(contains(text, "'a' is scripted to request 1 at every step (its default activation)"));
+  // d requests 0 at every step, so e (requesting 1) is not covered: it is always active.
+  CHECK_FALSE(contains(text, "behaviour 'e'"));
+  CHECK(diagnostics.warning_count() == 2);
+}
+
+TEST_CASE("never-active and redundant-inhibition agree with the closure on random graphs",
+          "[lint]") {
+  // The lints carry their properties along declared edges; here they are checked against a
+  // brute force over Program's closed inhibitor lists and a search over chaining edges.
+  std::mt19937 random(7);
+  const Registry registry = builtin_registry();
+  for (int round = 0; round < 40; ++round) {
+    const int n = 5 + static_cast<int>(random() % 30);
+    std::string config = "arbiter: 1\nname: random\nlayers:\n  - name: l\n    behaviours:\n";
+    const char* levels[] = {"0", "1", "0.5", "[1, 1]", "[0, 1]"};
+    for (int b = 0; b < n; ++b) {
+      config += "      b" + std::to_string(b) +
+                ": {type: scripted, params: {activation: " + levels[random() % 5] + "}}\n";
+    }
+    config += "    inhibitions:\n";
+    struct Edge {
+      int from, to;
+      bool chaining;
+    };
+    std::vector<Edge> edges;
+    for (int e = 0; e < 2 * n; ++e) {
+      const int from = static_cast<int>(random() % n);
+      const int to = static_cast<int>(random() % n);
+      if (from >= to) continue;
+      if (std::any_of(edges.begin(), edges.end(),
+                      [&](const Edge& x) { return x.from == from && x.to == to; })) {
+        continue;
+      }
+      edges.push_back({from, to, random() % 3 != 0});
+      config += "      - b" + std::to_string(from) + (edges.back().chaining ? " => b" : " -> b") +
+                std::to_string(to) + "\n";
+    }
+    Diagnostics diagnostics;
+    auto document = parse_document(config, "random.yaml", DocumentFormat::kYaml, diagnostics);
+    const Model model = build_model(*document, registry, diagnostics);
+    auto program = compile(model, registry, diagnostics);
+    INFO(config << format(diagnostics));
+    REQUIRE(program.has_value());
+    lint(model, *program, diagnostics);
+
+    std::set<std::string> never_reported;
+    std::set<std::string> redundant_reported;
+    for (const auto& item : diagnostics.items()) {
+      const auto first = item.message.find('\'') + 1;
+      const std::string quoted = item.message.substr(first, item.message.find('\'', first) - first);
+      if (item.code == "never-active") never_reported.insert(quoted);
+      if (item.code == "redundant-inhibition") redundant_reported.insert(quoted);
+    }
+    // Brute force, in execution order, over the closed inhibitor lists.
+    const auto count = program->behaviours.size();
+    std::vector<bool> full(count, false);
+    std::vector<bool> never(count, false);
+    std::set<std::string> never_expected;
+    for (std::uint32_t b = 0; b < count; ++b) {
+      const auto closed = program->inhibitions.closed(b);
+      const BehaviourDecl* decl = nullptr;
+      for (const auto& candidate : model.layers[0].behaviours) {
+        if (candidate.name.text == program->behaviours[b].name) decl = &candidate;
+      }
+      REQUIRE(decl != nullptr);
+      const auto& requested = std::get<std::vector<double>>(decl->params.find("activation")->value);
+      const auto all = [&](double v) {
+        return std::all_of(requested.begin(), requested.end(), [&](double r) { return r == v; });
+      };
+      const bool covered =
+          std::any_of(closed.begin(), closed.end(), [&](std::uint32_t i) { return full[i]; });
+      const bool free =
+          std::all_of(closed.begin(), closed.end(), [&](std::uint32_t i) { return never[i]; });
+      full[b] = all(1.0) && free;
+      never[b] = covered || all(0.0);
+      if (covered) never_expected.insert(program->behaviours[b].name);
+    }
+    CHECK(never_reported == never_expected);
+    // An edge a -> c is redundant when c is reachable from a chaining successor x != c of a.
+    std::set<std::string> redundant_expected;
+    for (const auto& edge : edges) {
+      std::vector<int> stack;
+      std::vector<bool> seen(static_cast<std::size_t>(n), false);
+      for (const auto& out : edges) {
+        if (out.from == edge.from && out.chaining && out.to != edge.to) stack.push_back(out.to);
+      }
+      bool reached = false;
+      while (!stack.empty() && !reached) {
+        const int at = stack.back();
+        stack.pop_back();
+        if (seen[static_cast<std::size_t>(at)]) continue;
+        seen[static_cast<std::size_t>(at)] = true;
+        for (const auto& out : edges) {
+          if (out.from != at || !out.chaining) continue;
+          reached = reached || out.to == edge.to;
+          stack.push_back(out.to);
+        }
+      }
+      if (reached) {
+        redundant_expected.insert("b" + std::to_string(edge.from) +
+                                  (edge.chaining ? " => b" : " -> b") + std::to_string(edge.to));
+      }
+    }
+    CHECK(redundant_reported == redundant_expected);
+  }
+}
+
+TEST_CASE("redundant inhibitions are found in layers larger than one block of reachability",
+          "[lint]") {
+  std::string config = "arbiter: 1\nname: long\nlayers:\n  - name: l\n    behaviours:\n";
+  constexpr int kCount = 5000;
+  for (int b = 0; b < kCount; ++b) {
+    config += "      b" + std::to_string(b) + ": {type: scripted, params: {activation: 0.5}}\n";
+  }
+  config += "    inhibitions:\n";
+  for (int b = 0; b + 1 < kCount; ++b) {
+    config += "      - b" + std::to_string(b) + " => b" + std::to_string(b + 1) + "\n";
+  }
+  config += "      - b0 -> b4999\n      - b10 => b4100\n      - b4097 -> b4099\n";
+  const Registry registry = builtin_registry();
+  Diagnostics diagnostics;
+  auto document = parse_document(config, "long.yaml", DocumentFormat::kYaml, diagnostics);
+  const Model model = build_model(*document, registry, diagnostics);
+  auto program = compile(model, registry, diagnostics);
+  REQUIRE(program.has_value());
+  lint(model, *program, diagnostics);
+  std::vector<std::string> messages;
+  for (const auto& item : diagnostics.items()) messages.push_back(item.message);
+  CHECK(messages ==
+        std::vector<std::string>{
+            "inhibition 'b0 -> b4999' is already implied by chaining b0 => b1 => b2 => b3 => b4 "
+            "=> b5 => b6 => b7 => b8 => b9 => b10 => b11 => b12 => ... => b4999",
+            "inhibition 'b10 => b4100' is already implied by chaining b10 => b11 => b12 => b13 => "
+            "b14 => b15 => b16 => b17 => b18 => b19 => b20 => b21 => b22 => ... => b4100",
+            "inhibition 'b4097 -> b4099' is already implied by chaining b4097 => b4098 => b4099"});
+}
+
+// --- validate ---
+
+TEST_CASE("arbiter validate --format json prints located diagnostics for machines",
+          "[validate][cli]") {
+  SECTION("errors, with exit code 1") {
+    const auto result = run_cli("validate --format json tests/data/invalid/unknown_key.yaml");
+    CHECK(result.exit_code == 1);
+    const Json diagnostics = Json::parse(result.out);
+    REQUIRE(diagnostics.is_array());
+    REQUIRE(!diagnostics.empty());
+    const Json& first = diagnostics[0];
+    CHECK(first["file"] == "tests/data/invalid/unknown_key.yaml");
+    CHECK(first["line"] == 3);
+    CHECK(first["column"] == 1);
+    CHECK(first["severity"] == "error");
+    CHECK(first["code"] == "unknown-key");
+    CHECK(first["message"] == "unknown key 'rate' in the config");
+    CHECK(first["notes"].is_array());
+    for (const auto& item : diagnostics) {
+      for (const char* key : {"file", "line", "column", "severity", "code", "message", "notes"}) {
+        CHECK(item.contains(key));
+      }
+    }
+  }
+  SECTION("a valid config gives an empty array") {
+    const auto result = run_cli(std::string("validate --format json ") + kWalkAndKick);
+    CHECK(result.exit_code == 0);
+    CHECK(Json::parse(result.out) == Json::array());
+  }
+  SECTION("lints are warnings; --strict makes them errors") {
+    const std::string config = "tests/data/golden/lints.yaml";
+    // The test classes are not in the CLI: a copy with built-in classes only.
+    std::string text = read_text(kSourceDir / config);
+    for (const std::string from :
+         {"interface: test.Feed\n    ports: {out: distance, in: speed}", "test.Probe"}) {
+      for (auto at = text.find(from); at != std::string::npos; at = text.find(from)) {
+        text.replace(at, from.size(), from == "test.Probe" ? "scripted" : "");
+      }
+    }
+    const fs::path copy =
+        fs::temp_directory_path() / ("arbiter_lints_" + std::to_string(::getpid()) + ".yaml");
+    write_text(copy, text);
+    const auto lenient = run_cli("validate --format json \"" + copy.string() + "\"");
+    CHECK(lenient.exit_code == 0);
+    const Json warnings = Json::parse(lenient.out);
+    REQUIRE(!warnings.empty());
+    CHECK(warnings[0]["severity"] == "warning");
+    const auto strict = run_cli("validate --strict --format json \"" + copy.string() + "\"");
+    CHECK(strict.exit_code == 1);
+    CHECK(Json::parse(strict.out)[0]["severity"] == "error");
+    const auto text_output = run_cli("validate \"" + copy.string() + "\"");
+    CHECK(text_output.exit_code == 0);
+    CHECK(contains(text_output.err, ": warning: "));
+    CHECK(contains(text_output.err, "never be active"));
+    fs::remove(copy);
+  }
+}
+
+// --- plugins ---
+
+TEST_CASE("arbiter plugins lists every class with its params and ports", "[plugins][cli]") {
+  SECTION("the built-ins, as JSON") {
+    const auto result = run_cli("plugins --builtin --format json");
+    REQUIRE(result.exit_code == 0);
+    const Json catalog = Json::parse(result.out);
+    CHECK(catalog == Json::parse(catalog_json(builtin_registry())));
+    const Json* scripted = nullptr;
+    for (const auto& cls : catalog["classes"]) {
+      if (cls["name"] == "scripted" && cls["kind"] == "behaviour") scripted = &cls;
+    }
+    REQUIRE(scripted != nullptr);
+    CHECK((*scripted)["origin"] == "built-in");
+    const Json& activation = (*scripted)["params"][0];
+    CHECK(activation["name"] == "activation");
+    CHECK(activation["type"] == "list of double");
+    CHECK(activation["required"] == false);
+    CHECK(activation["default"] == Json({1.0}));
+    CHECK(activation["minimum"] == 0.0);
+    CHECK(activation["maximum"] == 1.0);
+    CHECK_FALSE(activation["description"].get<std::string>().empty());
+    CHECK(catalog["value_types"].size() == 6);
+  }
+  SECTION("a plugin on the path, as text") {
+    const auto result = run_cli("plugins --load soccer");
+    INFO(result.err);
+    REQUIRE(result.exit_code == 0);
+    CHECK(contains(result.out, "behaviour classes\n  scripted (built-in)\n"));
+    CHECK(contains(result.out, "  soccer.SearchForBall (plugin soccer ("));
+    CHECK(contains(result.out, "      turn_rate: double, default "));
+    CHECK(contains(result.out, "      gait_velocity: output vec3\n"));
+    CHECK(contains(result.out, "      ball_visible: input bool"));
+    CHECK(contains(result.out, "interface classes\n  soccer.WorldLink"));
+  }
+  SECTION("every plugin on the path, by default") {
+    const auto result = run_cli("plugins --format json");
+    REQUIRE(result.exit_code == 0);
+    CHECK(contains(result.out, "\"name\": \"soccer.KickBall\""));
+  }
+  SECTION("a plugin that is not there") {
+    const auto result = run_cli("plugins --load no_such_plugin");
+    CHECK(result.exit_code == 1);
+    CHECK(contains(result.err, "arbiter plugins: error: plugin 'no_such_plugin' not found"));
+  }
+}
+
+// --- explain ---
+
+TEST_CASE("explain tells why search_for_ball is inactive at step 8 of the paper example",
+          "[explain]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const Program program = load_config(kWalkAndKick, registry, diagnostics);
+  std::istringstream trace(trace_of(kWalkAndKick, 20));
+  const auto explanation = explain(program, trace, 8, "search_for_ball");
+  REQUIRE(explanation.status == Explanation::Status::kOk);
+  check_golden("explain_search_for_ball.txt", explanation.text);
+  CHECK(contains(explanation.text, "at step 8: inactive, activation 0\n"));
+  CHECK(contains(explanation.text, "requested: 0.5\n"));
+  CHECK(contains(explanation.text,
+                 "implicit, from chaining kick_ball => go_behind_ball => "
+                 "search_for_ball"));
+  CHECK(contains(explanation.text, "inactive: go_behind_ball is fully active (factor 0)"));
+}
+
+TEST_CASE("explain gives the product of the factors and the normalisation", "[explain]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const std::string config = "tests/data/golden/relay.yaml";
+  const Program program = load_config(config, registry, diagnostics);
+  const std::string trace_text = trace_of(config, 6);
+  std::istringstream trace(trace_text);
+  const auto explanation = explain(program, trace, 2, "planning/retreat");
+  REQUIRE(explanation.status == Explanation::Status::kOk);
+  // approach 0.6 => retreat 0.3: refined 0.3 × 0.4 = 0.12; wait 0.5 × 0.4 × 0.88 = 0.176;
+  // the layer's sum is 0.6 + 0.12 + 0.176 = 0.896.
+  CHECK(contains(explanation.text, "refined = 0.3 × 0.4 = 0.12\n"));
+  CHECK(contains(explanation.text,
+                 "0.12 / 0.896 (the sum of the layer's refined levels) = "
+                 "0.133929\n"));
+  CHECK_FALSE(contains(explanation.text, "note:"));
+}
+
+TEST_CASE("explain tells what a state machine did in a step", "[explain]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const std::string config = "configs/paper/goalie_plan.yaml";
+  const Program program = load_config(config, registry, diagnostics);
+  const std::string trace_text = trace_of(config, 50);
+  {
+    std::istringstream trace(trace_text);
+    const auto explanation = explain(program, trace, 6, "goalie");
+    REQUIRE(explanation.status == Explanation::Status::kOk);
+    check_golden("explain_goalie.txt", explanation.text);
+    CHECK(contains(explanation.text,
+                   "events, in order: deactivate wait_for_button, "
+                   "activate walk_to_pose, execute walk_to_pose\n"));
+  }
+  {
+    std::istringstream trace(trace_text);
+    const auto explanation = explain(program, trace, 2, "state_machines/goalie");
+    REQUIRE(explanation.status == Explanation::Status::kOk);
+    CHECK(contains(explanation.text, "wait_for_button executed and held: it runs again at step 3"));
+  }
+}
+
+TEST_CASE("explain reports what it cannot explain", "[explain]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const Program program = load_config(kWalkAndKick, registry, diagnostics);
+  const std::string trace_text = trace_of(kWalkAndKick, 20);
+  const auto explain_text = [&](const std::string& trace, std::uint64_t step,
+                                const std::string& target) {
+    std::istringstream in(trace);
+    return explain(program, in, step, target);
+  };
+  auto result = explain_text(trace_text, 8, "search_for_bal");
+  CHECK(result.status == Explanation::Status::kNotFound);
+  REQUIRE(!result.notes.empty());
+  CHECK(contains(result.notes[0], "did you mean 'search_for_ball'?"));
+  result = explain_text(trace_text, 21, "search_for_ball");
+  CHECK(result.status == Explanation::Status::kNotFound);
+  CHECK(result.text == "the trace has steps 1 to 20, not step 21");
+  result = explain_text(trace_of("configs/paper/hierarchical.yaml", 3), 2, "kick_ball");
+  CHECK(result.status == Explanation::Status::kBadTrace);
+  CHECK(result.text == "the trace was written for 'hierarchical', not for 'walk_and_kick'");
+  result = explain_text("{\"arbiter_trace\": 1, \"name\": \"walk_and_kick\"\n", 1, "kick_ball");
+  CHECK(result.status == Explanation::Status::kBadTrace);
+}
+
+TEST_CASE("arbiter explain runs from a trace file", "[explain][cli]") {
+  const fs::path trace =
+      fs::temp_directory_path() / ("arbiter_explain_" + std::to_string(::getpid()) + ".jsonl");
+  REQUIRE(
+      run_cli(std::string("run -q --steps 20 --trace \"") + trace.string() + "\" " + kWalkAndKick)
+          .exit_code == 0);
+  const std::string base =
+      std::string("explain ") + kWalkAndKick + " --trace \"" + trace.string() + "\"";
+  const auto ok = run_cli(base + " --step 8 search_for_ball");
+  CHECK(ok.exit_code == 0);
+  CHECK(ok.out == read_text(kGoldenDir / "explain_search_for_ball.txt"));
+  CHECK(run_cli(base + " --step 8 control/search_for_ball").exit_code == 0);
+  const auto unknown = run_cli(base + " --step 8 nobody");
+  CHECK(unknown.exit_code == 2);
+  CHECK(contains(unknown.err, "arbiter explain: 'nobody' names no behaviour"));
+  CHECK(run_cli(base + " --step 99 kick_ball").exit_code == 2);
+  CHECK(run_cli(std::string("explain ") + kWalkAndKick + " --step 1 kick_ball").exit_code == 2);
+  fs::remove(trace);
+}
+
+// --- help ---
+
+TEST_CASE("every command's help ends with examples", "[help][cli]") {
+  for (const std::string command :
+       {"", "validate", "run", "dump", "explain", "plugins", "schema"}) {
+    DYNAMIC_SECTION("arbiter " << command << " --help") {
+      const auto result = run_cli(command + " --help");
+      CHECK(result.exit_code == 0);
+      CHECK(contains(result.out, "\nExamples:\n  arbiter "));
+      CHECK(contains(result.out, "\n  arbiter " + command));
+      CHECK(contains(result.out, "Exit codes: 0 ok"));
+    }
+  }
+  CHECK(contains(run_cli("validate --help").out, "redundant-inhibition"));
+}
