@@ -26,6 +26,10 @@ class Observer {
   virtual ~Observer() = default;
   virtual void on_start(const Manager& /*manager*/) {}
   virtual void on_step(const Manager& manager) = 0;
+  /// After a hot reload swapped a new program in (between two steps, before the next on_step):
+  /// behaviour, actuator and controller indices may all have changed, so anything an observer
+  /// keyed by index must be rebuilt from manager.program().
+  virtual void on_reload(const Manager& /*manager*/) {}
   virtual void on_finish(const Manager& /*manager*/) {}
 };
 
