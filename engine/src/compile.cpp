@@ -233,8 +233,9 @@ struct Bindings {
 struct InitScope {
   Bindings* bindings = nullptr;
   std::vector<Claim>* claims = nullptr;
-  Controller* controller = nullptr;           ///< for states: their controller
-  const StateMachineDecl* machine = nullptr;  ///< ... and its declaration
+  Controller* controller = nullptr;            ///< for states: their controller
+  const StateMachineDecl* machine = nullptr;   ///< ... and its declaration
+  const std::vector<Name>* sensors = nullptr;  ///< the layer's sensors as declared, if it has one
 };
 
 // Reports one shortest cycle of the closed graph among the behaviours Kahn could not order.
@@ -587,6 +588,26 @@ class InstanceInit final : public InitContext {
     return {};
   }
 
+  std::vector<LayerItem> layer_actuators() const override {
+    std::vector<LayerItem> items;
+    for (std::uint32_t a = layer_.actuator_begin; a < layer_.actuator_end; ++a) {
+      const CompiledActuator& actuator = program_.actuators[a];
+      items.push_back({actuator.name, actuator.type, actuator.location});
+    }
+    return items;
+  }
+
+  std::vector<LayerItem> layer_sensors() const override {
+    std::vector<LayerItem> items;
+    for (std::size_t s = 0; s < layer_.sensors.size(); ++s) {
+      const CompiledActuator& actuator = program_.actuators[layer_.sensors[s]];
+      const bool named = scope_.sensors != nullptr && s < scope_.sensors->size();
+      items.push_back(
+          {actuator.name, actuator.type, named ? (*scope_.sensors)[s].location : location_});
+    }
+    return items;
+  }
+
   ValueBox make_value(const ValueType& type, const Node& node) override {
     ValueBox box(type);
     std::string expected;
@@ -643,7 +664,7 @@ class InstanceInit final : public InitContext {
       claim = {true,
                in_program ? static_cast<std::uint32_t>(&layer_ - program_.layers.data()) : kUnbound,
                owner_};
-      controller.set_owned();
+      controller.set_owned(owner_);
       return &controller;
     }
     auto& error =
@@ -700,6 +721,29 @@ class InstanceInit final : public InitContext {
     }
     error_at(location_, "class-error",
              fmt::format("class {} resolves port '{}' that it does not declare", cls_.name, port));
+    return kUnbound;
+  }
+
+  std::uint32_t resolve_sensor(const std::string& sensor, const std::type_info& type,
+                               const SourceLocation& at) override {
+    std::vector<std::string> own;
+    for (const auto a : layer_.sensors) {
+      const CompiledActuator& actuator = program_.actuators[a];
+      if (actuator.name != sensor) {
+        own.push_back(actuator.name);
+        continue;
+      }
+      if (actuator.type->cpp_type != nullptr && *actuator.type->cpp_type == type) return a;
+      error_at(at, "class-error",
+               fmt::format("class {} reads sensor '{}' ({}) as a different C++ type", cls_.name,
+                           sensor, actuator.type->name));
+      return kUnbound;
+    }
+    auto& diagnostic =
+        error_at(at, "unknown-actuator",
+                 fmt::format("'{}' is not a sensor of layer '{}'", sensor, layer_.name));
+    const auto hint = suggest(sensor, own);
+    diagnostic.notes.push_back(hint.empty() ? "the layer reads no sensors" : hint);
     return kUnbound;
   }
 
@@ -851,7 +895,7 @@ class Compiler {
       layer.interface = decl.interface->make_interface();
       InstanceInit init(program_, registry_, diagnostics_, layer, kUnbound, layer.name,
                         layer.location, *decl.interface, decl.params, decl.ports,
-                        InitScope{&bindings_, &claims_});
+                        InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
       guarded_init(*decl.interface, layer.location, [&] { layer.interface->init(init); });
       return;
     }
@@ -861,7 +905,7 @@ class Compiler {
       behaviour.instance = behaviour.cls->make_behaviour();
       InstanceInit init(program_, registry_, diagnostics_, layer, b, behaviour.name,
                         behaviour.location, *behaviour.cls, source->params, source->ports,
-                        InitScope{&bindings_, &claims_});
+                        InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
       guarded_init(*behaviour.cls, behaviour.location, [&] { behaviour.instance->init(init); });
     }
   }
@@ -941,6 +985,8 @@ class Compiler {
       const Claim& claim = claims_[c];
       const CompiledLayer& layer =
           claim.layer == kUnbound ? kNoLayer : program_.layers[claim.layer];
+      const std::vector<Name>* sensors =
+          claim.layer == kUnbound ? nullptr : &model_.layers[claim.layer].sensors;
       std::vector<ParamSet> params(decl.states.size());
       std::vector<std::vector<PortBinding>> ports(decl.states.size());
       for (std::uint32_t s = 0; s < decl.states.size(); ++s) {
@@ -964,7 +1010,7 @@ class Compiler {
         InstanceInit init(program_, registry_, reported[s] ? repeat : diagnostics_, layer,
                           claim.owner, decl.states[s].name.text, decl.states[s].location,
                           *decl.states[s].cls, params[s], ports[s],
-                          InitScope{&bindings_, &claims_, &controller, &decl});
+                          InitScope{&bindings_, &claims_, &controller, &decl, sensors});
         reported[s] = true;
         guarded_init(*decl.states[s].cls, decl.states[s].location, [&] { state.init(init); });
       });

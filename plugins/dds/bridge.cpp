@@ -13,7 +13,6 @@
 
 #include "arbiter/init_context.hpp"
 #include "domain.hpp"
-#include "layer_items.hpp"
 #include "messages.hpp"
 
 namespace arbiter::dds {
@@ -292,18 +291,41 @@ Bridge::~Bridge() {
 
 namespace {
 
+/// The actuator a sensor reads, bound through an input of the sensor's C++ type; the output
+/// pass reads it as that type again (read_sensor).
+std::uint32_t sensor_actuator(InitContext& ctx, const std::string& sensor, ValueKind kind,
+                              const SourceLocation& where) {
+  switch (kind) {
+    case ValueKind::kBool:
+      return ctx.sensor_input<bool>(sensor, where).actuator;
+    case ValueKind::kInt:
+      return ctx.sensor_input<std::int64_t>(sensor, where).actuator;
+    case ValueKind::kDouble:
+      return ctx.sensor_input<double>(sensor, where).actuator;
+    case ValueKind::kVec2:
+      return ctx.sensor_input<Vec2>(sensor, where).actuator;
+    case ValueKind::kVec3:
+      return ctx.sensor_input<Vec3>(sensor, where).actuator;
+    case ValueKind::kString:
+      return ctx.sensor_input<std::string>(sensor, where).actuator;
+  }
+  return kUnbound;
+}
+
 /// A plan for each actuator (subscribed) and sensor (published) of the layer, with the options
 /// `topics:` gives them.
-std::vector<Plan> plan_topics(InitContext& ctx, ParamReader& params, const LayerItems& items) {
+std::vector<Plan> plan_topics(InitContext& ctx, ParamReader& params,
+                              const std::vector<LayerItem>& actuators,
+                              const std::vector<LayerItem>& sensors) {
   const TopicQos qos = params.bridge_qos();
   std::vector<Plan> plans;
   const auto add = [&](const LayerItem& item, bool subscribe) {
-    const auto kind = kind_of(item.type);
+    const auto kind = kind_of(item.type->name);
     if (!kind) {
-      params.error(
-          item.location,
-          fmt::format("{} '{}' has type '{}', which the DDS bridge does not carry; it carries {}",
-                      subscribe ? "actuator" : "sensor", item.name, item.type, carried_types()));
+      params.error(item.location, fmt::format("{} '{}' has type '{}', which the DDS bridge does "
+                                              "not carry; it carries {}",
+                                              subscribe ? "actuator" : "sensor", item.name,
+                                              item.type->name, carried_types()));
       return;
     }
     Plan plan;
@@ -314,12 +336,12 @@ std::vector<Plan> plan_topics(InitContext& ctx, ParamReader& params, const Layer
     plan.kind = *kind;
     plan.message = default_message(*kind);
     plan.qos = qos;
-    plan.actuator = item.actuator;
     plan.subscribe = subscribe;
+    if (!subscribe) plan.actuator = sensor_actuator(ctx, item.name, *kind, item.location);
     plans.push_back(std::move(plan));
   };
-  for (const auto& item : items.actuators) add(item, true);
-  for (const auto& item : items.sensors) add(item, false);
+  for (const auto& item : actuators) add(item, true);
+  for (const auto& item : sensors) add(item, false);
 
   const Node topics = ctx.param<Node>("topics");
   if (!topics.reads_as_null() && !topics.is_mapping()) {
@@ -330,8 +352,8 @@ std::vector<Plan> plan_topics(InitContext& ctx, ParamReader& params, const Layer
     return plans;
   }
   std::vector<std::string> known;
-  for (const auto& item : items.actuators) known.push_back(item.name);
-  for (const auto& item : items.sensors) known.push_back(item.name);
+  for (const auto& item : actuators) known.push_back(item.name);
+  for (const auto& item : sensors) known.push_back(item.name);
   for (const auto& entry : topics.entries()) {
     const auto plan = std::find_if(plans.begin(), plans.end(), [&](const Plan& candidate) {
       return candidate.name == entry.key;
@@ -419,15 +441,15 @@ void Bridge::init(InitContext& ctx) {
     ns.erase(0, ns.find_first_not_of('/'));
   }
 
-  LayerItems items;
-  if (!read_layer_items(ctx, items)) return;
-  if (items.actuators.empty() && items.sensors.empty()) {
+  const std::vector<LayerItem> actuators = ctx.layer_actuators();
+  const std::vector<LayerItem> sensors = ctx.layer_sensors();
+  if (actuators.empty() && sensors.empty()) {
     ctx.warning(ctx.location(),
                 fmt::format("layer '{}' has no actuators and no sensors: the DDS bridge "
                             "subscribes to a topic for each actuator and publishes each sensor",
                             ctx.name()));
   }
-  const std::vector<Plan> plans = plan_topics(ctx, params, items);
+  const std::vector<Plan> plans = plan_topics(ctx, params, actuators, sensors);
   std::map<std::string, const Plan*> published;
   for (const auto& plan : plans) {
     if (plan.subscribe) continue;

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "dds_support.hpp"
-#include "layer_items.hpp"
+#include "test_support.hpp"
 
 using namespace arbiter;
 using namespace arbiter::dds_test;
@@ -241,53 +241,163 @@ layers:
   CHECK(value_of(receiver, "point") == nlohmann::json::parse("[3.0, -3.0]"));
 }
 
-TEST_CASE("the bridge's layer items agree with the compiled program, includes and all", "[dds]") {
+namespace {
+
+/// Steps `sender` once and, once every topic delivered, `receiver` once; then the receiver reads
+/// the values probe.Stamp wrote in its first step, with their types.
+void check_first_values_arrive(Manager& sender, const std::string& to_dds, Manager& receiver,
+                               const std::string& from_dds) {
+  REQUIRE(bridge_of(sender, to_dds).wait_for_peers(10s));
+  REQUIRE(bridge_of(receiver, from_dds).wait_for_peers(10s));
+  sender.step();
+  REQUIRE(bridge_of(receiver, from_dds).wait_for_data(10s));
+  receiver.step();
+  CHECK(value_of(receiver, "flag") == true);
+  CHECK(value_of(receiver, "count") == 1);
+  CHECK(value_of(receiver, "level") == 0.5);
+  CHECK(value_of(receiver, "point") == nlohmann::json::parse("[1.0, -1.0]"));
+  CHECK(value_of(receiver, "vector") == nlohmann::json::parse("[1.0, 2.0, -0.5]"));
+  CHECK(value_of(receiver, "text") == "step 1");
+  for (const auto& name : kValues) {
+    INFO(name);
+    CHECK(written(receiver, name));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("a program compiled from text in memory bridges its layers both ways", "[dds]") {
+  DomainLease domain;
+  Registry registry = make_registry();
+  const std::vector<std::pair<std::string, std::string>> values = {
+      {"domain", std::to_string(domain.id())},
+      {"xml", loopback_xml()},
+      {"every", "1"},
+      {"publish", "written"}};
+  // Named after files that do not exist: nothing may read the config again.
+  Manager sender(test::compile_text(fill(kSender, values), registry, "no/such/sender.yaml"));
+  Manager receiver(test::compile_text(fill(kReceiver, values), registry, "no/such/receiver.yaml"));
+  check_first_values_arrive(sender, "to_dds", receiver, "from_dds");
+}
+
+TEST_CASE("a bridge layer in an included file bridges what that layer names", "[dds]") {
   DomainLease domain;
   TempDir dir;
-  dir.write("first.yaml", R"(
+  const std::vector<std::pair<std::string, std::string>> values = {
+      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
+  // The bridges' layers come after other layers' actuators, from included files of included
+  // files, so that their actuators and sensors are not the program's first.
+  dir.write("source.yaml", R"(
 arbiter: 1
 layers:
-  - name: early
-    actuators: {a1: double, a2: {type: vec3}}
+  - name: source
+    actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string}
+    behaviours: {stamp: probe.Stamp}
 )");
-  dir.write("second.yaml", R"(
+  dir.write("to_dds.yaml", fill(R"(
 arbiter: 1
-include: [first.yaml]
+include: [source.yaml]
 layers:
-  - name: middle
-    actuators: {b1: bool}
-)");
-  const std::string root = dir.write(
-      "root.yaml", fill(R"(
-arbiter: 1
-name: includes
-include: [second.yaml, first.yaml]
-layers:
-  - name: before
-    actuators: {c1: string, c2: int}
-  - name: bridge
+  - name: to_dds
     interface: dds.Bridge
     params: {domain_id: {domain}, cyclone_config: {xml}}
-    actuators: {d1: vec2}
-    sensors: {c2: int, a2: vec3, e1: double, b1: bool}
-  - name: after
-    sensors: [d1]
-    actuators: {e1: double}
+    sensors: [text, vector, point, level, count, flag]
 )",
-                        {{"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}}));
-  dds::LayerItems items;
-  Diagnostics diagnostics;
-  REQUIRE(dds::read_layer_items(root, "bridge", {root, 1, 1}, items, diagnostics));
-  REQUIRE(diagnostics.empty());
+                                values));
+  dir.write("spacer.yaml", R"(
+arbiter: 1
+layers:
+  - name: spacer
+    actuators: {pad_text: string, pad_vector: vec3}
+)");
+  dir.write("from_dds.yaml", fill(R"(
+arbiter: 1
+include: [spacer.yaml]
+layers:
+  - name: from_dds
+    interface: dds.Bridge
+    params: {domain_id: {domain}, cyclone_config: {xml}}
+    actuators: {text: string, flag: bool, count: int, level: double, point: vec2, vector: vec3}
+)",
+                                  values));
   Registry registry = make_registry();
-  const Program program = load_file(root, registry);
-  REQUIRE(items.actuators.size() == 1);
-  CHECK(items.actuators[0].actuator == *program.find_actuator("d1"));
-  CHECK(items.actuators[0].type == "vec2");
-  REQUIRE(items.sensors.size() == 4);
-  for (const auto& sensor : items.sensors) {
-    INFO(sensor.name);
-    CHECK(sensor.actuator == *program.find_actuator(sensor.name));
-    CHECK(sensor.type == program.actuators[sensor.actuator].type->name);
+  Manager sender(load_file(dir.write("sender.yaml", R"(
+arbiter: 1
+name: sender
+rate_hz: 100
+include: [to_dds.yaml]
+layers:
+  - name: after
+    actuators: {late: double}
+)"),
+                           registry));
+  Manager receiver(load_file(dir.write("receiver.yaml", R"(
+arbiter: 1
+name: receiver
+rate_hz: 100
+include: [from_dds.yaml]
+layers:
+  - name: user
+    sensors: [count, pad_vector]
+    actuators: {unused: double}
+)"),
+                             registry));
+  CHECK(bridge_of(sender, "to_dds").publication_count() == kValues.size());
+  CHECK(bridge_of(receiver, "from_dds").subscription_count() == kValues.size());
+  CHECK(bridge_of(receiver, "from_dds").topic_of("vector") == "rt/vector");
+  check_first_values_arrive(sender, "to_dds", receiver, "from_dds");
+}
+
+namespace {
+
+/// A value type of a plugin's own, which the bridge does not carry.
+struct Colour {
+  std::int64_t code = 0;
+};
+
+}  // namespace
+
+template <>
+struct arbiter::ValueTraits<Colour> {
+  static bool from_node(const Node& node, Colour& to, std::string& expected) {
+    expected = "an integer";
+    const auto code = node.as_int();
+    if (code) to.code = *code;
+    return code.has_value();
   }
+  static void append_json(const Colour& value, std::string& out) {
+    out += std::to_string(value.code);
+  }
+};
+
+TEST_CASE("a sensor the bridge cannot carry is reported where its layer names it", "[dds]") {
+  DomainLease domain;
+  TempDir dir;
+  dir.write("link.yaml", fill(R"(
+arbiter: 1
+layers:
+  - name: link
+    interface: dds.Bridge
+    params: {domain_id: {domain}, cyclone_config: {xml}}
+    sensors: [beacon]
+)",
+                              {{"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}}));
+  Registry registry = make_registry();
+  registry.add_value_type<Colour>("test.Colour");
+  const std::string root = dir.write("root.yaml", R"(
+arbiter: 1
+name: root
+include: [link.yaml]
+layers:
+  - name: lights
+    actuators: {beacon: test.Colour}
+)");
+  Diagnostics diagnostics;
+  CHECK_FALSE(load(root, registry, diagnostics));
+  REQUIRE(diagnostics.error_count() == 1);
+  const Diagnostic& error = diagnostics.items().front();
+  CHECK(error.location.file == dir.file("link.yaml"));
+  CHECK(error.location.line == 7);
+  CHECK(error.location.column == 15);
+  CHECK_THAT(error.message, Catch::Contains("sensor 'beacon' has type 'test.Colour'"));
 }

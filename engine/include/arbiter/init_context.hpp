@@ -6,6 +6,7 @@
 #include <string_view>
 #include <typeinfo>
 #include <variant>
+#include <vector>
 
 #include "arbiter/behaviour.hpp"
 #include "arbiter/registry.hpp"
@@ -14,6 +15,13 @@ namespace arbiter {
 
 class Controller;
 struct PlannedState;
+
+/// An actuator that a layer declares, or a sensor that it reads, as the config names it.
+struct LayerItem {
+  std::string name;
+  const ValueType* type = nullptr;
+  SourceLocation location;  ///< where the layer names it
+};
 
 class InitContext {
  public:
@@ -56,14 +64,13 @@ class InitContext {
   /// For a state class: a state of the same controller with per-instance params (a mapping node,
   /// or null), checked now so that a typo in a config fails the load. Reports at `where` and
   /// returns false when the state or a param is wrong.
-  virtual bool plan_state(const std::string& state, const Node* params,
-                          const SourceLocation& where, PlannedState& out) = 0;
+  virtual bool plan_state(const std::string& state, const Node* params, const SourceLocation& where,
+                          PlannedState& out) = 0;
 
   /// Claims the controller of state machine `machine` for this instance to step (the built-in
   /// `state_machine` behaviour does). Reports and returns nullptr when there is none, or when it
   /// already has an owner.
-  virtual Controller* claim_controller(const std::string& machine,
-                                       const SourceLocation& where) = 0;
+  virtual Controller* claim_controller(const std::string& machine, const SourceLocation& where) = 0;
 
   virtual void error(const SourceLocation& where, std::string message) = 0;
   virtual void warning(const SourceLocation& where, std::string message) = 0;
@@ -73,6 +80,28 @@ class InitContext {
                                        const std::type_info& requested) = 0;
   virtual std::uint32_t resolve_port(std::string_view port, PortDirection direction,
                                      const std::type_info& type) = 0;
+
+  // Declared after every earlier virtual function, so that a plugin built against an earlier
+  // header of the same API version finds those at the same place in the table.
+ public:
+  /// The actuators the instance's layer declares, in declaration order, and the sensors it
+  /// reads, in the order listed: for a class that moves whatever its layer names (a middleware
+  /// bridge) rather than ports it declares. Write an actuator through output_to_actuator(), read
+  /// a sensor through sensor_input(). Empty for a state that no behaviour steps.
+  virtual std::vector<LayerItem> layer_actuators() const = 0;
+  virtual std::vector<LayerItem> layer_sensors() const = 0;
+
+  /// An input bound to a sensor of the instance's own layer named in the config rather than
+  /// declared as a port; T is the C++ type of the sensor's value type. Reports at `where` and
+  /// returns an unbound input when the layer reads no such sensor or T is not its type.
+  template <typename T>
+  Input<T> sensor_input(const std::string& sensor, const SourceLocation& where) {
+    return Input<T>{resolve_sensor(sensor, typeid(T), where)};
+  }
+
+ protected:
+  virtual std::uint32_t resolve_sensor(const std::string& sensor, const std::type_info& type,
+                                       const SourceLocation& where) = 0;
 };
 
 }  // namespace arbiter
