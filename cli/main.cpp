@@ -24,7 +24,10 @@
 #include "arbiter/schema.hpp"
 #include "arbiter/trace.hpp"
 #include "builtins.hpp"
+#include "plot.hpp"
 #include "run_report.hpp"
+#include "serve.hpp"
+#include "view.hpp"
 
 namespace {
 
@@ -48,6 +51,10 @@ struct Options {
   bool builtin_only = false;
   std::uint64_t step = 0;
   std::string target;
+  std::string serve;                          ///< `run --serve`: [ADDR:]PORT
+  std::string view_serve = "127.0.0.1:8080";  ///< `view --serve`
+  std::string output;                         ///< `plot -o`
+  bool actuators = false;
 };
 
 arbiter::Registry make_registry() {
@@ -237,6 +244,12 @@ int run(const Options& options) {
   if (trace_file.is_open()) manager.add_observer(trace);
   arbiter::cli::RunReport report(std::cout, options.quiet);
   manager.add_observer(report);
+  std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
+  if (!options.serve.empty()) {
+    live = arbiter::cli::LiveView::open(options.serve, std::cout, std::cerr);
+    if (!live) return kExitUsage;
+    manager.add_observer(*live);
+  }
 
   // Ctrl-C ends the run between two steps, so the trace and the summary are still complete.
   std::signal(SIGINT, on_interrupt);
@@ -247,6 +260,10 @@ int run(const Options& options) {
   const auto started = Clock::now();
   auto next = started;
   for (std::uint64_t i = 0; i < options.steps && !interrupted; ++i) {
+    if (live && live->hold(manager, interrupted)) {  // paused from the page
+      if (interrupted) break;
+      next = Clock::now();
+    }
     manager.step();
     if (options.realtime) {
       next += period;
@@ -261,11 +278,53 @@ int run(const Options& options) {
                              static_cast<double>(manager.steps()) / rate_hz, rate_hz, wall,
                              options.realtime ? " (real time)" : "");
   }
+  if (live) live->serve_until(manager, interrupted);
   if (trace_file.is_open() && !trace_file) {
     std::cerr << fmt::format("arbiter run: writing trace '{}' failed\n", options.trace_path);
     return kExitInvalid;
   }
   return kExitOk;
+}
+
+int view(const Options& options) {
+  auto registry = make_registry();
+  auto program = load_or_report(options.file, registry, options);
+  if (!program) return kExitInvalid;
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+  std::string unused;  // the option's check has parsed it already
+  return arbiter::cli::view_trace(*program, options.trace_path,
+                                  arbiter::cli::ServeAddress::parse(options.view_serve, unused),
+                                  interrupted, std::cout, std::cerr);
+}
+
+int plot(const Options& options) {
+  std::string error;
+  const auto trace = arbiter::cli::read_trace_file(options.trace_path, error);
+  if (!trace) {
+    std::cerr << error << "\n";
+    return kExitInvalid;
+  }
+  arbiter::cli::PlotOptions plot_options;
+  plot_options.actuators = options.actuators;
+  const std::string svg = arbiter::cli::plot_svg(*trace, plot_options);
+  if (options.output.empty() || options.output == "-") {
+    std::cout << svg;
+    return kExitOk;
+  }
+  std::ofstream out(options.output, std::ios::binary | std::ios::trunc);
+  if (!(out << svg << std::flush)) {
+    std::cerr << fmt::format("arbiter plot: cannot write '{}'\n", options.output);
+    return kExitUsage;
+  }
+  return kExitOk;
+}
+
+/// CLI11 check of `--serve [ADDR:]PORT`.
+std::string check_serve_address(const std::string& text) {
+  std::string error;
+  arbiter::cli::ServeAddress::parse(text, error);
+  return error;
 }
 
 constexpr const char* kExitCodes =
@@ -350,6 +409,13 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--realtime", options.realtime,
                     "pace the steps at the config's rate_hz instead of running flat out");
   run_cmd->add_flag("--strict", options.strict, "treat config warnings as errors");
+  run_cmd
+      ->add_option("--serve", options.serve,
+                   "serve the live view (a web page) on [ADDR:]PORT (ADDR defaults to 127.0.0.1, "
+                   "PORT 0 picks a free one) and pace the steps at rate_hz; the server stays up "
+                   "after the last step until Ctrl-C")
+      ->check(check_serve_address, "[ADDR:]PORT")
+      ->type_name("[ADDR:]PORT");
   run_cmd->footer(
       std::string("Examples:\n"
                   "  arbiter run configs/paper/walk_and_kick.yaml --steps 20\n"
@@ -414,6 +480,49 @@ int main(int argc, char** argv) {
                   "Exit codes: 0 ok, 1 invalid config or trace, 2 usage error (no such behaviour "
                   "or step)."));
 
+  auto* view_cmd = app.add_subcommand(
+      "view",
+      "Serve the web view of a trace of 'arbiter run': the graph, each behaviour coloured by its\n"
+      "activation, the state machines, timelines, and a slider to scrub through the steps.");
+  view_cmd->add_option("FILE", options.file, "the config the trace was written with")
+      ->required()
+      ->check(CLI::ExistingPath);
+  view_cmd->add_option("--trace", options.trace_path, "the JSON-lines trace (arbiter run --trace)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  view_cmd
+      ->add_option("--serve", options.view_serve,
+                   "serve on [ADDR:]PORT (ADDR defaults to 127.0.0.1, PORT 0 picks a free one)")
+      ->check(check_serve_address, "[ADDR:]PORT")
+      ->type_name("[ADDR:]PORT")
+      ->capture_default_str();
+  view_cmd->footer(
+      std::string(
+          "Examples:\n"
+          "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
+          "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl\n"
+          "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --serve 0\n\n"
+          "Ctrl-C stops the server. ") +
+      kExitCodes);
+
+  auto* plot_cmd = app.add_subcommand(
+      "plot",
+      "Draw a trace of 'arbiter run' as an SVG timeline: a row per behaviour with its activation,\n"
+      "requested level and active steps, a row per state machine with its states and events.");
+  plot_cmd->add_option("TRACE", options.trace_path, "the JSON-lines trace (arbiter run --trace)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  plot_cmd->add_option("--output,-o", options.output, "the SVG file to write (default: stdout)")
+      ->type_name("FILE");
+  plot_cmd->add_flag("--actuators", options.actuators, "add a row per actuator with its value");
+  plot_cmd->footer(
+      std::string(
+          "Examples:\n"
+          "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
+          "  arbiter plot run.jsonl -o timeline.svg\n"
+          "  arbiter plot run.jsonl --actuators > timeline.svg\n\n") +
+      kExitCodes);
+
   auto* plugins_cmd = app.add_subcommand(
       "plugins",
       "List the registered classes (the built-ins, and the plugins on the plugin path) with\n"
@@ -456,6 +565,7 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
+    if (run_cmd->parsed() && !options.serve.empty()) options.realtime = true;
   } catch (const CLI::ParseError& error) {
     // --help and --version exit 0 through app.exit; every real parse error is a usage error.
     const int code = app.exit(error);
@@ -470,6 +580,8 @@ int main(int argc, char** argv) {
     if (run_cmd->parsed()) return run(options);
     if (dump_cmd->parsed()) return dump(options);
     if (explain_cmd->parsed()) return explain(options);
+    if (view_cmd->parsed()) return view(options);
+    if (plot_cmd->parsed()) return plot(options);
     if (plugins_cmd->parsed()) return plugins(options);
     if (schema_cmd->parsed()) return schema(options);
   } catch (const std::exception& error) {

@@ -483,6 +483,18 @@ Explanation explain_controller(const Program& program, std::uint32_t target, std
 
 }  // namespace
 
+Explanation check_trace_header(const Program& program, const std::string& header_line) {
+  Json header;
+  try {
+    header = Json::parse(header_line);
+  } catch (const Json::exception& error) {
+    return failure(Status::kBadTrace,
+                   fmt::format("line 1 of the trace is not JSON: {}", error.what()));
+  }
+  if (auto error = check_header(program, header)) return *error;
+  return {};
+}
+
 Explanation explain(const Program& program, std::istream& trace, std::uint64_t step,
                     std::string_view target) {
   Explanation error;

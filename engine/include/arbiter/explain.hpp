@@ -37,4 +37,8 @@ struct Explanation {
 Explanation explain(const Program& program, std::istream& trace, std::uint64_t step,
                     std::string_view target);
 
+/// Whether `header_line` (a trace's first line) was written by running `program`'s config,
+/// checked as explain() checks it: kOk, or kBadTrace saying what differs.
+Explanation check_trace_header(const Program& program, const std::string& header_line);
+
 }  // namespace arbiter

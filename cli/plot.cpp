@@ -1,0 +1,334 @@
+#include "plot.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace arbiter::cli {
+
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+constexpr double kLeft = 200;  // room for the row labels
+constexpr double kWidth = 900;
+constexpr double kRight = 20;
+constexpr double kTop = 58;  // title, legend and step axis
+constexpr double kRow = 30;
+constexpr double kPad = 4;  // between rows
+constexpr double kSection = 22;
+constexpr const char* kComponentColours[] = {"#d62728", "#2ca02c", "#1f77b4", "#9467bd"};
+constexpr const char* kStateColours[] = {"#c6dbef", "#fdd0a2", "#c7e9c0", "#dadaeb", "#fcbba1"};
+
+std::string escape(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+const Json& member(const Json& object, const std::string& key) {
+  static const Json kNull;
+  if (!object.is_object()) return kNull;
+  const auto found = object.find(key);
+  return found == object.end() ? kNull : *found;
+}
+
+double number_or(const Json& value, double fallback) {
+  return value.is_number() ? value.get<double>() : fallback;
+}
+
+/// Tick spacing for the step axis: 1, 2, 5, 10, 20, 50... with at most about 12 ticks.
+std::uint64_t tick_spacing(std::size_t steps) {
+  std::uint64_t spacing = 1;
+  for (int i = 0; steps / spacing > 12; ++i) spacing *= (i % 3 == 1) ? 5 : 2;
+  return spacing;
+}
+
+class Plot {
+ public:
+  Plot(const TraceFile& trace)
+      : trace_(trace), n_(std::max<std::size_t>(trace.records.size(), 1)) {}
+
+  double x(std::size_t index) const { return kLeft + kWidth * static_cast<double>(index) / n_; }
+
+  /// Starts a row: its `<g>`, background and label; returns the row's top.
+  double open_row(const std::string& kind, const std::string& name, const std::string& label) {
+    const double top = y_;
+    body_ += fmt::format(R"(<g class="row {}" data-name="{}">)", kind, escape(name));
+    body_ += fmt::format(R"(<title>{}</title>)", escape(name));
+    body_ += fmt::format(R"(<rect x="{}" y="{}" width="{}" height="{}" fill="#f4f4f4"/>)", kLeft,
+                         top, kWidth, kRow);
+    body_ += fmt::format(R"(<text x="{}" y="{:.1f}" text-anchor="end">{}</text>)", kLeft - 8,
+                         top + kRow / 2 + 4, escape(label));
+    y_ += kRow + kPad;
+    return top;
+  }
+  void close_row() { body_ += "</g>\n"; }
+
+  void section(const std::string& title) {
+    y_ += 6;
+    body_ += fmt::format(R"(<text x="8" y="{:.1f}" font-weight="bold">{}</text>)", y_ + 10,
+                         escape(title));
+    body_ += "\n";
+    y_ += kSection - 6;
+  }
+
+  /// A step function over the records as a closed area (from the row's bottom) or a line.
+  std::string steps_path(const std::vector<double>& values, double top, bool area) const {
+    const double bottom = top + kRow;
+    const auto y_of = [&](double v) {
+      return bottom - std::clamp(std::isfinite(v) ? v : 0.0, 0.0, 1.0) * (kRow - 2);
+    };
+    std::string d = area ? fmt::format("M{:.1f},{:.1f}", x(0), bottom) : "";
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      d += fmt::format("{}{:.1f},{:.1f}L{:.1f},{:.1f}", d.empty() ? "M" : "L", x(i),
+                       y_of(values[i]), x(i + 1), y_of(values[i]));
+    }
+    if (area) d += fmt::format("L{:.1f},{:.1f}Z", x(values.size()), bottom);
+    return d;
+  }
+
+  void behaviour(const std::string& layer, const std::string& name) {
+    std::vector<double> activation;
+    std::vector<double> requested;
+    std::vector<char> active;
+    for (const auto& record : trace_.records) {
+      const Json& entry = member(member(member(record, "layers"), layer), name);
+      activation.push_back(number_or(member(entry, "activation"), 0.0));
+      requested.push_back(number_or(member(entry, "requested"), 0.0));
+      active.push_back(member(entry, "active") == true ? 1 : 0);
+    }
+    const double top = open_row("behaviour", layer + "/" + name, name);
+    body_ += fmt::format(R"(<path class="activation" d="{}" fill="#4c9be8" fill-opacity="0.55"/>)",
+                         steps_path(activation, top, true));
+    body_ += fmt::format(
+        R"(<path class="requested" d="{}" fill="none" stroke="#1b3a5c" stroke-width="1" stroke-dasharray="3,2"/>)",
+        steps_path(requested, top, false));
+    for (std::size_t i = 0; i < active.size();) {
+      if (active[i] == 0) {
+        ++i;
+        continue;
+      }
+      const std::size_t begin = i;
+      while (i < active.size() && active[i] != 0) ++i;
+      body_ += fmt::format(
+          R"(<rect class="active" x="{:.1f}" y="{:.1f}" width="{:.1f}" height="3" fill="#2ca02c"/>)",
+          x(begin), top + kRow - 3, x(i) - x(begin));
+    }
+    // Ticks where the behaviour became active (green) or inactive (red).
+    for (std::size_t i = 1; i < active.size(); ++i) {
+      if (active[i] == active[i - 1]) continue;
+      body_ += fmt::format(
+          R"(<line class="event" x1="{:.1f}" y1="{:.1f}" x2="{:.1f}" y2="{:.1f}" stroke="{}" stroke-width="1.5"><title>step {}: {}</title></line>)",
+          x(i), top, x(i), top + kRow, active[i] ? "#2ca02c" : "#d62728", step_at(i),
+          active[i] ? "activated" : "deactivated");
+    }
+    close_row();
+  }
+
+  void controller(const std::string& name) {
+    const double top = open_row("controller", "state_machines/" + name, name);
+    std::size_t begin = 0;
+    std::string state;
+    std::size_t colour = 0;
+    const auto segment = [&](std::size_t end) {
+      if (state.empty() || end <= begin) return;
+      body_ += fmt::format(
+          R"(<rect x="{:.1f}" y="{}" width="{:.1f}" height="{}" fill="{}"><title>{}</title></rect>)",
+          x(begin), top, x(end) - x(begin), kRow, kStateColours[colour % std::size(kStateColours)],
+          escape(state));
+      if (x(end) - x(begin) > 7.0 * static_cast<double>(state.size())) {
+        body_ += fmt::format(R"(<text x="{:.1f}" y="{:.1f}">{}</text>)", x(begin) + 3,
+                             top + kRow / 2 + 4, escape(state));
+      }
+      ++colour;
+    };
+    for (std::size_t i = 0; i < trace_.records.size(); ++i) {
+      const Json& entry = member(member(trace_.records[i], "controllers"), name);
+      const Json& now = member(entry, "state");
+      const std::string current = now.is_string() ? now.get<std::string>() : "";
+      if (current != state) {
+        segment(i);
+        state = current;
+        begin = i;
+      }
+      const Json& events = member(entry, "events");
+      if (!events.is_array() || events.empty()) continue;
+      std::string text;
+      for (const auto& event : events) {
+        if (event.is_string()) text += (text.empty() ? "" : ", ") + event.get<std::string>();
+      }
+      body_ += fmt::format(
+          R"(<line class="event" x1="{:.1f}" y1="{}" x2="{:.1f}" y2="{}" stroke="#333" stroke-width="1"><title>step {}: {}</title></line>)",
+          x(i), top, x(i), top + 6, step_at(i), escape(text));
+    }
+    segment(trace_.records.size());
+    close_row();
+  }
+
+  void actuator(const std::string& name) {
+    // One series per component: a number or bool is one, a vector one per element.
+    std::vector<std::vector<double>> series;
+    bool text_valued = false;
+    for (std::size_t i = 0; i < trace_.records.size(); ++i) {
+      const Json& value = member(member(member(trace_.records[i], "actuators"), name), "value");
+      std::vector<double> components;
+      if (value.is_boolean()) {
+        components.push_back(value.get<bool>() ? 1.0 : 0.0);
+      } else if (value.is_number()) {
+        components.push_back(value.get<double>());
+      } else if (value.is_array()) {
+        for (const auto& item : value) components.push_back(number_or(item, 0.0));
+      } else {
+        text_valued = true;
+      }
+      if (series.size() < components.size()) {
+        series.resize(components.size(), std::vector<double>(i, 0.0));
+      }
+      for (std::size_t c = 0; c < series.size(); ++c) {
+        series[c].push_back(c < components.size() ? components[c] : 0.0);
+      }
+    }
+    double low = std::numeric_limits<double>::infinity();
+    double high = -low;
+    for (const auto& values : series) {
+      for (const double v : values) {
+        if (!std::isfinite(v)) continue;
+        low = std::min(low, v);
+        high = std::max(high, v);
+      }
+    }
+    if (!(low <= high)) low = high = 0.0;
+    if (high - low < 1e-12) {
+      low -= 0.5;
+      high += 0.5;
+    }
+    const double top = open_row("actuator", name, name);
+    for (std::size_t c = 0; c < series.size(); ++c) {
+      std::vector<double> scaled;
+      for (const double v : series[c]) scaled.push_back((v - low) / (high - low));
+      body_ += fmt::format(R"(<path d="{}" fill="none" stroke="{}" stroke-width="1.2"/>)",
+                           steps_path(scaled, top, false),
+                           kComponentColours[c % std::size(kComponentColours)]);
+    }
+    if (!series.empty()) {
+      body_ += fmt::format(R"(<text x="{}" y="{}" font-size="9" fill="#666">{:.3g}</text>)",
+                           kLeft + kWidth + 2, top + 8, high);
+      body_ += fmt::format(R"(<text x="{}" y="{}" font-size="9" fill="#666">{:.3g}</text>)",
+                           kLeft + kWidth + 2, top + kRow, low);
+    } else if (text_valued) {
+      body_ += fmt::format(R"(<text x="{}" y="{}" fill="#666">(not a number)</text>)", kLeft + 4,
+                           top + kRow / 2 + 4);
+    }
+    close_row();
+  }
+
+  std::string finish(const std::string& title, const std::string& subtitle) {
+    const double height = y_ + 30;
+    const double width = kLeft + kWidth + kRight + 24;
+    std::string out = fmt::format(
+        R"(<?xml version="1.0" encoding="UTF-8"?>)"
+        "\n"
+        R"(<svg xmlns="http://www.w3.org/2000/svg" width="{0}" height="{1}" viewBox="0 0 {0} {1}" font-family="DejaVu Sans, sans-serif" font-size="11">)"
+        "\n"
+        R"(<rect width="100%" height="100%" fill="white"/>)"
+        "\n"
+        R"(<text x="8" y="18" font-size="14" font-weight="bold">{2}</text>)"
+        R"(<text x="8" y="34" fill="#444">{3}</text>)"
+        "\n",
+        width, height, escape(title), escape(subtitle));
+    // Step axis, with grid lines through every row.
+    const auto spacing = tick_spacing(trace_.records.size());
+    out += R"(<g class="axis">)";
+    for (std::size_t i = 0; i < trace_.records.size(); ++i) {
+      const auto step = step_at(i);
+      if (step % spacing != 0) continue;
+      const double at = (x(i) + x(i + 1)) / 2;
+      out += fmt::format(
+          R"(<line x1="{0:.1f}" y1="{1}" x2="{0:.1f}" y2="{2}" stroke="#ddd"/><text x="{0:.1f}" y="{3}" text-anchor="middle" fill="#444">{4}</text>)",
+          at, kTop - 6, y_, kTop - 10, step);
+    }
+    out += fmt::format(R"(<text x="{}" y="{}" text-anchor="end" fill="#444">step</text>)",
+                       kLeft - 8, kTop - 10);
+    out += "</g>\n";
+    out += body_;
+    out += fmt::format(
+        R"svg(<g class="legend" transform="translate({},{})">)svg"
+        R"(<rect width="14" height="10" fill="#4c9be8" fill-opacity="0.55"/><text x="18" y="9">activation</text>)"
+        R"(<line x1="90" y1="5" x2="104" y2="5" stroke="#1b3a5c" stroke-dasharray="3,2"/><text x="108" y="9">requested</text>)"
+        R"(<rect x="180" y="7" width="14" height="3" fill="#2ca02c"/><text x="198" y="9">active</text>)"
+        R"(<line x1="250" y1="0" x2="250" y2="10" stroke="#2ca02c" stroke-width="1.5"/><line x1="254" y1="0" x2="254" y2="10" stroke="#d62728" stroke-width="1.5"/><text x="260" y="9">became active / inactive</text>)"
+        "</g>\n",
+        kLeft, height - 20);
+    out += "</svg>\n";
+    return out;
+  }
+
+  std::uint64_t step_at(std::size_t index) const {
+    return index < trace_.records.size() ? trace_.records[index]["step"].get<std::uint64_t>() : 0;
+  }
+
+  double y_ = kTop;
+
+ private:
+  const TraceFile& trace_;
+  double n_;
+  std::string body_;
+};
+
+}  // namespace
+
+std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
+  Plot plot(trace);
+  for (const auto& layer : member(trace.header, "layers")) {
+    const Json& order = member(layer, "order");
+    if (!order.is_array() || order.empty()) continue;
+    const std::string layer_name =
+        member(layer, "name").is_string() ? layer["name"].get<std::string>() : "";
+    plot.section("layer " + layer_name);
+    for (const auto& name : order) {
+      if (name.is_string()) plot.behaviour(layer_name, name.get<std::string>());
+    }
+  }
+  if (!trace.records.empty()) {
+    const Json& controllers = member(trace.records.front(), "controllers");
+    if (controllers.is_object() && !controllers.empty()) {
+      plot.section("state machines");
+      for (const auto& item : controllers.items()) plot.controller(item.key());
+    }
+    const Json& actuators = member(trace.records.front(), "actuators");
+    if (options.actuators && actuators.is_object() && !actuators.empty()) {
+      plot.section("actuators");
+      for (const auto& item : actuators.items()) plot.actuator(item.key());
+    }
+  }
+  const Json& name = member(trace.header, "name");
+  const std::string title = name.is_string() ? name.get<std::string>() : "trace";
+  const std::string subtitle =
+      trace.records.empty()
+          ? "no steps"
+          : fmt::format("steps {} to {}", trace.records.front()["step"].get<std::uint64_t>(),
+                        trace.records.back()["step"].get<std::uint64_t>());
+  return plot.finish(title, subtitle);
+}
+
+}  // namespace arbiter::cli

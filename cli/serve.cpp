@@ -1,0 +1,391 @@
+#include "serve.hpp"
+
+#include <fmt/format.h>
+#include <httplib.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <sstream>
+#include <tuple>
+
+#include "arbiter/dump.hpp"
+#include "arbiter/explain.hpp"
+#include "arbiter/trace.hpp"
+#include "web/assets.hpp"
+
+namespace arbiter::cli {
+
+namespace {
+
+using namespace std::chrono_literals;
+
+// Every open page holds one server thread for its stream; the few requests besides need a few
+// more. Past this many pages a new one waits for a thread.
+constexpr std::size_t kServerThreads = 32;
+// A page draws the last kBacklog steps; a client further behind skips to them.
+constexpr std::uint64_t kBacklog = 300;
+// Frames copied out of the ring under one lock.
+constexpr std::uint64_t kBatch = 64;
+
+std::optional<std::uint64_t> parse_step(const std::string& text) {
+  if (text.empty() || text.size() > 19 ||
+      text.find_first_not_of("0123456789") != std::string::npos) {
+    return std::nullopt;
+  }
+  return std::stoull(text);
+}
+
+void reply_text(httplib::Response& response, int status, const std::string& text) {
+  response.status = status;
+  response.set_content(text, "text/plain; charset=utf-8");
+}
+
+}  // namespace
+
+ServeAddress ServeAddress::parse(const std::string& text, std::string& error) {
+  ServeAddress address;
+  std::string port = text;
+  if (!text.empty() && text.front() == '[') {  // [::1]:8080
+    const auto close = text.find("]:");
+    if (close == std::string::npos) {
+      error = fmt::format("'{}' is not [ADDR]:PORT", text);
+      return address;
+    }
+    address.host = text.substr(1, close - 1);
+    port = text.substr(close + 2);
+  } else if (const auto colon = text.rfind(':'); colon != std::string::npos) {
+    address.host = text.substr(0, colon);
+    port = text.substr(colon + 1);
+  }
+  if (address.host.empty()) {
+    error = fmt::format("'{}' has an empty address; write PORT or ADDR:PORT", text);
+    return address;
+  }
+  if (port.empty() || port.size() > 5 ||
+      port.find_first_not_of("0123456789") != std::string::npos || std::stoi(port) > 65535) {
+    error =
+        fmt::format("'{}': the port must be a number from 0 to 65535 (0 picks a free one)", text);
+    return address;
+  }
+  address.port = std::stoi(port);
+  return address;
+}
+
+bool ServeAddress::loopback() const {
+  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+}
+
+WebServer::WebServer() : server_(std::make_unique<httplib::Server>()) {
+  server_->new_task_queue = [] { return new httplib::ThreadPool(kServerThreads); };
+  // Idle keep-alive connections hold a thread; a short timeout frees it (and speeds up stop()).
+  server_->set_keep_alive_timeout(1);
+  const auto asset = [this](const char* path, const char* text, const char* type) {
+    server_->Get(path, [text, type](const httplib::Request&, httplib::Response& response) {
+      response.set_header("Cache-Control", "no-cache");
+      response.set_content(text, type);
+    });
+  };
+  asset("/", web::kIndexHtml, "text/html; charset=utf-8");
+  asset("/app.js", web::kAppJs, "text/javascript; charset=utf-8");
+  asset("/style.css", web::kStyleCss, "text/css; charset=utf-8");
+}
+
+WebServer::~WebServer() {
+  stop();
+}
+
+bool WebServer::start(const ServeAddress& address, std::string& error) {
+  errno = 0;
+  int port = address.port;
+  bool bound = false;
+  if (port == 0) {
+    port = server_->bind_to_any_port(address.host);
+    bound = port > 0;
+  } else {
+    bound = server_->bind_to_port(address.host, port);
+  }
+  if (!bound) {
+    error = fmt::format(
+        "cannot listen on {}:{}: {}", address.host, address.port,
+        errno != 0 ? std::strerror(errno) : "not an address of this machine, or the port is taken");
+    return false;
+  }
+  const bool v6 = address.host.find(':') != std::string::npos;
+  url_ = fmt::format(v6 ? "http://[{}]:{}/" : "http://{}:{}/", address.host, port);
+  thread_ = std::thread([this] { server_->listen_after_bind(); });
+  return true;
+}
+
+void WebServer::stop() {
+  stopping_ = true;
+  server_->stop();
+  if (thread_.joinable()) thread_.join();
+}
+
+std::pair<int, std::string> explanation_reply(const Explanation& explanation) {
+  using Status = Explanation::Status;
+  if (explanation.status == Status::kOk) return {200, explanation.text};
+  std::string text = explanation.text + "\n";
+  for (const auto& note : explanation.notes) text += "note: " + note + "\n";
+  return {explanation.status == Status::kNotFound ? 404 : 422, text};
+}
+
+std::string exposure_warning(const ServeAddress& address, std::string_view what) {
+  if (address.loopback()) return "";
+  return fmt::format("serving on {}, not only to this machine: anyone who can reach it can {}\n",
+                     address.host, what);
+}
+
+std::string sse_frame(std::string_view event, std::uint64_t id, std::string_view data) {
+  std::string out = fmt::format("event: {}\n", event);
+  if (id != 0) out += fmt::format("id: {}\n", id);
+  // A data line may not hold a newline: each line of the payload gets its own "data:".
+  std::size_t begin = 0;
+  while (true) {
+    const auto end = data.find('\n', begin);
+    out += "data: ";
+    out += data.substr(begin, end == std::string_view::npos ? end : end - begin);
+    out += '\n';
+    if (end == std::string_view::npos || end + 1 == data.size()) break;
+    begin = end + 1;
+  }
+  out += '\n';
+  return out;
+}
+
+std::unique_ptr<LiveView> LiveView::open(const std::string& text, std::ostream& out,
+                                         std::ostream& err) {
+  std::string error;
+  const auto address = ServeAddress::parse(text, error);
+  auto live = std::make_unique<LiveView>();
+  if (error.empty() && !live->server_.start(address, error)) {
+    err << fmt::format("arbiter run: --serve {}\n", error);
+    return nullptr;
+  }
+  if (!error.empty()) {
+    err << fmt::format("arbiter run: --serve {}\n", error);
+    return nullptr;
+  }
+  err << exposure_warning(address, "watch, pause and step the run");
+  out << fmt::format("serving the live view at {}\n", live->server_.url()) << std::flush;
+  return live;
+}
+
+LiveView::LiveView() : ring_(kRingSize) {
+  auto& http = server_.http();
+  http.Get("/info", [](const httplib::Request&, httplib::Response& response) {
+    response.set_content(R"({"mode": "live"})", "application/json");
+  });
+  http.Get("/events", [this](const httplib::Request& request, httplib::Response& response) {
+    struct Cursor {
+      std::uint64_t next = 0;
+      std::uint64_t graph_seen = 0;
+      std::uint64_t status_seen = 0;
+    };
+    auto cursor = std::make_shared<Cursor>();
+    // EventSource sends the last id it saw when it reconnects: resume after it.
+    if (const auto last = parse_step(request.get_header_value("Last-Event-ID"))) {
+      cursor->next = *last + 1;
+    }
+    response.set_header("Cache-Control", "no-cache");
+    response.set_chunked_content_provider(
+        "text/event-stream", [this, cursor](std::size_t, httplib::DataSink& sink) {
+          return stream(
+              cursor->next, cursor->graph_seen, cursor->status_seen,
+              [&sink](const std::string& text) { return sink.write(text.data(), text.size()); });
+        });
+  });
+  const auto control = [this](const char* path, bool pause, bool single_step) {
+    server_.http().Post(
+        path, [this, pause, single_step](const httplib::Request&, httplib::Response& response) {
+          if (single_step) ++single_steps_;
+          paused_ = pause;
+          publish_status();
+          response.set_content(R"({"ok": true})", "application/json");
+        });
+  };
+  control("/control/pause", true, false);
+  control("/control/resume", false, false);
+  // A single step pauses a running engine after that step.
+  control("/control/step", true, true);
+  http.Get("/explain", [this](const httplib::Request& request, httplib::Response& response) {
+    const auto step = parse_step(request.get_param_value("step"));
+    const std::string target = request.get_param_value("target");
+    if (!step || *step == 0 || target.empty()) {
+      reply_text(response, 400, "explain needs ?step=N (from 1) and &target=BEHAVIOUR\n");
+      return;
+    }
+    ExplainRequest pending;
+    pending.step = *step;
+    pending.target = target;
+    std::unique_lock lock(mutex_);
+    requests_.push_back(&pending);
+    changed_.notify_all();
+    // The stepping thread answers between two steps; a stepping thread that never comes back
+    // (a behaviour stuck in a step) must not hold this client forever.
+    if (!answered_.wait_for(lock, 5s, [&] { return pending.done || server_.stopping(); })) {
+      requests_.erase(std::find(requests_.begin(), requests_.end(), &pending));
+      reply_text(response, 503, "the engine did not answer: it is inside a step\n");
+      return;
+    }
+    if (!pending.done) {
+      requests_.erase(std::find(requests_.begin(), requests_.end(), &pending));
+      reply_text(response, 503, "the server is stopping\n");
+      return;
+    }
+    reply_text(response, pending.status, pending.answer);
+  });
+}
+
+LiveView::~LiveView() {
+  // Stream threads read this object: they must be gone before it is.
+  server_.stop();
+}
+
+void LiveView::publish_graph(const Manager& manager) {
+  std::string graph = dump_json(manager.program());
+  std::string header = trace_header(manager.program());
+  {
+    std::lock_guard lock(mutex_);
+    graph_ = std::move(graph);
+    header_ = std::move(header);
+    ++graph_version_;
+  }
+  changed_.notify_all();
+}
+
+void LiveView::publish_status() {
+  {
+    std::lock_guard lock(mutex_);
+    ++status_version_;
+  }
+  changed_.notify_all();
+}
+
+void LiveView::on_start(const Manager& manager) {
+  publish_graph(manager);
+  // Sized from the record of step 0 with room to grow, so that copying a record into its slot
+  // does not allocate.
+  scratch_.clear();
+  append_step_record(manager, scratch_);
+  std::lock_guard lock(mutex_);
+  for (auto& slot : ring_) slot.record.reserve(2 * scratch_.size() + 256);
+  ++status_version_;
+}
+
+void LiveView::on_reload(const Manager& manager) {
+  publish_graph(manager);
+}
+
+void LiveView::on_step(const Manager& manager) {
+  scratch_.clear();
+  append_step_record(manager, scratch_);
+  {
+    std::lock_guard lock(mutex_);
+    const auto step = manager.steps();
+    auto& slot = ring_[step % kRingSize];
+    slot.step = step;
+    slot.record.assign(scratch_);
+    newest_ = step;
+  }
+  changed_.notify_all();
+}
+
+void LiveView::on_finish(const Manager&) {
+  {
+    std::lock_guard lock(mutex_);
+    finished_ = true;
+    ++status_version_;
+  }
+  changed_.notify_all();
+}
+
+void LiveView::answer_requests(const Manager& manager) {
+  std::unique_lock lock(mutex_);
+  if (requests_.empty()) return;
+  while (!requests_.empty()) {
+    ExplainRequest& request = *requests_.front();
+    requests_.pop_front();
+    const std::uint64_t oldest = newest_ >= kRingSize ? newest_ - kRingSize + 1 : 1;
+    if (request.step > newest_ || request.step < oldest) {
+      request.status = 404;
+      request.answer = newest_ == 0 ? "no step has run yet\n"
+                                    : fmt::format("steps {} to {} are kept, not step {}\n", oldest,
+                                                  newest_, request.step);
+    } else {
+      // explain() reads a trace: this one is the header and the records around the step.
+      std::string trace = header_ + "\n";
+      for (auto step = std::max(request.step - 1, oldest);
+           step <= std::min(request.step + 1, newest_); ++step) {
+        trace += ring_[step % kRingSize].record + "\n";
+      }
+      std::istringstream in(trace);
+      std::tie(request.status, request.answer) =
+          explanation_reply(explain(manager.program(), in, request.step, request.target));
+    }
+    request.done = true;
+  }
+  lock.unlock();
+  answered_.notify_all();
+}
+
+bool LiveView::hold(const Manager& manager, const std::atomic<bool>& interrupted) {
+  answer_requests(manager);
+  if (!paused_) return false;
+  while (!interrupted) {
+    if (!paused_) break;
+    if (single_steps_ > 0) {
+      --single_steps_;
+      break;
+    }
+    answer_requests(manager);
+    std::unique_lock lock(mutex_);
+    changed_.wait_for(lock, 50ms);
+  }
+  return true;
+}
+
+void LiveView::serve_until(const Manager& manager, const std::atomic<bool>& interrupted) {
+  while (!interrupted) {
+    answer_requests(manager);
+    std::unique_lock lock(mutex_);
+    changed_.wait_for(lock, 50ms);
+  }
+}
+
+bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint64_t& status_seen,
+                      const std::function<bool(const std::string&)>& write) {
+  std::string out;
+  {
+    std::unique_lock lock(mutex_);
+    changed_.wait_for(lock, 1s, [&] {
+      return server_.stopping() || graph_version_ != graph_seen || status_version_ != status_seen ||
+             (newest_ > 0 && next <= newest_);
+    });
+    if (server_.stopping()) return false;
+    if (graph_version_ != graph_seen && graph_version_ > 0) {
+      out += sse_frame("graph", 0, graph_);
+      graph_seen = graph_version_;
+    }
+    if (newest_ > 0 && next <= newest_) {
+      if (next + kBacklog <= newest_) next = newest_ - kBacklog + 1;
+      if (next == 0) next = 1;
+      for (std::uint64_t sent = 0; next <= newest_ && sent < kBatch; ++next, ++sent) {
+        out += sse_frame("step", next, ring_[next % kRingSize].record);
+      }
+    }
+    if (status_version_ != status_seen) {
+      out +=
+          sse_frame("status", 0,
+                    fmt::format(R"({{"paused": {}, "finished": {}, "step": {}}})",
+                                paused_ ? "true" : "false", finished_ ? "true" : "false", newest_));
+      status_seen = status_version_;
+    }
+  }
+  // A comment line keeps the connection alive and finds out when the client has gone.
+  if (out.empty()) out = ": idle\n\n";
+  return write(out);
+}
+
+}  // namespace arbiter::cli

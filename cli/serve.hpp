@@ -1,0 +1,138 @@
+#pragma once
+// The web view of a run (`arbiter run --serve`) and of a trace (`arbiter view`): an HTTP server
+// that serves the page compiled into the binary, the compiled graph (the JSON dump) and the step
+// records (the trace format), and answers `explain` for a behaviour at a step.
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "arbiter/explain.hpp"
+#include "arbiter/manager.hpp"
+
+namespace httplib {
+class Server;
+}
+
+namespace arbiter::cli {
+
+/// Where to listen: `[ADDR:]PORT`; port 0 picks a free port.
+struct ServeAddress {
+  std::string host = "127.0.0.1";
+  int port = 0;
+  /// The address as given, or why it is not one (`error` non-empty).
+  static ServeAddress parse(const std::string& text, std::string& error);
+  bool loopback() const;
+};
+
+/// The HTTP server both views share: the page and its assets, and a listening thread.
+class WebServer {
+ public:
+  WebServer();
+  ~WebServer();
+  WebServer(const WebServer&) = delete;
+  WebServer& operator=(const WebServer&) = delete;
+
+  httplib::Server& http() { return *server_; }
+  /// Binds and starts serving on a thread of its own; false (and `error` says why) when the
+  /// address cannot be bound. The URL is then url().
+  bool start(const ServeAddress& address, std::string& error);
+  /// Stops accepting and closes every connection; streams notice through `stopping()`.
+  void stop();
+  bool stopping() const { return stopping_; }
+  const std::string& url() const { return url_; }
+
+ private:
+  std::unique_ptr<httplib::Server> server_;
+  std::thread thread_;
+  std::string url_;
+  std::atomic<bool> stopping_{false};
+};
+
+/// Live view of a running manager. As an observer (on the stepping thread) it copies each step
+/// record into a ring of kRingSize preallocated slots and wakes the streams; each client's stream
+/// runs on a server thread and reads from the ring, so a slow or stuck client only falls behind
+/// (and skips to the frames still in the ring), never delays a step. Pause, single step and
+/// resume come from the page; the run loop asks hold() before each step.
+class LiveView : public Observer {
+ public:
+  static constexpr std::size_t kRingSize = 1024;
+
+  LiveView();
+  ~LiveView() override;
+
+  /// Serves on `address` (`[ADDR:]PORT`, checked by ServeAddress::parse) and prints the URL to
+  /// `out`, or says to `err` why it cannot (nullptr then).
+  static std::unique_ptr<LiveView> open(const std::string& address, std::ostream& out,
+                                        std::ostream& err);
+
+  void on_start(const Manager& manager) override;
+  void on_step(const Manager& manager) override;
+  void on_reload(const Manager& manager) override;
+  void on_finish(const Manager& manager) override;
+
+  /// Called by the run loop before each step, on the stepping thread. Returns at once while the
+  /// page has not paused the run; while paused, waits until the page resumes it or asks for a
+  /// single step, or `interrupted` becomes true. Also answers the page's explain requests, which
+  /// need the manager's program. True when it waited (so a paced loop restarts its clock).
+  bool hold(const Manager& manager, const std::atomic<bool>& interrupted);
+  /// After the run: keeps serving (and answering explain requests) until `interrupted`.
+  void serve_until(const Manager& manager, const std::atomic<bool>& interrupted);
+
+ private:
+  struct Slot {
+    std::uint64_t step = 0;
+    std::string record;
+  };
+  struct ExplainRequest {
+    std::uint64_t step = 0;
+    std::string target;
+    std::string answer;
+    int status = 0;
+    bool done = false;
+  };
+
+  void publish_graph(const Manager& manager);
+  void publish_status();
+  void answer_requests(const Manager& manager);
+  bool stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint64_t& status_seen,
+              const std::function<bool(const std::string&)>& write);
+
+  WebServer server_;
+  std::mutex mutex_;  // guards everything below; held only to copy, never across I/O
+  std::condition_variable changed_;
+  std::vector<Slot> ring_;
+  std::uint64_t newest_ = 0;  // the step of the newest record in the ring; 0: none yet
+  std::string graph_;         // the dump JSON of the current program
+  std::string header_;        // the trace header of the current program
+  std::uint64_t graph_version_ = 0;
+  std::uint64_t status_version_ = 0;
+  bool finished_ = false;
+  std::string scratch_;  // the stepping thread's record, built outside the lock
+  std::deque<ExplainRequest*> requests_;
+  std::condition_variable answered_;
+  std::atomic<bool> paused_{false};
+  std::atomic<std::uint64_t> single_steps_{0};
+};
+
+/// The text of an SSE frame: `event`, optional `id`, and `data` split into `data:` lines.
+std::string sse_frame(std::string_view event, std::uint64_t id, std::string_view data);
+
+/// The page's explain answer: the HTTP status, and the text (with the notes of a failure).
+std::pair<int, std::string> explanation_reply(const Explanation& explanation);
+
+/// The warning for an address other machines can reach, or "" for a loopback one.
+std::string exposure_warning(const ServeAddress& address, std::string_view what);
+
+}  // namespace arbiter::cli

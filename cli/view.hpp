@@ -1,0 +1,33 @@
+#pragma once
+// `arbiter view FILE --trace TRACE.jsonl`: the web view of a recorded run, scrubbed step by step.
+// Also reads trace files for `arbiter plot`.
+
+#include <atomic>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "arbiter/program.hpp"
+#include "serve.hpp"
+
+namespace arbiter::cli {
+
+/// A trace file (DESIGN 5) read whole: its header and step records, each line parsed.
+struct TraceFile {
+  std::string header_line;
+  nlohmann::ordered_json header;
+  std::vector<std::string> lines;  ///< the step records as written, in order
+  std::vector<nlohmann::ordered_json> records;
+};
+
+/// Reads `path`; on failure nullopt, and `error` says where and what (`file:line:col: ...`).
+std::optional<TraceFile> read_trace_file(const std::string& path, std::string& error);
+
+/// Serves the page for `trace` (written by running `program`'s config) until `interrupted`;
+/// prints the URL to `out`. Returns the exit code.
+int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,
+               const std::atomic<bool>& interrupted, std::ostream& out, std::ostream& err);
+
+}  // namespace arbiter::cli

@@ -1,0 +1,373 @@
+// The web view of an arbiter run: live (a stream of step records from `arbiter run --serve`)
+// or recorded (a trace from `arbiter view`). Both feed the same drawing: the graph comes from the
+// JSON dump, each step from a trace record (DESIGN 5).
+'use strict';
+
+const SVG = 'http://www.w3.org/2000/svg';
+const HISTORY = 300;  // steps a timeline shows
+const COLUMN = 270;   // width of a layer's column
+const BOX_W = 168;
+const BOX_H = 40;
+const PORT_H = 22;
+
+const view = {
+  mode: '',
+  graph: null,
+  graphText: '',
+  records: [],      // live: the last steps received; trace: every step
+  current: null,    // the record shown
+  behaviours: new Map(),  // 'layer/name' -> {group, rect, level, mark}
+  ports: new Map(),       // actuator name -> {group, value}
+  timelines: new Map(),   // 'layer/name' -> canvas
+  hovered: null,
+  explainPending: false,
+  explainShown: '',
+};
+
+function el(tag, attributes = {}, parent = null, ns = SVG) {
+  const node = ns ? document.createElementNS(ns, tag) : document.createElement(tag);
+  for (const [key, value] of Object.entries(attributes)) node.setAttribute(key, value);
+  if (parent) parent.appendChild(node);
+  return node;
+}
+
+function text(tag, attributes, content, parent) {
+  const node = el(tag, attributes, parent);
+  node.textContent = content;
+  return node;
+}
+
+function colour(level) {
+  const a = Math.max(0, Math.min(1, Number(level) || 0));
+  return `hsl(210, ${30 + 55 * a}%, ${95 - 53 * a}%)`;
+}
+
+function formatValue(value) {
+  if (Array.isArray(value)) return '[' + value.map(formatValue).join(', ') + ']';
+  if (typeof value === 'number') return Number.isInteger(value) ? String(value) : value.toFixed(3);
+  return JSON.stringify(value);
+}
+
+// The graph: a column per layer (in execution order), its sensors on top, its behaviours in
+// execution (topological) order, its actuators below; inhibitions as arcs on the column's right,
+// actuator -> sensor flows between columns.
+function buildGraph(graph) {
+  view.graph = graph;
+  view.behaviours.clear();
+  view.ports.clear();
+  document.getElementById('title').textContent = graph.name;
+  document.title = `arbiter: ${graph.name}`;
+  const svg = document.getElementById('graph');
+  svg.replaceChildren();
+  const edges = el('g', {class: 'edges'});
+  const flows = el('g', {class: 'flows'});
+  const sensorAt = new Map();    // 'layer/actuator' -> {x, y}
+  const actuatorAt = new Map();  // actuator -> {x, y, layerIndex}
+  let height = 0;
+  graph.layers.forEach((layer, index) => {
+    const x = 10 + index * COLUMN;
+    const column = el('g', {class: 'layer', 'data-layer': layer.name}, svg);
+    const box = el('rect', {class: 'layer-box', x, y: 4, width: COLUMN - 20, rx: 8}, column);
+    text('text', {class: 'layer-title', x: x + 12, y: 24}, layer.name, column);
+    if (layer.interface) text('text', {class: 'layer-class', x: x + 12, y: 40}, `interface ${layer.interface}`, column);
+    else if (layer.normalise) text('text', {class: 'layer-class', x: x + 12, y: 40}, 'normalised', column);
+    let y = 50;
+    if (layer.sensors.length) {
+      text('text', {class: 'section-label', x: x + 12, y: y + 8}, 'sensors', column);
+      y += 14;
+      for (const sensor of layer.sensors) {
+        const g = el('g', {class: 'port sensor', 'data-sensor': `${layer.name}/${sensor.name}`}, column);
+        el('rect', {x: x + 12, y, width: BOX_W, height: PORT_H - 4}, g);
+        text('text', {x: x + 20, y: y + 13}, sensor.name, g);
+        sensorAt.set(`${layer.name}/${sensor.name}`, {x: x + 12, y: y + (PORT_H - 4) / 2, lastStep: sensor.last_step, from: sensor.layer});
+        y += PORT_H;
+      }
+      y += 6;
+    }
+    const rowOf = new Map();
+    layer.behaviours.forEach((behaviour, row) => {
+      const key = `${layer.name}/${behaviour.name}`;
+      const top = y + row * (BOX_H + 8);
+      rowOf.set(behaviour.name, top + BOX_H / 2);
+      const g = el('g', {class: 'behaviour', 'data-name': key, 'data-class': behaviour.class}, column);
+      const rect = el('rect', {x: x + 12, y: top, width: BOX_W, height: BOX_H, fill: colour(0)}, g);
+      const mark = text('text', {class: 'mark', x: x + 20, y: top + 17}, '', g);
+      const name = text('text', {class: 'name', x: x + 34, y: top + 17}, behaviour.name, g);
+      const level = text('text', {class: 'level', x: x + 34, y: top + 32}, 'activation 0', g);
+      el('title', {}, g).textContent = `${key} (${behaviour.class}), execution order ${behaviour.order}`;
+      g.addEventListener('mouseenter', () => hover(key));
+      g.addEventListener('mouseleave', () => hover(null));
+      view.behaviours.set(key, {group: g, rect, level, mark, name});
+    });
+    y += layer.behaviours.length * (BOX_H + 8);
+    // Arcs nest by span so that they do not overlap.
+    for (const inhibition of layer.inhibitions) {
+      const from = rowOf.get(inhibition.inhibitor);
+      const to = rowOf.get(inhibition.inhibited);
+      if (from === undefined || to === undefined) continue;
+      const span = Math.abs(to - from) / (BOX_H + 8);
+      const right = x + 12 + BOX_W;
+      const reach = right + 12 + 14 * span;
+      const d = `M${right},${from} C${reach},${from} ${reach},${to} ${right + 6},${to}`;
+      const kind = inhibition.implicit ? 'implicit' : inhibition.chaining ? 'chaining' : 'non-chaining';
+      const g = el('g', {class: `edge ${kind}`, 'data-kind': kind,
+                         'data-from': inhibition.inhibitor, 'data-to': inhibition.inhibited}, edges);
+      const how = inhibition.implicit ? `implied by chaining ${inhibition.via.join(' => ')}`
+                                      : `${inhibition.inhibitor} ${inhibition.chaining ? '=>' : '->'} ${inhibition.inhibited}`;
+      el('title', {}, g).textContent = how;
+      if (kind === 'chaining') {
+        el('path', {class: 'edge-outer', d}, g);
+        el('path', {class: 'edge-inner', d}, g);
+      } else {
+        el('path', {class: `edge-line ${kind}`, d}, g);
+      }
+      // The inhibited end: a bar across the arc, as in the paper's figures.
+      el('line', {class: 'edge-line', x1: right + 6, y1: to - 6, x2: right + 6, y2: to + 6}, g);
+    }
+    if (layer.actuators.length) {
+      text('text', {class: 'section-label', x: x + 12, y: y + 8}, 'actuators', column);
+      y += 14;
+      for (const actuator of layer.actuators) {
+        const g = el('g', {class: 'port actuator', 'data-actuator': actuator.name}, column);
+        el('rect', {x: x + 12, y, width: COLUMN - 44, height: PORT_H - 4}, g);
+        text('text', {x: x + 20, y: y + 13}, actuator.name, g);
+        const value = text('text', {class: 'value', x: x + 20 + 7 * actuator.name.length + 8, y: y + 13}, '', g);
+        el('title', {}, g).textContent = `${actuator.name}: ${actuator.type}${actuator.aggregate ? ', aggregate' : ''}; written by ${actuator.writers.join(', ') || 'the interface'}`;
+        actuatorAt.set(actuator.name, {x: x + 12 + COLUMN - 44, y: y + (PORT_H - 4) / 2, layerIndex: index});
+        view.ports.set(actuator.name, {group: g, value});
+        y += PORT_H;
+      }
+    }
+    box.setAttribute('height', y + 8);
+    height = Math.max(height, y + 16);
+  });
+  for (const [key, sensor] of sensorAt) {
+    const source = actuatorAt.get(key.split('/')[1]);
+    if (!source) continue;
+    const bend = Math.max(40, Math.abs(sensor.x - source.x) / 3);
+    const d = `M${source.x},${source.y} C${source.x + bend},${source.y} ${sensor.x - bend},${sensor.y} ${sensor.x},${sensor.y}`;
+    const path = el('path', {class: `flow${sensor.lastStep ? ' last-step' : ''}`, d, 'data-flow': key}, flows);
+    el('title', {}, path).textContent = `${sensor.from} → ${key}${sensor.lastStep ? ' (last step\'s value)' : ''}`;
+  }
+  svg.appendChild(edges);
+  svg.appendChild(flows);
+  svg.setAttribute('width', graph.layers.length * COLUMN + 20);
+  svg.setAttribute('height', height);
+  buildControllers(graph);
+  buildTimelines(graph);
+}
+
+function buildControllers(graph) {
+  const box = document.getElementById('controllers');
+  box.replaceChildren();
+  if (!graph.state_machines.length) {
+    el('p', {class: 'empty'}, box, null).textContent = 'none';
+    return;
+  }
+  for (const machine of graph.state_machines) {
+    const div = el('div', {class: 'controller', 'data-controller': machine.name}, box, null);
+    const head = el('div', {class: 'head'}, div, null);
+    el('span', {class: 'name'}, head, null).textContent = machine.name + (machine.standalone ? '' : ' (owned)');
+    el('span', {class: 'status'}, head, null).textContent = '';
+    const state = el('div', {}, div, null);
+    state.append('state ');
+    el('span', {class: 'state'}, state, null).textContent = '(none)';
+    const queue = el('div', {class: 'queue'}, div, null);
+    queue.textContent = 'queue: ' + (machine.queue.join(', ') || '(empty)');
+    el('div', {class: 'events'}, div, null);
+  }
+}
+
+function buildTimelines(graph) {
+  const rows = document.getElementById('timeline-rows');
+  rows.replaceChildren();
+  view.timelines.clear();
+  for (const layer of graph.layers) {
+    for (const behaviour of layer.behaviours) {
+      const key = `${layer.name}/${behaviour.name}`;
+      const row = el('div', {class: 'timeline', 'data-name': key}, rows, null);
+      el('span', {class: 'label', title: key}, row, null).textContent = key;
+      const canvas = el('canvas', {width: 3 * HISTORY, height: 26}, row, null);
+      view.timelines.set(key, canvas);
+    }
+  }
+}
+
+function levelsOf(record, key) {
+  const [layer, name] = key.split('/');
+  return record && record.layers && record.layers[layer] ? record.layers[layer][name] : undefined;
+}
+
+// Shows `record` (one step) on the graph, the controllers and the timelines.
+function show(record) {
+  view.current = record;
+  document.getElementById('step').textContent = record ? record.step : 0;
+  if (!record) return;
+  for (const [key, item] of view.behaviours) {
+    const levels = levelsOf(record, key) || {activation: 0, requested: 0, active: false, inhibited_by: []};
+    const activation = Number(levels.activation) || 0;
+    item.rect.setAttribute('fill', colour(activation));
+    item.group.setAttribute('data-activation', activation);
+    item.group.setAttribute('data-active', levels.active ? 'true' : 'false');
+    item.group.classList.toggle('active', !!levels.active);
+    item.group.classList.toggle('inhibited', !levels.active && levels.requested > 0);
+    item.mark.textContent = levels.active ? '●' : '';
+    const dark = activation > 0.55;
+    item.name.setAttribute('fill', dark ? '#fff' : '#1d2733');
+    item.level.setAttribute('fill', dark ? '#fff' : '#1d2733');
+    let line = `activation ${activation.toFixed(2)} of ${Number(levels.requested).toFixed(2)}`;
+    if (levels.inhibited_by && levels.inhibited_by.length) line += ` ⊣ ${levels.inhibited_by.join(', ')}`;
+    item.level.textContent = line;
+  }
+  for (const [name, port] of view.ports) {
+    const value = record.actuators ? record.actuators[name] : undefined;
+    port.value.textContent = value ? formatValue(value.value) : '';
+    port.group.classList.toggle('written', !!(value && value.written));
+  }
+  for (const div of document.querySelectorAll('.controller')) {
+    const state = record.controllers ? record.controllers[div.dataset.controller] : undefined;
+    if (!state) continue;
+    div.className = `controller ${state.status}`;
+    div.querySelector('.status').textContent = `${state.status}, cycle ${state.cycle}`;
+    div.querySelector('.state').textContent = state.state || '(none)';
+    const queue = div.querySelector('.queue');
+    queue.replaceChildren('queue: ');
+    if (!state.queue.length) queue.append('(empty)');
+    for (const item of state.queue) el('span', {}, queue, null).textContent = item;
+    div.querySelector('.events').textContent = state.events.length ? state.events.join(' · ') : 'no events this step';
+  }
+  drawTimelines();
+  if (view.hovered) explain(view.hovered);
+}
+
+function drawTimelines() {
+  const records = view.records;
+  const end = view.current ? records.indexOf(view.current) + 1 : records.length;
+  const begin = Math.max(0, end - HISTORY);
+  const range = document.getElementById('timeline-range');
+  range.textContent = end > begin ? `steps ${records[begin].step} to ${records[end - 1].step}` : '';
+  for (const [key, canvas] of view.timelines) {
+    const context = canvas.getContext('2d');
+    const w = canvas.width / HISTORY;
+    const h = canvas.height;
+    context.clearRect(0, 0, canvas.width, h);
+    for (let i = begin; i < end; ++i) {
+      const levels = levelsOf(records[i], key);
+      if (!levels) continue;
+      const x = (i - begin) * w;
+      const a = Math.max(0, Math.min(1, Number(levels.activation) || 0));
+      context.fillStyle = colour(a);
+      context.fillRect(x, h - 3 - a * (h - 5), Math.ceil(w), a * (h - 5));
+      if (levels.active) {
+        context.fillStyle = '#1b7f3b';
+        context.fillRect(x, h - 3, Math.ceil(w), 3);
+      } else if (levels.requested > 0) {
+        context.fillStyle = '#c62828';
+        context.fillRect(x, h - 2, Math.ceil(w), 2);
+      }
+    }
+  }
+}
+
+function hover(key) {
+  view.hovered = key;
+  for (const [name, item] of view.behaviours) item.group.classList.toggle('hovered', name === key);
+  if (key) explain(key);
+}
+
+// The `explain` answer for the hovered behaviour at the shown step, asked of the server.
+async function explain(key) {
+  if (!view.current || view.explainPending) return;
+  const ask = `${view.current.step} ${key}`;
+  if (ask === view.explainShown) return;
+  view.explainPending = true;
+  try {
+    const response = await fetch(`explain?step=${view.current.step}&target=${encodeURIComponent(key)}`);
+    document.getElementById('explain').textContent = await response.text();
+    view.explainShown = ask;
+  } catch (error) {
+    document.getElementById('explain').textContent = `explain failed: ${error}`;
+  } finally {
+    view.explainPending = false;
+  }
+  if (view.hovered && view.current && `${view.current.step} ${view.hovered}` !== view.explainShown) {
+    explain(view.hovered);
+  }
+}
+
+function setStatus(text, kind) {
+  const status = document.getElementById('status');
+  status.textContent = text;
+  status.className = `badge ${kind}`;
+}
+
+function startLive() {
+  document.getElementById('live-controls').hidden = false;
+  const control = (action) => fetch(`control/${action}`, {method: 'POST'});
+  document.getElementById('pause').onclick = () => control('pause');
+  document.getElementById('single-step').onclick = () => control('step');
+  document.getElementById('resume').onclick = () => control('resume');
+  const events = new EventSource('events');
+  events.addEventListener('graph', (event) => {
+    // A reload swaps the program in: draw the new graph; the history is kept by name.
+    if (event.data === view.graphText) return;
+    view.graphText = event.data;
+    buildGraph(JSON.parse(event.data));
+    show(view.current);
+  });
+  events.addEventListener('step', (event) => {
+    const record = JSON.parse(event.data);
+    const last = view.records[view.records.length - 1];
+    if (last && record.step <= last.step) return;  // already have it (a reconnect)
+    view.records.push(record);
+    if (view.records.length > HISTORY) view.records.splice(0, view.records.length - HISTORY);
+    show(record);
+  });
+  events.addEventListener('status', (event) => {
+    const status = JSON.parse(event.data);
+    if (status.finished) setStatus('finished', 'finished');
+    else setStatus(status.paused ? 'paused' : 'running', status.paused ? 'paused' : 'running');
+  });
+  events.onerror = () => setStatus('connection lost: reconnecting…', 'lost');
+}
+
+async function startTrace() {
+  document.getElementById('trace-controls').hidden = false;
+  setStatus('trace', 'trace');
+  const [graph, trace] = await Promise.all([fetch('graph').then((r) => r.json()),
+                                            fetch('trace').then((r) => r.text())]);
+  const lines = trace.split('\n').filter((line) => line.trim());
+  view.records = lines.slice(1).map((line) => JSON.parse(line));
+  buildGraph(graph);
+  const scrub = document.getElementById('scrub');
+  scrub.min = 0;
+  scrub.max = Math.max(0, view.records.length - 1);
+  scrub.value = 0;
+  const go = (index) => {
+    index = Math.max(0, Math.min(view.records.length - 1, index));
+    scrub.value = index;
+    show(view.records[index]);
+  };
+  scrub.oninput = () => go(Number(scrub.value));
+  document.getElementById('previous').onclick = () => go(Number(scrub.value) - 1);
+  document.getElementById('next').onclick = () => go(Number(scrub.value) + 1);
+  document.addEventListener('keydown', (event) => {
+    if (event.target === scrub) return;  // the slider moves itself
+    if (event.key === 'ArrowLeft') go(Number(scrub.value) - 1);
+    if (event.key === 'ArrowRight') go(Number(scrub.value) + 1);
+  });
+  if (view.records.length) go(0);
+  setStatus(`trace of ${view.records.length} steps`, 'trace');
+}
+
+async function start() {
+  const info = await fetch('info').then((r) => r.json());
+  view.mode = info.mode;
+  document.getElementById('mode').textContent = info.mode === 'live' ? 'live' : 'recorded';
+  document.body.dataset.mode = info.mode;
+  if (info.mode === 'live') startLive();
+  else await startTrace();
+  document.body.dataset.ready = 'true';
+}
+
+start();
