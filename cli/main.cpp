@@ -26,6 +26,7 @@
 #include "builtins.hpp"
 #include "plot.hpp"
 #include "run_report.hpp"
+#include "watch.hpp"
 #include "serve.hpp"
 #include "view.hpp"
 
@@ -51,6 +52,7 @@ struct Options {
   bool builtin_only = false;
   std::uint64_t step = 0;
   std::string target;
+  bool watch = false;  ///< `run --watch`
   std::string serve;                          ///< `run --serve`: [ADDR:]PORT
   std::string view_serve = "127.0.0.1:8080";  ///< `view --serve`
   std::string output;                         ///< `plot -o`
@@ -227,7 +229,9 @@ extern "C" void on_interrupt(int) {
 
 int run(const Options& options) {
   auto registry = make_registry();
-  auto program = load_or_report(options.file, registry, options);
+  arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
+  auto program = options.watch ? arbiter::cli::load_watched(reloader, options.file, std::cerr)
+                               : load_or_report(options.file, registry, options);
   if (!program) return kExitInvalid;
   const double rate_hz = program->rate_hz;
 
@@ -244,6 +248,8 @@ int run(const Options& options) {
   if (trace_file.is_open()) manager.add_observer(trace);
   arbiter::cli::RunReport report(std::cout, options.quiet);
   manager.add_observer(report);
+  std::optional<arbiter::cli::Watcher> watcher;
+  if (options.watch) watcher.emplace(reloader, manager, std::cout, std::cerr);
   std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
   if (!options.serve.empty()) {
     live = arbiter::cli::LiveView::open(options.serve, std::cout, std::cerr);
@@ -270,6 +276,7 @@ int run(const Options& options) {
       std::this_thread::sleep_until(next);
     }
   }
+  watcher.reset();
   manager.finish();
   if (!options.quiet) {
     const double wall = std::chrono::duration<double>(Clock::now() - started).count();
@@ -409,6 +416,10 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--realtime", options.realtime,
                     "pace the steps at the config's rate_hz instead of running flat out");
   run_cmd->add_flag("--strict", options.strict, "treat config warnings as errors");
+  run_cmd->add_flag("--watch", options.watch,
+                    "reload the config whenever it or a file it includes changes, without "
+                    "stopping the run (a broken edit is reported and the previous config runs "
+                    "on); without --steps, runs until Ctrl-C");
   run_cmd
       ->add_option("--serve", options.serve,
                    "serve the live view (a web page) on [ADDR:]PORT (ADDR defaults to 127.0.0.1, "
@@ -577,7 +588,10 @@ int main(int argc, char** argv) {
     logger->set_level(spdlog::level::from_str(options.log_level));
     spdlog::set_default_logger(logger);
     if (validate_cmd->parsed()) return validate(options);
-    if (run_cmd->parsed()) return run(options);
+    if (run_cmd->parsed()) {
+      if (options.watch && run_cmd->count("--steps") == 0) options.steps = std::uint64_t{1} << 40;
+      return run(options);
+    }
     if (dump_cmd->parsed()) return dump(options);
     if (explain_cmd->parsed()) return explain(options);
     if (view_cmd->parsed()) return view(options);

@@ -18,11 +18,19 @@ std::string inhibitors_of(const Manager& manager, std::uint32_t behaviour) {
 
 }  // namespace
 
+void RunReport::key_by_index(const Program& program) {
+  keys_.clear();
+  for (const auto& behaviour : program.behaviours) {
+    keys_.push_back(program.layers[behaviour.layer].name + "/" + behaviour.name);
+  }
+}
+
 void RunReport::on_start(const Manager& manager) {
   const Program& program = manager.program();
   was_active_.assign(program.behaviours.size(), 0);
   active_steps_.assign(program.behaviours.size(), 0);
   controller_status_.assign(program.controllers.size(), ControllerStatus::kRunning);
+  key_by_index(program);
   if (quiet_) return;
   out_ << fmt::format("running {}: {} layers, {} behaviours, {} state machines\n", program.name,
                       program.layers.size(), program.behaviours.size(), program.controllers.size());
@@ -57,6 +65,33 @@ void RunReport::on_step(const Manager& manager) {
     out_ << fmt::format("step {:>4}  {}: {}\n", manager.steps(), manager.event_source(event),
                         event.text);
   }
+}
+
+void RunReport::on_reload(const Manager& manager) {
+  const Program& program = manager.program();
+  std::map<std::string, std::uint64_t> counted;
+  for (std::size_t b = 0; b < keys_.size(); ++b) counted[keys_[b]] = active_steps_[b];
+  key_by_index(program);
+  active_steps_.assign(program.behaviours.size(), 0);
+  was_active_.assign(program.behaviours.size(), 0);
+  for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
+    const auto found = counted.find(keys_[b]);
+    if (found != counted.end()) {
+      active_steps_[b] = found->second;
+      counted.erase(found);
+    }
+    // The manager carries activity over for what it keeps: a change shows from the next step.
+    was_active_[b] = manager.active(b) ? 1 : 0;
+  }
+  for (const auto& [key, steps] : counted) removed_steps_[key] += steps;
+  controller_status_.clear();
+  for (const auto& controller : program.controllers) {
+    controller_status_.push_back(controller->status());
+  }
+  if (quiet_) return;
+  out_ << fmt::format("step {:>4}  reloaded {}: {} layers, {} behaviours, {} state machines\n",
+                      manager.steps(), program.name, program.layers.size(),
+                      program.behaviours.size(), program.controllers.size());
 }
 
 void RunReport::report_controllers(const Manager& manager) {
@@ -106,6 +141,9 @@ void RunReport::on_finish(const Manager& manager) {
         "  {:<32} {:>6}  (final activation {:.3g})\n",
         program.layers[program.behaviours[b].layer].name + "/" + program.behaviours[b].name,
         active_steps_[b], manager.activation(b));
+  }
+  for (const auto& [key, steps] : removed_steps_) {
+    out_ << fmt::format("  {:<32} {:>6}  (removed by a reload)\n", key, steps);
   }
 }
 

@@ -15,16 +15,21 @@ class RunReport : public Observer {
   RunReport(std::ostream& out, bool quiet) : out_(out), quiet_(quiet) {}
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
+  /// Re-keys what it counts per behaviour and controller by name: indices change.
+  void on_reload(const Manager& manager) override;
   void on_finish(const Manager& manager) override;
 
  private:
   void report_controllers(const Manager& manager);
+  void key_by_index(const Program& program);
   std::ostream& out_;
   bool quiet_;
   std::vector<char> was_active_;
   std::vector<std::uint64_t> active_steps_;
   std::vector<ControllerStatus> controller_status_;
-  std::map<std::string, std::uint64_t> event_counts_;  ///< "source: text" → how often
+  std::vector<std::string> keys_;                       ///< "layer/name" per behaviour index
+  std::map<std::string, std::uint64_t> removed_steps_;  ///< active steps of removed behaviours
+  std::map<std::string, std::uint64_t> event_counts_;   ///< "source: text" → how often
 };
 
 }  // namespace arbiter::cli

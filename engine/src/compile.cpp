@@ -664,7 +664,7 @@ class InstanceInit final : public InitContext {
       claim = {true,
                in_program ? static_cast<std::uint32_t>(&layer_ - program_.layers.data()) : kUnbound,
                owner_};
-      controller.set_owned();
+      controller.set_owned(owner_);
       return &controller;
     }
     auto& error =

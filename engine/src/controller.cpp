@@ -428,4 +428,93 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
   stepping_ = false;
 }
 
+namespace {
+
+bool same_node(const Node& a, const Node& b) {
+  if (a.kind() != b.kind() || a.text() != b.text() || a.quoted() != b.quoted() ||
+      a.items().size() != b.items().size() || a.entries().size() != b.entries().size()) {
+    return false;
+  }
+  for (std::size_t i = 0; i < a.items().size(); ++i) {
+    if (!same_node(a.items()[i], b.items()[i])) return false;
+  }
+  for (std::size_t i = 0; i < a.entries().size(); ++i) {
+    if (a.entries()[i].key != b.entries()[i].key ||
+        !same_node(a.entries()[i].value, b.entries()[i].value)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+bool same_value(const ParamValue& a, const ParamValue& b) {
+  if (a.index() != b.index()) return false;
+  if (const auto* node = std::get_if<Node>(&a)) return same_node(*node, std::get<Node>(b));
+  return std::visit(
+      [&](const auto& value) {
+        using T = std::decay_t<decltype(value)>;
+        if constexpr (std::is_same_v<T, Node>) {
+          return false;  // handled above
+        } else {
+          return value == std::get<T>(b);
+        }
+      },
+      a);
+}
+
+}  // namespace
+
+bool same_params(const std::vector<Param>& a, const std::vector<Param>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].name != b[i].name || !same_value(a[i].value, b[i].value)) return false;
+  }
+  return true;
+}
+
+bool Controller::same_declaration(const Controller& other) const {
+  const auto child_name = [](const Controller& controller, std::uint32_t state) {
+    const Controller* child = controller.child_of(state);
+    return child == nullptr ? std::string() : child->name();
+  };
+  if (capacity_ != other.capacity_ || states_.size() != other.states_.size() ||
+      initial_.size() != other.initial_.size() ||
+      preemptions_.size() != other.preemptions_.size()) {
+    return false;
+  }
+  for (std::uint32_t s = 0; s < states_.size(); ++s) {
+    const auto& mine = states_[s];
+    const auto& theirs = other.states_[s];
+    if (mine.name != theirs.name || mine.cls != theirs.cls ||
+        !same_params(mine.params, theirs.params) || child_name(*this, s) != child_name(other, s)) {
+      return false;
+    }
+  }
+  for (std::size_t i = 0; i < initial_.size(); ++i) {
+    if (initial_[i].state != other.initial_[i].state ||
+        !same_params(initial_[i].params, other.initial_[i].params)) {
+      return false;
+    }
+  }
+  for (std::size_t i = 0; i < preemptions_.size(); ++i) {
+    const auto& mine = preemptions_[i];
+    const auto& theirs = other.preemptions_[i];
+    if (mine.cycle != theirs.cycle || mine.go_to.state != theirs.go_to.state ||
+        !same_params(mine.go_to.params, theirs.go_to.params)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+void Controller::end(const StepContext& context) {
+  if (stepping_ || current_ == kUnbound) return;
+  StateContext state_context(context, nullptr, *this, current_);
+  try {
+    deactivate_current(state_context);
+  } catch (...) {
+    // The controller is being dropped: there is nothing left for its error status to stop.
+  }
+}
+
 }  // namespace arbiter

@@ -4,88 +4,14 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <typeinfo>
 
 namespace arbiter {
-
-Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
-    : program_(std::move(program)), logger_(logger ? std::move(logger) : spdlog::default_logger()) {
-  const std::size_t behaviours = program_.behaviours.size();
-  const std::size_t actuators = program_.actuators.size();
-  const std::size_t slots = program_.slots.size();
-  values_ = std::make_unique<std::byte[]>(std::max<std::size_t>(program_.value_bytes, 1));
-  actuator_written_ = std::make_unique<bool[]>(std::max<std::size_t>(actuators, 1));
-  slot_written_ = std::make_unique<bool[]>(std::max<std::size_t>(slots, 1));
-  requested_.assign(behaviours, 0.0);
-  activation_.assign(behaviours, 0.0);
-  factors_.assign(2 * behaviours, 1.0);
-  instances_.reserve(behaviours);
-  for (const auto& behaviour : program_.behaviours) instances_.push_back(behaviour.instance.get());
-  active_.assign(behaviours, 0);
-  nan_reported_.assign(behaviours, 0);
-  exception_reported_.assign(behaviours + program_.layers.size(), 0);
-  init_fault_handling();
-  mean_values_.assign(program_.max_writers, nullptr);
-  mean_weights_.assign(program_.max_writers, 0.0);
-
-  for (const auto& actuator : program_.actuators) {
-    void* at = values_.get() + actuator.offset;
-    actuator.type->construct(at);
-    if (actuator.default_value) {
-      std::string expected;
-      actuator.type->from_node(*actuator.default_value, at, expected);  // validated at load
-    }
-  }
-  for (std::size_t s = 0; s < slots; ++s) {
-    program_.slot_types[s]->construct(values_.get() + program_.slot_offsets[s]);
-  }
-  data_.values = values_.get();
-  data_.actuator_offset = program_.actuator_offsets.data();
-  data_.actuator_written = actuator_written_.get();
-  data_.slot_offset = program_.slot_offsets.data();
-  data_.slot_type = program_.slot_types.data();
-  data_.slot_written = slot_written_.get();
-  data_.step = 0;
-  data_.period = 1.0 / program_.rate_hz;
-  constexpr std::size_t kEventsPerStep = 64;
-  events_.resize(kEventsPerStep);
-  data_.events = events_.data();
-  data_.event_capacity = events_.size();
-  for (const auto& controller : program_.controllers) controller->set_logger(logger_.get());
-}
-
-Manager::~Manager() {
-  if (!values_) return;  // moved from
-  for (const auto& actuator : program_.actuators) {
-    actuator.type->destroy(values_.get() + actuator.offset);
-  }
-  for (std::size_t s = 0; s < program_.slots.size(); ++s) {
-    program_.slot_types[s]->destroy(values_.get() + program_.slot_offsets[s]);
-  }
-}
-
-const std::string& Manager::event_source(const detail::StepData::Event& event) const {
-  static const std::string kStandalone = "state machines";
-  if (event.source == kUnbound) return kStandalone;
-  if (event.source < program_.behaviours.size()) return program_.behaviours[event.source].name;
-  return program_.layers[event.source - program_.behaviours.size()].name;
-}
-
-void Manager::add_observer(Observer& observer) {
-  observers_.push_back(&observer);
-  observer.on_start(*this);
-}
-
-void Manager::remove_observer(Observer& observer) {
-  observers_.erase(std::remove(observers_.begin(), observers_.end(), &observer), observers_.end());
-}
-
-void Manager::finish() {
-  for (Observer* observer : observers_) observer->on_finish(*this);
-}
 
 namespace {
 
@@ -123,106 +49,6 @@ bool is_finite(const void* value, std::uint8_t components) {
 
 }  // namespace
 
-void Manager::init_fault_handling() {
-  const std::size_t behaviours = program_.behaviours.size();
-  inert_ = std::make_unique<Inert>();
-  faulted_step_.assign(behaviours + program_.layers.size(), 0);
-  disabled_.assign(behaviours + program_.layers.size(), 0);
-  suspended_.reserve(behaviours);
-  non_finite_reported_.assign(program_.slots.size(), 0);
-  finite_components_.resize(program_.slots.size());
-  for (std::size_t s = 0; s < program_.slots.size(); ++s) {
-    finite_components_[s] = finite_components(*program_.slot_types[s]);
-  }
-}
-
-// Called from ARBITER_GUARDED's handlers: reports the exception once and applies the thrower's
-// on_exception policy. Every policy drops the thrower's writes of this step (resolve_actuators
-// skips a writer whose faulted_step_ is this step).
-void Manager::report_exception(std::uint32_t index, const char* callback, const char* what) {
-  const bool is_behaviour = index < program_.behaviours.size();
-  const FaultPolicy policy =
-      is_behaviour ? program_.behaviours[index].on_exception : program_.on_exception;
-  faulted_step_[index] = data_.step;
-  if (is_behaviour && instances_[index] != inert_.get()) {
-    // A throw from update() leaves nothing to ask for a level: the behaviour sits out the
-    // rest of the step (and, when disabled, the rest of the run).
-    if (policy == FaultPolicy::kDisable) {
-      instances_[index] = inert_.get();
-    } else if (std::string_view(callback) == "update") {
-      instances_[index] = inert_.get();
-      suspended_.push_back(index);
-    }
-  }
-  if (policy == FaultPolicy::kDisable) disabled_[index] = 1;
-  const char* outcome = "it counts as inactive in each step where it throws (on_exception: "
-                        "inactive; reported once)";
-  if (policy == FaultPolicy::kDisable) {
-    outcome = "it is disabled for the rest of the run (on_exception: disable)";
-  } else if (policy == FaultPolicy::kStop) {
-    outcome = "the manager stops after this step (on_exception: stop)";
-  }
-  std::string message;
-  if (is_behaviour) {
-    const auto& behaviour = program_.behaviours[index];
-    message = fmt::format("{}:{}:{}: behaviour '{}' ({}) threw from {}() in step {}: {}",
-                          behaviour.location.file, behaviour.location.line,
-                          behaviour.location.column, behaviour.name, behaviour.cls->name,
-                          callback, data_.step, what);
-  } else {
-    const auto& layer = program_.layers[index - program_.behaviours.size()];
-    message = fmt::format("{}:{}:{}: interface of layer '{}' ({}) threw from {}() in step {}: {}",
-                          layer.location.file, layer.location.line, layer.location.column,
-                          layer.name, layer.interface_class->name, callback, data_.step, what);
-  }
-  if (policy == FaultPolicy::kStop && !stopping_) {
-    stopping_ = true;
-    stop_reason_ = message;
-  }
-  if (exception_reported_[index] != 0) return;
-  exception_reported_[index] = 1;
-  logger_->error("{}; {}", message, outcome);
-}
-
-// End of a step: behaviours that sat out this step come back; a stop takes effect.
-void Manager::finish_faults() {
-  for (const std::uint32_t b : suspended_) {
-    if (disabled_[b] == 0) instances_[b] = program_.behaviours[b].instance.get();
-  }
-  suspended_.clear();
-  if (program_.on_exception == FaultPolicy::kStop && !stopping_) {
-    // A state's exception stops its controller with status error (DESIGN 3.5); under
-    // `on_exception: stop` it stops the manager too.
-    for (const auto& controller : program_.controllers) {
-      if (controller->status() != ControllerStatus::kError) continue;
-      stopping_ = true;
-      stop_reason_ = fmt::format("state machine '{}' stopped with an error: {}",
-                                 controller->name(), controller->error());
-      logger_->error("{}; the manager stops after this step (on_exception: stop)", stop_reason_);
-      break;
-    }
-  }
-  if (stopping_) stopped_ = true;
-}
-
-void Manager::report_non_finite_write(std::uint32_t slot) {
-  if (non_finite_reported_[slot] != 0) return;
-  non_finite_reported_[slot] = 1;
-  const WriterSlot& writer = program_.slots[slot];
-  const CompiledActuator& actuator = program_.actuators[writer.actuator];
-  const SourceLocation* where = &program_.layers[actuator.layer].location;
-  std::string who = fmt::format("the interface of layer '{}'", program_.layers[actuator.layer].name);
-  if (writer.owner != kUnbound) {
-    where = &program_.behaviours[writer.owner].location;
-    who = fmt::format("behaviour '{}' ({})", program_.behaviours[writer.owner].name,
-                      program_.behaviours[writer.owner].cls->name);
-  }
-  logger_->warn(
-      "{}:{}:{}: {} wrote a non-finite value (NaN or infinity) to actuator '{}' in step {}; "
-      "such writes are ignored (reported once)",
-      where->file, where->line, where->column, who, actuator.name, data_.step);
-}
-
 #if defined(__GNUC__)
 #define ARBITER_NOINLINE __attribute__((noinline))
 #else
@@ -253,7 +79,401 @@ void Manager::report_non_finite_write(std::uint32_t slot) {
     return false;                                                     \
   }()
 
+// A program with every buffer the step needs sized for it: what the constructor starts with,
+// and what stage() prepares for a swap. After the swap it holds what was replaced.
+struct Manager::Staged {
+  Program program;
+  CarryPlan plan;
+  std::unique_ptr<std::byte[]> values;
+  std::unique_ptr<bool[]> actuator_written;
+  std::unique_ptr<bool[]> slot_written;
+  std::vector<double> requested;
+  std::vector<double> activation;
+  std::vector<double> factors;
+  std::vector<Behaviour*> instances;
+  std::vector<char> active;
+  std::vector<char> nan_reported;
+  std::vector<char> exception_reported;
+  std::vector<std::uint64_t> faulted_step;
+  std::vector<char> disabled;
+  std::vector<std::uint32_t> suspended;
+  std::vector<std::uint8_t> finite_components;
+  std::vector<char> non_finite_reported;
+  std::vector<const void*> mean_values;
+  std::vector<double> mean_weights;
+  // Scratch for the swap: which running behaviours, layers and controllers go on in the new
+  // program (kept, or taken over by carry_over()), and which new instances took over.
+  std::vector<char> behaviour_continues;
+  std::vector<char> interface_continues;
+  std::vector<char> controller_continues;
+  std::vector<char> took_over;
+
+  Staged() = default;
+  Staged(Program p, CarryPlan c) : program(std::move(p)), plan(std::move(c)) {}
+  Staged(const Staged&) = delete;
+  Staged& operator=(const Staged&) = delete;
+  ~Staged() {
+    if (!values) return;
+    for (const auto& actuator : program.actuators) {
+      actuator.type->destroy(values.get() + actuator.offset);
+    }
+    for (std::size_t s = 0; s < program.slots.size(); ++s) {
+      program.slot_types[s]->destroy(values.get() + program.slot_offsets[s]);
+    }
+  }
+};
+
+struct Manager::Reloading {
+  std::mutex mutex;  // step() only ever try_locks it
+  std::atomic<bool> has_pending{false};
+  std::unique_ptr<Staged> pending;
+  std::unique_ptr<Staged> retired;
+  std::atomic<std::uint64_t> reloads{0};
+};
+
+Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
+    : reloading_(std::make_unique<Reloading>()),
+      logger_(logger ? std::move(logger) : spdlog::default_logger()) {
+  inert_ = std::make_unique<Inert>();
+  constexpr std::size_t kEventsPerStep = 64;
+  events_.resize(kEventsPerStep);
+  data_.events = events_.data();
+  data_.event_capacity = events_.size();
+  data_.step = 0;
+  Staged first(std::move(program), CarryPlan{});
+  prepare(first);
+  swap_buffers(first);
+}
+
+Manager::~Manager() = default;
+
+void Manager::prepare(Staged& staged) const {
+  const Program& program = staged.program;
+  const std::size_t behaviours = program.behaviours.size();
+  const std::size_t actuators = program.actuators.size();
+  const std::size_t slots = program.slots.size();
+  staged.values = std::make_unique<std::byte[]>(std::max<std::size_t>(program.value_bytes, 1));
+  staged.actuator_written = std::make_unique<bool[]>(std::max<std::size_t>(actuators, 1));
+  staged.slot_written = std::make_unique<bool[]>(std::max<std::size_t>(slots, 1));
+  staged.requested.assign(behaviours, 0.0);
+  staged.activation.assign(behaviours, 0.0);
+  staged.factors.assign(2 * behaviours, 1.0);
+  staged.instances.reserve(behaviours);
+  for (const auto& behaviour : program.behaviours) {
+    staged.instances.push_back(behaviour.instance.get());
+  }
+  staged.active.assign(behaviours, 0);
+  staged.nan_reported.assign(behaviours, 0);
+  staged.exception_reported.assign(behaviours + program.layers.size(), 0);
+  staged.faulted_step.assign(behaviours + program.layers.size(), 0);
+  staged.disabled.assign(behaviours + program.layers.size(), 0);
+  staged.suspended.reserve(behaviours);
+  staged.non_finite_reported.assign(slots, 0);
+  staged.finite_components.resize(slots);
+  for (std::size_t s = 0; s < slots; ++s) {
+    staged.finite_components[s] = finite_components(*program.slot_types[s]);
+  }
+  staged.mean_values.assign(program.max_writers, nullptr);
+  staged.mean_weights.assign(program.max_writers, 0.0);
+  for (const auto& actuator : program.actuators) {
+    void* at = staged.values.get() + actuator.offset;
+    actuator.type->construct(at);
+    if (actuator.default_value) {
+      std::string expected;
+      actuator.type->from_node(*actuator.default_value, at, expected);  // validated at load
+    }
+  }
+  for (std::size_t s = 0; s < slots; ++s) {
+    program.slot_types[s]->construct(staged.values.get() + program.slot_offsets[s]);
+  }
+  for (const auto& controller : program.controllers) controller->set_logger(logger_.get());
+  staged.behaviour_continues.assign(program_.behaviours.size(), 0);
+  staged.interface_continues.assign(program_.layers.size(), 0);
+  staged.controller_continues.assign(program_.controllers.size(), 0);
+  staged.took_over.assign(behaviours + program.layers.size(), 0);
+}
+
+// Exchanges the running program and its buffers with `staged`'s; allocates nothing.
+void Manager::swap_buffers(Staged& staged) noexcept {
+  std::swap(program_, staged.program);
+  std::swap(values_, staged.values);
+  std::swap(actuator_written_, staged.actuator_written);
+  std::swap(slot_written_, staged.slot_written);
+  requested_.swap(staged.requested);
+  activation_.swap(staged.activation);
+  factors_.swap(staged.factors);
+  instances_.swap(staged.instances);
+  active_.swap(staged.active);
+  nan_reported_.swap(staged.nan_reported);
+  exception_reported_.swap(staged.exception_reported);
+  faulted_step_.swap(staged.faulted_step);
+  disabled_.swap(staged.disabled);
+  suspended_.swap(staged.suspended);
+  finite_components_.swap(staged.finite_components);
+  non_finite_reported_.swap(staged.non_finite_reported);
+  mean_values_.swap(staged.mean_values);
+  mean_weights_.swap(staged.mean_weights);
+  data_.values = values_.get();
+  data_.actuator_offset = program_.actuator_offsets.data();
+  data_.actuator_written = actuator_written_.get();
+  data_.slot_offset = program_.slot_offsets.data();
+  data_.slot_type = program_.slot_types.data();
+  data_.slot_written = slot_written_.get();
+  data_.period = 1.0 / program_.rate_hz;
+}
+
+void Manager::stage(Program program, CarryPlan plan) {
+  auto staged = std::make_unique<Staged>(std::move(program), std::move(plan));
+  prepare(*staged);
+  std::unique_ptr<Staged> dropped;
+  std::unique_ptr<Staged> retired;
+  {
+    std::lock_guard<std::mutex> lock(reloading_->mutex);
+    dropped = std::move(reloading_->pending);
+    retired = std::move(reloading_->retired);
+    reloading_->pending = std::move(staged);
+    reloading_->has_pending.store(true, std::memory_order_release);
+  }
+  // Destroyed here, outside the lock and off the step path.
+}
+
+bool Manager::withdraw() {
+  std::unique_ptr<Staged> dropped;
+  std::unique_ptr<Staged> retired;
+  {
+    std::lock_guard<std::mutex> lock(reloading_->mutex);
+    dropped = std::move(reloading_->pending);
+    retired = std::move(reloading_->retired);
+    reloading_->has_pending.store(false, std::memory_order_relaxed);
+  }
+  return dropped != nullptr;
+}
+
+std::uint64_t Manager::reloads() const {
+  return reloading_->reloads.load(std::memory_order_relaxed);
+}
+
+// The swap, at the start of a step: the running program's parts that do not go on get their
+// final call while its buffers are still in place; then everything is exchanged and what goes
+// on is carried over. Every buffer was sized by prepare(): nothing here allocates.
+void Manager::apply(Staged& staged) {
+  const CarryPlan& plan = staged.plan;
+  Program& next = staged.program;
+  for (std::uint32_t b = 0; b < next.behaviours.size(); ++b) {
+    const std::uint32_t from = plan.behaviour_from[b];
+    if (from == kUnbound) continue;
+    if (plan.behaviour_kept[b] != 0) {
+      staged.behaviour_continues[from] = 1;
+      continue;
+    }
+    Behaviour& previous = *program_.behaviours[from].instance;
+    bool took = false;
+    ARBITER_GUARDED(from, "carry_over", took = next.behaviours[b].instance->carry_over(previous));
+    staged.took_over[b] = took ? 1 : 0;
+    staged.behaviour_continues[from] = took ? 1 : 0;
+  }
+  const auto behaviours = static_cast<std::uint32_t>(next.behaviours.size());
+  for (std::uint32_t l = 0; l < next.layers.size(); ++l) {
+    const std::uint32_t from = plan.interface_from[l];
+    if (from == kUnbound) continue;
+    if (plan.interface_kept[l] != 0) {
+      staged.interface_continues[from] = 1;
+      continue;
+    }
+    Interface& previous = *program_.layers[from].interface;
+    bool took = false;
+    ARBITER_GUARDED(program_.behaviours.size() + from, "carry_over",
+                    took = next.layers[l].interface->carry_over(previous));
+    staged.took_over[behaviours + l] = took ? 1 : 0;
+    staged.interface_continues[from] = took ? 1 : 0;
+  }
+  for (const auto from : plan.controller_kept) {
+    if (from != kUnbound) staged.controller_continues[from] = 1;
+  }
+  end_replaced(staged);
+
+  swap_buffers(staged);
+  // From here on `staged` holds the replaced program and its buffers.
+  carry_values(staged);
+  for (std::uint32_t b = 0; b < program_.behaviours.size(); ++b) {
+    const std::uint32_t from = plan.behaviour_from[b];
+    if (from == kUnbound) continue;
+    if (plan.behaviour_kept[b] != 0) {
+      std::swap(program_.behaviours[b].instance, staged.program.behaviours[from].instance);
+      instances_[b] = program_.behaviours[b].instance.get();
+    } else if (staged.took_over[b] == 0) {
+      continue;
+    }
+    active_[b] = staged.active[from];
+    requested_[b] = staged.requested[from];
+    activation_[b] = staged.activation[from];
+    nan_reported_[b] = staged.nan_reported[from];
+  }
+  for (std::uint32_t l = 0; l < program_.layers.size(); ++l) {
+    const std::uint32_t from = plan.interface_from[l];
+    if (from != kUnbound && plan.interface_kept[l] != 0) {
+      std::swap(program_.layers[l].interface, staged.program.layers[from].interface);
+    }
+  }
+  for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
+    const std::uint32_t from = plan.controller_kept[c];
+    if (from != kUnbound) std::swap(program_.controllers[c], staged.program.controllers[from]);
+  }
+}
+
+// Final calls for what the swap drops: inhibited() for behaviours, deactivation of the current
+// state of controllers, against the running program's buffers.
+void Manager::end_replaced(Staged& staged) {
+  for (std::uint32_t b = 0; b < program_.behaviours.size(); ++b) {
+    if (staged.behaviour_continues[b] != 0 || disabled_[b] != 0) continue;
+    const InhibitedContext context(data_, b, active_[b] != 0);
+    ARBITER_GUARDED(b, "inhibited", program_.behaviours[b].instance->inhibited(context));
+  }
+  const StepContext context(data_, kUnbound);
+  for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
+    if (staged.controller_continues[c] == 0) program_.controllers[c]->end(context);
+  }
+}
+
+// Actuators that go on keep their value and written flag (DESIGN 3.3: values persist).
+void Manager::carry_values(const Staged& staged) {
+  for (std::uint32_t a = 0; a < program_.actuators.size(); ++a) {
+    const std::uint32_t from = staged.plan.actuator_from[a];
+    if (from == kUnbound) continue;
+    program_.actuators[a].type->assign(values_.get() + program_.actuators[a].offset,
+                                       staged.values.get() + staged.program.actuators[from].offset);
+    actuator_written_[a] = staged.actuator_written[from];
+  }
+}
+
+const std::string& Manager::event_source(const detail::StepData::Event& event) const {
+  static const std::string kStandalone = "state machines";
+  if (event.source == kUnbound) return kStandalone;
+  if (event.source < program_.behaviours.size()) return program_.behaviours[event.source].name;
+  return program_.layers[event.source - program_.behaviours.size()].name;
+}
+
+void Manager::add_observer(Observer& observer) {
+  observers_.push_back(&observer);
+  observer.on_start(*this);
+}
+
+void Manager::remove_observer(Observer& observer) {
+  observers_.erase(std::remove(observers_.begin(), observers_.end(), &observer), observers_.end());
+}
+
+void Manager::finish() {
+  for (Observer* observer : observers_) observer->on_finish(*this);
+}
+
+// Called from ARBITER_GUARDED's handlers: reports the exception once and applies the thrower's
+// on_exception policy. Every policy drops the thrower's writes of this step (resolve_actuators
+// skips a writer whose faulted_step_ is this step).
+void Manager::report_exception(std::uint32_t index, const char* callback, const char* what) {
+  const bool is_behaviour = index < program_.behaviours.size();
+  const FaultPolicy policy =
+      is_behaviour ? program_.behaviours[index].on_exception : program_.on_exception;
+  faulted_step_[index] = data_.step;
+  if (is_behaviour && instances_[index] != inert_.get()) {
+    // A throw from update() leaves nothing to ask for a level: the behaviour sits out the
+    // rest of the step (and, when disabled, the rest of the run).
+    if (policy == FaultPolicy::kDisable) {
+      instances_[index] = inert_.get();
+    } else if (std::string_view(callback) == "update") {
+      instances_[index] = inert_.get();
+      suspended_.push_back(index);
+    }
+  }
+  if (policy == FaultPolicy::kDisable) disabled_[index] = 1;
+  const char* outcome =
+      "it counts as inactive in each step where it throws (on_exception: "
+      "inactive; reported once)";
+  if (policy == FaultPolicy::kDisable) {
+    outcome = "it is disabled for the rest of the run (on_exception: disable)";
+  } else if (policy == FaultPolicy::kStop) {
+    outcome = "the manager stops after this step (on_exception: stop)";
+  }
+  std::string message;
+  if (is_behaviour) {
+    const auto& behaviour = program_.behaviours[index];
+    message =
+        fmt::format("{}:{}:{}: behaviour '{}' ({}) threw from {}() in step {}: {}",
+                    behaviour.location.file, behaviour.location.line, behaviour.location.column,
+                    behaviour.name, behaviour.cls->name, callback, data_.step, what);
+  } else {
+    const auto& layer = program_.layers[index - program_.behaviours.size()];
+    message = fmt::format("{}:{}:{}: interface of layer '{}' ({}) threw from {}() in step {}: {}",
+                          layer.location.file, layer.location.line, layer.location.column,
+                          layer.name, layer.interface_class->name, callback, data_.step, what);
+  }
+  if (policy == FaultPolicy::kStop && !stopping_) {
+    stopping_ = true;
+    stop_reason_ = message;
+  }
+  if (exception_reported_[index] != 0) return;
+  exception_reported_[index] = 1;
+  logger_->error("{}; {}", message, outcome);
+}
+
+// End of a step: behaviours that sat out this step come back; a stop takes effect.
+void Manager::finish_faults() {
+  for (const std::uint32_t b : suspended_) {
+    if (disabled_[b] == 0) instances_[b] = program_.behaviours[b].instance.get();
+  }
+  suspended_.clear();
+  if (program_.on_exception == FaultPolicy::kStop && !stopping_) {
+    // A state's exception stops its controller with status error (DESIGN 3.5); under
+    // `on_exception: stop` it stops the manager too.
+    for (const auto& controller : program_.controllers) {
+      if (controller->status() != ControllerStatus::kError) continue;
+      stopping_ = true;
+      stop_reason_ = fmt::format("state machine '{}' stopped with an error: {}", controller->name(),
+                                 controller->error());
+      logger_->error("{}; the manager stops after this step (on_exception: stop)", stop_reason_);
+      break;
+    }
+  }
+  if (stopping_) stopped_ = true;
+}
+
+void Manager::report_non_finite_write(std::uint32_t slot) {
+  if (non_finite_reported_[slot] != 0) return;
+  non_finite_reported_[slot] = 1;
+  const WriterSlot& writer = program_.slots[slot];
+  const CompiledActuator& actuator = program_.actuators[writer.actuator];
+  const SourceLocation* where = &program_.layers[actuator.layer].location;
+  std::string who =
+      fmt::format("the interface of layer '{}'", program_.layers[actuator.layer].name);
+  if (writer.owner != kUnbound) {
+    where = &program_.behaviours[writer.owner].location;
+    who = fmt::format("behaviour '{}' ({})", program_.behaviours[writer.owner].name,
+                      program_.behaviours[writer.owner].cls->name);
+  }
+  logger_->warn(
+      "{}:{}:{}: {} wrote a non-finite value (NaN or infinity) to actuator '{}' in step {}; "
+      "such writes are ignored (reported once)",
+      where->file, where->line, where->column, who, actuator.name, data_.step);
+}
+
 void Manager::step() {
+  Reloading& reloading = *reloading_;
+  if (reloading.has_pending.load(std::memory_order_acquire) && reloading.mutex.try_lock()) {
+    // A swap the staging thread holds the lock for waits for the next step.
+    std::unique_ptr<Staged> staged = std::move(reloading.pending);
+    reloading.has_pending.store(false, std::memory_order_relaxed);
+    const bool swapped = staged != nullptr;
+    if (swapped) {
+      apply(*staged);
+      // stage() and withdraw() empty `retired` before a program can be pending, so nothing is
+      // destroyed here: the replaced program waits for them.
+      reloading.retired = std::move(staged);
+      reloading.reloads.fetch_add(1, std::memory_order_relaxed);
+    }
+    reloading.mutex.unlock();
+    if (swapped) {
+      for (Observer* observer : observers_) observer->on_reload(*this);
+    }
+  }
   if (stopped_) return;
   ++data_.step;
   data_.event_count = 0;
@@ -381,7 +601,10 @@ double Manager::non_finite_level(std::uint32_t b, double level) {
       "{}:{}:{}: behaviour '{}' requested a{} activation level; it counts as {} (reported "
       "once)",
       where.file, where.line, where.column, program_.behaviours[b].name,
-      std::isnan(level) ? " NaN" : level > 0 ? "n infinite" : " negative infinite", clamped);
+      std::isnan(level) ? " NaN"
+      : level > 0       ? "n infinite"
+                        : " negative infinite",
+      clamped);
   return clamped;
 }
 

@@ -118,6 +118,18 @@ void TraceWriter::on_step(const Manager& manager) {
   out_ << line_;
 }
 
+std::string reload_header(const Manager& manager) {
+  std::string out = trace_header(manager.program());
+  constexpr std::string_view kVersion = R"({"arbiter_trace": 1)";
+  out.insert(kVersion.size(), fmt::format(R"(, "reload": {}, "after_step": {})", manager.reloads(),
+                                          manager.steps()));
+  return out;
+}
+
+void TraceWriter::on_reload(const Manager& manager) {
+  out_ << reload_header(manager) << '\n';
+}
+
 void TraceWriter::on_finish(const Manager&) {
   out_.flush();
 }

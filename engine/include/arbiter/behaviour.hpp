@@ -176,6 +176,17 @@ class Behaviour {
   virtual double activation(const StepContext& ctx) = 0;
   virtual void execute(ExecuteContext& /*ctx*/) {}
   virtual void inhibited(const InhibitedContext& /*ctx*/) {}
+
+  /// Hot reload (docs/hot_reload.md). A behaviour whose layer, name, class, params and port
+  /// handles are unchanged simply keeps its instance. When its params or handles changed, a new
+  /// instance is initialised with the new config (init() as usual, off the step path), and at
+  /// the swap, inside step(), it is offered the instance it replaces: `previous` has this
+  /// class. Return true after taking over its run-time state (counters, memories, ...; not
+  /// handles or params: those are this instance's own); the behaviour then also keeps its
+  /// activation history. Return false (the default) to start afresh: `previous` gets a final
+  /// inhibited() call and the new instance counts as inactive before its first step. Runs on
+  /// the stepping thread, so it must not allocate, block or throw.
+  virtual bool carry_over(Behaviour& /*previous*/) { return false; }
 };
 
 /// The class behind an interface layer: moves data between the engine and the outside world.
@@ -187,6 +198,8 @@ class Interface {
   virtual void input(ExecuteContext& /*ctx*/) {}
   /// Output pass: reads this layer's sensors (its input ports).
   virtual void output(const StepContext& /*ctx*/) {}
+  /// Hot reload: as Behaviour::carry_over, for an interface whose params or handles changed.
+  virtual bool carry_over(Interface& /*previous*/) { return false; }
 };
 
 }  // namespace arbiter

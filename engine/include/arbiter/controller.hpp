@@ -28,6 +28,9 @@ struct CompiledState {
   std::uint32_t child = kUnbound;  ///< index of the controller this state owns
 };
 
+/// Whether two param lists hold the same names and values, wherever they were written.
+bool same_params(const std::vector<Param>& a, const std::vector<Param>& b);
+
 class Controller {
  public:
   struct Event {
@@ -73,6 +76,17 @@ class Controller {
   }
   /// Whether a behaviour or a parent state steps it (else the manager does: standalone).
   bool owned() const { return owned_; }
+  /// The behaviour that claimed it (and so holds a pointer to it), or kUnbound: standalone, or
+  /// the child of a state.
+  std::uint32_t owner_behaviour() const { return owner_behaviour_; }
+
+  /// Whether `other` was declared alike: the same states (names, classes, params, children by
+  /// name), initial queue, pre-emptions and capacity. A hot reload keeps a controller, with its
+  /// current state and queue, only then (docs/hot_reload.md).
+  bool same_declaration(const Controller& other) const;
+  /// For a hot reload that drops this controller: deactivates the current state, if any, as a
+  /// finish would; the controller is not stepped again. Allocates nothing.
+  void end(const StepContext& context);
 
   /// The message of the error that stopped the controller ("" unless status is error).
   const std::string& error() const { return error_; }
@@ -83,7 +97,10 @@ class Controller {
   void add_preemption(std::uint64_t cycle, PlannedState go_to) {
     preemptions_.push_back({cycle, std::move(go_to)});
   }
-  void set_owned() { owned_ = true; }
+  void set_owned(std::uint32_t owner_behaviour = kUnbound) {
+    owned_ = true;
+    owner_behaviour_ = owner_behaviour;
+  }
   /// Creates `capacity` pooled objects of every state; call init on each through `init`.
   template <typename Init>
   void build_pool(Init&& init) {
@@ -151,6 +168,7 @@ class Controller {
   bool terminate_ = false;
   bool stepping_ = false;
   bool owned_ = false;
+  std::uint32_t owner_behaviour_ = kUnbound;
   std::array<Event, kMaxEventsPerStep> events_{};
   std::size_t event_count_ = 0;
   ControllerHooks* hooks_ = nullptr;

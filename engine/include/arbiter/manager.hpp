@@ -33,6 +33,25 @@ class Observer {
   virtual void on_finish(const Manager& /*manager*/) {}
 };
 
+/// How the parts of a program staged for hot reload map onto the running program's, by index
+/// (Reloader builds it; docs/hot_reload.md). kUnbound: nothing carries over, the part starts
+/// afresh.
+struct CarryPlan {
+  /// Per behaviour of the new program: the running behaviour of the same layer, name and class.
+  std::vector<std::uint32_t> behaviour_from;
+  /// Per behaviour: non-zero when it keeps the running instance as it is (declaration and port
+  /// handles unchanged); else a matched behaviour's new instance is offered carry_over().
+  std::vector<char> behaviour_kept;
+  /// Per actuator: the running actuator of the same name and type, whose value it keeps.
+  std::vector<std::uint32_t> actuator_from;
+  /// Per layer: the running layer of the same name and interface class, and whether it keeps
+  /// that interface object (else its new one is offered carry_over()), as for behaviours.
+  std::vector<std::uint32_t> interface_from;
+  std::vector<char> interface_kept;
+  /// Per controller: the running controller it keeps, with its current state and queue.
+  std::vector<std::uint32_t> controller_kept;
+};
+
 class Manager {
  public:
   /// Takes the program; run-time warnings go to `logger` (default: spdlog's default logger).
@@ -61,6 +80,21 @@ class Manager {
   /// Tells the observers that the run is over (e.g. to close a trace).
   void finish();
 
+  /// Hot reload, first half (docs/hot_reload.md); Reloader does all of it for a config file.
+  /// Prepares on the calling thread everything the swap of `program` needs (buffers sized for
+  /// it, the carry-over of `plan`, made against program()) and hands it to step(), which swaps
+  /// it in at its start without allocating, then calls the observers' on_reload(). Replaces a
+  /// staged program not yet swapped in. One thread at a time may stage and withdraw, while
+  /// another steps; step() never waits for it.
+  void stage(Program program, CarryPlan plan);
+  /// Takes back a staged program not swapped in yet (returns true then) and frees what the last
+  /// swap replaced (the old program and its instances). Until the next stage(), program() then
+  /// stays as it is, so the staging thread may read it while another thread steps.
+  bool withdraw();
+  /// How many staged programs step() has swapped in.
+  std::uint64_t reloads() const;
+
+  /// The running program. Another thread may read it only between withdraw() and stage().
   const Program& program() const { return program_; }
   /// Steps completed so far.
   std::uint64_t steps() const { return data_.step; }
@@ -92,13 +126,21 @@ class Manager {
   void execute_behaviours(std::uint32_t begin, std::uint32_t end);
   void resolve_actuators(const CompiledLayer& layer);
   // Faults of behaviour code (docs/robustness.md).
-  void init_fault_handling();
   void report_exception(std::uint32_t behaviour, const char* callback, const char* what);
   void finish_faults();
   double non_finite_level(std::uint32_t behaviour, double level);
   void report_non_finite_write(std::uint32_t slot);
 
+  struct Staged;     // a program and every buffer sized for it
+  struct Reloading;  // the hand-over between stage() and step(); on the heap: Manager moves
+  void prepare(Staged& staged) const;
+  void swap_buffers(Staged& staged) noexcept;
+  void apply(Staged& staged);
+  void end_replaced(Staged& staged);
+  void carry_values(const Staged& staged);
+
   Program program_;
+  std::unique_ptr<Reloading> reloading_;
   std::shared_ptr<spdlog::logger> logger_;
   std::unique_ptr<std::byte[]> values_;
   // bool vectors are bit-packed; the contexts need addressable flags.

@@ -14,6 +14,8 @@ class TraceWriter : public Observer {
   explicit TraceWriter(std::ostream& out) : out_(out) {}
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
+  /// Writes a new header record (reload_header()): the step records after it follow it.
+  void on_reload(const Manager& manager) override;
   void on_finish(const Manager& manager) override;
 
  private:
@@ -23,6 +25,11 @@ class TraceWriter : public Observer {
 
 /// The header line `{"arbiter_trace": 1, ...}` without the newline.
 std::string trace_header(const Program& program);
+/// The header of a program swapped in by a hot reload: trace_header() with `"reload": N` (the
+/// manager's reloads()) and `"after_step": S` (the last step of the program it replaced) after
+/// the version, so that a reader can tell it from the first header and re-key what it keeps
+/// by index. Without the newline.
+std::string reload_header(const Manager& manager);
 /// "activate walk_to_pose", as in the trace.
 std::string event_text(const Controller& controller, const Controller::Event& event);
 /// The record of the manager's last step, without the newline.

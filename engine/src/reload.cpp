@@ -1,0 +1,528 @@
+#include "arbiter/reload.hpp"
+
+#include <fmt/format.h>
+
+#include <map>
+#include <unordered_map>
+
+#include "arbiter/lint.hpp"
+#include "arbiter/plugin.hpp"
+
+namespace arbiter {
+
+namespace {
+
+std::string behaviour_key(const Program& program, std::uint32_t b) {
+  return program.layers[program.behaviours[b].layer].name + "/" + program.behaviours[b].name;
+}
+
+std::string class_name(const ClassInfo* cls) {
+  return cls == nullptr ? std::string("none") : cls->name;
+}
+
+std::string actuator_text(const CompiledActuator& actuator) {
+  return fmt::format("{}{}", actuator.type->name, actuator.aggregate ? ", aggregate" : "");
+}
+
+// A node's value as text, for comparing defaults wherever they were written.
+std::string node_text(const Node& node) {
+  std::string out;
+  if (node.is_scalar()) return node.quoted() ? "\"" + node.text() + "\"" : node.text();
+  if (node.is_sequence()) {
+    out = "[";
+    for (const auto& item : node.items()) out += node_text(item) + ",";
+    return out + "]";
+  }
+  if (node.is_mapping()) {
+    out = "{";
+    for (const auto& entry : node.entries()) out += entry.key + ":" + node_text(entry.value) + ",";
+    return out + "}";
+  }
+  return "null";
+}
+
+std::string default_text(const CompiledActuator& actuator) {
+  return actuator.default_value ? node_text(*actuator.default_value) : std::string();
+}
+
+/// Declared inhibitions by "layer: inhibitor => inhibited" (arrow without its kind) → chaining.
+std::map<std::string, bool> declared_inhibitions(const Program& program) {
+  std::map<std::string, bool> out;
+  for (const auto& declared : program.inhibitions.declared_inhibitions()) {
+    const auto& inhibitor = program.behaviours[declared.inhibitor];
+    const auto& inhibited = program.behaviours[declared.inhibited];
+    out[fmt::format("{}: {} {} {}", program.layers[inhibited.layer].name, inhibitor.name, "{}",
+                    inhibited.name)] = declared.chaining;
+  }
+  return out;
+}
+
+std::string arrow(const std::string& key, bool chaining) {
+  return fmt::format(fmt::runtime(key), chaining ? "=>" : "->");
+}
+
+template <typename Item, typename Key, typename Describe, typename Compare>
+void diff_items(const std::vector<Item>& before, const std::vector<Item>& after,
+                const std::string& kind, Key key, Describe describe, Compare compare,
+                ProgramDiff& out) {
+  std::map<std::string, const Item*> old_items;
+  for (const auto& item : before) old_items.emplace(key(item), &item);
+  std::map<std::string, const Item*> new_items;
+  for (const auto& item : after) new_items.emplace(key(item), &item);
+  for (const auto& [name, item] : old_items) {
+    if (new_items.count(name) == 0) {
+      out.changes.push_back({Change::Kind::kRemoved, kind, name, describe(*item)});
+    }
+  }
+  for (const auto& [name, item] : new_items) {
+    const auto old = old_items.find(name);
+    if (old == old_items.end()) {
+      out.changes.push_back({Change::Kind::kAdded, kind, name, describe(*item)});
+      continue;
+    }
+    std::string what = compare(*old->second, *item);
+    if (!what.empty()) out.changes.push_back({Change::Kind::kChanged, kind, name, what});
+  }
+}
+
+const LayerDecl* find_layer(const Model& model, const std::string& name) {
+  return model.find_layer(name);
+}
+
+const BehaviourDecl* find_behaviour(const Model& model, const std::string& layer,
+                                    const std::string& name) {
+  const LayerDecl* decl = find_layer(model, layer);
+  if (decl == nullptr) return nullptr;
+  for (const auto& behaviour : decl->behaviours) {
+    if (behaviour.name.text == name) return &behaviour;
+  }
+  return nullptr;
+}
+
+bool same_ports(const std::vector<PortBinding>& a, const std::vector<PortBinding>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].port != b[i].port || a[i].target != b[i].target) return false;
+  }
+  return true;
+}
+
+/// Builds the carry-over plan of `after` against the running `before` (docs/hot_reload.md).
+class Planner {
+ public:
+  Planner(const Program& before, const Model& before_model, const Program& after,
+          const Model& after_model)
+      : before_(before), old_model_(before_model), after_(after), new_model_(after_model) {}
+
+  CarryPlan run(ProgramDiff& diff, std::vector<std::string>& restarted) {
+    CarryPlan plan;
+    match_actuators(plan);
+    slots_of(before_, old_slots_);
+    slots_of(after_, new_slots_);
+    match_behaviours(plan, diff);
+    match_interfaces(plan, diff);
+    // A kept behaviour holds pointers to the controllers it claimed, so those must be kept with
+    // it, and a controller is kept only with its owner: demote until both agree.
+    for (bool changed = true; changed;) {
+      match_controllers(plan);
+      changed = demote_owners(plan);
+    }
+    for (std::uint32_t b = 0; b < after_.behaviours.size(); ++b) {
+      if (plan.behaviour_from[b] != kUnbound && plan.behaviour_kept[b] == 0) {
+        restarted.push_back(behaviour_key(after_, b));
+      }
+    }
+    for (std::uint32_t l = 0; l < after_.layers.size(); ++l) {
+      if (plan.interface_from[l] != kUnbound && plan.interface_kept[l] == 0) {
+        restarted.push_back(fmt::format("interface of layer {}", after_.layers[l].name));
+      }
+    }
+    for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
+      if (plan.controller_kept[c] == kUnbound &&
+          before_.find_controller(after_.controllers[c]->name()) != nullptr) {
+        restarted.push_back(fmt::format("state machine {}", after_.controllers[c]->name()));
+      }
+    }
+    return plan;
+  }
+
+ private:
+  void match_actuators(CarryPlan& plan) {
+    std::unordered_map<std::string, std::uint32_t> index;
+    for (std::uint32_t a = 0; a < before_.actuators.size(); ++a) {
+      index.emplace(before_.actuators[a].name, a);
+    }
+    plan.actuator_from.assign(after_.actuators.size(), kUnbound);
+    for (std::uint32_t a = 0; a < after_.actuators.size(); ++a) {
+      const auto found = index.find(after_.actuators[a].name);
+      if (found != index.end() &&
+          before_.actuators[found->second].type == after_.actuators[a].type) {
+        plan.actuator_from[a] = found->second;
+      }
+    }
+    same_index_.assign(before_.actuators.size(), 0);
+    for (std::uint32_t a = 0; a < before_.actuators.size() && a < after_.actuators.size(); ++a) {
+      same_index_[a] = plan.actuator_from[a] == a ? 1 : 0;
+    }
+  }
+
+  // Writer slots by owner: behaviours first, then one list per layer for its interface.
+  void slots_of(const Program& program, std::vector<std::vector<std::uint32_t>>& out) {
+    out.assign(program.behaviours.size() + program.layers.size(), {});
+    for (std::uint32_t s = 0; s < program.slots.size(); ++s) {
+      const WriterSlot& slot = program.slots[s];
+      const std::size_t owner = slot.owner != kUnbound ? slot.owner
+                                                       : program.behaviours.size() +
+                                                             program.actuators[slot.actuator].layer;
+      out[owner].push_back(s);
+    }
+  }
+
+  // Whether the handles an instance resolved in the running program (actuator indices of its
+  // layer's sensors and actuators, and its writer slots) mean the same in the new one.
+  bool same_handles(std::uint32_t old_layer, std::size_t old_owner, std::size_t new_owner) const {
+    const CompiledLayer& layer = before_.layers[old_layer];
+    for (auto a = layer.actuator_begin; a < layer.actuator_end; ++a) {
+      if (same_index_[a] == 0) return false;
+    }
+    for (const auto a : layer.sensors) {
+      if (same_index_[a] == 0) return false;
+    }
+    const auto& mine = old_slots_[old_owner];
+    const auto& theirs = new_slots_[new_owner];
+    if (mine.size() != theirs.size()) return false;
+    for (std::size_t i = 0; i < mine.size(); ++i) {
+      if (mine[i] != theirs[i] ||
+          before_.slots[mine[i]].actuator != after_.slots[theirs[i]].actuator) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  void match_behaviours(CarryPlan& plan, ProgramDiff& diff) {
+    std::unordered_map<std::string, std::uint32_t> index;
+    for (std::uint32_t b = 0; b < before_.behaviours.size(); ++b) {
+      index.emplace(behaviour_key(before_, b), b);
+    }
+    plan.behaviour_from.assign(after_.behaviours.size(), kUnbound);
+    plan.behaviour_kept.assign(after_.behaviours.size(), 0);
+    for (std::uint32_t b = 0; b < after_.behaviours.size(); ++b) {
+      const auto found = index.find(behaviour_key(after_, b));
+      if (found == index.end()) continue;
+      const std::uint32_t from = found->second;
+      const CompiledBehaviour& old = before_.behaviours[from];
+      const CompiledBehaviour& now = after_.behaviours[b];
+      if (old.cls != now.cls) continue;
+      plan.behaviour_from[b] = from;
+      const std::string& layer = after_.layers[now.layer].name;
+      const BehaviourDecl* old_decl = find_behaviour(old_model_, layer, now.name);
+      const BehaviourDecl* new_decl = find_behaviour(new_model_, layer, now.name);
+      const bool same_params = old_decl != nullptr && new_decl != nullptr &&
+                               arbiter::same_params(old_decl->params.items, new_decl->params.items);
+      if (!same_params) {
+        diff.changes.push_back(
+            {Change::Kind::kChanged, "behaviour", behaviour_key(after_, b), "params"});
+      }
+      const bool same_declaration = same_params && same_ports(old_decl->ports, new_decl->ports) &&
+                                    old.on_exception == now.on_exception;
+      plan.behaviour_kept[b] = same_declaration && same_handles(old.layer, from, b) ? 1 : 0;
+    }
+  }
+
+  void match_interfaces(CarryPlan& plan, ProgramDiff& diff) {
+    plan.interface_from.assign(after_.layers.size(), kUnbound);
+    plan.interface_kept.assign(after_.layers.size(), 0);
+    for (std::uint32_t l = 0; l < after_.layers.size(); ++l) {
+      const CompiledLayer& now = after_.layers[l];
+      if (!now.is_interface()) continue;
+      for (std::uint32_t from = 0; from < before_.layers.size(); ++from) {
+        const CompiledLayer& old = before_.layers[from];
+        if (old.name != now.name || old.interface_class != now.interface_class) continue;
+        plan.interface_from[l] = from;
+        const LayerDecl* old_decl = find_layer(old_model_, now.name);
+        const LayerDecl* new_decl = find_layer(new_model_, now.name);
+        const bool same_params =
+            old_decl != nullptr && new_decl != nullptr &&
+            arbiter::same_params(old_decl->params.items, new_decl->params.items);
+        if (!same_params)
+          diff.changes.push_back({Change::Kind::kChanged, "layer", now.name, "params"});
+        plan.interface_kept[l] = same_params && same_ports(old_decl->ports, new_decl->ports) &&
+                                         same_handles(from, before_.behaviours.size() + from,
+                                                      after_.behaviours.size() + l)
+                                     ? 1
+                                     : 0;
+      }
+    }
+  }
+
+  static std::vector<std::uint32_t> parents(const Program& program) {
+    std::vector<std::uint32_t> parent(program.controllers.size(), kUnbound);
+    for (std::uint32_t c = 0; c < program.controllers.size(); ++c) {
+      const Controller& controller = *program.controllers[c];
+      for (std::uint32_t s = 0; s < controller.states().size(); ++s) {
+        const Controller* child = controller.child_of(s);
+        if (child == nullptr) continue;
+        for (std::uint32_t k = 0; k < program.controllers.size(); ++k) {
+          if (program.controllers[k].get() == child) parent[k] = c;
+        }
+      }
+    }
+    return parent;
+  }
+
+  static std::uint32_t root_of(const std::vector<std::uint32_t>& parent, std::uint32_t c) {
+    while (parent[c] != kUnbound) c = parent[c];
+    return c;
+  }
+
+  // A controller is kept with its whole tree (parents hold pointers to their children): when
+  // every controller of the tree was declared alike and the root's owner is kept, or both roots
+  // are standalone.
+  void match_controllers(CarryPlan& plan) {
+    const auto old_parent = parents(before_);
+    const auto new_parent = parents(after_);
+    std::vector<std::uint32_t> from(after_.controllers.size(), kUnbound);
+    for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
+      for (std::uint32_t o = 0; o < before_.controllers.size(); ++o) {
+        if (before_.controllers[o]->name() == after_.controllers[c]->name()) from[c] = o;
+      }
+    }
+    std::vector<char> tree_ok(after_.controllers.size(), 1);
+    for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
+      const bool ok = from[c] != kUnbound &&
+                      after_.controllers[c]->same_declaration(*before_.controllers[from[c]]);
+      if (!ok) tree_ok[root_of(new_parent, c)] = 0;
+    }
+    for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
+      if (new_parent[c] != kUnbound || from[c] == kUnbound) continue;
+      const Controller& now = *after_.controllers[c];
+      const Controller& old = *before_.controllers[from[c]];
+      if (old_parent[from[c]] != kUnbound) tree_ok[c] = 0;
+      const std::uint32_t owner = now.owner_behaviour();
+      if (now.owned() != old.owned()) tree_ok[c] = 0;
+      if (owner == kUnbound) {
+        if (old.owner_behaviour() != kUnbound) tree_ok[c] = 0;
+      } else if (plan.behaviour_kept[owner] == 0 ||
+                 plan.behaviour_from[owner] != old.owner_behaviour()) {
+        tree_ok[c] = 0;
+      }
+    }
+    plan.controller_kept.assign(after_.controllers.size(), kUnbound);
+    for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
+      if (tree_ok[root_of(new_parent, c)] != 0) plan.controller_kept[c] = from[c];
+    }
+  }
+
+  // A kept behaviour whose controllers are not all kept is given a new instance instead.
+  bool demote_owners(CarryPlan& plan) {
+    bool changed = false;
+    std::vector<char> old_kept(before_.controllers.size(), 0);
+    for (const auto from : plan.controller_kept) {
+      if (from != kUnbound) old_kept[from] = 1;
+    }
+    for (std::uint32_t b = 0; b < after_.behaviours.size(); ++b) {
+      if (plan.behaviour_kept[b] == 0) continue;
+      bool keep = true;
+      for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
+        if (after_.controllers[c]->owner_behaviour() == b && plan.controller_kept[c] == kUnbound) {
+          keep = false;
+        }
+      }
+      for (std::uint32_t o = 0; o < before_.controllers.size(); ++o) {
+        if (before_.controllers[o]->owner_behaviour() == plan.behaviour_from[b] &&
+            old_kept[o] == 0) {
+          keep = false;
+        }
+      }
+      if (!keep) {
+        plan.behaviour_kept[b] = 0;
+        changed = true;
+      }
+    }
+    return changed;
+  }
+
+  const Program& before_;
+  const Model& old_model_;
+  const Program& after_;
+  const Model& new_model_;
+  std::vector<char> same_index_;  // per running actuator: the new program has it at that index
+  std::vector<std::vector<std::uint32_t>> old_slots_;
+  std::vector<std::vector<std::uint32_t>> new_slots_;
+};
+
+}  // namespace
+
+ProgramDiff diff(const Program& before, const Program& after) {
+  ProgramDiff out;
+  diff_items(
+      before.layers, after.layers, "layer", [](const CompiledLayer& layer) { return layer.name; },
+      [](const CompiledLayer& layer) {
+        return layer.is_interface() ? fmt::format("interface {}", layer.interface_class->name)
+                                    : std::string();
+      },
+      [](const CompiledLayer& a, const CompiledLayer& b) {
+        std::string what;
+        if (a.interface_class != b.interface_class) {
+          what = fmt::format("interface {} -> {}", class_name(a.interface_class),
+                             class_name(b.interface_class));
+        } else if (a.normalise != b.normalise) {
+          what = fmt::format("normalise {} -> {}", a.normalise, b.normalise);
+        }
+        return what;
+      },
+      out);
+
+  std::vector<std::pair<std::string, const CompiledBehaviour*>> before_behaviours;
+  std::vector<std::pair<std::string, const CompiledBehaviour*>> after_behaviours;
+  for (std::uint32_t b = 0; b < before.behaviours.size(); ++b) {
+    before_behaviours.emplace_back(behaviour_key(before, b), &before.behaviours[b]);
+  }
+  for (std::uint32_t b = 0; b < after.behaviours.size(); ++b) {
+    after_behaviours.emplace_back(behaviour_key(after, b), &after.behaviours[b]);
+  }
+  using Keyed = std::pair<std::string, const CompiledBehaviour*>;
+  diff_items(
+      before_behaviours, after_behaviours, "behaviour",
+      [](const Keyed& item) { return item.first; },
+      [](const Keyed& item) { return item.second->cls->name; },
+      [](const Keyed& a, const Keyed& b) {
+        return a.second->cls == b.second->cls
+                   ? std::string()
+                   : fmt::format("class {} -> {}", a.second->cls->name, b.second->cls->name);
+      },
+      out);
+
+  const auto old_inhibitions = declared_inhibitions(before);
+  const auto new_inhibitions = declared_inhibitions(after);
+  for (const auto& [key, chaining] : old_inhibitions) {
+    const auto found = new_inhibitions.find(key);
+    if (found == new_inhibitions.end()) {
+      out.changes.push_back({Change::Kind::kRemoved, "inhibition", arrow(key, chaining), ""});
+    } else if (found->second != chaining) {
+      out.changes.push_back({Change::Kind::kChanged, "inhibition", arrow(key, found->second),
+                             chaining ? "was chaining" : "was non-chaining"});
+    }
+  }
+  for (const auto& [key, chaining] : new_inhibitions) {
+    if (old_inhibitions.count(key) == 0) {
+      out.changes.push_back({Change::Kind::kAdded, "inhibition", arrow(key, chaining), ""});
+    }
+  }
+
+  diff_items(
+      before.actuators, after.actuators, "actuator",
+      [](const CompiledActuator& actuator) { return actuator.name; },
+      [&](const CompiledActuator& actuator) { return actuator_text(actuator); },
+      [&](const CompiledActuator& a, const CompiledActuator& b) {
+        std::string what;
+        if (a.type != b.type || a.aggregate != b.aggregate) {
+          what = fmt::format("{} -> {}", actuator_text(a), actuator_text(b));
+        } else if (before.layers[a.layer].name != after.layers[b.layer].name) {
+          what = fmt::format("layer {} -> {}", before.layers[a.layer].name,
+                             after.layers[b.layer].name);
+        } else if (default_text(a) != default_text(b)) {
+          what = "default";
+        }
+        return what;
+      },
+      out);
+
+  using Owned = std::unique_ptr<Controller>;
+  diff_items(
+      before.controllers, after.controllers, "controller",
+      [](const Owned& controller) { return controller->name(); },
+      [](const Owned& controller) {
+        return fmt::format("{} state{}", controller->states().size(),
+                           controller->states().size() == 1 ? "" : "s");
+      },
+      [](const Owned& a, const Owned& b) {
+        return a->same_declaration(*b) ? std::string() : std::string("declaration");
+      },
+      out);
+  return out;
+}
+
+std::string format(const ProgramDiff& diff, const std::string& indent) {
+  std::string out;
+  for (const auto& change : diff.changes) {
+    const char sign = change.kind == Change::Kind::kAdded     ? '+'
+                      : change.kind == Change::Kind::kRemoved ? '-'
+                                                              : '~';
+    out += fmt::format("{}{} {} {}", indent, sign, change.item, change.name);
+    if (!change.detail.empty()) {
+      out += change.kind == Change::Kind::kChanged ? ": " : " (";
+      out += change.detail;
+      if (change.kind != Change::Kind::kChanged) out += ")";
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+Reloader::Reloader(Registry& registry, LoadOptions options)
+    : registry_(registry), options_(std::move(options)) {}
+
+Reloader::~Reloader() = default;
+
+// arbiter::load, keeping the model: it tells the next reload whose params changed.
+std::optional<Program> Reloader::load_model(Diagnostics& diagnostics, Model& model) {
+  auto finish = [&]() {
+    if (options_.strict) diagnostics.promote_warnings();
+    diagnostics.sort();
+  };
+  auto document = read_document(path_, diagnostics, options_.limits);
+  if (!document) {
+    finish();
+    return std::nullopt;
+  }
+  load_plugins(*document, options_.plugins, registry_, diagnostics);
+  model = build_model(*document, registry_, diagnostics, options_.limits);
+  if (!model.files.empty()) files_ = model.files;
+  if (diagnostics.has_errors()) {
+    check_inhibition_cycles(model, diagnostics);
+    finish();
+    return std::nullopt;
+  }
+  auto program = compile(model, registry_, diagnostics);
+  if (program) lint(model, *program, diagnostics);
+  finish();
+  if (diagnostics.has_errors()) return std::nullopt;
+  return program;
+}
+
+std::optional<Program> Reloader::load(const std::string& path, Diagnostics& diagnostics) {
+  path_ = path;
+  files_ = {path};
+  Model model;
+  auto program = load_model(diagnostics, model);
+  if (program) running_ = std::move(model);
+  staged_.reset();
+  return program;
+}
+
+ReloadResult Reloader::reload(Manager& manager) {
+  ReloadResult result;
+  // After withdraw() the manager's program stays put until stage(), so it can be read here.
+  const bool taken_back = manager.withdraw();
+  if (staged_ && !taken_back) running_ = std::move(staged_);
+  staged_.reset();
+  Model model;
+  auto program = load_model(result.diagnostics, model);
+  if (!program) return result;
+  const Model no_model;
+  Planner planner(manager.program(), running_ ? *running_ : no_model, *program, model);
+  CarryPlan plan = planner.run(result.diff, result.restarted);
+  ProgramDiff structure = diff(manager.program(), *program);
+  // Structure first, then the params changes the plan found.
+  structure.changes.insert(structure.changes.end(), result.diff.changes.begin(),
+                           result.diff.changes.end());
+  result.diff = std::move(structure);
+  manager.stage(std::move(*program), std::move(plan));
+  staged_ = std::move(model);
+  result.staged = true;
+  return result;
+}
+
+}  // namespace arbiter
