@@ -368,6 +368,8 @@ int main(int argc, char** argv) {
       "Run 'arbiter COMMAND --help' for a command's options and examples.",
       kExitCodes));
   app.require_subcommand(1);
+  // Global options also work after the command: `arbiter run FILE --plugin-path DIR`.
+  app.fallthrough();
   app.set_version_flag("--version", std::string("arbiter ") + "0.1.0");
   Options options;
   app.add_option("--log-level", options.log_level,

@@ -4,6 +4,7 @@
 //   arbiter_plugin_register(r)    fills a fresh registry, merged into the engine's afterwards.
 // A plugin named `soccer` is the file `arbiter_soccer.so` on the plugin path.
 
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -19,23 +20,24 @@
 /// Defines a plugin's entry points; the body registers its classes:
 ///   ARBITER_PLUGIN(registry) { registry.add_behaviour<KickBall>("soccer.KickBall"); }
 /// An exception thrown by the body is reported at the config line that named the plugin.
-#define ARBITER_PLUGIN(registry)                                                       \
-  static void arbiter_plugin_register_classes(::arbiter::Registry& registry);          \
-  ARBITER_PLUGIN_EXPORT int arbiter_plugin_api_version() {                             \
-    return ARBITER_PLUGIN_API_VERSION;                                                 \
-  }                                                                                    \
-  ARBITER_PLUGIN_EXPORT const char* arbiter_plugin_register(::arbiter::Registry* to) { \
-    static thread_local std::string failure;                                           \
-    try {                                                                              \
-      arbiter_plugin_register_classes(*to);                                            \
-      return nullptr;                                                                  \
-    } catch (const std::exception& error) {                                            \
-      failure = error.what();                                                          \
-    } catch (...) {                                                                    \
-      failure = "unknown exception";                                                   \
-    }                                                                                  \
-    return failure.c_str();                                                            \
-  }                                                                                    \
+#define ARBITER_PLUGIN(registry)                                                            \
+  static void arbiter_plugin_register_classes(::arbiter::Registry& registry);               \
+  ARBITER_PLUGIN_EXPORT int arbiter_plugin_api_version() {                                  \
+    return ARBITER_PLUGIN_API_VERSION;                                                      \
+  }                                                                                         \
+  ARBITER_PLUGIN_EXPORT const char* arbiter_plugin_register(::arbiter::Registry* to) {      \
+    /* A plain buffer: a thread_local std::string would keep the library from unloading. */ \
+    static char failure[1024];                                                              \
+    try {                                                                                   \
+      arbiter_plugin_register_classes(*to);                                                 \
+      return nullptr;                                                                       \
+    } catch (const std::exception& error) {                                                 \
+      std::snprintf(failure, sizeof failure, "%s", error.what());                           \
+    } catch (...) {                                                                         \
+      std::snprintf(failure, sizeof failure, "%s", "unknown exception");                    \
+    }                                                                                       \
+    return failure;                                                                         \
+  }                                                                                         \
   static void arbiter_plugin_register_classes(::arbiter::Registry& registry)
 
 namespace arbiter {

@@ -200,9 +200,7 @@ class Registry {
   std::vector<std::string> class_names(ClassKind kind) const;
   std::vector<std::string> value_type_names() const;
   /// Every class, ordered by name, then kind.
-  const std::map<std::pair<std::string, ClassKind>, ClassInfo>& classes() const {
-    return classes_;
-  }
+  const std::map<std::pair<std::string, ClassKind>, ClassInfo>& classes() const { return classes_; }
   const std::vector<std::unique_ptr<ValueType>>& value_types() const { return value_types_; }
 
   /// Sets the origin recorded for classes and value types added from now on.
@@ -226,11 +224,13 @@ class Registry {
   void merge(Registry&& other, const SourceLocation& where, Diagnostics& diagnostics);
 
  private:
+  // Declared first so that it is destroyed last: the classes and value types below hold code
+  // from these libraries.
+  std::vector<std::shared_ptr<void>> libraries_;
+  std::vector<std::string> library_paths_;
   std::map<std::pair<std::string, ClassKind>, ClassInfo> classes_;
   std::vector<std::unique_ptr<ValueType>> value_types_;  // stable addresses for handles
   std::string origin_ = "built-in";
-  std::vector<std::string> library_paths_;
-  std::vector<std::shared_ptr<void>> libraries_;
 };
 
 }  // namespace arbiter
