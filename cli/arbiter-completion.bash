@@ -31,7 +31,7 @@ _arbiter() {
   local cur prev command word i
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
-  local commands="validate run dump explain plugins schema"
+  local commands="validate run dump explain plugins schema view plot"
   local global="--help --version --log-level --plugin-path"
 
   command=""
@@ -55,7 +55,8 @@ _arbiter() {
       return ;;
     --trace) mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$'); return ;;
     --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
-    --steps | --step | --load) return ;;
+    --steps | --step | --load | --serve) return ;;
+    --output | -o) mapfile -t COMPREPLY < <(_arbiter_files '\.svg$'); return ;;
   esac
 
   if [[ -z $command ]]; then
@@ -70,9 +71,11 @@ _arbiter() {
   local options
   case "$command" in
     validate) options="--format --strict --help" ;;
-    run) options="--steps --trace --quiet --realtime --strict --help" ;;
+    run) options="--steps --trace --quiet --realtime --strict --serve --paused --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
+    view) options="--trace --serve --help" ;;
+    plot) options="--output --actuators --help" ;;
     plugins) options="--format --load --builtin --help" ;;
     schema) options="--load --builtin --help" ;;
   esac
@@ -82,6 +85,9 @@ _arbiter() {
   fi
   case "$command" in
     plugins | schema) return ;;
+    plot)
+      mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$')
+      return ;;
     explain)
       if [[ -n $(_arbiter_config_of) ]]; then
         mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names behaviours) $(_arbiter_names machines)" -- "$cur")

@@ -26,9 +26,9 @@
 #include "builtins.hpp"
 #include "plot.hpp"
 #include "run_report.hpp"
-#include "watch.hpp"
 #include "serve.hpp"
 #include "view.hpp"
+#include "watch.hpp"
 
 namespace {
 
@@ -52,11 +52,12 @@ struct Options {
   bool builtin_only = false;
   std::uint64_t step = 0;
   std::string target;
-  bool watch = false;  ///< `run --watch`
+  bool watch = false;                         ///< `run --watch`
   std::string serve;                          ///< `run --serve`: [ADDR:]PORT
   std::string view_serve = "127.0.0.1:8080";  ///< `view --serve`
   std::string output;                         ///< `plot -o`
   bool actuators = false;
+  bool paused = false;  ///< `run --paused`
 };
 
 arbiter::Registry make_registry() {
@@ -252,7 +253,7 @@ int run(const Options& options) {
   if (options.watch) watcher.emplace(reloader, manager, std::cout, std::cerr);
   std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
   if (!options.serve.empty()) {
-    live = arbiter::cli::LiveView::open(options.serve, std::cout, std::cerr);
+    live = arbiter::cli::LiveView::open(options.serve, options.paused, std::cout, std::cerr);
     if (!live) return kExitUsage;
     manager.add_observer(*live);
   }
@@ -429,6 +430,10 @@ int main(int argc, char** argv) {
                    "after the last step until Ctrl-C")
       ->check(check_serve_address, "[ADDR:]PORT")
       ->type_name("[ADDR:]PORT");
+  run_cmd
+      ->add_flag("--paused", options.paused,
+                 "with --serve: wait for the page's Step or Resume before the first step")
+      ->needs("--serve");
   run_cmd->footer(
       std::string("Examples:\n"
                   "  arbiter run configs/paper/walk_and_kick.yaml --steps 20\n"

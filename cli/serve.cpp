@@ -154,7 +154,7 @@ std::string sse_frame(std::string_view event, std::uint64_t id, std::string_view
   return out;
 }
 
-std::unique_ptr<LiveView> LiveView::open(const std::string& text, std::ostream& out,
+std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused, std::ostream& out,
                                          std::ostream& err) {
   std::string error;
   const auto address = ServeAddress::parse(text, error);
@@ -168,7 +168,10 @@ std::unique_ptr<LiveView> LiveView::open(const std::string& text, std::ostream& 
     return nullptr;
   }
   err << exposure_warning(address, "watch, pause and step the run");
-  out << fmt::format("serving the live view at {}\n", live->server_.url()) << std::flush;
+  live->paused_ = paused;
+  out << fmt::format("serving the live view at {}{}\n", live->server_.url(),
+                     paused ? " (paused: press Step or Resume on the page)" : "")
+      << std::flush;
   return live;
 }
 

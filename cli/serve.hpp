@@ -73,8 +73,9 @@ class LiveView : public Observer {
   ~LiveView() override;
 
   /// Serves on `address` (`[ADDR:]PORT`, checked by ServeAddress::parse) and prints the URL to
-  /// `out`, or says to `err` why it cannot (nullptr then).
-  static std::unique_ptr<LiveView> open(const std::string& address, std::ostream& out,
+  /// `out`, or says to `err` why it cannot (nullptr then). With `paused`, the first step waits
+  /// for the page's Step or Resume.
+  static std::unique_ptr<LiveView> open(const std::string& address, bool paused, std::ostream& out,
                                         std::ostream& err);
 
   void on_start(const Manager& manager) override;

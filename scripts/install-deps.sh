@@ -5,7 +5,9 @@ set -euo pipefail
 
 packages=(cmake g++ ninja-build pkg-config libyaml-cpp-dev nlohmann-json3-dev libfmt-dev
           libspdlog-dev catch2 libcli11-dev libbenchmark-dev libvalijson-dev
-          cyclonedds-dev cyclonedds-tools)
+          cyclonedds-dev cyclonedds-tools libcpp-httplib-dev)
+# Arguments: more packages the caller needs (scripts/test.sh passes the tools only tests use).
+packages+=("$@")
 
 # dpkg-query prints nothing for a package it has never heard of, so anything not listed as
 # installed is missing.

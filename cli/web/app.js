@@ -79,7 +79,7 @@ function buildGraph(graph) {
         const g = el('g', {class: 'port sensor', 'data-sensor': `${layer.name}/${sensor.name}`}, column);
         el('rect', {x: x + 12, y, width: BOX_W, height: PORT_H - 4}, g);
         text('text', {x: x + 20, y: y + 13}, sensor.name, g);
-        sensorAt.set(`${layer.name}/${sensor.name}`, {x: x + 12, y: y + (PORT_H - 4) / 2, lastStep: sensor.last_step, from: sensor.layer});
+        sensorAt.set(`${layer.name}/${sensor.name}`, {x: x + 12, y: y + (PORT_H - 4) / 2, lastStep: sensor.last_step, from: sensor.layer, layerIndex: index});
         y += PORT_H;
       }
       y += 6;
@@ -141,14 +141,27 @@ function buildGraph(graph) {
     box.setAttribute('height', y + 8);
     height = Math.max(height, y + 16);
   });
+  // A flow to an earlier (or the same) layer runs back under the columns, each in a lane of its
+  // own, so that it does not cross the graph.
+  let lanes = 0;
   for (const [key, sensor] of sensorAt) {
     const source = actuatorAt.get(key.split('/')[1]);
     if (!source) continue;
-    const bend = Math.max(40, Math.abs(sensor.x - source.x) / 3);
-    const d = `M${source.x},${source.y} C${source.x + bend},${source.y} ${sensor.x - bend},${sensor.y} ${sensor.x},${sensor.y}`;
+    let d;
+    if (source.layerIndex < sensor.layerIndex) {
+      const bend = Math.max(40, Math.abs(sensor.x - source.x) / 3);
+      d = `M${source.x},${source.y} C${source.x + bend},${source.y} ${sensor.x - bend},${sensor.y} ${sensor.x},${sensor.y}`;
+    } else {
+      const lane = lanes++;
+      const below = height + 4 + 7 * lane;
+      const out = source.x + 8 + 3 * lane;
+      const into = Math.max(2, sensor.x - 6 - 3 * lane);
+      d = `M${source.x},${source.y} H${out} V${below} H${into} V${sensor.y} H${sensor.x}`;
+    }
     const path = el('path', {class: `flow${sensor.lastStep ? ' last-step' : ''}`, d, 'data-flow': key}, flows);
     el('title', {}, path).textContent = `${sensor.from} → ${key}${sensor.lastStep ? ' (last step\'s value)' : ''}`;
   }
+  height += 7 * lanes + 8;
   svg.appendChild(edges);
   svg.appendChild(flows);
   svg.setAttribute('width', graph.layers.length * COLUMN + 20);

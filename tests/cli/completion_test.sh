@@ -31,7 +31,7 @@ expect() {
   fi
 }
 
-expect "" -- validate run dump explain plugins schema
+expect "" -- validate run dump explain plugins schema view plot
 expect "ex" -- explain
 expect "--log-level" "warn" "d" -- dump
 expect "--plu" -- --plugin-path
@@ -47,6 +47,10 @@ expect "explain" "configs/paper/goalie_plan.yaml" "go" -- goalie
 expect "run" "configs/paper/walk_and_k" -- configs/paper/walk_and_kick.yaml \
   configs/paper/walk_and_kick.json
 expect "plugins" "-" -- --format --load --builtin --help
+expect "run" "x.yaml" "--se" -- --serve
+expect "view" "x.yaml" "--t" -- --trace
+expect "plot" "--a" -- --actuators
+expect "plot" "x.jsonl" "-o" "docs/walk_and_k" -- docs/walk_and_kick.svg
 
 echo "completion: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

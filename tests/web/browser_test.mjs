@@ -1,0 +1,201 @@
+// The web view in a real browser: headless Chromium driven by playwright-core.
+// Run through tests/web/run.sh (CTest label `browser`), which sets:
+//   ARBITER         the arbiter binary
+//   ARBITER_SOURCE  the source tree (for the configs)
+//   CHROMIUM        the browser (Debian's /usr/bin/chromium)
+//   NODE_MODULES    where `npm ci` put playwright-core
+//   ARBITER_SCREENSHOT (optional) where to save the screenshot of the soccer demo
+import {test, before, after} from 'node:test';
+import assert from 'node:assert/strict';
+import {spawn, execFileSync} from 'node:child_process';
+import {createRequire} from 'node:module';
+import {mkdtempSync, rmSync} from 'node:fs';
+import {tmpdir} from 'node:os';
+import path from 'node:path';
+
+const require = createRequire(path.join(process.env.NODE_MODULES, 'package.json'));
+const {chromium} = require('playwright-core');
+
+const arbiter = process.env.ARBITER;
+const source = process.env.ARBITER_SOURCE;
+const paper = path.join(source, 'configs/paper/walk_and_kick.yaml');
+const soccer = path.join(source, 'configs/soccer/walk_and_kick.yaml');
+const scratch = mkdtempSync(path.join(tmpdir(), 'arbiter-web-'));
+const children = [];
+let browser;
+
+before(async () => {
+  browser = await chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+           '--disable-background-networking', '--disable-component-update', '--disable-sync'],
+  });
+});
+
+after(async () => {
+  if (browser) await browser.close();
+  for (const child of children) child.kill('SIGINT');
+  rmSync(scratch, {recursive: true, force: true});
+});
+
+/// Starts `arbiter ARGS` and resolves with the URL it prints.
+function serve(args) {
+  return new Promise((resolve, reject) => {
+    const child = spawn(arbiter, args, {stdio: ['ignore', 'pipe', 'pipe']});
+    children.push(child);
+    let out = '';
+    let err = '';
+    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 15000);
+    child.stdout.on('data', (data) => {
+      out += data;
+      const found = out.match(/http:\/\/127\.0\.0\.1:\d+\//);
+      if (found) {
+        clearTimeout(timer);
+        resolve({url: found[0], child});
+      }
+    });
+    child.stderr.on('data', (data) => { err += data; });
+    child.on('exit', (code) => reject(new Error(`arbiter exited with ${code}:\n${out}${err}`)));
+  });
+}
+
+async function open(url) {
+  const page = await browser.newPage({viewport: {width: 1400, height: 900}});
+  page.setDefaultTimeout(10000);
+  await page.goto(url);
+  await page.waitForSelector('body[data-ready="true"]');
+  await page.waitForSelector('.behaviour');
+  return page;
+}
+
+const stepShown = (page) => page.$eval('#step', (node) => Number(node.textContent));
+const waitForStep = (page, step) =>
+  page.waitForFunction((n) => Number(document.querySelector('#step').textContent) === n, step);
+const behaviour = (page, name) => page.locator(`.behaviour[data-name="control/${name}"]`);
+
+test('the live page shows every behaviour and inhibition of the config', async () => {
+  const {url} = await serve(['run', paper, '--serve', '0', '--paused', '--steps', '1000', '-q']);
+  const page = await open(url);
+  assert.equal(await page.locator('.behaviour').count(), 4);
+  assert.equal(await page.locator('#graph .edge').count(), 4);
+  assert.equal(await page.locator('#graph .edge[data-kind="chaining"]').count(), 2);
+  assert.equal(await page.locator('#graph .edge[data-kind="non-chaining"]').count(), 1);
+  const implicit = page.locator('#graph .edge[data-kind="implicit"]');
+  assert.equal(await implicit.count(), 1);
+  assert.equal(await implicit.getAttribute('data-from'), 'kick_ball');
+  assert.equal(await implicit.getAttribute('data-to'), 'search_for_ball');
+  assert.equal(await page.locator('.timeline').count(), 4);
+  await page.close();
+});
+
+test('colours follow the steps; pause, single step and resume drive the engine', async () => {
+  const {url} = await serve(['run', paper, '--serve', '0', '--paused', '--steps', '100000', '-q']);
+  const page = await open(url);
+  const search = behaviour(page, 'search_for_ball');
+  const head = behaviour(page, 'head_control');
+  // Started paused: nothing has run, and nothing runs until the page says so.
+  await page.waitForTimeout(500);
+  assert.equal(await stepShown(page), 0);
+
+  await page.click('#single-step');
+  await waitForStep(page, 1);
+  // Step 1: search_for_ball requests 1 and is not inhibited; it inhibits head_control fully.
+  assert.equal(await search.getAttribute('data-activation'), '1');
+  assert.equal(await search.getAttribute('data-active'), 'true');
+  assert.equal(await head.getAttribute('data-active'), 'false');
+  const fullFill = await search.locator('rect').getAttribute('fill');
+  const headFill = await head.locator('rect').getAttribute('fill');
+  assert.notEqual(fullFill, headFill);
+
+  for (let step = 2; step <= 5; ++step) {
+    await page.click('#single-step');
+    await waitForStep(page, step);
+  }
+  // Step 5: go_behind_ball at 0.3 leaves search_for_ball 0.5 × 0.7 = 0.35, head_control 0.65.
+  assert.equal(Number(await search.getAttribute('data-activation')).toFixed(2), '0.35');
+  assert.equal(Number(await head.getAttribute('data-activation')).toFixed(2), '0.65');
+  assert.notEqual(await search.locator('rect').getAttribute('fill'), fullFill);
+  await page.waitForTimeout(400);
+  assert.equal(await stepShown(page), 5, 'a single step runs one step only');
+
+  // Hovering asks the engine's explain for the step shown.
+  await search.hover();
+  await page.waitForFunction(() => document.querySelector('#explain').textContent.includes('at step 5'));
+  const explanation = await page.textContent('#explain');
+  assert.match(explanation, /behaviour search_for_ball \(layer control\) at step 5: active, activation 0\.35/);
+  assert.match(explanation, /go_behind_ball\s+activation 0\.3\s+factor 0\.7/);
+
+  await page.click('#resume');
+  await page.waitForFunction(() => Number(document.querySelector('#step').textContent) >= 9);
+  await page.click('#pause');
+  await page.waitForSelector('#status.paused');
+  await page.waitForTimeout(300);  // a step already under way may still arrive
+  const paused = await stepShown(page);
+  await page.waitForTimeout(700);
+  assert.equal(await stepShown(page), paused, 'the engine stays paused');
+  await page.close();
+});
+
+test('a client that reconnects resumes after the last step it saw; many clients at once', async () => {
+  const {url} = await serve(['run', paper, '--serve', '0', '--steps', '100000', '-q']);
+  const firstId = async (headers) => {
+    const controller = new AbortController();
+    const response = await fetch(`${url}events`, {headers, signal: controller.signal});
+    const reader = response.body.getReader();
+    let text = '';
+    while (!/\nid: \d+\n/.test(text)) text += new TextDecoder().decode((await reader.read()).value);
+    controller.abort();
+    return Number(text.match(/\nid: (\d+)\n/)[1]);
+  };
+  await new Promise((resolve) => setTimeout(resolve, 700));
+  const resumed = await firstId({'Last-Event-ID': '3'});
+  assert.equal(resumed, 4);
+  const ids = await Promise.all(Array.from({length: 12}, () => firstId({})));
+  assert.equal(ids.length, 12);
+  for (const id of ids) assert.ok(id >= 1);
+});
+
+test('the trace view scrubs through the recorded steps', async () => {
+  const trace = path.join(scratch, 'paper.jsonl');
+  execFileSync(arbiter, ['run', paper, '--steps', '20', '--trace', trace, '-q']);
+  const {url} = await serve(['view', paper, '--trace', trace, '--serve', '0']);
+  const page = await open(url);
+  assert.equal(await page.locator('#trace-controls').isVisible(), true);
+  assert.equal(await page.locator('#live-controls').isVisible(), false);
+  const kick = behaviour(page, 'kick_ball');
+  const scrubTo = (index) => page.$eval('#scrub', (node, value) => {
+    node.value = value;
+    node.dispatchEvent(new Event('input'));
+  }, index);
+  await scrubTo(12);  // step 13: kick_ball requests 1
+  assert.equal(await stepShown(page), 13);
+  assert.equal(await kick.getAttribute('data-active'), 'true');
+  assert.equal(await behaviour(page, 'go_behind_ball').getAttribute('data-active'), 'false');
+  await scrubTo(3);
+  assert.equal(await stepShown(page), 4);
+  assert.equal(await kick.getAttribute('data-active'), 'false');
+  await page.click('#next');
+  assert.equal(await stepShown(page), 5);
+  await behaviour(page, 'search_for_ball').hover();
+  await page.waitForFunction(() => document.querySelector('#explain').textContent.includes('at step 5'));
+  assert.match(await page.textContent('#explain'), /activation = 0\.5 × 1 × 0\.7 = 0\.35/);
+  await page.close();
+});
+
+test('the soccer demo: interface and behaviour layers with their data flow', async () => {
+  const {url} = await serve(['run', soccer, '--serve', '0', '--steps', '100000', '-q']);
+  const page = await open(url);
+  assert.equal(await page.locator('#graph .layer').count(), 2);
+  assert.equal(await page.locator('.behaviour').count(), 4);
+  // world -> control: ball_visible, ball_position, robot_pose; control -> world: gait_velocity,
+  // head_angle, kick.
+  assert.equal(await page.locator('#graph .flow').count(), 6);
+  await page.waitForFunction(() => Number(document.querySelector('#step').textContent) >= 45);
+  assert.equal(await behaviour(page, 'go_behind_ball').getAttribute('data-active'), 'true');
+  if (process.env.ARBITER_SCREENSHOT) {
+    await behaviour(page, 'go_behind_ball').hover();
+    await page.waitForFunction(() => document.querySelector('#explain').textContent.includes('go_behind_ball'));
+    await page.screenshot({path: process.env.ARBITER_SCREENSHOT, fullPage: true});
+  }
+  await page.close();
+});
