@@ -160,11 +160,11 @@ std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused, s
   const auto address = ServeAddress::parse(text, error);
   auto live = std::make_unique<LiveView>();
   if (error.empty() && !live->server_.start(address, error)) {
-    err << fmt::format("arbiter run: --serve {}\n", error);
+    err << fmt::format("arbiter run: --serve: {}\n", error);
     return nullptr;
   }
   if (!error.empty()) {
-    err << fmt::format("arbiter run: --serve {}\n", error);
+    err << fmt::format("arbiter run: --serve: {}\n", error);
     return nullptr;
   }
   err << exposure_warning(address, "watch, pause and step the run");

@@ -18,8 +18,9 @@ const {chromium} = require('playwright-core');
 
 const arbiter = process.env.ARBITER;
 const source = process.env.ARBITER_SOURCE;
-const paper = path.join(source, 'configs/paper/walk_and_kick.yaml');
-const soccer = path.join(source, 'configs/soccer/walk_and_kick.yaml');
+// Relative to the source tree, where arbiter runs: the explain answers name them so.
+const paper = 'configs/paper/walk_and_kick.yaml';
+const soccer = 'configs/soccer/walk_and_kick.yaml';
 const scratch = mkdtempSync(path.join(tmpdir(), 'arbiter-web-'));
 const children = [];
 let browser;
@@ -41,7 +42,7 @@ after(async () => {
 /// Starts `arbiter ARGS` and resolves with the URL it prints.
 function serve(args) {
   return new Promise((resolve, reject) => {
-    const child = spawn(arbiter, args, {stdio: ['ignore', 'pipe', 'pipe']});
+    const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
     children.push(child);
     let out = '';
     let err = '';
@@ -157,7 +158,7 @@ test('a client that reconnects resumes after the last step it saw; many clients 
 
 test('the trace view scrubs through the recorded steps', async () => {
   const trace = path.join(scratch, 'paper.jsonl');
-  execFileSync(arbiter, ['run', paper, '--steps', '20', '--trace', trace, '-q']);
+  execFileSync(arbiter, ['run', paper, '--steps', '20', '--trace', trace, '-q'], {cwd: source});
   const {url} = await serve(['view', paper, '--trace', trace, '--serve', '0']);
   const page = await open(url);
   assert.equal(await page.locator('#trace-controls').isVisible(), true);
