@@ -71,7 +71,7 @@ _arbiter() {
   local options
   case "$command" in
     validate) options="--format --strict --help" ;;
-    run) options="--steps --trace --quiet --realtime --strict --serve --paused --help" ;;
+    run) options="--steps --trace --quiet --realtime --strict --serve --paused --watch --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
     view) options="--trace --serve --help" ;;

@@ -65,6 +65,9 @@ void RunReport::on_step(const Manager& manager) {
     out_ << fmt::format("step {:>4}  {}: {}\n", manager.steps(), manager.event_source(event),
                         event.text);
   }
+  // Each step's lines go out at once, also into a pipe or a file (`--watch` is watched live);
+  // a step that printed nothing has nothing to flush.
+  if (!quiet_) out_.flush();
 }
 
 void RunReport::on_reload(const Manager& manager) {

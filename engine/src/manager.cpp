@@ -145,7 +145,12 @@ Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
   swap_buffers(first);
 }
 
-Manager::~Manager() = default;
+Manager::Manager(Manager&&) noexcept = default;
+Manager::~Manager() {
+  // The running program's values are destroyed as a replaced one's are: through a Staged.
+  Staged last;
+  swap_buffers(last);
+}
 
 void Manager::prepare(Staged& staged) const {
   const Program& program = staged.program;

@@ -51,6 +51,7 @@ expect "run" "x.yaml" "--se" -- --serve
 expect "view" "x.yaml" "--t" -- --trace
 expect "plot" "--a" -- --actuators
 expect "plot" "x.jsonl" "-o" "docs/walk_and_k" -- docs/walk_and_kick.svg
+expect "run" "x.yaml" "--w" -- --watch
 
 echo "completion: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

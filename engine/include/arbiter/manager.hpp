@@ -57,7 +57,7 @@ class Manager {
   /// Takes the program; run-time warnings go to `logger` (default: spdlog's default logger).
   explicit Manager(Program program, std::shared_ptr<spdlog::logger> logger = nullptr);
   ~Manager();
-  Manager(Manager&&) noexcept = default;  // buffers live on the heap: their addresses survive
+  Manager(Manager&&) noexcept;  // buffers live on the heap: their addresses survive
   Manager& operator=(Manager&&) = delete;
   Manager(const Manager&) = delete;
   Manager& operator=(const Manager&) = delete;
