@@ -1,15 +1,13 @@
 // Hot reload (docs/hot_reload.md): a config edited while its manager runs. The swap happens
-// inside step(), which must not allocate, so this binary counts operator new, as alloc_test does.
+// inside step(), which must not allocate, so this binary counts operator new (counting_new.cpp).
 
 #include <catch2/catch.hpp>
 
 #include <atomic>
 #include <chrono>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <new>
 #include <sstream>
 #include <thread>
 
@@ -17,27 +15,12 @@
 
 #include "arbiter/reload.hpp"
 #include "arbiter/trace.hpp"
+#include "counting_new.hpp"
 #include "test_support.hpp"
 
-namespace {
-std::atomic<bool> counting{false};
-std::atomic<std::size_t> allocations{0};
-}  // namespace
-
-// The other forms of new (arrays, nothrow) call this one; aligned ones are not used here.
-void* operator new(std::size_t size) {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
-  if (void* memory = std::malloc(size == 0 ? 1 : size)) return memory;
-  throw std::bad_alloc();
-}
-void operator delete(void* memory) noexcept {
-  std::free(memory);
-}
-void operator delete(void* memory, std::size_t) noexcept {
-  std::free(memory);
-}
-
 using namespace arbiter;
+using test::allocations;
+using test::counting;
 
 namespace {
 
