@@ -20,11 +20,13 @@ std::atomic<bool> counting{false};
 thread_local bool stepping_thread = false;  // static TLS: reading it does not allocate
 std::atomic<std::size_t> new_calls{0};
 std::atomic<std::size_t> step_mallocs{0};   // on the stepping thread, during step()
+std::atomic<std::size_t> step_reallocs{0};  // ... of which realloc
 std::atomic<std::size_t> other_mallocs{0};  // on other threads (Cyclone's), meanwhile
 
-void count_malloc() {
+void count_malloc(bool is_realloc = false) {
   if (!counting.load(std::memory_order_relaxed)) return;
   (stepping_thread ? step_mallocs : other_mallocs).fetch_add(1, std::memory_order_relaxed);
+  if (is_realloc && stepping_thread) step_reallocs.fetch_add(1, std::memory_order_relaxed);
 }
 
 }  // namespace
@@ -108,7 +110,7 @@ void* calloc(std::size_t count, std::size_t size) {
   return __libc_calloc(count, size);
 }
 void* realloc(void* memory, std::size_t size) {
-  count_malloc();
+  count_malloc(true);
   return __libc_realloc(memory, size);
 }
 void free(void* memory) {
@@ -211,7 +213,8 @@ TEST_CASE("a step that publishes and receives over DDS allocates nothing with op
     WARN("over " << kSteps << " steps (" << published << " samples published, " << taken
                  << " taken): operator new " << new_calls.load() << "; malloc in step() "
                  << step_mallocs.load() << " (" << static_cast<double>(step_mallocs.load()) / kSteps
-                 << " per step), on Cyclone DDS's threads meanwhile " << other_mallocs.load());
+                 << " per step; realloc " << step_reallocs.load()
+                 << "), on Cyclone DDS's threads meanwhile " << other_mallocs.load());
   }
   peer.signal(SIGTERM);
   CHECK(peer.wait(20s));

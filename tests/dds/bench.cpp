@@ -1,6 +1,6 @@
 // arbiter_dds_bench: latency and throughput of dds.Bridge between two processes on loopback
-// (figures in docs/dds.md). The sender is this program run again as a child (`--sender CONFIG
-// SECONDS`); the receiver is stepped here.
+// (figures in docs/performance.md). The sender is this program run again as a child (`--sender
+// CONFIG SECONDS`); the receiver is stepped here.
 //
 //   latency:    the sender writes the monotonic clock into an actuator and publishes it in its
 //               output pass; the receiver's behaviour reads it in the step in which it becomes
@@ -10,7 +10,9 @@
 //   throughput: N double actuators published every step at rate R (N × R values per second);
 //               what arrives, and what a step costs on either side.
 //
-// Usage: arbiter_dds_bench [--quick]   (--quick: a short smoke run, for the test suite)
+// Usage: arbiter_dds_bench [--quick] [--repetitions N]   (--quick: a short smoke run, for the
+// test suite; N runs of each scenario, of which the median of each figure is printed, with the
+// range of the latency medians)
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -22,6 +24,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -203,7 +206,14 @@ std::string rate_text(double hz) {
   return hz > 0 ? fmt::format("{:g} Hz", hz) : std::string("unpaced");
 }
 
-void run_scenario(const Scenario& scenario, const std::string& self) {
+/// One run of a scenario.
+struct Row {
+  double sent_per_s = 0, taken_per_s = 0;
+  double latency_p50 = 0, latency_p99 = 0, latency_max = 0;  // µs
+  double sender_p50 = 0, sender_p99 = 0, receiver_p50 = 0, receiver_p99 = 0;
+};
+
+std::optional<Row> run_scenario(const Scenario& scenario, const std::string& self) {
   DomainLease domain;
   TempDir dir;
   const std::string sender_file = dir.write("sender.yaml", sender_config(scenario, domain.id()));
@@ -222,7 +232,7 @@ void run_scenario(const Scenario& scenario, const std::string& self) {
   if (!step_until(
           receiver, [&] { return bridge.stats().values_written > 0; }, std::chrono::seconds(60))) {
     std::cerr << "no data from the sender\n" << sender.output();
-    return;
+    return std::nullopt;
   }
   run_steps(receiver, scenario.receiver_hz, 0.2);
   const auto before = bridge.stats();
@@ -233,18 +243,49 @@ void run_scenario(const Scenario& scenario, const std::string& self) {
   sender.wait(std::chrono::seconds(60));
   const SenderFigures sent = parse_sender(sender.output());
 
-  const double taken_per_s =
-      static_cast<double>(after.samples_taken - before.samples_taken) / scenario.seconds;
-  const double values_per_s = sent.published / sender_seconds;
   std::vector<double> ages_us;
   for (double age : latency.ages()) ages_us.push_back(age * 1e6);
+  Row row;
+  row.sent_per_s = sent.published / sender_seconds;
+  row.taken_per_s =
+      static_cast<double>(after.samples_taken - before.samples_taken) / scenario.seconds;
+  row.latency_p50 = percentile(ages_us, 0.5);
+  row.latency_p99 = percentile(ages_us, 0.99);
+  row.latency_max = ages_us.empty() ? 0.0 : *std::max_element(ages_us.begin(), ages_us.end());
+  row.sender_p50 = sent.p50;
+  row.sender_p99 = sent.p99;
+  row.receiver_p50 = percentile(durations, 0.5);
+  row.receiver_p99 = percentile(durations, 0.99);
+  return row;
+}
+
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  double one = 0, five = 0, fifteen = 0;
+  in >> one >> five >> fifteen;
+  return fmt::format("{:.2f} {:.2f} {:.2f}", one, five, fifteen);
+}
+
+/// The median of each figure over the repetitions, and the range of the latency medians.
+void print_row(const Scenario& scenario, const std::vector<Row>& rows) {
+  const auto median = [&](double Row::*field) {
+    std::vector<double> values;
+    for (const auto& row : rows) values.push_back(row.*field);
+    return percentile(values, 0.5);
+  };
+  double lowest = rows.front().latency_p50;
+  double highest = lowest;
+  for (const auto& row : rows) {
+    lowest = std::min(lowest, row.latency_p50);
+    highest = std::max(highest, row.latency_p50);
+  }
   std::cout << fmt::format(
-      "| {} | {} | {} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.1f} / {:.1f} | {:.1f} / "
-      "{:.1f} |\n",
+      "| {} | {} | {} | {:.0f} | {:.0f} | {:.0f} ({:.0f}-{:.0f}) | {:.0f} | {:.0f} | {:.1f} / "
+      "{:.1f} | {:.1f} / {:.1f} |\n",
       scenario.values + 1, rate_text(scenario.sender_hz), rate_text(scenario.receiver_hz),
-      values_per_s, taken_per_s, percentile(ages_us, 0.5), percentile(ages_us, 0.99),
-      ages_us.empty() ? 0.0 : *std::max_element(ages_us.begin(), ages_us.end()), sent.p50, sent.p99,
-      percentile(durations, 0.5), percentile(durations, 0.99));
+      median(&Row::sent_per_s), median(&Row::taken_per_s), median(&Row::latency_p50), lowest,
+      highest, median(&Row::latency_p99), median(&Row::latency_max), median(&Row::sender_p50),
+      median(&Row::sender_p99), median(&Row::receiver_p50), median(&Row::receiver_p99));
   std::cout.flush();
 }
 
@@ -254,10 +295,18 @@ int main(int argc, char** argv) {
   if (argc == 5 && std::strcmp(argv[1], "--sender") == 0) {
     return run_sender(argv[2], std::stod(argv[3]), std::strcmp(argv[4], "unpaced") == 0);
   }
-  const bool quick = argc == 2 && std::strcmp(argv[1], "--quick") == 0;
-  if (argc > 1 && !quick) {
-    std::cerr << "usage: arbiter_dds_bench [--quick]\n";
-    return 2;
+  bool quick = false;
+  int repetitions = 1;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--quick") == 0) {
+      quick = true;
+    } else if (std::strcmp(argv[i], "--repetitions") == 0 && i + 1 < argc &&
+               std::atoi(argv[i + 1]) > 0) {
+      repetitions = std::atoi(argv[++i]);
+    } else {
+      std::cerr << "usage: arbiter_dds_bench [--quick] [--repetitions N]\n";
+      return 2;
+    }
   }
   const std::string self = "/proc/self/exe";
   char path[4096];
@@ -265,9 +314,11 @@ int main(int argc, char** argv) {
   if (length <= 0) return 1;
   path[length] = '\0';
 
+  std::cout << fmt::format("{} repetition(s) of each scenario; load average {}\n\n", repetitions,
+                           load_average());
   std::cout << "| topics | sender | receiver | values/s sent | samples/s taken | latency p50 "
-               "(µs) | p99 (µs) | max (µs) | sender step p50 / p99 (µs) | receiver step p50 / "
-               "p99 (µs) |\n"
+               "(µs) (range) | p99 (µs) | max (µs) | sender step p50 / p99 (µs) | receiver step "
+               "p50 / p99 (µs) |\n"
                "|---|---|---|---|---|---|---|---|---|---|\n";
   // {values besides time, sender Hz, receiver Hz (0: back to back), seconds}
   static const Scenario kQuick[] = {{0, 100, 100, 0.5}, {9, 100, 100, 0.5}};
@@ -278,6 +329,18 @@ int main(int argc, char** argv) {
   };
   const Scenario* begin = quick ? std::begin(kQuick) : std::begin(kFull);
   const Scenario* end = quick ? std::end(kQuick) : std::end(kFull);
-  for (const Scenario* scenario = begin; scenario != end; ++scenario) run_scenario(*scenario, path);
-  return 0;
+  int failures = 0;
+  for (const Scenario* scenario = begin; scenario != end; ++scenario) {
+    std::vector<Row> rows;
+    for (int r = 0; r < repetitions; ++r) {
+      if (auto row = run_scenario(*scenario, path)) rows.push_back(*row);
+    }
+    if (rows.empty()) {
+      ++failures;
+      continue;
+    }
+    print_row(*scenario, rows);
+  }
+  std::cout << fmt::format("\nload average {}\n", load_average());
+  return failures == 0 ? 0 : 1;
 }
