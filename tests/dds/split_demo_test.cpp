@@ -1,5 +1,6 @@
 // The soccer demo split over two processes (configs/soccer/split/): a 10 Hz strategy process and a
-// 100 Hz motion process, started as the README says, reach the single-process demo's outcome.
+// 100 Hz motion process, started with the README's `arbiter run` commands (both at once, and the
+// motion for 15 s rather than 30), reach the single-process demo's outcome.
 
 #include <catch2/catch.hpp>
 
@@ -69,6 +70,9 @@ TEST_CASE("the split soccer demo kicks the ball and scores a goal", "[dds][proce
   CHECK(*motion_status == 0);
   CHECK(*strategy_status == 0);
   CHECK(std::regex_search(motion_output, std::regex("world: ball kicked[\\s\\S]*world: goal!")));
+  // The single-process demo's outcome: one kick, one goal.
+  CHECK(motion_output.find("world: ball kicked (1 time)") != std::string::npos);
+  CHECK(motion_output.find("world: goal! (1 time)") != std::string::npos);
   CHECK(motion_output.find("strategy_link: walk_command: publisher found") != std::string::npos);
   CHECK(strategy.output().find("motion_link: ball_position: publisher found") != std::string::npos);
 }
