@@ -16,6 +16,8 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string>
+#include <system_error>
 #include <unordered_set>
 
 namespace arbiter {
@@ -809,6 +811,11 @@ class TreeBuilder : public YAML::EventHandler {
   std::size_t node_count_ = 0;
 };
 
+// Why the last system call failed, as ": Permission denied", or "" when errno says nothing.
+std::string reason() {
+  return errno == 0 ? std::string() : ": " + std::generic_category().message(errno);
+}
+
 }  // namespace
 
 std::optional<Node> parse_document(std::string_view text, const std::string& file,
@@ -879,8 +886,21 @@ std::optional<Node> read_document(const std::string& path, Diagnostics& diagnost
   namespace fs = std::filesystem;
   std::error_code error;
   const auto status = fs::status(path, error);
-  if (error || !fs::exists(status)) {
-    diagnostics.error({path, 0, 0}, "file-not-found", "no such file");
+  if (status.type() == fs::file_type::not_found) {
+    std::error_code link_error;
+    if (fs::is_symlink(fs::symlink_status(path, link_error))) {
+      diagnostics.error({path, 0, 0}, "file-not-found",
+                        "is a symbolic link to a file that does not exist");
+    } else {
+      diagnostics.error({path, 0, 0}, "file-not-found", "no such file");
+    }
+    return std::nullopt;
+  }
+  // The path exists but cannot be looked at: a symbolic link loop, a directory on the way that
+  // cannot be searched.
+  if (error) {
+    diagnostics.error({path, 0, 0}, "unreadable-file",
+                      fmt::format("cannot be read: {}", error.message()));
     return std::nullopt;
   }
   if (fs::is_directory(status)) {
@@ -900,9 +920,10 @@ std::optional<Node> read_document(const std::string& path, Diagnostics& diagnost
         fmt::format("the file has {} bytes; the limit is {}", size, limits.max_file_bytes));
     return std::nullopt;
   }
+  errno = 0;
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    diagnostics.error({path, 0, 0}, "unreadable-file", "cannot be opened for reading");
+    diagnostics.error({path, 0, 0}, "unreadable-file", "cannot be opened for reading" + reason());
     return std::nullopt;
   }
   std::string text;
@@ -917,7 +938,7 @@ std::optional<Node> read_document(const std::string& path, Diagnostics& diagnost
     }
   }
   if (in.bad()) {
-    diagnostics.error({path, 0, 0}, "unreadable-file", "read error");
+    diagnostics.error({path, 0, 0}, "unreadable-file", "read error" + reason());
     return std::nullopt;
   }
   return parse_document(text, path, format_of(path), diagnostics, limits);

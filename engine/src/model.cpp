@@ -201,9 +201,11 @@ class ModelBuilder {
       if (const Node* rate = fields.optional("rate_hz")) {
         const auto value = rate->as_double();
         if (!value || !std::isfinite(*value) || *value <= 0.0) {
+          // 1e999999 is positive, but not a number a loop can run at.
           diagnostics_.error(
               rate->location(), value ? "out-of-range" : "wrong-type",
-              fmt::format("'rate_hz' must be a positive number, found {}", rate->describe()));
+              fmt::format("'rate_hz' must be a {}positive number, found {}",
+                          value && !std::isfinite(*value) ? "finite " : "", rate->describe()));
         } else {
           model_.rate_hz = *value;
         }
@@ -241,7 +243,9 @@ class ModelBuilder {
     const fs::path base = fs::path(where.file).parent_path();
     const std::string path = (base / relative).lexically_normal().string();
     std::error_code error;
-    const std::string canonical = fs::weakly_canonical(path, error).string();
+    std::string canonical = fs::weakly_canonical(path, error).string();
+    // Unresolvable (a symbolic link loop): its own name, so that reading it reports why.
+    if (error) canonical = path;
     for (std::size_t i = 0; i < include_stack_.size(); ++i) {
       if (include_stack_[i] != canonical) continue;
       std::string cycle;
@@ -1030,7 +1034,7 @@ class ModelBuilder {
 
   // Lookups for add_inhibition, so that a layer's inhibitions are read in linear time.
   struct InhibitionIndex {
-    std::unordered_set<std::string_view> behaviours;             // valid ones of the layer
+    std::unordered_set<std::string_view> behaviours;        // valid ones of the layer
     std::unordered_map<std::string, std::size_t> declared;  // "inhibitor inhibited" → index
   };
 
