@@ -417,3 +417,12 @@ TEST_CASE("1000 reloads of the soccer demo keep resident memory flat", "[reload]
             << " KiB after (" << (after - before) << " KiB growth), " << seconds << " s\n";
   if (!kSanitized) CHECK(after - before <= 1024);
 }
+
+TEST_CASE("a carry-over plan that does not fit is refused before it reaches step()", "[reload]") {
+  Manager manager(test::compile_text(kTwoProbes, registry()));
+  manager.step();
+  CHECK_THROWS_AS(manager.stage(test::compile_text(kTwoProbes, registry()), CarryPlan{}),
+                  std::invalid_argument);
+  manager.step();
+  CHECK(manager.reloads() == 0);
+}

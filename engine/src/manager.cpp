@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cmath>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <typeinfo>
@@ -228,6 +229,21 @@ void Manager::swap_buffers(Staged& staged) noexcept {
 }
 
 void Manager::stage(Program program, CarryPlan plan) {
+  // A plan that does not fit would index out of bounds inside step(): refuse it here.
+  const auto fits = [](const auto& from, std::size_t size, std::size_t limit) {
+    return from.size() == size && std::all_of(from.begin(), from.end(), [&](std::uint32_t index) {
+             return index == kUnbound || index < limit;
+           });
+  };
+  if (!fits(plan.behaviour_from, program.behaviours.size(), program_.behaviours.size()) ||
+      plan.behaviour_kept.size() != program.behaviours.size() ||
+      !fits(plan.actuator_from, program.actuators.size(), program_.actuators.size()) ||
+      !fits(plan.interface_from, program.layers.size(), program_.layers.size()) ||
+      plan.interface_kept.size() != program.layers.size() ||
+      !fits(plan.controller_kept, program.controllers.size(), program_.controllers.size())) {
+    throw std::invalid_argument(
+        "Manager::stage: the carry-over plan does not fit the programs (build it with Reloader)");
+  }
   auto staged = std::make_unique<Staged>(std::move(program), std::move(plan));
   prepare(*staged);
   std::unique_ptr<Staged> dropped;

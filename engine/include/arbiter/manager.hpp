@@ -85,7 +85,8 @@ class Manager {
   /// it, the carry-over of `plan`, made against program()) and hands it to step(), which swaps
   /// it in at its start without allocating, then calls the observers' on_reload(). Replaces a
   /// staged program not yet swapped in. One thread at a time may stage and withdraw, while
-  /// another steps; step() never waits for it.
+  /// another steps; step() never waits for it. Throws std::invalid_argument when the plan's
+  /// sizes or indices do not fit the two programs.
   void stage(Program program, CarryPlan plan);
   /// Takes back a staged program not swapped in yet (returns true then) and frees what the last
   /// swap replaced (the old program and its instances). Until the next stage(), program() then
