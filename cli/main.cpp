@@ -250,7 +250,7 @@ int run(const Options& options) {
   arbiter::cli::RunReport report(std::cout, options.quiet);
   manager.add_observer(report);
   std::optional<arbiter::cli::Watcher> watcher;
-  if (options.watch) watcher.emplace(reloader, manager, std::cout, std::cerr);
+  if (options.watch) watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet);
   std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
   if (!options.serve.empty()) {
     live = arbiter::cli::LiveView::open(options.serve, options.paused, std::cout, std::cerr);

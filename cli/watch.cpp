@@ -15,8 +15,9 @@ std::optional<Program> load_watched(Reloader& reloader, const std::string& path,
   return program;
 }
 
-Watcher::Watcher(Reloader& reloader, Manager& manager, std::ostream& out, std::ostream& err)
-    : reloader_(reloader), manager_(manager), out_(out), err_(err) {
+Watcher::Watcher(Reloader& reloader, Manager& manager, std::ostream& out, std::ostream& err,
+                 bool quiet)
+    : reloader_(reloader), manager_(manager), out_(out), err_(err), quiet_(quiet) {
   thread_ = std::thread([this] { run(); });
 }
 
@@ -62,6 +63,7 @@ void Watcher::run() {
       continue;
     }
     if (!result.diagnostics.empty()) err_ << format(result.diagnostics);
+    if (quiet_) continue;
     std::string text =
         fmt::format("reload of {}: {} change{}, swapped in at the next step\n", reloader_.path(),
                     result.diff.changes.size(), result.diff.changes.size() == 1 ? "" : "s");

@@ -19,12 +19,14 @@ std::optional<Program> load_watched(Reloader& reloader, const std::string& path,
 /// thread of its own, and reloads through `reloader` when one changes. A valid edit prints its
 /// diff to `out`; a broken one prints its diagnostics (`file:line:col: error: ...`) to `err`
 /// and the running program goes on; a file caught mid-write is reported and retried at its
-/// next change. The manager's stepping thread never waits for it.
+/// next change; `quiet` leaves out the diffs (errors are still printed). The manager's stepping
+/// thread never waits for it.
 class Watcher {
  public:
   static constexpr int kPollMilliseconds = 200;
 
-  Watcher(Reloader& reloader, Manager& manager, std::ostream& out, std::ostream& err);
+  Watcher(Reloader& reloader, Manager& manager, std::ostream& out, std::ostream& err,
+          bool quiet = false);
   /// Stops polling (waits for a reload in progress).
   ~Watcher();
   Watcher(const Watcher&) = delete;
@@ -38,6 +40,7 @@ class Watcher {
   Manager& manager_;
   std::ostream& out_;
   std::ostream& err_;
+  bool quiet_;
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
