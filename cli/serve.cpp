@@ -25,8 +25,10 @@ using namespace std::chrono_literals;
 constexpr std::size_t kServerThreads = 32;
 // A page draws the last kBacklog steps; a client further behind skips to them.
 constexpr std::uint64_t kBacklog = 300;
-// Frames copied out of the ring under one lock.
+// At most this many frames in one write.
 constexpr std::uint64_t kBatch = 64;
+// How often a stream looks for new steps: at most this often a page gets a write.
+constexpr auto kPoll = 20ms;
 
 std::optional<std::uint64_t> parse_step(const std::string& text) {
   if (text.empty() || text.size() > 19 ||
@@ -169,13 +171,14 @@ std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused, s
   }
   err << exposure_warning(address, "watch, pause and step the run");
   live->paused_ = paused;
+  live->out_ = &out;
   out << fmt::format("serving the live view at {}{}\n", live->server_.url(),
                      paused ? " (paused: press Step or Resume on the page)" : "")
       << std::flush;
   return live;
 }
 
-LiveView::LiveView() : ring_(kRingSize) {
+LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
   auto& http = server_.http();
   http.Get("/info", [](const httplib::Request&, httplib::Response& response) {
     response.set_content(R"({"mode": "live"})", "application/json");
@@ -253,16 +256,13 @@ void LiveView::publish_graph(const Manager& manager) {
     std::lock_guard lock(mutex_);
     graph_ = std::move(graph);
     header_ = std::move(header);
-    ++graph_version_;
   }
-  changed_.notify_all();
+  ++graph_version_;
 }
 
 void LiveView::publish_status() {
-  {
-    std::lock_guard lock(mutex_);
-    ++status_version_;
-  }
+  ++status_version_;
+  std::lock_guard lock(mutex_);  // so that a hold() about to wait does not miss the change
   changed_.notify_all();
 }
 
@@ -272,8 +272,10 @@ void LiveView::on_start(const Manager& manager) {
   // does not allocate.
   scratch_.clear();
   append_step_record(manager, scratch_);
-  std::lock_guard lock(mutex_);
-  for (auto& slot : ring_) slot.record.reserve(2 * scratch_.size() + 256);
+  for (std::size_t i = 0; i < kRingSize; ++i) {
+    std::lock_guard lock(ring_[i].mutex);
+    ring_[i].record.reserve(2 * scratch_.size() + 256);
+  }
   ++status_version_;
 }
 
@@ -284,24 +286,27 @@ void LiveView::on_reload(const Manager& manager) {
 void LiveView::on_step(const Manager& manager) {
   scratch_.clear();
   append_step_record(manager, scratch_);
+  const auto step = manager.steps();
   {
-    std::lock_guard lock(mutex_);
-    const auto step = manager.steps();
-    auto& slot = ring_[step % kRingSize];
+    Slot& slot = ring_[step % kRingSize];
+    std::lock_guard lock(slot.mutex);
     slot.step = step;
     slot.record.assign(scratch_);
-    newest_ = step;
   }
-  changed_.notify_all();
+  newest_ = step;
 }
 
 void LiveView::on_finish(const Manager&) {
-  {
-    std::lock_guard lock(mutex_);
-    finished_ = true;
-    ++status_version_;
-  }
-  changed_.notify_all();
+  finished_ = true;
+  ++status_version_;
+}
+
+bool LiveView::copy_record(std::uint64_t step, std::string& out) {
+  Slot& slot = ring_[step % kRingSize];
+  std::lock_guard lock(slot.mutex);
+  if (slot.step != step) return false;  // overwritten by a later step
+  out += slot.record;
+  return true;
 }
 
 void LiveView::answer_requests(const Manager& manager) {
@@ -310,18 +315,19 @@ void LiveView::answer_requests(const Manager& manager) {
   while (!requests_.empty()) {
     ExplainRequest& request = *requests_.front();
     requests_.pop_front();
-    const std::uint64_t oldest = newest_ >= kRingSize ? newest_ - kRingSize + 1 : 1;
-    if (request.step > newest_ || request.step < oldest) {
+    const std::uint64_t newest = newest_;
+    const std::uint64_t oldest = newest >= kRingSize ? newest - kRingSize + 1 : 1;
+    if (request.step > newest || request.step < oldest) {
       request.status = 404;
-      request.answer = newest_ == 0 ? "no step has run yet\n"
-                                    : fmt::format("steps {} to {} are kept, not step {}\n", oldest,
-                                                  newest_, request.step);
+      request.answer = newest == 0 ? "no step has run yet\n"
+                                   : fmt::format("steps {} to {} are kept, not step {}\n", oldest,
+                                                 newest, request.step);
     } else {
       // explain() reads a trace: this one is the header and the records around the step.
       std::string trace = header_ + "\n";
       for (auto step = std::max(request.step - 1, oldest);
-           step <= std::min(request.step + 1, newest_); ++step) {
-        trace += ring_[step % kRingSize].record + "\n";
+           step <= std::min(request.step + 1, newest); ++step) {
+        if (copy_record(step, trace)) trace += "\n";
       }
       std::istringstream in(trace);
       std::tie(request.status, request.answer) =
@@ -350,6 +356,10 @@ bool LiveView::hold(const Manager& manager, const std::atomic<bool>& interrupted
 }
 
 void LiveView::serve_until(const Manager& manager, const std::atomic<bool>& interrupted) {
+  if (out_ != nullptr) {
+    *out_ << fmt::format("the run is over; the live view stays at {} until Ctrl-C\n", server_.url())
+          << std::flush;
+  }
   while (!interrupted) {
     answer_requests(manager);
     std::unique_lock lock(mutex_);
@@ -359,32 +369,41 @@ void LiveView::serve_until(const Manager& manager, const std::atomic<bool>& inte
 
 bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint64_t& status_seen,
                       const std::function<bool(const std::string&)>& write) {
+  // Polled rather than woken by each step: the stepping thread then shares no lock with the
+  // streams but a slot's, and a fast engine's steps reach a page in batches.
+  const auto news = [&] {
+    return graph_version_ != graph_seen || status_version_ != status_seen ||
+           (newest_ > 0 && next <= newest_);
+  };
+  for (int i = 0; i < 50 && !server_.stopping(); ++i) {
+    std::this_thread::sleep_for(kPoll);
+    if (news()) break;
+  }
+  if (server_.stopping()) return false;
   std::string out;
-  {
-    std::unique_lock lock(mutex_);
-    changed_.wait_for(lock, 1s, [&] {
-      return server_.stopping() || graph_version_ != graph_seen || status_version_ != status_seen ||
-             (newest_ > 0 && next <= newest_);
-    });
-    if (server_.stopping()) return false;
-    if (graph_version_ != graph_seen && graph_version_ > 0) {
-      out += sse_frame("graph", 0, graph_);
-      graph_seen = graph_version_;
+  if (const std::uint64_t version = graph_version_; version != graph_seen) {
+    std::lock_guard lock(mutex_);
+    out += sse_frame("graph", 0, graph_);
+    graph_seen = version;
+  }
+  const std::uint64_t newest = newest_;
+  if (newest > 0 && next <= newest) {
+    if (next + kBacklog <= newest) next = newest - kBacklog + 1;
+    if (next == 0) next = 1;
+    std::string record;
+    for (std::uint64_t sent = 0; next <= newest && sent < kBatch; ++next) {
+      record.clear();
+      if (!copy_record(next, record)) continue;
+      out += sse_frame("step", next, record);
+      ++sent;
     }
-    if (newest_ > 0 && next <= newest_) {
-      if (next + kBacklog <= newest_) next = newest_ - kBacklog + 1;
-      if (next == 0) next = 1;
-      for (std::uint64_t sent = 0; next <= newest_ && sent < kBatch; ++next, ++sent) {
-        out += sse_frame("step", next, ring_[next % kRingSize].record);
-      }
-    }
-    if (status_version_ != status_seen) {
-      out +=
-          sse_frame("status", 0,
-                    fmt::format(R"({{"paused": {}, "finished": {}, "step": {}}})",
-                                paused_ ? "true" : "false", finished_ ? "true" : "false", newest_));
-      status_seen = status_version_;
-    }
+  }
+  if (const std::uint64_t version = status_version_; version != status_seen) {
+    out += sse_frame(
+        "status", 0,
+        fmt::format(R"({{"paused": {}, "finished": {}, "step": {}}})", paused_ ? "true" : "false",
+                    finished_ ? "true" : "false", newest_.load()));
+    status_seen = version;
   }
   // A comment line keeps the connection alive and finds out when the client has gone.
   if (out.empty()) out = ": idle\n\n";

@@ -61,10 +61,11 @@ class WebServer {
 };
 
 /// Live view of a running manager. As an observer (on the stepping thread) it copies each step
-/// record into a ring of kRingSize preallocated slots and wakes the streams; each client's stream
-/// runs on a server thread and reads from the ring, so a slow or stuck client only falls behind
-/// (and skips to the frames still in the ring), never delays a step. Pause, single step and
-/// resume come from the page; the run loop asks hold() before each step.
+/// record into a ring of kRingSize preallocated slots, each with a lock of its own that a reader
+/// holds only to copy that one record; each client's stream runs on a server thread that polls
+/// the ring, so a slow or stuck client only falls behind (and skips to the last steps), never
+/// delays a step. Pause, single step and resume come from the page; the run loop asks hold()
+/// before each step.
 class LiveView : public Observer {
  public:
   static constexpr std::size_t kRingSize = 1024;
@@ -93,6 +94,7 @@ class LiveView : public Observer {
 
  private:
   struct Slot {
+    std::mutex mutex;
     std::uint64_t step = 0;
     std::string record;
   };
@@ -107,20 +109,23 @@ class LiveView : public Observer {
   void publish_graph(const Manager& manager);
   void publish_status();
   void answer_requests(const Manager& manager);
+  /// Appends the record of `step` to `out`; false when the ring no longer holds it.
+  bool copy_record(std::uint64_t step, std::string& out);
   bool stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint64_t& status_seen,
               const std::function<bool(const std::string&)>& write);
 
   WebServer server_;
-  std::mutex mutex_;  // guards everything below; held only to copy, never across I/O
-  std::condition_variable changed_;
-  std::vector<Slot> ring_;
-  std::uint64_t newest_ = 0;  // the step of the newest record in the ring; 0: none yet
-  std::string graph_;         // the dump JSON of the current program
-  std::string header_;        // the trace header of the current program
-  std::uint64_t graph_version_ = 0;
-  std::uint64_t status_version_ = 0;
-  bool finished_ = false;
-  std::string scratch_;  // the stepping thread's record, built outside the lock
+  std::ostream* out_ = nullptr;  // where open() printed the URL
+  std::unique_ptr<Slot[]> ring_;
+  std::atomic<std::uint64_t> newest_{0};  // the step of the newest record in the ring; 0: none
+  std::atomic<std::uint64_t> graph_version_{0};
+  std::atomic<std::uint64_t> status_version_{0};
+  std::atomic<bool> finished_{false};
+  std::string scratch_;  // the stepping thread's record, built before taking a slot's lock
+  std::mutex mutex_;     // guards what follows; held only to copy, never across I/O
+  std::condition_variable changed_;  // control from the page, explain requests, stopping
+  std::string graph_;                // the dump JSON of the current program
+  std::string header_;               // the trace header of the current program
   std::deque<ExplainRequest*> requests_;
   std::condition_variable answered_;
   std::atomic<bool> paused_{false};

@@ -9,7 +9,7 @@ import {test, before, after} from 'node:test';
 import assert from 'node:assert/strict';
 import {spawn, execFileSync} from 'node:child_process';
 import {createRequire} from 'node:module';
-import {mkdtempSync, rmSync} from 'node:fs';
+import {copyFileSync, mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import path from 'node:path';
 
@@ -154,6 +154,24 @@ test('a client that reconnects resumes after the last step it saw; many clients 
   const ids = await Promise.all(Array.from({length: 12}, () => firstId({})));
   assert.equal(ids.length, 12);
   for (const id of ids) assert.ok(id >= 1);
+});
+
+test('an open page redraws the graph when --watch reloads an edited config', async () => {
+  const config = path.join(scratch, 'watched.yaml');
+  copyFileSync(path.join(source, paper), config);
+  const {url} = await serve(['run', config, '--watch', '--serve', '0', '--steps', '100000', '-q']);
+  const page = await open(url);
+  assert.equal(await page.locator('#graph .behaviour').count(), 4);
+  const edited = readFileSync(config, 'utf8').replace(
+      '      head_control:\n',
+      '      look_around:\n        type: scripted\n        params: {activation: 0.5}\n      head_control:\n');
+  writeFileSync(config, edited);
+  await page.waitForSelector('.behaviour[data-name="control/look_around"]');
+  assert.equal(await page.locator('#graph .behaviour').count(), 5);
+  // Steps of the new program arrive: look_around requests 0.5 and nothing inhibits it.
+  await page.waitForFunction(() => document.querySelector('.behaviour[data-name="control/look_around"]')
+      .getAttribute('data-activation') === '0.5');
+  await page.close();
 });
 
 test('the trace view scrubs through the recorded steps', async () => {
