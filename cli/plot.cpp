@@ -283,6 +283,15 @@ class Plot {
     return out;
   }
 
+  /// A dashed line through every row where a reload swapped a new program in.
+  void reloads() {
+    for (const auto& reload : trace_.reloads) {
+      body_ += fmt::format(
+          R"(<line class="reload" x1="{0:.1f}" y1="{1}" x2="{0:.1f}" y2="{2}" stroke="#7a5af8" stroke-width="1.5" stroke-dasharray="5,3"><title>config reloaded after step {3}</title></line>)",
+          x(reload.before), kTop - 4, y_, member(reload.header, "after_step").dump());
+    }
+  }
+
   std::uint64_t step_at(std::size_t index) const {
     return index < trace_.records.size() ? trace_.records[index]["step"].get<std::uint64_t>() : 0;
   }
@@ -295,19 +304,43 @@ class Plot {
   std::string body_;
 };
 
+/// The layers and behaviours of every program of the run, each once, in the order they first
+/// appear: the first header's, then what reloads added.
+std::vector<std::pair<std::string, std::vector<std::string>>> behaviours_of(
+    const TraceFile& trace) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> layers;
+  const auto add = [&](const Json& header) {
+    for (const auto& layer : member(header, "layers")) {
+      const Json& name = member(layer, "name");
+      if (!name.is_string()) continue;
+      auto found = std::find_if(layers.begin(), layers.end(),
+                                [&](const auto& item) { return item.first == name; });
+      if (found == layers.end()) {
+        layers.emplace_back(name.get<std::string>(), std::vector<std::string>{});
+        found = layers.end() - 1;
+      }
+      for (const auto& behaviour : member(layer, "order")) {
+        if (!behaviour.is_string()) continue;
+        auto& names = found->second;
+        if (std::find(names.begin(), names.end(), behaviour) == names.end()) {
+          names.push_back(behaviour.get<std::string>());
+        }
+      }
+    }
+  };
+  add(trace.header);
+  for (const auto& reload : trace.reloads) add(reload.header);
+  return layers;
+}
+
 }  // namespace
 
 std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
   Plot plot(trace);
-  for (const auto& layer : member(trace.header, "layers")) {
-    const Json& order = member(layer, "order");
-    if (!order.is_array() || order.empty()) continue;
-    const std::string layer_name =
-        member(layer, "name").is_string() ? layer["name"].get<std::string>() : "";
-    plot.section("layer " + layer_name);
-    for (const auto& name : order) {
-      if (name.is_string()) plot.behaviour(layer_name, name.get<std::string>());
-    }
+  for (const auto& [layer, names] : behaviours_of(trace)) {
+    if (names.empty()) continue;
+    plot.section("layer " + layer);
+    for (const auto& name : names) plot.behaviour(layer, name);
   }
   if (!trace.records.empty()) {
     const Json& controllers = member(trace.records.front(), "controllers");
@@ -328,6 +361,7 @@ std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
           ? "no steps"
           : fmt::format("steps {} to {}", trace.records.front()["step"].get<std::uint64_t>(),
                         trace.records.back()["step"].get<std::uint64_t>());
+  plot.reloads();
   return plot.finish(title, subtitle);
 }
 

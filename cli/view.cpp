@@ -50,6 +50,11 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
                           std::max<std::size_t>(bad.byte, 1), parse_message(bad));
       return std::nullopt;
     }
+    if (!trace.header_line.empty() && parsed.is_object() && parsed.contains("reload") &&
+        parsed.value("arbiter_trace", nlohmann::ordered_json()) == 1) {
+      trace.reloads.push_back({number, trace.records.size(), std::move(parsed)});
+      continue;
+    }
     if (trace.header_line.empty()) {
       if (!parsed.is_object() || parsed.value("arbiter_trace", nlohmann::ordered_json()) != 1 ||
           !parsed.value("layers", nlohmann::ordered_json()).is_array()) {
@@ -99,6 +104,13 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
       header.status != Explanation::Status::kOk) {
     err << fmt::format("{}:1:1: error: {}\n", trace_path, header.text);
     for (const auto& note : header.notes) err << fmt::format("  note: {}\n", note);
+    return 1;
+  }
+  if (!trace->reloads.empty()) {
+    err << fmt::format(
+        "{}:{}:1: error: the config was reloaded during this run (a reload header); the view "
+        "shows a run of one config: 'arbiter plot {}' draws all of it\n",
+        trace_path, trace->reloads.front().line, trace_path);
     return 1;
   }
   std::vector<std::uint64_t> steps;

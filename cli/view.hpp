@@ -16,10 +16,17 @@ namespace arbiter::cli {
 
 /// A trace file (DESIGN 5) read whole: its header and step records, each line parsed.
 struct TraceFile {
+  /// A header written when a hot reload swapped a new program in (docs/hot_reload.md).
+  struct Reload {
+    std::size_t line = 0;    ///< its line in the file
+    std::size_t before = 0;  ///< the index in `records` of the first step after it
+    nlohmann::ordered_json header;
+  };
   std::string header_line;
   nlohmann::ordered_json header;
   std::vector<std::string> lines;  ///< the step records as written, in order
   std::vector<nlohmann::ordered_json> records;
+  std::vector<Reload> reloads;
 };
 
 /// Reads `path`; on failure nullopt, and `error` says where and what (`file:line:col: ...`).

@@ -46,6 +46,25 @@ width=$("$xmllint" --xpath "string($kick/*[@class='active']/@width)" "$work/pape
 [[ $(count "//*[local-name()='g'][@class='row controller']/*[@class='event']" "$work/h.svg") -gt 0 ]] ||
   fail "no state machine events marked"
 
+# A run whose config was reloaded (--watch): a reload header after step 2 that adds a behaviour.
+{
+  sed -n 1,3p "$work/paper.jsonl"
+  head -n 1 "$work/paper.jsonl" |
+    sed 's/"arbiter_trace": 1/&, "reload": 1, "after_step": 2/; s/"head_control"\]/"head_control", "look_around"]/'
+  sed -n 4,6p "$work/paper.jsonl"
+} >"$work/reloaded.jsonl"
+"$arbiter" plot "$work/reloaded.jsonl" -o "$work/reloaded.svg"
+"$xmllint" --noout "$work/reloaded.svg" || fail "reloaded.svg is not well-formed"
+[[ $(rows behaviour "$work/reloaded.svg") == 5 ]] || fail "expected the 4 behaviours and the added one"
+[[ $(count "//*[local-name()='line'][@class='reload']" "$work/reloaded.svg") == 1 ]] ||
+  fail "expected one reload mark"
+status=0
+timeout 10 "$arbiter" view "$source/configs/paper/walk_and_kick.yaml" --trace "$work/reloaded.jsonl" \
+  --serve 0 2>"$work/err" >/dev/null || status=$?
+[[ $status == 1 ]] || fail "view of a reloaded run exits 1, not $status"
+grep -q "reloaded.jsonl:4:1: error: the config was reloaded during this run" "$work/err" ||
+  fail "$(cat "$work/err")"
+
 # A broken line is reported where it is.
 head -n 3 "$work/paper.jsonl" >"$work/broken.jsonl"
 echo '{"step": 3, "layers": {,}}' >>"$work/broken.jsonl"
