@@ -337,6 +337,8 @@ std::string check_serve_address(const std::string& text) {
 
 constexpr const char* kExitCodes =
     "Exit codes: 0 ok, 1 invalid config (or failed run), 2 usage error.";
+constexpr const char* kExitCodesTrace =
+    "Exit codes: 0 ok, 1 invalid config or trace, 2 usage error.";
 
 std::string lint_list() {
   std::string out =
@@ -428,7 +430,7 @@ int main(int argc, char** argv) {
                    "serve the live view (a web page) on [ADDR:]PORT (ADDR defaults to 127.0.0.1, "
                    "PORT 0 picks a free one) and pace the steps at rate_hz; the server stays up "
                    "after the last step until Ctrl-C")
-      ->check(check_serve_address, "[ADDR:]PORT")
+      ->check(check_serve_address, "")
       ->type_name("[ADDR:]PORT");
   run_cmd
       ->add_flag("--paused", options.paused,
@@ -439,7 +441,9 @@ int main(int argc, char** argv) {
                   "  arbiter run configs/paper/walk_and_kick.yaml --steps 20\n"
                   "  arbiter run configs/paper/walk_and_kick.yaml --trace out.jsonl -q\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --realtime   # Ctrl-C "
-                  "stops cleanly\n\n"
+                  "stops cleanly\n"
+                  "  arbiter run configs/soccer/walk_and_kick.yaml --steps 300 --serve 8080   "
+                  "# then open http://127.0.0.1:8080/\n\n"
                   "Then 'arbiter explain FILE --trace out.jsonl --step N BEHAVIOUR' tells why "
                   "a behaviour had its level.\n") +
       kExitCodes);
@@ -511,7 +515,7 @@ int main(int argc, char** argv) {
   view_cmd
       ->add_option("--serve", options.view_serve,
                    "serve on [ADDR:]PORT (ADDR defaults to 127.0.0.1, PORT 0 picks a free one)")
-      ->check(check_serve_address, "[ADDR:]PORT")
+      ->check(check_serve_address, "")
       ->type_name("[ADDR:]PORT")
       ->capture_default_str();
   view_cmd->footer(
@@ -520,8 +524,8 @@ int main(int argc, char** argv) {
           "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl\n"
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --serve 0\n\n"
-          "Ctrl-C stops the server. ") +
-      kExitCodes);
+          "Ctrl-C stops the server.\n") +
+      kExitCodesTrace);
 
   auto* plot_cmd = app.add_subcommand(
       "plot",
@@ -539,7 +543,7 @@ int main(int argc, char** argv) {
           "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
           "  arbiter plot run.jsonl -o timeline.svg\n"
           "  arbiter plot run.jsonl --actuators > timeline.svg\n\n") +
-      kExitCodes);
+      kExitCodesTrace);
 
   auto* plugins_cmd = app.add_subcommand(
       "plugins",
