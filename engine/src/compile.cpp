@@ -899,7 +899,17 @@ class Compiler {
       guarded_init(*decl.interface, layer.location, [&] { layer.interface->init(init); });
       return;
     }
+    // Initialised in declaration order, not execution order: the writer slots their outputs get
+    // then do not move when an edit only reorders the layer (a flipped inhibition), so a hot
+    // reload keeps those behaviours' instances (their handles are unchanged).
+    std::vector<std::uint32_t> by_declaration;
     for (std::uint32_t b = layer.behaviour_begin; b < layer.behaviour_end; ++b) {
+      by_declaration.push_back(b);
+    }
+    std::sort(by_declaration.begin(), by_declaration.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return std::less<const BehaviourDecl*>()(sources_[a], sources_[b]);
+    });
+    for (const std::uint32_t b : by_declaration) {
       CompiledBehaviour& behaviour = program_.behaviours[b];
       const BehaviourDecl* source = sources_[b];
       behaviour.instance = behaviour.cls->make_behaviour();
