@@ -115,6 +115,8 @@ TEST_CASE("an edit that flips an inhibition changes the trace from the next step
   manager.add_observer(writer);
   for (int i = 0; i < 3; ++i) manager.step();
   CHECK(test::activation_of(manager, "control", "b") == Approx(0.25));
+  const auto* a = &test::instance<test::Probe>(manager.program(), "control", "a");
+  const auto* b = &test::instance<test::Probe>(manager.program(), "control", "b");
 
   config.write(flipped(kTwoProbes));
   const ReloadResult result = reloader.reload(manager);
@@ -123,12 +125,16 @@ TEST_CASE("an edit that flips an inhibition changes the trace from the next step
   CHECK(format(result.diff) ==
         "  - inhibition control: a -> b\n"
         "  + inhibition control: b -> a\n");
+  // Reordering the layer moves no writer slot, so both behaviours keep their instances.
+  CHECK(result.restarted.empty());
   // Staged, not yet swapped: the running program is untouched until the next step.
   CHECK(manager.reloads() == 0);
   CHECK(test::activation_of(manager, "control", "b") == Approx(0.25));
 
   manager.step();
   CHECK(manager.reloads() == 1);
+  CHECK(&test::instance<test::Probe>(manager.program(), "control", "a") == a);
+  CHECK(&test::instance<test::Probe>(manager.program(), "control", "b") == b);
   CHECK(test::activation_of(manager, "control", "a") == Approx(0.25));
   CHECK(test::activation_of(manager, "control", "b") == Approx(0.5));
   const auto lines = lines_of(trace.str());
