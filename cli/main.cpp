@@ -272,6 +272,7 @@ int run(const Options& options) {
       next = Clock::now();
     }
     manager.step();
+    if (manager.stopped()) break;  // on_exception: stop — the run ends with this step
     if (options.realtime) {
       next += period;
       std::this_thread::sleep_until(next);
@@ -289,6 +290,11 @@ int run(const Options& options) {
   if (live) live->serve_until(manager, interrupted);
   if (trace_file.is_open() && !trace_file) {
     std::cerr << fmt::format("arbiter run: writing trace '{}' failed\n", options.trace_path);
+    return kExitInvalid;
+  }
+  if (manager.stopped()) {
+    std::cerr << fmt::format("arbiter run: stopped after step {}: {}\n", manager.steps(),
+                             manager.stop_reason());
     return kExitInvalid;
   }
   return kExitOk;

@@ -896,7 +896,8 @@ class Compiler {
       InstanceInit init(program_, registry_, diagnostics_, layer, kUnbound, layer.name,
                         layer.location, *decl.interface, decl.params, decl.ports,
                         InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
-      guarded_init(*decl.interface, layer.location, [&] { layer.interface->init(init); });
+      guarded_init(diagnostics_, *decl.interface, layer.location,
+                   [&] { layer.interface->init(init); });
       return;
     }
     // Initialised in declaration order, not execution order: the writer slots their outputs get
@@ -916,21 +917,21 @@ class Compiler {
       InstanceInit init(program_, registry_, diagnostics_, layer, b, behaviour.name,
                         behaviour.location, *behaviour.cls, source->params, source->ports,
                         InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
-      guarded_init(*behaviour.cls, behaviour.location, [&] { behaviour.instance->init(init); });
+      guarded_init(diagnostics_, *behaviour.cls, behaviour.location,
+                   [&] { behaviour.instance->init(init); });
     }
   }
 
   template <typename F>
-  void guarded_init(const ClassInfo& cls, const SourceLocation& at, F&& init) {
+  void guarded_init(Diagnostics& into, const ClassInfo& cls, const SourceLocation& at, F&& init) {
     try {
       init();
     } catch (const std::exception& error) {
-      diagnostics_.error(at, "init-failed",
-                         fmt::format("class {} failed to initialise: {}", cls.name, error.what()));
+      into.error(at, "init-failed",
+                 fmt::format("class {} failed to initialise: {}", cls.name, error.what()));
     } catch (...) {
-      diagnostics_.error(
-          at, "init-failed",
-          fmt::format("class {} failed to initialise (unknown exception)", cls.name));
+      into.error(at, "init-failed",
+                 fmt::format("class {} failed to initialise (unknown exception)", cls.name));
     }
   }
 
@@ -1021,8 +1022,9 @@ class Compiler {
                           claim.owner, decl.states[s].name.text, decl.states[s].location,
                           *decl.states[s].cls, params[s], ports[s],
                           InitScope{&bindings_, &claims_, &controller, &decl, sensors});
+        guarded_init(reported[s] ? repeat : diagnostics_, *decl.states[s].cls,
+                     decl.states[s].location, [&] { state.init(init); });
         reported[s] = true;
-        guarded_init(*decl.states[s].cls, decl.states[s].location, [&] { state.init(init); });
       });
     }
   }

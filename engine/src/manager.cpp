@@ -406,6 +406,10 @@ void Manager::report_exception(std::uint32_t index, const char* callback, const 
     }
   }
   if (policy == FaultPolicy::kDisable) disabled_[index] = 1;
+  // Formatting allocates: a behaviour that throws in every step is described once (and once more
+  // for the stop reason), not in every step.
+  const bool sets_stop_reason = policy == FaultPolicy::kStop && !stopping_;
+  if (exception_reported_[index] != 0 && !sets_stop_reason) return;
   const char* outcome =
       "it counts as inactive in each step where it throws (on_exception: "
       "inactive; reported once)";

@@ -1,4 +1,9 @@
-// A plugin that works: test_good.Constant requests its `level` and writes its `value` to `out`.
+// A plugin that works: test_good.Constant requests its `level` and writes its `value` to `out`;
+// test_good.Faulty is the same until its `throw_at` step, where execute() throws (a buggy
+// behaviour as `arbiter run` meets it).
+
+#include <cstdint>
+#include <stdexcept>
 
 #include "arbiter/init_context.hpp"
 #include "arbiter/plugin.hpp"
@@ -21,6 +26,19 @@ class Constant final : public arbiter::Behaviour {
   arbiter::Output<double> out_;
 };
 
+class Faulty final : public arbiter::Behaviour {
+ public:
+  void init(arbiter::InitContext& ctx) override { throw_at_ = ctx.param<std::int64_t>("throw_at"); }
+  double activation(const arbiter::StepContext&) override { return 1.0; }
+  void execute(arbiter::ExecuteContext&) override {
+    if (++executions_ == throw_at_) throw std::runtime_error("sensor cable unplugged");
+  }
+
+ private:
+  std::int64_t throw_at_ = 0;
+  std::int64_t executions_ = 0;
+};
+
 }  // namespace
 
 ARBITER_PLUGIN(registry) {
@@ -28,4 +46,8 @@ ARBITER_PLUGIN(registry) {
   constant.param("level", arbiter::ParamKind::kDouble).fallback(1.0).range(0.0, 1.0);
   constant.param("value", arbiter::ParamKind::kDouble).fallback(0.0);
   constant.output<double>("out");
+  registry.add_behaviour<Faulty>("test_good.Faulty")
+      .param("throw_at", arbiter::ParamKind::kInt)
+      .fallback(std::int64_t{1})
+      .range(1, 1000000);
 }
