@@ -32,13 +32,13 @@ _arbiter() {
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
   local commands="validate run dump explain plugins schema view plot"
-  local global="--help --version --log-level --plugin-path"
+  local global="--help --version --log-level --plugin-path --max-file-bytes"
 
   command=""
   for ((i = 1; i < COMP_CWORD; ++i)); do
     word=${COMP_WORDS[i]}
     case "$word" in
-      --log-level | --plugin-path) ((++i)) ;;
+      --log-level | --plugin-path | --max-file-bytes) ((++i)) ;;
       -*) ;;
       *) command=$word; break ;;
     esac

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -48,6 +49,7 @@ struct Options {
   std::string layer;
   bool quiet = false;
   std::string log_level = "warn";
+  std::optional<std::size_t> max_file_bytes;  ///< unset: the library's default
   std::vector<std::string> load;  ///< plugins to list (`plugins`, `schema`); empty: all found
   bool builtin_only = false;
   std::uint64_t step = 0;
@@ -78,6 +80,7 @@ arbiter::LoadOptions load_options_of(const Options& options) {
   arbiter::LoadOptions load_options;
   load_options.strict = options.strict;
   load_options.plugins.path = options.plugin_path;
+  if (options.max_file_bytes) load_options.limits.max_file_bytes = *options.max_file_bytes;
   return load_options;
 }
 
@@ -390,6 +393,11 @@ int main(int argc, char** argv) {
                  "ARBITER_PLUGIN_PATH and the plugins that come with arbiter")
       ->check(CLI::ExistingDirectory)
       ->type_name("DIR");
+  app.add_option("--max-file-bytes", options.max_file_bytes,
+                 "refuse config files (and included files) larger than this; default 16777216 "
+                 "(16 MiB)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 40))
+      ->type_name("BYTES");
 
   auto* validate_cmd = app.add_subcommand(
       "validate",

@@ -35,6 +35,8 @@ expect "" -- validate run dump explain plugins schema view plot
 expect "ex" -- explain
 expect "--log-level" "warn" "d" -- dump
 expect "--plu" -- --plugin-path
+expect "--max" -- --max-file-bytes
+expect "--max-file-bytes" "1000" "va" -- validate
 expect "dump" "--fo" -- --format
 expect "dump" "--format" "" -- text dot json
 expect "validate" "--format" "" -- text json
