@@ -14,11 +14,12 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <system_error>
-#include <unordered_set>
+#include <unordered_map>
 
 namespace arbiter {
 
@@ -29,10 +30,24 @@ const Node* Node::find(std::string_view key) const {
   return nullptr;
 }
 
+namespace {
+
+// The core schema's null, written as a plain scalar.
+bool plain_null(std::string_view text) {
+  return text.empty() || text == "~" || text == "null" || text == "Null" || text == "NULL";
+}
+
+}  // namespace
+
+const std::string& NodeLocation::file() const {
+  static const std::string kNone;
+  return file_ ? *file_ : kNone;
+}
+
 bool Node::reads_as_null() const {
   if (kind_ == Kind::kNull) return true;
   if (kind_ != Kind::kScalar || quoted_) return false;
-  return text_.empty() || text_ == "~" || text_ == "null" || text_ == "Null" || text_ == "NULL";
+  return plain_null(text_);
 }
 
 std::optional<bool> Node::as_bool() const {
@@ -141,7 +156,7 @@ SourceLocation Node::text_location(std::size_t offset) const {
   for (std::size_t i = 0; i < offset; ++i) {
     if ((static_cast<unsigned char>(text_[i]) & 0xC0) != 0x80) ++characters;
   }
-  return {location_.file, location_.line, text_column_ + characters};
+  return {location_.file(), location_.line(), text_column_ + characters};
 }
 
 void Node::set_scalar(std::string text, bool quoted) {
@@ -154,7 +169,7 @@ Node& Node::push_item(Node item) {
   return items_.emplace_back(std::move(item));
 }
 
-Node::Entry& Node::add_entry(std::string key, SourceLocation key_location, Node value) {
+Node::Entry& Node::add_entry(std::string key, NodeLocation key_location, Node value) {
   return entries_.emplace_back(Entry{std::move(key), std::move(key_location), std::move(value)});
 }
 
@@ -178,7 +193,8 @@ bool is_blank(char c) {
 /// columns count bytes) into locations whose columns count characters.
 class SourceText {
  public:
-  SourceText(std::string_view text, const std::string& file) : text_(text), file_(file) {
+  SourceText(std::string_view text, const std::string& file)
+      : text_(text), file_(file), shared_file_(std::make_shared<const std::string>(file)) {
     line_starts_.push_back(0);
     for (std::size_t i = 0; i < text.size(); ++i) {
       if (text[i] == '\n') line_starts_.push_back(i + 1);
@@ -196,26 +212,16 @@ class SourceText {
   }
 
   SourceLocation location(std::size_t offset) const {
-    offset = std::min(offset, text_.size());
-    const auto next = std::upper_bound(line_starts_.begin(), line_starts_.end(), offset);
-    const std::size_t start = *(next - 1);
-    // Nodes are located mostly in file order: counting on from the last place located on the
-    // same line keeps a long line (a whole file of flow style) linear rather than quadratic.
-    std::size_t from = start;
-    int column = 1;
-    if (cached_offset_ >= start && cached_offset_ <= offset && cached_start_ == start) {
-      from = cached_offset_;
-      column = cached_column_;
-    }
-    for (std::size_t i = from; i < offset; ++i) {
-      if (!is_continuation_byte(text_[i])) ++column;
-    }
-    cached_start_ = start;
-    cached_offset_ = offset;
-    cached_column_ = column;
-    return {file_, static_cast<int>(next - line_starts_.begin()), column};
+    const Place place = locate(offset);
+    return {file_, place.line, place.column};
   }
   SourceLocation location(const YAML::Mark& mark) const { return location(offset(mark)); }
+
+  /// The same place as a Document node keeps it, naming the file without copying its name.
+  NodeLocation node_location(std::size_t offset) const {
+    const Place place = locate(offset);
+    return {shared_file_, place.line, place.column};
+  }
 
   /// "line 5, column 17", for notes about a place in the same file.
   std::string describe(std::size_t offset) const {
@@ -231,11 +237,52 @@ class SourceText {
   }
 
  private:
+  struct Place {
+    int line;
+    int column;
+  };
+
+  Place locate(std::size_t offset) const {
+    offset = std::min(offset, text_.size());
+    // Nodes are located mostly in file order, so the line is usually the last one located or the
+    // next; counting on from the last place located on the same line keeps a long line (a whole
+    // file of flow style) linear rather than quadratic.
+    std::size_t line = cached_line_;
+    if (!on_line(line, offset)) {
+      line = on_line(line + 1, offset)
+                 ? line + 1
+                 : static_cast<std::size_t>(
+                       std::upper_bound(line_starts_.begin(), line_starts_.end(), offset) -
+                       line_starts_.begin() - 1);
+    }
+    const std::size_t start = line_starts_[line];
+    std::size_t from = start;
+    int column = 1;
+    if (cached_line_ == line && cached_offset_ <= offset) {
+      from = cached_offset_;
+      column = cached_column_;
+    }
+    for (std::size_t i = from; i < offset; ++i) {
+      if (!is_continuation_byte(text_[i])) ++column;
+    }
+    cached_line_ = line;
+    cached_offset_ = offset;
+    cached_column_ = column;
+    return {static_cast<int>(line + 1), column};
+  }
+
+  // Whether `offset` lies on the line of index `line` (its newline included).
+  bool on_line(std::size_t line, std::size_t offset) const {
+    return line < line_starts_.size() && line_starts_[line] <= offset &&
+           (line + 1 == line_starts_.size() || offset < line_starts_[line + 1]);
+  }
+
   std::string_view text_;
   const std::string& file_;
+  std::shared_ptr<const std::string> shared_file_;
   std::vector<std::size_t> line_starts_;
-  mutable std::size_t cached_start_ = std::string_view::npos;
-  mutable std::size_t cached_offset_ = std::string_view::npos;
+  mutable std::size_t cached_line_ = 0;
+  mutable std::size_t cached_offset_ = 0;
   mutable int cached_column_ = 1;
 };
 
@@ -641,20 +688,15 @@ class TreeBuilder : public YAML::EventHandler {
                 const std::string& value) override {
     const std::string_view text = source_.text();
     const std::size_t at = token_start(source_.offset(mark));
-    Node node(Node::Kind::kScalar, source_.location(at));
-    if (find_invalid_utf8(value) == std::string_view::npos) {
-      node.set_scalar(value, tag != "?");
-    } else {
-      node.set_scalar(repair_utf8(value), tag != "?");
-    }
+    NodeLocation location = source_.node_location(at);
+    const bool quoted = tag != "?";
     // The text is verbatim when the file holds exactly it (after the opening quote, if any).
     const char quote = at < text.size() && (text[at] == '"' || text[at] == '\'') ? text[at] : 0;
     const std::size_t begin = at + (quote != 0 ? 1 : 0);
     const std::size_t end = begin + value.size();
-    if (end <= text.size() && text.compare(begin, value.size(), value) == 0 &&
-        (quote == 0 || (end < text.size() && text[end] == quote))) {
-      node.set_text_column(source_.location(begin).column);
-    } else if (quote != 0 && !closed(at)) {
+    const bool verbatim = end <= text.size() && text.compare(begin, value.size(), value) == 0 &&
+                          (quote == 0 || (end < text.size() && text[end] == quote));
+    if (!verbatim && quote != 0 && !closed(at)) {
       // yaml-cpp ends an unclosed quoted scalar at the end of the file without complaint; the
       // rest of the file is then inside the string, so nothing after this is worth checking.
       diagnostics_.error(source_.location(at), "yaml-syntax",
@@ -663,6 +705,18 @@ class TreeBuilder : public YAML::EventHandler {
       unreadable = true;
     }
     count(mark, 1);
+    std::string scalar =
+        find_invalid_utf8(value) == std::string_view::npos ? value : repair_utf8(value);
+    // Most scalars are keys: kept as the entry's key, never built as a node.
+    if (anchor == 0 && expecting_key() && (quoted || !plain_null(scalar))) {
+      take_key(std::move(scalar), std::move(location));
+      return;
+    }
+    // The opening quote is one character.
+    const int text_column = verbatim ? location.column() + (quote != 0 ? 1 : 0) : 0;
+    Node node(Node::Kind::kScalar, std::move(location));
+    node.set_scalar(std::move(scalar), quoted);
+    node.set_text_column(text_column);
     finish(std::move(node), anchor);
   }
 
@@ -686,8 +740,24 @@ class TreeBuilder : public YAML::EventHandler {
     bool has_key = false;
     bool drop_value = false;  // the key was unusable and already reported
     std::string key;
-    SourceLocation key_location;
-    std::unordered_set<std::string> keys;
+    NodeLocation key_location;
+    // Key → entry, for mappings too large to search; filled as the first search needs it.
+    std::unordered_map<std::string, std::size_t> index;
+
+    const Node::Entry* find(const std::string& key) {
+      const auto& entries = node.entries();
+      // Most mappings have a handful of keys: a scan beats hashing them.
+      constexpr std::size_t kScanned = 16;
+      if (entries.size() <= kScanned) {
+        for (const auto& entry : entries) {
+          if (entry.key == key) return &entry;
+        }
+        return nullptr;
+      }
+      for (std::size_t i = index.size(); i < entries.size(); ++i) index.emplace(entries[i].key, i);
+      const auto found = index.find(key);
+      return found == index.end() ? nullptr : &entries[found->second];
+    }
   };
 
   // yaml-cpp marks a node at its properties (`!!str`, `&anchor`); the node starts after them.
@@ -700,8 +770,8 @@ class TreeBuilder : public YAML::EventHandler {
     return at;
   }
 
-  SourceLocation where(const YAML::Mark& mark) const {
-    return source_.location(token_start(source_.offset(mark)));
+  NodeLocation where(const YAML::Mark& mark) const {
+    return source_.node_location(token_start(source_.offset(mark)));
   }
 
   // Whether the quoted scalar opening at `at` has its closing quote.
@@ -768,39 +838,41 @@ class TreeBuilder : public YAML::EventHandler {
       return;
     }
     if (!parent.has_key) {
-      parent.has_key = true;
-      parent.drop_value = false;
-      parent.key_location = node.location();
       if (!node.is_scalar() || node.reads_as_null()) {
+        parent.has_key = true;
+        parent.drop_value = true;
         diagnostics_.error(node.location(), "bad-key",
                            fmt::format("a mapping key must be a name, found {}", node.describe()));
-        parent.drop_value = true;
         return;
       }
-      parent.key = node.text();
-      if (!parent.keys.insert(parent.key).second) {
-        auto& error = diagnostics_.error(node.location(), "duplicate-key",
-                                         fmt::format("duplicate key '{}'", parent.key));
-        if (const Node::Entry* first = find_entry(parent.node, parent.key)) {
-          const auto& where = first->key_location;
-          error.notes.push_back(fmt::format("first defined at {}:{}:{}; the second is ignored",
-                                            where.file, where.line, where.column));
-        }
-        parent.drop_value = true;
-      }
+      take_key(node.text(), node.node_location());
       return;
     }
     parent.has_key = false;
     if (!parent.drop_value) {
-      parent.node.add_entry(std::move(parent.key), parent.key_location, std::move(node));
+      parent.node.add_entry(std::move(parent.key), std::move(parent.key_location), std::move(node));
     }
   }
 
-  static const Node::Entry* find_entry(const Node& mapping, const std::string& key) {
-    for (const auto& entry : mapping.entries()) {
-      if (entry.key == key) return &entry;
+  bool expecting_key() const {
+    return !stack_.empty() && stack_.back().node.is_mapping() && !stack_.back().has_key;
+  }
+
+  // The innermost mapping's next key; its value is dropped when the key repeats an earlier one.
+  void take_key(std::string key, NodeLocation location) {
+    Frame& parent = stack_.back();
+    parent.has_key = true;
+    parent.drop_value = false;
+    if (const Node::Entry* first = parent.find(key)) {
+      const auto& where = first->key_location;
+      diagnostics_.error(location, "duplicate-key", fmt::format("duplicate key '{}'", key))
+          .notes.push_back(fmt::format("first defined at {}:{}:{}; the second is ignored",
+                                       where.file(), where.line(), where.column()));
+      parent.drop_value = true;
+      return;
     }
-    return nullptr;
+    parent.key = std::move(key);
+    parent.key_location = std::move(location);
   }
 
   const SourceText& source_;
@@ -848,7 +920,8 @@ std::optional<Node> parse_document(std::string_view text, const std::string& fil
   TreeBuilder builder(source, diagnostics, limits);
   try {
     YAML::Parser parser(stream);
-    if (!parser.HandleNextDocument(builder)) return Node(Node::Kind::kNull, {file, 1, 1});
+    if (!parser.HandleNextDocument(builder))
+      return Node(Node::Kind::kNull, source.node_location(0));
     Diagnostics ignored;  // the second document's own problems do not matter
     TreeBuilder extra(source, ignored, limits);
     if (parser.HandleNextDocument(extra) && extra.root) {
@@ -877,7 +950,7 @@ std::optional<Node> parse_document(std::string_view text, const std::string& fil
     return std::nullopt;
   }
   if (builder.unreadable) return std::nullopt;
-  if (!builder.root) return Node(Node::Kind::kNull, {file, 1, 1});
+  if (!builder.root) return Node(Node::Kind::kNull, source.node_location(0));
   return std::move(builder.root);
 }
 

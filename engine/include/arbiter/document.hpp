@@ -3,6 +3,7 @@
 // node carries its file:line:column. Nothing after read_document sees a yaml-cpp or nlohmann type.
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -12,6 +13,28 @@
 
 namespace arbiter {
 
+/// A place in a config file as the Document keeps it: every node of a file shares one copy of the
+/// file's name. Converts to the SourceLocation that diagnostics take.
+class NodeLocation {
+ public:
+  NodeLocation() = default;
+  NodeLocation(std::shared_ptr<const std::string> file, int line, int column)
+      : file_(std::move(file)), line_(line), column_(column) {}
+
+  const std::string& file() const;
+  int line() const { return line_; }
+  int column() const { return column_; }
+
+  SourceLocation get() const { return {file(), line_, column_}; }
+  // Implicit, so that a key's location is passed to Diagnostics and stored as before.
+  operator SourceLocation() const { return get(); }  // NOLINT(google-explicit-constructor)
+
+ private:
+  std::shared_ptr<const std::string> file_;
+  int line_ = 0;
+  int column_ = 0;
+};
+
 class Node {
  public:
   enum class Kind { kNull, kScalar, kSequence, kMapping };
@@ -19,10 +42,11 @@ class Node {
   struct Entry;
 
   Node() = default;
-  Node(Kind kind, SourceLocation location) : kind_(kind), location_(std::move(location)) {}
+  Node(Kind kind, NodeLocation location) : kind_(kind), location_(std::move(location)) {}
 
   Kind kind() const { return kind_; }
-  const SourceLocation& location() const { return location_; }
+  SourceLocation location() const { return location_.get(); }
+  const NodeLocation& node_location() const { return location_; }
   bool is_null() const { return kind_ == Kind::kNull; }
   bool is_scalar() const { return kind_ == Kind::kScalar; }
   bool is_sequence() const { return kind_ == Kind::kSequence; }
@@ -57,22 +81,22 @@ class Node {
   /// Records that text() appears verbatim in the file from this 1-based column of the node's line.
   void set_text_column(int column) { text_column_ = column; }
   Node& push_item(Node item);
-  Entry& add_entry(std::string key, SourceLocation key_location, Node value);
+  Entry& add_entry(std::string key, NodeLocation key_location, Node value);
   std::size_t size() const { return is_mapping() ? entries_.size() : items_.size(); }
 
  private:
   Kind kind_ = Kind::kNull;
-  SourceLocation location_;
-  std::string text_;
   bool quoted_ = false;
   int text_column_ = 0;  // 0: the text is not verbatim in the file
+  NodeLocation location_;
+  std::string text_;
   std::vector<Node> items_;
   std::vector<Entry> entries_;
 };
 
 struct Node::Entry {
   std::string key;
-  SourceLocation key_location;
+  NodeLocation key_location;
   Node value;
 };
 
