@@ -910,6 +910,55 @@ TEST_CASE("explain tells what a state machine did in a step", "[explain]") {
   }
 }
 
+TEST_CASE("explain reads a trace of a run reloaded with --watch", "[explain][reload]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const Program program = load_config(kWalkAndKick, registry, diagnostics);
+  std::vector<std::string> lines;
+  {
+    std::istringstream in(trace_of(kWalkAndKick, 10));
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+  }
+  REQUIRE(lines.size() == 11);
+  // The header a reload after step 5 writes, for the program it swapped in.
+  const auto reload_header = [](std::string header) {
+    const std::string start = "{\"arbiter_trace\": 1, ";
+    REQUIRE(header.rfind(start, 0) == 0);
+    return start + "\"reload\": 1, \"after_step\": 5, " + header.substr(start.size());
+  };
+  const auto reloaded = [&](const std::string& header) {
+    std::string text;
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      if (i == 6) text += reload_header(header) + "\n";
+      text += lines[i] + "\n";
+    }
+    return text;
+  };
+  const auto explain_text = [&](const std::string& trace, std::uint64_t step) {
+    std::istringstream in(trace);
+    return explain(program, in, step, "search_for_ball");
+  };
+  std::string other_header;
+  std::getline(std::istringstream(trace_of("configs/paper/hierarchical.yaml", 1)) >> std::ws,
+               other_header);
+
+  // Reloaded into the config given: steps on both sides of the reload are explained.
+  const std::string same = reloaded(lines[0]);
+  CHECK(explain_text(same, 3).status == Explanation::Status::kOk);
+  std::string whole;
+  for (const auto& line : lines) whole += line + "\n";
+  const auto after = explain_text(same, 7);
+  REQUIRE(after.status == Explanation::Status::kOk);
+  CHECK(after.text == explain_text(whole, 7).text);
+
+  // Reloaded into another config: the steps before it still match this one, those after do not.
+  const std::string other = reloaded(other_header);
+  CHECK(explain_text(other, 5).status == Explanation::Status::kOk);
+  const auto mismatch = explain_text(other, 7);
+  CHECK(mismatch.status == Explanation::Status::kBadTrace);
+  CHECK(mismatch.text == "the trace was written for 'hierarchical', not for 'walk_and_kick'");
+}
+
 TEST_CASE("explain reports what it cannot explain", "[explain]") {
   Registry registry = tooling_registry();
   Diagnostics diagnostics;

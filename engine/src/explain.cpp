@@ -192,14 +192,23 @@ std::optional<Explanation> read_trace(const Program& program, std::istream& in, 
   Json header;
   if (line.empty()) return failure(Status::kBadTrace, "the trace is empty");
   if (auto error = parse(header)) return error;
-  if (auto error = check_header(program, header)) return error;
   while (std::getline(in, line)) {
     ++line_number;
     if (line.empty()) continue;
     const auto at = step_of(line);
     if (!at) {
-      return failure(Status::kBadTrace,
-                     fmt::format("line {} of the trace is not a step record", line_number));
+      // A run reloaded with --watch has a header per program ("reload": N, "after_step": S):
+      // a step is explained against the program that ran it.
+      Json reload;
+      if (parse(reload) || !reload.is_object() || !reload.contains("arbiter_trace") ||
+          !reload.contains("reload") || !reload.value("after_step", Json()).is_number_unsigned()) {
+        return failure(Status::kBadTrace,
+                       fmt::format("line {} of the trace is not a step record", line_number));
+      }
+      if (step <= reload["after_step"].get<std::uint64_t>()) break;
+      header = std::move(reload);
+      records.previous = Json();  // written by the program before, with its own indices
+      continue;
     }
     records.last_step = *at;
     Json* slot = *at + 1 == step   ? &records.previous
@@ -211,6 +220,7 @@ std::optional<Explanation> read_trace(const Program& program, std::istream& in, 
     }
     if (*at > step) break;
   }
+  if (auto error = check_header(program, header)) return error;
   if (records.current.is_null()) {
     return failure(
         Status::kNotFound,
