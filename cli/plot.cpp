@@ -283,6 +283,45 @@ class Plot {
     return out;
   }
 
+  /// True when behaviour or interface code reported something (the records' "reported").
+  bool has_reported() const {
+    return std::any_of(trace_.records.begin(), trace_.records.end(),
+                       [](const Json& record) { return member(record, "reported").is_array(); });
+  }
+
+  /// One row with a tick per reported event, labelled where there is room for the text.
+  void reported() {
+    const double top = open_row("reported", "reported", "reported by code");
+    double label_end = 0;  // right edge of the last label drawn
+    for (std::size_t i = 0; i < trace_.records.size(); ++i) {
+      const Json& reported = member(trace_.records[i], "reported");
+      if (!reported.is_array() || reported.empty()) continue;
+      std::string text;
+      for (const auto& event : reported) {
+        const Json& by = member(event, "by");
+        const Json& what = member(event, "text");
+        if (!what.is_string()) continue;
+        if (!text.empty()) text += "; ";
+        text += (by.is_string() ? by.get<std::string>() + ": " : "") + what.get<std::string>();
+      }
+      const double at = x(i) + (x(i + 1) - x(i)) / 2;
+      body_ += fmt::format(
+          R"(<line class="event" x1="{0:.1f}" y1="{1:.1f}" x2="{0:.1f}" y2="{2:.1f}" stroke="#e6550d" stroke-width="2"><title>step {3}: {4}</title></line>)",
+          at, top + 2, top + kRow - 2, step_at(i), escape(text));
+      const Json& first = member(reported.front(), "text");
+      const std::string label = first.is_string() ? first.get<std::string>() : "";
+      // About 7 px per character at the plot's font size; overlapping labels are left out (the
+      // tick's tooltip still has the text).
+      if (at + 3 >= label_end && !label.empty()) {
+        body_ += fmt::format(
+            R"(<text class="reported-label" x="{:.1f}" y="{:.1f}" font-size="11" fill="#a63603">{}</text>)",
+            at + 3, top + kRow / 2 + 4, escape(label));
+        label_end = at + 3 + 7.0 * static_cast<double>(label.size());
+      }
+    }
+    close_row();
+  }
+
   /// A dashed line through every row where a reload swapped a new program in.
   void reloads() {
     for (const auto& reload : trace_.reloads) {
@@ -337,6 +376,10 @@ std::vector<std::pair<std::string, std::vector<std::string>>> behaviours_of(
 
 std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
   Plot plot(trace);
+  if (plot.has_reported()) {
+    plot.section("events");
+    plot.reported();
+  }
   for (const auto& [layer, names] : behaviours_of(trace)) {
     if (names.empty()) continue;
     plot.section("layer " + layer);

@@ -46,6 +46,21 @@ width=$("$xmllint" --xpath "string($kick/*[@class='active']/@width)" "$work/pape
 [[ $(count "//*[local-name()='g'][@class='row controller']/*[@class='event']" "$work/h.svg") -gt 0 ]] ||
   fail "no state machine events marked"
 
+# What behaviour code reports (the soccer world's kick and goal) is in the trace and marked on a row
+# of its own; a trace without reports has no such row.
+"$arbiter" run "$source/configs/soccer/walk_and_kick.yaml" --steps 220 --trace "$work/soccer.jsonl" -q
+grep -q '"reported": \[{"by": "world", "text": "ball kicked"}\]' "$work/soccer.jsonl" ||
+  fail "the trace does not record the kick"
+"$arbiter" plot "$work/soccer.jsonl" -o "$work/soccer.svg"
+"$xmllint" --noout "$work/soccer.svg" || fail "soccer.svg is not well-formed"
+[[ $(rows reported "$work/soccer.svg") == 1 ]] || fail "expected one row of reported events"
+reported="//*[local-name()='g'][@class='row reported']"
+[[ $(count "$reported/*[@class='event']" "$work/soccer.svg") == 2 ]] ||
+  fail "expected two reported events (kick, goal)"
+[[ $("$xmllint" --xpath "string($reported/*[@class='event'][2]/*[local-name()='title'])" \
+  "$work/soccer.svg") == "step 196: world: goal!" ]] || fail "the goal is not marked at step 196"
+[[ $(rows reported "$work/paper.svg") == 0 ]] || fail "a row of reported events without any"
+
 # A run whose config was reloaded (--watch): a reload header after step 2 that adds a behaviour.
 {
   sed -n 1,3p "$work/paper.jsonl"

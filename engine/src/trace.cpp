@@ -104,7 +104,23 @@ void append_step_record(const Manager& manager, std::string& out) {
     out += to_string(controller.status());
     out += "\"}";
   }
-  out += "}}";
+  out += "}";
+  // What behaviour and interface code reported (StepContext::report): only in steps that have
+  // some, so that traces of graphs that report nothing keep DESIGN 5's exact shape.
+  if (manager.event_count() > 0) {
+    out += R"(, "reported": [)";
+    for (std::size_t e = 0; e < manager.event_count(); ++e) {
+      const auto& event = manager.event(e);
+      if (e > 0) out += ", ";
+      out += R"({"by": )";
+      append_name(manager.event_source(event), out);
+      out += R"(, "text": )";
+      detail::append_json_string(event.text, out);
+      out += "}";
+    }
+    out += "]";
+  }
+  out += "}";
 }
 
 void TraceWriter::on_start(const Manager& manager) {
