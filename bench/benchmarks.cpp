@@ -13,6 +13,7 @@
 #include <fstream>
 #include <map>
 
+#include "arbiter/lint.hpp"
 #include "arbiter/manager.hpp"
 #include "benchmarks.hpp"
 #include "generator.hpp"
@@ -111,7 +112,7 @@ const std::string& config_file(std::size_t n) {
   return path;
 }
 
-enum class Stage { kParse, kValidate, kCompile, kTotal };
+enum class Stage { kParse, kValidate, kCompile, kLint, kTotal };
 
 /// One stage of arbiter::load() (or all of it) for the dag config of N behaviours, 3N
 /// inhibitions.
@@ -126,6 +127,7 @@ void load(benchmark::State& state, Stage stage) {
     state.SkipWithError(format(diagnostics).c_str());
     return;
   }
+  const auto linted = stage == Stage::kLint ? compile(model, fresh, diagnostics) : std::nullopt;
   double paused = 0.0;
   const auto discard = [&](std::optional<Program>& program) {
     const double before = cpu_seconds();
@@ -150,6 +152,9 @@ void load(benchmark::State& state, Stage stage) {
         discard(program);
         break;
       }
+      case Stage::kLint:
+        lint(model, *linted, each);
+        break;
       case Stage::kTotal: {
         auto program = arbiter::load(path, fresh, each);
         if (!program) state.SkipWithError(format(each).c_str());
@@ -215,6 +220,7 @@ void register_benchmarks() {
   const std::pair<const char*, Stage> stages[] = {{"load/parse", Stage::kParse},
                                                   {"load/validate", Stage::kValidate},
                                                   {"load/compile", Stage::kCompile},
+                                                  {"load/lint", Stage::kLint},
                                                   {"load/total", Stage::kTotal}};
   for (const auto& [name, stage] : stages) {
     benchmark::RegisterBenchmark(name, load, stage)

@@ -3,8 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <functional>
 #include <limits>
-#include <unordered_map>
+#include <string_view>
 
 namespace arbiter {
 
@@ -34,6 +35,77 @@ const char* arrow(bool chaining) {
   return chaining ? "=>" : "->";
 }
 
+/// A list of edge ids per behaviour, all in one array: a vector per behaviour costs an
+/// allocation each, which showed at 10 000 behaviours.
+class EdgeLists {
+ public:
+  struct Range {
+    const std::uint32_t* first;
+    const std::uint32_t* last;
+    const std::uint32_t* begin() const { return first; }
+    const std::uint32_t* end() const { return last; }
+  };
+
+  /// `owner_of(e)` is the behaviour edge e is listed under, or kNone; lists keep edge order.
+  template <typename OwnerOf>
+  EdgeLists(std::uint32_t behaviours, std::uint32_t edges, OwnerOf owner_of)
+      : begin_(behaviours + 1, 0) {
+    for (std::uint32_t e = 0; e < edges; ++e) {
+      if (const std::uint32_t owner = owner_of(e); owner != kNone) ++begin_[owner + 1];
+    }
+    for (std::uint32_t b = 0; b < behaviours; ++b) begin_[b + 1] += begin_[b];
+    ids_.resize(begin_[behaviours]);
+    std::vector<std::uint32_t> next(begin_.begin(), begin_.end() - 1);
+    for (std::uint32_t e = 0; e < edges; ++e) {
+      if (const std::uint32_t owner = owner_of(e); owner != kNone) ids_[next[owner]++] = e;
+    }
+  }
+  EdgeLists() = default;
+
+  Range operator[](std::uint32_t b) const {
+    return {ids_.data() + begin_[b], ids_.data() + begin_[b + 1]};
+  }
+
+ private:
+  std::vector<std::uint32_t> begin_;
+  std::vector<std::uint32_t> ids_;
+};
+
+/// A layer's behaviour names → their index in the layer, in one open-addressing table: a hash
+/// node per name (std::unordered_map) cost more than the rest of the linter's setup at 10 000.
+class NameIndex {
+ public:
+  NameIndex(const std::vector<CompiledBehaviour>& behaviours, std::uint32_t base,
+            std::uint32_t size)
+      : behaviours_(behaviours), base_(base) {
+    std::size_t capacity = 16;
+    while (capacity < 2 * std::size_t{size}) capacity *= 2;
+    slots_.assign(capacity, kNone);
+    for (std::uint32_t i = 0; i < size; ++i) {
+      std::size_t slot = first_slot(behaviours[base + i].name);
+      while (slots_[slot] != kNone) slot = (slot + 1) & (slots_.size() - 1);
+      slots_[slot] = i;
+    }
+  }
+
+  /// The index of the behaviour named `name` (the first of that name), or kNone.
+  std::uint32_t find(std::string_view name) const {
+    for (std::size_t slot = first_slot(name);; slot = (slot + 1) & (slots_.size() - 1)) {
+      const std::uint32_t i = slots_[slot];
+      if (i == kNone || behaviours_[base_ + i].name == name) return i;
+    }
+  }
+
+ private:
+  std::size_t first_slot(std::string_view name) const {
+    return std::hash<std::string_view>{}(name) & (slots_.size() - 1);
+  }
+
+  const std::vector<CompiledBehaviour>& behaviours_;
+  std::uint32_t base_;
+  std::vector<std::uint32_t> slots_;
+};
+
 /// A layer's declared inhibitions over its behaviours, numbered by execution (topological)
 /// order: an inhibitor always comes before what it inhibits.
 struct LayerGraph {
@@ -45,8 +117,8 @@ struct LayerGraph {
   std::uint32_t base = 0;  ///< program index of the layer's first behaviour
   std::uint32_t size = 0;
   std::vector<Edge> edges;
-  std::vector<std::vector<std::uint32_t>> in;         ///< edge ids, by inhibited
-  std::vector<std::vector<std::uint32_t>> chain_out;  ///< chaining edge ids, by inhibitor
+  EdgeLists in;         ///< edge ids, by inhibited
+  EdgeLists chain_out;  ///< chaining edge ids, by inhibitor
 
   const Edge* declared(std::uint32_t from, std::uint32_t to) const {
     for (auto e : in[to]) {
@@ -67,26 +139,24 @@ class Linter {
       LayerGraph& graph = graphs_[l];
       graph.base = layer.behaviour_begin;
       graph.size = layer.behaviour_end - layer.behaviour_begin;
-      graph.in.resize(graph.size);
-      graph.chain_out.resize(graph.size);
-      std::unordered_map<std::string_view, std::uint32_t> index;
-      for (std::uint32_t i = 0; i < graph.size; ++i) {
-        index.emplace(program.behaviours[graph.base + i].name, i);
-      }
+      const NameIndex index(program.behaviours, graph.base, graph.size);
       for (const auto& decl : model.layers[l].behaviours) {
-        if (const auto found = index.find(decl.name.text); found != index.end()) {
-          decls_[graph.base + found->second] = &decl;
+        if (const auto found = index.find(decl.name.text); found != kNone) {
+          decls_[graph.base + found] = &decl;
         }
       }
+      graph.edges.reserve(model.layers[l].inhibitions.size());
       for (const auto& inhibition : model.layers[l].inhibitions) {
         const auto from = index.find(inhibition.inhibitor.text);
         const auto to = index.find(inhibition.inhibited.text);
-        if (from == index.end() || to == index.end()) continue;
-        const auto e = static_cast<std::uint32_t>(graph.edges.size());
-        graph.edges.push_back({from->second, to->second, &inhibition});
-        graph.in[to->second].push_back(e);
-        if (inhibition.chaining) graph.chain_out[from->second].push_back(e);
+        if (from == kNone || to == kNone) continue;
+        graph.edges.push_back({from, to, &inhibition});
       }
+      const auto edges = static_cast<std::uint32_t>(graph.edges.size());
+      graph.in = EdgeLists(graph.size, edges, [&](std::uint32_t e) { return graph.edges[e].to; });
+      graph.chain_out = EdgeLists(graph.size, edges, [&](std::uint32_t e) {
+        return graph.edges[e].decl->chaining ? graph.edges[e].from : kNone;
+      });
     }
   }
 
