@@ -19,6 +19,7 @@ const view = {
   behaviours: new Map(),  // 'layer/name' -> {group, rect, level, mark}
   ports: new Map(),       // actuator name -> {group, value}
   timelines: new Map(),   // 'layer/name' -> canvas
+  reported: [],     // what behaviour code reported (records' "reported"), oldest first
   hovered: null,
   explainPending: false,
   explainShown: '',
@@ -206,6 +207,25 @@ function buildTimelines(graph) {
   }
 }
 
+const REPORTED_SHOWN = 8;
+const REPORTED_KEPT = 200;  // live: the oldest are dropped
+
+function collectReported(record) {
+  for (const event of record.reported || []) view.reported.push({step: record.step, ...event});
+}
+
+// The last events reported at or before the shown step, newest first.
+function showReported(record) {
+  const list = document.getElementById('reported');
+  const shown = view.reported.filter((event) => event.step <= record.step).slice(-REPORTED_SHOWN);
+  list.replaceChildren();
+  if (!shown.length) el('li', {class: 'empty'}, list, null).textContent = 'nothing reported yet';
+  for (const event of shown.reverse()) {
+    const item = el('li', {class: 'event'}, list, null);
+    item.textContent = `step ${event.step}  ${event.by}: ${event.text}`;
+  }
+}
+
 function levelsOf(record, key) {
   const [layer, name] = key.split('/');
   return record && record.layers && record.layers[layer] ? record.layers[layer][name] : undefined;
@@ -249,6 +269,7 @@ function show(record) {
     for (const item of state.queue) el('span', {}, queue, null).textContent = item;
     div.querySelector('.events').textContent = state.events.length ? state.events.join(' · ') : 'no events this step';
   }
+  showReported(record);
   drawTimelines();
   if (view.hovered) explain(view.hovered);
 }
@@ -334,6 +355,8 @@ function startLive() {
     if (last && record.step <= last.step) return;  // already have it (a reconnect)
     view.records.push(record);
     if (view.records.length > HISTORY) view.records.splice(0, view.records.length - HISTORY);
+    collectReported(record);
+    if (view.reported.length > REPORTED_KEPT) view.reported.splice(0, view.reported.length - REPORTED_KEPT);
     show(record);
   });
   events.addEventListener('status', (event) => {
@@ -351,6 +374,7 @@ async function startTrace() {
                                             fetch('trace').then((r) => r.text())]);
   const lines = trace.split('\n').filter((line) => line.trim());
   view.records = lines.slice(1).map((line) => JSON.parse(line));
+  view.records.forEach(collectReported);
   buildGraph(graph);
   const scrub = document.getElementById('scrub');
   scrub.min = 0;

@@ -201,6 +201,25 @@ test('the trace view scrubs through the recorded steps', async () => {
   await page.close();
 });
 
+test('the trace view lists what behaviour code reported up to the step shown', async () => {
+  const trace = path.join(scratch, 'soccer.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '220', '--trace', trace, '-q'], {cwd: source});
+  const {url} = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
+  const page = await open(url);
+  const scrubTo = (index) => page.$eval('#scrub', (node, value) => {
+    node.value = value;
+    node.dispatchEvent(new Event('input'));
+  }, index);
+  const reported = () => page.locator('#reported li.event').allTextContents();
+  await scrubTo(100);
+  assert.deepEqual(await reported(), []);
+  await scrubTo(180);
+  assert.deepEqual(await reported(), ['step 172  world: ball kicked']);
+  await scrubTo(219);
+  assert.deepEqual(await reported(), ['step 196  world: goal!', 'step 172  world: ball kicked']);
+  await page.close();
+});
+
 test('the soccer demo: interface and behaviour layers with their data flow', async () => {
   const {url} = await serve(['run', soccer, '--serve', '0', '--steps', '100000', '-q']);
   const page = await open(url);
