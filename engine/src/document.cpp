@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -19,7 +20,6 @@
 #include <sstream>
 #include <string>
 #include <system_error>
-#include <unordered_map>
 
 namespace arbiter {
 
@@ -741,10 +741,12 @@ class TreeBuilder : public YAML::EventHandler {
     bool drop_value = false;  // the key was unusable and already reported
     std::string key;
     NodeLocation key_location;
-    // Key → entry, for mappings too large to search; filled as the first search needs it.
-    std::unordered_map<std::string, std::size_t> index;
+    // Entry indices + 1 by key hash (open addressing, 0 is empty), for mappings too large to
+    // search; filled as searches need it. A hash node per key cost 4 % of parsing.
+    std::vector<std::uint32_t> index;
+    std::size_t indexed = 0;
 
-    const Node::Entry* find(const std::string& key) {
+    const Node::Entry* find(std::string_view key) {
       const auto& entries = node.entries();
       // Most mappings have a handful of keys: a scan beats hashing them.
       constexpr std::size_t kScanned = 16;
@@ -754,9 +756,26 @@ class TreeBuilder : public YAML::EventHandler {
         }
         return nullptr;
       }
-      for (std::size_t i = index.size(); i < entries.size(); ++i) index.emplace(entries[i].key, i);
-      const auto found = index.find(key);
-      return found == index.end() ? nullptr : &entries[found->second];
+      if (index.size() < 2 * entries.size()) {
+        std::size_t capacity = 64;
+        while (capacity < 4 * entries.size()) capacity *= 2;
+        index.assign(capacity, 0);
+        indexed = 0;
+      }
+      for (; indexed < entries.size(); ++indexed) {
+        index[free_slot(entries[indexed].key)] = static_cast<std::uint32_t>(indexed + 1);
+      }
+      const std::uint32_t found = index[free_slot(key)];
+      return found == 0 ? nullptr : &entries[found - 1];
+    }
+
+    // The slot holding `key`, or the empty one where it would go.
+    std::size_t free_slot(std::string_view key) const {
+      const std::size_t mask = index.size() - 1;
+      std::size_t slot = std::hash<std::string_view>{}(key)&mask;
+      while (index[slot] != 0 && node.entries()[index[slot] - 1].key != key)
+        slot = (slot + 1) & mask;
+      return slot;
     }
   };
 

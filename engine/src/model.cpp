@@ -1041,6 +1041,7 @@ class ModelBuilder {
   void read_inhibitions(const Node& node, LayerDecl& layer, const PendingLayer& pending) {
     if (node.reads_as_null()) return;
     InhibitionIndex index;
+    index.behaviours.reserve(layer.behaviours.size());
     for (const auto& behaviour : layer.behaviours) index.behaviours.insert(behaviour.name.text);
     if (!node.is_sequence()) {
       diagnostics_.error(node.location(), "wrong-type",
@@ -1049,6 +1050,8 @@ class ModelBuilder {
                                      node.describe()));
       return;
     }
+    index.declared.reserve(node.items().size());
+    layer.inhibitions.reserve(layer.inhibitions.size() + node.items().size());
     for (const auto& item : node.items()) {
       InhibitionDecl inhibition;
       inhibition.location = item.location();
