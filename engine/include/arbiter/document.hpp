@@ -27,7 +27,7 @@ class NodeLocation {
 
   SourceLocation get() const { return {file(), line_, column_}; }
   // Implicit, so that a key's location is passed to Diagnostics and stored as before.
-  operator SourceLocation() const { return get(); }  // NOLINT(google-explicit-constructor)
+  operator SourceLocation() const { return get(); }
 
  private:
   std::shared_ptr<const std::string> file_;
