@@ -1000,10 +1000,12 @@ class ModelBuilder {
     }
     for (const auto& entry : node.entries()) {
       pending.behaviour_names.push_back(entry.key);
-      check_identifier(entry.key, entry.key_location, "a behaviour");
+      // The Document hands out a location as a new SourceLocation each time: once here.
+      const SourceLocation where = entry.key_location;
+      check_identifier(entry.key, where, "a behaviour");
       BehaviourDecl behaviour;
-      behaviour.name = {entry.key, entry.key_location};
-      behaviour.location = entry.key_location;
+      behaviour.name = {entry.key, where};
+      behaviour.location = where;
       const std::string owner = fmt::format("behaviour '{}'", entry.key);
       const Node* type = nullptr;
       const Node* params = nullptr;
@@ -1024,8 +1026,8 @@ class ModelBuilder {
       if (type == nullptr) continue;
       behaviour.cls = read_class(*type, ClassKind::kBehaviour, owner);
       if (behaviour.cls == nullptr) continue;
-      behaviour.params = read_params(*behaviour.cls, params, entry.key_location, owner);
-      behaviour.ports = bind_ports(*behaviour.cls, ports, layer, owner, entry.key_location);
+      behaviour.params = read_params(*behaviour.cls, params, where, owner);
+      behaviour.ports = bind_ports(*behaviour.cls, ports, layer, owner, where);
       layer.behaviours.push_back(std::move(behaviour));
     }
   }
