@@ -144,7 +144,7 @@ class ModelBuilder {
   // --- files and includes --------------------------------------------------------------------
 
   void read_file(const Node& root, bool is_root) {
-    const std::string& file = root.location().file;
+    const std::string file = root.location().file;  // a copy: location() returns by value
     model_.files.push_back(file);
     if (!root.is_mapping()) {
       diagnostics_.error(root.location(), "wrong-type",
