@@ -5,13 +5,16 @@
 //   CHROMIUM        the browser (Debian's /usr/bin/chromium)
 //   NODE_MODULES    where `npm ci` put playwright-core
 //   ARBITER_SCREENSHOT (optional) where to save the screenshot of the soccer demo
-import {test, before, after} from 'node:test';
+import {test as nodeTest, before, after} from 'node:test';
 import assert from 'node:assert/strict';
 import {spawn, execFileSync} from 'node:child_process';
 import {createRequire} from 'node:module';
 import {copyFileSync, mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import path from 'node:path';
+
+// A minute per test, set here: Debian's node 18 has no --test-timeout.
+const test = (name, fn) => nodeTest(name, {timeout: 60000}, fn);
 
 const require = createRequire(path.join(process.env.NODE_MODULES, 'package.json'));
 const {chromium} = require('playwright-core');

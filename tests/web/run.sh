@@ -16,4 +16,4 @@ if ! cmp -s "$source/tests/web/package-lock.json" "$work/package-lock.json" ||
 fi
 export ARBITER=$arbiter ARBITER_SOURCE=$source NODE_MODULES=$work/node_modules
 export CHROMIUM=${CHROMIUM:-/usr/bin/chromium}
-exec node --test --test-timeout=60000 "$source/tests/web/browser_test.mjs"
+exec node --test "$source/tests/web/browser_test.mjs"
