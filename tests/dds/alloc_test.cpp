@@ -23,12 +23,6 @@ std::atomic<std::size_t> step_mallocs{0};   // on the stepping thread, during st
 std::atomic<std::size_t> step_reallocs{0};  // ... of which realloc
 std::atomic<std::size_t> other_mallocs{0};  // on other threads (Cyclone's), meanwhile
 
-void count_malloc(bool is_realloc = false) {
-  if (!counting.load(std::memory_order_relaxed)) return;
-  (stepping_thread ? step_mallocs : other_mallocs).fetch_add(1, std::memory_order_relaxed);
-  if (is_realloc && stepping_thread) step_reallocs.fetch_add(1, std::memory_order_relaxed);
-}
-
 }  // namespace
 
 void* operator new(std::size_t size) {
@@ -94,6 +88,15 @@ void operator delete[](void* memory, std::size_t, std::align_val_t) noexcept {
 constexpr bool kCountsMalloc = false;
 #else
 constexpr bool kCountsMalloc = true;
+
+namespace {
+void count_malloc(bool is_realloc = false) {
+  if (!counting.load(std::memory_order_relaxed)) return;
+  (stepping_thread ? step_mallocs : other_mallocs).fetch_add(1, std::memory_order_relaxed);
+  if (is_realloc && stepping_thread) step_reallocs.fetch_add(1, std::memory_order_relaxed);
+}
+}  // namespace
+
 // glibc's own functions, under their internal names: malloc is replaced by forwarding to them.
 extern "C" {
 void* __libc_malloc(std::size_t size);
