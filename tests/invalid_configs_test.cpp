@@ -27,20 +27,9 @@ namespace {
 
 const fs::path kDataDir = fs::path(ARBITER_SOURCE_DIR) / "tests" / "data";
 
-bool update_golden() {
-  const char* value = std::getenv("ARBITER_UPDATE_GOLDEN");
-  return value != nullptr && std::string(value) == "1";
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-}
+using test::read_text;
+using test::update_golden;
+using test::write_text;
 
 bool is_config(const fs::path& path) {
   const auto extension = path.extension();
@@ -68,45 +57,11 @@ std::vector<fs::path> golden_cases(const fs::path& dir) {
   return cases;
 }
 
-/// Makes `dir` the working directory for the scope, so that diagnostics show relative paths.
-class WorkingDirectory {
- public:
-  explicit WorkingDirectory(const fs::path& dir) : previous_(fs::current_path()) {
-    fs::current_path(dir);
-  }
-  ~WorkingDirectory() { fs::current_path(previous_); }
-  WorkingDirectory(const WorkingDirectory&) = delete;
-  WorkingDirectory& operator=(const WorkingDirectory&) = delete;
-
- private:
-  fs::path previous_;
-};
-
-/// Requests nothing; it exists for its params.
-class Tuned : public Behaviour {
- public:
-  double activation(const StepContext&) override { return 0.0; }
-};
-
-/// Proceeds at once; it exists for its params.
-class Wait : public State {
- public:
-  StateResult execute(StateContext&) override { return StateResult::kProceed; }
-};
-
-/// The test registry plus classes whose params exercise every param check (required, ranged,
-/// restricted to choices), for behaviours and for states.
+/// The test registry plus the classes whose params exercise every param check.
 Registry golden_registry() {
   Registry registry = test::make_test_registry();
   registry.set_origin("invalid_configs_test");
-  auto& tuned = registry.add_behaviour<Tuned>("test.Tuned");
-  tuned.param("gain", ParamKind::kDouble).range(0.0, 1.0);
-  tuned.param("mode", ParamKind::kString).fallback(std::string("soft")).one_of({"soft", "hard"});
-  tuned.param("retries", ParamKind::kInt).fallback(std::int64_t{3}).at_least(0);
-  tuned.param("offset", ParamKind::kVec2).fallback(Vec2{});
-  auto& wait = add_state_class<Wait>(registry, "test.Wait");
-  wait.param("ticks", ParamKind::kInt).at_least(1);
-  wait.param("label", ParamKind::kString).fallback(std::string());
+  test::add_param_check_classes(registry);
   return registry;
 }
 
@@ -128,7 +83,7 @@ TEST_CASE("every invalid config reports the approved diagnostics", "[diagnostics
       Diagnostics diagnostics;
       std::optional<Program> program;
       {
-        WorkingDirectory here(dir);
+        test::WorkingDirectory here(dir);
         program = load(name, registry, diagnostics);
       }
       const std::string actual = format(diagnostics);
@@ -198,23 +153,9 @@ TEST_CASE("a JSON config and its YAML twin compile to the same graph", "[diagnos
 
 namespace {
 
-struct CliResult {
-  int exit_code = -1;
-  std::string err;
-};
-
-/// Runs the `arbiter` CLI with `arguments` (already shell-quoted), capturing stderr.
-CliResult run_cli(const std::string& arguments) {
-  const fs::path err_path =
-      fs::temp_directory_path() / ("arbiter_cli_test_" + std::to_string(::getpid()) + ".err");
-  const std::string command = "\"" + std::string(ARBITER_CLI) + "\" " + arguments +
-                              " >/dev/null 2>\"" + err_path.string() + "\"";
-  const int status = std::system(command.c_str());
-  CliResult result;
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.err = read_text(err_path);
-  fs::remove(err_path);
-  return result;
+/// Runs the `arbiter` CLI with `arguments` (already shell-quoted).
+test::CliResult run_cli(const std::string& arguments) {
+  return test::run_captured("\"" + std::string(ARBITER_CLI) + "\" " + arguments);
 }
 
 std::string quoted(const fs::path& path) {

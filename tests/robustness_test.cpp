@@ -304,15 +304,8 @@ class JsonTrace {
 
 // --- config files --------------------------------------------------------------------------------
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-}
+using test::read_text;
+using test::write_text;
 
 /// A fresh directory under the system's temporary one, removed at the end of the scope.
 class TempDir {
@@ -390,25 +383,9 @@ void expect_rejected(const fs::path& path, const std::string& code,
   CHECK(peak_rss_mib() - before < 1500.0);
 }
 
-struct CliResult {
-  int exit_code = -1;
-  bool signalled = false;
-  std::string err;
-};
-
-/// Runs `arbiter ARGUMENTS` (already shell-quoted), capturing stderr.
-CliResult run_cli(const std::string& arguments) {
-  const fs::path err_path =
-      fs::temp_directory_path() / ("arbiter_robustness_" + std::to_string(::getpid()) + ".err");
-  const std::string command = "\"" + std::string(ARBITER_CLI) + "\" " + arguments +
-                              " >/dev/null 2>\"" + err_path.string() + "\" </dev/null";
-  const int status = std::system(command.c_str());
-  CliResult result;
-  result.signalled = WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) > 125);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.err = read_text(err_path);
-  fs::remove(err_path);
-  return result;
+/// Runs `arbiter ARGUMENTS` (already shell-quoted), capturing its output.
+test::CliResult run_cli(const std::string& arguments) {
+  return test::run_captured("\"" + std::string(ARBITER_CLI) + "\" " + arguments);
 }
 
 std::string quoted(const fs::path& path) {

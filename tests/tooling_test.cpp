@@ -46,20 +46,9 @@ const fs::path kSourceDir = ARBITER_SOURCE_DIR;
 const fs::path kDataDir = kSourceDir / "tests" / "data";
 const fs::path kGoldenDir = kDataDir / "golden";
 
-bool update_golden() {
-  const char* value = std::getenv("ARBITER_UPDATE_GOLDEN");
-  return value != nullptr && std::string(value) == "1";
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-}
+using test::read_text;
+using test::update_golden;
+using test::write_text;
 
 /// Compares `actual` with the golden file `name` (or rewrites it in update mode).
 void check_golden(const std::string& name, const std::string& actual) {
@@ -74,44 +63,11 @@ void check_golden(const std::string& name, const std::string& actual) {
   CHECK(actual == read_text(path));
 }
 
-/// Makes `dir` the working directory for the scope, so that outputs show relative paths.
-class WorkingDirectory {
- public:
-  explicit WorkingDirectory(const fs::path& dir) : previous_(fs::current_path()) {
-    fs::current_path(dir);
-  }
-  ~WorkingDirectory() { fs::current_path(previous_); }
-  WorkingDirectory(const WorkingDirectory&) = delete;
-  WorkingDirectory& operator=(const WorkingDirectory&) = delete;
-
- private:
-  fs::path previous_;
-};
-
-/// Requests nothing; it exists for its params (as in invalid_configs_test.cpp).
-class Tuned : public Behaviour {
- public:
-  double activation(const StepContext&) override { return 0.0; }
-};
-
-/// Proceeds at once; it exists for its params.
-class Wait : public State {
- public:
-  StateResult execute(StateContext&) override { return StateResult::kProceed; }
-};
-
 /// The test registry plus the classes the invalid configs use (tests/data/invalid).
 Registry tooling_registry() {
   Registry registry = test::make_test_registry();
   registry.set_origin("tooling_test");
-  auto& tuned = registry.add_behaviour<Tuned>("test.Tuned");
-  tuned.param("gain", ParamKind::kDouble).range(0.0, 1.0);
-  tuned.param("mode", ParamKind::kString).fallback(std::string("soft")).one_of({"soft", "hard"});
-  tuned.param("retries", ParamKind::kInt).fallback(std::int64_t{3}).at_least(0);
-  tuned.param("offset", ParamKind::kVec2).fallback(Vec2{});
-  auto& wait = add_state_class<Wait>(registry, "test.Wait");
-  wait.param("ticks", ParamKind::kInt).at_least(1);
-  wait.param("label", ParamKind::kString).fallback(std::string());
+  test::add_param_check_classes(registry);
   return registry;
 }
 
@@ -254,29 +210,10 @@ std::unique_ptr<SchemaValidator> extended_schema(const fs::path& config) {
 
 // --- the CLI ---
 
-struct CliResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
 /// Runs `arbiter ARGUMENTS` in the source directory (paths relative to it), capturing both streams.
-CliResult run_cli(const std::string& arguments) {
-  const fs::path base =
-      fs::temp_directory_path() / ("arbiter_tooling_test_" + std::to_string(::getpid()));
-  const std::string out_path = base.string() + ".out";
-  const std::string err_path = base.string() + ".err";
-  const std::string command = "cd \"" + kSourceDir.string() + "\" && \"" +
-                              std::string(ARBITER_CLI) + "\" " + arguments + " >\"" + out_path +
-                              "\" 2>\"" + err_path + "\"";
-  const int status = std::system(command.c_str());
-  CliResult result;
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.out = read_text(out_path);
-  result.err = read_text(err_path);
-  fs::remove(out_path);
-  fs::remove(err_path);
-  return result;
+test::CliResult run_cli(const std::string& arguments) {
+  return test::run_captured("cd \"" + kSourceDir.string() + "\" && \"" + std::string(ARBITER_CLI) +
+                            "\" " + arguments);
 }
 
 bool contains(const std::string& text, const std::string& part) {
@@ -285,7 +222,7 @@ bool contains(const std::string& text, const std::string& part) {
 
 /// Loads a config as `arbiter` does (relative to the source directory), with the test classes.
 Program load_config(const std::string& relative, Registry& registry, Diagnostics& diagnostics) {
-  WorkingDirectory here(kSourceDir);
+  test::WorkingDirectory here(kSourceDir);
   auto program = load(relative, registry, diagnostics);
   INFO(format(diagnostics));
   REQUIRE(program.has_value());
@@ -465,7 +402,7 @@ TEST_CASE("arbiter dump prints the paper example the same way every time", "[dum
 TEST_CASE("a multi-layer config dumps as text, DOT and JSON", "[dump]") {
   Registry registry = tooling_registry();
   Diagnostics diagnostics;
-  WorkingDirectory here(kGoldenDir);
+  test::WorkingDirectory here(kGoldenDir);
   const auto program = load("relay.yaml", registry, diagnostics);
   INFO(format(diagnostics));
   REQUIRE(program.has_value());
@@ -511,7 +448,7 @@ TEST_CASE("arbiter dump rejects an unknown layer as a usage error", "[dump][cli]
 TEST_CASE("each lint is reported once, located, with its code", "[lint]") {
   Registry registry = tooling_registry();
   Diagnostics diagnostics;
-  WorkingDirectory here(kGoldenDir);
+  test::WorkingDirectory here(kGoldenDir);
   const auto program = load("lints.yaml", registry, diagnostics);
   REQUIRE(program.has_value());
   CHECK(diagnostics.error_count() == 0);

@@ -1,6 +1,12 @@
 #include "test_support.hpp"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <stdexcept>
 
 #include "arbiter/trace.hpp"
@@ -149,6 +155,66 @@ Registry make_test_registry() {
   auto& pose = add_state_class<Pose>(registry, "test.Pose");
   pose.param("x", ParamKind::kDouble).range(-10.0, 10.0);
   return registry;
+}
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+}
+
+bool update_golden() {
+  const char* value = std::getenv("ARBITER_UPDATE_GOLDEN");
+  return value != nullptr && std::string(value) == "1";
+}
+
+CliResult run_captured(const std::string& command) {
+  const std::filesystem::path base =
+      std::filesystem::temp_directory_path() / ("arbiter_test_" + std::to_string(::getpid()));
+  const std::string out_path = base.string() + ".out";
+  const std::string err_path = base.string() + ".err";
+  const std::string line =
+      "{ " + command + "; } >\"" + out_path + "\" 2>\"" + err_path + "\" </dev/null";
+  const int status = std::system(line.c_str());
+  CliResult result;
+  result.signalled = WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) > 125);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.out = read_text(out_path);
+  result.err = read_text(err_path);
+  std::filesystem::remove(out_path);
+  std::filesystem::remove(err_path);
+  return result;
+}
+
+namespace {
+
+/// Requests nothing; it exists for its params.
+class Tuned : public Behaviour {
+ public:
+  double activation(const StepContext&) override { return 0.0; }
+};
+
+/// Proceeds at once; it exists for its params.
+class Wait : public State {
+ public:
+  StateResult execute(StateContext&) override { return StateResult::kProceed; }
+};
+
+}  // namespace
+
+void add_param_check_classes(Registry& registry) {
+  auto& tuned = registry.add_behaviour<Tuned>("test.Tuned");
+  tuned.param("gain", ParamKind::kDouble).range(0.0, 1.0);
+  tuned.param("mode", ParamKind::kString).fallback(std::string("soft")).one_of({"soft", "hard"});
+  tuned.param("retries", ParamKind::kInt).fallback(std::int64_t{3}).at_least(0);
+  tuned.param("offset", ParamKind::kVec2).fallback(Vec2{});
+  auto& wait = add_state_class<Wait>(registry, "test.Wait");
+  wait.param("ticks", ParamKind::kInt).at_least(1);
+  wait.param("label", ParamKind::kString).fallback(std::string());
 }
 
 Diagnostics diagnose_text(const std::string& text, const Registry& registry,

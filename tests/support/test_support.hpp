@@ -2,6 +2,7 @@
 // Shared by the test binaries: classes that expose the engine's semantics, and helpers that
 // compile a config written inline.
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -96,6 +97,44 @@ class ControllerLog : public Observer {
 /// The built-ins plus test.Probe, test.NanLevel, test.Thrower, test.Feed (behaviours and an
 /// interface) and the states test.Planner and test.Pose.
 Registry make_test_registry();
+
+/// A file's bytes ("" when it cannot be read), and writing them.
+std::string read_text(const std::filesystem::path& path);
+void write_text(const std::filesystem::path& path, const std::string& text);
+
+/// True when ARBITER_UPDATE_GOLDEN=1: golden-file tests rewrite their expected files.
+bool update_golden();
+
+struct CliResult {
+  int exit_code = -1;
+  bool signalled = false;  ///< killed by a signal (or the shell reported one)
+  std::string out;
+  std::string err;
+};
+
+/// Runs `command` (a shell command line, already quoted) with stdin from /dev/null, capturing
+/// its stdout and stderr.
+CliResult run_captured(const std::string& command);
+
+/// Adds test.Tuned (a behaviour) and test.Wait (a state), whose params exercise every param check
+/// (required, ranged, restricted to choices): the classes the configs of tests/data/invalid use.
+void add_param_check_classes(Registry& registry);
+
+/// Makes `dir` the working directory for the scope, so that diagnostics and outputs show relative
+/// paths.
+class WorkingDirectory {
+ public:
+  explicit WorkingDirectory(const std::filesystem::path& dir)
+      : previous_(std::filesystem::current_path()) {
+    std::filesystem::current_path(dir);
+  }
+  ~WorkingDirectory() { std::filesystem::current_path(previous_); }
+  WorkingDirectory(const WorkingDirectory&) = delete;
+  WorkingDirectory& operator=(const WorkingDirectory&) = delete;
+
+ private:
+  std::filesystem::path previous_;
+};
 
 /// Parses, validates and compiles `text` (YAML, or JSON when `file` ends in .json). Throws
 /// ConfigError with every diagnostic when it is invalid.
