@@ -186,7 +186,10 @@ void ExpectationChecks::check(const Manager& manager, double tolerance) {
         for (std::uint32_t s = program.actuator_slot_begin[resolved.index];
              s < program.actuator_slot_begin[resolved.index + 1]; ++s) {
           const auto owner = program.slots[program.actuator_slots[s]].owner;
-          if (owner != kUnbound) failure.explain.push_back(qualified(program, owner));
+          // The writers whose value could have counted: the active ones.
+          if (owner != kUnbound && manager.active(owner)) {
+            failure.explain.push_back(qualified(program, owner));
+          }
         }
         break;
       case Expectation::Kind::kState:

@@ -21,7 +21,7 @@ class ExpectationChecks {
     std::uint64_t step = 0;
     std::string message;
     /// explain() targets for that step: the behaviour (`layer/name`), the state machine
-    /// (`state_machines/name`) or, for an actuator, the behaviours that wrote it.
+    /// (`state_machines/name`) or, for an actuator, its writers that were active.
     std::vector<std::string> explain;
   };
 

@@ -82,6 +82,10 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
     failure.diagnostic.message = failed.message;
     failure.step = failed.step;
     failure.explanation = explain_at(manager.program(), text, failed.step, failed.explain);
+    if (failed.explain.empty()) {
+      failure.explanation = fmt::format("no behaviour that writes '{}' was active at step {}\n",
+                                        expectation.target.text, failed.step);
+    }
     result.failures.push_back(std::move(failure));
   }
   if (manager.stopped()) {

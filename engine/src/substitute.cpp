@@ -121,7 +121,11 @@ class Substituter {
     if (matches.size() == 1) return matches;
     if (matches.empty()) {
       std::vector<std::string> known;
-      for (const auto& candidate : candidates) known.push_back(candidate.qualified);
+      for (const auto& candidate : candidates) {
+        for (const auto* name : {&candidate.short_name, &candidate.qualified}) {
+          if (std::find(known.begin(), known.end(), *name) == known.end()) known.push_back(*name);
+        }
+      }
       auto& error = diagnostics_.error(
           substitution.location, "substitute-target",
           fmt::format("'{}' names no behaviour, state, interface layer or class of config '{}'",

@@ -28,7 +28,7 @@ struct ScenarioOptions {
 struct ScenarioFailure {
   Diagnostic diagnostic;  ///< at the expectation: "expected ..., got ..."
   std::uint64_t step = 0;
-  std::string explanation;  ///< explain() at that step of what it names; may be empty
+  std::string explanation;  ///< explain() at that step of what it names
 };
 
 struct ScenarioResult {
