@@ -52,7 +52,7 @@ class ScenarioReader {
                          "a test file must start with 'arbiter_test: 1'");
     } else if (version->as_int() != 1) {
       diagnostics_.error(
-          version->location(), "unsupported-version",
+          version->location(), "bad-version",
           fmt::format("this arbiter reads test files of version 1, found {}", version->describe()));
     }
     read_config(root.find("config"), root, scenario);

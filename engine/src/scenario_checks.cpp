@@ -210,20 +210,23 @@ std::string ExpectationChecks::check_one(const Resolved& resolved, const Manager
   const Program& program = manager.program();
   const std::string& name = expectation.target.text;
   const std::uint64_t step = manager.steps();
-  const std::string at = expectation.first_step == expectation.last_step
-                             ? fmt::format("at step {}", step)
-                             : fmt::format("at step {} (of steps {}-{})", step,
-                                           expectation.first_step, expectation.last_step);
+  // Formatted only for a failure: a check that holds allocates nothing.
+  const auto at = [&] {
+    return expectation.first_step == expectation.last_step
+               ? fmt::format("at step {}", step)
+               : fmt::format("at step {} (of steps {}-{})", step, expectation.first_step,
+                             expectation.last_step);
+  };
   const std::uint32_t b = resolved.index;
   switch (expectation.kind) {
     case Expectation::Kind::kActive:
       if (manager.active(b)) return {};
       return fmt::format(
-          "expected '{}' to be active {}, got inactive (activation {}, requested {})", name, at,
+          "expected '{}' to be active {}, got inactive (activation {}, requested {})", name, at(),
           level_text(manager.activation(b)), level_text(manager.requested(b)));
     case Expectation::Kind::kInactive:
       if (!manager.active(b)) return {};
-      return fmt::format("expected '{}' to be inactive {}, got active (activation {})", name, at,
+      return fmt::format("expected '{}' to be inactive {}, got active (activation {})", name, at(),
                          level_text(manager.activation(b)));
     case Expectation::Kind::kActivation:
     case Expectation::Kind::kRequested: {
@@ -237,7 +240,7 @@ std::string ExpectationChecks::check_one(const Resolved& resolved, const Manager
               : fmt::format("in [{}, {}]", level_text(expectation.low),
                             level_text(expectation.high));
       return fmt::format("expected the {} of '{}' {} to be {}, got {}",
-                         activation ? "activation" : "requested level", name, at, wanted,
+                         activation ? "activation" : "requested level", name, at(), wanted,
                          level_text(level));
     }
     case Expectation::Kind::kInhibitedBy: {
@@ -254,7 +257,7 @@ std::string ExpectationChecks::check_one(const Resolved& resolved, const Manager
       std::sort(sorted_got.begin(), sorted_got.end());
       std::sort(expected.begin(), expected.end());
       if (sorted_got == expected) return {};
-      return fmt::format("expected '{}' {} to be inhibited by [{}], got [{}]", name, at,
+      return fmt::format("expected '{}' {} to be inhibited by [{}], got [{}]", name, at(),
                          fmt::join(expectation.names, ", "), fmt::join(got, ", "));
     }
     case Expectation::Kind::kActuator: {
@@ -263,7 +266,7 @@ std::string ExpectationChecks::check_one(const Resolved& resolved, const Manager
       type.append_json(manager.actuator_value(resolved.index), json_);
       if (same_json(json_, resolved.expected_json, tolerance)) return {};
       return fmt::format(
-          "expected actuator '{}' {} to be {}, got {}{}", name, at, resolved.expected_json, json_,
+          "expected actuator '{}' {} to be {}, got {}{}", name, at(), resolved.expected_json, json_,
           manager.actuator_written(resolved.index) ? "" : " (not written this step)");
     }
     case Expectation::Kind::kState: {
@@ -272,7 +275,7 @@ std::string ExpectationChecks::check_one(const Resolved& resolved, const Manager
       const std::string got = controller.current_state().empty()
                                   ? fmt::format("no state ({})", to_string(controller.status()))
                                   : fmt::format("'{}'", controller.current_state());
-      return fmt::format("expected state machine '{}' {} to be in state '{}', got {}", name, at,
+      return fmt::format("expected state machine '{}' {} to be in state '{}', got {}", name, at(),
                          expectation.state, got);
     }
     case Expectation::Kind::kQueue: {
@@ -285,7 +288,7 @@ std::string ExpectationChecks::check_one(const Resolved& resolved, const Manager
       }
       if (same) return {};
       return fmt::format("expected the queue of state machine '{}' {} to be [{}], got [{}]", name,
-                         at, fmt::join(expectation.names, ", "), fmt::join(got, ", "));
+                         at(), fmt::join(expectation.names, ", "), fmt::join(got, ", "));
     }
   }
   return {};
