@@ -383,7 +383,7 @@ int main(int argc, char** argv) {
       "  arbiter explain configs/paper/walk_and_kick.yaml --trace out.jsonl --step 8 "
       "search_for_ball\n"
       "  arbiter dump configs/paper/walk_and_kick.yaml --format dot | dot -Tsvg -o graph.svg\n"
-      "  arbiter test configs/soccer/tests/\n"
+      "  arbiter test tests/scenarios/soccer/\n"
       "  arbiter plugins\n"
       "  arbiter schema > arbiter.schema.json\n\n"
       "{}\n"
@@ -550,8 +550,8 @@ int main(int argc, char** argv) {
       ->type_name("FILE");
   test_cmd->footer(
       "Examples:\n"
-      "  arbiter test configs/soccer/tests/kick_needs_a_close_ball.test.yaml\n"
-      "  arbiter test configs/ --junit results.xml      # every test under configs/\n"
+      "  arbiter test tests/scenarios/soccer/kick_needs_a_close_ball.test.yaml\n"
+      "  arbiter test tests/scenarios/ --junit results.xml   # every test under a directory\n"
       "  arbiter test --tolerance 0.01 my_tests/\n\n"
       "A test file:\n"
       "  arbiter_test: 1\n"

@@ -73,10 +73,10 @@ TEST_CASE("every failing or invalid scenario prints the approved output and exit
 }
 
 TEST_CASE("the soccer demo's scenarios pass, found by directory", "[scenario]") {
-  const auto result = run_cli("test configs/soccer/tests");
+  const auto result = run_cli("test tests/scenarios/soccer");
   INFO(result.out << result.err);
   CHECK(result.exit_code == 0);
-  CHECK(count(result.out, "PASS ") == scenarios_in(kSourceDir / "configs/soccer/tests").size());
+  CHECK(count(result.out, "PASS ") == scenarios_in(kSourceDir / "tests/scenarios/soccer").size());
   CHECK(result.out.find("0 failed, 0 invalid") != std::string::npos);
 }
 
@@ -90,12 +90,12 @@ TEST_CASE("--junit writes well-formed XML: a testcase per file, a failure per fa
           "[scenario]") {
   const fs::path xml = fs::temp_directory_path() / "arbiter_scenario_junit.xml";
   fs::remove(xml);
-  const auto result = run_cli("test tests/data/scenarios/failing configs/soccer/tests --junit \"" +
+  const auto result = run_cli("test tests/data/scenarios/failing tests/scenarios/soccer --junit \"" +
                               xml.string() + "\"");
   CHECK(result.exit_code == 1);
   const std::string text = test::read_text(xml);
   const auto files = scenarios_in(kScenarios / "failing").size() +
-                     scenarios_in(kSourceDir / "configs/soccer/tests").size();
+                     scenarios_in(kSourceDir / "tests/scenarios/soccer").size();
   CHECK(count(text, "<testcase ") == files);
   CHECK(count(text, "<failure ") == count(result.out, ": error: expected "));
   const auto lint = test::run_captured("xmllint --noout \"" + xml.string() + "\"");

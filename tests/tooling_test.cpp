@@ -962,7 +962,7 @@ TEST_CASE("every scenario test file fits schema/arbiter-test.schema.json, a miss
   const SchemaValidator schema(
       Json::parse(read_text(kSourceDir / "schema" / "arbiter-test.schema.json")));
   std::size_t checked = 0;
-  for (const auto& dir : {kSourceDir / "configs", kDataDir / "scenarios" / "failing"}) {
+  for (const auto& dir : {kSourceDir / "tests" / "scenarios", kDataDir / "scenarios" / "failing"}) {
     for (const auto& entry : fs::recursive_directory_iterator(dir)) {
       if (!is_scenario_file(entry.path().string())) continue;
       const auto document = config_json(entry.path());

@@ -55,7 +55,7 @@ expect "plot" "--a" -- --actuators
 expect "plot" "x.jsonl" "-o" "docs/walk_and_k" -- docs/walk_and_kick.svg
 expect "run" "x.yaml" "--w" -- --watch
 expect "test" "--j" -- --junit
-expect "test" "configs/soccer/tests/goalie_d" -- configs/soccer/tests/goalie_dives_at_the_shot.test.yaml
+expect "test" "tests/scenarios/soccer/goalie_d" -- tests/scenarios/soccer/goalie_dives_at_the_shot.test.yaml
 
 echo "completion: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

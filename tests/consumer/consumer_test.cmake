@@ -68,7 +68,7 @@ run_checked(output 0 "${CMAKE_COMMAND}" -E env --unset=ARBITER_PLUGIN_PATH
             "${cmake_bin}/ctest" --test-dir "${consumer_build}" --verbose)
 expect_in("${output}" "ctest in the consumer project"
   "patrol_scenarios[ .]*Passed"
-  "PASS [^\n]*patrol.test.yaml \\(5 expectations, 30 steps\\)")
+  "PASS [^\n]*patrol.test.yaml \\(6 expectations, 30 steps\\)")
 
 # The plugin's classes run: the robot drives to the gate, then the lookout's countdown plans
 # itself for three rounds; the beacon (the plugin's own value type) goes into the trace.
