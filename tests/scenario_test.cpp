@@ -86,12 +86,13 @@ TEST_CASE("a path that is neither a test file nor a directory of them is a usage
   CHECK(run_cli("test docs").exit_code == 2);
 }
 
-TEST_CASE("--junit writes well-formed XML: a testcase per file, a failure per failed expectation",
-          "[scenario]") {
+TEST_CASE(
+    "the JUnit XML is well-formed: a testcase per test file, a failure per failed expectation",
+    "[scenario]") {
   const fs::path xml = fs::temp_directory_path() / "arbiter_scenario_junit.xml";
   fs::remove(xml);
-  const auto result = run_cli("test tests/data/scenarios/failing tests/scenarios/soccer --junit \"" +
-                              xml.string() + "\"");
+  const auto result = run_cli(
+      "test tests/data/scenarios/failing tests/scenarios/soccer --junit \"" + xml.string() + "\"");
   CHECK(result.exit_code == 1);
   const std::string text = test::read_text(xml);
   const auto files = scenarios_in(kScenarios / "failing").size() +

@@ -16,6 +16,16 @@ constexpr std::string_view kExpectKeys[] = {"step",      "steps",        "active
                                             "actuators", "inhibited_by", "machines"};
 constexpr std::string_view kMachineKeys[] = {"state", "queue"};
 
+// The length of the `.test.yaml` (`.test.yml`, `.test.json`) that ends `path`, or 0.
+std::size_t scenario_suffix(std::string_view path) {
+  for (std::string_view suffix : {".test.yaml", ".test.yml", ".test.json"}) {
+    if (path.size() > suffix.size() && path.substr(path.size() - suffix.size()) == suffix) {
+      return suffix.size();
+    }
+  }
+  return 0;
+}
+
 template <std::size_t N>
 std::vector<std::string> names_of(const std::string_view (&keys)[N]) {
   return {std::begin(keys), std::end(keys)};
@@ -30,14 +40,7 @@ class ScenarioReader {
     Scenario scenario;
     scenario.file = root.location().file;
     scenario.name = std::filesystem::path(scenario.file).filename().string();
-    for (const char* suffix : {".test.yaml", ".test.yml", ".test.json"}) {
-      const std::string_view end(suffix);
-      if (scenario.name.size() > end.size() &&
-          scenario.name.compare(scenario.name.size() - end.size(), end.size(), end) == 0) {
-        scenario.name.resize(scenario.name.size() - end.size());
-        break;
-      }
-    }
+    scenario.name.resize(scenario.name.size() - scenario_suffix(scenario.name));
     if (!root.is_mapping()) {
       diagnostics_.error(root.location(), "wrong-type",
                          fmt::format("a test file must be a mapping starting with "
@@ -433,12 +436,7 @@ class ScenarioReader {
 }  // namespace
 
 bool is_scenario_file(std::string_view path) {
-  for (std::string_view suffix : {".test.yaml", ".test.yml", ".test.json"}) {
-    if (path.size() >= suffix.size() && path.substr(path.size() - suffix.size()) == suffix) {
-      return true;
-    }
-  }
-  return false;
+  return scenario_suffix(path) > 0;
 }
 
 std::optional<Scenario> build_scenario(const Node& root, Diagnostics& diagnostics) {
