@@ -31,7 +31,7 @@ _arbiter() {
   local cur prev command word i
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
-  local commands="validate run dump explain plugins schema view plot"
+  local commands="validate run dump explain test plugins schema view plot"
   local global="--help --version --log-level --plugin-path --max-file-bytes"
 
   command=""
@@ -55,7 +55,8 @@ _arbiter() {
       return ;;
     --trace) mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$'); return ;;
     --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
-    --steps | --step | --load | --serve) return ;;
+    --steps | --step | --load | --serve | --tolerance) return ;;
+    --junit) mapfile -t COMPREPLY < <(_arbiter_files '\.xml$'); return ;;
     --output | -o) mapfile -t COMPREPLY < <(_arbiter_files '\.svg$'); return ;;
   esac
 
@@ -74,6 +75,7 @@ _arbiter() {
     run) options="--steps --trace --quiet --realtime --strict --serve --paused --watch --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
+    test) options="--junit --tolerance --help" ;;
     view) options="--trace --serve --help" ;;
     plot) options="--output --actuators --help" ;;
     plugins) options="--format --load --builtin --help" ;;
@@ -87,6 +89,9 @@ _arbiter() {
     plugins | schema) return ;;
     plot)
       mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$')
+      return ;;
+    test)
+      mapfile -t COMPREPLY < <(_arbiter_files '\.test\.(yaml|yml|json)$')
       return ;;
     explain)
       if [[ -n $(_arbiter_config_of) ]]; then

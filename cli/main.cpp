@@ -28,6 +28,7 @@
 #include "plot.hpp"
 #include "run_report.hpp"
 #include "serve.hpp"
+#include "test_command.hpp"
 #include "view.hpp"
 #include "watch.hpp"
 
@@ -59,7 +60,8 @@ struct Options {
   std::string view_serve = "127.0.0.1:8080";  ///< `view --serve`
   std::string output;                         ///< `plot -o`
   bool actuators = false;
-  bool paused = false;  ///< `run --paused`
+  bool paused = false;             ///< `run --paused`
+  arbiter::cli::TestCommand test;  ///< `test`
 };
 
 arbiter::Registry make_registry() {
@@ -225,6 +227,13 @@ int explain(const Options& options) {
   return explanation.status == arbiter::Explanation::Status::kNotFound ? kExitUsage : kExitInvalid;
 }
 
+int test(Options& options) {
+  auto registry = make_registry();
+  options.test.options.plugins = load_options_of(options).plugins;
+  options.test.options.limits = load_options_of(options).limits;
+  return arbiter::cli::run_tests(options.test, registry, std::cout, std::cerr);
+}
+
 std::atomic<bool> interrupted{false};
 
 extern "C" void on_interrupt(int) {
@@ -374,6 +383,7 @@ int main(int argc, char** argv) {
       "  arbiter explain configs/paper/walk_and_kick.yaml --trace out.jsonl --step 8 "
       "search_for_ball\n"
       "  arbiter dump configs/paper/walk_and_kick.yaml --format dot | dot -Tsvg -o graph.svg\n"
+      "  arbiter test tests/scenarios/soccer/\n"
       "  arbiter plugins\n"
       "  arbiter schema > arbiter.schema.json\n\n"
       "{}\n"
@@ -516,6 +526,48 @@ int main(int argc, char** argv) {
                   "Exit codes: 0 ok, 1 invalid config or trace, 2 usage error (no such behaviour "
                   "or step)."));
 
+  auto* test_cmd = app.add_subcommand(
+      "test",
+      "Run scenario tests: a behaviour graph stepped without a robot, its interface layers or\n"
+      "classes substituted and its inputs scripted, checked step by step against what the test\n"
+      "expects (docs/testing.md). Prints one line per test and, for each failed expectation,\n"
+      "file:line:col: error: expected ..., got ... followed by the explanation of that\n"
+      "behaviour or state machine at that step.");
+  test_cmd
+      ->add_option("PATH", options.test.paths,
+                   "test files (arbiter_test: 1), or directories: every *.test.yaml, "
+                   "*.test.yml and *.test.json in them")
+      ->required();
+  test_cmd
+      ->add_option("--tolerance", options.test.options.tolerance,
+                   "how far a level or number may be from one expected as a single number")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  test_cmd
+      ->add_option("--junit", options.test.junit,
+                   "also write JUnit XML to FILE (one testcase per test file, one failure "
+                   "per failed expectation), for CI systems")
+      ->type_name("FILE");
+  test_cmd->footer(
+      "Examples:\n"
+      "  arbiter test tests/scenarios/soccer/kick_needs_a_close_ball.test.yaml\n"
+      "  arbiter test tests/scenarios/ --junit results.xml   # every test under a directory\n"
+      "  arbiter test --tolerance 0.01 my_tests/\n\n"
+      "A test file:\n"
+      "  arbiter_test: 1\n"
+      "  config: ../walk_and_kick.yaml        # relative to the test file\n"
+      "  substitute:\n"
+      "    world: inputs                      # this interface layer is fed from inputs: below\n"
+      "    control/kick_ball: {type: scripted, params: {activation: 0}}\n"
+      "  inputs:\n"
+      "    - {step: 1, ball_visible: false}\n"
+      "    - {step: 10, ball_visible: true, ball_position: [1.0, 0.2]}\n"
+      "  expect:\n"
+      "    - {step: 5, active: [search_for_ball], inactive: [go_behind_ball]}\n"
+      "    - {steps: [12, 40], actuators: {kick: false}}\n"
+      "  steps: 40\n\n"
+      "Exit codes: 0 all passed, 1 a test failed, 2 usage error or invalid test file.");
+
   auto* view_cmd = app.add_subcommand(
       "view",
       "Serve the web view of a trace of 'arbiter run': the graph, each behaviour coloured by its\n"
@@ -619,6 +671,7 @@ int main(int argc, char** argv) {
     }
     if (dump_cmd->parsed()) return dump(options);
     if (explain_cmd->parsed()) return explain(options);
+    if (test_cmd->parsed()) return test(options);
     if (view_cmd->parsed()) return view(options);
     if (plot_cmd->parsed()) return plot(options);
     if (plugins_cmd->parsed()) return plugins(options);

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <vector>
 
+#include "arbiter/substitute.hpp"
 #include "counting_new.hpp"
 #include "test_support.hpp"
 
@@ -150,4 +151,24 @@ TEST_CASE("every config in configs/ steps without allocating", "[alloc]") {
       CHECK(allocations_in_steps(manager, 300) == 0);
     }
   }
+}
+
+TEST_CASE("a program with substituted classes steps without allocating", "[alloc]") {
+  Registry registry = test::make_test_registry();
+  Diagnostics diagnostics;
+  auto root = parse_document(read_config("configs/paper/walk_and_kick.yaml"), "walk_and_kick.yaml",
+                             DocumentFormat::kYaml, diagnostics);
+  REQUIRE(root);
+  Model model = build_model(*root, registry, diagnostics);
+  auto replacement =
+      parse_document("{type: scripted, params: {activation: [0, 1], writes: {kick: true}}}",
+                     "test.yaml", DocumentFormat::kYaml, diagnostics);
+  REQUIRE(replacement);
+  REQUIRE(
+      substitute(model, {{"control/kick_ball", {}, *replacement, nullptr}}, registry, diagnostics));
+  auto program = compile(model, registry, diagnostics);
+  INFO(format(diagnostics));
+  REQUIRE(program);
+  Manager manager(std::move(*program));
+  CHECK(allocations_in_steps(manager, 50) == 0);
 }

@@ -30,6 +30,7 @@
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/lint.hpp"
+#include "arbiter/scenario.hpp"
 #include "arbiter/schema.hpp"
 #include "arbiter/state.hpp"
 #include "arbiter/trace.hpp"
@@ -954,4 +955,26 @@ TEST_CASE("every command's help ends with examples", "[help][cli]") {
     }
   }
   CHECK(contains(run_cli("validate --help").out, "redundant-inhibition"));
+}
+
+TEST_CASE("every scenario test file fits schema/arbiter-test.schema.json, a misshapen one does not",
+          "[schema]") {
+  const SchemaValidator schema(
+      Json::parse(read_text(kSourceDir / "schema" / "arbiter-test.schema.json")));
+  std::size_t checked = 0;
+  for (const auto& dir : {kSourceDir / "tests" / "scenarios", kDataDir / "scenarios" / "failing"}) {
+    for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+      if (!is_scenario_file(entry.path().string())) continue;
+      const auto document = config_json(entry.path());
+      REQUIRE(document);
+      INFO(entry.path().string());
+      CHECK(schema.errors(*document) == "");
+      ++checked;
+    }
+  }
+  CHECK(checked >= 7);
+  const auto misshapen =
+      config_json(kDataDir / "scenarios" / "invalid" / "test_file_shape.test.yaml");
+  REQUIRE(misshapen);
+  CHECK(schema.errors(*misshapen) != "");
 }

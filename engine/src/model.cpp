@@ -1465,6 +1465,41 @@ class ModelBuilder {
     return std::move(given.items);
   }
 
+  /// Takes a built model's layers and actuators, so that redeclare() binds ports as build()
+  /// did.
+  void seed(const Model& model) {
+    model_.layers = model.layers;
+    pending_layers_.resize(model_.layers.size());
+    for (const auto& layer : model_.layers) {
+      for (const auto& actuator : layer.actuators) {
+        actuator_index_[actuator.name.text] = {layer.name.text, actuator.name.location,
+                                               actuator.type};
+      }
+    }
+  }
+
+  std::optional<Declaration> redeclare(ClassKind kind, const Node& type, const Node* params,
+                                       const Node* ports, std::optional<std::size_t> layer,
+                                       const std::string& owner, const SourceLocation& owner_at) {
+    const std::size_t errors = diagnostics_.error_count();
+    Declaration declaration;
+    declaration.cls = read_class(type, kind, owner);
+    if (declaration.cls == nullptr) return std::nullopt;
+    // A state's required params may come per queue entry; a replacement has none of those.
+    declaration.params = read_params(*declaration.cls, params, owner_at, owner);
+    if (layer) {
+      declaration.ports =
+          bind_ports(*declaration.cls, ports, model_.layers[*layer], owner, owner_at);
+    } else if (ports != nullptr) {
+      diagnostics_.error(ports->location(), "unknown-key",
+                         fmt::format("{} has no ports: a state reads and writes through the "
+                                     "behaviour that steps its machine",
+                                     owner));
+    }
+    if (diagnostics_.error_count() != errors) return std::nullopt;
+    return declaration;
+  }
+
  private:
   struct ActuatorInfo {
     std::string layer;
@@ -1494,6 +1529,17 @@ std::vector<Param> check_state_params(const StateDecl& state, const Node* overri
   static const ReadLimits kLimits;
   return ModelBuilder(registry, diagnostics, kLimits)
       .check_instance_params(state, overrides, where);
+}
+
+std::optional<Declaration> redeclare(const Model& model, ClassKind kind, const Node& type,
+                                     const Node* params, const Node* ports,
+                                     std::optional<std::size_t> layer, const std::string& owner,
+                                     const SourceLocation& owner_at, const Registry& registry,
+                                     Diagnostics& diagnostics) {
+  static const ReadLimits kLimits;
+  ModelBuilder builder(registry, diagnostics, kLimits);
+  builder.seed(model);
+  return builder.redeclare(kind, type, params, ports, layer, owner, owner_at);
 }
 
 Model build_model(const Node& root, const Registry& registry, Diagnostics& diagnostics,

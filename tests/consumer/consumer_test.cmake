@@ -4,7 +4,8 @@
 #      with find_package(arbiter), nothing else;
 #   3. runs the project's config with the *installed* CLI, finding the plugin through
 #      --plugin-path and through ARBITER_PLUGIN_PATH, and checks what it reports;
-#   4. checks that the installed CLI finds the installed soccer plugin with no flags, and that
+#   4. runs the project's scenario tests through its CTest (arbiter_add_test);
+#   5. checks that the installed CLI finds the installed soccer plugin with no flags, and that
 #      it looks for plugins in the prefix, not in the build tree.
 # Variables: BUILD_DIR, SOURCE_DIR (Arbiter's), WORK_DIR, CXX_COMPILER.
 
@@ -59,6 +60,15 @@ run_checked(output 0 "${CMAKE_COMMAND}" --build "${consumer_build}" -j2)
 if(NOT EXISTS "${consumer_build}/arbiter_patrol.so")
   message(FATAL_ERROR "the consumer build made no ${consumer_build}/arbiter_patrol.so")
 endif()
+
+# The project's scenario tests, registered with arbiter_add_test(), pass in its own CTest.
+message(STATUS "running the consumer's scenario tests with ctest")
+get_filename_component(cmake_bin "${CMAKE_COMMAND}" DIRECTORY)
+run_checked(output 0 "${CMAKE_COMMAND}" -E env --unset=ARBITER_PLUGIN_PATH
+            "${cmake_bin}/ctest" --test-dir "${consumer_build}" --verbose)
+expect_in("${output}" "ctest in the consumer project"
+  "patrol_scenarios[ .]*Passed"
+  "PASS [^\n]*patrol.test.yaml \\(6 expectations, 30 steps\\)")
 
 # The plugin's classes run: the robot drives to the gate, then the lookout's countdown plans
 # itself for three rounds; the beacon (the plugin's own value type) goes into the trace.

@@ -129,6 +129,24 @@ std::vector<Param> check_state_params(const StateDecl& state, const Node* overri
                                       const SourceLocation& where, const Registry& registry,
                                       Diagnostics& diagnostics);
 
+/// A class with its checked params and bound ports, as a config declares an instance.
+struct Declaration {
+  const ClassInfo* cls = nullptr;
+  ParamSet params;                 ///< defaults filled in
+  std::vector<PortBinding> ports;  ///< one per port the class declares
+};
+
+/// Declares an instance of `model` (built without error) anew, as a config would: `type` names a
+/// class of `kind`, `params` (may be null) are checked against it and, for an instance of a
+/// layer (`layer`: its index; none for a state), `ports` (may be null) are bound in that layer.
+/// Reports at the nodes, naming the instance as `owner` (declared at `owner_at`); nullopt when
+/// anything was wrong. Substitution (substitute.hpp) declares its replacements through it.
+std::optional<Declaration> redeclare(const Model& model, ClassKind kind, const Node& type,
+                                     const Node* params, const Node* ports,
+                                     std::optional<std::size_t> layer, const std::string& owner,
+                                     const SourceLocation& owner_at, const Registry& registry,
+                                     Diagnostics& diagnostics);
+
 /// Validates a parsed config (and the files it includes, read relative to `root`'s file) against
 /// the registry's classes. Reports every problem; the model is only meaningful when no error was
 /// reported.

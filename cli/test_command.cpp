@@ -1,0 +1,187 @@
+#include "test_command.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+namespace arbiter::cli {
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailed = 1;
+constexpr int kExitUsage = 2;
+
+// The test files a path names: itself, or every test file under a directory, sorted.
+bool expand(const std::string& path, std::vector<std::string>& files, std::ostream& err) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (fs::is_regular_file(path, error)) {
+    files.push_back(path);
+    return true;
+  }
+  if (!fs::is_directory(path, error)) {
+    err << fmt::format("arbiter test: no such file or directory '{}'\n", path);
+    return false;
+  }
+  std::vector<std::string> found;
+  for (fs::recursive_directory_iterator it(path, error), end; !error && it != end;
+       it.increment(error)) {
+    if (it->is_regular_file(error) && is_scenario_file(it->path().filename().string())) {
+      found.push_back(it->path().lexically_normal().string());
+    }
+  }
+  if (error) {
+    err << fmt::format("arbiter test: cannot read directory '{}': {}\n", path, error.message());
+    return false;
+  }
+  if (found.empty()) {
+    err << fmt::format(
+        "arbiter test: no test files (*.test.yaml, *.test.yml, *.test.json) in '{}'\n", path);
+    return false;
+  }
+  std::sort(found.begin(), found.end());
+  files.insert(files.end(), found.begin(), found.end());
+  return true;
+}
+
+std::string indented(const std::string& text) {
+  std::string out;
+  bool line_start = true;
+  for (char c : text) {
+    if (line_start && c != '\n') out += "    ";
+    out += c;
+    line_start = c == '\n';
+  }
+  if (!out.empty() && out.back() != '\n') out += '\n';
+  return out;
+}
+
+std::string xml_escaped(std::string_view text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        // XML 1.0 allows no control characters but tab and line breaks.
+        if (static_cast<unsigned char>(c) >= 0x20 || c == '\t' || c == '\n' || c == '\r') {
+          out += c;
+        }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string junit_xml(const std::vector<ScenarioResult>& results) {
+  std::size_t failures = 0;
+  std::size_t errors = 0;
+  for (const auto& result : results) {
+    failures += result.failures.size();
+    errors += result.status == ScenarioResult::Status::kInvalid ? 1 : 0;
+  }
+  std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  out +=
+      fmt::format("<testsuites name=\"arbiter test\" tests=\"{}\" failures=\"{}\" errors=\"{}\">\n",
+                  results.size(), failures, errors);
+  out += fmt::format(
+      "  <testsuite name=\"arbiter test\" tests=\"{}\" failures=\"{}\" errors=\"{}\">\n",
+      results.size(), failures, errors);
+  for (const auto& result : results) {
+    const std::string classname = std::filesystem::path(result.file).parent_path().string();
+    out += fmt::format("    <testcase name=\"{}\" classname=\"{}\" file=\"{}\"",
+                       xml_escaped(result.name), xml_escaped(classname), xml_escaped(result.file));
+    if (result.status == ScenarioResult::Status::kPassed) {
+      out += "/>\n";
+      continue;
+    }
+    out += ">\n";
+    if (result.status == ScenarioResult::Status::kInvalid) {
+      std::string first;
+      for (const auto& item : result.diagnostics.items()) {
+        if (item.severity == Severity::kError) {
+          first = item.message;
+          break;
+        }
+      }
+      out += fmt::format("      <error message=\"{}\" type=\"invalid\">{}</error>\n",
+                         xml_escaped(first), xml_escaped(format(result.diagnostics)));
+    }
+    for (const auto& failure : result.failures) {
+      out += fmt::format("      <failure message=\"{}\" type=\"{}\">{}{}</failure>\n",
+                         xml_escaped(failure.diagnostic.message), failure.diagnostic.code,
+                         xml_escaped(format(failure.diagnostic)), xml_escaped(failure.explanation));
+    }
+    out += "    </testcase>\n";
+  }
+  out += "  </testsuite>\n</testsuites>\n";
+  return out;
+}
+
+int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
+              std::ostream& err) {
+  std::vector<std::string> files;
+  for (const auto& path : command.paths) {
+    if (!expand(path, files, err)) return kExitUsage;
+  }
+  std::vector<ScenarioResult> results;
+  std::size_t passed = 0;
+  std::size_t failed = 0;
+  std::size_t invalid = 0;
+  for (const auto& file : files) {
+    ScenarioResult result = run_scenario_file(file, registry, command.options);
+    switch (result.status) {
+      case ScenarioResult::Status::kPassed:
+        ++passed;
+        out << fmt::format("PASS {} ({} expectations, {} steps)\n", file, result.expectations,
+                           result.steps);
+        break;
+      case ScenarioResult::Status::kFailed:
+        ++failed;
+        out << fmt::format("FAIL {} ({} of {} expectations failed)\n", file, result.failures.size(),
+                           result.expectations);
+        for (const auto& failure : result.failures) {
+          out << format(failure.diagnostic);
+          out << indented(failure.explanation);
+        }
+        break;
+      case ScenarioResult::Status::kInvalid:
+        ++invalid;
+        out << fmt::format("INVALID {}\n", file);
+        break;
+    }
+    // Load warnings and the reasons a test could not run, as `arbiter validate` prints them.
+    if (!result.diagnostics.empty()) err << format(result.diagnostics);
+    out.flush();
+    results.push_back(std::move(result));
+  }
+  out << fmt::format("{} passed, {} failed, {} invalid\n", passed, failed, invalid);
+  if (!command.junit.empty()) {
+    std::ofstream xml(command.junit, std::ios::binary);
+    xml << junit_xml(results);
+    if (!xml) {
+      err << fmt::format("arbiter test: cannot write '{}'\n", command.junit);
+      return kExitUsage;
+    }
+  }
+  if (invalid > 0) return kExitUsage;
+  return failed > 0 ? kExitFailed : kExitOk;
+}
+
+}  // namespace arbiter::cli

@@ -1,0 +1,106 @@
+// `arbiter test` end to end: scenario files that fail or are invalid print the approved output
+// (tests/data/scenarios/*/NAME.test.yaml beside NAME.expected), exit codes, directories, and the
+// JUnit XML that CI systems read.
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+
+#include "arbiter/scenario.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace arbiter;
+
+namespace {
+
+const fs::path kSourceDir = ARBITER_SOURCE_DIR;
+const fs::path kScenarios = kSourceDir / "tests" / "data" / "scenarios";
+
+/// Runs `arbiter ARGUMENTS` in the source directory, so that paths in the output are relative.
+test::CliResult run_cli(const std::string& arguments) {
+  return test::run_captured("cd \"" + kSourceDir.string() + "\" && \"" + std::string(ARBITER_CLI) +
+                            "\" " + arguments);
+}
+
+std::vector<fs::path> scenarios_in(const fs::path& dir) {
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (is_scenario_file(entry.path().string())) files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+fs::path expected_of(const fs::path& scenario) {
+  std::string name = scenario.filename().string();
+  name.resize(name.find(".test."));
+  return scenario.parent_path() / (name + ".expected");
+}
+
+std::size_t count(const std::string& text, const std::string& part) {
+  std::size_t n = 0;
+  for (auto at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("every failing or invalid scenario prints the approved output and exit code",
+          "[scenario]") {
+  std::size_t cases = 0;
+  for (const char* kind : {"failing", "invalid"}) {
+    for (const auto& path : scenarios_in(kScenarios / kind)) {
+      ++cases;
+      const std::string relative = fs::relative(path, kSourceDir).string();
+      DYNAMIC_SECTION(relative) {
+        const auto result = run_cli("test " + relative);
+        const std::string actual =
+            result.out + result.err + "exit " + std::to_string(result.exit_code) + "\n";
+        if (test::update_golden()) {
+          test::write_text(expected_of(path), actual);
+          WARN("rewrote " << expected_of(path).string());
+        } else {
+          CHECK(actual == test::read_text(expected_of(path)));
+        }
+        CHECK(result.exit_code == (std::string(kind) == "failing" ? 1 : 2));
+      }
+    }
+  }
+  CHECK(cases >= 8);
+}
+
+TEST_CASE("the soccer demo's scenarios pass, found by directory", "[scenario]") {
+  const auto result = run_cli("test tests/scenarios/soccer");
+  INFO(result.out << result.err);
+  CHECK(result.exit_code == 0);
+  CHECK(count(result.out, "PASS ") == scenarios_in(kSourceDir / "tests/scenarios/soccer").size());
+  CHECK(result.out.find("0 failed, 0 invalid") != std::string::npos);
+}
+
+TEST_CASE("a path that is neither a test file nor a directory of them is a usage error",
+          "[scenario]") {
+  CHECK(run_cli("test no/such/dir").exit_code == 2);
+  CHECK(run_cli("test docs").exit_code == 2);
+}
+
+TEST_CASE(
+    "the JUnit XML is well-formed: a testcase per test file, a failure per failed expectation",
+    "[scenario]") {
+  const fs::path xml = fs::temp_directory_path() / "arbiter_scenario_junit.xml";
+  fs::remove(xml);
+  const auto result = run_cli(
+      "test tests/data/scenarios/failing tests/scenarios/soccer --junit \"" + xml.string() + "\"");
+  CHECK(result.exit_code == 1);
+  const std::string text = test::read_text(xml);
+  const auto files = scenarios_in(kScenarios / "failing").size() +
+                     scenarios_in(kSourceDir / "tests/scenarios/soccer").size();
+  CHECK(count(text, "<testcase ") == files);
+  CHECK(count(text, "<failure ") == count(result.out, ": error: expected "));
+  const auto lint = test::run_captured("xmllint --noout \"" + xml.string() + "\"");
+  INFO(lint.err);
+  CHECK(lint.exit_code == 0);
+  fs::remove(xml);
+}
