@@ -151,3 +151,51 @@ TEST_CASE("every config in configs/ steps without allocating", "[alloc]") {
     }
   }
 }
+
+namespace {
+
+/// A clock that only counts: what a host's steady clock costs, without the time.
+class CountingClock : public StepClock {
+ public:
+  double now() override { return ticks_ += 1.0; }
+
+ private:
+  double ticks_ = 0.0;
+};
+
+}  // namespace
+
+TEST_CASE("a timed step and the safe pass allocate nothing", "[alloc][safe]") {
+  static const Registry registry = test::make_test_registry();
+  Manager manager(test::compile_text(R"(arbiter: 1
+name: safe
+layers:
+  - name: control
+    actuators:
+      gait: {type: vec3, aggregate: true, safe: [0, 0, 0]}
+      label: {type: string, safe: stop}
+      speed: {type: double}
+    behaviours:
+      walk: {type: scripted, params: {activation: 1, writes: {gait: [1, 2, 3], label: go, speed: 2}}}
+  - name: world
+    interface: test.Feed
+    ports: {out: measured}
+    actuators: {measured: double}
+    sensors: [gait, label, speed]
+)",
+                                     registry));
+  CountingClock clock;
+  manager.set_clock(&clock);
+  manager.step();
+  manager.safe_pass();
+  allocations = 0;
+  counting = true;
+  for (int i = 0; i < 50; ++i) {
+    manager.step();
+    manager.safe_pass();
+  }
+  counting = false;
+  CHECK(allocations.load() == 0);
+  CHECK(manager.safe_passes() == 51);
+  CHECK(manager.actuator<std::string>(*manager.program().find_actuator("label")) == "stop");
+}
