@@ -132,6 +132,10 @@ test('colours follow the steps; pause, single step and resume drive the engine',
 
   await page.click('#resume');
   await page.waitForFunction(() => Number(document.querySelector('#step').textContent) >= 9);
+  // Running, the page shows how well the run keeps time.
+  await page.waitForSelector('#timing-panel:not([hidden])');
+  assert.match(await page.textContent('#timing'), /step duration\s+p50 [\d.]+ µs\s+p99 [\d.]+ µs\s+max [\d.]+ µs/);
+  assert.match(await page.textContent('#timing'), /period jitter\s+p50/);
   await page.click('#pause');
   await page.waitForSelector('#status.paused');
   await page.waitForTimeout(300);  // a step already under way may still arrive
