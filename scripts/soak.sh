@@ -50,7 +50,7 @@ for _ in $(seq 1 100); do
   sleep 0.1
 done
 [ -n "$url" ] || { echo "soak: the live view did not start" >&2; cat "$work/err.txt" >&2; exit 1; }
-curl -sN -H "X-Arbiter-Token: $token" "${url}events" >/dev/null &
+curl -sN -H "X-Arbiter-Token: $token" "${url}events" | wc -c >"$work/client_bytes" &
 client_pid=$!
 
 rss_kb() { awk '/^VmRSS:/ {print $2}' "/proc/$run_pid/status" 2>/dev/null || true; }
@@ -81,11 +81,15 @@ status=0
 wait "$run_pid" || status=$?
 run_pid=
 [ -n "$elapsed" ] || elapsed=$(($(date +%s) - started))
-kill "$client_pid" 2>/dev/null || true
+# The server closes the stream when the run ends: the client must have held it until then.
+for _ in $(seq 1 50); do [ -s "$work/client_bytes" ] && break; sleep 0.1; done
+client_bytes=$(cat "$work/client_bytes" 2>/dev/null || echo 0)
 client_pid=
 
 fail=0
 report() { echo "soak: $*"; }
+[ "$client_bytes" -gt $((steps / 100)) ] ||
+  { report "FAIL: the live client received only $client_bytes bytes"; fail=1; }
 [ "$status" -eq 0 ] || { report "FAIL: exit status $status"; fail=1; }
 if [ -s "$work/err.txt" ]; then
   report "FAIL: stderr is not empty:"
@@ -116,7 +120,7 @@ rss_first=$(head -1 "$samples" | awk '{print $3}')
   { report "FAIL: resident memory after warm-up from $rss_min to $rss_max KiB ($rss_n samples)"; fail=1; }
 
 report "$steps steps in ${elapsed} s ($((steps / (elapsed > 0 ? elapsed : 1))) steps/s), exit $status"
-report "live client streamed throughout; $edits config edits, $reloads reloads"
+report "live client received $((client_bytes / 1048576)) MiB; $edits config edits, $reloads reloads"
 report "trace: $records step records, $((trace_bytes / 1048576)) MiB, last step $last, $bad out of order, $safe safe pass"
 report "resident memory: $rss_first KiB at the first sample; after warm-up $rss_min..$rss_max KiB" \
   "($((rss_max - rss_min)) KiB apart, $rss_n samples)"
