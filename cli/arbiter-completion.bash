@@ -55,7 +55,7 @@ _arbiter() {
       return ;;
     --trace) mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$'); return ;;
     --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
-    --steps | --step | --load | --serve | --tolerance) return ;;
+    --steps | --step | --load | --serve | --serve-token | --rt-priority | --tolerance) return ;;
     --junit) mapfile -t COMPREPLY < <(_arbiter_files '\.xml$'); return ;;
     --output | -o) mapfile -t COMPREPLY < <(_arbiter_files '\.svg$'); return ;;
   esac
@@ -72,7 +72,7 @@ _arbiter() {
   local options
   case "$command" in
     validate) options="--format --strict --help" ;;
-    run) options="--steps --trace --quiet --realtime --strict --serve --paused --watch --help" ;;
+    run) options="--steps --trace --quiet --realtime --strict --serve --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
     test) options="--junit --tolerance --help" ;;

@@ -29,6 +29,7 @@
 #include "run_report.hpp"
 #include "serve.hpp"
 #include "test_command.hpp"
+#include "timing.hpp"
 #include "view.hpp"
 #include "watch.hpp"
 
@@ -43,6 +44,7 @@ struct Options {
   std::string file;
   std::vector<std::string> plugin_path;
   bool realtime = false;
+  bool full_speed = false;  ///< `run --full-speed`: unpaced even with --serve
   std::string format = "text";
   bool strict = false;
   std::uint64_t steps = 100;
@@ -62,6 +64,9 @@ struct Options {
   bool actuators = false;
   bool paused = false;             ///< `run --paused`
   arbiter::cli::TestCommand test;  ///< `test`
+  int rt_priority = 0;             ///< `run --rt-priority`; 0: normal scheduling
+  std::string serve_token;  ///< `run --serve-token` (or ARBITER_SERVE_TOKEN); empty: a random one
+  bool serve_readonly = false;
 };
 
 arbiter::Registry make_registry() {
@@ -265,9 +270,24 @@ int run(const Options& options) {
   if (options.watch) watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet);
   std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
   if (!options.serve.empty()) {
-    live = arbiter::cli::LiveView::open(options.serve, options.paused, std::cout, std::cerr);
+    arbiter::cli::LiveAccess access;
+    access.token = options.serve_token;
+    access.readonly = options.serve_readonly;
+    live =
+        arbiter::cli::LiveView::open(options.serve, options.paused, access, std::cout, std::cerr);
     if (!live) return kExitUsage;
     manager.add_observer(*live);
+  }
+  arbiter::cli::SteadyStepClock clock;
+  manager.set_clock(&clock);
+  arbiter::cli::RunTiming timing(1.0 / rate_hz);
+  if (live) live->set_timing(&timing, options.realtime);
+  if (options.rt_priority > 0) {
+    std::string error;
+    if (!arbiter::cli::enter_realtime(options.rt_priority, error)) {
+      std::cerr << fmt::format("arbiter run: {}\n", error);
+      return kExitUsage;
+    }
   }
 
   // Ctrl-C ends the run between two steps, so the trace and the summary are still complete.
@@ -277,27 +297,41 @@ int run(const Options& options) {
   const auto period =
       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate_hz));
   const auto started = Clock::now();
+  // Absolute deadlines: step i starts at started + i periods. A step that overruns never brings
+  // a burst of catch-up steps: the next one waits for the next period boundary, and the periods
+  // skipped are counted.
   auto next = started;
   for (std::uint64_t i = 0; i < options.steps && !interrupted; ++i) {
-    if (live && live->hold(manager, interrupted)) {  // paused from the page
+    if (live && live->will_hold()) manager.safe_pass();  // paused from the page: make it safe
+    if (live && live->hold(manager, interrupted)) {
       if (interrupted) break;
       next = Clock::now();
     }
+    if (options.realtime) {
+      std::this_thread::sleep_until(next);
+      timing.record_lateness(std::chrono::duration<double>(Clock::now() - next).count());
+    }
     manager.step();
+    timing.record_step(manager.step_duration());
     if (manager.stopped()) break;  // on_exception: stop — the run ends with this step
     if (options.realtime) {
       next += period;
-      std::this_thread::sleep_until(next);
+      if (const auto now = Clock::now(); now > next) {
+        const auto missed = (now - next) / period + 1;
+        next += missed * period;
+        timing.record_missed(static_cast<std::uint64_t>(missed));
+      }
     }
   }
   watcher.reset();
-  manager.finish();
+  manager.finish();  // outputs the safe values, whatever ended the run
   if (!options.quiet) {
     const double wall = std::chrono::duration<double>(Clock::now() - started).count();
     std::cout << fmt::format("{}simulated {:.2f} s at {} Hz in {:.3f} s of wall time{}\n",
                              interrupted ? "interrupted: " : "",
                              static_cast<double>(manager.steps()) / rate_hz, rate_hz, wall,
                              options.realtime ? " (real time)" : "");
+    std::cout << timing.text(options.realtime) << std::flush;
   }
   if (live) live->serve_until(manager, interrupted);
   if (trace_file.is_open() && !trace_file) {
@@ -344,6 +378,11 @@ int plot(const Options& options) {
     return kExitUsage;
   }
   return kExitOk;
+}
+
+/// CLI11 check of `--serve-token`: it travels in URLs and cookies.
+std::string check_serve_token(const std::string& text) {
+  return arbiter::cli::token_error(text);
 }
 
 /// CLI11 check of `--serve [ADDR:]PORT`.
@@ -445,6 +484,11 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--realtime", options.realtime,
                     "pace the steps at the config's rate_hz instead of running flat out");
   run_cmd->add_flag("--strict", options.strict, "treat config warnings as errors");
+  run_cmd
+      ->add_flag("--full-speed", options.full_speed,
+                 "run flat out even with --serve (which otherwise paces at rate_hz), e.g. for a "
+                 "soak test")
+      ->excludes("--realtime");
   run_cmd->add_flag("--watch", options.watch,
                     "reload the config whenever it or a file it includes changes, without "
                     "stopping the run (a broken edit is reported and the previous config runs "
@@ -460,6 +504,24 @@ int main(int argc, char** argv) {
       ->add_flag("--paused", options.paused,
                  "with --serve: wait for the page's Step or Resume before the first step")
       ->needs("--serve");
+  run_cmd
+      ->add_option("--serve-token", options.serve_token,
+                   "with --serve: the token the page and every request must carry (default: a "
+                   "random one per run, printed in the URL; also ARBITER_SERVE_TOKEN)")
+      ->envname("ARBITER_SERVE_TOKEN")
+      ->type_name("TOKEN")
+      ->check(check_serve_token, "");
+  run_cmd
+      ->add_flag("--serve-readonly", options.serve_readonly,
+                 "with --serve: watch only; the page cannot pause, step or resume the run")
+      ->needs("--serve");
+  run_cmd
+      ->add_option("--rt-priority", options.rt_priority,
+                   "run the stepping thread under SCHED_FIFO at this priority (1-99) with memory "
+                   "locked; needs CAP_SYS_NICE or RLIMIT_RTPRIO, and CAP_IPC_LOCK or "
+                   "RLIMIT_MEMLOCK (exit 2 when not permitted)")
+      ->check(CLI::Range(1, 99))
+      ->type_name("N");
   run_cmd->footer(
       std::string("Examples:\n"
                   "  arbiter run configs/paper/walk_and_kick.yaml --steps 20\n"
@@ -467,7 +529,13 @@ int main(int argc, char** argv) {
                   "  arbiter run configs/soccer/walk_and_kick.yaml --realtime   # Ctrl-C "
                   "stops cleanly\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --steps 300 --serve 8080   "
-                  "# then open http://127.0.0.1:8080/\n\n"
+                  "# then open the printed URL (it carries the token)\n"
+                  "  arbiter run configs/soccer/walk_and_kick.yaml --realtime --rt-priority 50   "
+                  "# SCHED_FIFO\n\n"
+                  "Actuators with a 'safe:' value carry it in a last output pass when the run "
+                  "pauses or ends\n(Ctrl-C, SIGTERM, --steps, on_exception: stop). With "
+                  "--realtime the summary gives the period\njitter and step durations (p50, "
+                  "p99, max) and the overruns.\n"
                   "Then 'arbiter explain FILE --trace out.jsonl --step N BEHAVIOUR' tells why "
                   "a behaviour had its level.\n") +
       kExitCodes);
@@ -653,7 +721,9 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
-    if (run_cmd->parsed() && !options.serve.empty()) options.realtime = true;
+    if (run_cmd->parsed() && !options.serve.empty() && !options.full_speed) {
+      options.realtime = true;
+    }
   } catch (const CLI::ParseError& error) {
     // --help and --version exit 0 through app.exit; every real parse error is a usage error.
     const int code = app.exit(error);

@@ -126,10 +126,30 @@ void RunReport::report_controllers(const Manager& manager) {
   }
 }
 
+void RunReport::on_safe(const Manager& manager) {
+  if (quiet_) return;
+  const Program& program = manager.program();
+  std::string values;
+  for (std::uint32_t a = 0; a < program.actuators.size(); ++a) {
+    if (!manager.actuator_written(a)) continue;
+    std::string value;
+    program.actuators[a].type->append_json(manager.actuator_value(a), value);
+    values +=
+        fmt::format("{}{} = {}", values.empty() ? "" : ", ", program.actuators[a].name, value);
+  }
+  out_ << fmt::format("step {:>4}  safe values output: {}\n", manager.steps(), values)
+       << std::flush;
+}
+
 void RunReport::on_finish(const Manager& manager) {
   if (quiet_) return;
   const Program& program = manager.program();
   out_ << fmt::format("\n{} steps.\n", manager.steps());
+  if (manager.safe_passes() > 0) {
+    out_ << fmt::format("Safe values output {} time{} (the last after step {}).\n",
+                        manager.safe_passes(), manager.safe_passes() == 1 ? "" : "s",
+                        manager.steps());
+  }
   for (const auto& controller : program.controllers) {
     out_ << fmt::format("State machine {}: {} after {} cycles.\n", controller->name(),
                         to_string(controller->status()), controller->cycle());

@@ -18,6 +18,8 @@ class RunReport : public Observer {
   /// Re-keys what it counts per behaviour and controller by name: indices change.
   void on_reload(const Manager& manager) override;
   void on_finish(const Manager& manager) override;
+  /// A line naming the safe values output, each time.
+  void on_safe(const Manager& manager) override;
 
  private:
   void report_controllers(const Manager& manager);

@@ -6,12 +6,15 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <fstream>
+#include <list>
 #include <sstream>
 #include <tuple>
 
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/trace.hpp"
+#include "timing.hpp"
 #include "web/assets.hpp"
 
 namespace arbiter::cli {
@@ -23,6 +26,11 @@ using namespace std::chrono_literals;
 // Every open page holds one server thread for its stream; the few requests besides need a few
 // more. Past this many pages a new one waits for a thread.
 constexpr std::size_t kServerThreads = 32;
+// Accepted connections waiting for a thread; past this many the listening thread stops
+// accepting, and further clients wait in the kernel's backlog (or are refused by it).
+constexpr std::size_t kMaxQueued = 256;
+// A client that sends nothing for this long is dropped, freeing its thread.
+constexpr int kReadTimeoutSeconds = 2;
 // A page draws the last kBacklog steps; a client further behind skips to them.
 constexpr std::uint64_t kBacklog = 300;
 // At most this many frames in one write.
@@ -43,7 +51,112 @@ void reply_text(httplib::Response& response, int status, const std::string& text
   response.set_content(text, "text/plain; charset=utf-8");
 }
 
+/// httplib's thread pool with a bounded queue: enqueue() (on the listening thread) waits while
+/// the queue is full, so a burst of connections costs a bounded amount of memory.
+class BoundedPool : public httplib::TaskQueue {
+ public:
+  BoundedPool(std::size_t threads, const std::atomic<bool>& stopping) : stopping_(stopping) {
+    for (std::size_t i = 0; i < threads; ++i) threads_.emplace_back([this] { work(); });
+  }
+  void enqueue(std::function<void()> fn) override {
+    std::unique_lock lock(mutex_);
+    // While stopping, the queue takes what the listening thread still has: it is drained.
+    while (jobs_.size() >= kMaxQueued && !stopping_) room_.wait_for(lock, 50ms);
+    jobs_.push_back(std::move(fn));
+    lock.unlock();
+    ready_.notify_one();
+  }
+  void shutdown() override {
+    {
+      std::lock_guard lock(mutex_);
+      shutdown_ = true;
+    }
+    ready_.notify_all();
+    for (auto& thread : threads_) thread.join();
+  }
+
+ private:
+  void work() {
+    while (true) {
+      std::function<void()> fn;
+      {
+        std::unique_lock lock(mutex_);
+        ready_.wait(lock, [&] { return !jobs_.empty() || shutdown_; });
+        if (jobs_.empty()) return;
+        fn = std::move(jobs_.front());
+        jobs_.pop_front();
+      }
+      room_.notify_one();
+      fn();
+    }
+  }
+
+  const std::atomic<bool>& stopping_;
+  std::vector<std::thread> threads_;
+  std::list<std::function<void()>> jobs_;
+  bool shutdown_ = false;
+  std::mutex mutex_;
+  std::condition_variable ready_;
+  std::condition_variable room_;
+};
+
+bool same_token(std::string_view given, std::string_view token) {
+  // In time independent of where the first difference is.
+  if (given.size() != token.size()) return false;
+  unsigned char difference = 0;
+  for (std::size_t i = 0; i < token.size(); ++i) {
+    difference |= static_cast<unsigned char>(given[i] ^ token[i]);
+  }
+  return difference == 0;
+}
+
+/// The value of cookie `name` in a Cookie header, or "".
+std::string cookie_value(const std::string& header, const std::string& name) {
+  std::size_t at = 0;
+  while (at < header.size()) {
+    while (at < header.size() && (header[at] == ' ' || header[at] == ';')) ++at;
+    const auto end = std::min(header.find(';', at), header.size());
+    const std::string_view pair(header.data() + at, end - at);
+    if (pair.size() > name.size() && pair.compare(0, name.size(), name) == 0 &&
+        pair[name.size()] == '=') {
+      return std::string(pair.substr(name.size() + 1));
+    }
+    at = end;
+  }
+  return "";
+}
+
+std::string lowercase(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+constexpr const char* kTokenNeeded =
+    "this live view needs its token: open the URL that `arbiter run --serve` printed "
+    "(http://HOST:PORT/?token=...), or pass the token as ?token=, as the X-Arbiter-Token header "
+    "or with --serve-token / ARBITER_SERVE_TOKEN when you start the run\n";
+
 }  // namespace
+
+std::string token_error(const std::string& token) {
+  if (token.size() < 8 || token.size() > 128 ||
+      token.find_first_not_of(
+          "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_.") !=
+          std::string::npos) {
+    return "the token must be 8 to 128 letters, digits, '-', '_' or '.'";
+  }
+  return "";
+}
+
+std::string random_token() {
+  std::ifstream random("/dev/urandom", std::ios::binary);
+  unsigned char bytes[16] = {};
+  random.read(reinterpret_cast<char*>(bytes), sizeof bytes);
+  if (!random) throw std::runtime_error("cannot read /dev/urandom for the live view's token");
+  std::string token;
+  for (const unsigned char byte : bytes) token += fmt::format("{:02x}", byte);
+  return token;
+}
 
 ServeAddress ServeAddress::parse(const std::string& text, std::string& error) {
   ServeAddress address;
@@ -79,9 +192,10 @@ bool ServeAddress::loopback() const {
 }
 
 WebServer::WebServer() : server_(std::make_unique<httplib::Server>()) {
-  server_->new_task_queue = [] { return new httplib::ThreadPool(kServerThreads); };
+  server_->new_task_queue = [this] { return new BoundedPool(kServerThreads, stopping_); };
   // Idle keep-alive connections hold a thread; a short timeout frees it (and speeds up stop()).
   server_->set_keep_alive_timeout(1);
+  server_->set_read_timeout(kReadTimeoutSeconds);
   const auto asset = [this](const char* path, const char* text, const char* type) {
     server_->Get(path, [text, type](const httplib::Request&, httplib::Response& response) {
       response.set_header("Cache-Control", "no-cache");
@@ -115,6 +229,8 @@ bool WebServer::start(const ServeAddress& address, std::string& error) {
   }
   const bool v6 = address.host.find(':') != std::string::npos;
   url_ = fmt::format(v6 ? "http://[{}]:{}/" : "http://{}:{}/", address.host, port);
+  host_ = address.host;
+  port_ = port;
   thread_ = std::thread([this] { server_->listen_after_bind(); });
   return true;
 }
@@ -123,6 +239,71 @@ void WebServer::stop() {
   stopping_ = true;
   server_->stop();
   if (thread_.joinable()) thread_.join();
+}
+
+void WebServer::guard(const LiveAccess& access) {
+  server_->set_pre_routing_handler([this, access](const httplib::Request& request,
+                                                  httplib::Response& response) {
+    using Handled = httplib::Server::HandlerResponse;
+    // DNS rebinding: a page of another site whose name now resolves to this machine still says
+    // its own name in Host. A wildcard bind has no one name: the token guards it alone.
+    const std::string host = lowercase(request.get_header_value("Host"));
+    if (host_ != "0.0.0.0" && host_ != "::") {
+      const std::string port = fmt::format(":{}", port_);
+      const bool v6 = host_.find(':') != std::string::npos;
+      const std::string bound = lowercase(v6 ? "[" + host_ + "]" : host_);
+      bool known = false;
+      for (const std::string& name :
+           {bound, std::string("localhost"), std::string("127.0.0.1"), std::string("[::1]")}) {
+        known = known || host == name || host == name + port;
+      }
+      if (!known) {
+        reply_text(response, 403,
+                   fmt::format("refused: Host '{}' is not this server's address ({}{}) or "
+                               "localhost\n",
+                               request.get_header_value("Host"), bound, port));
+        return Handled::Handled;
+      }
+    }
+    const std::string cookie = fmt::format("arbiter_token_{}", port_);
+    std::string given = request.get_param_value("token");
+    if (given.empty()) given = request.get_header_value("X-Arbiter-Token");
+    if (given.empty()) given = cookie_value(request.get_header_value("Cookie"), cookie);
+    const bool authorised = same_token(given, access.token);
+    const bool page =
+        request.path == "/" || request.path == "/app.js" || request.path == "/style.css";
+    if (page) {
+      // The page loads without the token (it then says that one is needed); opened with it, it
+      // keeps it in a cookie that only this origin sends, and no script reads.
+      if (authorised && request.has_param("token")) {
+        response.set_header("Set-Cookie", fmt::format("{}={}; Path=/; HttpOnly; SameSite=Strict",
+                                                      cookie, access.token));
+      }
+      return Handled::Unhandled;
+    }
+    if (!authorised) {
+      reply_text(response, 403, kTokenNeeded);
+      return Handled::Handled;
+    }
+    if (request.path.rfind("/control/", 0) == 0) {
+      if (access.readonly) {
+        reply_text(response, 403, "refused: the live view is read-only (--serve-readonly)\n");
+        return Handled::Handled;
+      }
+      // A page of another origin may send a form POST with the cookie's help (where the cookie
+      // is not SameSite) but cannot forge Origin: only this server's own page may control.
+      const std::string origin = request.get_header_value("Origin");
+      if ((!origin.empty() && lowercase(origin) != "http://" + host) ||
+          request.get_header_value("Sec-Fetch-Site") == "cross-site") {
+        reply_text(response, 403,
+                   fmt::format("refused: a control request from origin '{}', not from this "
+                               "server's page\n",
+                               origin));
+        return Handled::Handled;
+      }
+    }
+    return Handled::Unhandled;
+  });
 }
 
 std::pair<int, std::string> explanation_reply(const Explanation& explanation) {
@@ -156,11 +337,16 @@ std::string sse_frame(std::string_view event, std::uint64_t id, std::string_view
   return out;
 }
 
-std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused, std::ostream& out,
+std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused,
+                                         const LiveAccess& given, std::ostream& out,
                                          std::ostream& err) {
   std::string error;
   const auto address = ServeAddress::parse(text, error);
   auto live = std::make_unique<LiveView>();
+  LiveAccess access = given;
+  if (access.token.empty()) access.token = random_token();
+  live->readonly_ = access.readonly;
+  live->server_.guard(access);
   if (error.empty() && !live->server_.start(address, error)) {
     err << fmt::format("arbiter run: --serve: {}\n", error);
     return nullptr;
@@ -169,10 +355,13 @@ std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused, s
     err << fmt::format("arbiter run: --serve: {}\n", error);
     return nullptr;
   }
-  err << exposure_warning(address, "watch, pause and step the run");
+  err << exposure_warning(address, access.readonly ? "watch the run (with its token)"
+                                                   : "watch, pause and step the run (with its "
+                                                     "token)");
   live->paused_ = paused;
   live->out_ = &out;
-  out << fmt::format("serving the live view at {}{}\n", live->server_.url(),
+  out << fmt::format("serving the live view at {}?token={}{}{}\n", live->server_.url(),
+                     access.token, access.readonly ? " (read-only)" : "",
                      paused ? " (paused: press Step or Resume on the page)" : "")
       << std::flush;
   return live;
@@ -180,14 +369,17 @@ std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused, s
 
 LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
   auto& http = server_.http();
-  http.Get("/info", [](const httplib::Request&, httplib::Response& response) {
-    response.set_content(R"({"mode": "live"})", "application/json");
+  http.Get("/info", [this](const httplib::Request&, httplib::Response& response) {
+    response.set_content(
+        readonly_ ? R"({"mode": "live", "readonly": true})" : R"({"mode": "live"})",
+        "application/json");
   });
   http.Get("/events", [this](const httplib::Request& request, httplib::Response& response) {
     struct Cursor {
       std::uint64_t next = 0;
       std::uint64_t graph_seen = 0;
       std::uint64_t status_seen = 0;
+      std::chrono::steady_clock::time_point timing_sent{};
     };
     auto cursor = std::make_shared<Cursor>();
     // EventSource sends the last id it saw when it reconnects: resume after it.
@@ -198,7 +390,7 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
     response.set_chunked_content_provider(
         "text/event-stream", [this, cursor](std::size_t, httplib::DataSink& sink) {
           return stream(
-              cursor->next, cursor->graph_seen, cursor->status_seen,
+              cursor->next, cursor->graph_seen, cursor->status_seen, cursor->timing_sent,
               [&sink](const std::string& text) { return sink.write(text.data(), text.size()); });
         });
   });
@@ -368,6 +560,7 @@ void LiveView::serve_until(const Manager& manager, const std::atomic<bool>& inte
 }
 
 bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint64_t& status_seen,
+                      std::chrono::steady_clock::time_point& timing_sent,
                       const std::function<bool(const std::string&)>& write) {
   // Polled rather than woken by each step: the stepping thread then shares no lock with the
   // streams but a slot's, and a fast engine's steps reach a page in batches.
@@ -404,6 +597,11 @@ bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint6
         fmt::format(R"({{"paused": {}, "finished": {}, "step": {}}})", paused_ ? "true" : "false",
                     finished_ ? "true" : "false", newest_.load()));
     status_seen = version;
+  }
+  if (const auto now = std::chrono::steady_clock::now();
+      timing_ != nullptr && newest > 0 && now - timing_sent >= 1s) {
+    out += sse_frame("timing", 0, timing_->json(paced_));
+    timing_sent = now;
   }
   // A comment line keeps the connection alive and finds out when the client has gone.
   if (out.empty()) out = ": idle\n\n";

@@ -4,6 +4,7 @@
 // records (the trace format), and answers `explain` for a behaviour at a step.
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -27,6 +28,8 @@ class Server;
 
 namespace arbiter::cli {
 
+class RunTiming;
+
 /// Where to listen: `[ADDR:]PORT`; port 0 picks a free port.
 struct ServeAddress {
   std::string host = "127.0.0.1";
@@ -35,6 +38,21 @@ struct ServeAddress {
   static ServeAddress parse(const std::string& text, std::string& error);
   bool loopback() const;
 };
+
+/// Who may use the live server (docs/live_view.md): every request but the static page needs the
+/// token, from the cookie the page gets when opened with `?token=`, the `token` parameter or an
+/// `X-Arbiter-Token` header; the Host must be the bound address or localhost (against DNS
+/// rebinding); a control request must come from the server's own origin, and none is served
+/// when read-only.
+struct LiveAccess {
+  std::string token;  ///< empty: open() picks a random one
+  bool readonly = false;
+};
+
+/// Why `token` cannot be a serve token, or "" when it can (it travels in URLs and cookies).
+std::string token_error(const std::string& token);
+/// 32 hex digits from the system's random source.
+std::string random_token();
 
 /// The HTTP server both views share: the page and its assets, and a listening thread.
 class WebServer {
@@ -52,9 +70,13 @@ class WebServer {
   void stop();
   bool stopping() const { return stopping_; }
   const std::string& url() const { return url_; }
+  /// Refuses, from now on, every request that `access` does not let in (before start()).
+  void guard(const LiveAccess& access);
 
  private:
   std::unique_ptr<httplib::Server> server_;
+  std::string host_;  // the address bound
+  int port_ = 0;
   std::thread thread_;
   std::string url_;
   std::atomic<bool> stopping_{false};
@@ -76,8 +98,16 @@ class LiveView : public Observer {
   /// Serves on `address` (`[ADDR:]PORT`, checked by ServeAddress::parse) and prints the URL to
   /// `out`, or says to `err` why it cannot (nullptr then). With `paused`, the first step waits
   /// for the page's Step or Resume.
-  static std::unique_ptr<LiveView> open(const std::string& address, bool paused, std::ostream& out,
+  static std::unique_ptr<LiveView> open(const std::string& address, bool paused,
+                                        const LiveAccess& access, std::ostream& out,
                                         std::ostream& err);
+  /// The run's timing, sent to the page about once a second (`paced`: with deadlines).
+  void set_timing(const RunTiming* timing, bool paced) {
+    timing_ = timing;
+    paced_ = paced;
+  }
+  /// True when the next hold() will wait: the page has paused the run and asked for no step.
+  bool will_hold() const { return paused_ && single_steps_ == 0; }
 
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
@@ -112,6 +142,7 @@ class LiveView : public Observer {
   /// Appends the record of `step` to `out`; false when the ring no longer holds it.
   bool copy_record(std::uint64_t step, std::string& out);
   bool stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint64_t& status_seen,
+              std::chrono::steady_clock::time_point& timing_sent,
               const std::function<bool(const std::string&)>& write);
 
   WebServer server_;
@@ -130,6 +161,9 @@ class LiveView : public Observer {
   std::condition_variable answered_;
   std::atomic<bool> paused_{false};
   std::atomic<std::uint64_t> single_steps_{0};
+  const RunTiming* timing_ = nullptr;
+  bool paced_ = false;
+  bool readonly_ = false;
 };
 
 /// The text of an SSE frame: `event`, optional `id`, and `data` split into `data:` lines.

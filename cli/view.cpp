@@ -76,6 +76,8 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
       return std::nullopt;
     }
     const auto step = parsed["step"].get<std::uint64_t>();
+    // The safe-value pass of a stopping engine repeats its last step's number: no step to draw.
+    if (step == last_step && parsed.value("safe", false) == true) continue;
     if (step <= last_step) {
       error = fmt::format("{}:{}:1: error: step {} follows step {}; steps must increase", path,
                           number, step, last_step);

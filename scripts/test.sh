@@ -102,6 +102,7 @@ command -v chromium >/dev/null || test_tools+=(chromium)
 command -v node >/dev/null || test_tools+=(nodejs)
 command -v npm >/dev/null || test_tools+=(npm)
 command -v xmllint >/dev/null || test_tools+=(libxml2-utils)
+command -v curl >/dev/null || test_tools+=(curl)
 scripts/install-deps.sh "${test_tools[@]}"
 
 status=0

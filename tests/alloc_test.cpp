@@ -16,6 +16,7 @@
 #include "arbiter/substitute.hpp"
 #include "counting_new.hpp"
 #include "test_support.hpp"
+#include "timing.hpp"
 
 using arbiter::test::allocations;
 using arbiter::test::counting;
@@ -171,4 +172,73 @@ TEST_CASE("a program with substituted classes steps without allocating", "[alloc
   REQUIRE(program);
   Manager manager(std::move(*program));
   CHECK(allocations_in_steps(manager, 50) == 0);
+}
+
+namespace {
+
+/// A clock that only counts: what a host's steady clock costs, without the time.
+class CountingClock : public StepClock {
+ public:
+  double now() override { return ticks_ += 1.0; }
+
+ private:
+  double ticks_ = 0.0;
+};
+
+}  // namespace
+
+TEST_CASE("a timed step and the safe pass allocate nothing", "[alloc][safe]") {
+  static const Registry registry = test::make_test_registry();
+  Manager manager(test::compile_text(R"(arbiter: 1
+name: safe
+layers:
+  - name: control
+    actuators:
+      gait: {type: vec3, aggregate: true, safe: [0, 0, 0]}
+      label: {type: string, safe: stop}
+      speed: {type: double}
+    behaviours:
+      walk: {type: scripted, params: {activation: 1, writes: {gait: [1, 2, 3], label: go, speed: 2}}}
+  - name: world
+    interface: test.Feed
+    ports: {out: measured}
+    actuators: {measured: double}
+    sensors: [gait, label, speed]
+)",
+                                     registry));
+  CountingClock clock;
+  manager.set_clock(&clock);
+  manager.step();
+  manager.safe_pass();
+  allocations = 0;
+  counting = true;
+  for (int i = 0; i < 50; ++i) {
+    manager.step();
+    manager.safe_pass();
+  }
+  counting = false;
+  CHECK(allocations.load() == 0);
+  CHECK(manager.safe_passes() == 51);
+  CHECK(manager.actuator<std::string>(*manager.program().find_actuator("label")) == "stop");
+}
+
+TEST_CASE("recording a step's timing allocates nothing", "[alloc][timing]") {
+  cli::RunTiming timing(0.01);
+  cli::SteadyStepClock clock;
+  timing.record_step(1e-5);
+  allocations = 0;
+  counting = true;
+  for (int i = 0; i < 1000; ++i) {
+    timing.record_lateness(clock.now() * 1e-3);
+    timing.record_step(1e-6 * i);
+    if (i % 100 == 0) timing.record_missed(2);
+  }
+  counting = false;
+  CHECK(allocations.load() == 0);
+  CHECK(timing.duration().count() == 1001);
+  CHECK(timing.overruns() == 10);
+  CHECK(timing.missed() == 20);
+  // Percentiles within a bucket (2 %) of the exact ones; the maximum is exact.
+  CHECK(timing.duration().percentile(0.5) == Approx(499e-6).epsilon(0.03));
+  CHECK(timing.duration().max() == 1e-6 * 999);
 }

@@ -335,8 +335,20 @@ function setStatus(text, kind) {
   status.className = `badge ${kind}`;
 }
 
-function startLive() {
-  document.getElementById('live-controls').hidden = false;
+function showTiming(timing) {
+  const us = (seconds) => `${(seconds * 1e6).toFixed(1)} µs`;
+  const stats = (h) => `p50 ${us(h.p50)}  p99 ${us(h.p99)}  max ${us(h.max)}`;
+  const lines = [`step duration  ${stats(timing.duration)}`];
+  if (timing.paced) {
+    lines.push(`period jitter  ${stats(timing.jitter)}`);
+    lines.push(`overruns ${timing.overruns}, periods missed ${timing.missed} (period ${us(timing.period)})`);
+  }
+  document.getElementById('timing-panel').hidden = false;
+  document.getElementById('timing').textContent = lines.join('\n');
+}
+
+function startLive(readonly) {
+  document.getElementById('live-controls').hidden = !!readonly;
   const control = (action) => fetch(`control/${action}`, {method: 'POST'});
   document.getElementById('pause').onclick = () => control('pause');
   document.getElementById('single-step').onclick = () => control('step');
@@ -364,6 +376,7 @@ function startLive() {
     if (status.finished) setStatus('finished', 'finished');
     else setStatus(status.paused ? 'paused' : 'running', status.paused ? 'paused' : 'running');
   });
+  events.addEventListener('timing', (event) => showTiming(JSON.parse(event.data)));
   events.onerror = () => setStatus('connection lost: reconnecting…', 'lost');
 }
 
@@ -398,11 +411,22 @@ async function startTrace() {
 }
 
 async function start() {
-  const info = await fetch('info').then((r) => r.json());
+  const reply = await fetch('info');
+  if (reply.status === 403) {
+    // The live server lets in only the holder of its token (the URL `arbiter run` printed).
+    setStatus('token needed', 'lost');
+    const note = document.getElementById('token-needed');
+    note.textContent = await reply.text();
+    note.hidden = false;
+    return;
+  }
+  // The server has put the token in a cookie: keep it out of the address bar and history.
+  if (new URLSearchParams(location.search).has('token')) history.replaceState(null, '', location.pathname);
+  const info = await reply.json();
   view.mode = info.mode;
   document.getElementById('mode').textContent = info.mode === 'live' ? 'live' : 'recorded';
   document.body.dataset.mode = info.mode;
-  if (info.mode === 'live') startLive();
+  if (info.mode === 'live') startLive(info.readonly);
   else await startTrace();
   document.body.dataset.ready = 'true';
 }

@@ -828,6 +828,7 @@ class Compiler {
         out.aggregate = actuator.aggregate;
         out.layer = static_cast<std::uint32_t>(program_.layers.size());
         out.default_value = actuator.default_value;
+        out.safe_value = actuator.safe_value;
         out.location = actuator.name.location;
         bindings_.actuator.emplace(out.name, static_cast<std::uint32_t>(program_.actuators.size()));
         program_.actuators.push_back(std::move(out));

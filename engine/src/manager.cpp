@@ -102,6 +102,7 @@ struct Manager::Staged {
   std::vector<char> non_finite_reported;
   std::vector<const void*> mean_values;
   std::vector<double> mean_weights;
+  std::vector<ValueBox> safe_values;
   // Scratch for the swap: which running behaviours, layers and controllers go on in the new
   // program (kept, or taken over by carry_over()), and which new instances took over.
   std::vector<char> behaviour_continues;
@@ -189,6 +190,14 @@ void Manager::prepare(Staged& staged) const {
       actuator.type->from_node(*actuator.default_value, at, expected);  // validated at load
     }
   }
+  staged.safe_values.resize(actuators);
+  for (std::size_t a = 0; a < actuators; ++a) {
+    const auto& actuator = program.actuators[a];
+    if (!actuator.safe_value) continue;
+    staged.safe_values[a] = ValueBox(*actuator.type);
+    std::string expected;
+    actuator.type->from_node(*actuator.safe_value, staged.safe_values[a].data(), expected);
+  }
   for (std::size_t s = 0; s < slots; ++s) {
     program.slot_types[s]->construct(staged.values.get() + program.slot_offsets[s]);
   }
@@ -219,6 +228,7 @@ void Manager::swap_buffers(Staged& staged) noexcept {
   non_finite_reported_.swap(staged.non_finite_reported);
   mean_values_.swap(staged.mean_values);
   mean_weights_.swap(staged.mean_weights);
+  safe_values_.swap(staged.safe_values);
   data_.values = values_.get();
   data_.actuator_offset = program_.actuator_offsets.data();
   data_.actuator_written = actuator_written_.get();
@@ -384,7 +394,37 @@ void Manager::remove_observer(Observer& observer) {
 }
 
 void Manager::finish() {
+  safe_pass();
   for (Observer* observer : observers_) observer->on_finish(*this);
+}
+
+void Manager::safe_pass() {
+  const bool any_safe = std::any_of(safe_values_.begin(), safe_values_.end(),
+                                    [](const ValueBox& box) { return box.data() != nullptr; });
+  if (data_.step == 0 || !any_safe) return;
+  if (clock_ != nullptr) step_time_ = clock_->now();
+  for (std::uint32_t a = 0; a < program_.actuators.size(); ++a) {
+    const bool safe = safe_values_[a].data() != nullptr;
+    if (safe) {
+      program_.actuators[a].type->assign(values_.get() + program_.actuators[a].offset,
+                                         safe_values_[a].data());
+    }
+    actuator_written_[a] = safe;
+  }
+  data_.event_count = 0;
+  for (const auto& controller : program_.controllers) controller->clear_events();
+  for (const auto& layer : program_.layers) {
+    if (!layer.is_interface()) continue;
+    const auto index =
+        static_cast<std::uint32_t>(program_.behaviours.size() + (&layer - program_.layers.data()));
+    const StepContext context(data_, index);
+    if (disabled_[index] == 0) ARBITER_GUARDED(index, "output", layer.interface->output(context));
+  }
+  if (clock_ != nullptr) step_duration_ = clock_->now() - step_time_;
+  ++safe_passes_;
+  in_safe_pass_ = true;
+  for (Observer* observer : observers_) observer->on_safe(*this);
+  in_safe_pass_ = false;
 }
 
 // Called from ARBITER_GUARDED's handlers: reports the exception once and applies the thrower's
@@ -500,6 +540,7 @@ void Manager::step() {
     }
   }
   if (stopped_) return;
+  if (clock_ != nullptr) step_time_ = clock_->now();
   ++data_.step;
   data_.event_count = 0;
   const bool first_step = data_.step == 1;
@@ -542,6 +583,7 @@ void Manager::step() {
     if (!controller->owned()) controller->step(standalone);
   }
   finish_faults();
+  if (clock_ != nullptr) step_duration_ = clock_->now() - step_time_;
 
   for (Observer* observer : observers_) observer->on_step(*this);
 }

@@ -722,14 +722,16 @@ class ModelBuilder {
         type = &entry.value;  // short form `name: vec2`
       } else {
         Fields fields(entry.value, fmt::format("actuator '{}'", entry.key),
-                      {"type", "aggregate", "default"}, diagnostics_,
-                      "a value type or a mapping {type: ..., aggregate: ..., default: ...}");
+                      {"type", "aggregate", "default", "safe"}, diagnostics_,
+                      "a value type or a mapping {type: ..., aggregate: ..., default: ..., "
+                      "safe: ...}");
         type = fields.required("type");
         aggregate = fields.optional("aggregate");
         if (aggregate != nullptr) {
           actuator.aggregate = read_bool(*aggregate, "aggregate").value_or(false);
         }
         if (const Node* fallback = fields.optional("default")) actuator.default_value = *fallback;
+        if (const Node* safe = fields.optional("safe")) actuator.safe_value = *safe;
       }
       if (type != nullptr) {
         if (auto text = read_string(*type, "a value type")) {
@@ -758,16 +760,18 @@ class ModelBuilder {
         error.notes.push_back(
             "without 'aggregate', the writer with the highest activation level wins");
       }
-      if (actuator.type != nullptr && actuator.default_value) {
+      for (const auto& [what, value] : {std::pair{"default", &actuator.default_value},
+                                        std::pair{"safe value", &actuator.safe_value}}) {
+        if (actuator.type == nullptr || !*value) continue;
         ValueBox scratch(*actuator.type);
         std::string expected;
-        if (!actuator.type->from_node(*actuator.default_value, scratch.data(), expected)) {
+        if (!actuator.type->from_node(**value, scratch.data(), expected)) {
           add_quote_hint(
               diagnostics_.error(
-                  actuator.default_value->location(), "wrong-type",
-                  fmt::format("default of actuator '{}' must be {} ({}), found {}", entry.key,
-                              expected, actuator.type->name, actuator.default_value->describe())),
-              *actuator.default_value);
+                  (*value)->location(), "wrong-type",
+                  fmt::format("{} of actuator '{}' must be {} ({}), found {}", what, entry.key,
+                              expected, actuator.type->name, (*value)->describe())),
+              **value);
         }
       }
       if (auto found = actuator_index_.find(entry.key); found != actuator_index_.end()) {

@@ -41,7 +41,16 @@ std::string trace_header(const Program& program) {
 
 void append_step_record(const Manager& manager, std::string& out) {
   const Program& program = manager.program();
-  fmt::format_to(std::back_inserter(out), R"({{"step": {}, "layers": {{)", manager.steps());
+  fmt::format_to(std::back_inserter(out), R"({{"step": {}, )", manager.steps());
+  if (manager.in_safe_pass()) out += R"("safe": true, )";
+  if (manager.timed()) {
+    out += R"("t": )";
+    detail::append_json_number(manager.step_time(), out);
+    out += R"(, "duration": )";
+    detail::append_json_number(manager.step_duration(), out);
+    out += ", ";
+  }
+  out += R"("layers": {)";
   std::vector<std::uint32_t> inhibitors;
   for (std::size_t l = 0; l < program.layers.size(); ++l) {
     const auto& layer = program.layers[l];
@@ -125,6 +134,10 @@ void append_step_record(const Manager& manager, std::string& out) {
 
 void TraceWriter::on_start(const Manager& manager) {
   out_ << trace_header(manager.program()) << '\n';
+}
+
+void TraceWriter::on_safe(const Manager& manager) {
+  on_step(manager);
 }
 
 void TraceWriter::on_step(const Manager& manager) {

@@ -49,7 +49,9 @@ expect "explain" "configs/paper/goalie_plan.yaml" "go" -- goalie
 expect "run" "configs/paper/walk_and_k" -- configs/paper/walk_and_kick.yaml \
   configs/paper/walk_and_kick.json
 expect "plugins" "-" -- --format --load --builtin --help
-expect "run" "x.yaml" "--se" -- --serve
+expect "run" "x.yaml" "--se" -- --serve --serve-token --serve-readonly
+expect "run" "x.yaml" "--rt" -- --rt-priority
+expect "run" "x.yaml" "--rt-priority" "" --
 expect "view" "x.yaml" "--t" -- --trace
 expect "plot" "--a" -- --actuators
 expect "plot" "x.jsonl" "-o" "docs/walk_and_k" -- docs/walk_and_kick.svg

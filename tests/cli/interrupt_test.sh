@@ -1,9 +1,11 @@
 #!/bin/bash
-# Ctrl-C during `arbiter run --realtime` ends the run between two steps: exit 0, a summary, and a
-# trace whose every line is a whole record.
+# Ctrl-C (or SIGTERM, as a service manager stops it) during `arbiter run --realtime` ends the run
+# between two steps: exit 0, a summary, and a trace whose every line is a whole record, the last
+# one the safe-value pass (the soccer demo stands: gait_velocity [0, 0, 0]).
 set -eu
 cli=$1
 config=$2
+signal=${3:-INT}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
@@ -14,12 +16,12 @@ for _ in $(seq 1 200); do
   [ -f "$work/trace.jsonl" ] && [ "$(wc -l <"$work/trace.jsonl")" -ge 4 ] && break
   sleep 0.05
 done
-kill -INT "$pid"
+kill -"$signal" "$pid"
 status=0
 wait "$pid" || status=$?
 
 fail() { echo "FAIL: $*"; cat "$work/out.txt"; exit 1; }
-[ "$status" -eq 0 ] || fail "exit status $status after SIGINT"
+[ "$status" -eq 0 ] || fail "exit status $status after SIG$signal"
 grep -q '^interrupted: simulated' "$work/out.txt" || fail "no summary after the interrupt"
 lines=$(wc -l <"$work/trace.jsonl")
 [ "$lines" -ge 4 ] || fail "trace has only $lines lines"
@@ -29,6 +31,13 @@ case "$last" in
   '{"step": '*'}}') ;;
   *) fail "last trace line is not a whole record: $last" ;;
 esac
+case "$last" in
+  *'"safe": true'*'"gait_velocity": {"value": [0.0, 0.0, 0.0], "written": true}'*) ;;
+  *) fail "last trace line is not the safe pass: $last" ;;
+esac
+grep -q 'safe values output: gait_velocity = \[0.0, 0.0, 0.0\]' "$work/out.txt" ||
+  fail "the summary does not show the safe pass"
+grep -q '^period jitter' "$work/out.txt" || fail "the summary has no timing"
 steps=$(grep -c '^{"step": ' "$work/trace.jsonl")
 [ "$steps" -eq $((lines - 1)) ] || fail "header plus $steps records != $lines lines"
-echo "interrupted after $steps steps: 1 passed, 0 failed"
+echo "interrupted by SIG$signal after $steps steps: 1 passed, 0 failed"

@@ -4,11 +4,13 @@
 
 #include <catch2/catch.hpp>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "dds_support.hpp"
 
@@ -75,4 +77,86 @@ TEST_CASE("the split soccer demo kicks the ball and scores a goal", "[dds][proce
   CHECK(motion_output.find("world: goal! (1 time)") != std::string::npos);
   CHECK(motion_output.find("strategy_link: walk_command: publisher found") != std::string::npos);
   CHECK(strategy.output().find("motion_link: ball_position: publisher found") != std::string::npos);
+}
+
+TEST_CASE("the motion process stands at once when the strategy process stops or pauses",
+          "[dds][process][safe]") {
+  DomainLease domain;
+  TempDir dir;
+  const std::string id = "domain_id: " + std::to_string(domain.id());
+  for (const std::string name : {"motion.yaml", "strategy.yaml"}) {
+    dir.write(name,
+              std::regex_replace(read_text(kSplitDir + name), std::regex("domain_id: 7"), id));
+  }
+  std::filesystem::copy_file(kSplitDir + "cyclonedds-loopback.xml",
+                             dir.file("cyclonedds-loopback.xml"));
+  const auto zero = nlohmann::json::array({0.0, 0.0, 0.0});
+  // The walk commands the motion process received (written), from the strategy's first on.
+  const auto received = [&](const std::string& trace) {
+    std::vector<std::pair<std::uint64_t, nlohmann::json>> commands;
+    for (const auto& record : read_trace(trace)) {
+      const auto& command = record["actuators"]["walk_command"];
+      if (command["written"] == true) commands.emplace_back(record["step"], command["value"]);
+    }
+    return commands;
+  };
+
+  SECTION("at the end of its steps") {
+    // 1.5 s of strategy: the robot is walking to the ball when it stops.
+    Child motion(arbiter_run(dir.file("motion.yaml"), 400, dir.file("motion.jsonl")),
+                 dir.file("motion.out"));
+    Child strategy(arbiter_run(dir.file("strategy.yaml"), 15, dir.file("strategy.jsonl")),
+                   dir.file("strategy.out"));
+    REQUIRE(strategy.wait(20s) == 0);
+    REQUIRE(motion.wait(20s) == 0);
+    const auto strategy_trace = read_trace(dir.file("strategy.jsonl"));
+    REQUIRE(strategy_trace.back()["safe"] == true);
+    const auto commands = received(dir.file("motion.jsonl"));
+    INFO(motion.output());
+    REQUIRE(commands.size() >= 2);
+    // The last command is the safe gait; the one before it made the robot walk.
+    CHECK(commands.back().second == zero);
+    CHECK(commands[commands.size() - 2].second != zero);
+    // It arrives in the next motion step or so, not after the 0.3 s hold timeout (30 steps).
+    CHECK(commands.back().first - commands[commands.size() - 2].first <= 15);
+    const auto motion_trace = read_trace(dir.file("motion.jsonl"));
+    const auto& at = motion_trace[commands.back().first - 1];
+    CHECK(at["actuators"]["gait_velocity"]["value"] == zero);
+  }
+
+  SECTION("when paused from the live page") {
+    Child motion(arbiter_run(dir.file("motion.yaml"), 400, dir.file("motion.jsonl")),
+                 dir.file("motion.out"));
+    auto argv = arbiter_run(dir.file("strategy.yaml"), 100000, "", /*quiet=*/false);
+    for (const std::string arg : {"--serve", "127.0.0.1:0", "--serve-token", "pause-test"}) {
+      argv.push_back(arg);
+    }
+    Child strategy(argv, dir.file("strategy.out"));
+    // The URL, then a second of walking, then the page's Pause.
+    std::smatch port;
+    for (int i = 0; i < 100; ++i) {
+      const std::string out = strategy.output();
+      if (std::regex_search(out, port, std::regex("127\\.0\\.0\\.1:(\\d+)/"))) break;
+      std::this_thread::sleep_for(100ms);
+    }
+    REQUIRE(port.size() == 2);
+    std::this_thread::sleep_for(1500ms);
+    // The page's Pause, as curl sends it (found on PATH by the shell).
+    Child pause({"/bin/sh", "-c",
+                 "curl -sf -d '' -H 'X-Arbiter-Token: pause-test' http://127.0.0.1:" +
+                     port[1].str() + "/control/pause"},
+                dir.file("curl.out"));
+    REQUIRE(pause.wait(10s) == 0);
+    REQUIRE(motion.wait(20s) == 0);
+    strategy.signal(SIGTERM);
+    REQUIRE(strategy.wait(10s) == 0);
+    const auto commands = received(dir.file("motion.jsonl"));
+    INFO(strategy.output());
+    REQUIRE(commands.size() >= 2);
+    CHECK(commands.back().second == zero);
+    CHECK(commands[commands.size() - 2].second != zero);
+    CHECK(commands.back().first - commands[commands.size() - 2].first <= 15);
+    CHECK(strategy.output().find("safe values output: gait_velocity = [0.0, 0.0, 0.0]") !=
+          std::string::npos);
+  }
 }

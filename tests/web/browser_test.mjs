@@ -42,7 +42,8 @@ after(async () => {
   rmSync(scratch, {recursive: true, force: true});
 });
 
-/// Starts `arbiter ARGS` and resolves with the URL it prints.
+/// Starts `arbiter ARGS` and resolves with the URL it prints (with the live view's token, if
+/// any), the server's base URL and the token.
 function serve(args) {
   return new Promise((resolve, reject) => {
     const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
@@ -52,10 +53,10 @@ function serve(args) {
     const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 15000);
     child.stdout.on('data', (data) => {
       out += data;
-      const found = out.match(/http:\/\/127\.0\.0\.1:\d+\//);
+      const found = out.match(/(http:\/\/127\.0\.0\.1:\d+\/)(\?token=([\w.-]+))?/);
       if (found) {
         clearTimeout(timer);
-        resolve({url: found[0], child});
+        resolve({url: found[0], base: found[1], token: found[3], child});
       }
     });
     child.stderr.on('data', (data) => { err += data; });
@@ -131,6 +132,10 @@ test('colours follow the steps; pause, single step and resume drive the engine',
 
   await page.click('#resume');
   await page.waitForFunction(() => Number(document.querySelector('#step').textContent) >= 9);
+  // Running, the page shows how well the run keeps time.
+  await page.waitForSelector('#timing-panel:not([hidden])');
+  assert.match(await page.textContent('#timing'), /step duration\s+p50 [\d.]+ µs\s+p99 [\d.]+ µs\s+max [\d.]+ µs/);
+  assert.match(await page.textContent('#timing'), /period jitter\s+p50/);
   await page.click('#pause');
   await page.waitForSelector('#status.paused');
   await page.waitForTimeout(300);  // a step already under way may still arrive
@@ -141,10 +146,11 @@ test('colours follow the steps; pause, single step and resume drive the engine',
 });
 
 test('a client that reconnects resumes after the last step it saw; many clients at once', async () => {
-  const {url} = await serve(['run', paper, '--serve', '0', '--steps', '100000', '-q']);
+  const {base, token} = await serve(['run', paper, '--serve', '0', '--steps', '100000', '-q']);
   const firstId = async (headers) => {
     const controller = new AbortController();
-    const response = await fetch(`${url}events`, {headers, signal: controller.signal});
+    const response = await fetch(`${base}events`,
+                                 {headers: {...headers, 'X-Arbiter-Token': token}, signal: controller.signal});
     const reader = response.body.getReader();
     let text = '';
     while (!/\nid: \d+\n/.test(text)) text += new TextDecoder().decode((await reader.read()).value);
@@ -238,5 +244,53 @@ test('the soccer demo: interface and behaviour layers with their data flow', asy
     await page.waitForFunction(() => document.querySelector('#explain').textContent.includes('go_behind_ball'));
     await page.screenshot({path: process.env.ARBITER_SCREENSHOT, fullPage: true});
   }
+  await page.close();
+});
+
+test('a page of another origin cannot pause the run, even in the operator\'s browser', async () => {
+  const {url, base} = await serve(['run', paper, '--serve', '0', '--steps', '100000', '-q']);
+  // The operator's page, opened with the token: the browser now holds the token's cookie.
+  const context = await browser.newContext();
+  const operator = await context.newPage();
+  operator.setDefaultTimeout(10000);
+  await operator.goto(url);
+  await operator.waitForSelector('#status.running');
+  // Another site, served from another port, tries a form POST and a fetch to pause the run.
+  const http = await import('node:http');
+  const attack = `<!DOCTYPE html><iframe name="sink"></iframe>
+    <form id="f" method="POST" action="${base}control/pause" target="sink"></form>
+    <script>
+      document.getElementById('f').submit();
+      fetch('${base}control/pause', {method: 'POST', mode: 'no-cors', credentials: 'include'})
+        .finally(() => { document.body.dataset.done = 'true'; });
+    </script>`;
+  const site = http.createServer((request, response) => {
+    response.writeHead(200, {'Content-Type': 'text/html'});
+    response.end(attack);
+  });
+  await new Promise((resolve) => site.listen(0, '127.0.0.1', resolve));
+  try {
+    const attacker = await context.newPage();
+    await attacker.goto(`http://127.0.0.1:${site.address().port}/`);
+    await attacker.waitForSelector('body[data-done="true"]');
+    await attacker.waitForTimeout(500);
+    // The run goes on: the operator's page still sees it running and stepping.
+    const before = await stepShown(operator);
+    await operator.waitForFunction((n) => Number(document.querySelector('#step').textContent) > n, before);
+    assert.equal(await operator.getAttribute('#status', 'class'), 'badge running');
+  } finally {
+    site.close();
+    await context.close();
+  }
+});
+
+test('the page opened without the token explains that it needs one', async () => {
+  const {base} = await serve(['run', paper, '--serve', '0', '--steps', '100000', '-q']);
+  const page = await browser.newPage();
+  page.setDefaultTimeout(10000);
+  await page.goto(base);
+  await page.waitForSelector('#token-needed:not([hidden])');
+  assert.match(await page.textContent('#token-needed'), /needs its token/);
+  assert.equal(await page.locator('.behaviour').count(), 0);
   await page.close();
 });

@@ -31,6 +31,18 @@ class Observer {
   /// keyed by index must be rebuilt from manager.program().
   virtual void on_reload(const Manager& /*manager*/) {}
   virtual void on_finish(const Manager& /*manager*/) {}
+  /// After the safe-value pass (Manager::safe_pass()): the actuators hold what it output; the
+  /// step counter is that of the last step.
+  virtual void on_safe(const Manager& /*manager*/) {}
+};
+
+/// Seconds since the run started, for the step records' `"t"` and `"duration"`. The host injects
+/// it (`arbiter run`: the steady clock); tests use a manual one, so their traces stay exact.
+/// now() is called twice per step on the stepping thread: it must not allocate.
+class StepClock {
+ public:
+  virtual ~StepClock() = default;
+  virtual double now() = 0;
 };
 
 /// How the parts of a program staged for hot reload map onto the running program's, by index
@@ -73,6 +85,25 @@ class Manager {
   bool stopped() const { return stopped_; }
   /// Why the manager stopped: the exception's report (who, where, what); "" unless stopped().
   const std::string& stop_reason() const { return stop_reason_; }
+
+  /// The safe-value pass of a pausing or stopping engine (docs/config.md): every actuator with
+  /// a `safe:` value carries it, written; every other keeps its value, unwritten; then the
+  /// interface layers' output pass runs and the observers' on_safe(). Steps no behaviour and
+  /// does not count as a step; the next step() continues as usual. Runs also when stopped() (that
+  /// is when it matters); does nothing before the first step or when no actuator has a safe
+  /// value. finish() runs it first. Allocates nothing.
+  void safe_pass();
+  /// True during the observers' on_safe().
+  bool in_safe_pass() const { return in_safe_pass_; }
+  /// How many safe-value passes ran.
+  std::uint64_t safe_passes() const { return safe_passes_; }
+
+  /// Times every step from now on (nullptr: none); not owned.
+  void set_clock(StepClock* clock) { clock_ = clock; }
+  bool timed() const { return clock_ != nullptr; }
+  /// With a clock: when the last step (or safe pass) started, and how long it took, in seconds.
+  double step_time() const { return step_time_; }
+  double step_duration() const { return step_duration_; }
 
   /// Observers are not owned; they must outlive the manager or be removed.
   void add_observer(Observer& observer);
@@ -166,6 +197,12 @@ class Manager {
   bool stopping_ = false;
   bool stopped_ = false;
   std::string stop_reason_;
+  std::vector<ValueBox> safe_values_;  // per actuator; empty for one without `safe:`
+  bool in_safe_pass_ = false;
+  std::uint64_t safe_passes_ = 0;
+  StepClock* clock_ = nullptr;
+  double step_time_ = 0.0;
+  double step_duration_ = 0.0;
   std::vector<const void*> mean_values_;  // scratch for aggregation, sized max_writers
   std::vector<double> mean_weights_;
   std::vector<Observer*> observers_;

@@ -30,6 +30,7 @@ struct ActuatorDecl {
   const ValueType* type = nullptr;
   bool aggregate = false;
   std::optional<Node> default_value;  ///< checked against `type`
+  std::optional<Node> safe_value;     ///< `safe:`, checked against `type`
   std::string layer;
 };
 
@@ -75,7 +76,7 @@ struct LayerDecl {
 struct StateDecl {
   Name name;
   const ClassInfo* cls = nullptr;
-  ParamSet params;        ///< the state's params as written (class defaults are not filled in)
+  ParamSet params;  ///< the state's params as written (class defaults are not filled in)
   std::optional<Name> machine;  ///< a child controller this state owns and steps
   SourceLocation location;
 };
@@ -112,7 +113,7 @@ struct Model {
   std::vector<LayerDecl> layers;
   std::vector<StateMachineDecl> state_machines;
   std::vector<std::string> files;  ///< the config and everything it includes
-  std::vector<Name> lint_ignore;    ///< lint codes silenced in the whole config
+  std::vector<Name> lint_ignore;   ///< lint codes silenced in the whole config
 
   const LayerDecl* find_layer(std::string_view name) const;
   /// The actuator of that name in any layer, or nullptr.

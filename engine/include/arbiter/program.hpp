@@ -135,6 +135,8 @@ struct CompiledActuator {
   std::uint32_t layer = 0;
   std::uint32_t offset = 0;  ///< into the value buffer
   std::optional<Node> default_value;
+  /// What the actuator carries in the safe-value pass of a pausing or stopping engine.
+  std::optional<Node> safe_value;
   SourceLocation location;
 };
 

@@ -17,6 +17,8 @@ class TraceWriter : public Observer {
   /// Writes a new header record (reload_header()): the step records after it follow it.
   void on_reload(const Manager& manager) override;
   void on_finish(const Manager& manager) override;
+  /// Writes the safe-value pass as a record with `"safe": true` and the last step's number.
+  void on_safe(const Manager& manager) override;
 
  private:
   std::ostream& out_;
@@ -32,7 +34,8 @@ std::string trace_header(const Program& program);
 std::string reload_header(const Manager& manager);
 /// "activate walk_to_pose", as in the trace.
 std::string event_text(const Controller& controller, const Controller::Event& event);
-/// The record of the manager's last step, without the newline.
+/// The record of the manager's last step, without the newline: with `"safe": true` during the
+/// safe-value pass, and `"t"` and `"duration"` (seconds) when the manager has a clock.
 void append_step_record(const Manager& manager, std::string& out);
 
 }  // namespace arbiter
