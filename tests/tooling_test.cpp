@@ -740,6 +740,33 @@ TEST_CASE("arbiter validate --format json prints located diagnostics for machine
   }
 }
 
+TEST_CASE("a missing config is an error of its own and the other files are still checked",
+          "[validate][cli]") {
+  const auto result = run_cli(std::string("validate missing.yaml ") + kWalkAndKick +
+                              " tests/data/invalid/unknown_key.yaml");
+  CHECK(result.exit_code == 1);
+  CHECK(contains(result.err, "missing.yaml: error: cannot open: No such file or directory\n"));
+  CHECK(contains(result.err, std::string(kWalkAndKick) + ": ok\n"));
+  CHECK(contains(result.err, "unknown_key.yaml:3:1: error: unknown key 'rate'"));
+  CHECK(contains(result.err, "4 error(s), 0 warning(s)\n"));
+  SECTION("as JSON, located at the file") {
+    const auto json = run_cli("validate --format json missing.yaml");
+    CHECK(json.exit_code == 1);
+    const Json diagnostics = Json::parse(json.out);
+    REQUIRE(diagnostics.size() == 1);
+    CHECK(diagnostics[0]["file"] == "missing.yaml");
+    CHECK(diagnostics[0]["code"] == "file-not-found");
+  }
+  SECTION("the commands that run or print a config say the same") {
+    for (const char* command : {"run missing.yaml", "dump missing.yaml"}) {
+      INFO(command);
+      const auto other = run_cli(command);
+      CHECK(other.exit_code == 1);
+      CHECK(other.err == "missing.yaml: error: cannot open: No such file or directory\n");
+    }
+  }
+}
+
 // --- plugins ---
 
 TEST_CASE("arbiter plugins lists every class with its params and ports", "[plugins][cli]") {
