@@ -369,6 +369,85 @@ TEST_CASE("the extended schema names each class and checks its params", "[schema
   CHECK_FALSE(validator.errors(with_behaviour("test.Tuned")).empty());
 }
 
+namespace {
+
+/// Where a subschema that editors label has no title: definitions, properties, list items and
+/// the choices of anyOf/oneOf (a bare $ref takes its target's). Conditions (if, not,
+/// propertyNames) are not labelled.
+void untitled(const Json& schema, const std::string& path, bool labelled,
+              std::vector<std::string>& out) {
+  if (!schema.is_object()) return;
+  const bool bare_ref = schema.contains("$ref") && !schema.contains("type") &&
+                        !schema.contains("anyOf") && !schema.contains("properties");
+  if (labelled && !bare_ref && !schema.contains("title")) out.push_back(path);
+  for (const auto& [key, value] : schema.items()) {
+    const std::string at = path + "/" + key;
+    if (key == "definitions" || key == "properties" || key == "patternProperties") {
+      for (const auto& [name, item] : value.items()) untitled(item, at + "/" + name, true, out);
+    } else if (key == "additionalProperties" || key == "items") {
+      untitled(value, at, true, out);
+    } else if (key == "anyOf" || key == "oneOf") {
+      for (std::size_t i = 0; i < value.size(); ++i) {
+        untitled(value[i], at + "/" + std::to_string(i), true, out);
+      }
+    } else if (key == "allOf") {
+      for (std::size_t i = 0; i < value.size(); ++i) {
+        untitled(value[i], at + "/" + std::to_string(i), false, out);
+      }
+    } else if (key == "then" || key == "else") {
+      untitled(value, at, false, out);
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("every subschema of both schemas has a title, so editors name what they show",
+          "[schema]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  for (const char* plugin : {"soccer", "dds"}) {
+    load_plugin(plugin, {"test", 0, 0}, "", PluginOptions{}, registry, diagnostics);
+  }
+  INFO(format(diagnostics));
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"static", config_schema()},
+                                   {"extended", config_schema(registry)}}) {
+    DYNAMIC_SECTION(name) {
+      std::vector<std::string> missing;
+      untitled(Json::parse(text), "#", true, missing);
+      INFO(Json(missing).dump(1));
+      CHECK(missing.empty());
+    }
+  }
+}
+
+TEST_CASE("an actuator's default has its type's shape in the schema, as the engine checks it",
+          "[schema]") {
+  const auto config = [](Json actuator) {
+    return Json{{"arbiter", 1},
+                {"name", "x"},
+                {"layers", {{{"name", "world"}, {"actuators", {{"a", std::move(actuator)}}}}}}};
+  };
+  for (const auto& ok :
+       {Json{{"type", "vec3"}, {"default", {1, 2, 3}}},
+        Json{{"type", "vec2"}, {"default", {1, 2.5}}}, Json{{"type", "bool"}, {"default", true}},
+        Json{{"type", "int"}, {"default", -4}}, Json{{"type", "double"}, {"default", 0.5}},
+        Json{{"type", "string"}, {"default", "idle"}}}) {
+    INFO(ok.dump());
+    CHECK(base_schema().errors(config(ok)).empty());
+  }
+  for (const auto& bad :
+       {Json{{"type", "vec3"}, {"default", {1, 2}}}, Json{{"type", "vec3"}, {"default", 1}},
+        Json{{"type", "vec2"}, {"default", {1, "y"}}}, Json{{"type", "bool"}, {"default", 1}},
+        Json{{"type", "int"}, {"default", 1.5}}, Json{{"type", "double"}, {"default", "fast"}},
+        Json{{"type", "string"}, {"default", {1}}}}) {
+    INFO(bad.dump());
+    CHECK_FALSE(base_schema().errors(config(bad)).empty());
+    // The engine rejects it too.
+    CHECK(test::diagnose_text(config(bad).dump(), tooling_registry(), "bad.json").has_errors());
+  }
+}
+
 TEST_CASE("arbiter schema prints the schema with the registered classes", "[schema][cli]") {
   const auto builtin = run_cli("schema --builtin");
   REQUIRE(builtin.exit_code == 0);
