@@ -448,6 +448,43 @@ TEST_CASE("an actuator's default has its type's shape in the schema, as the engi
   }
 }
 
+TEST_CASE("the extended schema checks the DDS bridge's topics as the bridge does", "[schema]") {
+  const fs::path probe = fs::temp_directory_path() / "arbiter_dds_schema_probe.yaml";
+  write_text(probe, "arbiter: 1\nname: probe\nplugins: [dds]\n");
+  if (!plugins_built(probe)) return;
+  const auto validator = extended_schema(probe);
+  fs::remove(probe);
+  const auto config = [](Json topics) {
+    return Json{{"arbiter", 1},
+                {"name", "x"},
+                {"plugins", {"dds"}},
+                {"layers",
+                 {{{"name", "link"},
+                   {"interface", "dds.Bridge"},
+                   {"params", {{"topics", std::move(topics)}}},
+                   {"actuators", {{"kick", "bool"}}}}}}};
+  };
+  for (const auto& ok : {Json{{"kick", "/robot/kick"}},
+                         Json{{"kick",
+                               {{"topic", "kick_now"},
+                                {"qos", "sensor_data"},
+                                {"depth", 5},
+                                {"message", "std_msgs/msg/Bool"},
+                                {"durability", "transient_local"}}}},
+                         Json(nullptr)}) {
+    INFO(ok.dump());
+    CHECK(validator->errors(config(ok)).empty());
+  }
+  for (const auto& bad :
+       {Json{{"kick", "kick//now"}}, Json{{"kick", "2nd_robot"}}, Json{{"kick", 5}},
+        Json{{"kick", {{"reliability", "reliabel"}}}}, Json{{"kick", {{"depth", 0}}}},
+        Json{{"kick", {{"qos", "sensors"}}}}, Json{{"kick", {{"message", "std_msgs/msg/Bol"}}}},
+        Json{{"kick", {{"topc", "x"}}}}, Json{{"Kick", "x"}}, Json::array({"kick"})}) {
+    INFO(bad.dump());
+    CHECK_FALSE(validator->errors(config(bad)).empty());
+  }
+}
+
 TEST_CASE("arbiter schema prints the schema with the registered classes", "[schema][cli]") {
   const auto builtin = run_cli("schema --builtin");
   REQUIRE(builtin.exit_code == 0);
