@@ -5,9 +5,10 @@
 // shared memory, no multicast, participants found by unicast to the well-known ports.
 //
 //   fastdds_peer echo MESSAGE DOMAIN SECONDS
-//       takes MESSAGE (std_msgs/msg/Bool, ...) from rt/arbiter/out and publishes each sample
-//       back on rt/arbiter/in; prints the first sample it received ("received: ...") and how
-//       many it echoed; exits 0 once it echoed 5, 1 if SECONDS pass first.
+//       takes MESSAGE (std_msgs/msg/Bool, ...) from rt/arbiter/out and publishes the newest
+//       sample back on rt/arbiter/in, at most every 50 ms; prints the first sample it received
+//       ("received: ...") and how many it echoed; exits 0 once it echoed 5, 1 if SECONDS pass
+//       first.
 //   fastdds_peer strategy DOMAIN SECONDS
 //       plays the split soccer demo's strategy against its motion process: reads ball_visible,
 //       ball_position and robot_pose, and publishes gait_velocity, head_angle and kick at 10 Hz
@@ -167,17 +168,26 @@ int echo(int domain, double seconds) {
   dds::DataWriter* out = node.writer<PubSubType>("rt/arbiter/in");
   if (in == nullptr || out == nullptr) return 2;
   const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
+  // One echo, of the newest sample, every 50 ms at most: the bridge's process steps every 20 ms,
+  // so that each echo is written in a step of its own rather than several in one.
+  auto last_echo = Clock::now() - std::chrono::seconds(1);
+  bool described = false;
   int echoed = 0;
+  Message newest;
+  bool pending = false;
   while (Clock::now() < deadline && echoed < 5) {
-    Message sample;
-    dds::SampleInfo info;
-    while (in->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK) {
-      if (!info.valid_data) continue;
-      if (echoed == 0) std::printf("received: %s\n", describe(sample).c_str());
-      out->write(&sample);
+    if (take_newest(in, newest)) {
+      pending = true;
+      if (!described) std::printf("received: %s\n", describe(newest).c_str());
+      described = true;
+    }
+    if (pending && Clock::now() - last_echo >= std::chrono::milliseconds(50)) {
+      out->write(&newest);
+      last_echo = Clock::now();
+      pending = false;
       ++echoed;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   std::printf("echoed %d\n", echoed);
   std::fflush(stdout);
