@@ -8,7 +8,8 @@
 #      ./arbiter*.deb` pulls in what the packages declare, the soccer demo runs from /usr, and
 #      tests/consumer builds against the installed arbiter-dev and runs.
 # Needs root (debootstrap, chroot) and the Debian mirror of this machine's apt sources. It takes
-# minutes (a release build, a Debian root the first time), so it is not part of .ci/run.
+# about 25 minutes on a busy 2-core machine (a release build, a Debian root the first time), so
+# it is not part of .ci/run.
 #   scripts/package-test.sh [WORK_DIR]     default /tmp/arbiter-package-test; the Debian root is
 #                                           kept there (WORK_DIR/root) for the next run
 set -euo pipefail
