@@ -61,6 +61,9 @@ void register_scripted_behaviour(Registry& registry) {
           "held)");
   info.param("writes", ParamKind::kAny)
       .fallback(Node())
+      .schema(R"({"type": ["object", "null"],
+                  "propertyNames": {"$ref": "#/definitions/identifier"},
+                  "additionalProperties": {"title": "Value written"}})")
       .describe(
           "a mapping from actuators of the behaviour's own layer to the value written each "
           "step while active");

@@ -106,12 +106,17 @@ void register_scripted_state(Registry& registry) {
       .fallback(std::int64_t{1})
       .at_least(1)
       .describe("executions before proceeding");
+  // The entries are written as the queue's (`arbiter schema` refers editors to its definition).
+  const std::string planned_states =
+      R"({"type": ["array", "null"], "items": {"$ref": "#/definitions/queue_entry"}})";
   info.param("append", ParamKind::kAny)
       .fallback(Node())
+      .schema(planned_states)
       .state_level()
       .describe("states to append to the queue when proceeding: names or {name: {params}}");
   info.param("prepend", ParamKind::kAny)
       .fallback(Node())
+      .schema(planned_states)
       .state_level()
       .describe("states to put at the head of the queue when proceeding, in this order");
   info.param("terminate", ParamKind::kBool)

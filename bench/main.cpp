@@ -14,6 +14,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -39,13 +40,18 @@ constexpr const char* kUsage = R"(usage:
 )";
 
 /// The result of each benchmark by name: with repetitions, the fastest (on a shared machine
-/// interference only ever adds time), else the one run.
-class Collector : public benchmark::ConsoleReporter {
+/// interference only ever adds time), else the one run. Everything goes on to the display
+/// reporter `--benchmark_format` asks for, so the output is Google Benchmark's own.
+class Collector : public benchmark::BenchmarkReporter {
  public:
   struct Result {
     double cpu_time = 0;  // in the benchmark's time unit
     std::map<std::string, double> counters;
   };
+
+  Collector() : display_(benchmark::CreateDefaultDisplayReporter()) {}
+
+  bool ReportContext(const Context& context) override { return display_->ReportContext(context); }
 
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& run : runs) {
@@ -62,17 +68,26 @@ class Collector : public benchmark::ConsoleReporter {
       result.cpu_time = run.GetAdjustedCPUTime();
       for (const auto& [counter, value] : run.counters) result.counters[counter] = value.value;
     }
-    ConsoleReporter::ReportRuns(runs);
+    display_->ReportRuns(runs);
+  }
+
+  void Finalize() override { display_->Finalize(); }
+
+  /// True when the display is the console table, which the target table may follow on stdout;
+  /// JSON and CSV output stays parseable.
+  bool console() const {
+    return dynamic_cast<const benchmark::ConsoleReporter*>(display_.get()) != nullptr;
   }
 
   std::map<std::string, Result> results;
 
  private:
+  std::unique_ptr<benchmark::BenchmarkReporter> display_;
   std::map<std::string, bool> fastest_names_;
 };
 
 /// Prints each target whose benchmarks ran; returns how many were missed.
-int check_targets(const Collector& collector) {
+int check_targets(const Collector& collector, std::ostream& out) {
   const auto& results = collector.results;
   const auto counter = [&](const std::string& name,
                            const std::string& key) -> std::optional<double> {
@@ -87,12 +102,12 @@ int check_targets(const Collector& collector) {
   const auto check = [&](const std::string& what, std::optional<double> value, double limit,
                          const char* unit) {
     if (!value) return;
-    if (!any) std::cout << fmt::format("\n{:<52} {:>10} {:>12}\n", "target", "measured", "limit");
+    if (!any) out << fmt::format("\n{:<52} {:>10} {:>12}\n", "target", "measured", "limit");
     any = true;
     const bool ok = *value <= limit;
     missed += ok ? 0 : 1;
-    std::cout << fmt::format("{:<52} {:>10.3g} {:>9} {:<3} {}\n", what, *value,
-                             fmt::format("<= {:g}", limit), unit, ok ? "ok" : "MISSED");
+    out << fmt::format("{:<52} {:>10.3g} {:>9} {:<3} {}\n", what, *value,
+                       fmt::format("<= {:g}", limit), unit, ok ? "ok" : "MISSED");
   };
   for (const char* graph : {"none", "chain", "dag", "layers"}) {
     const std::string base = fmt::format("step/{}/", graph);
@@ -119,8 +134,8 @@ int check_targets(const Collector& collector) {
     }
   }
   if (any) {
-    std::cout << (missed == 0 ? "every target that ran is met\n"
-                              : fmt::format("{} target(s) missed\n", missed));
+    out << (missed == 0 ? "every target that ran is met\n"
+                        : fmt::format("{} target(s) missed\n", missed));
   }
   return missed;
 }
@@ -278,6 +293,7 @@ int main(int argc, char** argv) {
   Collector collector;
   benchmark::RunSpecifiedBenchmarks(&collector);
   benchmark::Shutdown();
-  const int missed = check_targets(collector);
+  // With --benchmark_format=json or csv the targets go to stderr, so stdout stays parseable.
+  const int missed = check_targets(collector, collector.console() ? std::cout : std::cerr);
   return check && missed > 0 ? 1 : 0;
 }

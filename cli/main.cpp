@@ -452,9 +452,9 @@ int main(int argc, char** argv) {
       "validate",
       "Load and compile configs; print every problem as file:line:col: error|warning: message.\n"
       "Exit 0 when all are valid, 1 when any is invalid, 2 on a usage error.");
-  validate_cmd->add_option("FILE", options.files, "config files (.yaml, .yml, .json)")
-      ->required()
-      ->check(CLI::ExistingPath);
+  // No existence check on config files: a missing one is reported like any other unreadable
+  // config (exit 1), and validate still checks the other files.
+  validate_cmd->add_option("FILE", options.files, "config files (.yaml, .yml, .json)")->required();
   validate_cmd
       ->add_option("--format", options.format,
                    "diagnostics as text (stderr) or json (stdout: an array of {file, line, "
@@ -472,9 +472,7 @@ int main(int argc, char** argv) {
 
   auto* run_cmd = app.add_subcommand(
       "run", "Run a config's behaviour manager for a number of steps and report what happened.");
-  run_cmd->add_option("FILE", options.file, "the config to run")
-      ->required()
-      ->check(CLI::ExistingPath);
+  run_cmd->add_option("FILE", options.file, "the config to run")->required();
   run_cmd->add_option("--steps", options.steps, "number of steps to run")
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1} << 40))
       ->capture_default_str();
@@ -544,9 +542,7 @@ int main(int argc, char** argv) {
       "dump",
       "Print the compiled graph: layers in order, behaviours in execution (topological) order,\n"
       "declared and implicit inhibitions, actuator → sensor wiring, state machines.");
-  dump_cmd->add_option("FILE", options.file, "the config to dump")
-      ->required()
-      ->check(CLI::ExistingPath);
+  dump_cmd->add_option("FILE", options.file, "the config to dump")->required();
   dump_cmd->add_option("--layer", options.layer, "only this layer");
   dump_cmd
       ->add_option("--format", options.format,
@@ -570,8 +566,7 @@ int main(int argc, char** argv) {
       "implicit inhibition, the product and the normalisation. Naming a state machine instead\n"
       "tells which state ran, what was queued and the events.");
   explain_cmd->add_option("FILE", options.file, "the config the trace was written with")
-      ->required()
-      ->check(CLI::ExistingPath);
+      ->required();
   explain_cmd
       ->add_option("BEHAVIOUR", options.target,
                    "a behaviour ('name', or 'layer/name' when several layers have one of that "
@@ -640,9 +635,7 @@ int main(int argc, char** argv) {
       "view",
       "Serve the web view of a trace of 'arbiter run': the graph, each behaviour coloured by its\n"
       "activation, the state machines, timelines, and a slider to scrub through the steps.");
-  view_cmd->add_option("FILE", options.file, "the config the trace was written with")
-      ->required()
-      ->check(CLI::ExistingPath);
+  view_cmd->add_option("FILE", options.file, "the config the trace was written with")->required();
   view_cmd->add_option("--trace", options.trace_path, "the JSON-lines trace (arbiter run --trace)")
       ->required()
       ->check(CLI::ExistingFile);

@@ -95,7 +95,7 @@ print_summary() {
 }
 
 # Tools only tests use: Chromium, Node.js and npm for the browser tests of the web view
-# (tests/web/), xmllint for the plot test. Looked for by command, so that a Node.js installed
+# (tests/web/) and the schema's ajv test (tests/schema/), xmllint for the plot test. Looked for by command, so that a Node.js installed
 # some other way counts.
 test_tools=()
 command -v chromium >/dev/null || test_tools+=(chromium)
@@ -103,6 +103,10 @@ command -v node >/dev/null || test_tools+=(nodejs)
 command -v npm >/dev/null || test_tools+=(npm)
 command -v xmllint >/dev/null || test_tools+=(libxml2-utils)
 command -v curl >/dev/null || test_tools+=(curl)
+# Fast DDS, a stand-in ROS 2 node for the DDS bridge's tests (tests/dds/fastdds_peer.cpp), with
+# fastddsgen, which runs on Java, to generate its message types.
+test_tools+=(libfastrtps-dev fastddsgen)
+command -v java >/dev/null || test_tools+=(default-jre-headless)
 scripts/install-deps.sh "${test_tools[@]}"
 
 status=0

@@ -370,6 +370,122 @@ TEST_CASE("the extended schema names each class and checks its params", "[schema
   CHECK_FALSE(validator.errors(with_behaviour("test.Tuned")).empty());
 }
 
+namespace {
+
+/// Where a subschema that editors label has no title: definitions, properties, list items and
+/// the choices of anyOf/oneOf (a bare $ref takes its target's). Conditions (if, not,
+/// propertyNames) are not labelled.
+void untitled(const Json& schema, const std::string& path, bool labelled,
+              std::vector<std::string>& out) {
+  if (!schema.is_object()) return;
+  const bool bare_ref = schema.contains("$ref") && !schema.contains("type") &&
+                        !schema.contains("anyOf") && !schema.contains("properties");
+  if (labelled && !bare_ref && !schema.contains("title")) out.push_back(path);
+  for (const auto& [key, value] : schema.items()) {
+    const std::string at = path + "/" + key;
+    if (key == "definitions" || key == "properties" || key == "patternProperties") {
+      for (const auto& [name, item] : value.items()) untitled(item, at + "/" + name, true, out);
+    } else if (key == "additionalProperties" || key == "items") {
+      untitled(value, at, true, out);
+    } else if (key == "anyOf" || key == "oneOf") {
+      for (std::size_t i = 0; i < value.size(); ++i) {
+        untitled(value[i], at + "/" + std::to_string(i), true, out);
+      }
+    } else if (key == "allOf") {
+      for (std::size_t i = 0; i < value.size(); ++i) {
+        untitled(value[i], at + "/" + std::to_string(i), false, out);
+      }
+    } else if (key == "then" || key == "else") {
+      untitled(value, at, false, out);
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("every subschema of both schemas has a title, so editors name what they show",
+          "[schema]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  for (const char* plugin : {"soccer", "dds"}) {
+    load_plugin(plugin, {"test", 0, 0}, "", PluginOptions{}, registry, diagnostics);
+  }
+  INFO(format(diagnostics));
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"static", config_schema()},
+                                   {"extended", config_schema(registry)}}) {
+    DYNAMIC_SECTION(name) {
+      std::vector<std::string> missing;
+      untitled(Json::parse(text), "#", true, missing);
+      INFO(Json(missing).dump(1));
+      CHECK(missing.empty());
+    }
+  }
+}
+
+TEST_CASE("an actuator's default has its type's shape in the schema, as the engine checks it",
+          "[schema]") {
+  const auto config = [](Json actuator) {
+    return Json{{"arbiter", 1},
+                {"name", "x"},
+                {"layers", {{{"name", "world"}, {"actuators", {{"a", std::move(actuator)}}}}}}};
+  };
+  for (const auto& ok :
+       {Json{{"type", "vec3"}, {"default", {1, 2, 3}}},
+        Json{{"type", "vec2"}, {"default", {1, 2.5}}}, Json{{"type", "bool"}, {"default", true}},
+        Json{{"type", "int"}, {"default", -4}}, Json{{"type", "double"}, {"default", 0.5}},
+        Json{{"type", "string"}, {"default", "idle"}}}) {
+    INFO(ok.dump());
+    CHECK(base_schema().errors(config(ok)).empty());
+  }
+  for (const auto& bad :
+       {Json{{"type", "vec3"}, {"default", {1, 2}}}, Json{{"type", "vec3"}, {"default", 1}},
+        Json{{"type", "vec2"}, {"default", {1, "y"}}}, Json{{"type", "bool"}, {"default", 1}},
+        Json{{"type", "int"}, {"default", 1.5}}, Json{{"type", "double"}, {"default", "fast"}},
+        Json{{"type", "string"}, {"default", {1}}}}) {
+    INFO(bad.dump());
+    CHECK_FALSE(base_schema().errors(config(bad)).empty());
+    // The engine rejects it too.
+    CHECK(test::diagnose_text(config(bad).dump(), tooling_registry(), "bad.json").has_errors());
+  }
+}
+
+TEST_CASE("the extended schema checks the DDS bridge's topics as the bridge does", "[schema]") {
+  const fs::path probe = fs::temp_directory_path() / "arbiter_dds_schema_probe.yaml";
+  write_text(probe, "arbiter: 1\nname: probe\nplugins: [dds]\n");
+  if (!plugins_built(probe)) return;
+  const auto validator = extended_schema(probe);
+  fs::remove(probe);
+  const auto config = [](Json topics) {
+    return Json{{"arbiter", 1},
+                {"name", "x"},
+                {"plugins", {"dds"}},
+                {"layers",
+                 {{{"name", "link"},
+                   {"interface", "dds.Bridge"},
+                   {"params", {{"topics", std::move(topics)}}},
+                   {"actuators", {{"kick", "bool"}}}}}}};
+  };
+  for (const auto& ok : {Json{{"kick", "/robot/kick"}},
+                         Json{{"kick",
+                               {{"topic", "kick_now"},
+                                {"qos", "sensor_data"},
+                                {"depth", 5},
+                                {"message", "std_msgs/msg/Bool"},
+                                {"durability", "transient_local"}}}},
+                         Json(nullptr)}) {
+    INFO(ok.dump());
+    CHECK(validator->errors(config(ok)).empty());
+  }
+  for (const auto& bad :
+       {Json{{"kick", "kick//now"}}, Json{{"kick", "2nd_robot"}}, Json{{"kick", 5}},
+        Json{{"kick", {{"reliability", "reliabel"}}}}, Json{{"kick", {{"depth", 0}}}},
+        Json{{"kick", {{"qos", "sensors"}}}}, Json{{"kick", {{"message", "std_msgs/msg/Bol"}}}},
+        Json{{"kick", {{"topc", "x"}}}}, Json{{"Kick", "x"}}, Json::array({"kick"})}) {
+    INFO(bad.dump());
+    CHECK_FALSE(validator->errors(config(bad)).empty());
+  }
+}
+
 TEST_CASE("arbiter schema prints the schema with the registered classes", "[schema][cli]") {
   const auto builtin = run_cli("schema --builtin");
   REQUIRE(builtin.exit_code == 0);
@@ -738,6 +854,33 @@ TEST_CASE("arbiter validate --format json prints located diagnostics for machine
     CHECK(contains(text_output.err, ": warning: "));
     CHECK(contains(text_output.err, "never be active"));
     fs::remove(copy);
+  }
+}
+
+TEST_CASE("a missing config is an error of its own and the other files are still checked",
+          "[validate][cli]") {
+  const auto result = run_cli(std::string("validate missing.yaml ") + kWalkAndKick +
+                              " tests/data/invalid/unknown_key.yaml");
+  CHECK(result.exit_code == 1);
+  CHECK(contains(result.err, "missing.yaml: error: cannot open: No such file or directory\n"));
+  CHECK(contains(result.err, std::string(kWalkAndKick) + ": ok\n"));
+  CHECK(contains(result.err, "unknown_key.yaml:3:1: error: unknown key 'rate'"));
+  CHECK(contains(result.err, "4 error(s), 0 warning(s)\n"));
+  SECTION("as JSON, located at the file") {
+    const auto json = run_cli("validate --format json missing.yaml");
+    CHECK(json.exit_code == 1);
+    const Json diagnostics = Json::parse(json.out);
+    REQUIRE(diagnostics.size() == 1);
+    CHECK(diagnostics[0]["file"] == "missing.yaml");
+    CHECK(diagnostics[0]["code"] == "file-not-found");
+  }
+  SECTION("the commands that run or print a config say the same") {
+    for (const char* command : {"run missing.yaml", "dump missing.yaml"}) {
+      INFO(command);
+      const auto other = run_cli(command);
+      CHECK(other.exit_code == 1);
+      CHECK(other.err == "missing.yaml: error: cannot open: No such file or directory\n");
+    }
   }
 }
 

@@ -984,7 +984,8 @@ std::optional<Node> read_document(const std::string& path, Diagnostics& diagnost
       diagnostics.error({path, 0, 0}, "file-not-found",
                         "is a symbolic link to a file that does not exist");
     } else {
-      diagnostics.error({path, 0, 0}, "file-not-found", "no such file");
+      diagnostics.error({path, 0, 0}, "file-not-found",
+                        "cannot open: " + std::generic_category().message(ENOENT));
     }
     return std::nullopt;
   }

@@ -1,8 +1,11 @@
 #include "arbiter/schema.hpp"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
+
+#include <stdexcept>
 
 #include "arbiter/lint.hpp"
 #include "param_json.hpp"
@@ -35,16 +38,34 @@ Json number_schema(const ParamSpec& spec, const char* type) {
   return out;
 }
 
-Json scalar_types() {
-  return Json::array({"string", "number", "boolean"});
+/// Any scalar, as the engine reads a string from one (`label: 5` is "5"). Spelled as anyOf:
+/// ajv's strict mode refuses union types other than with "null".
+Json scalar_schema(const std::string& title) {
+  return {{"title", title},
+          {"anyOf", Json::array({{{"title", "Text"}, {"type", "string"}},
+                                 {{"title", "Number"}, {"type", "number"}},
+                                 {{"title", "Boolean"}, {"type", "boolean"}}})}};
 }
 
 Json vector_schema(std::size_t size) {
-  return {
-      {"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", size}, {"maxItems", size}};
+  return {{"type", "array"},
+          {"items", {{"title", "Coordinate"}, {"type", "number"}}},
+          {"minItems", size},
+          {"maxItems", size}};
 }
 
-Json param_schema(const ParamSpec& spec) {
+/// The schema a class gave a param (ParamSpec::schema); a programming error when it is not JSON.
+Json class_param_schema(const ClassInfo& cls, const ParamSpec& spec) {
+  Json out = Json::parse(spec.json_schema, nullptr, /*allow_exceptions=*/false);
+  if (out.is_discarded() || !out.is_object()) {
+    throw std::invalid_argument(
+        fmt::format("the JSON Schema that class '{}' gives its param '{}' is not a JSON object",
+                    cls.name, spec.name));
+  }
+  return out;
+}
+
+Json param_schema(const ClassInfo& cls, const ParamSpec& spec) {
   Json out;
   switch (spec.kind) {
     case ParamKind::kBool:
@@ -57,9 +78,7 @@ Json param_schema(const ParamSpec& spec) {
       out = number_schema(spec, "number");
       break;
     case ParamKind::kString:
-      // The engine reads any scalar as a string param (`label: 5` is "5").
-      out = {{"type", scalar_types()}};
-      if (!spec.choices.empty()) out["enum"] = spec.choices;
+      out = spec.choices.empty() ? scalar_schema(spec.name) : Json{{"enum", spec.choices}};
       break;
     case ParamKind::kVec2:
       out = vector_schema(2);
@@ -69,18 +88,29 @@ Json param_schema(const ParamSpec& spec) {
       break;
     case ParamKind::kDoubleList: {
       // A single number stands for a list of one.
-      const Json item = number_schema(spec, "number");
-      out = {{"anyOf", Json::array({item, {{"type", "array"}, {"minItems", 1}, {"items", item}}})}};
+      Json item = number_schema(spec, "number");
+      item["title"] = "Number";
+      Json list = {
+          {"title", "List of numbers"}, {"type", "array"}, {"minItems", 1}, {"items", item}};
+      out = {{"anyOf", Json::array({item, std::move(list)})}};
       break;
     }
     case ParamKind::kStringList:
-      out = {{"type", "array"}, {"items", {{"type", scalar_types()}}}};
+      out = {{"type", "array"}, {"items", scalar_schema("Item")}};
       break;
     case ParamKind::kAny:
       out = Json::object();
       break;
   }
-  if (!spec.description.empty()) out["description"] = spec.description;
+  if (!spec.json_schema.empty()) out = class_param_schema(cls, spec);
+  if (!out.contains("title")) {
+    Json titled = {{"title", spec.name}};
+    titled.update(out);
+    out = std::move(titled);
+  }
+  if (!spec.description.empty() && !out.contains("description")) {
+    out["description"] = spec.description;
+  }
   if (spec.default_value) {
     if (Json fallback = detail::param_json(*spec.default_value); !fallback.is_null()) {
       out["default"] = std::move(fallback);
@@ -95,10 +125,11 @@ Json params_schema(const ClassInfo& cls, bool require) {
   Json properties = Json::object();
   Json required = Json::array();
   for (const auto& spec : cls.params) {
-    properties[spec.name] = param_schema(spec);
+    properties[spec.name] = param_schema(cls, spec);
     if (require && spec.required()) required.push_back(spec.name);
   }
-  Json out = {{"type", required.empty() ? Json::array({"object", "null"}) : Json("object")},
+  Json out = {{"title", "Params of " + cls.name},
+              {"type", required.empty() ? Json::array({"object", "null"}) : Json("object")},
               {"additionalProperties", false},
               {"properties", std::move(properties)}};
   if (!required.empty()) out["required"] = std::move(required);
@@ -115,10 +146,13 @@ Json ports_schema(const ClassInfo& cls, const Registry& registry) {
                               " of this layer; default: the one named '" + port.name + "'";
     if (port.optional) description += " if there is one";
     if (!port.description.empty()) description += ". " + port.description;
-    properties[port.name] = {
-        {"type", "string"}, {"pattern", kIdentifierPattern}, {"description", description}};
+    properties[port.name] = {{"title", port.name},
+                             {"type", "string"},
+                             {"pattern", kIdentifierPattern},
+                             {"description", description}};
   }
-  return {{"type", Json::array({"object", "null"})},
+  return {{"title", "Ports of " + cls.name},
+          {"type", Json::array({"object", "null"})},
           {"additionalProperties", false},
           {"properties", std::move(properties)}};
 }
@@ -141,22 +175,23 @@ Json instance_schema(const ClassInfo& cls, const Registry& registry) {
 /// One of the named classes, with each one's description for editors.
 Json one_of_classes(const std::vector<const ClassInfo*>& classes, const std::string& what) {
   if (classes.empty()) {
-    return {{"type", "string"},
+    return {{"title", "Class"},
+            {"type", "string"},
             {"not", Json::object()},
             {"description", "no " + what + " is registered"}};
   }
   Json choices = Json::array();
   for (const ClassInfo* cls : classes) {
-    Json choice = {{"const", cls->name}};
+    Json choice = {{"title", cls->name}, {"const", cls->name}};
     if (!cls->description.empty()) choice["description"] = cls->description;
     choices.push_back(std::move(choice));
   }
-  return {{"anyOf", std::move(choices)}};
+  return {{"title", "Class"}, {"anyOf", std::move(choices)}};
 }
 
 /// `if` the object's `key` is `name` `then` ...
 Json when(const char* key, const std::string& name, Json then) {
-  return {{"if", {{"required", Json::array({key})}, {"properties", {{key, {{"const", name}}}}}}},
+  return {{"if", {{"properties", {{key, {{"const", name}}}}}, {"required", Json::array({key})}}},
           {"then", std::move(then)}};
 }
 
@@ -193,11 +228,13 @@ std::string config_schema(const Registry& registry) {
     types.push_back(type->name);
     if (type->aggregatable()) averaged.push_back(type->name);
   }
-  definitions["value_type"] = {{"enum", types},
+  definitions["value_type"] = {{"title", definitions["value_type"]["title"]},
+                               {"enum", types},
                                {"description", definitions["value_type"]["description"]}};
-  definitions["actuator"]["anyOf"][1]["if"] = {{"required", Json::array({"aggregate"})},
-                                               {"properties", {{"aggregate", {{"const", true}}}}}};
-  definitions["actuator"]["anyOf"][1]["then"] = {{"properties", {{"type", {{"enum", averaged}}}}}};
+  definitions["actuator"]["anyOf"][1]["if"] = {{"properties", {{"aggregate", {{"const", true}}}}},
+                                               {"required", Json::array({"aggregate"})}};
+  definitions["actuator"]["anyOf"][1]["then"] = {
+      {"properties", {{"type", {{"title", "Value type that averages"}, {"enum", averaged}}}}}};
 
   const auto behaviours = classes_of(registry, ClassKind::kBehaviour);
   std::vector<const ClassInfo*> short_behaviours;

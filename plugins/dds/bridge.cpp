@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -17,11 +19,13 @@
 
 namespace arbiter::dds {
 
-/// QoS of one topic's reader or writer.
+/// QoS of one topic's reader or writer; the defaults are ROS 2's default profile.
 struct TopicQos {
-  bool reliable = true;
+  /// Unset: the DDS implementation's default for each side (Cyclone DDS: reliable writers,
+  /// best-effort readers), as ROS 2's system_default profile leaves it.
+  std::optional<bool> reliable = true;
   bool keep_all = false;
-  std::int32_t depth = 1;  // for keep_last
+  std::int32_t depth = 10;  // for keep_last
   bool transient_local = false;
 };
 
@@ -43,6 +47,10 @@ struct Bridge::Subscription {
   std::int32_t reported_publishers = 0;
   std::string found_event;
   std::string lost_event;
+  // Set by a listener when a publisher's QoS cannot match this reader's; reported once.
+  std::atomic<std::int32_t> incompatible_policy{0};
+  bool incompatible_reported = false;
+  std::vector<std::string> incompatible_events;  // by QoS policy id
 };
 
 struct Bridge::Publication {
@@ -57,6 +65,9 @@ struct Bridge::Publication {
   std::atomic<std::int32_t> subscribers{0};
   bool failing = false;
   std::string failed_event;
+  std::atomic<std::int32_t> incompatible_policy{0};
+  bool incompatible_reported = false;
+  std::vector<std::string> incompatible_events;  // by QoS policy id
 };
 
 namespace {
@@ -77,6 +88,91 @@ void on_publication_matched(dds_entity_t /*writer*/, const dds_publication_match
                             void* arg) {
   static_cast<Bridge::Publication*>(arg)->subscribers.store(
       static_cast<std::int32_t>(status.current_count), std::memory_order_release);
+}
+
+void on_requested_incompatible_qos(dds_entity_t /*reader*/,
+                                   const dds_requested_incompatible_qos_status_t status,
+                                   void* arg) {
+  static_cast<Bridge::Subscription*>(arg)->incompatible_policy.store(
+      static_cast<std::int32_t>(status.last_policy_id), std::memory_order_release);
+}
+
+void on_offered_incompatible_qos(dds_entity_t /*writer*/,
+                                 const dds_offered_incompatible_qos_status_t status, void* arg) {
+  static_cast<Bridge::Publication*>(arg)->incompatible_policy.store(
+      static_cast<std::int32_t>(status.last_policy_id), std::memory_order_release);
+}
+
+/// ROS 2's QoS profiles by name (rmw/qos_profiles.h).
+std::optional<TopicQos> qos_profile(const std::string& name) {
+  TopicQos qos;
+  if (name == "default") return qos;
+  if (name == "sensor_data") {
+    qos.reliable = false;
+    qos.depth = 5;
+    return qos;
+  }
+  if (name == "system_default") {
+    qos.reliable.reset();
+    qos.depth = 1;
+    return qos;
+  }
+  return std::nullopt;
+}
+
+const std::vector<std::string> kQosProfiles = {"default", "sensor_data", "system_default"};
+
+/// Whether the config wrote a param: a default is located at the instance.
+bool param_written(InitContext& ctx, std::string_view param) {
+  const SourceLocation at = ctx.param_location(param);
+  const SourceLocation& self = ctx.location();
+  return at.file != self.file || at.line != self.line || at.column != self.column;
+}
+
+/// The warning a reader (`subscriber`) or writer reports when a peer's QoS policy `policy`
+/// cannot match its own, saying what to change; an entry for every policy id.
+std::vector<std::string> incompatible_qos_events(const std::string& name, const std::string& topic,
+                                                 const TopicQos& qos, bool subscriber) {
+  std::vector<std::string> events(DDS_DATA_REPRESENTATION_QOS_POLICY_ID + 1);
+  const char* const peer = subscriber ? "a publisher" : "a subscriber";
+  const char* const self = subscriber ? "this subscription" : "this publication";
+  const char* const outcome =
+      subscriber ? "nothing it publishes arrives" : "it receives nothing from this bridge";
+  for (std::size_t id = 0; id < events.size(); ++id) {
+    std::string detail;
+    if (id == DDS_RELIABILITY_QOS_POLICY_ID) {
+      detail = subscriber ? fmt::format(
+                                "{} offers best_effort reliability, {} requests reliable; {}. "
+                                "Set 'reliability: best_effort' (or 'qos: sensor_data') for "
+                                "'{}' under topics:, or make the publisher reliable",
+                                peer, self, outcome, name)
+                          : fmt::format(
+                                "{} requests reliable reliability, {} offers best_effort; {}. "
+                                "Set 'reliability: reliable' (or 'qos: default') for '{}' "
+                                "under topics:, or make the subscriber best-effort",
+                                peer, self, outcome, name);
+    } else if (id == DDS_DURABILITY_QOS_POLICY_ID) {
+      detail = subscriber ? fmt::format(
+                                "{} offers volatile durability, {} requests {}; {}. Set "
+                                "'durability: volatile' for '{}' under topics:, or make the "
+                                "publisher transient_local",
+                                peer, self, qos.transient_local ? "transient_local" : "more",
+                                outcome, name)
+                          : fmt::format(
+                                "{} requests a durability {} does not offer ({}); {}. Set "
+                                "'durability: transient_local' for '{}' under topics:, or make "
+                                "the subscriber volatile",
+                                peer, self, qos.transient_local ? "transient_local" : "volatile",
+                                outcome, name);
+    } else {
+      detail = fmt::format(
+          "{}'s QoS policy {} cannot match {}'s; {}. Make the two sides agree "
+          "on it",
+          peer, id, self, outcome);
+    }
+    events[id] = fmt::format("{}: warning: incompatible QoS on {}: {}", name, topic, detail);
+  }
+  return events;
 }
 
 /// A ROS 2 topic name: tokens of letters, digits and '_' separated by single '/', none starting
@@ -128,12 +224,21 @@ class ParamReader {
   }
   int errors() const { return errors_; }
 
+  /// The `qos` profile, then the policies the config writes beside it.
   TopicQos bridge_qos() {
-    TopicQos qos;
-    qos.reliable = ctx_.param<std::string>("reliability") == "reliable";
-    qos.keep_all = ctx_.param<std::string>("history") == "keep_all";
-    qos.depth = static_cast<std::int32_t>(ctx_.param<std::int64_t>("depth"));
-    qos.transient_local = ctx_.param<std::string>("durability") == "transient_local";
+    TopicQos qos = qos_profile(ctx_.param<std::string>("qos")).value_or(TopicQos{});
+    if (param_written(ctx_, "reliability")) {
+      qos.reliable = ctx_.param<std::string>("reliability") == "reliable";
+    }
+    if (param_written(ctx_, "history")) {
+      qos.keep_all = ctx_.param<std::string>("history") == "keep_all";
+    }
+    if (param_written(ctx_, "depth")) {
+      qos.depth = static_cast<std::int32_t>(ctx_.param<std::int64_t>("depth"));
+    }
+    if (param_written(ctx_, "durability")) {
+      qos.transient_local = ctx_.param<std::string>("durability") == "transient_local";
+    }
     return qos;
   }
 
@@ -146,12 +251,20 @@ class ParamReader {
     if (!value.is_mapping()) {
       error(value.location(),
             fmt::format("topics: '{}' must map to a topic name or to a mapping with "
-                        "topic, message, reliability, history, depth, durability; found {}",
+                        "topic, message, qos, reliability, history, depth, durability; found {}",
                         plan.name, value.describe()));
       return;
     }
-    static const std::vector<std::string> kKeys = {"topic",   "message", "reliability",
+    static const std::vector<std::string> kKeys = {"topic",   "message", "qos",       "reliability",
                                                    "history", "depth",   "durability"};
+    // A profile replaces the bridge's QoS for this topic, wherever the mapping writes it; the
+    // policies written beside it then change it.
+    for (const auto& entry : value.entries()) {
+      if (entry.key != "qos") continue;
+      if (auto choice = choose(entry.value, entry.key, kQosProfiles)) {
+        plan.qos = *qos_profile(*choice);
+      }
+    }
     for (const auto& entry : value.entries()) {
       if (std::find(kKeys.begin(), kKeys.end(), entry.key) == kKeys.end()) {
         error(entry.key_location, fmt::format("unknown key '{}' for topic '{}'; {}", entry.key,
@@ -159,7 +272,9 @@ class ParamReader {
         continue;
       }
       const Node& option = entry.value;
-      if (entry.key == "topic") {
+      if (entry.key == "qos") {
+        continue;
+      } else if (entry.key == "topic") {
         set_topic(option, plan);
       } else if (entry.key == "message") {
         set_message(option, plan);
@@ -235,12 +350,12 @@ class ParamReader {
   int errors_ = 0;
 };
 
-dds_qos_t* make_qos(const TopicQos& topic) {
+dds_qos_t* make_qos(const TopicQos& topic, bool writer) {
   dds_qos_t* qos = dds_create_qos();
   // A writer never waits for room in its history: step() must not block. A full keep_all
   // history makes dds_write() fail at once instead (counted, and reported as an event).
-  dds_qset_reliability(qos, topic.reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT,
-                       0);
+  const bool reliable = topic.reliable.value_or(writer);
+  dds_qset_reliability(qos, reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT, 0);
   dds_qset_history(qos, topic.keep_all ? DDS_HISTORY_KEEP_ALL : DDS_HISTORY_KEEP_LAST,
                    topic.keep_all ? 1 : topic.depth);
   dds_qset_durability(
@@ -264,6 +379,25 @@ std::optional<std::string> read_cyclone_config(const std::string& value, const S
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
+}
+
+/// `domain_id`, or else ROS_DOMAIN_ID as a ROS 2 node reads it, or else 0.
+std::optional<std::int64_t> domain_id_of(InitContext& ctx, ParamReader& params) {
+  if (param_written(ctx, "domain_id")) return ctx.param<std::int64_t>("domain_id");
+  const char* variable = std::getenv("ROS_DOMAIN_ID");
+  if (variable == nullptr || *variable == '\0') return 0;
+  char* end = nullptr;
+  errno = 0;
+  const long long value = std::strtoll(variable, &end, 10);
+  if (errno != 0 || *end != '\0' || value < 0 || value > 232) {
+    params.error(ctx.location(),
+                 fmt::format("the environment variable ROS_DOMAIN_ID is '{}', which is not a DDS "
+                             "domain id (an integer in [0, 232]); set it to one, or set "
+                             "'domain_id' in the bridge's params",
+                             variable));
+    return std::nullopt;
+  }
+  return value;
 }
 
 std::string full_topic(const std::string& prefix, const std::string& ns, const std::string& name) {
@@ -395,7 +529,9 @@ std::unique_ptr<Bridge::Subscription> subscribe(InitContext& ctx, dds_entity_t p
   in.listener = dds_create_listener(&in);
   dds_lset_data_available(in.listener, on_data_available);
   dds_lset_subscription_matched(in.listener, on_subscription_matched);
-  dds_qos_t* qos = make_qos(plan.qos);
+  dds_lset_requested_incompatible_qos(in.listener, on_requested_incompatible_qos);
+  in.incompatible_events = incompatible_qos_events(in.name, topic_name, plan.qos, true);
+  dds_qos_t* qos = make_qos(plan.qos, false);
   in.reader = dds_create_reader(participant, topic, qos, in.listener);
   dds_delete_qos(qos);
   if (in.reader < 0) {
@@ -419,7 +555,9 @@ std::unique_ptr<Bridge::Publication> publish(InitContext& ctx, dds_entity_t part
       fmt::format("{}: publishing on {} failed; the history is full", out.name, topic_name);
   out.listener = dds_create_listener(&out);
   dds_lset_publication_matched(out.listener, on_publication_matched);
-  dds_qos_t* qos = make_qos(plan.qos);
+  dds_lset_offered_incompatible_qos(out.listener, on_offered_incompatible_qos);
+  out.incompatible_events = incompatible_qos_events(out.name, topic_name, plan.qos, false);
+  dds_qos_t* qos = make_qos(plan.qos, true);
   out.writer = dds_create_writer(participant, topic, qos, out.listener);
   dds_delete_qos(qos);
   if (out.writer < 0) {
@@ -475,10 +613,11 @@ void Bridge::init(InitContext& ctx) {
       params.error(ctx.param_location("cyclone_config"), problem);
     }
   }
+  const auto domain = domain_id_of(ctx, params);
   // Nothing joins the network while the config has an error.
-  if (params.errors() > 0) return;
+  if (params.errors() > 0 || !domain) return;
 
-  const auto domain_id = static_cast<std::uint32_t>(ctx.param<std::int64_t>("domain_id"));
+  const auto domain_id = static_cast<std::uint32_t>(*domain);
   std::string problem;
   domain_ = Domain::open(domain_id, config,
                          config_path.empty() ? (config.empty() ? "" : "inline XML")
@@ -512,6 +651,22 @@ void Bridge::init(InitContext& ctx) {
   }
 }
 
+namespace {
+
+/// Reports, once, that a peer's QoS cannot match this reader's or writer's.
+template <typename Endpoint>
+void report_incompatible(const StepContext& ctx, Endpoint& endpoint) {
+  if (endpoint.incompatible_reported) return;
+  const std::int32_t policy = endpoint.incompatible_policy.load(std::memory_order_acquire);
+  if (policy <= 0) return;
+  const auto id = static_cast<std::size_t>(policy);
+  ctx.report(
+      endpoint.incompatible_events[std::min(id, endpoint.incompatible_events.size() - 1)].c_str());
+  endpoint.incompatible_reported = true;
+}
+
+}  // namespace
+
 void Bridge::input(ExecuteContext& ctx) {
   for (auto& owned : subscriptions_) {
     Subscription& in = *owned;
@@ -520,6 +675,7 @@ void Bridge::input(ExecuteContext& ctx) {
       ctx.report(publishers > 0 ? in.found_event.c_str() : in.lost_event.c_str());
     }
     in.reported_publishers = publishers;
+    report_incompatible(ctx, in);
     if (!in.pending.exchange(false, std::memory_order_acq_rel)) continue;
 
     // Samples come oldest first; only the newest valid one becomes the actuator's value.
@@ -560,6 +716,7 @@ const void* read_sensor(const StepContext& ctx, std::uint32_t actuator, bool& wr
 void Bridge::output(const StepContext& ctx) {
   for (auto& owned : publications_) {
     Publication& out = *owned;
+    report_incompatible(ctx, out);
     bool written = false;
     const void* value = nullptr;
     switch (out.kind) {
@@ -640,6 +797,58 @@ bool Bridge::wait_for_data(std::chrono::milliseconds timeout) const {
   });
 }
 
+namespace {
+
+/// The JSON Schema of `topics:`, for `arbiter schema`: the shapes init() checks. Whether a message
+/// can carry an actuator's type depends on the layer, which only `arbiter validate` knows.
+std::string topics_schema() {
+  std::string messages;
+  for (const Message message : {Message::kBool, Message::kInt64, Message::kFloat64,
+                                Message::kString, Message::kVector3, Message::kPoint}) {
+    messages += fmt::format("{}\"{}\"", messages.empty() ? "" : ", ", ros_name(message));
+  }
+  std::string profiles;
+  for (const auto& profile : kQosProfiles) {
+    profiles += fmt::format("{}\"{}\"", profiles.empty() ? "" : ", ", profile);
+  }
+  std::string schema = R"({
+  "title": "Topics",
+  "type": ["object", "null"],
+  "propertyNames": {"pattern": "^[a-z_][a-z0-9_]*$"},
+  "additionalProperties": {
+    "title": "Topic of an actuator or sensor",
+    "anyOf": [
+      {"title": "Topic name", @NAME@},
+      {
+        "title": "Topic options",
+        "type": "object",
+        "additionalProperties": false,
+        "properties": {
+          "topic": {"title": "Topic name", @NAME@},
+          "message": {"title": "ROS 2 message", "enum": [@MESSAGES@]},
+          "qos": {"title": "ROS 2 QoS profile", "enum": [@PROFILES@]},
+          "reliability": {"title": "Reliability", "enum": ["reliable", "best_effort"]},
+          "history": {"title": "History", "enum": ["keep_last", "keep_all"]},
+          "depth": {"title": "Depth", "type": "integer", "minimum": 1, "maximum": 10000},
+          "durability": {"title": "Durability", "enum": ["volatile", "transient_local"]}
+        }
+      }
+    ]
+  }
+})";
+  // A ROS 2 name (check_topic_name): tokens not starting with a digit, an optional leading '/'.
+  const std::string name =
+      R"("type": "string", "pattern": "^/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")";
+  for (auto at = schema.find("@NAME@"); at != std::string::npos; at = schema.find("@NAME@")) {
+    schema.replace(at, 6, name);
+  }
+  schema.replace(schema.find("@MESSAGES@"), 10, messages);
+  schema.replace(schema.find("@PROFILES@"), 10, profiles);
+  return schema;
+}
+
+}  // namespace
+
 void register_bridge(Registry& registry) {
   auto& info =
       registry.add_interface<Bridge>("dds.Bridge")
@@ -654,30 +863,41 @@ void register_bridge(Registry& registry) {
   info.param("domain_id", ParamKind::kInt)
       .fallback(std::int64_t{0})
       .range(0.0, 232.0)
-      .describe("the DDS domain (ROS_DOMAIN_ID for ROS 2 nodes)");
+      .describe(
+          "the DDS domain; when not set, the environment variable ROS_DOMAIN_ID, as for a ROS 2 "
+          "node, or else 0");
   info.param("cyclone_config", ParamKind::kString)
       .fallback(std::string())
       .describe(
           "a Cyclone DDS XML configuration file, relative to this config file (or XML text "
           "starting with '<'); empty: Cyclone's defaults, or the file CYCLONEDDS_URI names");
+  info.param("qos", ParamKind::kString)
+      .fallback(std::string("default"))
+      .one_of(kQosProfiles)
+      .describe(
+          "the ROS 2 QoS profile of every reader and writer: default (reliable, keep last 10, "
+          "volatile), sensor_data (best effort, keep last 5, volatile) or system_default (the "
+          "DDS implementation's); the params below change it, 'topics' per topic");
   info.param("reliability", ParamKind::kString)
       .fallback(std::string("reliable"))
       .one_of({"reliable", "best_effort"})
-      .describe("reliability QoS of every reader and writer (per topic: 'topics')");
+      .describe("reliability QoS of every reader and writer, instead of the profile's");
   info.param("history", ParamKind::kString)
       .fallback(std::string("keep_last"))
       .one_of({"keep_last", "keep_all"})
-      .describe("history QoS of every reader and writer (per topic: 'topics')");
+      .describe("history QoS of every reader and writer, instead of the profile's");
   info.param("depth", ParamKind::kInt)
-      .fallback(std::int64_t{1})
+      .fallback(std::int64_t{10})
       .range(1.0, 10000.0)
-      .describe("the history depth for keep_last: how many samples a reader keeps between steps");
+      .describe(
+          "the history depth for keep_last, instead of the profile's: how many samples a reader "
+          "keeps between steps");
   info.param("durability", ParamKind::kString)
       .fallback(std::string("volatile"))
       .one_of({"volatile", "transient_local"})
       .describe(
-          "durability QoS: transient_local lets a subscriber that joins late get the last "
-          "value");
+          "durability QoS, instead of the profile's: transient_local lets a subscriber that "
+          "joins late get the last value");
   info.param("topic_prefix", ParamKind::kString)
       .fallback(std::string("rt/"))
       .describe("prepended to every topic name: 'rt/' is ROS 2's prefix for topics");
@@ -686,9 +906,10 @@ void register_bridge(Registry& registry) {
       .describe("a ROS 2 namespace for topic names that do not start with '/'");
   info.param("topics", ParamKind::kAny)
       .fallback(Node())
+      .schema(topics_schema())
       .describe(
           "per actuator or sensor of the layer: its topic name (default: its own name), or "
-          "{topic, message, reliability, history, depth, durability}");
+          "{topic, message, qos, reliability, history, depth, durability}");
   info.param("publish", ParamKind::kString)
       .fallback(std::string("written"))
       .one_of({"written", "every_step"})

@@ -3,8 +3,12 @@
 
 #include <catch2/catch.hpp>
 
+#include <functional>
+#include <map>
 #include <memory>
 #include <string>
+
+#include <stdlib.h>
 
 #include "dds_support.hpp"
 #include "test_support.hpp"
@@ -400,4 +404,200 @@ layers:
   CHECK(error.location.line == 7);
   CHECK(error.location.column == 15);
   CHECK_THAT(error.message, Catch::Contains("sensor 'beacon' has type 'test.Colour'"));
+}
+
+namespace {
+
+/// Steps both managers at their rate until `done()`, or 10 s pass; counts each event text seen.
+std::map<std::string, int> step_both_until(Manager& a, Manager& b,
+                                           const std::function<bool()>& done) {
+  std::map<std::string, int> seen;
+  const auto record = [&](const Manager& manager) {
+    for (std::size_t e = 0; e < manager.event_count(); ++e) ++seen[manager.event(e).text];
+  };
+  step_until(
+      a,
+      [&] {
+        record(a);
+        b.step();
+        record(b);
+        return done();
+      },
+      10s);
+  return seen;
+}
+
+int count_containing(const std::map<std::string, int>& seen, const std::string& part) {
+  int count = 0;
+  for (const auto& [text, times] : seen) {
+    if (text.find(part) != std::string::npos) count += times;
+  }
+  return count;
+}
+
+}  // namespace
+
+TEST_CASE("a peer whose QoS cannot match is reported once per topic on both sides, with the fix",
+          "[dds][qos]") {
+  DomainLease domain;
+  TempDir dir;
+  Registry registry = make_registry();
+  const std::vector<std::pair<std::string, std::string>> values = {
+      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
+  // ROS 2's sensor-data profile is best effort: against the default (reliable) reader, nothing
+  // would ever arrive. The count's reliability is set back to reliable, so the count arrives.
+  Manager sender(load_file(dir.write("sender.yaml", fill(R"(
+arbiter: 1
+name: sender
+rate_hz: 100
+layers:
+  - name: source
+    actuators: {count: int, level: double}
+    behaviours: {stamp: probe.Stamp}
+  - name: to_dds
+    interface: dds.Bridge
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml}
+      qos: sensor_data
+      topics: {count: {reliability: reliable}}
+    sensors: [count, level]
+)",
+                                                         values)),
+                           registry));
+  Manager receiver(load_file(dir.write("receiver.yaml", fill(R"(
+arbiter: 1
+name: receiver
+rate_hz: 100
+layers:
+  - name: from_dds
+    interface: dds.Bridge
+    params: {domain_id: {domain}, cyclone_config: {xml}}
+    actuators: {count: int, level: double}
+)",
+                                                             values)),
+                             registry));
+  const auto seen = step_both_until(sender, receiver, [&] {
+    return written(receiver, "count") &&
+           bridge_of(receiver, "from_dds").stats().values_written >= 5;
+  });
+  CHECK(written(receiver, "count"));
+  // Both sides say it, once, with the topic, the policy, each side's value and the fix.
+  CHECK(seen.count(
+            "level: warning: incompatible QoS on rt/level: a publisher offers best_effort "
+            "reliability, this subscription requests reliable; nothing it publishes arrives. Set "
+            "'reliability: best_effort' (or 'qos: sensor_data') for 'level' under topics:, or "
+            "make the publisher reliable") == 1);
+  CHECK(seen.count(
+            "level: warning: incompatible QoS on rt/level: a subscriber requests reliable "
+            "reliability, this publication offers best_effort; it receives nothing from this "
+            "bridge. Set 'reliability: reliable' (or 'qos: default') for 'level' under topics:, "
+            "or make the subscriber best-effort") == 1);
+  CHECK(count_containing(seen, "incompatible QoS") == 2);
+  CHECK(count_containing(seen, "rt/count") == 1);  // only "publisher found"
+  CHECK_FALSE(written(receiver, "level"));
+}
+
+TEST_CASE("a profile per topic: sensor data matches sensor data, a late joiner gets the kept value",
+          "[dds][qos]") {
+  DomainLease domain;
+  TempDir dir;
+  Registry registry = make_registry();
+  const std::vector<std::pair<std::string, std::string>> values = {
+      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
+  constexpr const char* kTopics = R"(
+      topics:
+        count: {qos: default, durability: transient_local}
+        level: {qos: sensor_data}
+)";
+  Manager sender(load_file(dir.write("sender.yaml", fill(std::string(R"(
+arbiter: 1
+name: sender
+rate_hz: 100
+layers:
+  - name: source
+    actuators: {count: int, level: double}
+    behaviours: {stamp: probe.Stamp}
+  - name: to_dds
+    interface: dds.Bridge
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml})") + kTopics + R"(
+    sensors: [count, level]
+)",
+                                                         values)),
+                           registry));
+  sender.step();
+  // The receiver asks for what was published before it joined; the sender keeps it.
+  Manager receiver(load_file(dir.write("receiver.yaml", fill(std::string(R"(
+arbiter: 1
+name: receiver
+rate_hz: 100
+layers:
+  - name: from_dds
+    interface: dds.Bridge
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml})") + kTopics + R"(
+    actuators: {count: int, level: double}
+)",
+                                                             values)),
+                             registry));
+  const auto seen = step_both_until(
+      sender, receiver, [&] { return written(receiver, "level") && written(receiver, "count"); });
+  CHECK(written(receiver, "level"));
+  CHECK(count_containing(seen, "incompatible QoS") == 0);
+}
+
+TEST_CASE("without domain_id the bridge joins the domain ROS_DOMAIN_ID names, as ROS 2 nodes do",
+          "[dds]") {
+  DomainLease domain;
+  TempDir dir;
+  Registry registry = make_registry();
+  const std::vector<std::pair<std::string, std::string>> values = {
+      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
+  Manager sender(load_file(dir.write("sender.yaml", fill(R"(
+arbiter: 1
+name: sender
+rate_hz: 100
+layers:
+  - name: source
+    actuators: {count: int}
+    behaviours: {stamp: probe.Stamp}
+  - name: to_dds
+    interface: dds.Bridge
+    params: {domain_id: {domain}, cyclone_config: {xml}}
+    sensors: [count]
+)",
+                                                         values)),
+                           registry));
+  const std::string receiver_path = dir.write("receiver.yaml", fill(R"(
+arbiter: 1
+name: receiver
+rate_hz: 100
+layers:
+  - name: from_dds
+    interface: dds.Bridge
+    params: {cyclone_config: {xml}}
+    actuators: {count: int}
+)",
+                                                                    values));
+  SECTION("a domain id") {
+    ::setenv("ROS_DOMAIN_ID", std::to_string(domain.id()).c_str(), 1);
+    Manager receiver(load_file(receiver_path, registry));
+    ::unsetenv("ROS_DOMAIN_ID");
+    step_both_until(sender, receiver, [&] { return written(receiver, "count"); });
+    CHECK(written(receiver, "count"));
+  }
+  SECTION("anything else is an error at the layer, naming the variable") {
+    ::setenv("ROS_DOMAIN_ID", "seven", 1);
+    Diagnostics diagnostics;
+    CHECK_FALSE(load(receiver_path, registry, diagnostics));
+    ::unsetenv("ROS_DOMAIN_ID");
+    REQUIRE(diagnostics.error_count() == 1);
+    CHECK(diagnostics.items().front().location.line == 6);
+    CHECK(diagnostics.items().front().message ==
+          "the environment variable ROS_DOMAIN_ID is 'seven', which is not a DDS domain id (an "
+          "integer in [0, 232]); set it to one, or set 'domain_id' in the bridge's params");
+  }
 }

@@ -65,6 +65,9 @@ struct ParamSpec {
   std::string description;
   /// For states: false when the param may only be set on the state, not per planned instance.
   bool per_instance = true;
+  /// The param's JSON Schema (draft-07, as JSON text) for `arbiter schema`, instead of the one
+  /// its kind gives: how a structured (kAny) param tells editors and CI its shape.
+  std::string json_schema;
 
   ParamSpec& fallback(ParamValue value) {
     default_value = std::move(value);
@@ -85,6 +88,10 @@ struct ParamSpec {
   }
   ParamSpec& describe(std::string text) {
     description = std::move(text);
+    return *this;
+  }
+  ParamSpec& schema(std::string json_schema_text) {
+    json_schema = std::move(json_schema_text);
     return *this;
   }
   ParamSpec& state_level() {
