@@ -18,6 +18,7 @@
 
 #include "arbiter/catalog.hpp"
 #include "arbiter/dump.hpp"
+#include "arbiter/load.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/lint.hpp"
 #include "arbiter/manager.hpp"

@@ -30,6 +30,7 @@
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/lint.hpp"
+#include "arbiter/load.hpp"
 #include "arbiter/schema.hpp"
 #include "arbiter/state.hpp"
 #include "arbiter/trace.hpp"

@@ -75,7 +75,7 @@ struct LayerDecl {
 struct StateDecl {
   Name name;
   const ClassInfo* cls = nullptr;
-  ParamSet params;        ///< the state's params as written (class defaults are not filled in)
+  ParamSet params;  ///< the state's params as written (class defaults are not filled in)
   std::optional<Name> machine;  ///< a child controller this state owns and steps
   SourceLocation location;
 };
@@ -112,7 +112,7 @@ struct Model {
   std::vector<LayerDecl> layers;
   std::vector<StateMachineDecl> state_machines;
   std::vector<std::string> files;  ///< the config and everything it includes
-  std::vector<Name> lint_ignore;    ///< lint codes silenced in the whole config
+  std::vector<Name> lint_ignore;   ///< lint codes silenced in the whole config
 
   const LayerDecl* find_layer(std::string_view name) const;
   /// The actuator of that name in any layer, or nullptr.
@@ -134,5 +134,9 @@ std::vector<Param> check_state_params(const StateDecl& state, const Node* overri
 /// reported.
 Model build_model(const Node& root, const Registry& registry, Diagnostics& diagnostics,
                   const ReadLimits& limits = {});
+
+/// The same, reading included files through `files` (which keeps them, and their text).
+Model build_model(const Node& root, const Registry& registry, Diagnostics& diagnostics,
+                  SourceFiles& files);
 
 }  // namespace arbiter
