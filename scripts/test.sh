@@ -102,6 +102,8 @@ command -v chromium >/dev/null || test_tools+=(chromium)
 command -v node >/dev/null || test_tools+=(nodejs)
 command -v npm >/dev/null || test_tools+=(npm)
 command -v xmllint >/dev/null || test_tools+=(libxml2-utils)
+# Neovim for the language server's editor test (tests/lsp/).
+command -v nvim >/dev/null || test_tools+=(neovim)
 scripts/install-deps.sh "${test_tools[@]}"
 
 status=0

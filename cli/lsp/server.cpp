@@ -957,7 +957,8 @@ void Server::publish(std::vector<json>& out) {
   }
   std::map<std::string, std::string> now;
   for (auto& [file, diagnostics] : by_file) {
-    if (diagnostics.empty() && published_.count(file) == 0) continue;
+    // An open config gets its (empty) list too, so that an editor knows it was checked.
+    if (diagnostics.empty() && published_.count(file) == 0 && analyses_.count(file) == 0) continue;
     out.push_back({{"jsonrpc", "2.0"},
                    {"method", "textDocument/publishDiagnostics"},
                    {"params", {{"uri", path_to_uri(file)}, {"diagnostics", diagnostics}}}});
@@ -1439,19 +1440,21 @@ json Server::code_actions(const json& params) const {
           to = text->find_first_of(",]\n", begin);
           while (to > begin && (*text)[to - 1] == ' ') --to;
         }
-        std::size_t after = to;
-        while (after < text->size() &&
-               ((*text)[after] == ' ' || (*text)[after] == '\n' || (*text)[after] == '\r'))
-          ++after;
-        if (after < text->size() && (*text)[after] == ',') {
-          to = after + 1;
-          while (to < text->size() && (*text)[to] == ' ') ++to;
+        // With the comma before it (or, for the first item, the one after it).
+        const auto space = [&](std::size_t at) {
+          return std::isspace(static_cast<unsigned char>((*text)[at])) != 0;
+        };
+        std::size_t back = from;
+        while (back > 0 && space(back - 1)) --back;
+        if (back > 0 && (*text)[back - 1] == ',') {
+          from = back - 1;
         } else {
-          std::size_t back = from;
-          while (back > 0 && ((*text)[back - 1] == ' ' || (*text)[back - 1] == '\n' ||
-                              (*text)[back - 1] == '\r'))
-            --back;
-          if (back > 0 && (*text)[back - 1] == ',') from = back - 1;
+          std::size_t after = to;
+          while (after < text->size() && space(after)) ++after;
+          if (after < text->size() && (*text)[after] == ',') {
+            to = after + 1;
+            while (to < text->size() && space(to)) ++to;
+          }
         }
       }
       actions.push_back(
