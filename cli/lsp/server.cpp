@@ -819,6 +819,7 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
     initialized_ = true;
     catalog_ = json::parse(catalog_json(registry_));
     schema_ = json::parse(config_schema(registry_));
+    catalogued_ = registry_.classes().size();
     return {{"capabilities",
              {{"textDocumentSync", {{"openClose", true}, {"change", 1}}},
               {"completionProvider",
@@ -921,7 +922,11 @@ void Server::changed(std::vector<json>& out) {
       it = analyses_.count(it->first) ? std::next(it) : kept->erase(it);
     }
   }
-  catalog_ = json::parse(catalog_json(registry_));  // plugins may have been loaded
+  if (registry_.classes().size() != catalogued_) {  // a config's plugins were loaded
+    catalog_ = json::parse(catalog_json(registry_));
+    schema_ = json::parse(config_schema(registry_));
+    catalogued_ = registry_.classes().size();
+  }
   publish(out);
 }
 

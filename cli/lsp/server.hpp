@@ -68,6 +68,7 @@ class Server {
   std::map<std::string, std::string> published_;  // path -> URI of files with diagnostics
   json catalog_;
   json schema_;
+  std::size_t catalogued_ = 0;  // the registry's classes when catalog_ and schema_ were made
   bool initialized_ = false;
   bool shutdown_ = false;
   bool exited_ = false;
