@@ -700,10 +700,14 @@ void schema_keys(const json& schema, const json& definition, std::vector<std::st
 
 std::string param_summary(const json& param) {
   std::string text = param.value("type", "");
-  if (param.contains("minimum") && param.contains("maximum")) {
+  const bool low = param.contains("minimum") && param["minimum"].is_number();
+  const bool high = param.contains("maximum") && param["maximum"].is_number();
+  if (low && high) {
     text += fmt::format(", {} to {}", param["minimum"].dump(), param["maximum"].dump());
-  } else if (param.contains("minimum")) {
+  } else if (low) {
     text += fmt::format(", at least {}", param["minimum"].dump());
+  } else if (high) {
+    text += fmt::format(", at most {}", param["maximum"].dump());
   }
   if (!param.value("choices", json::array()).empty()) {
     text += ", one of " + param["choices"].dump();

@@ -250,6 +250,26 @@ for (const [format, config] of [['YAML', yaml], ['JSON', json]]) {
   });
 }
 
+test('hover on an actuator lists its writers and readers; on a class, its params; a sensor goes to its actuator', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const actuator = await client.request('textDocument/hover',
+      { textDocument: { uri }, position: positionOf(text, 'ball_visible: {', { skip: 1 }) });
+    assert.match(actuator.contents.value, /\*\*actuator\*\* `ball_visible` of layer `world`, type `bool`/);
+    assert.match(actuator.contents.value, /Written by:\n- interface of layer `world` \(port `ball_visible`\)/);
+    assert.match(actuator.contents.value, /Read by:\n- layer `control` \(sensor\)\n- `control\/kick_ball` \(port `ball_visible`\)/);
+    const cls = await client.request('textDocument/hover',
+      { textDocument: { uri }, position: positionOf(text, 'soccer.SearchForBall', { skip: 3 }) });
+    assert.deepEqual(cls.range, rangeOf(text, 'soccer.SearchForBall'));
+    assert.match(cls.contents.value, /\*\*soccer.SearchForBall\*\* \(behaviour, plugin soccer/);
+    assert.match(cls.contents.value, /- `turn_rate`: double, /);
+    const sensor = positionOf(text, 'ball_visible, ball_position, robot_pose', { skip: 2 });
+    const definition = await client.request('textDocument/definition', { textDocument: { uri }, position: sensor });
+    assert.deepEqual(definition.range, rangeOf(text, 'ball_visible: {', { length: 12 }));
+  });
+});
+
 test('completion offers keys, classes with descriptions, behaviour names after => and actuators as sensors', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
