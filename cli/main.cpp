@@ -613,7 +613,7 @@ int main(int argc, char** argv) {
       "and lint of 'validate' as the config is typed, completion, hover, go to definition,\n"
       "references, rename, outline and quick fixes, on YAML and JSON configs and their includes.");
   lsp_cmd->footer(
-      "An editor starts it; it reads the editor's unsaved text, not the files on disk.\n"
+      "An editor starts it; an open file's unsaved text wins over the file on disk.\n"
       "Plugins the configs name are found as for the other commands (--plugin-path,\n"
       "ARBITER_PLUGIN_PATH). Logs go to stderr. docs/editors.md shows each editor's setup.\n\n"
       "Examples:\n"

@@ -31,7 +31,7 @@ expect() {
   fi
 }
 
-expect "" -- validate run dump explain plugins schema view plot
+expect "" -- validate run dump explain plugins schema view plot lsp
 expect "ex" -- explain
 expect "--log-level" "warn" "d" -- dump
 expect "--plu" -- --plugin-path
@@ -54,6 +54,8 @@ expect "view" "x.yaml" "--t" -- --trace
 expect "plot" "--a" -- --actuators
 expect "plot" "x.jsonl" "-o" "docs/walk_and_k" -- docs/walk_and_kick.svg
 expect "run" "x.yaml" "--w" -- --watch
+expect "ls" -- lsp
+expect "lsp" "-" -- --help
 
 echo "completion: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]
