@@ -25,8 +25,8 @@ namespace {
 
 constexpr const char* kTrivial = "bench.Trivial";
 
-const Registry& registry() {
-  static const Registry instance = make_registry();
+Registry& registry() {
+  static Registry instance = make_registry();
   return instance;
 }
 

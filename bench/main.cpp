@@ -22,6 +22,7 @@
 #include "arbiter/manager.hpp"
 #include "benchmarks.hpp"
 #include "generator.hpp"
+#include "lsp_benchmarks.hpp"
 #include "support.hpp"
 
 namespace {
@@ -124,6 +125,13 @@ int check_targets(const Collector& collector, std::ostream& out) {
     const auto found = results.find(fmt::format("load/total/{}", n));
     if (found != results.end()) {
       check(fmt::format("load/total/{}: load, validate and compile", n), found->second.cpu_time,
+            limit, "ms");
+    }
+  }
+  for (const auto& [n, limit] : {std::pair<int, double>{200, 20.0}, {1000, 100.0}}) {
+    const auto found = results.find(fmt::format("lsp/change/{}", n));
+    if (found != results.end()) {
+      check(fmt::format("lsp/change/{}: diagnostics after an edit", n), found->second.cpu_time,
             limit, "ms");
     }
   }
@@ -290,6 +298,7 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&count, forwarded.data());
   if (benchmark::ReportUnrecognizedArguments(count, forwarded.data())) return 2;
   arbiter::bench::register_benchmarks();
+  arbiter::bench::register_lsp_benchmarks();
   Collector collector;
   benchmark::RunSpecifiedBenchmarks(&collector);
   benchmark::Shutdown();

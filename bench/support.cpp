@@ -72,15 +72,12 @@ Registry make_registry() {
   return registry;
 }
 
-Program compile_text(const std::string& text, const Registry& registry, const std::string& file) {
-  Diagnostics diagnostics;
-  auto document = parse_document(text, file, format_of(file), diagnostics);
-  if (!document) throw ConfigError(std::move(diagnostics));
-  const Model model = build_model(*document, registry, diagnostics);
-  if (diagnostics.has_errors()) throw ConfigError(std::move(diagnostics));
-  auto program = compile(model, registry, diagnostics);
-  if (!program) throw ConfigError(std::move(diagnostics));
-  return std::move(*program);
+Program compile_text(const std::string& text, Registry& registry, const std::string& file) {
+  Overlay overlay;
+  overlay.set(file, text);
+  LoadOptions options;
+  options.source = &overlay;
+  return load_program(file, registry, options);
 }
 
 std::size_t heap_in_use() {

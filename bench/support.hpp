@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <string>
 
+#include "arbiter/load.hpp"
 #include "arbiter/program.hpp"
 #include "arbiter/registry.hpp"
 
@@ -17,7 +18,7 @@ namespace arbiter::bench {
 Registry make_registry();
 
 /// Parses, validates and compiles `text` (named `file`); throws ConfigError when it is invalid.
-Program compile_text(const std::string& text, const Registry& registry,
+Program compile_text(const std::string& text, Registry& registry,
                      const std::string& file = "generated.yaml");
 
 /// Bytes of heap in use (malloc's own count), or 0 where the C library does not say.

@@ -31,7 +31,7 @@ _arbiter() {
   local cur prev command word i
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
-  local commands="validate run dump explain test plugins schema view plot"
+  local commands="validate run dump explain test plugins schema view plot lsp"
   local global="--help --version --log-level --plugin-path --max-file-bytes"
 
   command=""
@@ -80,13 +80,14 @@ _arbiter() {
     plot) options="--output --actuators --help" ;;
     plugins) options="--format --load --builtin --help" ;;
     schema) options="--load --builtin --help" ;;
+    lsp) options="--help" ;;
   esac
   if [[ $cur == -* ]]; then
     mapfile -t COMPREPLY < <(compgen -W "$options" -- "$cur")
     return
   fi
   case "$command" in
-    plugins | schema) return ;;
+    plugins | schema | lsp) return ;;
     plot)
       mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$')
       return ;;

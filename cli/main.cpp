@@ -20,11 +20,13 @@
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/lint.hpp"
+#include "arbiter/load.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/program.hpp"
 #include "arbiter/schema.hpp"
 #include "arbiter/trace.hpp"
 #include "builtins.hpp"
+#include "lsp/server.hpp"
 #include "plot.hpp"
 #include "run_report.hpp"
 #include "serve.hpp"
@@ -211,6 +213,12 @@ int schema(const Options& options) {
   const bool ok = registry_for_listing(options, "schema", registry);
   std::cout << arbiter::config_schema(registry);
   return ok ? kExitOk : kExitInvalid;
+}
+
+int lsp(const Options& options) {
+  // stdout carries the protocol: nothing else may write to it.
+  std::ios::sync_with_stdio(false);
+  return arbiter::lsp::run(std::cin, std::cout, make_registry(), load_options_of(options));
 }
 
 int explain(const Options& options) {
@@ -712,6 +720,21 @@ int main(int argc, char** argv) {
       "schema/arbiter.schema.json in the sources is the same schema without the classes.\n\n"
       "Exit codes: 0 ok, 1 a plugin failed to load, 2 usage error.");
 
+  auto* lsp_cmd = app.add_subcommand(
+      "lsp",
+      "Serve the Language Server Protocol over stdin/stdout for editors: every error, warning\n"
+      "and lint of 'validate' as the config is typed, completion, hover, go to definition,\n"
+      "references, rename, outline and quick fixes, on YAML and JSON configs and their includes.");
+  lsp_cmd->footer(
+      "An editor starts it; an open file's unsaved text wins over the file on disk.\n"
+      "Plugins the configs name are found as for the other commands (--plugin-path,\n"
+      "ARBITER_PLUGIN_PATH). Logs go to stderr. docs/editors.md shows each editor's setup.\n\n"
+      "Examples:\n"
+      "  arbiter lsp\n"
+      "  arbiter --plugin-path ~/robot/plugins lsp\n"
+      "  Neovim: vim.lsp.start({name = 'arbiter', cmd = {'arbiter', 'lsp'}})\n\n"
+      "Exit codes: 0 after 'shutdown' and 'exit', 1 when the input ends or 'exit' comes first.");
+
   try {
     app.parse(argc, argv);
     if (run_cmd->parsed() && !options.serve.empty() && !options.full_speed) {
@@ -739,6 +762,7 @@ int main(int argc, char** argv) {
     if (plot_cmd->parsed()) return plot(options);
     if (plugins_cmd->parsed()) return plugins(options);
     if (schema_cmd->parsed()) return schema(options);
+    if (lsp_cmd->parsed()) return lsp(options);
   } catch (const std::exception& error) {
     std::cerr << fmt::format("arbiter: {}\n", error.what());
     return kExitInvalid;

@@ -107,6 +107,8 @@ command -v curl >/dev/null || test_tools+=(curl)
 # fastddsgen, which runs on Java, to generate its message types.
 test_tools+=(libfastrtps-dev fastddsgen)
 command -v java >/dev/null || test_tools+=(default-jre-headless)
+# Neovim for the language server's editor test (tests/lsp/).
+command -v nvim >/dev/null || test_tools+=(neovim)
 scripts/install-deps.sh "${test_tools[@]}"
 
 status=0

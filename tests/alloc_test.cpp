@@ -13,6 +13,7 @@
 #include <sstream>
 #include <vector>
 
+#include "arbiter/load.hpp"
 #include "arbiter/substitute.hpp"
 #include "counting_new.hpp"
 #include "test_support.hpp"

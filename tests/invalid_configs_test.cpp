@@ -16,6 +16,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "arbiter/load.hpp"
 #include "arbiter/program.hpp"
 #include "arbiter/state.hpp"
 #include "test_support.hpp"

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "arbiter/load.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/plugin.hpp"
 #include "arbiter/program.hpp"

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "arbiter/load.hpp"
 #include "arbiter/program.hpp"
 #include "arbiter/state.hpp"
 #include "arbiter/trace.hpp"

@@ -8,7 +8,6 @@
 #include <unordered_map>
 
 #include "arbiter/init_context.hpp"
-#include "arbiter/lint.hpp"
 #include "arbiter/program.hpp"
 
 namespace arbiter {
@@ -1147,40 +1146,6 @@ std::optional<Program> compile(const Model& model, const Registry& registry,
 
 void check_inhibition_cycles(const Model& model, Diagnostics& diagnostics) {
   for (const auto& layer : model.layers) order_behaviours(layer, diagnostics);
-}
-
-std::optional<Program> load(const std::string& path, Registry& registry, Diagnostics& diagnostics,
-                            const LoadOptions& options) {
-  auto finish = [&]() {
-    if (options.strict) diagnostics.promote_warnings();
-    diagnostics.sort();
-  };
-  auto document = read_document(path, diagnostics, options.limits);
-  if (!document) {
-    finish();
-    return std::nullopt;
-  }
-  // Plugins first: their classes are what the model is checked against. A plugin that fails
-  // still lets validation run, so that every other problem is reported too.
-  load_plugins(*document, options.plugins, registry, diagnostics);
-  Model model = build_model(*document, registry, diagnostics, options.limits);
-  if (diagnostics.has_errors()) {
-    check_inhibition_cycles(model, diagnostics);  // a cycle is reported in the same pass
-    finish();
-    return std::nullopt;
-  }
-  auto program = compile(model, registry, diagnostics);
-  if (program) lint(model, *program, diagnostics);
-  finish();
-  if (diagnostics.has_errors()) return std::nullopt;
-  return program;
-}
-
-Program load_program(const std::string& path, Registry& registry, const LoadOptions& options) {
-  Diagnostics diagnostics;
-  auto program = load(path, registry, diagnostics, options);
-  if (!program) throw ConfigError(std::move(diagnostics));
-  return std::move(*program);
 }
 
 }  // namespace arbiter

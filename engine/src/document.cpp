@@ -973,8 +973,8 @@ std::optional<Node> parse_document(std::string_view text, const std::string& fil
   return std::move(builder.root);
 }
 
-std::optional<Node> read_document(const std::string& path, Diagnostics& diagnostics,
-                                  const ReadLimits& limits) {
+std::optional<std::string> FileSource::read(const std::string& path, Diagnostics& diagnostics,
+                                            const ReadLimits& limits) const {
   namespace fs = std::filesystem;
   std::error_code error;
   const auto status = fs::status(path, error);
@@ -1034,7 +1034,72 @@ std::optional<Node> read_document(const std::string& path, Diagnostics& diagnost
     diagnostics.error({path, 0, 0}, "unreadable-file", "read error" + reason());
     return std::nullopt;
   }
-  return parse_document(text, path, format_of(path), diagnostics, limits);
+  return text;
+}
+
+const FileSource& disk() {
+  static const FileSource instance;
+  return instance;
+}
+
+namespace {
+
+std::string normal(const std::string& path) {
+  return std::filesystem::path(path).lexically_normal().string();
+}
+
+}  // namespace
+
+void Overlay::set(const std::string& path, std::string text) {
+  texts_[normal(path)] = std::move(text);
+}
+
+void Overlay::erase(const std::string& path) {
+  texts_.erase(normal(path));
+}
+
+const std::string* Overlay::find(const std::string& path) const {
+  const auto found = texts_.find(normal(path));
+  return found == texts_.end() ? nullptr : &found->second;
+}
+
+std::optional<std::string> Overlay::read(const std::string& path, Diagnostics& diagnostics,
+                                         const ReadLimits& limits) const {
+  const std::string* text = find(path);
+  if (!text) return FileSource::read(path, diagnostics, limits);
+  if (text->size() > limits.max_file_bytes) {
+    diagnostics.error(
+        {path, 0, 0}, "file-too-large",
+        fmt::format("the file has {} bytes; the limit is {}", text->size(), limits.max_file_bytes));
+    return std::nullopt;
+  }
+  return *text;
+}
+
+const Node* SourceFiles::read(const std::string& path, Diagnostics& diagnostics) {
+  if (const SourceFile* file = find(path)) return file->root ? &*file->root : nullptr;
+  auto text = source_->read(path, diagnostics, limits_);
+  if (!text) return nullptr;
+  auto file = std::make_unique<SourceFile>();
+  file->path = path;
+  file->text = std::move(*text);
+  file->root = parse_document(file->text, path, format_of(path), diagnostics, limits_);
+  files_.push_back(std::move(file));
+  return files_.back()->root ? &*files_.back()->root : nullptr;
+}
+
+const SourceFile* SourceFiles::find(const std::string& path) const {
+  for (const auto& file : files_) {
+    if (file->path == path) return file.get();
+  }
+  return nullptr;
+}
+
+std::optional<Node> read_document(const std::string& path, Diagnostics& diagnostics,
+                                  const ReadLimits& limits) {
+  auto text = disk().read(path, diagnostics, limits);
+  if (!text) return std::nullopt;
+  return parse_document(*text, path, format_of(path), diagnostics, limits);
 }
 
 }  // namespace arbiter

@@ -114,8 +114,8 @@ class Fields {
 
 class ModelBuilder {
  public:
-  ModelBuilder(const Registry& registry, Diagnostics& diagnostics, const ReadLimits& limits)
-      : registry_(registry), diagnostics_(diagnostics), limits_(limits) {}
+  ModelBuilder(const Registry& registry, Diagnostics& diagnostics, SourceFiles& files)
+      : registry_(registry), diagnostics_(diagnostics), files_(files) {}
 
   Model build(const Node& root) {
     model_.location = root.location();
@@ -259,7 +259,7 @@ class ModelBuilder {
     }
     if (!included_.insert(canonical).second) return;  // each file is merged once
     Diagnostics reading;
-    auto document = read_document(path, reading, limits_);
+    const Node* document = files_.read(path, reading);
     for (const auto& item : reading.items()) {
       // A missing include is the including line's problem; report it there.
       if (item.location.line == 0) {
@@ -271,11 +271,10 @@ class ModelBuilder {
       }
     }
     if (!document) return;
-    documents_.push_back(std::make_unique<Node>(std::move(*document)));
     include_stack_.push_back(canonical);
     include_names_.push_back(path);
     include_chain_.push_back(fmt::format("{}:{}:{}", where.file, where.line, where.column));
-    read_file(*documents_.back(), /*is_root=*/false);
+    read_file(*document, /*is_root=*/false);
     include_chain_.pop_back();
     include_names_.pop_back();
     include_stack_.pop_back();
@@ -1513,14 +1512,13 @@ class ModelBuilder {
 
   const Registry& registry_;
   Diagnostics& diagnostics_;
-  const ReadLimits& limits_;
+  SourceFiles& files_;  // the included files, alive while pending
   Model model_;
   std::vector<PendingLayer> pending_layers_;
   std::vector<const Node*> pending_machines_;
   std::map<std::string, ActuatorInfo> actuator_index_;
-  std::vector<std::unique_ptr<Node>> documents_;  // included files, alive while pending
-  std::vector<std::string> include_stack_;        // canonical paths of the files being read
-  std::vector<std::string> include_names_;        // the same files as diagnostics name them
+  std::vector<std::string> include_stack_;  // canonical paths of the files being read
+  std::vector<std::string> include_names_;  // the same files as diagnostics name them
   std::vector<std::string> include_chain_;
   std::set<std::string> included_;
 };
@@ -1530,8 +1528,8 @@ class ModelBuilder {
 std::vector<Param> check_state_params(const StateDecl& state, const Node* overrides,
                                       const SourceLocation& where, const Registry& registry,
                                       Diagnostics& diagnostics) {
-  static const ReadLimits kLimits;
-  return ModelBuilder(registry, diagnostics, kLimits)
+  SourceFiles no_files;
+  return ModelBuilder(registry, diagnostics, no_files)
       .check_instance_params(state, overrides, where);
 }
 
@@ -1540,15 +1538,21 @@ std::optional<Declaration> redeclare(const Model& model, ClassKind kind, const N
                                      std::optional<std::size_t> layer, const std::string& owner,
                                      const SourceLocation& owner_at, const Registry& registry,
                                      Diagnostics& diagnostics) {
-  static const ReadLimits kLimits;
-  ModelBuilder builder(registry, diagnostics, kLimits);
+  SourceFiles no_files;
+  ModelBuilder builder(registry, diagnostics, no_files);
   builder.seed(model);
   return builder.redeclare(kind, type, params, ports, layer, owner, owner_at);
 }
 
 Model build_model(const Node& root, const Registry& registry, Diagnostics& diagnostics,
                   const ReadLimits& limits) {
-  ModelBuilder builder(registry, diagnostics, limits);
+  SourceFiles files(disk(), limits);
+  return build_model(root, registry, diagnostics, files);
+}
+
+Model build_model(const Node& root, const Registry& registry, Diagnostics& diagnostics,
+                  SourceFiles& files) {
+  ModelBuilder builder(registry, diagnostics, files);
   builder.enter_root(root.location().file);
   return builder.build(root);
 }

@@ -5,9 +5,6 @@
 #include <map>
 #include <unordered_map>
 
-#include "arbiter/lint.hpp"
-#include "arbiter/plugin.hpp"
-
 namespace arbiter {
 
 namespace {
@@ -466,30 +463,15 @@ Reloader::Reloader(Registry& registry, LoadOptions options)
 
 Reloader::~Reloader() = default;
 
-// arbiter::load, keeping the model: it tells the next reload whose params changed.
+// The pipeline's model is kept: it tells the next reload whose params changed.
 std::optional<Program> Reloader::load_model(Diagnostics& diagnostics, Model& model) {
-  auto finish = [&]() {
-    if (options_.strict) diagnostics.promote_warnings();
-    diagnostics.sort();
-  };
-  auto document = read_document(path_, diagnostics, options_.limits);
-  if (!document) {
-    finish();
-    return std::nullopt;
+  Loaded loaded = load_config(path_, registry_, options_);
+  diagnostics = std::move(loaded.diagnostics);
+  if (loaded.model) {
+    if (!loaded.model->files.empty()) files_ = loaded.model->files;
+    model = std::move(*loaded.model);
   }
-  load_plugins(*document, options_.plugins, registry_, diagnostics);
-  model = build_model(*document, registry_, diagnostics, options_.limits);
-  if (!model.files.empty()) files_ = model.files;
-  if (diagnostics.has_errors()) {
-    check_inhibition_cycles(model, diagnostics);
-    finish();
-    return std::nullopt;
-  }
-  auto program = compile(model, registry_, diagnostics);
-  if (program) lint(model, *program, diagnostics);
-  finish();
-  if (diagnostics.has_errors()) return std::nullopt;
-  return program;
+  return std::move(loaded.program);
 }
 
 std::optional<Program> Reloader::load(const std::string& path, Diagnostics& diagnostics) {

@@ -31,7 +31,7 @@ expect() {
   fi
 }
 
-expect "" -- validate run dump explain test plugins schema view plot
+expect "" -- validate run dump explain test plugins schema view plot lsp
 expect "ex" -- explain
 expect "--log-level" "warn" "d" -- dump
 expect "--plu" -- --plugin-path
@@ -58,6 +58,8 @@ expect "plot" "x.jsonl" "-o" "docs/walk_and_k" -- docs/walk_and_kick.svg
 expect "run" "x.yaml" "--w" -- --watch
 expect "test" "--j" -- --junit
 expect "test" "tests/scenarios/soccer/goalie_d" -- tests/scenarios/soccer/goalie_dives_at_the_shot.test.yaml
+expect "ls" -- lsp
+expect "lsp" "-" -- --help
 
 echo "completion: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "arbiter/load.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/program.hpp"
 #include "arbiter/registry.hpp"

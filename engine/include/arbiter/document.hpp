@@ -3,6 +3,7 @@
 // node carries its file:line:column. Nothing after read_document sees a yaml-cpp or nlohmann type.
 
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -121,6 +122,64 @@ DocumentFormat format_of(std::string_view path);
 std::optional<Node> parse_document(std::string_view text, const std::string& file,
                                    DocumentFormat format, Diagnostics& diagnostics,
                                    const ReadLimits& limits = {});
+
+/// Where the pipeline reads a config's text: the disk, unless an editor's unsaved buffers are
+/// put in front (Overlay).
+class FileSource {
+ public:
+  virtual ~FileSource() = default;
+  /// The text of `path`; nullopt after reporting (at `{path, 0, 0}`) an unreadable path, a
+  /// directory or a file over the size limit.
+  virtual std::optional<std::string> read(const std::string& path, Diagnostics& diagnostics,
+                                          const ReadLimits& limits) const;
+};
+
+/// The files on disk.
+const FileSource& disk();
+
+/// Texts held in memory, by path, in front of the disk: a path that has a text is never read
+/// from disk. Paths are compared after lexical normalisation.
+class Overlay : public FileSource {
+ public:
+  void set(const std::string& path, std::string text);
+  void erase(const std::string& path);
+  /// The text held for `path`, or nullptr.
+  const std::string* find(const std::string& path) const;
+  std::optional<std::string> read(const std::string& path, Diagnostics& diagnostics,
+                                  const ReadLimits& limits) const override;
+
+ private:
+  std::map<std::string, std::string> texts_;
+};
+
+/// A file read by the pipeline: its text and, when it could be parsed, its tree.
+struct SourceFile {
+  std::string path;
+  std::string text;
+  std::optional<Node> root;
+};
+
+/// The files of one load, each read once through a FileSource and kept with its text, in the
+/// order they were read (the config first, then its includes).
+class SourceFiles {
+ public:
+  explicit SourceFiles(const FileSource& source = disk(), ReadLimits limits = {})
+      : source_(&source), limits_(limits) {}
+
+  /// The tree of `path`, read and parsed on first use; nullptr after reporting when it cannot
+  /// be read or parsed (the text, if read, is kept all the same).
+  const Node* read(const std::string& path, Diagnostics& diagnostics);
+
+  const std::vector<std::unique_ptr<SourceFile>>& files() const { return files_; }
+  /// The file read as `path`, or nullptr.
+  const SourceFile* find(const std::string& path) const;
+  const ReadLimits& limits() const { return limits_; }
+
+ private:
+  const FileSource* source_;
+  ReadLimits limits_;
+  std::vector<std::unique_ptr<SourceFile>> files_;
+};
 
 /// Reads and parses a file; unreadable paths, directories and oversized files are reported.
 std::optional<Node> read_document(const std::string& path, Diagnostics& diagnostics,

@@ -154,4 +154,8 @@ std::optional<Declaration> redeclare(const Model& model, ClassKind kind, const N
 Model build_model(const Node& root, const Registry& registry, Diagnostics& diagnostics,
                   const ReadLimits& limits = {});
 
+/// The same, reading included files through `files` (which keeps them, and their text).
+Model build_model(const Node& root, const Registry& registry, Diagnostics& diagnostics,
+                  SourceFiles& files);
+
 }  // namespace arbiter

@@ -15,7 +15,6 @@
 #include "arbiter/controller.hpp"
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/model.hpp"
-#include "arbiter/plugin.hpp"
 #include "arbiter/registry.hpp"
 
 namespace arbiter {
@@ -215,23 +214,8 @@ std::optional<Program> compile(const Model& model, const Registry& registry,
                                Diagnostics& diagnostics);
 
 /// Reports each layer's inhibition cycle, as compile() does, for a model that may have other
-/// errors: inhibitions that name no valid behaviour are left out. Lets load() report a cycle in
-/// the same pass as the model's problems.
+/// errors: inhibitions that name no valid behaviour are left out. Lets the load pipeline report a
+/// cycle in the same pass as the model's problems.
 void check_inhibition_cycles(const Model& model, Diagnostics& diagnostics);
-
-/// Options for the whole pipeline.
-struct LoadOptions {
-  ReadLimits limits;
-  PluginOptions plugins;
-  bool strict = false;  ///< warnings are errors
-};
-
-/// read_document → load the plugins it names into `registry` → build_model → compile. Returns
-/// nullopt after reporting when any stage failed.
-std::optional<Program> load(const std::string& path, Registry& registry, Diagnostics& diagnostics,
-                            const LoadOptions& options = {});
-
-/// The same, throwing one ConfigError carrying every diagnostic.
-Program load_program(const std::string& path, Registry& registry, const LoadOptions& options = {});
 
 }  // namespace arbiter

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "arbiter/load.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/model.hpp"
 #include "arbiter/program.hpp"
@@ -65,7 +66,7 @@ class Reloader {
   Reloader(const Reloader&) = delete;
   Reloader& operator=(const Reloader&) = delete;
 
-  /// The first load of `path` (as arbiter::load does), for the manager that reload() will
+  /// The first load of `path` (as load_config does), for the manager that reload() will
   /// update: remembers the model, which tells later reloads whose params changed.
   std::optional<Program> load(const std::string& path, Diagnostics& diagnostics);
 

@@ -1,0 +1,80 @@
+#pragma once
+// `arbiter lsp`: a Language Server Protocol server over the engine's own load pipeline. The
+// Server handles decoded messages and returns what to send, with no I/O of its own, so that
+// tests and benchmarks drive it directly; run() connects it to a framed stream (framing.hpp).
+
+#include <iosfwd>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "arbiter/load.hpp"
+#include "arbiter/registry.hpp"
+
+namespace arbiter::lsp {
+
+struct Analysis;
+
+class Server {
+ public:
+  /// `registry` holds the built-in classes; the plugins a config names are loaded into it.
+  Server(Registry registry, LoadOptions options);
+  ~Server();
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  /// Handles one message's JSON text: a malformed one is answered with a JSON-RPC error.
+  /// Returns the responses and notifications to send, in order.
+  std::vector<nlohmann::json> handle(const std::string& text);
+  std::vector<nlohmann::json> handle(const nlohmann::json& message);
+
+  /// After the `exit` notification: the process exits with exit_code().
+  bool exited() const { return exited_; }
+  /// 0 when `shutdown` came before `exit`, 1 otherwise (as the protocol says).
+  int exit_code() const { return shutdown_ ? 0 : 1; }
+
+ private:
+  struct Open {
+    std::string path;
+    std::string text;
+  };
+  using json = nlohmann::json;
+
+  json dispatch(const std::string& method, const json& params, std::vector<json>& out);
+  void changed(std::vector<json>& out);
+  void publish(std::vector<json>& out);
+  const Analysis* analysis_of(const std::string& path) const;
+  const Analysis* good_analysis_of(const std::string& path) const;
+  const Program* program_of(const std::string& path) const;
+  const std::string* text_of(const std::string& path) const;
+
+  json completion(const json& params) const;
+  json hover(const json& params) const;
+  json definition(const json& params) const;
+  json references(const json& params) const;
+  json rename(const json& params) const;
+  json symbols(const json& params) const;
+  json code_actions(const json& params) const;
+
+  Registry registry_;
+  LoadOptions options_;
+  Overlay overlay_;
+  std::map<std::string, Open> open_;                                 // by URI
+  std::map<std::string, std::shared_ptr<const Analysis>> analyses_;  // by root path
+  std::map<std::string, std::shared_ptr<const Analysis>> good_;      // the last that parsed
+  std::map<std::string, std::shared_ptr<const Analysis>> compiled_;  // the last that compiled
+  std::map<std::string, std::string> published_;  // path -> URI of files with diagnostics
+  json catalog_;
+  json schema_;
+  std::size_t catalogued_ = 0;  // the registry's classes when catalog_ and schema_ were made
+  bool initialized_ = false;
+  bool shutdown_ = false;
+  bool exited_ = false;
+};
+
+/// Serves `in` and `out` until `exit` or the end of the input; returns the exit status.
+int run(std::istream& in, std::ostream& out, Registry registry, LoadOptions options);
+
+}  // namespace arbiter::lsp

@@ -1,0 +1,53 @@
+#pragma once
+// The load pipeline as one call: read → document → model → program, then the lints. What every
+// caller needs comes back together: the files read (text and tree), the model, the program and
+// the diagnostics.
+
+#include <optional>
+#include <string>
+
+#include "arbiter/diagnostics.hpp"
+#include "arbiter/document.hpp"
+#include "arbiter/model.hpp"
+#include "arbiter/plugin.hpp"
+#include "arbiter/program.hpp"
+#include "arbiter/registry.hpp"
+
+namespace arbiter {
+
+/// Options for the whole pipeline.
+struct LoadOptions {
+  ReadLimits limits;
+  PluginOptions plugins;
+  bool strict = false;  ///< warnings are errors
+  /// Where files are read from (must outlive the call); nullptr: the disk.
+  const FileSource* source = nullptr;
+};
+
+/// What one load produced.
+struct Loaded {
+  /// Every file read, the config first, with its text and (when it parsed) its tree.
+  SourceFiles files;
+  /// Set once the config was read far enough to be validated; meaningful only without errors.
+  std::optional<Model> model;
+  /// Set when no stage reported an error.
+  std::optional<Program> program;
+  /// Every stage's errors, warnings and lints, sorted (warnings promoted under `strict`).
+  Diagnostics diagnostics;
+
+  /// The config's tree, or nullptr when it could not be read or parsed.
+  const Node* document() const;
+};
+
+/// read the file → load the plugins it names into `registry` → build_model → compile → lint.
+/// Every stage that can run does, so that one load reports every problem.
+Loaded load_config(const std::string& path, Registry& registry, const LoadOptions& options = {});
+
+/// The program of load_config(), reporting into `diagnostics`; nullopt when any stage failed.
+std::optional<Program> load(const std::string& path, Registry& registry, Diagnostics& diagnostics,
+                            const LoadOptions& options = {});
+
+/// The same, throwing one ConfigError carrying every diagnostic.
+Program load_program(const std::string& path, Registry& registry, const LoadOptions& options = {});
+
+}  // namespace arbiter

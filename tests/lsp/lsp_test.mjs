@@ -1,0 +1,420 @@
+// `arbiter lsp` driven by vscode-languageserver-protocol, the client library VS Code uses, on the
+// repo's configs (YAML and JSON) and broken copies of them. Expected ranges are computed from the
+// text the test sends: 0-based lines, UTF-16 columns.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawn } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { createRequire } from 'node:module';
+
+const require = createRequire(path.join(process.env.NODE_MODULES, 'x.js'));
+const rpc = require('vscode-languageserver-protocol/node.js');
+
+const arbiter = process.env.ARBITER;
+const source = process.env.ARBITER_SOURCE;
+const uriOf = (file) => 'file://' + file;
+
+function read(relative) {
+  const file = path.join(source, relative);
+  return { file, uri: uriOf(file), text: fs.readFileSync(file, 'utf8') };
+}
+
+// The range of the `nth` occurrence of `needle` in `text` (plus `skip` characters).
+function rangeOf(text, needle, { nth = 0, skip = 0, length = needle.length - skip } = {}) {
+  let at = -1;
+  for (let i = 0; i <= nth; ++i) {
+    at = text.indexOf(needle, at + 1);
+    assert.notEqual(at, -1, `'${needle}' not in the text`);
+  }
+  at += skip;
+  const before = text.slice(0, at).split('\n');
+  const line = before.length - 1;
+  const character = before[line].length;  // JavaScript strings count UTF-16 units
+  return { start: { line, character }, end: { line, character: character + length } };
+}
+
+function positionOf(text, needle, options = {}) {
+  return rangeOf(text, needle, options).start;
+}
+
+class Client {
+  constructor(args = []) {
+    this.process = spawn(arbiter, ['lsp', ...args], { stdio: ['pipe', 'pipe', 'pipe'] });
+    this.stderr = '';
+    this.process.stderr.on('data', (chunk) => { this.stderr += chunk; });
+    this.exited = new Promise((resolve) => this.process.on('exit', (code) => resolve(code)));
+    this.connection = rpc.createProtocolConnection(
+      new rpc.StreamMessageReader(this.process.stdout),
+      new rpc.StreamMessageWriter(this.process.stdin));
+    this.diagnostics = new Map();
+    this.waiting = new Map();
+    this.connection.onNotification('textDocument/publishDiagnostics', (params) => {
+      this.diagnostics.set(params.uri, params.diagnostics);
+      const waiter = this.waiting.get(params.uri);
+      if (waiter) {
+        this.waiting.delete(params.uri);
+        waiter(params.diagnostics);
+      }
+    });
+    this.connection.listen();
+  }
+
+  async start() {
+    const result = await this.connection.sendRequest('initialize',
+      { processId: process.pid, rootUri: uriOf(source), capabilities: {} });
+    await this.connection.sendNotification('initialized', {});
+    return result;
+  }
+
+  published(uri) {
+    return new Promise((resolve) => this.waiting.set(uri, resolve));
+  }
+
+  async open(uri, text) {
+    const next = this.published(uri);
+    const languageId = uri.endsWith('.json') ? 'json' : 'yaml';
+    await this.connection.sendNotification('textDocument/didOpen',
+      { textDocument: { uri, languageId, version: 1, text } });
+    return next;
+  }
+
+  async change(uri, text, waitFor = uri) {
+    const next = this.published(waitFor);
+    await this.connection.sendNotification('textDocument/didChange',
+      { textDocument: { uri, version: 2 }, contentChanges: [{ text }] });
+    return next;
+  }
+
+  request(method, params) {
+    return this.connection.sendRequest(method, params);
+  }
+
+  async stop() {
+    await this.connection.sendRequest('shutdown');
+    await this.connection.sendNotification('exit');
+    const code = await this.exited;
+    this.connection.dispose();
+    return code;
+  }
+}
+
+async function withClient(body) {
+  const client = new Client();
+  await client.start();
+  try {
+    await body(client);
+  } finally {
+    assert.equal(await client.stop(), 0, client.stderr);
+  }
+}
+
+const yaml = () => read('configs/soccer/walk_and_kick.yaml');
+const json = () => read('configs/paper/walk_and_kick.json');
+
+test('a valid config gets an empty list of diagnostics', async () => {
+  await withClient(async (client) => {
+    for (const config of [yaml(), json()]) {
+      assert.deepEqual(await client.open(config.uri, config.text), []);
+    }
+  });
+});
+
+for (const [format, config] of [['YAML', yaml], ['JSON', json]]) {
+  test(`a misspelt inhibition endpoint in ${format} is an error at the name, with the suggestion, and fixing it clears it`, async () => {
+    await withClient(async (client) => {
+      const { uri, text } = config();
+      await client.open(uri, text);
+      const broken = text.replace('kick_ball => go_behind_ball', 'kick_bal => go_behind_ball');
+      const [diagnostic, ...rest] = await client.change(uri, broken);
+      assert.deepEqual(rest, []);
+      assert.equal(diagnostic.code, 'unknown-behaviour');
+      assert.equal(diagnostic.source, 'arbiter');
+      assert.equal(diagnostic.severity, 1);
+      assert.deepEqual(diagnostic.range, rangeOf(broken, 'kick_bal =>', { length: 8 }));
+      assert.match(diagnostic.relatedInformation[0].message, /did you mean 'kick_ball'\?/);
+
+      const [action] = await client.request('textDocument/codeAction',
+        { textDocument: { uri }, range: diagnostic.range, context: { diagnostics: [diagnostic] } });
+      assert.equal(action.title, "Change to 'kick_ball'");
+      assert.deepEqual(action.edit.changes[uri], [{ range: diagnostic.range, newText: 'kick_ball' }]);
+
+      assert.deepEqual(await client.change(uri, text), []);
+    });
+  });
+
+  test(`an inhibition cycle in ${format} names each edge in related information`, async () => {
+    await withClient(async (client) => {
+      const { uri, text } = config();
+      await client.open(uri, text);
+      const broken = text.replace('go_behind_ball => search_for_ball', 'go_behind_ball => kick_ball');
+      const diagnostics = await client.change(uri, broken);
+      const cycle = diagnostics.find((d) => d.code === 'inhibition-cycle');
+      assert.ok(cycle, JSON.stringify(diagnostics));
+      assert.ok(cycle.relatedInformation.length >= 1);
+      for (const info of cycle.relatedInformation) assert.equal(info.location.uri, uri);
+    });
+  });
+
+  test(`a redundant inhibition in ${format} is a lint with a quick fix that removes it`, async () => {
+    await withClient(async (client) => {
+      const { uri, text } = config();
+      await client.open(uri, text);
+      const added = format === 'YAML'
+        ? text.replace('      - search_for_ball -> head_control', '      - search_for_ball -> head_control\n      - kick_ball => search_for_ball')
+        : text.replace('"go_behind_ball => search_for_ball"', '"go_behind_ball => search_for_ball", "kick_ball => search_for_ball"');
+      assert.notEqual(added, text);
+      const diagnostics = await client.change(uri, added);
+      const lint = diagnostics.find((d) => d.code === 'redundant-inhibition');
+      assert.ok(lint, JSON.stringify(diagnostics));
+      assert.equal(lint.severity, 2);
+      const needle = format === 'YAML' ? 'kick_ball => search_for_ball' : '"kick_ball => search_for_ball"';
+      assert.deepEqual(lint.range.start, positionOf(added, needle));
+      const actions = await client.request('textDocument/codeAction',
+        { textDocument: { uri }, range: lint.range, context: { diagnostics: [lint] } });
+      const remove = actions.find((a) => a.title.startsWith('Remove the inhibition'));
+      assert.ok(remove);
+      // Applying the edit gives back the original text.
+      const [edit] = remove.edit.changes[uri];
+      const lines = added.split('\n');
+      const offset = (p) => lines.slice(0, p.line).reduce((n, l) => n + l.length + 1, 0) + p.character;
+      const fixed = added.slice(0, offset(edit.range.start)) + edit.newText + added.slice(offset(edit.range.end));
+      assert.equal(fixed, text);
+      assert.deepEqual(await client.change(uri, fixed), []);
+    });
+  });
+
+  test(`hover on a ${format} behaviour lists its inhibitions, implied ones with their chain`, async () => {
+    await withClient(async (client) => {
+      const { uri, text } = config();
+      await client.open(uri, text);
+      const hover = await client.request('textDocument/hover',
+        { textDocument: { uri }, position: positionOf(text, 'search_for_ball', { skip: 2 }) });
+      assert.deepEqual(hover.range, rangeOf(text, 'search_for_ball'));
+      assert.match(hover.contents.value, /\*\*behaviour\*\* `search_for_ball` in layer `control`/);
+      assert.match(hover.contents.value, /`go_behind_ball` => `search_for_ball`/);
+      assert.match(hover.contents.value, /`kick_ball` inhibits `search_for_ball`, implied by chaining kick_ball => go_behind_ball => search_for_ball/);
+
+      const line = await client.request('textDocument/hover',
+        { textDocument: { uri }, position: positionOf(text, ' => go_behind_ball', { skip: 1 }) });
+      assert.match(line.contents.value, /Implies through chaining:\n- `kick_ball` inhibits `search_for_ball`/);
+    });
+  });
+
+  test(`definition and references of a ${format} behaviour`, async () => {
+    await withClient(async (client) => {
+      const { uri, text } = config();
+      await client.open(uri, text);
+      const use = positionOf(text, 'kick_ball => go_behind_ball', { skip: 14 });
+      const definition = await client.request('textDocument/definition', { textDocument: { uri }, position: use });
+      const declared = format === 'YAML' ? 'go_behind_ball: {' : '"go_behind_ball": {';
+      assert.deepEqual(definition, { uri, range: rangeOf(text, declared, { skip: format === 'YAML' ? 0 : 1, length: 14 }) });
+      const references = await client.request('textDocument/references',
+        { textDocument: { uri }, position: use, context: { includeDeclaration: true } });
+      assert.equal(references.length, 3);
+      assert.deepEqual(references.map((r) => r.range.start.line).sort((a, b) => a - b),
+        [definition.range.start.line, positionOf(text, 'kick_ball => go_behind_ball').line,
+          positionOf(text, 'go_behind_ball => search_for_ball').line].sort((a, b) => a - b));
+    });
+  });
+
+  test(`rename of a ${format} behaviour edits every use, and refuses invalid or taken names`, async () => {
+    await withClient(async (client) => {
+      const { uri, text } = config();
+      await client.open(uri, text);
+      const position = positionOf(text, 'kick_ball => go_behind_ball');
+      const edit = await client.request('textDocument/rename', { textDocument: { uri }, position, newName: 'shoot' });
+      const edits = edit.changes[uri];
+      assert.equal(edits.length, 2);
+      for (const e of edits) assert.equal(e.newText, 'shoot');
+      assert.deepEqual(edits[1].range, rangeOf(text, 'kick_ball => go_behind_ball', { length: 9 }));
+      await assert.rejects(client.request('textDocument/rename', { textDocument: { uri }, position, newName: 'Shoot!' }),
+        /not a valid name/);
+      await assert.rejects(client.request('textDocument/rename', { textDocument: { uri }, position, newName: 'head_control' }),
+        /already taken/);
+    });
+  });
+
+  test(`document symbols of ${format}: layers with behaviours and actuators`, async () => {
+    await withClient(async (client) => {
+      const { uri, text } = config();
+      await client.open(uri, text);
+      const symbols = await client.request('textDocument/documentSymbol', { textDocument: { uri } });
+      const control = symbols.find((s) => s.name === 'control');
+      assert.ok(control);
+      const behaviours = control.children.filter((c) => c.kind === 5).map((c) => c.name);
+      assert.deepEqual(behaviours, ['kick_ball', 'go_behind_ball', 'search_for_ball', 'head_control']);
+      assert.ok(control.children.some((c) => c.kind === 8 && c.name === 'gait_velocity'));
+    });
+  });
+}
+
+test('hover on an actuator lists its writers and readers; on a class, its params; a sensor goes to its actuator', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const actuator = await client.request('textDocument/hover',
+      { textDocument: { uri }, position: positionOf(text, 'ball_visible: {', { skip: 1 }) });
+    assert.match(actuator.contents.value, /\*\*actuator\*\* `ball_visible` of layer `world`, type `bool`/);
+    assert.match(actuator.contents.value, /Written by:\n- interface of layer `world` \(port `ball_visible`\)/);
+    assert.match(actuator.contents.value, /Read by:\n- layer `control` \(sensor\)\n- `control\/kick_ball` \(port `ball_visible`\)/);
+    const cls = await client.request('textDocument/hover',
+      { textDocument: { uri }, position: positionOf(text, 'soccer.SearchForBall', { skip: 3 }) });
+    assert.deepEqual(cls.range, rangeOf(text, 'soccer.SearchForBall'));
+    assert.match(cls.contents.value, /\*\*soccer.SearchForBall\*\* \(behaviour, plugin soccer/);
+    assert.match(cls.contents.value, /- `turn_rate`: double, /);
+    const sensor = positionOf(text, 'ball_visible, ball_position, robot_pose', { skip: 2 });
+    const definition = await client.request('textDocument/definition', { textDocument: { uri }, position: sensor });
+    assert.deepEqual(definition.range, rangeOf(text, 'ball_visible: {', { length: 12 }));
+  });
+});
+
+test('completion offers keys, classes with descriptions, behaviour names after => and actuators as sensors', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const labels = async (edited, at) => {
+      await client.change(uri, edited);
+      const result = await client.request('textDocument/completion', { textDocument: { uri }, position: at });
+      return result.items.map((i) => i.label);
+    };
+    // A key at the top level.
+    let edited = text.replace('rate_hz: 15', 'rate_hz: 15\nnorm');
+    let items = await labels(edited, positionOf(edited, 'norm', { skip: 4 }));
+    assert.ok(items.includes('normalise') && items.includes('state_machines') && items.includes('layers'), items.join());
+    // A behaviour's keys.
+    edited = text.replace('      head_control: {type: soccer.HeadControl}', '      head_control:\n        ty');
+    items = await labels(edited, positionOf(edited, '        ty', { skip: 10 }));
+    assert.ok(items.includes('type') && items.includes('params') && items.includes('ports'), items.join());
+    // Class names after `type:`, with their description.
+    edited = text.replace('head_control: {type: soccer.HeadControl}', 'head_control:\n        type: soc');
+    await client.change(uri, edited);
+    const classes = await client.request('textDocument/completion',
+      { textDocument: { uri }, position: positionOf(edited, 'type: soc', { skip: 9 }) });
+    const kick = classes.items.find((i) => i.label === 'soccer.KickBall');
+    assert.ok(kick, classes.items.map((i) => i.label).join());
+    assert.match(kick.documentation.value, /\*\*soccer.KickBall\*\*/);
+    // Behaviour names of the layer after `=>`.
+    edited = text.replace('search_for_ball -> head_control', 'search_for_ball -> he');
+    items = await labels(edited, positionOf(edited, '-> he', { skip: 5 }));
+    assert.deepEqual(items.sort(), ['go_behind_ball', 'head_control', 'kick_ball', 'search_for_ball']);
+    // Actuators as sensors.
+    edited = text.replace('sensors: [ball_visible, ball_position, robot_pose]', 'sensors: [ball_visible, ]');
+    items = await labels(edited, positionOf(edited, 'ball_visible, ]', { skip: 14 }));
+    assert.ok(items.includes('ball_position') && items.includes('gait_velocity'), items.join());
+  });
+});
+
+test('completion in JSON offers a layer\'s keys and a params key of the class', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = json();
+    await client.open(uri, text);
+    const edited = text.replace('"params": {"activation": 1, "writes": {"head_angle": -0.5}}',
+      '"params": {"activation": 1, "writes": {"head_angle": -0.5}, "}');
+    await client.change(uri, edited);
+    const result = await client.request('textDocument/completion',
+      { textDocument: { uri }, position: positionOf(edited, '-0.5}, "}', { skip: 8 }) });
+    const labels = result.items.map((i) => i.label);
+    assert.ok(labels.includes('activation') && labels.includes('writes'), labels.join());
+  });
+});
+
+test('state names complete in a queue and go to their declaration', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = read('configs/paper/goalie_plan.yaml');
+    assert.deepEqual(await client.open(uri, text), []);
+    const edited = text.replace('      - monitor_ball\n', '      - monitor_ball\n      - wal\n');
+    await client.change(uri, edited);
+    const result = await client.request('textDocument/completion',
+      { textDocument: { uri }, position: positionOf(edited, '      - wal\n', { skip: 11 }) });
+    assert.ok(result.items.some((i) => i.label === 'walk_to_pose'), JSON.stringify(result.items));
+    await client.change(uri, text);
+    const definition = await client.request('textDocument/definition',
+      { textDocument: { uri }, position: positionOf(text, '- walk_to_pose', { skip: 2 }) });
+    assert.deepEqual(definition.range, rangeOf(text, 'walk_to_pose: {type', { length: 12 }));
+  });
+});
+
+test('a file that does not parse gets its syntax error located and keeps completion', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const broken = text.replace('      kick: {type: bool}', '      kick: {type: bool\n      x: ]');
+    const diagnostics = await client.change(uri, broken);
+    assert.equal(diagnostics.length, 1, JSON.stringify(diagnostics));
+    assert.equal(diagnostics[0].source, 'arbiter');
+    assert.ok(diagnostics[0].range.start.line >= positionOf(broken, 'kick: {type: bool').line);
+    const edited = broken.replace('search_for_ball -> head_control', 'search_for_ball -> he');
+    await client.change(uri, edited);
+    const result = await client.request('textDocument/completion',
+      { textDocument: { uri }, position: positionOf(edited, '-> he', { skip: 5 }) });
+    assert.ok(result.items.some((i) => i.label === 'head_control'));
+  });
+});
+
+test("an included file's diagnostics are published on that file, and its open buffer wins over the disk", async () => {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'arbiter-lsp-'));
+  try {
+    const main = path.join(dir, 'main.yaml');
+    const part = path.join(dir, 'part.yaml');
+    const mainText = 'arbiter: 1\nname: m\ninclude: [part.yaml]\nlayers:\n  - name: control\n    actuators:\n      speed: {type: double}\n    behaviours:\n      a: {type: scripted, params: {activation: 1}}\n';
+    const partText = 'arbiter: 1\nlayers:\n  - name: other\n    actuators:\n      size: {type: double}\n    behaviours:\n      b: {type: scripted, params: {activation: 1}}\n';
+    fs.writeFileSync(main, mainText);
+    fs.writeFileSync(part, partText);
+    await withClient(async (client) => {
+      assert.deepEqual(await client.open(uriOf(main), mainText), []);
+      const [definition] = [await client.request('textDocument/definition',
+        { textDocument: { uri: uriOf(main) }, position: positionOf(mainText, 'part.yaml', { skip: 1 }) })];
+      assert.equal(definition.uri, uriOf(part));
+      // The included file opened and broken in the editor (not on disk).
+      const partBroken = partText.replace('type: scripted', 'type: scriptd');
+      const published = client.published(uriOf(part));
+      await client.connection.sendNotification('textDocument/didOpen',
+        { textDocument: { uri: uriOf(part), languageId: 'yaml', version: 1, text: partBroken } });
+      const diagnostics = await published;
+      assert.equal(diagnostics.length, 1, JSON.stringify(diagnostics));
+      assert.equal(diagnostics[0].code, 'unknown-class');
+      assert.deepEqual(diagnostics[0].range, rangeOf(partBroken, 'scriptd'));
+      assert.deepEqual(client.diagnostics.get(uriOf(main)), []);
+      assert.deepEqual(await client.change(uriOf(part), partText, uriOf(part)), []);
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('a position after a non-ASCII character counts UTF-16 units', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    const broken = text.replace('      kick_ball: {type: soccer.KickBall}', '      kick_ball: {type: soccer.KickBall}  # 🦶 kick\n      kick_bal2: {type: soccer.KickBal}');
+    const diagnostics = await client.open(uri, broken);
+    const unknown = diagnostics.find((d) => d.code === 'unknown-class');
+    assert.ok(unknown, JSON.stringify(diagnostics));
+    assert.deepEqual(unknown.range, rangeOf(broken, 'soccer.KickBal}', { length: 14 }));
+  });
+});
+
+test('malformed messages get JSON-RPC errors and the server keeps serving', async () => {
+  const client = new Client();
+  const before = client.request('textDocument/hover', { textDocument: { uri: 'file:///x.yaml' }, position: { line: 0, character: 0 } });
+  await assert.rejects(before, (error) => error.code === -32002);
+  await client.start();
+  await assert.rejects(client.request('arbiter/nonsense', {}), (error) => error.code === -32601);
+  await assert.rejects(client.request('textDocument/hover', { position: 3 }), (error) => error.code === -32602);
+  // Raw bytes: invalid JSON, then a frame without Content-Length.
+  client.process.stdin.write('Content-Length: 5\r\n\r\n{bad}');
+  client.process.stdin.write('X-Nothing: 1\r\n\r\n');
+  const { uri, text } = yaml();
+  assert.deepEqual(await client.open(uri, text), []);
+  assert.equal(await client.stop(), 0);
+  assert.doesNotMatch(client.stderr, /terminate|Segmentation/);
+});
+
+test('exit without shutdown ends with status 1', async () => {
+  const client = new Client();
+  await client.start();
+  await client.connection.sendNotification('exit');
+  assert.equal(await client.exited, 1);
+  client.connection.dispose();
+});
