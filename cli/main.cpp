@@ -24,6 +24,7 @@
 #include "arbiter/program.hpp"
 #include "arbiter/schema.hpp"
 #include "arbiter/trace.hpp"
+#include "arbiter/trace_reader.hpp"
 #include "builtins.hpp"
 #include "plot.hpp"
 #include "run_report.hpp"
@@ -210,15 +211,21 @@ int explain(const Options& options) {
   auto registry = make_registry();
   auto program = load_or_report(options.file, registry, options);
   if (!program) return kExitInvalid;
-  std::ifstream trace(options.trace_path, std::ios::binary);
-  if (!trace) {
+  if (!std::ifstream(options.trace_path, std::ios::binary)) {
     std::cerr << fmt::format("arbiter explain: cannot read trace '{}'\n", options.trace_path);
     return kExitUsage;
   }
-  const auto explanation = arbiter::explain(*program, trace, options.step, options.target);
+  const auto trace = arbiter::open_trace(options.trace_path);
+  const auto explanation = arbiter::explain(*program, *trace, options.step, options.target);
   if (explanation.status == arbiter::Explanation::Status::kOk) {
     std::cout << explanation.text;
     return kExitOk;
+  }
+  if (explanation.where) {
+    std::cerr << arbiter::format(arbiter::Diagnostic{*explanation.where, arbiter::Severity::kError,
+                                                     "bad-trace", explanation.text,
+                                                     explanation.notes});
+    return kExitInvalid;
   }
   std::cerr << fmt::format("arbiter explain: {}\n", explanation.text);
   for (const auto& note : explanation.notes) std::cerr << fmt::format("  note: {}\n", note);
