@@ -46,6 +46,8 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     err << error << "\n";
     return 1;
   }
+  if (!trace->truncated.empty())
+    err << fmt::format("{}: warning: {}\n", trace_path, trace->truncated);
   if (const auto header = check_trace_header(program, trace->header_line);
       header.status != Explanation::Status::kOk) {
     err << fmt::format("{}:1:1: error: {}\n", trace_path, header.text);

@@ -4,7 +4,10 @@
 
 #include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
+
+#include "mcap.hpp"
 
 namespace arbiter {
 
@@ -55,6 +58,53 @@ class JsonlFileSource : public JsonlSource {
 
  private:
   std::unique_ptr<std::ifstream> owned_;
+};
+
+/// A recording: its header messages (the first and each reload's) and step messages, in order.
+class McapSource : public TraceSource {
+ public:
+  McapSource(std::string bytes, std::string file)
+      : reader_(std::move(bytes)), file_(std::move(file)) {}
+
+  bool next(TraceRecord& record) override {
+    if (error()) return false;
+    mcap::Record message;
+    while (reader_.next(message)) {
+      if (message.kind != mcap::Record::Kind::kMessage) continue;
+      if (message.topic != "/arbiter/header" && message.topic != "/arbiter/step") continue;
+      record.text = std::move(message.data);
+      record.location = {file_, 0, 0};
+      if (!accept(record)) {
+        fail_at(message.offset);
+        return false;
+      }
+      last_step_ = record.kind == TraceRecord::Kind::kStep ? record.step : last_step_;
+      return true;
+    }
+    if (!reader_.error().empty()) {
+      fail({file_, 0, 0}, reader_.error());
+      return false;
+    }
+    if (reader_.truncated()) {
+      set_truncated(fmt::format(
+          "the recording was cut off while it was written: it ends after step {} (byte {}); "
+          "what the run did after that is lost",
+          last_step_, reader_.good_until()));
+    }
+    return end({file_, 0, 0});
+  }
+
+ private:
+  /// The record's own error, told with the byte of its chunk.
+  void fail_at(std::uint64_t offset) {
+    auto problem = *error();
+    reset_error();
+    fail(problem.location, fmt::format("at byte {}: {}", offset, problem.message), problem.notes);
+  }
+
+  mcap::Reader reader_;
+  std::string file_;
+  std::uint64_t last_step_ = 0;
 };
 
 class UnreadableSource : public TraceSource {
@@ -135,6 +185,18 @@ std::unique_ptr<TraceSource> jsonl_trace_source(std::istream& in, std::string fi
 std::unique_ptr<TraceSource> open_trace(const std::string& path) {
   auto in = std::make_unique<std::ifstream>(path, std::ios::binary);
   if (!*in) return std::make_unique<UnreadableSource>(path);
+  char magic[mcap::kMagic.size()] = {};
+  in->read(magic, sizeof(magic));
+  const auto got = static_cast<std::size_t>(in->gcount());
+  if (got > 0 && std::string_view(magic, got) == mcap::kMagic.substr(0, got) &&
+      (got == sizeof(magic) || magic[0] == mcap::kMagic[0])) {
+    in->seekg(0);
+    in->clear();
+    std::string bytes((std::istreambuf_iterator<char>(*in)), std::istreambuf_iterator<char>());
+    return std::make_unique<McapSource>(std::move(bytes), path);
+  }
+  in->clear();
+  in->seekg(0);
   return std::make_unique<JsonlFileSource>(std::move(in), path);
 }
 
