@@ -31,7 +31,7 @@ _arbiter() {
   local cur prev command word i
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
-  local commands="validate run dump explain plugins schema view plot"
+  local commands="validate run dump explain plugins schema view plot replay diff"
   local global="--help --version --log-level --plugin-path --max-file-bytes"
 
   command=""
@@ -53,7 +53,15 @@ _arbiter() {
         *) mapfile -t COMPREPLY < <(compgen -W "text json" -- "$cur") ;;
       esac
       return ;;
-    --trace) mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$'); return ;;
+    --trace)
+      case "$command" in
+        explain | view) mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$') ;;
+        *) mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$') ;;
+      esac
+      return ;;
+    --record) mapfile -t COMPREPLY < <(_arbiter_files '\.mcap$'); return ;;
+    --config) mapfile -t COMPREPLY < <(_arbiter_files '\.(yaml|yml|json)$'); return ;;
+    --tolerance) return ;;
     --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
     --steps | --step | --load | --serve) return ;;
     --output | -o) mapfile -t COMPREPLY < <(_arbiter_files '\.svg$'); return ;;
@@ -71,11 +79,13 @@ _arbiter() {
   local options
   case "$command" in
     validate) options="--format --strict --help" ;;
-    run) options="--steps --trace --quiet --realtime --strict --serve --paused --watch --help" ;;
+    run) options="--steps --trace --record --quiet --realtime --strict --serve --paused --watch --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
     view) options="--trace --serve --help" ;;
     plot) options="--output --actuators --help" ;;
+    replay) options="--config --trace --record --steps --help" ;;
+    diff) options="--tolerance --format --help" ;;
     plugins) options="--format --load --builtin --help" ;;
     schema) options="--load --builtin --help" ;;
   esac
@@ -85,8 +95,11 @@ _arbiter() {
   fi
   case "$command" in
     plugins | schema) return ;;
-    plot)
-      mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$')
+    plot | diff)
+      mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$')
+      return ;;
+    replay)
+      mapfile -t COMPREPLY < <(_arbiter_files '\.mcap$')
       return ;;
     explain)
       if [[ -n $(_arbiter_config_of) ]]; then
