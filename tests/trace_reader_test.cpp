@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "arbiter/explain.hpp"
+#include "arbiter/trace_diff.hpp"
 #include "arbiter/trace_reader.hpp"
 #include "test_support.hpp"
 
@@ -90,4 +91,42 @@ TEST_CASE("explain reports an unreadable record where the reader found it", "[tr
   REQUIRE(result.where);
   CHECK(result.where->line == 3);
   CHECK(result.text.rfind("not JSON: ", 0) == 0);
+}
+
+TEST_CASE("a recording reads as the trace of the same run, each step with its time",
+          "[trace_reader]") {
+  const auto dir = fs::path(ARBITER_SOURCE_DIR) / "tests/data/traces";
+  Diagnostic error;
+  const auto trace = read_trace((dir / "walk_and_kick.jsonl").string(), error);
+  REQUIRE(trace);
+  const auto recording = read_trace((dir / "walk_and_kick.mcap").string(), error);
+  REQUIRE(recording);
+  CHECK(recording->header.text == trace->header.text);
+  REQUIRE(recording->steps.size() == trace->steps.size());
+  for (std::size_t i = 0; i < trace->steps.size(); ++i) {
+    std::string text = recording->steps[i].text;
+    const auto t = text.find(", \"t\": ");
+    REQUIRE(t != std::string::npos);
+    text.erase(t, text.find(',', t + 1) - t);
+    CHECK(text == trace->steps[i].text);
+  }
+  CHECK(recording->truncated.empty());
+  CHECK(diff_traces(*trace, *recording).identical);
+}
+
+TEST_CASE("a recording cut anywhere reads up to its last whole chunk and says it was cut",
+          "[trace_reader]") {
+  const auto bytes =
+      read_text(fs::path(ARBITER_SOURCE_DIR) / "tests/data/traces/walk_and_kick.mcap");
+  REQUIRE(bytes.size() > 1000);
+  for (std::size_t cut = 1; cut < bytes.size() - 8; cut += 97) {
+    const auto source = trace_source(bytes.substr(0, cut), "cut.mcap");
+    Diagnostic error;
+    const auto trace = read_trace(*source, error);
+    if (trace && trace->steps.size() < 12) {
+      CHECK(trace->truncated.rfind("the recording was cut off while it was written", 0) == 0);
+    } else if (!trace) {
+      CHECK(format(error) == "cut.mcap: error: the trace is empty\n");
+    }
+  }
 }

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "mcap.hpp"
 
@@ -51,13 +52,16 @@ class JsonlSource : public TraceSource {
   std::size_t line_ = 0;
 };
 
-class JsonlFileSource : public JsonlSource {
+/// A JSON-lines trace held in memory.
+class JsonlTextSource : public JsonlSource {
  public:
-  JsonlFileSource(std::unique_ptr<std::ifstream> in, std::string file)
-      : JsonlSource(*in, std::move(file)), owned_(std::move(in)) {}
+  JsonlTextSource(std::string text, std::string file)
+      : JsonlTextSource(std::make_unique<std::istringstream>(std::move(text)), std::move(file)) {}
 
  private:
-  std::unique_ptr<std::ifstream> owned_;
+  JsonlTextSource(std::unique_ptr<std::istringstream> in, std::string file)
+      : JsonlSource(*in, std::move(file)), owned_(std::move(in)) {}
+  std::unique_ptr<std::istringstream> owned_;
 };
 
 /// A recording: its header messages (the first and each reload's) and step messages, in order.
@@ -182,22 +186,21 @@ std::unique_ptr<TraceSource> jsonl_trace_source(std::istream& in, std::string fi
   return std::make_unique<JsonlSource>(in, std::move(file));
 }
 
-std::unique_ptr<TraceSource> open_trace(const std::string& path) {
-  auto in = std::make_unique<std::ifstream>(path, std::ios::binary);
-  if (!*in) return std::make_unique<UnreadableSource>(path);
-  char magic[mcap::kMagic.size()] = {};
-  in->read(magic, sizeof(magic));
-  const auto got = static_cast<std::size_t>(in->gcount());
-  if (got > 0 && std::string_view(magic, got) == mcap::kMagic.substr(0, got) &&
-      (got == sizeof(magic) || magic[0] == mcap::kMagic[0])) {
-    in->seekg(0);
-    in->clear();
-    std::string bytes((std::istreambuf_iterator<char>(*in)), std::istreambuf_iterator<char>());
-    return std::make_unique<McapSource>(std::move(bytes), path);
+std::unique_ptr<TraceSource> trace_source(std::string bytes, std::string file) {
+  if (bytes.size() >= mcap::kMagic.size()
+          ? std::string_view(bytes).substr(0, mcap::kMagic.size()) == mcap::kMagic
+          : !bytes.empty() && mcap::kMagic.substr(0, bytes.size()) == bytes) {
+    return std::make_unique<McapSource>(std::move(bytes), std::move(file));
   }
-  in->clear();
-  in->seekg(0);
-  return std::make_unique<JsonlFileSource>(std::move(in), path);
+  return std::make_unique<JsonlTextSource>(std::move(bytes), std::move(file));
+}
+
+std::unique_ptr<TraceSource> open_trace(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::make_unique<UnreadableSource>(path);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) return std::make_unique<UnreadableSource>(path);
+  return trace_source(std::move(bytes), path);
 }
 
 std::optional<Trace> read_trace(TraceSource& source, Diagnostic& error) {

@@ -60,6 +60,10 @@ class TraceSource {
 /// The JSON-lines trace in `in`, named `file` in errors. `in` must outlive the source.
 std::unique_ptr<TraceSource> jsonl_trace_source(std::istream& in, std::string file);
 
+/// The trace or recording in `bytes`, named `file` in errors: an MCAP recording when it starts
+/// with MCAP's magic (or is a piece of it: a recording cut off at once), else JSON lines.
+std::unique_ptr<TraceSource> trace_source(std::string bytes, std::string file);
+
 /// The trace or recording at `path`, by its content: an MCAP recording starts with MCAP's magic,
 /// anything else is read as JSON lines. A file that cannot be opened gives a source whose first
 /// next() fails with the reason.
