@@ -60,6 +60,7 @@ _arbiter() {
       esac
       return ;;
     --record) mapfile -t COMPREPLY < <(_arbiter_files '\.mcap$'); return ;;
+    --compare) mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$'); return ;;
     --config) mapfile -t COMPREPLY < <(_arbiter_files '\.(yaml|yml|json)$'); return ;;
     --tolerance) return ;;
     --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
@@ -83,7 +84,7 @@ _arbiter() {
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
     view) options="--trace --serve --help" ;;
-    plot) options="--output --actuators --help" ;;
+    plot) options="--output --actuators --compare --help" ;;
     replay) options="--config --trace --record --steps --help" ;;
     diff) options="--tolerance --format --help" ;;
     plugins) options="--format --load --builtin --help" ;;

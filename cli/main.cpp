@@ -67,7 +67,8 @@ struct Options {
   std::string recording;    ///< `replay RUN.mcap`
   std::string diff_a;       ///< `diff A B`
   std::string diff_b;
-  double tolerance = 1e-9;  ///< `diff --tolerance`
+  double tolerance = 1e-9;   ///< `diff --tolerance`
+  std::string compare_path;  ///< `plot --compare`
 };
 
 constexpr const char* kVersion = "0.1.0";
@@ -362,6 +363,15 @@ int plot(const Options& options) {
   }
   arbiter::cli::PlotOptions plot_options;
   plot_options.actuators = options.actuators;
+  std::optional<arbiter::cli::TraceFile> compare;  // --compare
+  if (!options.compare_path.empty()) {
+    compare = arbiter::cli::read_trace_file(options.compare_path, error);
+    if (!compare) {
+      std::cerr << error << "\n";
+      return kExitInvalid;
+    }
+    plot_options.compare = &*compare;
+  }
   const std::string svg = arbiter::cli::plot_svg(*trace, plot_options);
   if (options.output.empty() || options.output == "-") {
     std::cout << svg;
@@ -594,12 +604,19 @@ int main(int argc, char** argv) {
   plot_cmd->add_option("--output,-o", options.output, "the SVG file to write (default: stdout)")
       ->type_name("FILE");
   plot_cmd->add_flag("--actuators", options.actuators, "add a row per actuator with its value");
+  plot_cmd
+      ->add_option("--compare", options.compare_path,
+                   "a second run (trace or recording): its row of each behaviour under the "
+                   "first's, the steps where they differ shaded")
+      ->check(CLI::ExistingFile)
+      ->type_name("B");
   plot_cmd->footer(
       std::string(
           "Examples:\n"
           "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
           "  arbiter plot run.jsonl -o timeline.svg\n"
-          "  arbiter plot run.jsonl --actuators > timeline.svg\n\n") +
+          "  arbiter plot run.jsonl --actuators > timeline.svg\n"
+          "  arbiter plot run.mcap --compare what_if.mcap -o compare.svg\n\n") +
       kExitCodesTrace);
 
   auto* replay_cmd = app.add_subcommand(

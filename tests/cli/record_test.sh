@@ -59,6 +59,13 @@ ARBITER_PLUGIN_PATH=$test_plugins expect_exit 1 "$cli" replay "$work/counter.mca
 grep -qx "$source_dir/tests/data/replay/counter_renamed.yaml:3:1: error: recorded input 'count' has no place in this config: no interface layer declares an actuator 'count'" \
   "$work/err.txt" || fail "a recorded input without a place"
 
+# Two runs on one timeline: the second run's row under each behaviour's, divergent steps shaded.
+expect_exit 0 "$cli" plot "$work/run.mcap" --compare "$work/no_kick.mcap" -o "$work/compare.svg"
+[[ $(grep -o 'class="row behaviour compared" data-name="control/kick_ball"' "$work/compare.svg" | wc -l) -eq 1 ]] ||
+  fail "no second row for kick_ball"
+[[ $(grep -o '<title>step 171: the runs differ</title>' "$work/compare.svg" | wc -l) -eq 2 ]] ||
+  fail "the divergent steps are not marked"
+
 # A behaviour that is not deterministic is caught and named.
 ARBITER_PLUGIN_PATH=$test_plugins expect_exit 0 "$cli" run \
   "$source_dir/tests/data/replay/unsteady.yaml" --steps 20 -q --record "$work/unsteady.mcap"
