@@ -76,7 +76,7 @@ grep -qx "$work/unsteady.mcap: error: the replay differs from the recording at s
 # Cut off while written: readable up to its last complete chunk, and every reader says so.
 "$cli" run "$config" --steps 100000000 -q --record "$work/cut.mcap" >/dev/null 2>&1 &
 pid=$!
-for _ in $(seq 1 200); do
+for _ in $(seq 1 600); do  # up to 30 s on a busy machine
   [[ $(stat -c %s "$work/cut.mcap" 2>/dev/null || echo 0) -gt 300000 ]] && break
   sleep 0.05
 done
