@@ -91,7 +91,7 @@ grep -q "warning: the recording was cut off" "$work/err.txt" || fail "diff of a 
 expect_exit 0 "$cli" plot "$work/cut.mcap" -o "$work/cut.svg"
 grep -q "warning: the recording was cut off" "$work/err.txt" || fail "plot of a cut recording"
 set +e
-timeout 5 "$cli" view "$config" --trace "$work/cut.mcap" --serve 0 >"$work/out.txt" 2>"$work/err.txt"
+timeout -s KILL 5 "$cli" view "$config" --trace "$work/cut.mcap" --serve 0 >"$work/out.txt" 2>"$work/err.txt"
 set -e
 grep -q "warning: the recording was cut off" "$work/err.txt" || fail "view of a cut recording"
 
