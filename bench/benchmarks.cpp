@@ -12,9 +12,11 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 
 #include "arbiter/lint.hpp"
 #include "arbiter/manager.hpp"
+#include "arbiter/recording.hpp"
 #include "benchmarks.hpp"
 #include "generator.hpp"
 #include "support.hpp"
@@ -64,6 +66,70 @@ void step(benchmark::State& state, Graph graph, const std::string& behaviour_cla
   state.counters["closure"] = static_cast<double>(manager.program().inhibitions.size());
   state.counters["terms"] =
       static_cast<double>(manager.program().inhibitions.recipes().terms.size());
+}
+
+/// The step with a Recorder attached, against the same graph without (the stepping thread's CPU
+/// time only: the writer thread compresses on another core). `soccer`: the soccer demo (its
+/// plugin built beside), else the generated `graph` of N behaviours.
+void record(benchmark::State& state, Graph graph, bool soccer) {
+  std::optional<Program> programs[2];
+  Registry soccer_registry = make_registry();
+  for (auto& program : programs) {
+    if (soccer) {
+      Diagnostics diagnostics;
+      LoadOptions options;
+      options.plugins.path = {ARBITER_BENCH_PLUGIN_DIR};
+      program = load(ARBITER_BENCH_SOCCER, soccer_registry, diagnostics, options);
+      if (!program) {
+        state.SkipWithError("the soccer demo does not load (is its plugin built?)");
+        return;
+      }
+    } else {
+      GeneratorOptions options;
+      options.graph = graph;
+      options.behaviours = static_cast<std::size_t>(state.range(0));
+      options.behaviour_class = kTrivial;
+      program = compile_text(generate_config(options), registry());
+    }
+  }
+  Manager plain(std::move(*programs[0]), quiet());
+  Manager recorded(std::move(*programs[1]), quiet());
+  const auto path = std::filesystem::temp_directory_path() / "arbiter_bench_record.mcap";
+  RecordingInfo info;
+  info.version = "bench";
+  std::uint64_t steps = 0;
+  std::uint64_t dropped = 0;
+  double plain_ns = 0.0;
+  double recorded_ns = 0.0;
+  {
+    Recorder recorder(path.string(), info, 1024);
+    recorded.add_observer(recorder);
+    plain.step();
+    recorded.step();
+    double plain_total = 0.0;
+    double recorded_total = 0.0;
+    for (auto _ : state) {
+      double start = cpu_seconds();
+      plain.step();
+      plain_total += cpu_seconds() - start;
+      start = cpu_seconds();
+      recorded.step();
+      recorded_total += cpu_seconds() - start;
+    }
+    recorded.finish();
+    steps = recorded.steps();
+    dropped = recorder.dropped();
+    const auto n = static_cast<double>(std::max<std::int64_t>(state.iterations(), 1));
+    plain_ns = plain_total * 1e9 / n;
+    recorded_ns = recorded_total * 1e9 / n;
+  }
+  state.counters["ns_per_step"] = plain_ns;
+  state.counters["recorded_ns_per_step"] = recorded_ns;
+  state.counters["overhead"] = plain_ns > 0.0 ? recorded_ns / plain_ns - 1.0 : 0.0;
+  state.counters["bytes_per_step"] =
+      static_cast<double>(std::filesystem::file_size(path)) / static_cast<double>(steps);
+  state.counters["dropped"] = static_cast<double>(dropped);
+  std::filesystem::remove(path);
 }
 
 const char* const kPlan = R"(arbiter: 1
@@ -213,6 +279,12 @@ void register_benchmarks() {
         ->ComputeStatistics("min", fastest)
         ->Arg(1000);
   }
+  benchmark::RegisterBenchmark("record/layers", record, Graph::kLayers, false)
+      ->ComputeStatistics("min", fastest)
+      ->Arg(1000);
+  benchmark::RegisterBenchmark("record/soccer", record, Graph::kLayers, true)
+      ->ComputeStatistics("min", fastest)
+      ->MinTime(0.2);
   benchmark::RegisterBenchmark("scl/replan5", scl, std::string("bench.Proceed"))
       ->ComputeStatistics("min", fastest);
   benchmark::RegisterBenchmark("scl/replan5_scripted", scl, std::string("scripted"))

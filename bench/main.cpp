@@ -141,6 +141,11 @@ int check_targets(const Collector& collector, std::ostream& out) {
       check(name + ": heap bytes per behaviour", counter(name, "bytes_per_behaviour"), 500.0, "B");
     }
   }
+  check("record/layers/1000: recording overhead per step",
+        counter("record/layers/1000", "overhead"), 0.10, "x");
+  check("record/soccer: recording overhead per step", counter("record/soccer", "overhead"), 0.10,
+        "x");
+  check("record/soccer: bytes per step", counter("record/soccer", "bytes_per_step"), 200.0, "B");
   if (any) {
     out << (missed == 0 ? "every target that ran is met\n"
                         : fmt::format("{} target(s) missed\n", missed));

@@ -31,7 +31,7 @@ _arbiter() {
   local cur prev command word i
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
-  local commands="validate run dump explain test plugins schema view plot lsp"
+  local commands="validate run dump explain test plugins schema view plot replay diff lsp"
   local global="--help --version --log-level --plugin-path --max-file-bytes"
 
   command=""
@@ -53,9 +53,18 @@ _arbiter() {
         *) mapfile -t COMPREPLY < <(compgen -W "text json" -- "$cur") ;;
       esac
       return ;;
-    --trace) mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$'); return ;;
+    --trace)
+      case "$command" in
+        explain | view) mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$') ;;
+        *) mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$') ;;
+      esac
+      return ;;
+    --record) mapfile -t COMPREPLY < <(_arbiter_files '\.mcap$'); return ;;
+    --compare) mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$'); return ;;
+    --config) mapfile -t COMPREPLY < <(_arbiter_files '\.(yaml|yml|json)$'); return ;;
+    --tolerance) return ;;
     --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
-    --steps | --step | --load | --serve | --serve-token | --rt-priority | --tolerance) return ;;
+    --steps | --step | --load | --serve | --serve-token | --rt-priority) return ;;
     --junit) mapfile -t COMPREPLY < <(_arbiter_files '\.xml$'); return ;;
     --output | -o) mapfile -t COMPREPLY < <(_arbiter_files '\.svg$'); return ;;
   esac
@@ -72,12 +81,14 @@ _arbiter() {
   local options
   case "$command" in
     validate) options="--format --strict --help" ;;
-    run) options="--steps --trace --quiet --realtime --strict --serve --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --help" ;;
+    run) options="--steps --trace --record --quiet --realtime --strict --serve --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
     test) options="--junit --tolerance --help" ;;
     view) options="--trace --serve --help" ;;
-    plot) options="--output --actuators --help" ;;
+    plot) options="--output --actuators --compare --help" ;;
+    replay) options="--config --trace --record --steps --help" ;;
+    diff) options="--tolerance --format --help" ;;
     plugins) options="--format --load --builtin --help" ;;
     schema) options="--load --builtin --help" ;;
     lsp) options="--help" ;;
@@ -88,8 +99,11 @@ _arbiter() {
   fi
   case "$command" in
     plugins | schema | lsp) return ;;
-    plot)
-      mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$')
+    plot | diff)
+      mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$')
+      return ;;
+    replay)
+      mapfile -t COMPREPLY < <(_arbiter_files '\.mcap$')
       return ;;
     test)
       mapfile -t COMPREPLY < <(_arbiter_files '\.test\.(yaml|yml|json)$')

@@ -25,9 +25,11 @@
 #include "arbiter/program.hpp"
 #include "arbiter/schema.hpp"
 #include "arbiter/trace.hpp"
+#include "arbiter/trace_reader.hpp"
 #include "builtins.hpp"
 #include "lsp/server.hpp"
 #include "plot.hpp"
+#include "record.hpp"
 #include "run_report.hpp"
 #include "serve.hpp"
 #include "test_command.hpp"
@@ -69,7 +71,16 @@ struct Options {
   int rt_priority = 0;             ///< `run --rt-priority`; 0: normal scheduling
   std::string serve_token;  ///< `run --serve-token` (or ARBITER_SERVE_TOKEN); empty: a random one
   bool serve_readonly = false;
+  std::string record_path;  ///< `run --record`, `replay --record`
+  std::string config;       ///< `replay --config`
+  std::string recording;    ///< `replay RUN.mcap`
+  std::string diff_a;       ///< `diff A B`
+  std::string diff_b;
+  double tolerance = 1e-9;   ///< `diff --tolerance`
+  std::string compare_path;  ///< `plot --compare`
 };
+
+constexpr const char* kVersion = "0.1.0";
 
 arbiter::Registry make_registry() {
   arbiter::Registry registry;
@@ -225,15 +236,21 @@ int explain(const Options& options) {
   auto registry = make_registry();
   auto program = load_or_report(options.file, registry, options);
   if (!program) return kExitInvalid;
-  std::ifstream trace(options.trace_path, std::ios::binary);
-  if (!trace) {
+  if (!std::ifstream(options.trace_path, std::ios::binary)) {
     std::cerr << fmt::format("arbiter explain: cannot read trace '{}'\n", options.trace_path);
     return kExitUsage;
   }
-  const auto explanation = arbiter::explain(*program, trace, options.step, options.target);
+  const auto trace = arbiter::open_trace(options.trace_path);
+  const auto explanation = arbiter::explain(*program, *trace, options.step, options.target);
   if (explanation.status == arbiter::Explanation::Status::kOk) {
     std::cout << explanation.text;
     return kExitOk;
+  }
+  if (explanation.where) {
+    std::cerr << arbiter::format(arbiter::Diagnostic{*explanation.where, arbiter::Severity::kError,
+                                                     "bad-trace", explanation.text,
+                                                     explanation.notes});
+    return kExitInvalid;
   }
   std::cerr << fmt::format("arbiter explain: {}\n", explanation.text);
   for (const auto& note : explanation.notes) std::cerr << fmt::format("  note: {}\n", note);
@@ -276,6 +293,17 @@ int run(const Options& options) {
   manager.add_observer(report);
   std::optional<arbiter::cli::Watcher> watcher;
   if (options.watch) watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet);
+  std::unique_ptr<arbiter::Recorder> recorder;  // --record
+  if (!options.record_path.empty()) {
+    recorder = std::make_unique<arbiter::Recorder>(
+        options.record_path,
+        arbiter::cli::recording_info(options.file, registry, load_options_of(options), kVersion));
+    if (!recorder->ok()) {
+      std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);
+      return kExitUsage;
+    }
+    manager.add_observer(*recorder);
+  }
   std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
   if (!options.serve.empty()) {
     arbiter::cli::LiveAccess access;
@@ -333,6 +361,13 @@ int run(const Options& options) {
   }
   watcher.reset();
   manager.finish();  // outputs the safe values, whatever ended the run
+  manager.finish();
+  if (recorder && recorder->dropped() > 0) {
+    std::cerr << fmt::format(
+        "arbiter run: the recording dropped {} steps (the disk kept up too "
+        "slowly); each gap is recorded\n",
+        recorder->dropped());
+  }
   if (!options.quiet) {
     const double wall = std::chrono::duration<double>(Clock::now() - started).count();
     std::cout << fmt::format("{}simulated {:.2f} s at {} Hz in {:.3f} s of wall time{}\n",
@@ -373,8 +408,20 @@ int plot(const Options& options) {
     std::cerr << error << "\n";
     return kExitInvalid;
   }
+  if (!trace->truncated.empty()) {
+    std::cerr << fmt::format("{}: warning: {}\n", options.trace_path, trace->truncated);
+  }
   arbiter::cli::PlotOptions plot_options;
   plot_options.actuators = options.actuators;
+  std::optional<arbiter::cli::TraceFile> compare;  // --compare
+  if (!options.compare_path.empty()) {
+    compare = arbiter::cli::read_trace_file(options.compare_path, error);
+    if (!compare) {
+      std::cerr << error << "\n";
+      return kExitInvalid;
+    }
+    plot_options.compare = &*compare;
+  }
   const std::string svg = arbiter::cli::plot_svg(*trace, plot_options);
   if (options.output.empty() || options.output == "-") {
     std::cout << svg;
@@ -439,7 +486,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   // Global options also work after the command: `arbiter run FILE --plugin-path DIR`.
   app.fallthrough();
-  app.set_version_flag("--version", std::string("arbiter ") + "0.1.0");
+  app.set_version_flag("--version", std::string("arbiter ") + kVersion);
   Options options;
   app.add_option("--log-level", options.log_level,
                  "run-time log level: trace, debug, info, warn, error, off")
@@ -486,6 +533,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   run_cmd->add_option("--trace", options.trace_path,
                       "write a JSON-lines trace of every step to this file");
+  run_cmd
+      ->add_option("--record", options.record_path,
+                   "record the run as MCAP (steps, interface inputs, the config) for "
+                   "'arbiter replay', 'arbiter diff' and Foxglove")
+      ->type_name("RUN.mcap");
   run_cmd->add_flag("--quiet,-q", options.quiet, "print nothing but errors");
   run_cmd->add_flag("--realtime", options.realtime,
                     "pace the steps at the config's rate_hz instead of running flat out");
@@ -672,13 +724,65 @@ int main(int argc, char** argv) {
   plot_cmd->add_option("--output,-o", options.output, "the SVG file to write (default: stdout)")
       ->type_name("FILE");
   plot_cmd->add_flag("--actuators", options.actuators, "add a row per actuator with its value");
+  plot_cmd
+      ->add_option("--compare", options.compare_path,
+                   "a second run (trace or recording): its row of each behaviour under the "
+                   "first's, the steps where they differ shaded")
+      ->check(CLI::ExistingFile)
+      ->type_name("B");
   plot_cmd->footer(
       std::string(
           "Examples:\n"
           "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
           "  arbiter plot run.jsonl -o timeline.svg\n"
-          "  arbiter plot run.jsonl --actuators > timeline.svg\n\n") +
+          "  arbiter plot run.jsonl --actuators > timeline.svg\n"
+          "  arbiter plot run.mcap --compare what_if.mcap -o compare.svg\n\n") +
       kExitCodesTrace);
+
+  auto* replay_cmd = app.add_subcommand(
+      "replay",
+      "Run a recorded behaviour system again, as fast as it can, with every interface layer\n"
+      "replaced by the recorded inputs. Without --config it checks that the run repeats itself\n"
+      "(determinism); with --config it runs an edited graph on the same inputs (what if).");
+  replay_cmd->add_option("RUN", options.recording, "the recording (arbiter run --record)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  replay_cmd->add_option("--config", options.config, "an edited config to run instead")
+      ->check(CLI::ExistingPath)
+      ->type_name("FILE");
+  replay_cmd->add_option("--trace", options.trace_path, "write the replay's JSON-lines trace")
+      ->type_name("OUT.jsonl");
+  replay_cmd->add_option("--record", options.record_path, "record the replay as MCAP")
+      ->type_name("OUT.mcap");
+  replay_cmd->add_option("--steps", options.steps, "replay at most this many steps")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40));
+  replay_cmd->footer(
+      "Examples:\n"
+      "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --record run.mcap -q\n"
+      "  arbiter replay run.mcap                      # repeats the run exactly?\n"
+      "  arbiter replay run.mcap --config edited.yaml --record what_if.mcap\n"
+      "  arbiter diff run.mcap what_if.mcap\n\n"
+      "Exit codes: 0 ok (the replay matched, or the what-if ran), 1 the replay differs from the "
+      "recording or a config or recording is invalid, 2 usage error.");
+
+  auto* diff_cmd = app.add_subcommand(
+      "diff",
+      "Compare two runs, traces (.jsonl) or recordings (.mcap) in any mix, step by step: where\n"
+      "they first diverge, and per behaviour, actuator and state machine in how many steps.");
+  diff_cmd->add_option("A", options.diff_a, "the first run")->required()->check(CLI::ExistingFile);
+  diff_cmd->add_option("B", options.diff_b, "the second run")->required()->check(CLI::ExistingFile);
+  diff_cmd->add_option("--tolerance", options.tolerance, "numbers this close are equal")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  diff_cmd->add_option("--format", options.format, "text or json")
+      ->check(CLI::IsMember({"text", "json"}))
+      ->capture_default_str();
+  diff_cmd->footer(
+      "Examples:\n"
+      "  arbiter diff run.mcap what_if.mcap\n"
+      "  arbiter diff run.jsonl replay.jsonl --format json\n"
+      "  arbiter diff a.mcap b.mcap --tolerance 1e-6\n\n"
+      "Exit codes: 0 identical, 1 different, 2 usage error or unreadable input.");
 
   auto* plugins_cmd = app.add_subcommand(
       "plugins",
@@ -760,6 +864,22 @@ int main(int argc, char** argv) {
     if (test_cmd->parsed()) return test(options);
     if (view_cmd->parsed()) return view(options);
     if (plot_cmd->parsed()) return plot(options);
+    if (replay_cmd->parsed()) {
+      auto registry = make_registry();
+      arbiter::cli::ReplayOptions replay;
+      replay.recording = options.recording;
+      replay.config = options.config;
+      replay.trace = options.trace_path;
+      replay.record = options.record_path;
+      replay.steps = replay_cmd->count("--steps") > 0 ? options.steps : 0;
+      replay.load = load_options_of(options);
+      replay.version = kVersion;
+      return arbiter::cli::replay(replay, registry, std::cout, std::cerr);
+    }
+    if (diff_cmd->parsed()) {
+      return arbiter::cli::diff(options.diff_a, options.diff_b, options.tolerance, options.format,
+                                std::cout, std::cerr);
+    }
     if (plugins_cmd->parsed()) return plugins(options);
     if (schema_cmd->parsed()) return schema(options);
     if (lsp_cmd->parsed()) return lsp(options);

@@ -66,7 +66,13 @@ std::uint64_t tick_spacing(std::size_t steps) {
 class Plot {
  public:
   Plot(const TraceFile& trace)
-      : trace_(trace), n_(std::max<std::size_t>(trace.records.size(), 1)) {}
+      : trace_(&trace), n_(std::max<std::size_t>(trace.records.size(), 1)) {}
+
+  /// Draws `other`'s row of each behaviour under this trace's, with the steps where they differ.
+  void compare_with(const TraceFile& other) {
+    other_ = &other;
+    n_ = std::max<double>(n_, static_cast<double>(other.records.size()));
+  }
 
   double x(std::size_t index) const { return kLeft + kWidth * static_cast<double>(index) / n_; }
 
@@ -108,16 +114,43 @@ class Plot {
   }
 
   void behaviour(const std::string& layer, const std::string& name) {
+    behaviour_row(layer, name, name, "behaviour");
+    if (other_ == nullptr) return;
+    const TraceFile* first = trace_;
+    trace_ = other_;
+    const double top = behaviour_row(layer, name, name + " (B)", "behaviour compared");
+    trace_ = first;
+    // Steps where the two runs' active flag or activation differ, shaded on the second row.
+    const auto entry = [&](const TraceFile& trace, std::size_t i) -> const Json& {
+      return member(member(member(trace.records[i], "layers"), layer), name);
+    };
+    const std::size_t common = std::min(first->records.size(), other_->records.size());
+    for (std::size_t i = 0; i < common; ++i) {
+      const Json& a = entry(*first, i);
+      const Json& b = entry(*other_, i);
+      if ((member(a, "active") == true) == (member(b, "active") == true) &&
+          std::fabs(number_or(member(a, "activation"), 0.0) -
+                    number_or(member(b, "activation"), 0.0)) <= 1e-9) {
+        continue;
+      }
+      body_ += fmt::format(
+          R"(<rect class="divergent" x="{:.1f}" y="{:.1f}" width="{:.1f}" height="{}" fill="#ff7f0e" fill-opacity="0.45"><title>step {}: the runs differ</title></rect>)",
+          x(i), top, std::max(x(i + 1) - x(i), 1.0), kRow, step_at(i));
+    }
+  }
+
+  double behaviour_row(const std::string& layer, const std::string& name, const std::string& label,
+                       const std::string& kind) {
     std::vector<double> activation;
     std::vector<double> requested;
     std::vector<char> active;
-    for (const auto& record : trace_.records) {
+    for (const auto& record : trace_->records) {
       const Json& entry = member(member(member(record, "layers"), layer), name);
       activation.push_back(number_or(member(entry, "activation"), 0.0));
       requested.push_back(number_or(member(entry, "requested"), 0.0));
       active.push_back(member(entry, "active") == true ? 1 : 0);
     }
-    const double top = open_row("behaviour", layer + "/" + name, name);
+    const double top = open_row(kind, layer + "/" + name, label);
     body_ += fmt::format(R"(<path class="activation" d="{}" fill="#4c9be8" fill-opacity="0.55"/>)",
                          steps_path(activation, top, true));
     body_ += fmt::format(
@@ -143,6 +176,7 @@ class Plot {
           active[i] ? "activated" : "deactivated");
     }
     close_row();
+    return top;
   }
 
   void controller(const std::string& name) {
@@ -162,8 +196,8 @@ class Plot {
       }
       ++colour;
     };
-    for (std::size_t i = 0; i < trace_.records.size(); ++i) {
-      const Json& entry = member(member(trace_.records[i], "controllers"), name);
+    for (std::size_t i = 0; i < trace_->records.size(); ++i) {
+      const Json& entry = member(member(trace_->records[i], "controllers"), name);
       const Json& now = member(entry, "state");
       const std::string current = now.is_string() ? now.get<std::string>() : "";
       if (current != state) {
@@ -181,7 +215,7 @@ class Plot {
           R"(<line class="event" x1="{:.1f}" y1="{}" x2="{:.1f}" y2="{}" stroke="#333" stroke-width="1"><title>step {}: {}</title></line>)",
           x(i), top, x(i), top + 6, step_at(i), escape(text));
     }
-    segment(trace_.records.size());
+    segment(trace_->records.size());
     close_row();
   }
 
@@ -189,8 +223,8 @@ class Plot {
     // One series per component: a number or bool is one, a vector one per element.
     std::vector<std::vector<double>> series;
     bool text_valued = false;
-    for (std::size_t i = 0; i < trace_.records.size(); ++i) {
-      const Json& value = member(member(member(trace_.records[i], "actuators"), name), "value");
+    for (std::size_t i = 0; i < trace_->records.size(); ++i) {
+      const Json& value = member(member(member(trace_->records[i], "actuators"), name), "value");
       std::vector<double> components;
       if (value.is_boolean()) {
         components.push_back(value.get<bool>() ? 1.0 : 0.0);
@@ -257,9 +291,9 @@ class Plot {
         "\n",
         width, height, escape(title), escape(subtitle));
     // Step axis, with grid lines through every row.
-    const auto spacing = tick_spacing(trace_.records.size());
+    const auto spacing = tick_spacing(trace_->records.size());
     out += R"(<g class="axis">)";
-    for (std::size_t i = 0; i < trace_.records.size(); ++i) {
+    for (std::size_t i = 0; i < trace_->records.size(); ++i) {
       const auto step = step_at(i);
       if (step % spacing != 0) continue;
       const double at = (x(i) + x(i + 1)) / 2;
@@ -285,7 +319,7 @@ class Plot {
 
   /// True when behaviour or interface code reported something (the records' "reported").
   bool has_reported() const {
-    return std::any_of(trace_.records.begin(), trace_.records.end(),
+    return std::any_of(trace_->records.begin(), trace_->records.end(),
                        [](const Json& record) { return member(record, "reported").is_array(); });
   }
 
@@ -293,8 +327,8 @@ class Plot {
   void reported() {
     const double top = open_row("reported", "reported", "reported by code");
     double label_end = 0;  // right edge of the last label drawn
-    for (std::size_t i = 0; i < trace_.records.size(); ++i) {
-      const Json& reported = member(trace_.records[i], "reported");
+    for (std::size_t i = 0; i < trace_->records.size(); ++i) {
+      const Json& reported = member(trace_->records[i], "reported");
       if (!reported.is_array() || reported.empty()) continue;
       std::string text;
       for (const auto& event : reported) {
@@ -324,7 +358,7 @@ class Plot {
 
   /// A dashed line through every row where a reload swapped a new program in.
   void reloads() {
-    for (const auto& reload : trace_.reloads) {
+    for (const auto& reload : trace_->reloads) {
       body_ += fmt::format(
           R"(<line class="reload" x1="{0:.1f}" y1="{1}" x2="{0:.1f}" y2="{2}" stroke="#7a5af8" stroke-width="1.5" stroke-dasharray="5,3"><title>config reloaded after step {3}</title></line>)",
           x(reload.before), kTop - 4, y_, member(reload.header, "after_step").dump());
@@ -332,13 +366,14 @@ class Plot {
   }
 
   std::uint64_t step_at(std::size_t index) const {
-    return index < trace_.records.size() ? trace_.records[index]["step"].get<std::uint64_t>() : 0;
+    return index < trace_->records.size() ? trace_->records[index]["step"].get<std::uint64_t>() : 0;
   }
 
   double y_ = kTop;
 
  private:
-  const TraceFile& trace_;
+  const TraceFile* trace_;
+  const TraceFile* other_ = nullptr;
   double n_;
   std::string body_;
 };
@@ -376,6 +411,7 @@ std::vector<std::pair<std::string, std::vector<std::string>>> behaviours_of(
 
 std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
   Plot plot(trace);
+  if (options.compare != nullptr) plot.compare_with(*options.compare);
   if (plot.has_reported()) {
     plot.section("events");
     plot.reported();

@@ -9,6 +9,9 @@ namespace arbiter::cli {
 
 struct PlotOptions {
   bool actuators = false;  ///< add a row per actuator (its value over the steps)
+  /// `--compare`: a second run, whose row of each behaviour is drawn under the first's, with the
+  /// steps where they differ shaded. Steps are aligned by position.
+  const TraceFile* compare = nullptr;
 };
 
 /// An SVG timeline of `trace`: per layer, a row per behaviour (in execution order) with its

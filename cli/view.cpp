@@ -11,86 +11,30 @@
 
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
+#include "arbiter/trace_reader.hpp"
 
 namespace arbiter::cli {
 
-namespace {
-
-/// nlohmann's message without its own prefix and position, which the caller gives as file:line:col.
-std::string parse_message(const nlohmann::ordered_json::parse_error& error) {
-  std::string text = error.what();
-  if (const auto column = text.find(", column "); column != std::string::npos) {
-    if (const auto colon = text.find(": ", column); colon != std::string::npos) {
-      return text.substr(colon + 2);
-    }
-  }
-  return text;
-}
-
-}  // namespace
-
 std::optional<TraceFile> read_trace_file(const std::string& path, std::string& error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    error = fmt::format("{}: error: cannot read the trace", path);
+  Diagnostic problem;
+  auto read = read_trace(path, problem);
+  if (!read) {
+    error = format(problem);
+    error.pop_back();  // the caller ends the line
     return std::nullopt;
   }
   TraceFile trace;
-  std::string line;
-  std::size_t number = 0;
-  std::uint64_t last_step = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.empty()) continue;
-    nlohmann::ordered_json parsed;
-    try {
-      parsed = nlohmann::ordered_json::parse(line);
-    } catch (const nlohmann::ordered_json::parse_error& bad) {
-      error = fmt::format("{}:{}:{}: error: not JSON: {}", path, number,
-                          std::max<std::size_t>(bad.byte, 1), parse_message(bad));
-      return std::nullopt;
-    }
-    if (!trace.header_line.empty() && parsed.is_object() && parsed.contains("reload") &&
-        parsed.value("arbiter_trace", nlohmann::ordered_json()) == 1) {
-      trace.reloads.push_back({number, trace.records.size(), std::move(parsed)});
-      continue;
-    }
-    if (trace.header_line.empty()) {
-      if (!parsed.is_object() || parsed.value("arbiter_trace", nlohmann::ordered_json()) != 1 ||
-          !parsed.value("layers", nlohmann::ordered_json()).is_array()) {
-        error = fmt::format(
-            "{}:{}:1: error: a trace starts with a header {{\"arbiter_trace\": 1, \"name\": ..., "
-            "\"layers\": [...]}}; write one with 'arbiter run CONFIG --trace FILE.jsonl'",
-            path, number);
-        return std::nullopt;
-      }
-      trace.header_line = line;
-      trace.header = std::move(parsed);
-      continue;
-    }
-    if (!parsed.is_object() || !parsed.contains("step") || !parsed["step"].is_number_unsigned() ||
-        !parsed.contains("layers") || !parsed["layers"].is_object()) {
-      error =
-          fmt::format("{}:{}:1: error: not a step record (an object with \"step\" and \"layers\")",
-                      path, number);
-      return std::nullopt;
-    }
-    const auto step = parsed["step"].get<std::uint64_t>();
-    // The safe-value pass of a stopping engine repeats its last step's number: no step to draw.
-    if (step == last_step && parsed.value("safe", false) == true) continue;
-    if (step <= last_step) {
-      error = fmt::format("{}:{}:1: error: step {} follows step {}; steps must increase", path,
-                          number, step, last_step);
-      return std::nullopt;
-    }
-    last_step = step;
-    trace.lines.push_back(line);
-    trace.records.push_back(std::move(parsed));
+  trace.header_line = std::move(read->header.text);
+  trace.header = nlohmann::ordered_json::parse(trace.header_line);
+  for (auto& reload : read->reloads) {
+    trace.reloads.push_back({static_cast<std::size_t>(reload.header.location.line), reload.before,
+                             nlohmann::ordered_json::parse(reload.header.text)});
   }
-  if (trace.header_line.empty()) {
-    error = fmt::format("{}: error: the trace is empty", path);
-    return std::nullopt;
+  for (auto& step : read->steps) {
+    trace.records.push_back(nlohmann::ordered_json::parse(step.text));
+    trace.lines.push_back(std::move(step.text));
   }
+  trace.truncated = std::move(read->truncated);
   return trace;
 }
 
@@ -102,6 +46,8 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     err << error << "\n";
     return 1;
   }
+  if (!trace->truncated.empty())
+    err << fmt::format("{}: warning: {}\n", trace_path, trace->truncated);
   if (const auto header = check_trace_header(program, trace->header_line);
       header.status != Explanation::Status::kOk) {
     err << fmt::format("{}:1:1: error: {}\n", trace_path, header.text);

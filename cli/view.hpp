@@ -14,7 +14,8 @@
 
 namespace arbiter::cli {
 
-/// A trace file (DESIGN 5) read whole: its header and step records, each line parsed.
+/// A trace file (DESIGN 5) or recording read whole by the trace reader: its header and step
+/// records, each parsed.
 struct TraceFile {
   /// A header written when a hot reload swapped a new program in (docs/hot_reload.md).
   struct Reload {
@@ -27,6 +28,7 @@ struct TraceFile {
   std::vector<std::string> lines;  ///< the step records as written, in order
   std::vector<nlohmann::ordered_json> records;
   std::vector<Reload> reloads;
+  std::string truncated;  ///< what a recording cut off while written lost (TraceSource)
 };
 
 /// Reads `path`; on failure nullopt, and `error` says where and what (`file:line:col: ...`).

@@ -3,7 +3,7 @@
 # Fast and silent when everything is present; runs apt-get as root, or through sudo otherwise.
 set -euo pipefail
 
-packages=(cmake g++ ninja-build pkg-config libyaml-cpp-dev nlohmann-json3-dev libfmt-dev
+packages=(cmake g++ ninja-build pkg-config libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libzstd-dev zlib1g-dev
           libspdlog-dev catch2 libcli11-dev libbenchmark-dev libvalijson-dev
           cyclonedds-dev cyclonedds-tools libcpp-httplib-dev)
 # Arguments: more packages the caller needs (scripts/test.sh passes the tools only tests use).

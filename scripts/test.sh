@@ -69,20 +69,30 @@ run_fuzz_smoke() {
   CXX=clang++ cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DARBITER_BUILD_FUZZERS=ON -DARBITER_BUILD_TESTS=OFF -DARBITER_BUILD_BENCHMARKS=OFF \
       --log-level=WARNING
-  cmake --build "$dir" --target arbiter_fuzz_config --parallel "$jobs"
-  echo "== fuzz: ${seconds} s"
+  cmake --build "$dir" --target arbiter_fuzz_config arbiter_fuzz_trace --parallel "$jobs"
+  # The config loader gets two thirds of the time, the trace reader the rest.
+  local config_seconds=$((seconds * 2 / 3))
+  local trace_seconds=$((seconds - config_seconds))
+  echo "== fuzz: ${config_seconds} s config, ${trace_seconds} s trace"
   work=$(mktemp -d)
   fuzz/make_seeds.sh "$work/seeds" >/dev/null
-  mkdir -p "$work/corpus"
-  "$dir/fuzz/arbiter_fuzz_config" -dict=fuzz/config.dict -max_total_time="$seconds" -timeout=5 \
-      -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/" "$work/corpus" \
-      "$work/seeds" </dev/null >"$work/fuzz.log" 2>&1 || status=$?
+  fuzz/make_seeds.sh "$work/trace_seeds" trace >/dev/null
+  mkdir -p "$work/corpus" "$work/trace_corpus"
+  "$dir/fuzz/arbiter_fuzz_config" -dict=fuzz/config.dict -max_total_time="$config_seconds" \
+      -timeout=5 -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/" \
+      "$work/corpus" "$work/seeds" </dev/null >"$work/fuzz.log" 2>&1 || status=$?
+  if [[ $status -eq 0 ]]; then
+    "$dir/fuzz/arbiter_fuzz_trace" -max_total_time="$trace_seconds" -timeout=5 \
+        -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/" \
+        "$work/trace_corpus" "$work/trace_seeds" </dev/null >>"$work/fuzz.log" 2>&1 || status=$?
+  fi
   grep -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|Done)' "$work/fuzz.log" || true
   if [[ $status -eq 0 ]]; then
     summaries+=("fuzz: ${seconds} s, no crash, leak or hang")
   else
     tail -n 60 "$work/fuzz.log"
-    echo "== fuzz: failed; the input is in $work (make it a test in tests/data/hostile/)"
+    echo "== fuzz: failed; the input is in $work (make it a test in tests/data/hostile/ or," \
+         "for a trace, tests/data/bad_traces/)"
     summaries+=("fuzz: FAILED (see $work)")
   fi
   [[ $status -ne 0 ]] || rm -rf "$work"

@@ -122,17 +122,6 @@ struct Records {
   std::uint64_t last_step = 0;
 };
 
-/// The step number of a record line, read without parsing the whole line.
-std::optional<std::uint64_t> step_of(const std::string& line) {
-  const auto key = line.find("\"step\":");
-  if (key == std::string::npos) return std::nullopt;
-  const char* begin = line.c_str() + key + 7;
-  char* end = nullptr;
-  const auto value = std::strtoull(begin, &end, 10);
-  if (end == begin) return std::nullopt;
-  return value;
-}
-
 std::optional<Explanation> check_header(const Program& program, const Json& header) {
   const auto bad = [](std::string text, std::vector<std::string> notes = {}) {
     return failure(Status::kBadTrace, std::move(text), std::move(notes));
@@ -172,54 +161,43 @@ std::optional<Explanation> check_header(const Program& program, const Json& head
   return std::nullopt;
 }
 
-std::optional<Explanation> read_trace(const Program& program, std::istream& in, std::uint64_t step,
-                                      Records& records) {
-  std::string line;
-  std::size_t line_number = 0;
-  const auto parse = [&](Json& out) -> std::optional<Explanation> {
-    try {
-      out = Json::parse(line);
-      return std::nullopt;
-    } catch (const Json::exception& error) {
-      return failure(Status::kBadTrace, fmt::format("line {} of the trace is not JSON: {}",
-                                                    line_number, error.what()));
+std::optional<Explanation> read_trace(TraceSource& source, std::uint64_t step, Records& records,
+                                      Json& header) {
+  TraceRecord record;
+  while (source.next(record)) {
+    if (record.kind == TraceRecord::Kind::kHeader) {
+      header = Json::parse(record.text);
+      continue;
     }
-  };
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (!line.empty()) break;
-  }
-  Json header;
-  if (line.empty()) return failure(Status::kBadTrace, "the trace is empty");
-  if (auto error = parse(header)) return error;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (line.empty()) continue;
-    const auto at = step_of(line);
-    if (!at) {
-      // A run reloaded with --watch has a header per program ("reload": N, "after_step": S):
-      // a step is explained against the program that ran it.
-      Json reload;
-      if (parse(reload) || !reload.is_object() || !reload.contains("arbiter_trace") ||
-          !reload.contains("reload") || !reload.value("after_step", Json()).is_number_unsigned()) {
-        return failure(Status::kBadTrace,
-                       fmt::format("line {} of the trace is not a step record", line_number));
-      }
-      if (step <= reload["after_step"].get<std::uint64_t>()) break;
-      header = std::move(reload);
+    if (record.kind == TraceRecord::Kind::kReload) {
+      // A run reloaded with --watch has a header per program: a step is explained against the
+      // program that ran it.
+      if (step <= record.step) break;
+      header = Json::parse(record.text);
       records.previous = Json();  // written by the program before, with its own indices
       continue;
     }
-    records.last_step = *at;
-    Json* slot = *at + 1 == step   ? &records.previous
-                 : *at == step     ? &records.current
-                 : *at == step + 1 ? &records.next
-                                   : nullptr;
-    if (slot != nullptr) {
-      if (auto error = parse(*slot)) return error;
-    }
-    if (*at > step) break;
+    if (record.kind == TraceRecord::Kind::kSafe) continue;  // outputs values, steps nothing
+    records.last_step = record.step;
+    Json* slot = record.step + 1 == step   ? &records.previous
+                 : record.step == step     ? &records.current
+                 : record.step == step + 1 ? &records.next
+                                           : nullptr;
+    if (slot != nullptr) *slot = Json::parse(record.text);
+    if (record.step > step) break;
   }
+  if (const auto& error = source.error()) {
+    Explanation out = failure(Status::kBadTrace, error->message, error->notes);
+    out.where = error->location;
+    return out;
+  }
+  return std::nullopt;
+}
+
+std::optional<Explanation> read_trace(const Program& program, TraceSource& source,
+                                      std::uint64_t step, Records& records) {
+  Json header;
+  if (auto error = read_trace(source, step, records, header)) return error;
   if (auto error = check_header(program, header)) return error;
   if (records.current.is_null()) {
     return failure(
@@ -506,6 +484,12 @@ Explanation check_trace_header(const Program& program, const std::string& header
 }
 
 Explanation explain(const Program& program, std::istream& trace, std::uint64_t step,
+                    std::string_view target) {
+  const auto source = jsonl_trace_source(trace, "trace");
+  return explain(program, *source, step, target);
+}
+
+Explanation explain(const Program& program, TraceSource& trace, std::uint64_t step,
                     std::string_view target) {
   Explanation error;
   const auto resolved = resolve(program, target, error);

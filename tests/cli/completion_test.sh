@@ -31,9 +31,11 @@ expect() {
   fi
 }
 
-expect "" -- validate run dump explain test plugins schema view plot lsp
+expect "" -- validate run dump explain test plugins schema view plot replay diff lsp
+expect "replay" "--c" -- --config
+expect "diff" "--t" -- --tolerance
 expect "ex" -- explain
-expect "--log-level" "warn" "d" -- dump
+expect "--log-level" "warn" "du" -- dump
 expect "--plu" -- --plugin-path
 expect "--max" -- --max-file-bytes
 expect "--max-file-bytes" "1000" "va" -- validate

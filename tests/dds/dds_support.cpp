@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "arbiter/trace_reader.hpp"
 #include "dds.hpp"
 #include "probe.hpp"
 #include "test_support.hpp"
@@ -163,14 +164,11 @@ std::vector<std::string> arbiter_run(const std::string& config, std::uint64_t st
 }
 
 std::vector<nlohmann::json> read_trace(const std::string& path) {
-  std::ifstream in(path);
+  Diagnostic error;
+  const auto trace = arbiter::read_trace(path, error);
+  if (!trace) throw std::runtime_error(format(error));
   std::vector<nlohmann::json> steps;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    auto record = nlohmann::json::parse(line);
-    if (record.contains("step")) steps.push_back(std::move(record));
-  }
+  for (const auto& step : trace->steps) steps.push_back(nlohmann::json::parse(step.text));
   return steps;
 }
 

@@ -5,11 +5,13 @@
 
 #include <cstdint>
 #include <istream>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "arbiter/program.hpp"
+#include "arbiter/trace_reader.hpp"
 
 namespace arbiter {
 
@@ -22,6 +24,8 @@ struct Explanation {
   Status status = Status::kOk;
   std::string text;                ///< the explanation, or what went wrong (one line)
   std::vector<std::string> notes;  ///< with an error: suggestions
+  /// kBadTrace because a record could not be read: where it is (the trace reader's location).
+  std::optional<SourceLocation> where;
 };
 
 /// Explains `target` at step `step` (counting from 1) of `trace`, a trace written by running
@@ -34,6 +38,9 @@ struct Explanation {
 /// (`name`, or `state_machines/name`): which state ran, what was queued before and after, the
 /// events and what they mean. Levels are recomputed from the trace's requested levels and checked
 /// against its recorded activations.
+Explanation explain(const Program& program, TraceSource& trace, std::uint64_t step,
+                    std::string_view target);
+/// explain() of the JSON-lines trace in `trace`, named "trace" in errors.
 Explanation explain(const Program& program, std::istream& trace, std::uint64_t step,
                     std::string_view target);
 

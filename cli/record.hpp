@@ -1,0 +1,37 @@
+#pragma once
+// `arbiter run --record`, `arbiter replay` and `arbiter diff` (docs/replay.md).
+
+#include <cstdint>
+#include <ostream>
+#include <string>
+
+#include "arbiter/load.hpp"
+#include "arbiter/program.hpp"
+#include "arbiter/recording.hpp"
+#include "arbiter/registry.hpp"
+
+namespace arbiter::cli {
+
+/// The files `config` reads (itself and its includes) with their text, and its plugins, for a
+/// recording. `registry` has the config's plugins loaded.
+RecordingInfo recording_info(const std::string& config, const Registry& registry,
+                             const LoadOptions& options, const std::string& version);
+
+struct ReplayOptions {
+  std::string recording;
+  std::string config;  ///< empty: the recorded config
+  std::string trace;
+  std::string record;
+  std::uint64_t steps = 0;  ///< 0: all recorded
+  LoadOptions load;
+  std::string version;
+};
+
+/// Runs the recorded system again on its recorded inputs; returns the exit code.
+int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err);
+
+/// Compares two traces or recordings; `format` is "text" or "json". Returns the exit code.
+int diff(const std::string& a, const std::string& b, double tolerance, const std::string& format,
+         std::ostream& out, std::ostream& err);
+
+}  // namespace arbiter::cli

@@ -1,0 +1,152 @@
+#include "recorded_inputs.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <nlohmann/json.hpp>
+
+#include "arbiter/behaviour.hpp"
+#include "arbiter/document.hpp"
+#include "arbiter/init_context.hpp"
+
+namespace arbiter::cli {
+
+namespace {
+
+/// Writes its layer's actuators from the recording: what the recorded run's interface wrote.
+class Replayed : public Interface {
+ public:
+  explicit Replayed(const RecordedInputs& inputs) : inputs_(inputs) {}
+
+  void init(InitContext& ctx) override {
+    reports_ = !inputs_.claim_reports();
+    for (const auto& actuator : ctx.layer_actuators()) {
+      const auto* column = inputs_.find(actuator.name);
+      if (column == nullptr) {
+        ctx.error(actuator.location,
+                  fmt::format("the recording has no input '{}': the recorded run's interface "
+                              "layers did not declare it",
+                              actuator.name));
+        continue;
+      }
+      Feed feed;
+      feed.output = ctx.output_to_actuator(actuator.name, actuator.location);
+      for (std::size_t i = 0; i < column->values.size(); ++i) {
+        feed.values.emplace_back(*actuator.type);
+        feed.written.push_back(column->written[i]);
+        if (column->values[i].empty()) continue;
+        Diagnostics parsed;
+        const auto node =
+            parse_document(column->values[i], "recording", DocumentFormat::kJson, parsed);
+        std::string expected;
+        if (!node || !actuator.type->from_node(*node, feed.values.back().data(), expected)) {
+          ctx.error(
+              actuator.location,
+              fmt::format("recorded input '{}' at step {} is {}, not {} (a {}): the edited "
+                          "config must keep the recorded inputs' types",
+                          actuator.name, i + 1, column->values[i], expected, actuator.type->name));
+          break;
+        }
+      }
+      feeds_.push_back(std::move(feed));
+    }
+  }
+
+  // Reported again in the output pass, where interfaces that advance a world report; only the
+  // first interface layer reports, as the recording does not say which layer reported.
+  void output(const StepContext& ctx) override {
+    if (!reports_) return;
+    for (const auto& text : inputs_.reported(ctx.step())) ctx.report(text.c_str());
+  }
+
+  void input(ExecuteContext& ctx) override {
+    const auto index = ctx.step() - 1;
+    for (auto& feed : feeds_) {
+      if (index < feed.values.size() && feed.written[index]) {
+        ctx.write(feed.output, feed.values[index]);
+      }
+    }
+  }
+
+ private:
+  struct Feed {
+    AnyOutput output;
+    std::vector<ValueBox> values;
+    std::vector<char> written;
+  };
+  const RecordedInputs& inputs_;
+  std::vector<Feed> feeds_;
+  bool reports_ = false;
+};
+
+}  // namespace
+
+RecordedInputs::RecordedInputs(const std::vector<std::pair<std::uint64_t, std::string>>& messages) {
+  for (const auto& [step, text] : messages) steps_ = std::max(steps_, step);
+  for (const auto& [step, text] : messages) {
+    const auto json = nlohmann::ordered_json::parse(text, nullptr, false);
+    if (step == 0 || !json.is_object() || !json.contains("inputs")) continue;
+    if (json.contains("reported") && json["reported"].is_array()) {
+      reported_.resize(steps_);
+      for (const auto& text : json["reported"]) {
+        if (text.is_string()) reported_[step - 1].push_back(text.get<std::string>());
+      }
+    }
+    for (const auto& [name, entry] : json["inputs"].items()) {
+      auto* column = const_cast<Column*>(find(name));
+      if (column == nullptr) {
+        column = &columns_.emplace_back();
+        column->name = name;
+        column->values.resize(steps_);
+        column->written.resize(steps_);
+      }
+      column->values[step - 1] = entry.value("value", nlohmann::ordered_json()).dump();
+      column->written[step - 1] = entry.value("written", false) ? 1 : 0;
+    }
+  }
+  class_.name = "arbiter.RecordedInputs";
+  class_.kind = ClassKind::kInterface;
+  class_.origin = "replay";
+  class_.make_interface = [this] { return std::make_unique<Replayed>(*this); };
+}
+
+const std::vector<std::string>& RecordedInputs::reported(std::uint64_t step) const {
+  static const std::vector<std::string> kNone;
+  return step >= 1 && step <= reported_.size() ? reported_[step - 1] : kNone;
+}
+
+bool RecordedInputs::claim_reports() const {
+  const bool claimed = reports_claimed_;
+  reports_claimed_ = true;
+  return claimed;
+}
+
+const RecordedInputs::Column* RecordedInputs::find(const std::string& name) const {
+  for (const auto& column : columns_) {
+    if (column.name == name) return &column;
+  }
+  return nullptr;
+}
+
+void RecordedInputs::replace_interfaces(Model& model, Diagnostics& diagnostics) const {
+  std::vector<std::string> declared;
+  for (auto& layer : model.layers) {
+    if (!layer.is_interface()) continue;
+    layer.interface = &class_;
+    layer.params = {};
+    layer.ports.clear();
+    for (const auto& actuator : layer.actuators) declared.push_back(actuator.name.text);
+  }
+  for (const auto& column : columns_) {
+    if (std::find(declared.begin(), declared.end(), column.name) != declared.end()) continue;
+    diagnostics
+        .error(model.location, "replay-input",
+               fmt::format("recorded input '{}' has no place in this config: no interface layer "
+                           "declares an actuator '{}'",
+                           column.name, column.name))
+        .notes.push_back(declared.empty() ? "the config has no interface layer"
+                                          : suggest(column.name, declared, "interface actuators"));
+  }
+}
+
+}  // namespace arbiter::cli

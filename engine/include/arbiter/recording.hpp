@@ -1,0 +1,101 @@
+#pragma once
+// Stage 5 of the data path, for keeping: a run recorded as MCAP (https://mcap.dev/spec), with the
+// trace's step records, the values interface layers wrote into the engine, and the config.
+// docs/replay.md describes the file.
+
+#include <atomic>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "arbiter/diagnostics.hpp"
+#include "arbiter/manager.hpp"
+
+namespace arbiter {
+
+/// What a recording keeps besides the steps, for replaying the run.
+struct RecordingInfo {
+  /// Each file the config read (the config first, then its includes), with its text.
+  std::vector<std::pair<std::string, std::string>> files;
+  std::vector<std::string> plugins;
+  std::string version;  ///< Arbiter's
+};
+
+/// Records a run into an MCAP file. The stepping thread only copies the step into a ring of
+/// slots allocated when the run starts; a writer thread compresses and writes them. When the
+/// writer falls behind, whole steps are dropped (dropped() counts them, the file records each gap).
+class Recorder : public Observer {
+ public:
+  /// `slots` steps may wait for the writer. Open fails (ok() false) when `path` cannot be written.
+  Recorder(const std::string& path, RecordingInfo info, std::size_t slots = 256);
+  ~Recorder() override;
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  bool ok() const;
+
+  void on_start(const Manager& manager) override;
+  void on_step(const Manager& manager) override;
+  void on_reload(const Manager& manager) override;
+  /// The safe-value pass, as the trace has it, on `/arbiter/step`.
+  void on_safe(const Manager& manager) override;
+  void on_finish(const Manager& manager) override;
+
+  std::uint64_t dropped() const { return dropped_total_.load(); }
+
+ private:
+  struct Slot {
+    enum class Kind { kStep, kSafe, kHeader, kEnd };
+    Kind kind = Kind::kStep;
+    std::uint64_t step = 0;
+    std::uint64_t log_time = 0;
+    std::string record;
+    std::string inputs;
+  };
+  Slot* claim();
+  /// A message's log time: the wall clock at the run's start plus the step's "t" (the manager's
+  /// clock; a manager without one logs every step at the start).
+  std::uint64_t log_time(const Manager& manager) const;
+  void publish();
+  void write_loop();
+
+  std::FILE* file_ = nullptr;
+  RecordingInfo info_;
+  std::vector<Slot> ring_;
+  std::atomic<std::size_t> head_{0};  // next slot the stepping thread fills
+  std::atomic<std::size_t> tail_{0};  // next slot the writer reads
+  std::atomic<std::uint64_t> dropped_total_{0};
+  std::thread writer_;
+  struct Output;
+  std::unique_ptr<Output> out_;
+  std::uint64_t wall_start_ns_ = 0;
+  bool started_ = false;
+  bool finished_ = false;
+};
+
+/// The message on `/arbiter/inputs`: {"step": N, "inputs": {NAME: {"value": V, "written": B}}}
+/// for every actuator of an interface layer, and "reported": [TEXT, ...] when interface code
+/// reported something in the step.
+void append_inputs_record(const Manager& manager, std::string& out);
+
+/// What replay needs of a recording besides its steps (read those with open_trace()).
+struct RecordedRun {
+  RecordingInfo info;
+  /// Each step's `/arbiter/inputs` message, in order.
+  std::vector<std::pair<std::uint64_t, std::string>> inputs;
+  /// The last step before each hot reload.
+  std::vector<std::uint64_t> reloads;
+  std::uint64_t dropped = 0;               ///< steps the recorder dropped (its gap records)
+  std::optional<std::uint64_t> first_gap;  ///< the last step before the first dropped one
+};
+
+/// Reads the config, inputs and reloads of the recording at `path`; nullopt with `error` set when
+/// it is not a readable recording. A recording cut off while written gives what it holds.
+std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error);
+
+}  // namespace arbiter

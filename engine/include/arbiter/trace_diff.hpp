@@ -1,0 +1,47 @@
+#pragma once
+// Two runs compared step by step (`arbiter diff`, and replay's determinism check): which
+// behaviours, actuators and state machines differ, where first and how often.
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "arbiter/trace_reader.hpp"
+
+namespace arbiter {
+
+struct TraceDiff {
+  /// In how many steps something differs, and the first and last of them.
+  struct Count {
+    std::uint64_t differ = 0;
+    std::uint64_t first = 0;
+    std::uint64_t last = 0;
+  };
+  struct Divergence {
+    std::uint64_t step = 0;
+    /// "layer/behaviour", "actuator:NAME", "machine:NAME"; empty when one run only has more
+    /// steps, or (exact comparison) when a field outside those differs.
+    std::vector<std::string> what;
+  };
+  bool identical = true;
+  std::uint64_t steps_a = 0;
+  std::uint64_t steps_b = 0;
+  std::optional<Divergence> first_divergence;
+  std::map<std::string, Count> behaviours;  ///< by "layer/name": `active` or `activation`
+  std::map<std::string, Count> actuators;   ///< value or written flag
+  std::map<std::string, Count> machines;    ///< state or events
+};
+
+/// Aligns the steps of `a` and `b` by number. Numbers differing by at most `tolerance` are
+/// equal; "t" and "duration" (timing, not behaviour) are never compared. With `exact`, a step
+/// also differs when anything else in its record does (e.g. requested levels, queues).
+TraceDiff diff_traces(const Trace& a, const Trace& b, double tolerance = 1e-9, bool exact = false);
+
+/// `{"identical": ..., "steps": [na, nb], "first_divergence": ..., "behaviours": ...}`.
+std::string format_json(const TraceDiff& diff);
+/// The same for people, naming the runs `a` and `b`.
+std::string format_text(const TraceDiff& diff, const std::string& a, const std::string& b);
+
+}  // namespace arbiter

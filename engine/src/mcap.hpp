@@ -1,0 +1,104 @@
+#pragma once
+// The MCAP container (https://mcap.dev/spec, major version 0) as far as recordings use it: a
+// writer of chunked, zstd-compressed, indexed files with a summary, and a linear reader that
+// checks every record and stops cleanly where a file was cut off.
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace arbiter::mcap {
+
+inline constexpr std::string_view kMagic{"\x89MCAP0\r\n", 8};
+
+/// Writes one MCAP file into a byte sink. Not thread-safe: one writer thread owns it.
+class Writer {
+ public:
+  /// `sink(bytes)` appends to the file; the writer keeps offsets itself.
+  explicit Writer(std::FILE* file, std::size_t chunk_size = 256 * 1024);
+  void header(std::string_view profile, std::string_view library);
+  std::uint16_t schema(std::string_view name, std::string_view encoding, std::string_view data);
+  std::uint16_t channel(std::uint16_t schema, std::string_view topic, std::string_view encoding);
+  /// A message into the current chunk, written out when the chunk is full.
+  void message(std::uint16_t channel, std::uint64_t log_time, std::string_view data);
+  /// A metadata record (outside chunks, so the current chunk is written first).
+  void metadata(std::string_view name, const std::vector<std::pair<std::string, std::string>>& map);
+  /// Writes the open chunk, the data end, the summary and the footer.
+  void finish();
+  /// False once a write to the file failed.
+  bool ok() const { return ok_; }
+
+ private:
+  void write(std::string_view bytes);
+  void flush_chunk();
+
+  std::FILE* file_;
+  std::size_t chunk_size_;
+  bool ok_ = true;
+  std::uint64_t offset_ = 0;
+  std::uint32_t data_crc_ = 0;
+  std::string schemas_;  // the schema and channel records again, for the summary
+  std::string channels_;
+  std::uint16_t schema_count_ = 0;
+  std::uint16_t channel_count_ = 0;
+  std::map<std::uint16_t, std::uint64_t> counts_;
+  std::map<std::uint16_t, std::uint32_t> sequence_;
+  std::uint64_t message_count_ = 0;
+  std::uint64_t first_time_ = 0;
+  std::uint64_t last_time_ = 0;
+  std::string chunk_;  // uncompressed records of the open chunk
+  std::uint64_t chunk_start_ = 0;
+  std::uint64_t chunk_end_ = 0;
+  std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> index_;
+  std::string chunk_indexes_;
+  std::uint32_t chunk_count_ = 0;
+  std::string metadata_indexes_;
+  std::uint32_t metadata_count_ = 0;
+  std::string compressed_;
+};
+
+/// A record of the data section, chunks opened: what a recording reader needs.
+struct Record {
+  enum class Kind { kMessage, kMetadata };
+  Kind kind = Kind::kMessage;
+  std::string topic;  ///< kMessage: its channel's topic
+  std::uint64_t log_time = 0;
+  std::string data;  ///< kMessage: the message
+  std::string name;  ///< kMetadata
+  std::vector<std::pair<std::string, std::string>> metadata;
+  std::uint64_t offset = 0;  ///< the byte of the file where the record (or its chunk) starts
+};
+
+/// Reads the records of a whole file held in memory, in file order.
+class Reader {
+ public:
+  explicit Reader(std::string bytes);
+  /// The next message or metadata record; false at the end, on an error (error() non-empty,
+  /// "at byte N: ...") or where the file was cut off (truncated()).
+  bool next(Record& record);
+  const std::string& error() const { return error_; }
+  bool truncated() const { return truncated_; }
+  /// Where the last whole chunk (or record) ended, for a truncation message.
+  std::uint64_t good_until() const { return good_until_; }
+
+ private:
+  bool fail(std::uint64_t at, std::string message);
+  bool read_chunk(std::uint64_t start, std::string_view content);
+  bool inner(std::string_view records, std::uint64_t chunk_start);
+
+  std::string bytes_;
+  std::size_t pos_ = 0;
+  bool started_ = false;
+  bool done_ = false;
+  bool truncated_ = false;
+  std::string error_;
+  std::uint64_t good_until_ = 0;
+  std::map<std::uint16_t, std::string> topics_;
+  std::map<std::uint16_t, bool> schemas_;
+  std::vector<Record> pending_;  // the messages of the chunk being read
+  std::size_t pending_next_ = 0;
+};
+
+}  // namespace arbiter::mcap

@@ -1,0 +1,318 @@
+#include "arbiter/recording.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <fstream>
+#include <iterator>
+
+#include "arbiter/trace.hpp"
+#include "mcap.hpp"
+
+namespace arbiter {
+
+namespace {
+
+constexpr const char* kStepSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
+ "title": "arbiter step record",
+ "type": "object",
+ "properties": {
+  "step": {"type": "integer", "minimum": 1},
+  "t": {"type": "number", "description": "seconds since the run began, at the step's start"},
+  "duration": {"type": "number", "description": "seconds the step took"},
+  "safe": {"type": "boolean", "description": "the safe-value pass of a stopping or pausing engine"},
+  "layers": {"type": "object", "additionalProperties": {"type": "object",
+    "additionalProperties": {"type": "object", "properties": {
+      "requested": {"type": "number"}, "activation": {"type": "number"},
+      "active": {"type": "boolean"}, "inhibited_by": {"type": "array", "items": {"type": "string"}}}}}},
+  "actuators": {"type": "object", "additionalProperties": {"type": "object",
+    "properties": {"value": {}, "written": {"type": "boolean"}}}},
+  "controllers": {"type": "object", "additionalProperties": {"type": "object", "properties": {
+    "cycle": {"type": "integer"}, "state": {"type": ["string", "null"]},
+    "queue": {"type": "array", "items": {"type": "string"}},
+    "events": {"type": "array", "items": {"type": "string"}}, "status": {"type": "string"}}}},
+  "reported": {"type": "array", "items": {"type": "object",
+    "properties": {"by": {"type": "string"}, "text": {"type": "string"}}}}},
+ "required": ["step", "layers"]})";
+
+constexpr const char* kInputsSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
+ "title": "arbiter interface inputs",
+ "type": "object",
+ "properties": {
+  "step": {"type": "integer", "minimum": 1},
+  "inputs": {"type": "object", "additionalProperties": {"type": "object",
+    "properties": {"value": {}, "written": {"type": "boolean"}}}}},
+ "required": ["step", "inputs"]})";
+
+constexpr const char* kHeaderSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
+ "title": "arbiter trace header",
+ "type": "object",
+ "properties": {"arbiter_trace": {"const": 1}, "name": {"type": "string"},
+  "reload": {"type": "integer"}, "after_step": {"type": "integer"},
+  "layers": {"type": "array"}},
+ "required": ["arbiter_trace", "name", "layers"]})";
+
+}  // namespace
+
+void append_inputs_record(const Manager& manager, std::string& out) {
+  const Program& program = manager.program();
+  fmt::format_to(std::back_inserter(out), R"({{"step": {}, "inputs": {{)", manager.steps());
+  bool first = true;
+  for (const auto& layer : program.layers) {
+    if (!layer.is_interface()) continue;
+    for (auto a = layer.actuator_begin; a < layer.actuator_end; ++a) {
+      if (!first) out += ", ";
+      first = false;
+      detail::append_json_string(program.actuators[a].name, out);
+      out += R"(: {"value": )";
+      program.actuators[a].type->append_json(manager.actuator_value(a), out);
+      out += manager.actuator_written(a) ? R"(, "written": true})" : R"(, "written": false})";
+    }
+  }
+  out += "}";
+  // What interface code reported is an input too: replay reports it again, in the output pass.
+  bool reported = false;
+  for (std::size_t e = 0; e < manager.event_count(); ++e) {
+    const auto& event = manager.event(e);
+    if (event.source < program.behaviours.size()) continue;
+    out += reported ? ", " : R"(, "reported": [)";
+    reported = true;
+    detail::append_json_string(event.text, out);
+  }
+  if (reported) out += "]";
+  out += "}";
+}
+
+struct Recorder::Output {
+  explicit Output(std::FILE* file) : writer(file) {}
+  mcap::Writer writer;
+  std::uint16_t header = 0;
+  std::uint16_t step = 0;
+  std::uint16_t inputs = 0;
+  std::uint64_t last_step = 0;
+  std::uint64_t dropped = 0;
+};
+
+Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots)
+    : file_(std::fopen(path.c_str(), "wb")), info_(std::move(info)), ring_(slots + 1) {
+  if (file_ != nullptr) out_ = std::make_unique<Output>(file_);
+}
+
+Recorder::~Recorder() {
+  if (started_ && !finished_) {
+    Slot* slot = nullptr;
+    while ((slot = claim()) == nullptr) std::this_thread::yield();
+    slot->kind = Slot::Kind::kEnd;
+    publish();
+  }
+  if (writer_.joinable()) writer_.join();
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+bool Recorder::ok() const {
+  return file_ != nullptr && out_ && out_->writer.ok();
+}
+
+Recorder::Slot* Recorder::claim() {
+  const auto head = head_.load(std::memory_order_relaxed);
+  if ((head + 1) % ring_.size() == tail_.load(std::memory_order_acquire)) return nullptr;
+  return &ring_[head];
+}
+
+void Recorder::publish() {
+  head_.store((head_.load(std::memory_order_relaxed) + 1) % ring_.size(),
+              std::memory_order_release);
+}
+
+void Recorder::on_start(const Manager& manager) {
+  if (!out_) return;
+  wall_start_ns_ =
+      static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                     std::chrono::system_clock::now().time_since_epoch())
+                                     .count());
+  auto& writer = out_->writer;
+  writer.header("arbiter", "arbiter " + info_.version);
+  out_->header = writer.channel(writer.schema("arbiter.Header", "jsonschema", kHeaderSchema),
+                                "/arbiter/header", "json");
+  out_->step = writer.channel(writer.schema("arbiter.Step", "jsonschema", kStepSchema),
+                              "/arbiter/step", "json");
+  out_->inputs = writer.channel(writer.schema("arbiter.Inputs", "jsonschema", kInputsSchema),
+                                "/arbiter/inputs", "json");
+  std::vector<std::pair<std::string, std::string>> config;
+  config.emplace_back("name", manager.program().name);
+  config.emplace_back("rate_hz", fmt::format("{}", manager.program().rate_hz));
+  config.emplace_back("version", info_.version);
+  std::string plugins;
+  for (const auto& plugin : info_.plugins) plugins += (plugins.empty() ? "" : "\n") + plugin;
+  config.emplace_back("plugins", plugins);
+  for (const auto& [file, text] : info_.files) config.emplace_back("file:" + file, text);
+  writer.metadata("arbiter.config", config);
+  writer.message(out_->header, wall_start_ns_, trace_header(manager.program()));
+  // Sized now, so that the step copies into the slots without allocating.
+  std::string sample;
+  append_step_record(manager, sample);
+  std::string inputs;
+  append_inputs_record(manager, inputs);
+  for (auto& slot : ring_) {
+    slot.record.reserve(2 * sample.size() + 1024);
+    slot.inputs.reserve(2 * inputs.size() + 256);
+  }
+  started_ = true;
+  writer_ = std::thread([this] { write_loop(); });
+}
+
+std::uint64_t Recorder::log_time(const Manager& manager) const {
+  const double since_start = manager.timed() ? manager.step_time() : 0.0;
+  return wall_start_ns_ + static_cast<std::uint64_t>(since_start * 1e9);
+}
+
+void Recorder::on_step(const Manager& manager) {
+  if (!started_) return;
+  Slot* slot = claim();
+  if (slot == nullptr) {
+    dropped_total_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  slot->kind = Slot::Kind::kStep;
+  slot->step = manager.steps();
+  slot->log_time = log_time(manager);
+  slot->record.clear();
+  append_step_record(manager, slot->record);
+  slot->inputs.clear();
+  append_inputs_record(manager, slot->inputs);
+  publish();
+}
+
+void Recorder::on_safe(const Manager& manager) {
+  if (!started_) return;
+  Slot* slot = nullptr;
+  // The last values a stopping robot was given: never dropped.
+  while ((slot = claim()) == nullptr) std::this_thread::yield();
+  slot->kind = Slot::Kind::kSafe;
+  slot->step = manager.steps();
+  slot->log_time = log_time(manager);
+  slot->record.clear();
+  append_step_record(manager, slot->record);
+  publish();
+}
+
+void Recorder::on_reload(const Manager& manager) {
+  if (!started_) return;
+  Slot* slot = nullptr;
+  // A reload header is never dropped: without it the steps after it could not be read.
+  while ((slot = claim()) == nullptr) std::this_thread::yield();
+  slot->kind = Slot::Kind::kHeader;
+  slot->step = manager.steps();
+  slot->log_time = log_time(manager);
+  slot->record = reload_header(manager);
+  publish();
+}
+
+void Recorder::on_finish(const Manager&) {
+  if (!started_ || finished_) return;
+  Slot* slot = nullptr;
+  while ((slot = claim()) == nullptr) std::this_thread::yield();
+  slot->kind = Slot::Kind::kEnd;
+  publish();
+  writer_.join();
+  finished_ = true;
+}
+
+void Recorder::write_loop() {
+  auto& out = *out_;
+  while (true) {
+    const auto tail = tail_.load(std::memory_order_relaxed);
+    if (tail == head_.load(std::memory_order_acquire)) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      continue;
+    }
+    Slot& slot = ring_[tail];
+    if (slot.kind == Slot::Kind::kEnd) {
+      tail_.store((tail + 1) % ring_.size(), std::memory_order_release);
+      break;
+    }
+    if (slot.kind == Slot::Kind::kHeader) {
+      out.writer.metadata("arbiter.reload",
+                          {{"after_step", std::to_string(slot.step)}, {"header", slot.record}});
+      out.writer.message(out.header, slot.log_time, slot.record);
+      out.last_step = slot.step;
+    } else if (slot.kind == Slot::Kind::kSafe) {
+      out.writer.message(out.step, slot.log_time, slot.record);  // no inputs: nothing was read
+    } else {
+      if (slot.step > out.last_step + 1) {
+        const auto gap = slot.step - out.last_step - 1;
+        out.dropped += gap;
+        out.writer.metadata("arbiter.gap", {{"after_step", std::to_string(out.last_step)},
+                                            {"dropped", std::to_string(gap)}});
+      }
+      out.last_step = slot.step;
+      out.writer.message(out.step, slot.log_time, slot.record);
+      out.writer.message(out.inputs, slot.log_time, slot.inputs);
+    }
+    tail_.store((tail + 1) % ring_.size(), std::memory_order_release);
+  }
+  out.writer.metadata("arbiter.summary", {{"steps", std::to_string(out.last_step)},
+                                          {"dropped", std::to_string(out.dropped)}});
+  out.writer.finish();
+}
+
+std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error) {
+  const auto fail = [&](std::string message) {
+    error = Diagnostic{{path, 0, 0}, Severity::kError, "bad-recording", std::move(message), {}};
+    return std::nullopt;
+  };
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail("cannot read the recording");
+  mcap::Reader reader(
+      std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()));
+  RecordedRun run;
+  bool config = false;
+  mcap::Record record;
+  while (reader.next(record)) {
+    if (record.kind == mcap::Record::Kind::kMetadata) {
+      if (record.name == "arbiter.config") {
+        config = true;
+        for (auto& [key, value] : record.metadata) {
+          if (key.rfind("file:", 0) == 0) {
+            run.info.files.emplace_back(key.substr(5), std::move(value));
+          } else if (key == "version") {
+            run.info.version = value;
+          } else if (key == "plugins" && !value.empty()) {
+            std::size_t start = 0;
+            while (start <= value.size()) {
+              const auto end = std::min(value.find('\n', start), value.size());
+              run.info.plugins.push_back(value.substr(start, end - start));
+              start = end + 1;
+            }
+          }
+        }
+      } else if (record.name == "arbiter.reload") {
+        for (const auto& [key, value] : record.metadata) {
+          if (key == "after_step") run.reloads.push_back(std::strtoull(value.c_str(), nullptr, 10));
+        }
+      } else if (record.name == "arbiter.gap") {
+        for (const auto& [key, value] : record.metadata) {
+          if (key == "dropped") run.dropped += std::strtoull(value.c_str(), nullptr, 10);
+          if (key == "after_step" && !run.first_gap) {
+            run.first_gap = std::strtoull(value.c_str(), nullptr, 10);
+          }
+        }
+      }
+    } else if (record.topic == "/arbiter/inputs") {
+      const auto key = record.data.find("\"step\": ");
+      const auto step =
+          key == std::string::npos ? 0 : std::strtoull(record.data.c_str() + key + 8, nullptr, 10);
+      run.inputs.emplace_back(step, std::move(record.data));
+    }
+    record = mcap::Record();
+  }
+  if (!reader.error().empty()) return fail(reader.error());
+  if (!config || run.info.files.empty()) {
+    return fail(
+        "the recording has no 'arbiter.config' metadata with the config's files; record "
+        "one with 'arbiter run CONFIG --record RUN.mcap'");
+  }
+  return run;
+}
+
+}  // namespace arbiter

@@ -1,0 +1,212 @@
+#include "arbiter/trace_diff.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <set>
+
+namespace arbiter {
+
+namespace {
+
+using Json = nlohmann::json;
+
+const Json& member(const Json& object, const std::string& key) {
+  static const Json kNull;
+  if (!object.is_object()) return kNull;
+  const auto found = object.find(key);
+  return found == object.end() ? kNull : *found;
+}
+
+bool same(const Json& a, const Json& b, double tolerance) {
+  if (a.is_number() && b.is_number()) {
+    const double x = a.get<double>();
+    const double y = b.get<double>();
+    return x == y || std::fabs(x - y) <= tolerance || (std::isnan(x) && std::isnan(y));
+  }
+  if (a.is_array() && b.is_array()) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      if (!same(a[i], b[i], tolerance)) return false;
+    }
+    return true;
+  }
+  if (a.is_object() && b.is_object()) {
+    if (a.size() != b.size()) return false;
+    for (auto it = a.begin(); it != a.end(); ++it) {
+      if (!same(it.value(), member(b, it.key()), tolerance)) return false;
+    }
+    return true;
+  }
+  return a == b;
+}
+
+/// The keys of a member object in either record, each once.
+std::set<std::string> keys(const Json& a, const Json& b) {
+  std::set<std::string> out;
+  for (const Json* side : {&a, &b}) {
+    if (!side->is_object()) continue;
+    for (auto it = side->begin(); it != side->end(); ++it) out.insert(it.key());
+  }
+  return out;
+}
+
+void count(TraceDiff::Count& entry, std::uint64_t step) {
+  if (entry.differ++ == 0) entry.first = step;
+  entry.last = step;
+}
+
+/// A behaviour, actuator or machine a run does not have compares as one that does nothing.
+bool behaviour_differs(const Json& a, const Json& b, double tolerance) {
+  const auto active = [](const Json& x) { return member(x, "active") == true; };
+  const auto activation = [](const Json& x) {
+    const Json& level = member(x, "activation");
+    return level.is_number() ? level : Json(0.0);
+  };
+  return active(a) != active(b) || !same(activation(a), activation(b), tolerance);
+}
+
+bool actuator_differs(const Json& a, const Json& b, double tolerance) {
+  const bool written_a = member(a, "written") == true;
+  const bool written_b = member(b, "written") == true;
+  if (a.is_null() || b.is_null()) return written_a || written_b;
+  return written_a != written_b || !same(member(a, "value"), member(b, "value"), tolerance);
+}
+
+bool machine_differs(const Json& a, const Json& b) {
+  const auto events = [](const Json& x) {
+    const Json& list = member(x, "events");
+    return list.is_array() ? list : Json::array();
+  };
+  return member(a, "state") != member(b, "state") || events(a) != events(b);
+}
+
+Json without_timing(Json record) {
+  if (record.is_object()) {
+    record.erase("t");
+    record.erase("duration");
+  }
+  return record;
+}
+
+}  // namespace
+
+TraceDiff diff_traces(const Trace& a, const Trace& b, double tolerance, bool exact) {
+  TraceDiff diff;
+  diff.steps_a = a.steps.size();
+  diff.steps_b = b.steps.size();
+  std::size_t i = 0;
+  std::size_t j = 0;
+  while (i < a.steps.size() && j < b.steps.size()) {
+    const auto step = std::min(a.steps[i].step, b.steps[j].step);
+    if (a.steps[i].step != b.steps[j].step) {
+      // A step one run has and the other lacks (dropped while recording): nothing to align.
+      if (!diff.first_divergence) diff.first_divergence = TraceDiff::Divergence{step, {}};
+      (a.steps[i].step < b.steps[j].step ? i : j)++;
+      continue;
+    }
+    const Json x = Json::parse(a.steps[i].text);
+    const Json y = Json::parse(b.steps[j].text);
+    ++i;
+    ++j;
+    std::vector<std::string> what;
+    const Json& layers_x = member(x, "layers");
+    const Json& layers_y = member(y, "layers");
+    for (const auto& layer : keys(layers_x, layers_y)) {
+      const Json& lx = member(layers_x, layer);
+      const Json& ly = member(layers_y, layer);
+      for (const auto& name : keys(lx, ly)) {
+        if (!behaviour_differs(member(lx, name), member(ly, name), tolerance)) continue;
+        const auto key = layer + "/" + name;
+        count(diff.behaviours[key], step);
+        what.push_back(key);
+      }
+    }
+    const Json& actuators_x = member(x, "actuators");
+    const Json& actuators_y = member(y, "actuators");
+    for (const auto& name : keys(actuators_x, actuators_y)) {
+      if (!actuator_differs(member(actuators_x, name), member(actuators_y, name), tolerance)) {
+        continue;
+      }
+      count(diff.actuators[name], step);
+      what.push_back("actuator:" + name);
+    }
+    const Json& machines_x = member(x, "controllers");
+    const Json& machines_y = member(y, "controllers");
+    for (const auto& name : keys(machines_x, machines_y)) {
+      if (!machine_differs(member(machines_x, name), member(machines_y, name))) continue;
+      count(diff.machines[name], step);
+      what.push_back("machine:" + name);
+    }
+    const bool differs = !what.empty() || (exact && without_timing(x) != without_timing(y));
+    if (differs && !diff.first_divergence) {
+      diff.first_divergence = TraceDiff::Divergence{step, std::move(what)};
+    }
+  }
+  if (!diff.first_divergence && diff.steps_a != diff.steps_b) {
+    const auto& longer = diff.steps_a > diff.steps_b ? a.steps : b.steps;
+    diff.first_divergence = TraceDiff::Divergence{longer[std::min(i, j)].step, {}};
+  }
+  diff.identical = !diff.first_divergence;
+  return diff;
+}
+
+std::string format_json(const TraceDiff& diff) {
+  using Ordered = nlohmann::ordered_json;
+  Ordered out = Ordered::object();
+  out["identical"] = diff.identical;
+  out["steps"] = {diff.steps_a, diff.steps_b};
+  out["first_divergence"] = nullptr;
+  if (diff.first_divergence) {
+    out["first_divergence"] = Ordered::object();
+    out["first_divergence"]["step"] = diff.first_divergence->step;
+    out["first_divergence"]["what"] = diff.first_divergence->what;
+  }
+  const auto counts = [](const std::map<std::string, TraceDiff::Count>& entries) {
+    Ordered object = Ordered::object();
+    for (const auto& [name, entry] : entries) {
+      auto& item = object[name] = Ordered::object();
+      item["differ"] = entry.differ;
+      item["first"] = entry.first;
+      item["last"] = entry.last;
+    }
+    return object;
+  };
+  out["behaviours"] = counts(diff.behaviours);
+  out["actuators"] = counts(diff.actuators);
+  out["machines"] = counts(diff.machines);
+  return out.dump() + "\n";
+}
+
+std::string format_text(const TraceDiff& diff, const std::string& a, const std::string& b) {
+  std::string out;
+  if (diff.identical) {
+    return fmt::format("{} and {} are identical: {} steps\n", a, b, diff.steps_a);
+  }
+  out += fmt::format("{} ({} steps) and {} ({} steps) differ\n", a, diff.steps_a, b, diff.steps_b);
+  const auto& first = *diff.first_divergence;
+  if (first.what.empty()) {
+    out += fmt::format("first divergence: step {}\n", first.step);
+  } else {
+    out += fmt::format("first divergence: step {}: ", first.step);
+    for (std::size_t i = 0; i < first.what.size(); ++i) {
+      out += (i > 0 ? ", " : "") + first.what[i];
+    }
+    out += "\n";
+  }
+  const auto section = [&](const char* title, const std::map<std::string, TraceDiff::Count>& map) {
+    if (map.empty()) return;
+    out += fmt::format("{}:\n", title);
+    for (const auto& [name, entry] : map) {
+      out += fmt::format("  {}: differs in {} step{} ({} to {})\n", name, entry.differ,
+                         entry.differ == 1 ? "" : "s", entry.first, entry.last);
+    }
+  };
+  section("behaviours (active or activation)", diff.behaviours);
+  section("actuators (value or written)", diff.actuators);
+  section("state machines (state or events)", diff.machines);
+  return out;
+}
+
+}  // namespace arbiter

@@ -1,0 +1,241 @@
+#include "arbiter/trace_reader.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "mcap.hpp"
+
+namespace arbiter {
+
+namespace {
+
+using Json = nlohmann::json;
+
+/// nlohmann's message without its own prefix and position, which the location gives.
+std::string parse_message(const Json::parse_error& error) {
+  std::string text = error.what();
+  if (const auto column = text.find(", column "); column != std::string::npos) {
+    if (const auto colon = text.find(": ", column); colon != std::string::npos) {
+      return text.substr(colon + 2);
+    }
+  }
+  return text;
+}
+
+bool is_header(const Json& json) {
+  return json.is_object() && json.value("arbiter_trace", Json()) == 1;
+}
+
+class JsonlSource : public TraceSource {
+ public:
+  JsonlSource(std::istream& in, std::string file) : in_(in), file_(std::move(file)) {}
+
+  bool next(TraceRecord& record) override {
+    if (error()) return false;
+    while (std::getline(in_, record.text)) {
+      ++line_;
+      if (record.text.empty()) continue;
+      record.location = {file_, static_cast<int>(line_), 1};
+      return accept(record);
+    }
+    return end({file_, 0, 0});
+  }
+
+ private:
+  std::istream& in_;
+  std::string file_;
+  std::size_t line_ = 0;
+};
+
+/// A JSON-lines trace held in memory.
+class JsonlTextSource : public JsonlSource {
+ public:
+  JsonlTextSource(std::string text, std::string file)
+      : JsonlTextSource(std::make_unique<std::istringstream>(std::move(text)), std::move(file)) {}
+
+ private:
+  JsonlTextSource(std::unique_ptr<std::istringstream> in, std::string file)
+      : JsonlSource(*in, std::move(file)), owned_(std::move(in)) {}
+  std::unique_ptr<std::istringstream> owned_;
+};
+
+/// A recording: its header messages (the first and each reload's) and step messages, in order.
+class McapSource : public TraceSource {
+ public:
+  McapSource(std::string bytes, std::string file)
+      : reader_(std::move(bytes)), file_(std::move(file)) {}
+
+  bool next(TraceRecord& record) override {
+    if (error()) return false;
+    mcap::Record message;
+    while (reader_.next(message)) {
+      if (message.kind != mcap::Record::Kind::kMessage) continue;
+      if (message.topic != "/arbiter/header" && message.topic != "/arbiter/step") continue;
+      record.text = std::move(message.data);
+      record.location = {file_, 0, 0};
+      if (!accept(record)) {
+        fail_at(message.offset);
+        return false;
+      }
+      last_step_ = record.kind == TraceRecord::Kind::kStep ? record.step : last_step_;
+      return true;
+    }
+    if (!reader_.error().empty()) {
+      fail({file_, 0, 0}, reader_.error());
+      return false;
+    }
+    if (reader_.truncated()) {
+      set_truncated(fmt::format(
+          "the recording was cut off while it was written: it ends after step {} (byte {}); "
+          "what the run did after that is lost",
+          last_step_, reader_.good_until()));
+    }
+    return end({file_, 0, 0});
+  }
+
+ private:
+  /// The record's own error, told with the byte of its chunk.
+  void fail_at(std::uint64_t offset) {
+    auto problem = *error();
+    reset_error();
+    fail(problem.location, fmt::format("at byte {}: {}", offset, problem.message), problem.notes);
+  }
+
+  mcap::Reader reader_;
+  std::string file_;
+  std::uint64_t last_step_ = 0;
+};
+
+class UnreadableSource : public TraceSource {
+ public:
+  explicit UnreadableSource(std::string file) {
+    fail({std::move(file), 0, 0}, "cannot read the trace");
+  }
+  bool next(TraceRecord&) override { return false; }
+};
+
+}  // namespace
+
+void TraceSource::fail(SourceLocation where, std::string message, std::vector<std::string> notes) {
+  if (error_) return;
+  error_ = Diagnostic{std::move(where), Severity::kError, "bad-trace", std::move(message),
+                      std::move(notes)};
+}
+
+bool TraceSource::end(SourceLocation where) {
+  if (!header_seen_ && !error_) fail(std::move(where), "the trace is empty");
+  return false;
+}
+
+bool TraceSource::accept(TraceRecord& record) {
+  Json parsed;
+  try {
+    parsed = Json::parse(record.text);
+  } catch (const Json::parse_error& bad) {
+    auto where = record.location;
+    if (where.line > 0) where.column = static_cast<int>(std::max<std::size_t>(bad.byte, 1));
+    fail(std::move(where), "not JSON: " + parse_message(bad));
+    return false;
+  }
+  if (!header_seen_) {
+    if (!is_header(parsed) || !parsed.value("layers", Json()).is_array()) {
+      fail(record.location,
+           "a trace starts with a header {\"arbiter_trace\": 1, \"name\": ..., \"layers\": "
+           "[...]}; write one with 'arbiter run CONFIG --trace FILE.jsonl'");
+      return false;
+    }
+    header_seen_ = true;
+    record.kind = TraceRecord::Kind::kHeader;
+    record.step = 0;
+    return true;
+  }
+  if (is_header(parsed) && parsed.contains("reload")) {
+    const Json& after = parsed.value("after_step", Json());
+    if (!after.is_number_unsigned() || !parsed.value("layers", Json()).is_array()) {
+      fail(record.location,
+           "a reload header has \"after_step\" (the last step before it) and \"layers\"");
+      return false;
+    }
+    record.kind = TraceRecord::Kind::kReload;
+    record.step = after.get<std::uint64_t>();
+    return true;
+  }
+  if (!parsed.is_object() || !parsed.contains("step") || !parsed["step"].is_number_unsigned() ||
+      !parsed.contains("layers") || !parsed["layers"].is_object()) {
+    fail(record.location, "not a step record (an object with \"step\" and \"layers\")");
+    return false;
+  }
+  const auto step = parsed["step"].get<std::uint64_t>();
+  if (step == last_step_ && parsed.value("safe", false) == true) {
+    record.kind = TraceRecord::Kind::kSafe;
+    record.step = step;
+    return true;
+  }
+  if (step <= last_step_) {
+    fail(record.location,
+         fmt::format("step {} follows step {}; steps must increase", step, last_step_));
+    return false;
+  }
+  last_step_ = step;
+  record.kind = TraceRecord::Kind::kStep;
+  record.step = step;
+  return true;
+}
+
+std::unique_ptr<TraceSource> jsonl_trace_source(std::istream& in, std::string file) {
+  return std::make_unique<JsonlSource>(in, std::move(file));
+}
+
+std::unique_ptr<TraceSource> trace_source(std::string bytes, std::string file) {
+  if (bytes.size() >= mcap::kMagic.size()
+          ? std::string_view(bytes).substr(0, mcap::kMagic.size()) == mcap::kMagic
+          : !bytes.empty() && mcap::kMagic.substr(0, bytes.size()) == bytes) {
+    return std::make_unique<McapSource>(std::move(bytes), std::move(file));
+  }
+  return std::make_unique<JsonlTextSource>(std::move(bytes), std::move(file));
+}
+
+std::unique_ptr<TraceSource> open_trace(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::make_unique<UnreadableSource>(path);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) return std::make_unique<UnreadableSource>(path);
+  return trace_source(std::move(bytes), path);
+}
+
+std::optional<Trace> read_trace(TraceSource& source, Diagnostic& error) {
+  Trace trace;
+  TraceRecord record;
+  bool first = true;
+  while (source.next(record)) {
+    if (first) {
+      trace.header = std::move(record);
+      first = false;
+    } else if (record.kind == TraceRecord::Kind::kReload) {
+      trace.reloads.push_back({std::move(record), trace.steps.size()});
+    } else if (record.kind == TraceRecord::Kind::kSafe) {
+      trace.safe_passes.push_back(std::move(record));
+    } else {
+      trace.steps.push_back(std::move(record));
+    }
+    record = TraceRecord();
+  }
+  if (source.error()) {
+    error = *source.error();
+    return std::nullopt;
+  }
+  trace.truncated = source.truncated();
+  return trace;
+}
+
+std::optional<Trace> read_trace(const std::string& path, Diagnostic& error) {
+  auto source = open_trace(path);
+  return read_trace(*source, error);
+}
+
+}  // namespace arbiter

@@ -1,0 +1,48 @@
+// A behaviour that breaks the replay rule on purpose: test_unsteady.Dice requests a level drawn
+// from the operating system's entropy, so that no two runs agree. Replay must catch and name it.
+// test_unsteady.Counter, an interface class, writes the step number to every double actuator its
+// layer declares: inputs for replay to record and feed back.
+
+#include <random>
+#include <vector>
+
+#include "arbiter/init_context.hpp"
+#include "arbiter/plugin.hpp"
+
+namespace {
+
+class Dice final : public arbiter::Behaviour {
+ public:
+  double activation(const arbiter::StepContext&) override {
+    return std::uniform_real_distribution<double>(0.1, 1.0)(device_);
+  }
+
+ private:
+  std::random_device device_;
+};
+
+class Counter final : public arbiter::Interface {
+ public:
+  void init(arbiter::InitContext& ctx) override {
+    for (const auto& actuator : ctx.layer_actuators()) {
+      outputs_.push_back(ctx.output_to_actuator(actuator.name, actuator.location));
+    }
+  }
+  void input(arbiter::ExecuteContext& ctx) override {
+    arbiter::ValueBox value(*outputs_.front().type);
+    for (const auto& output : outputs_) {
+      *static_cast<double*>(value.data()) = static_cast<double>(ctx.step());
+      ctx.write(output, value);
+    }
+  }
+
+ private:
+  std::vector<arbiter::AnyOutput> outputs_;
+};
+
+}  // namespace
+
+ARBITER_PLUGIN(registry) {
+  registry.add_behaviour<Dice>("test_unsteady.Dice");
+  registry.add_interface<Counter>("test_unsteady.Counter");
+}

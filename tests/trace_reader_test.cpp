@@ -1,0 +1,132 @@
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <sstream>
+
+#include "arbiter/explain.hpp"
+#include "arbiter/trace_diff.hpp"
+#include "arbiter/trace_reader.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace arbiter;
+using namespace arbiter::test;
+
+namespace {
+
+const fs::path kBadTraces = fs::path(ARBITER_SOURCE_DIR) / "tests/data/bad_traces";
+
+const std::string kHeader =
+    R"({"arbiter_trace": 1, "name": "t", "layers": [{"name": "l", "order": ["a"]}]})";
+
+std::string step_record(int step) {
+  return R"({"step": )" + std::to_string(step) +
+         R"(, "layers": {"l": {"a": {"requested": 1.0, "activation": 1.0, "active": true, )"
+         R"("inhibited_by": []}}}, "actuators": {}, "controllers": {}})";
+}
+
+}  // namespace
+
+TEST_CASE("each malformed trace or recording gets its exact located error", "[trace_reader]") {
+  const WorkingDirectory here(kBadTraces);
+  std::size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(kBadTraces)) {
+    const auto name = entry.path().filename().string();
+    if (entry.path().extension() == ".err") continue;
+    ++files;
+    DYNAMIC_SECTION(name) {
+      Diagnostic error;
+      const auto trace = read_trace(name, error);
+      REQUIRE_FALSE(trace);
+      const auto expected = entry.path().string() + ".err";
+      if (update_golden()) write_text(expected, format(error));
+      CHECK(format(error) == read_text(expected));
+    }
+  }
+  CHECK(files >= 10);
+}
+
+TEST_CASE("a trace with a reload header is read as header, reloads and steps", "[trace_reader]") {
+  const std::string reload =
+      R"({"arbiter_trace": 1, "reload": 1, "after_step": 2, "name": "t", "layers": []})";
+  std::istringstream in(kHeader + "\n" + step_record(1) + "\n\n" + step_record(2) + "\n" + reload +
+                        "\n" + step_record(3) + "\n");
+  const auto source = jsonl_trace_source(in, "run.jsonl");
+  Diagnostic error;
+  const auto trace = read_trace(*source, error);
+  REQUIRE(trace);
+  CHECK(trace->header.text == kHeader);
+  REQUIRE(trace->steps.size() == 3);
+  CHECK(trace->steps[2].step == 3);
+  CHECK(trace->steps[2].location.line == 6);
+  REQUIRE(trace->reloads.size() == 1);
+  CHECK(trace->reloads[0].before == 2);
+  CHECK(trace->reloads[0].header.step == 2);
+  CHECK(trace->reloads[0].header.location.line == 5);
+  CHECK(trace->truncated.empty());
+}
+
+TEST_CASE("a record the reader rejects stops reading there with its location", "[trace_reader]") {
+  std::istringstream in(kHeader + "\n" + step_record(1) + "\nnonsense\n" + step_record(2) + "\n");
+  const auto source = jsonl_trace_source(in, "run.jsonl");
+  TraceRecord record;
+  CHECK(source->next(record));
+  CHECK(source->next(record));
+  CHECK_FALSE(source->next(record));
+  CHECK_FALSE(source->next(record));
+  REQUIRE(source->error());
+  CHECK(format(*source->error()) ==
+        "run.jsonl:3:2: error: not JSON: syntax error while parsing value - invalid literal; "
+        "last read: 'no'\n");
+}
+
+TEST_CASE("explain reports an unreadable record where the reader found it", "[trace_reader]") {
+  Registry registry = make_test_registry();
+  const Program program = compile_text(
+      "arbiter: 1\nname: t\nlayers:\n  - name: l\n    behaviours:\n      a: {type: scripted, "
+      "params: {activation: 1.0}}\n",
+      registry);
+  std::istringstream in(kHeader + "\n" + step_record(1) + "\n{\"step\": 2,\n");
+  const auto result = explain(program, in, 2, "a");
+  CHECK(result.status == Explanation::Status::kBadTrace);
+  REQUIRE(result.where);
+  CHECK(result.where->line == 3);
+  CHECK(result.text.rfind("not JSON: ", 0) == 0);
+}
+
+TEST_CASE("a recording reads as the trace of the same run, each step with its time",
+          "[trace_reader]") {
+  const auto dir = fs::path(ARBITER_SOURCE_DIR) / "tests/data/traces";
+  Diagnostic error;
+  const auto trace = read_trace((dir / "walk_and_kick.jsonl").string(), error);
+  REQUIRE(trace);
+  const auto recording = read_trace((dir / "walk_and_kick.mcap").string(), error);
+  REQUIRE(recording);
+  CHECK(recording->header.text == trace->header.text);
+  REQUIRE(recording->steps.size() == trace->steps.size());
+  for (std::size_t i = 0; i < trace->steps.size(); ++i) {
+    std::string text = recording->steps[i].text;
+    const auto t = text.find(", \"t\": ");
+    REQUIRE(t != std::string::npos);
+    text.erase(t, text.find(',', t + 1) - t);
+    CHECK(text == trace->steps[i].text);
+  }
+  CHECK(recording->truncated.empty());
+  CHECK(diff_traces(*trace, *recording).identical);
+}
+
+TEST_CASE("a recording cut anywhere reads up to its last whole chunk and says it was cut",
+          "[trace_reader]") {
+  const auto bytes =
+      read_text(fs::path(ARBITER_SOURCE_DIR) / "tests/data/traces/walk_and_kick.mcap");
+  REQUIRE(bytes.size() > 1000);
+  for (std::size_t cut = 1; cut < bytes.size() - 8; cut += 97) {
+    const auto source = trace_source(bytes.substr(0, cut), "cut.mcap");
+    Diagnostic error;
+    const auto trace = read_trace(*source, error);
+    if (trace && trace->steps.size() < 12) {
+      CHECK(trace->truncated.rfind("the recording was cut off while it was written", 0) == 0);
+    } else if (!trace) {
+      CHECK(format(error) == "cut.mcap: error: the trace is empty\n");
+    }
+  }
+}
