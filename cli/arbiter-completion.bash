@@ -32,13 +32,13 @@ _arbiter() {
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
   local commands="validate run dump explain plugins schema view plot"
-  local global="--help --version --log-level --plugin-path --max-file-bytes"
+  local global="--help --version --log-level --plugin-path --max-file-bytes --color"
 
   command=""
   for ((i = 1; i < COMP_CWORD; ++i)); do
     word=${COMP_WORDS[i]}
     case "$word" in
-      --log-level | --plugin-path | --max-file-bytes) ((++i)) ;;
+      --log-level | --plugin-path | --max-file-bytes | --color) ((++i)) ;;
       -*) ;;
       *) command=$word; break ;;
     esac
@@ -47,6 +47,7 @@ _arbiter() {
   case "$prev" in
     --log-level) mapfile -t COMPREPLY < <(compgen -W "trace debug info warn error off" -- "$cur"); return ;;
     --plugin-path) mapfile -t COMPREPLY < <(compgen -d -- "$cur"); return ;;
+    --color) mapfile -t COMPREPLY < <(compgen -W "auto always never" -- "$cur"); return ;;
     --format)
       case "$command" in
         dump) mapfile -t COMPREPLY < <(compgen -W "text dot json" -- "$cur") ;;

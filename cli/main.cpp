@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -59,8 +60,18 @@ struct Options {
   std::string view_serve = "127.0.0.1:8080";  ///< `view --serve`
   std::string output;                         ///< `plot -o`
   bool actuators = false;
-  bool paused = false;  ///< `run --paused`
+  bool paused = false;         ///< `run --paused`
+  std::string color = "auto";  ///< `--color`
+  arbiter::FormatOptions diagnostic_format = arbiter::FormatOptions::readable();
 };
+
+/// `--color auto` colours diagnostics when stderr is a terminal (and NO_COLOR is not set).
+bool use_color(const std::string& choice) {
+  if (choice != "auto") return choice == "always";
+  const char* term = std::getenv("TERM");
+  return isatty(fileno(stderr)) != 0 && std::getenv("NO_COLOR") == nullptr && term != nullptr &&
+         std::string_view(term) != "dumb";
+}
 
 arbiter::Registry make_registry() {
   arbiter::Registry registry;
@@ -68,11 +79,11 @@ arbiter::Registry make_registry() {
   return registry;
 }
 
-void print_diagnostics(const arbiter::Diagnostics& diagnostics, const std::string& format) {
-  if (format == "json") {
+void print_diagnostics(const arbiter::Diagnostics& diagnostics, const Options& options) {
+  if (options.format == "json") {
     std::cout << arbiter::format_json(diagnostics);
   } else {
-    std::cerr << arbiter::format(diagnostics);
+    std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
   }
 }
 
@@ -88,7 +99,7 @@ std::optional<arbiter::Program> load_or_report(const std::string& path, arbiter:
                                                const Options& options) {
   arbiter::Diagnostics diagnostics;
   auto program = arbiter::load(path, registry, diagnostics, load_options_of(options));
-  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics);
+  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
   return program;
 }
 
@@ -110,7 +121,7 @@ int validate(const Options& options) {
       std::cerr << fmt::format("{}: ok\n", file);
     }
   }
-  print_diagnostics(all, options.format);
+  print_diagnostics(all, options);
   if (options.format == "text" && !all.empty()) {
     std::cerr << fmt::format("{} error(s), {} warning(s)\n", all.error_count(),
                              all.warning_count());
@@ -187,7 +198,7 @@ bool registry_for_listing(const Options& options, const char* command,
   for (const auto& name : names) {
     ok = arbiter::load_plugin(name, where, "", plugin_options, registry, diagnostics) && ok;
   }
-  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics);
+  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
   return ok;
 }
 
@@ -234,7 +245,8 @@ extern "C" void on_interrupt(int) {
 int run(const Options& options) {
   auto registry = make_registry();
   arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
-  auto program = options.watch ? arbiter::cli::load_watched(reloader, options.file, std::cerr)
+  auto program = options.watch ? arbiter::cli::load_watched(reloader, options.file, std::cerr,
+                                                            options.diagnostic_format)
                                : load_or_report(options.file, registry, options);
   if (!program) return kExitInvalid;
   const double rate_hz = program->rate_hz;
@@ -253,7 +265,9 @@ int run(const Options& options) {
   arbiter::cli::RunReport report(std::cout, options.quiet);
   manager.add_observer(report);
   std::optional<arbiter::cli::Watcher> watcher;
-  if (options.watch) watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet);
+  if (options.watch)
+    watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
+                    options.diagnostic_format);
   std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
   if (!options.serve.empty()) {
     live = arbiter::cli::LiveView::open(options.serve, options.paused, std::cout, std::cerr);
@@ -398,6 +412,11 @@ int main(int argc, char** argv) {
                  "(16 MiB)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 40))
       ->type_name("BYTES");
+  app.add_option("--color", options.color,
+                 "colour the diagnostics: auto (when stderr is a terminal and NO_COLOR is unset), "
+                 "always or never")
+      ->check(CLI::IsMember({"auto", "always", "never"}))
+      ->capture_default_str();
 
   auto* validate_cmd = app.add_subcommand(
       "validate",
@@ -612,6 +631,7 @@ int main(int argc, char** argv) {
     logger->set_pattern("%^%l%$: %v");
     logger->set_level(spdlog::level::from_str(options.log_level));
     spdlog::set_default_logger(logger);
+    options.diagnostic_format = arbiter::FormatOptions::readable(use_color(options.color));
     if (validate_cmd->parsed()) return validate(options);
     if (run_cmd->parsed()) {
       if (options.watch && run_cmd->count("--steps") == 0) options.steps = std::uint64_t{1} << 40;

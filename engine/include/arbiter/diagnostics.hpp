@@ -53,9 +53,24 @@ class Diagnostics {
   std::size_t error_count_ = 0;
 };
 
+/// How format() renders diagnostics. The default is the compact form (one line per diagnostic
+/// and per note) that tests and the exception text use; people get `readable()`.
+struct FormatOptions {
+  bool codes = false;   ///< `error[unknown-key]:` instead of `error:`
+  bool source = false;  ///< under each diagnostic, its source line with the place underlined
+  bool color = false;   ///< ANSI colours (a terminal)
+
+  /// Codes and source lines: what the CLI prints.
+  static FormatOptions readable(bool color = false) { return {true, true, color}; }
+};
+
 /// `file:line:col: error: message` followed by one `file:line:col: note: ...` line per note.
-std::string format(const Diagnostic& diagnostic);
-std::string format(const Diagnostics& diagnostics);
+/// With `options.source`, the line the location points into is read from its file (relative
+/// names are resolved against the working directory, as when loading) and shown under the
+/// message, numbered, with the token at the column underlined (`^~~~`); a file that cannot be
+/// read again simply gets no source line.
+std::string format(const Diagnostic& diagnostic, const FormatOptions& options = {});
+std::string format(const Diagnostics& diagnostics, const FormatOptions& options = {});
 
 /// A JSON array of {file, line, column, severity, code, message, notes}.
 std::string format_json(const Diagnostics& diagnostics);
