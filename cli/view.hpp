@@ -14,7 +14,8 @@
 
 namespace arbiter::cli {
 
-/// A trace file (DESIGN 5) read whole: its header and step records, each line parsed.
+/// A trace file (docs/semantics.md, "The trace") read whole: its header and step records, each line
+/// parsed.
 struct TraceFile {
   /// A header written when a hot reload swapped a new program in (docs/hot_reload.md).
   struct Reload {
