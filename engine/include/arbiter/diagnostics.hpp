@@ -40,6 +40,8 @@ class Diagnostics {
   std::size_t error_count() const { return error_count_; }
   std::size_t warning_count() const { return items_.size() - error_count_; }
   const std::vector<Diagnostic>& items() const { return items_; }
+  /// An earlier report, to add notes to (one mistake, one error: what follows from it are notes).
+  Diagnostic& at(std::size_t index) { return items_.at(index); }
   bool empty() const { return items_.empty(); }
 
   /// Turns every warning into an error (`--strict`).
