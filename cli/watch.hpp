@@ -18,7 +18,7 @@ std::optional<Program> load_watched(Reloader& reloader, const std::string& path,
 
 /// Polls the modification time and size of the config and of every file it includes, from a
 /// thread of its own, and reloads through `reloader` when one changes. A valid edit prints its
-/// diff to `out`; a broken one prints its diagnostics (`file:line:col: error: ...`) to `err`
+/// diff to `out`; a broken one prints its diagnostics (`file:line:col: error[code]: ...`) to `err`
 /// and the running program goes on; a file caught mid-write is reported and retried at its
 /// next change; `quiet` leaves out the diffs (errors are still printed). The manager's stepping
 /// thread never waits for it.
