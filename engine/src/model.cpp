@@ -778,7 +778,9 @@ class ModelBuilder {
       if (type != nullptr) {
         if (auto text = read_string(*type, "a value type")) {
           actuator.type = registry_.find_value_type(*text);
-          if (actuator.type == nullptr) {
+          // A value type of a listed plugin that did not load: the plugin's error says it.
+          if (actuator.type == nullptr &&
+              !(from_unloaded_plugin(*text) && diagnostics_.has_errors())) {
             auto& error = diagnostics_.error(type->location(), "unknown-type",
                                              fmt::format("unknown value type '{}'", *text));
             error.notes.push_back(suggest(*text, registry_.value_type_names()));
