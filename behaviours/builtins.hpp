@@ -1,5 +1,5 @@
 #pragma once
-// The classes every Arbiter config can use without a plugin (DESIGN 6).
+// The classes every Arbiter config can use without a plugin (docs/config.md, "Built-in classes").
 
 #include "arbiter/registry.hpp"
 

@@ -66,8 +66,8 @@ class ScriptedState final : public State {
   std::vector<PlannedState> prepend_;
 };
 
-/// Steps a state machine while active (DESIGN 6): requests `activation` while its controller is
-/// running and 0 once it has finished; pauses it while inhibited.
+/// Steps a state machine while active (docs/config.md, "Built-in classes"): requests `activation`
+/// while its controller is running and 0 once it has finished; pauses it while inhibited.
 class StateMachineBehaviour final : public Behaviour {
  public:
   void init(InitContext& ctx) override {

@@ -17,14 +17,32 @@ _arbiter_files() {  # files whose names match the regex $1, and directories, com
   compgen -d -- "$cur"
 }
 
-_arbiter_names() {  # layers|behaviours|machines of a config, from its text dump
-  local config what=$1
+_arbiter_plugin_paths() {  # the --plugin-path options typed so far, for `arbiter dump`
+  local i word
+  for ((i = 1; i < COMP_CWORD; ++i)); do
+    word=${COMP_WORDS[i]}
+    case "$word" in
+      --plugin-path) printf '%s\n' "--plugin-path" "${COMP_WORDS[i + 1]}"; ((++i)) ;;
+      --plugin-path=*) printf '%s\n' "$word" ;;
+    esac
+  done
+}
+
+# layers|behaviours|machines of a config, from its text dump. A behaviour is offered by its name,
+# and as LAYER/NAME only when its name is in several layers or the word typed has a '/'.
+_arbiter_names() {
+  local config what=$1 plugin_paths
   config=$(_arbiter_config_of)
   [[ -n $config ]] || return
-  "${COMP_WORDS[0]}" dump "$config" 2>/dev/null | awk -v what="$what" '
+  mapfile -t plugin_paths < <(_arbiter_plugin_paths)
+  "${COMP_WORDS[0]}" "${plugin_paths[@]}" dump "$config" 2>/dev/null |
+    awk -v what="$what" -v qualified="$([[ $cur == */* ]] && echo 1)" '
     /^layer / { layer = $2; if (what == "layers") print $2 }
     /^state machine / { if (what == "machines") print $3 }
-    /^    [0-9]+\. / { if (what == "behaviours") { print $2; print layer "/" $2 } }'
+    /^    [0-9]+\. / { if (what == "behaviours") { layers[$2]++; full[++n] = layer "/" $2; name[n] = $2 } }
+    END {
+      for (i = 1; i <= n; ++i) print (qualified || layers[name[i]] > 1) ? full[i] : name[i]
+    }'
 }
 
 _arbiter() {
@@ -32,13 +50,13 @@ _arbiter() {
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
   local commands="validate run dump explain test plugins schema view plot replay diff lsp"
-  local global="--help --version --log-level --plugin-path --max-file-bytes"
+  local global="--help --version --log-level --plugin-path --max-file-bytes --color"
 
   command=""
   for ((i = 1; i < COMP_CWORD; ++i)); do
     word=${COMP_WORDS[i]}
     case "$word" in
-      --log-level | --plugin-path | --max-file-bytes) ((++i)) ;;
+      --log-level | --plugin-path | --max-file-bytes | --color) ((++i)) ;;
       -*) ;;
       *) command=$word; break ;;
     esac
@@ -47,6 +65,7 @@ _arbiter() {
   case "$prev" in
     --log-level) mapfile -t COMPREPLY < <(compgen -W "trace debug info warn error off" -- "$cur"); return ;;
     --plugin-path) mapfile -t COMPREPLY < <(compgen -d -- "$cur"); return ;;
+    --color) mapfile -t COMPREPLY < <(compgen -W "auto always never" -- "$cur"); return ;;
     --format)
       case "$command" in
         dump) mapfile -t COMPREPLY < <(compgen -W "text dot json" -- "$cur") ;;

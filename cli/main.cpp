@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -76,11 +77,21 @@ struct Options {
   std::string recording;    ///< `replay RUN.mcap`
   std::string diff_a;       ///< `diff A B`
   std::string diff_b;
-  double tolerance = 1e-9;   ///< `diff --tolerance`
-  std::string compare_path;  ///< `plot --compare`
+  double tolerance = 1e-9;     ///< `diff --tolerance`
+  std::string compare_path;    ///< `plot --compare`
+  std::string color = "auto";  ///< `--color`
+  arbiter::FormatOptions diagnostic_format = arbiter::FormatOptions::readable();
 };
 
 constexpr const char* kVersion = "0.1.0";
+
+/// `--color auto` colours diagnostics when stderr is a terminal (and NO_COLOR is not set).
+bool use_color(const std::string& choice) {
+  if (choice != "auto") return choice == "always";
+  const char* term = std::getenv("TERM");
+  return isatty(fileno(stderr)) != 0 && std::getenv("NO_COLOR") == nullptr && term != nullptr &&
+         std::string_view(term) != "dumb";
+}
 
 arbiter::Registry make_registry() {
   arbiter::Registry registry;
@@ -88,11 +99,11 @@ arbiter::Registry make_registry() {
   return registry;
 }
 
-void print_diagnostics(const arbiter::Diagnostics& diagnostics, const std::string& format) {
-  if (format == "json") {
+void print_diagnostics(const arbiter::Diagnostics& diagnostics, const Options& options) {
+  if (options.format == "json") {
     std::cout << arbiter::format_json(diagnostics);
   } else {
-    std::cerr << arbiter::format(diagnostics);
+    std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
   }
 }
 
@@ -108,7 +119,7 @@ std::optional<arbiter::Program> load_or_report(const std::string& path, arbiter:
                                                const Options& options) {
   arbiter::Diagnostics diagnostics;
   auto program = arbiter::load(path, registry, diagnostics, load_options_of(options));
-  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics);
+  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
   return program;
 }
 
@@ -130,7 +141,7 @@ int validate(const Options& options) {
       std::cerr << fmt::format("{}: ok\n", file);
     }
   }
-  print_diagnostics(all, options.format);
+  print_diagnostics(all, options);
   if (options.format == "text" && !all.empty()) {
     std::cerr << fmt::format("{} error(s), {} warning(s)\n", all.error_count(),
                              all.warning_count());
@@ -207,7 +218,7 @@ bool registry_for_listing(const Options& options, const char* command,
   for (const auto& name : names) {
     ok = arbiter::load_plugin(name, where, "", plugin_options, registry, diagnostics) && ok;
   }
-  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics);
+  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
   return ok;
 }
 
@@ -273,7 +284,8 @@ extern "C" void on_interrupt(int) {
 int run(const Options& options) {
   auto registry = make_registry();
   arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
-  auto program = options.watch ? arbiter::cli::load_watched(reloader, options.file, std::cerr)
+  auto program = options.watch ? arbiter::cli::load_watched(reloader, options.file, std::cerr,
+                                                            options.diagnostic_format)
                                : load_or_report(options.file, registry, options);
   if (!program) return kExitInvalid;
   const double rate_hz = program->rate_hz;
@@ -292,7 +304,9 @@ int run(const Options& options) {
   arbiter::cli::RunReport report(std::cout, options.quiet);
   manager.add_observer(report);
   std::optional<arbiter::cli::Watcher> watcher;
-  if (options.watch) watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet);
+  if (options.watch)
+    watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
+                    options.diagnostic_format);
   std::unique_ptr<arbiter::Recorder> recorder;  // --record
   if (!options.record_path.empty()) {
     recorder = std::make_unique<arbiter::Recorder>(
@@ -502,6 +516,11 @@ int main(int argc, char** argv) {
                  "(16 MiB)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 40))
       ->type_name("BYTES");
+  app.add_option("--color", options.color,
+                 "colour the diagnostics: auto (when stderr is a terminal and NO_COLOR is unset), "
+                 "always or never")
+      ->check(CLI::IsMember({"auto", "always", "never"}))
+      ->capture_default_str();
 
   auto* validate_cmd = app.add_subcommand(
       "validate",
@@ -854,6 +873,7 @@ int main(int argc, char** argv) {
     logger->set_pattern("%^%l%$: %v");
     logger->set_level(spdlog::level::from_str(options.log_level));
     spdlog::set_default_logger(logger);
+    options.diagnostic_format = arbiter::FormatOptions::readable(use_color(options.color));
     if (validate_cmd->parsed()) return validate(options);
     if (run_cmd->parsed()) {
       if (options.watch && run_cmd->count("--steps") == 0) options.steps = std::uint64_t{1} << 40;

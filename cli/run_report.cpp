@@ -32,8 +32,8 @@ void RunReport::on_start(const Manager& manager) {
   controller_status_.assign(program.controllers.size(), ControllerStatus::kRunning);
   key_by_index(program);
   if (quiet_) return;
-  out_ << fmt::format("running {}: {} layers, {} behaviours, {} state machines\n", program.name,
-                      program.layers.size(), program.behaviours.size(), program.controllers.size());
+  print(fmt::format("running {}: {} layers, {} behaviours, {} state machines\n", program.name,
+                    program.layers.size(), program.behaviours.size(), program.controllers.size()));
 }
 
 void RunReport::on_step(const Manager& manager) {
@@ -47,14 +47,14 @@ void RunReport::on_step(const Manager& manager) {
     const auto& behaviour = program.behaviours[b];
     const auto& layer = program.layers[behaviour.layer].name;
     if (active) {
-      out_ << fmt::format("step {:>4}  {}/{} activated (activation {:.3g})\n", manager.steps(),
-                          layer, behaviour.name, manager.activation(b));
+      print(fmt::format("step {:>4}  {}/{} activated (activation {:.3g})\n", manager.steps(), layer,
+                        behaviour.name, manager.activation(b)));
     } else if (manager.requested(b) > 0.0) {
-      out_ << fmt::format("step {:>4}  {}/{} inhibited by {}\n", manager.steps(), layer,
-                          behaviour.name, inhibitors_of(manager, b));
+      print(fmt::format("step {:>4}  {}/{} inhibited by {}\n", manager.steps(), layer,
+                        behaviour.name, inhibitors_of(manager, b)));
     } else {
-      out_ << fmt::format("step {:>4}  {}/{} deactivated (requests 0)\n", manager.steps(), layer,
-                          behaviour.name);
+      print(fmt::format("step {:>4}  {}/{} deactivated (requests 0)\n", manager.steps(), layer,
+                        behaviour.name));
     }
   }
   report_controllers(manager);
@@ -62,8 +62,7 @@ void RunReport::on_step(const Manager& manager) {
     const auto& event = manager.event(e);
     ++event_counts_[fmt::format("{}: {}", manager.event_source(event), event.text)];
     if (quiet_) continue;
-    out_ << fmt::format("step {:>4}  {}: {}\n", manager.steps(), manager.event_source(event),
-                        event.text);
+    print_event(manager.steps(), fmt::format("{}: {}", manager.event_source(event), event.text));
   }
   // Each step's lines go out at once, also into a pipe or a file (`--watch` is watched live);
   // a step that printed nothing has nothing to flush.
@@ -92,9 +91,9 @@ void RunReport::on_reload(const Manager& manager) {
     controller_status_.push_back(controller->status());
   }
   if (quiet_) return;
-  out_ << fmt::format("step {:>4}  reloaded {}: {} layers, {} behaviours, {} state machines\n",
-                      manager.steps(), program.name, program.layers.size(),
-                      program.behaviours.size(), program.controllers.size());
+  print(fmt::format("step {:>4}  reloaded {}: {} layers, {} behaviours, {} state machines\n",
+                    manager.steps(), program.name, program.layers.size(), program.behaviours.size(),
+                    program.controllers.size()));
 }
 
 void RunReport::report_controllers(const Manager& manager) {
@@ -111,19 +110,44 @@ void RunReport::report_controllers(const Manager& manager) {
       for (std::size_t i = 0; i < controller.queue_size(); ++i) {
         queue += fmt::format("{}{}", i == 0 ? "" : ", ", controller.queued(i));
       }
-      out_ << fmt::format("step {:>4}  {}: {} (cycle {}; queued: {})\n", manager.steps(),
-                          controller.name(), controller.states()[event.state].name,
-                          controller.cycle(), queue.empty() ? "nothing" : queue);
+      print(fmt::format("step {:>4}  {}: {} (cycle {}; queued: {})\n", manager.steps(),
+                        controller.name(), controller.states()[event.state].name,
+                        controller.cycle(), queue.empty() ? "nothing" : queue));
     }
     if (!status_changed) continue;
     if (controller.status() == ControllerStatus::kError) {
-      out_ << fmt::format("step {:>4}  {}: error: {}\n", manager.steps(), controller.name(),
-                          controller.error());
+      print(fmt::format("step {:>4}  {}: error: {}\n", manager.steps(), controller.name(),
+                        controller.error()));
     } else {
-      out_ << fmt::format("step {:>4}  {}: {}\n", manager.steps(), controller.name(),
-                          to_string(controller.status()));
+      print(fmt::format("step {:>4}  {}: {}\n", manager.steps(), controller.name(),
+                        to_string(controller.status())));
     }
   }
+}
+
+void RunReport::print(const std::string& line) {
+  flush_repeats();
+  last_event_.clear();
+  out_ << line;
+}
+
+void RunReport::print_event(std::uint64_t step, const std::string& event) {
+  if (event == last_event_) {
+    if (repeats_++ == 0) first_repeat_ = step;
+    last_repeat_ = step;
+    return;
+  }
+  print(fmt::format("step {:>4}  {}\n", step, event));
+  last_event_ = event;
+}
+
+void RunReport::flush_repeats() {
+  if (repeats_ == 0) return;
+  out_ << fmt::format("step {:>4}  {} again ", last_repeat_, last_event_)
+       << (repeats_ == 1
+               ? std::string("(x1)\n")
+               : fmt::format("(x{}, steps {}-{})\n", repeats_, first_repeat_, last_repeat_));
+  repeats_ = 0;
 }
 
 void RunReport::on_safe(const Manager& manager) {
@@ -137,36 +161,36 @@ void RunReport::on_safe(const Manager& manager) {
     values +=
         fmt::format("{}{} = {}", values.empty() ? "" : ", ", program.actuators[a].name, value);
   }
-  out_ << fmt::format("step {:>4}  safe values output: {}\n", manager.steps(), values)
-       << std::flush;
+  print(fmt::format("step {:>4}  safe values output: {}\n", manager.steps(), values));
+  out_ << std::flush;
 }
 
 void RunReport::on_finish(const Manager& manager) {
   if (quiet_) return;
   const Program& program = manager.program();
-  out_ << fmt::format("\n{} steps.\n", manager.steps());
+  print(fmt::format("\n{} steps.\n", manager.steps()));
   if (manager.safe_passes() > 0) {
-    out_ << fmt::format("Safe values output {} time{} (the last after step {}).\n",
-                        manager.safe_passes(), manager.safe_passes() == 1 ? "" : "s",
-                        manager.steps());
+    print(fmt::format("Safe values output {} time{} (the last after step {}).\n",
+                      manager.safe_passes(), manager.safe_passes() == 1 ? "" : "s",
+                      manager.steps()));
   }
   for (const auto& controller : program.controllers) {
-    out_ << fmt::format("State machine {}: {} after {} cycles.\n", controller->name(),
-                        to_string(controller->status()), controller->cycle());
+    print(fmt::format("State machine {}: {} after {} cycles.\n", controller->name(),
+                      to_string(controller->status()), controller->cycle()));
   }
   for (const auto& [event, count] : event_counts_) {
-    out_ << fmt::format("{} ({} time{})\n", event, count, count == 1 ? "" : "s");
+    print(fmt::format("{} ({} time{})\n", event, count, count == 1 ? "" : "s"));
   }
   if (program.behaviours.empty()) return;
-  out_ << "Active steps per behaviour:\n";
+  print("Active steps per behaviour:\n");
   for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
-    out_ << fmt::format(
+    print(fmt::format(
         "  {:<32} {:>6}  (final activation {:.3g})\n",
         program.layers[program.behaviours[b].layer].name + "/" + program.behaviours[b].name,
-        active_steps_[b], manager.activation(b));
+        active_steps_[b], manager.activation(b)));
   }
   for (const auto& [key, steps] : removed_steps_) {
-    out_ << fmt::format("  {:<32} {:>6}  (removed by a reload)\n", key, steps);
+    print(fmt::format("  {:<32} {:>6}  (removed by a reload)\n", key, steps));
   }
 }
 

@@ -23,6 +23,12 @@ class RunReport : public Observer {
 
  private:
   void report_controllers(const Manager& manager);
+  /// Writes a line of the report, after the repeats of the last event line, if any.
+  void print(const std::string& line);
+  /// An event line: printed unless it repeats the event line just before, whose repeats are
+  /// then counted and told in one line (`world: ball kicked again (x200, steps 361-559)`).
+  void print_event(std::uint64_t step, const std::string& event);
+  void flush_repeats();
   void key_by_index(const Program& program);
   std::ostream& out_;
   bool quiet_;
@@ -32,6 +38,10 @@ class RunReport : public Observer {
   std::vector<std::string> keys_;                       ///< "layer/name" per behaviour index
   std::map<std::string, std::uint64_t> removed_steps_;  ///< active steps of removed behaviours
   std::map<std::string, std::uint64_t> event_counts_;   ///< "source: text" → how often
+  std::string last_event_;  ///< the event of the last line printed, if that was an event line
+  std::uint64_t repeats_ = 0;
+  std::uint64_t first_repeat_ = 0;
+  std::uint64_t last_repeat_ = 0;
 };
 
 }  // namespace arbiter::cli

@@ -14,8 +14,8 @@
 
 namespace arbiter::cli {
 
-/// A trace file (DESIGN 5) or recording read whole by the trace reader: its header and step
-/// records, each parsed.
+/// A trace file (docs/semantics.md, "The trace") or recording read whole by the trace reader: its
+/// header and step records, each parsed.
 struct TraceFile {
   /// A header written when a hot reload swapped a new program in (docs/hot_reload.md).
   struct Reload {

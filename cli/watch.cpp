@@ -7,17 +7,22 @@
 
 namespace arbiter::cli {
 
-std::optional<Program> load_watched(Reloader& reloader, const std::string& path,
-                                    std::ostream& err) {
+std::optional<Program> load_watched(Reloader& reloader, const std::string& path, std::ostream& err,
+                                    const FormatOptions& format_options) {
   Diagnostics diagnostics;
   auto program = reloader.load(path, diagnostics);
-  if (!diagnostics.empty()) err << format(diagnostics);
+  if (!diagnostics.empty()) err << format(diagnostics, format_options);
   return program;
 }
 
 Watcher::Watcher(Reloader& reloader, Manager& manager, std::ostream& out, std::ostream& err,
-                 bool quiet)
-    : reloader_(reloader), manager_(manager), out_(out), err_(err), quiet_(quiet) {
+                 bool quiet, const FormatOptions& format_options)
+    : reloader_(reloader),
+      manager_(manager),
+      out_(out),
+      err_(err),
+      quiet_(quiet),
+      format_options_(format_options) {
   thread_ = std::thread([this] { run(); });
 }
 
@@ -55,14 +60,14 @@ void Watcher::run() {
     seen = fingerprint();
     // Each report goes out in one piece: the run's own lines come from the stepping thread.
     if (!result.staged) {
-      err_ << format(result.diagnostics)
+      err_ << format(result.diagnostics, format_options_)
            << fmt::format(
                   "reload of {} rejected: {} error(s); still running the previous "
                   "config\n",
                   reloader_.path(), result.diagnostics.error_count());
       continue;
     }
-    if (!result.diagnostics.empty()) err_ << format(result.diagnostics);
+    if (!result.diagnostics.empty()) err_ << format(result.diagnostics, format_options_);
     if (quiet_) continue;
     std::string text =
         fmt::format("reload of {}: {} change{}, swapped in at the next step\n", reloader_.path(),

@@ -83,11 +83,13 @@ TEST_CASE("every invalid config reports the approved diagnostics", "[diagnostics
       Registry registry = golden_registry();  // fresh: loading may add a config's plugins
       Diagnostics diagnostics;
       std::optional<Program> program;
+      std::string actual;
       {
         test::WorkingDirectory here(dir);
         program = load(name, registry, diagnostics);
+        // Source lines are read where the config was loaded from, as the CLI reads them.
+        actual = format(diagnostics, FormatOptions::readable());
       }
-      const std::string actual = format(diagnostics);
       const fs::path expected_path = fs::path(path).replace_extension(".expected");
       if (update_golden()) {
         write_text(expected_path, actual);
@@ -174,7 +176,7 @@ TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage 
     const auto result = run_cli("validate " + quoted(kDataDir / "invalid" / "unknown_key.yaml"));
     CHECK(result.exit_code == 1);
     CHECK(result.err.find("unknown_key.yaml:") != std::string::npos);
-    CHECK(result.err.find("error: unknown key") != std::string::npos);
+    CHECK(result.err.find("error[unknown-key]: unknown key") != std::string::npos);
   }
   SECTION("one invalid config among valid ones fails the run") {
     const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml") + " " +
@@ -190,4 +192,42 @@ TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage 
   SECTION("a missing command is a usage error") {
     CHECK(run_cli("").exit_code == 2);
   }
+}
+
+TEST_CASE("arbiter validate colours its diagnostics only when asked or in a terminal", "[cli]") {
+  const std::string config = quoted(kDataDir / "invalid" / "unknown_key.yaml");
+  const std::string escape = "\x1b[";
+  SECTION("--color always colours the severity, the code and the underline") {
+    const auto result = run_cli("--color always validate " + config);
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("\x1b[1;31merror[unknown-key]\x1b[0m") != std::string::npos);
+    CHECK(result.err.find("\x1b[1;32m^~~~\x1b[0m") != std::string::npos);
+  }
+  SECTION("auto leaves a pipe uncoloured, with the source line and its underline") {
+    const auto result = run_cli("validate " + config);
+    CHECK(result.err.find(escape) == std::string::npos);
+    CHECK(result.err.find("3 | rate: 15\n  | ^~~~\n") != std::string::npos);
+  }
+  SECTION("--color never, given after the command, too") {
+    const auto result = run_cli("validate " + config + " --color never");
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find(escape) == std::string::npos);
+  }
+  SECTION("anything else is a usage error") {
+    CHECK(run_cli("--color sometimes validate " + config).exit_code == 2);
+  }
+}
+
+TEST_CASE("the compact format is one line per diagnostic and per note, without codes",
+          "[diagnostics]") {
+  Diagnostics diagnostics;
+  diagnostics.error({"no_such_file.yaml", 3, 1}, "unknown-key", "unknown key 'rate'").notes = {
+      "did you mean 'rate_hz'?"};
+  CHECK(format(diagnostics) ==
+        "no_such_file.yaml:3:1: error: unknown key 'rate'\n"
+        "no_such_file.yaml:3:1: note: did you mean 'rate_hz'?\n");
+  // A file that cannot be read gets no source line, but keeps its code.
+  CHECK(format(diagnostics, FormatOptions::readable()) ==
+        "no_such_file.yaml:3:1: error[unknown-key]: unknown key 'rate'\n"
+        "no_such_file.yaml:3:1: note: did you mean 'rate_hz'?\n");
 }

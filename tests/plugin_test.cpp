@@ -249,6 +249,17 @@ TEST_CASE("a plugin that is on no directory of the plugin path is reported with 
             "file relative to the config ('./libs/arbiter_x.so')\n");
 }
 
+TEST_CASE("the classes of a listed plugin that is not found are no errors of their own",
+          "[plugin][diagnostic]") {
+  const Diagnostics diagnostics = failures("not_found_used.yaml");
+  std::vector<std::string> codes;
+  for (const auto& item : diagnostics.items()) codes.push_back(item.code);
+  INFO(format(diagnostics));
+  // The missing plugin, and the unrelated typo; not test_missing.Dive nor test_missing.Wait.
+  CHECK(codes == std::vector<std::string>{"plugin-not-found", "unknown-class"});
+  CHECK(diagnostics.items()[1].message == "unknown behaviour class 'scriptd'");
+}
+
 TEST_CASE("a plugin file named relative to its config that does not exist is reported",
           "[plugin][diagnostic]") {
   const Diagnostics diagnostics = failures("not_found_by_path.yaml");

@@ -1,6 +1,8 @@
 // The step refines levels through per-behaviour recipes instead of walking the chaining closure
-// (Inhibitions::recipes()). These tests check the recipes against the plain definition of DESIGN
-// 3.2 d, a[X] = r[X] * Π (1 - a[I]) over every inhibitor I of X after closure, on random graphs.
+// (Inhibitions::recipes()). These tests check the recipes against the plain definition of
+// docs/semantics.md
+// ("Refinement"), a[X] = r[X] * Π (1 - a[I]) over every inhibitor I of X after closure, on random
+// graphs.
 
 #include <catch2/catch.hpp>
 

@@ -1,4 +1,5 @@
-// State controllers (DESIGN 3.5), checked as exact event sequences per step.
+// State controllers (docs/semantics.md, "State machines"), checked as exact event sequences per
+// step.
 
 #include <catch2/catch.hpp>
 

@@ -1,4 +1,4 @@
-// The behaviour manager's step, checked against DESIGN 3.1-3.4 one rule at a time.
+// The behaviour manager's step, checked against docs/semantics.md one rule at a time.
 
 #include <catch2/catch.hpp>
 

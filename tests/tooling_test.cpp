@@ -852,7 +852,7 @@ TEST_CASE("arbiter validate --format json prints located diagnostics for machine
     CHECK(Json::parse(strict.out)[0]["severity"] == "error");
     const auto text_output = run_cli("validate \"" + copy.string() + "\"");
     CHECK(text_output.exit_code == 0);
-    CHECK(contains(text_output.err, ": warning: "));
+    CHECK(contains(text_output.err, ": warning["));
     CHECK(contains(text_output.err, "never be active"));
     fs::remove(copy);
   }
@@ -928,7 +928,8 @@ TEST_CASE("arbiter plugins lists every class with its params and ports", "[plugi
   SECTION("a plugin that is not there") {
     const auto result = run_cli("plugins --load no_such_plugin");
     CHECK(result.exit_code == 1);
-    CHECK(contains(result.err, "arbiter plugins: error: plugin 'no_such_plugin' not found"));
+    CHECK(contains(result.err,
+                   "arbiter plugins: error[plugin-not-found]: plugin 'no_such_plugin' not found"));
   }
 }
 

@@ -1,6 +1,6 @@
 // The web view of an arbiter run: live (a stream of step records from `arbiter run --serve`)
 // or recorded (a trace from `arbiter view`). Both feed the same drawing: the graph comes from the
-// JSON dump, each step from a trace record (DESIGN 5).
+// JSON dump, each step from a trace record (docs/semantics.md, "The trace").
 'use strict';
 
 const SVG = 'http://www.w3.org/2000/svg';

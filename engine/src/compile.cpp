@@ -397,8 +397,8 @@ struct PositionEdge {
 class LayerClosure {
  public:
   LayerClosure(std::size_t n, std::vector<PositionEdge> edges) : n_(n), edges_(std::move(edges)) {
-    // A pair declared both ways counts as chaining (DESIGN 3.1). The model merges duplicates;
-    // this keeps the closure right whatever it is given.
+    // A pair declared both ways counts as chaining (docs/semantics.md, "Inhibitions and their
+    // closure"). The model merges duplicates; this keeps the closure right whatever it is given.
     std::sort(edges_.begin(), edges_.end(), [](const PositionEdge& a, const PositionEdge& b) {
       if (a.to != b.to) return a.to < b.to;
       if (a.from != b.from) return a.from < b.from;

@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
+#include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 
@@ -45,19 +48,185 @@ const char* severity_name(Severity severity) {
   return severity == Severity::kError ? "error" : "warning";
 }
 
-}  // namespace
+// ANSI escapes, as gcc and rustc colour their messages.
+constexpr const char* kBold = "\x1b[1m";
+constexpr const char* kRed = "\x1b[1;31m";
+constexpr const char* kMagenta = "\x1b[1;35m";
+constexpr const char* kCyan = "\x1b[1;36m";
+constexpr const char* kBlue = "\x1b[1;34m";
+constexpr const char* kGreen = "\x1b[1;32m";
+constexpr const char* kReset = "\x1b[0m";
 
-std::string format(const Diagnostic& diagnostic) {
+struct Paint {
+  bool on;
+  std::string operator()(const char* colour, std::string_view text) const {
+    if (!on) return std::string(text);
+    return fmt::format("{}{}{}", colour, text, kReset);
+  }
+};
+
+// Config files are bounded by the load limits; a file larger than this was refused at load and
+// gets no source line.
+constexpr std::uintmax_t kMaxSourceBytes = 64u << 20;
+// A longer line is shown as a window around the column.
+constexpr std::size_t kMaxShownBytes = 160;
+
+/// The lines of the files diagnostics point into, each file read once per format() call.
+class SourceLines {
+ public:
+  /// The line (1-based) of `file`, without its line break; nullopt when unreadable.
+  std::optional<std::string_view> line(const std::string& file, int number) {
+    auto found = files_.find(file);
+    if (found == files_.end()) found = files_.emplace(file, read(file)).first;
+    const auto& lines = found->second;
+    if (number <= 0 || static_cast<std::size_t>(number) > lines.size()) return std::nullopt;
+    return std::string_view(lines[static_cast<std::size_t>(number) - 1]);
+  }
+
+ private:
+  static std::vector<std::string> read(const std::string& file) {
+    // Only regular files of a plausible size: a FIFO would block, /proc files claim size 0.
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(file, error)) return {};
+    const auto size = std::filesystem::file_size(file, error);
+    if (error || size == 0 || size > kMaxSourceBytes) return {};
+    std::ifstream in(file, std::ios::binary);
+    std::vector<std::string> lines;
+    for (std::string text; std::getline(in, text);) {
+      if (!text.empty() && text.back() == '\r') text.pop_back();
+      lines.push_back(std::move(text));
+    }
+    return lines;
+  }
+
+  std::map<std::string, std::vector<std::string>> files_;
+};
+
+bool is_continuation_byte(char c) {
+  return (static_cast<unsigned char>(c) & 0xC0) == 0x80;
+}
+
+/// The byte offset of the 1-based character column `column` in `line` (columns count
+/// characters, as the Document's locations do); the line's size when past its end.
+std::size_t byte_of_column(std::string_view line, int column) {
+  int seen = 1;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    if (is_continuation_byte(line[i])) continue;
+    if (seen == column) return i;
+    ++seen;
+  }
+  return line.size();
+}
+
+/// The length in bytes of the YAML token that starts at `start`: a quoted scalar to its closing
+/// quote, a flow collection to its closing bracket, a plain scalar up to what ends it (`: `,
+/// `,`, a closing bracket, ` #`, the line's end), a name in an inhibition up to its arrow. At
+/// least 1.
+std::size_t token_bytes(std::string_view line, std::size_t start) {
+  if (start >= line.size()) return 1;
+  const char first = line[start];
+  std::size_t end = start + 1;
+  if (first == '"' || first == '\'') {
+    while (end < line.size() && line[end] != first)
+      end += line[end] == '\\' && first == '"' ? 2 : 1;
+    return std::min(end + 1, line.size()) - start;
+  }
+  if (first == '{' || first == '[') {
+    const char close = first == '{' ? '}' : ']';
+    int depth = 1;
+    for (; end < line.size() && depth > 0; ++end) {
+      if (line[end] == first) ++depth;
+      if (line[end] == close) --depth;
+    }
+    return end - start;
+  }
+  while (end < line.size()) {
+    const char c = line[end];
+    const bool followed_by_space = end + 1 == line.size() || line[end + 1] == ' ';
+    const bool arrow =
+        c == ' ' && (line.compare(end + 1, 2, "=>") == 0 || line.compare(end + 1, 2, "->") == 0);
+    if (c == ',' || c == ']' || c == '}' || c == '"' || (c == ':' && followed_by_space) ||
+        (c == '#' && line[end - 1] == ' ') || arrow) {
+      break;
+    }
+    ++end;
+  }
+  while (end > start + 1 && line[end - 1] == ' ') --end;
+  return end - start;
+}
+
+/// Characters, not bytes: what the underline spans on screen.
+std::size_t characters(std::string_view text) {
+  std::size_t count = 0;
+  for (const char c : text) count += is_continuation_byte(c) ? 0 : 1;
+  return count;
+}
+
+/// `  12 | source line` and `     |   ^~~~` under it.
+std::string source_excerpt(std::string_view line, const SourceLocation& where, Paint paint) {
+  std::size_t start = byte_of_column(line, where.column);
+  std::size_t length = token_bytes(line, start);
+  // A long line is cut to a window around the place, marked with "...".
+  std::string_view shown = line;
+  std::string before, after;
+  if (line.size() > kMaxShownBytes) {
+    std::size_t from = start > kMaxShownBytes / 4 ? start - kMaxShownBytes / 4 : 0;
+    while (from > 0 && is_continuation_byte(line[from])) --from;
+    std::size_t to = std::min(line.size(), from + kMaxShownBytes);
+    while (to < line.size() && is_continuation_byte(line[to])) ++to;
+    shown = line.substr(from, to - from);
+    if (from > 0) before = "...";
+    if (to < line.size()) after = "...";
+    start -= from;
+    length =
+        std::min(length, std::max<std::size_t>(1, shown.size() - std::min(start, shown.size())));
+  }
+  // The underline keeps the line's tabs so that it lines up wherever the terminal's tab stops are.
+  std::string pad = before.empty() ? "" : "   ";
+  for (std::size_t i = 0; i < start && i < shown.size(); ++i) {
+    if (is_continuation_byte(shown[i])) continue;
+    pad += shown[i] == '\t' ? '\t' : ' ';
+  }
+  const std::size_t width =
+      std::max<std::size_t>(1, characters(shown.substr(std::min(start, shown.size()), length)));
+  const std::string number = std::to_string(where.line);
+  const std::string gutter(number.size(), ' ');
+  return fmt::format("{} {} {}{}{}\n{} {} {}{}\n", paint(kBlue, number), paint(kBlue, "|"), before,
+                     shown, after, gutter, paint(kBlue, "|"), pad,
+                     paint(kGreen, "^" + std::string(width - 1, '~')));
+}
+
+std::string format_one(const Diagnostic& diagnostic, const FormatOptions& options,
+                       SourceLines& sources) {
+  const Paint paint{options.color};
   const std::string where = format_location(diagnostic.location);
-  std::string out =
-      fmt::format("{}: {}: {}\n", where, severity_name(diagnostic.severity), diagnostic.message);
-  for (const auto& note : diagnostic.notes) out += fmt::format("{}: note: {}\n", where, note);
+  std::string label = severity_name(diagnostic.severity);
+  if (options.codes && !diagnostic.code.empty()) label += fmt::format("[{}]", diagnostic.code);
+  const char* colour = diagnostic.severity == Severity::kError ? kRed : kMagenta;
+  std::string out = fmt::format("{}: {}: {}\n", paint(kBold, where), paint(colour, label),
+                                paint(kBold, diagnostic.message));
+  if (options.source && diagnostic.location.line > 0) {
+    if (const auto line = sources.line(diagnostic.location.file, diagnostic.location.line)) {
+      out += source_excerpt(*line, diagnostic.location, paint);
+    }
+  }
+  for (const auto& note : diagnostic.notes) {
+    out += fmt::format("{}: {} {}\n", paint(kBold, where), paint(kCyan, "note:"), note);
+  }
   return out;
 }
 
-std::string format(const Diagnostics& diagnostics) {
+}  // namespace
+
+std::string format(const Diagnostic& diagnostic, const FormatOptions& options) {
+  SourceLines sources;
+  return format_one(diagnostic, options, sources);
+}
+
+std::string format(const Diagnostics& diagnostics, const FormatOptions& options) {
+  SourceLines sources;
   std::string out;
-  for (const auto& item : diagnostics.items()) out += format(item);
+  for (const auto& item : diagnostics.items()) out += format_one(item, options, sources);
   return out;
 }
 

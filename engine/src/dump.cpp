@@ -29,8 +29,8 @@ std::vector<std::uint32_t> readers_of(const Program& program, std::uint32_t a) {
   return readers;
 }
 
-/// Whether layer `reader` sees last step's value of actuator `a` (DESIGN 3.3): a normal layer
-/// reading an actuator of its own or a later normal layer.
+/// Whether layer `reader` sees last step's value of actuator `a` (docs/semantics.md, "Timing: the
+/// one-step delay"): a normal layer reading an actuator of its own or a later normal layer.
 bool delayed(const Program& program, std::uint32_t reader, std::uint32_t a) {
   const auto source = program.actuators[a].layer;
   return !program.layers[reader].is_interface() && !program.layers[source].is_interface() &&

@@ -232,7 +232,8 @@ Explanation explain_behaviour(const Program& program, std::uint32_t target, std:
   const auto& behaviour = program.behaviours[target];
   const auto& layer = program.layers[behaviour.layer];
   const Json& levels = at(at(record, "layers"), layer.name);
-  // Refinement over the whole layer, from the recorded requested levels (DESIGN 3.2 d).
+  // Refinement over the whole layer, from the recorded requested levels (docs/semantics.md,
+  // "Refinement").
   const std::size_t n = layer.behaviour_end - layer.behaviour_begin;
   std::vector<double> refined(n, 0.0);
   double sum = 0.0;

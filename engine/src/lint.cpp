@@ -428,9 +428,10 @@ class Linter {
     }
   }
 
-  // DESIGN 3.3: a sensor of a normal layer sees this step's value of an actuator of an earlier
-  // layer or of an interface layer, and last step's value of one of its own or a later layer.
-  // Interface layers read their sensors in the output pass, after every layer.
+  // docs/semantics.md, "Timing: the one-step delay": a sensor of a normal layer sees this step's
+  // value of an actuator of an earlier layer or of an interface layer, and last step's value of one
+  // of its own or a later layer. Interface layers read their sensors in the output pass, after
+  // every layer.
   void delayed_sensors() {
     for (std::uint32_t l = 0; l < program_.layers.size(); ++l) {
       const auto& layer = program_.layers[l];

@@ -366,7 +366,7 @@ void Manager::end_replaced(Staged& staged) {
   }
 }
 
-// Actuators that go on keep their value and written flag (DESIGN 3.3: values persist).
+// Actuators that go on keep their value and written flag (docs/semantics.md, "Persistence").
 void Manager::carry_values(const Staged& staged) {
   for (std::uint32_t a = 0; a < program_.actuators.size(); ++a) {
     const std::uint32_t from = staged.plan.actuator_from[a];
@@ -487,8 +487,8 @@ void Manager::finish_faults() {
   }
   suspended_.clear();
   if (program_.on_exception == FaultPolicy::kStop && !stopping_) {
-    // A state's exception stops its controller with status error (DESIGN 3.5); under
-    // `on_exception: stop` it stops the manager too.
+    // A state's exception stops its controller with status error (docs/semantics.md, "State
+    // machines"); under `on_exception: stop` it stops the manager too.
     for (const auto& controller : program_.controllers) {
       if (controller->status() != ControllerStatus::kError) continue;
       stopping_ = true;
@@ -576,8 +576,8 @@ void Manager::step() {
     }
   }
 
-  // Standalone controllers run after the output pass (DESIGN 3.5); a controller contains the
-  // exceptions of its states itself.
+  // Standalone controllers run after the output pass (docs/semantics.md, "State machines"); a
+  // controller contains the exceptions of its states itself.
   const StepContext standalone(data_, kUnbound);
   for (const auto& controller : program_.controllers) {
     if (!controller->owned()) controller->step(standalone);
@@ -592,7 +592,8 @@ void Manager::run_layer(const CompiledLayer& layer) {
   const std::uint32_t begin = layer.behaviour_begin;
   const std::uint32_t end = layer.behaviour_end;
   // Sensors read actuators in place: an actuator of this or a later layer still holds last
-  // step's value and written flag until resolve_actuators() below, which is DESIGN 3.3's timing.
+  // step's value and written flag until resolve_actuators() below, the timing of docs/semantics.md,
+  // "Timing: the one-step delay".
   for (std::uint32_t a = layer.actuator_begin; a < layer.actuator_end; ++a) {
     for (auto s = program_.actuator_slot_begin[a]; s < program_.actuator_slot_begin[a + 1]; ++s) {
       slot_written_[program_.actuator_slots[s]] = false;
@@ -621,13 +622,13 @@ ARBITER_NOINLINE void Manager::update_behaviours(std::uint32_t begin, std::uint3
   }
 }
 
-// Queries each behaviour's level (DESIGN 3.2 c) and refines it at once (d): refinement reads
-// only requested levels and the refined levels of behaviours earlier in the order, and no
-// behaviour code sees a refined level before execute(), so the result is that of two passes.
-// In one loop the products' latency overlaps the calls into behaviour code instead of adding to
-// them. a[b] = r[b] * Π (1 - a[i]) over b's closed inhibitors is computed through b's recipe:
-// the product Q[b] over its chained inhibitors from earlier behaviours' block products, then
-// the rest.
+// Queries each behaviour's level (docs/semantics.md, "A step") and refines it at once
+// ("Refinement"): refinement reads only requested levels and the refined levels of behaviours
+// earlier in the order, and no behaviour code sees a refined level before execute(), so the result
+// is that of two passes. In one loop the products' latency overlaps the calls into behaviour code
+// instead of adding to them. a[b] = r[b] * Π (1 - a[i]) over b's closed inhibitors is computed
+// through b's recipe: the product Q[b] over its chained inhibitors from earlier behaviours' block
+// products, then the rest.
 ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_NOINLINE void Manager::request_and_refine(
     std::uint32_t begin, std::uint32_t end) {
   const auto& recipes = program_.inhibitions.recipes();

@@ -77,12 +77,19 @@ class Fields {
         const auto hint = suggest(entry.key, keys_of(allowed));
         if (!hint.empty()) error.notes.push_back(hint);
         // A misspelt required key is reported once, as misspelt, not also as missing.
-        if (auto meant = closest(entry.key, keys_of(allowed))) misspelt_.push_back(*meant);
+        if (auto meant = closest(entry.key, keys_of(allowed))) {
+          misspelt_.push_back(*meant);
+        } else {
+          unknown_.emplace_back(entry.key, diagnostics.items().size() - 1);
+        }
       }
     }
   }
 
   bool ok() const { return ok_; }
+
+  /// The unknown keys that are no misspelling of an allowed one, with the index of their error.
+  const std::vector<std::pair<std::string, std::size_t>>& unknown() const { return unknown_; }
 
   const Node* optional(std::string_view key) const { return ok_ ? node_.find(key) : nullptr; }
 
@@ -109,6 +116,7 @@ class Fields {
   std::string what_;
   Diagnostics& diagnostics_;
   std::vector<std::string> misspelt_;
+  std::vector<std::pair<std::string, std::size_t>> unknown_;
   bool ok_ = true;
 };
 
@@ -128,6 +136,9 @@ class ModelBuilder {
 
  private:
   // Raw per-layer parts kept until every actuator of every file is known.
+  // The keys written beside a behaviour's `params:` while its params are read.
+  const std::vector<std::pair<std::string, std::size_t>>* misplaced_ = nullptr;
+
   struct PendingLayer {
     const Node* sensors = nullptr;
     const Node* behaviours = nullptr;
@@ -136,6 +147,9 @@ class ModelBuilder {
     const Node* params = nullptr;
     SourceLocation location;
     std::vector<std::string> behaviour_names;  // every key of `behaviours:`, valid or not
+    // A sensor that names no actuator but is close to one: the actuator meant and the error
+    // reported, so that ports reading the actuator meant are notes of that one error.
+    std::vector<std::pair<std::string, std::size_t>> misspelt_sensors;
   };
   struct PendingMachine {
     const Node* node = nullptr;
@@ -425,6 +439,29 @@ class ModelBuilder {
     }
   }
 
+  /// Whether `name` (`soccer.KickBall`) belongs to a plugin the config lists (by name or as a
+  /// path to `arbiter_soccer.so`) but that registered no class: it was not found or not loaded.
+  bool from_unloaded_plugin(const std::string& name) const {
+    const auto dot = name.find('.');
+    if (dot == std::string::npos) return false;
+    const std::string plugin = name.substr(0, dot);
+    bool listed = false;
+    for (const auto& entry : model_.plugins) {
+      const std::string stem = std::filesystem::path(entry.text).stem().string();
+      listed = listed || entry.text == plugin || stem == "arbiter_" + plugin;
+    }
+    if (!listed) return false;
+    // A loaded plugin's classes name its library in their origin.
+    const std::string library = fmt::format("arbiter_{}.so)", plugin);
+    for (const auto& [key, info] : registry_.classes()) {
+      if (info.origin.size() >= library.size() &&
+          info.origin.compare(info.origin.size() - library.size(), library.size(), library) == 0) {
+        return false;
+      }
+    }
+    return true;
+  }
+
   /// "a behaviour class", "an interface class".
   static std::string a_class(ClassKind kind) {
     return fmt::format("{} {} class", kind == ClassKind::kInterface ? "an" : "a", to_string(kind));
@@ -436,6 +473,8 @@ class ModelBuilder {
     const ClassInfo* cls = registry_.find_class(kind, *text);
     if (cls == nullptr) cls = registry_.find_any_class(*text);
     if (cls == nullptr) {
+      // A class of a listed plugin that did not load: the plugin's error is the one mistake.
+      if (from_unloaded_plugin(*text) && diagnostics_.has_errors()) return nullptr;
       const auto known = registry_.class_names(kind);
       auto& error =
           diagnostics_.error(node.location(), "unknown-class",
@@ -475,6 +514,11 @@ class ModelBuilder {
                      at);
       return std::nullopt;
     };
+    // "a number in [0, 5]": what is allowed, bounds and all.
+    auto bounded = [&](std::string_view noun) {
+      const std::string bounds = describe_range(spec);
+      return bounds.empty() ? std::string(noun) : fmt::format("{} {}", noun, bounds);
+    };
     // Checks a number against the spec; `item` is a number in a list.
     auto in_range = [&](double value, const Node& at, bool item) {
       const bool finite = std::isfinite(value);
@@ -482,9 +526,9 @@ class ModelBuilder {
           !(spec.maximum && value > *spec.maximum)) {
         return true;
       }
-      const std::string bounds = describe_range(spec);
-      const std::string required =
-          finite ? bounds : fmt::format("a finite number{}{}", bounds.empty() ? "" : " ", bounds);
+      const std::string required = bounded(!finite                        ? "a finite number"
+                                           : spec.kind == ParamKind::kInt ? "an integer"
+                                                                          : "a number");
       diagnostics_.error(at.location(), "out-of-range",
                          item ? fmt::format("param '{}' of {} has an item {}; items must be {}",
                                             spec.name, owner, at.text(), required)
@@ -498,13 +542,13 @@ class ModelBuilder {
         return fail("true or false", node);
       case ParamKind::kInt: {
         auto value = node.as_int();
-        if (!value) return fail("an integer", node);
+        if (!value) return fail(bounded("an integer"), node);
         if (!in_range(static_cast<double>(*value), node, false)) return std::nullopt;
         return ParamValue{static_cast<std::int64_t>(*value)};
       }
       case ParamKind::kDouble: {
         auto value = node.as_double();
-        if (!value) return fail("a number", node);
+        if (!value) return fail(bounded("a number"), node);
         if (!in_range(*value, node, false)) return std::nullopt;
         return ParamValue{*value};
       }
@@ -624,7 +668,7 @@ class ModelBuilder {
         }
       } else if (spec.default_value) {
         if (fill_defaults) set.items.push_back({spec.name, *spec.default_value, owner_at, true});
-      } else if (fill_defaults) {
+      } else if (fill_defaults && !misplaced(spec.name)) {
         diagnostics_.error(owner_at, "missing-param",
                            fmt::format("{} is missing the required param '{}' ({}) of class {}",
                                        owner, spec.name, to_string(spec.kind), cls.name));
@@ -735,7 +779,9 @@ class ModelBuilder {
       if (type != nullptr) {
         if (auto text = read_string(*type, "a value type")) {
           actuator.type = registry_.find_value_type(*text);
-          if (actuator.type == nullptr) {
+          // A value type of a listed plugin that did not load: the plugin's error says it.
+          if (actuator.type == nullptr &&
+              !(from_unloaded_plugin(*text) && diagnostics_.has_errors())) {
             auto& error = diagnostics_.error(type->location(), "unknown-type",
                                              fmt::format("unknown value type '{}'", *text));
             error.notes.push_back(suggest(*text, registry_.value_type_names()));
@@ -793,7 +839,7 @@ class ModelBuilder {
     for (std::size_t i = 0; i < model_.layers.size(); ++i) {
       LayerDecl& layer = model_.layers[i];
       PendingLayer& pending = pending_layers_[i];
-      if (pending.sensors != nullptr) read_sensors(*pending.sensors, layer);
+      if (pending.sensors != nullptr) read_sensors(*pending.sensors, layer, pending);
       if (layer.interface != nullptr) {
         const std::string owner = layer.name.text.empty()
                                       ? layer_label(layer)
@@ -813,7 +859,7 @@ class ModelBuilder {
     }
   }
 
-  void read_sensors(const Node& node, LayerDecl& layer) {
+  void read_sensors(const Node& node, LayerDecl& layer, PendingLayer& pending) {
     auto add = [&](const std::string& name, const SourceLocation& where, const Node* type) {
       if (!check_identifier(name, where, "a sensor")) return;
       for (const auto& existing : layer.sensors) {
@@ -831,8 +877,12 @@ class ModelBuilder {
         auto& error = diagnostics_.error(
             where, "unknown-actuator",
             fmt::format("sensor '{}' of {} names no actuator", name, layer_label(layer)));
-        const auto hint = suggest(name, actuator_names());
+        const auto names = actuator_names();
+        const auto hint = suggest(name, names);
         error.notes.push_back(hint.empty() ? "the config declares no actuators" : hint);
+        if (auto meant = closest(name, names)) {
+          pending.misspelt_sensors.emplace_back(std::move(*meant), diagnostics_.items().size() - 1);
+        }
         return;
       }
       const ActuatorInfo& actuator = found->second;
@@ -932,6 +982,8 @@ class ModelBuilder {
         }
         // Declared but rejected (a bad sensor entry, a duplicate actuator): already reported.
         if (declared_but_invalid(target, input, layer)) continue;
+        // A misspelt sensor is the one mistake: the ports that read what it meant are notes.
+        if (input && fold_into_misspelt_sensor(target, layer, owner, spec.name)) continue;
         std::vector<std::string> candidates;
         if (input) {
           for (const auto& sensor : layer.sensors) candidates.push_back(sensor.text);
@@ -978,6 +1030,19 @@ class ModelBuilder {
 
   /// Whether `name` was written in the layer's sensors (input) or actuators (output) but
   /// rejected there, with an error already reported.
+  bool fold_into_misspelt_sensor(const std::string& target, const LayerDecl& layer,
+                                 const std::string& owner, const std::string& port) {
+    const PendingLayer& pending =
+        pending_layers_[static_cast<std::size_t>(&layer - model_.layers.data())];
+    for (const auto& [meant, index] : pending.misspelt_sensors) {
+      if (meant != target) continue;
+      diagnostics_.at(index).notes.push_back(
+          fmt::format("{} reads '{}' through its port '{}'", owner, target, port));
+      return true;
+    }
+    return false;
+  }
+
   bool declared_but_invalid(const std::string& name, bool input, const LayerDecl& layer) const {
     const PendingLayer& pending =
         pending_layers_[static_cast<std::size_t>(&layer - model_.layers.data())];
@@ -990,6 +1055,35 @@ class ModelBuilder {
       if (entry.key == name) return true;
     }
     return false;
+  }
+
+  /// Whether `key` was written beside `params:` (and so reported already, not missing).
+  bool misplaced(const std::string& key) const {
+    if (misplaced_ == nullptr) return false;
+    for (const auto& entry : *misplaced_) {
+      if (entry.first == key) return true;
+    }
+    return false;
+  }
+
+  /// A param or port written beside `params:` or `ports:` instead of under it.
+  void note_misplaced_keys(const ClassInfo& cls,
+                           const std::vector<std::pair<std::string, std::size_t>>& keys) {
+    for (const auto& [key, index] : keys) {
+      for (const auto& param : cls.params) {
+        if (param.name != key) continue;
+        diagnostics_.at(index).notes.push_back(
+            fmt::format("'{}' is a param of {}: write it under 'params:', as in "
+                        "'params: {{{}: ...}}'",
+                        key, cls.name, key));
+      }
+      for (const auto& port : cls.ports) {
+        if (port.name != key) continue;
+        diagnostics_.at(index).notes.push_back(
+            fmt::format("'{}' is a port of {}: bind it under 'ports:', as in 'ports: {{{}: ...}}'",
+                        key, cls.name, key));
+      }
+    }
   }
 
   void read_behaviours(const Node& node, LayerDecl& layer, PendingLayer& pending) {
@@ -1013,6 +1107,7 @@ class ModelBuilder {
       const Node* type = nullptr;
       const Node* params = nullptr;
       const Node* ports = nullptr;
+      std::vector<std::pair<std::string, std::size_t>> misplaced;
       if (entry.value.is_scalar() && !entry.value.reads_as_null()) {
         type = &entry.value;  // short form `name: Class`
       } else {
@@ -1022,6 +1117,7 @@ class ModelBuilder {
         type = fields.required("type");
         params = fields.optional("params");
         ports = fields.optional("ports");
+        misplaced = fields.unknown();
         if (const Node* policy = fields.optional("on_exception")) {
           behaviour.on_exception = read_fault_policy(*policy);
         }
@@ -1029,7 +1125,10 @@ class ModelBuilder {
       if (type == nullptr) continue;
       behaviour.cls = read_class(*type, ClassKind::kBehaviour, owner);
       if (behaviour.cls == nullptr) continue;
+      note_misplaced_keys(*behaviour.cls, misplaced);
+      misplaced_ = &misplaced;
       behaviour.params = read_params(*behaviour.cls, params, where, owner);
+      misplaced_ = nullptr;
       behaviour.ports = bind_ports(*behaviour.cls, ports, layer, owner, where);
       layer.behaviours.push_back(std::move(behaviour));
     }
@@ -1111,6 +1210,20 @@ class ModelBuilder {
             "'{} {}> {}'?",
             text.substr(rb, re - rb), backwards[1] == '=' ? '=' : '-', text.substr(lb, le - lb)));
       }
+      return false;
+    }
+    // `- a => b` with the next item's `- ` indented deeper: YAML folds that line into this
+    // item as `a => b - c -> d`.
+    const auto folded = text.find(" - ");
+    if (arrows.size() > 1 && folded != std::string::npos && !item.quoted() &&
+        folded > arrows.front()) {
+      diagnostics_
+          .error(item.location(), "bad-inhibition",
+                 fmt::format("inhibition '{}' runs on into the next item", text))
+          .notes.push_back(fmt::format(
+              "the '- {}' after it is indented deeper than this item's '- ', so YAML reads it "
+              "as more of this item's text; line up the '- ' of every item",
+              text.substr(folded + 3)));
       return false;
     }
     if (arrows.size() > 1) {

@@ -115,7 +115,8 @@ void append_step_record(const Manager& manager, std::string& out) {
   }
   out += "}";
   // What behaviour and interface code reported (StepContext::report): only in steps that have
-  // some, so that traces of graphs that report nothing keep DESIGN 5's exact shape.
+  // some, so that traces of graphs that report nothing keep the exact shape of docs/semantics.md,
+  // "The trace".
   if (manager.event_count() > 0) {
     out += R"(, "reported": [)";
     for (std::size_t e = 0; e < manager.event_count(); ++e) {

@@ -54,6 +54,15 @@ expect "plugins" "-" -- --format --load --builtin --help
 expect "run" "x.yaml" "--se" -- --serve --serve-token --serve-readonly
 expect "run" "x.yaml" "--rt" -- --rt-priority
 expect "run" "x.yaml" "--rt-priority" "" --
+# Each behaviour once, by its name; LAYER/NAME once a '/' is typed.
+expect "explain" "configs/paper/walk_and_kick.yaml" "" -- go_behind_ball head_control kick_ball \
+  search_for_ball
+expect "explain" "configs/paper/walk_and_kick.yaml" "control/" -- control/go_behind_ball \
+  control/head_control control/kick_ball control/search_for_ball
+# A config whose plugin is found only through the --plugin-path typed on the command line.
+plugin_dir=$(dirname "$cli")/../tests/plugins/lib
+expect "--plugin-path" "$plugin_dir" "explain" "tests/data/plugins/good.yaml" "con" -- constant
+expect "explain" "tests/data/plugins/good.yaml" "--plugin-path" "$plugin_dir" "con" -- constant
 expect "view" "x.yaml" "--t" -- --trace
 expect "plot" "--a" -- --actuators
 expect "plot" "x.jsonl" "-o" "docs/walk_and_k" -- docs/walk_and_kick.svg

@@ -44,7 +44,7 @@ line=$(grep -n 'wave: ' "$work/robot.yaml" | cut -d: -f1)
 sed -i 's/type: scripted, params: {activation: 1}/type: scriptd, params: {activation: 1}/' \
   "$work/robot.yaml"
 wait_for 'rejected' "$work/err.txt"
-grep -q "robot.yaml:$line:[0-9]*: error: .*scriptd" "$work/err.txt" ||
+grep -q "robot.yaml:$line:[0-9]*: error\[unknown-class\]: .*scriptd" "$work/err.txt" ||
   fail "the error does not name robot.yaml:$line"
 grep -q 'still running the previous config' "$work/err.txt" || fail "no 'still running' line"
 kill -0 "$pid" || fail "the run ended after the broken edit"

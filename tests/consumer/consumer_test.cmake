@@ -116,7 +116,7 @@ run_checked(output 1 "${CMAKE_COMMAND}" -E env --unset=ARBITER_PLUGIN_PATH
             "${arbiter}" validate "${consumer_source}/patrol.yaml")
 file(REAL_PATH "${prefix}" real_prefix)
 expect_in("${output}" "arbiter validate patrol.yaml without --plugin-path"
-  "patrol.yaml:7:11: error: plugin 'patrol' not found: no arbiter_patrol.so on the plugin path"
+  "patrol.yaml:7:11: error\\[plugin-not-found\\]: plugin 'patrol' not found: no arbiter_patrol.so on the plugin path"
   "patrol.yaml:7:11: note: looked in ${real_prefix}/lib[^\n]*/arbiter/plugins\n")
 file(REAL_PATH "${BUILD_DIR}/plugins" build_plugins)
 string(FIND "${output}" "looked in ${build_plugins}\n" found)

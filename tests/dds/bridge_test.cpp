@@ -1,5 +1,5 @@
 // dds.Bridge in one process: two managers on one DDS domain, stepped by the test, so that what
-// each step sees can be checked exactly (DESIGN 3.6; docs/dds.md).
+// each step sees can be checked exactly (docs/semantics.md, "Interface layers"; docs/dds.md).
 
 #include <catch2/catch.hpp>
 

@@ -101,7 +101,8 @@ class StepContext {
     if (!input.bound()) return detail::zero_value<T>();
     return *reinterpret_cast<const T*>(data_->values + data_->actuator_offset[input.actuator]);
   }
-  /// Whether the value read was written in the step it comes from (see DESIGN 3.3 for which).
+  /// Whether the value read was written in the step it comes from (see docs/semantics.md, "Timing:
+  /// the one-step delay" for which).
   template <typename T>
   bool written(Input<T> input) const {
     return input.bound() && data_->actuator_written[input.actuator];
@@ -164,8 +165,8 @@ class InhibitedContext : public StepContext {
 
 class InitContext;
 
-/// A behaviour of the BCF. Callbacks run in this order each step (DESIGN 3.2): update(), then
-/// activation() for every behaviour of the layer, then execute() or inhibited().
+/// A behaviour of the BCF. Callbacks run in this order each step (docs/semantics.md, "A step"):
+/// update(), then activation() for every behaviour of the layer, then execute() or inhibited().
 class Behaviour {
  public:
   virtual ~Behaviour() = default;

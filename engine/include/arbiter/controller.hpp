@@ -1,7 +1,8 @@
 #pragma once
 // An SCL state controller, compiled: its states, the pool of single-use instances sized at load,
-// the queue, and the step of DESIGN 3.5. Built by compile(), stepped by its owner (a behaviour or
-// a parent state) or, when standalone, by the manager after the output pass.
+// the queue, and the step of docs/semantics.md, "State machines". Built by compile(), stepped by
+// its owner (a behaviour or a parent state) or, when standalone, by the manager after the output
+// pass.
 
 #include <array>
 #include <cstdint>
@@ -50,8 +51,9 @@ class Controller {
   std::size_t capacity() const { return capacity_; }
   const std::vector<CompiledState>& states() const { return states_; }
 
-  /// One controller step (DESIGN 3.5). `execute` is the owner's execute context, through which
-  /// states write actuators; null for a standalone controller (its states cannot write).
+  /// One controller step (docs/semantics.md, "State machines"). `execute` is the owner's execute
+  /// context, through which states write actuators; null for a standalone controller (its states
+  /// cannot write).
   void step(const StepContext& context, ExecuteContext* execute = nullptr);
   /// Back to cycle 0 with the configured initial queue; a current state is deactivated first.
   void restart(const StepContext& context);

@@ -40,6 +40,8 @@ class Diagnostics {
   std::size_t error_count() const { return error_count_; }
   std::size_t warning_count() const { return items_.size() - error_count_; }
   const std::vector<Diagnostic>& items() const { return items_; }
+  /// An earlier report, to add notes to (one mistake, one error: what follows from it are notes).
+  Diagnostic& at(std::size_t index) { return items_.at(index); }
   bool empty() const { return items_.empty(); }
 
   /// Turns every warning into an error (`--strict`).
@@ -53,9 +55,24 @@ class Diagnostics {
   std::size_t error_count_ = 0;
 };
 
+/// How format() renders diagnostics. The default is the compact form (one line per diagnostic
+/// and per note) that tests and the exception text use; people get `readable()`.
+struct FormatOptions {
+  bool codes = false;   ///< `error[unknown-key]:` instead of `error:`
+  bool source = false;  ///< under each diagnostic, its source line with the place underlined
+  bool color = false;   ///< ANSI colours (a terminal)
+
+  /// Codes and source lines: what the CLI prints.
+  static FormatOptions readable(bool color = false) { return {true, true, color}; }
+};
+
 /// `file:line:col: error: message` followed by one `file:line:col: note: ...` line per note.
-std::string format(const Diagnostic& diagnostic);
-std::string format(const Diagnostics& diagnostics);
+/// With `options.source`, the line the location points into is read from its file (relative
+/// names are resolved against the working directory, as when loading) and shown under the
+/// message, numbered, with the token at the column underlined (`^~~~`); a file that cannot be
+/// read again simply gets no source line.
+std::string format(const Diagnostic& diagnostic, const FormatOptions& options = {});
+std::string format(const Diagnostics& diagnostics, const FormatOptions& options = {});
 
 /// A JSON array of {file, line, column, severity, code, message, notes}.
 std::string format_json(const Diagnostics& diagnostics);

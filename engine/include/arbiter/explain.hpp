@@ -1,7 +1,7 @@
 #pragma once
 // Why a behaviour had its activation level at one step of a run, told from the compiled program
 // (the closed inhibitor lists, the chains behind implicit inhibitions) and the run's trace
-// (DESIGN 5). Also what a state machine did in that step.
+// (docs/semantics.md, "The trace"). Also what a state machine did in that step.
 
 #include <cstdint>
 #include <istream>

@@ -74,8 +74,8 @@ class Manager {
   Manager(const Manager&) = delete;
   Manager& operator=(const Manager&) = delete;
 
-  /// One step of DESIGN 3.2: input pass, every layer, output pass, then the observers.
-  /// Does nothing once stopped().
+  /// One step of docs/semantics.md, "A step": input pass, every layer, output pass, then the
+  /// observers. Does nothing once stopped().
   void step();
 
   /// True once behaviour or interface code under `on_exception: stop` threw (or, under a
@@ -152,7 +152,7 @@ class Manager {
 
  private:
   void run_layer(const CompiledLayer& layer);
-  // The passes of run_layer() over behaviours [begin, end) (DESIGN 3.2 b-e).
+  // The passes of run_layer() over behaviours [begin, end) (docs/semantics.md, "A step").
   void update_behaviours(std::uint32_t begin, std::uint32_t end);
   void request_and_refine(std::uint32_t begin, std::uint32_t end);
   void execute_behaviours(std::uint32_t begin, std::uint32_t end);

@@ -36,12 +36,13 @@ struct CompiledInhibition {
   SourceLocation location;  ///< where declared; for an implicit one, its inhibited behaviour
 };
 
-/// The inhibitions of a compiled program (DESIGN 3.1). What is kept is the declared ones,
-/// compactly, and a short recipe per behaviour from which the step refines levels over the chaining
-/// closure (DESIGN 3.2 d) without walking it: the closure of a chain of N behaviours has N(N-1)/2
-/// edges. As a list it holds the declared and the implicit inhibitions, by layer, then inhibited,
-/// then inhibitor (execution order); the list is built on first use (thread-safe) and kept, for
-/// tools: the step, the trace and closed() never build it.
+/// The inhibitions of a compiled program (docs/semantics.md, "Inhibitions and their closure"). What
+/// is kept is the declared ones, compactly, and a short recipe per behaviour from which the step
+/// refines levels over the chaining closure (docs/semantics.md, "Refinement") without walking it:
+/// the closure of a chain of N behaviours has N(N-1)/2 edges. As a list it holds the declared and
+/// the implicit inhibitions, by layer, then inhibited, then inhibitor (execution order); the list
+/// is built on first use (thread-safe) and kept, for tools: the step, the trace and closed() never
+/// build it.
 class Inhibitions {
  public:
   /// A declared inhibition, compactly: its location is `files()[file]:line:column`.

@@ -1,5 +1,6 @@
 #pragma once
-// Stage 5 of the data path: the JSON-lines trace of DESIGN 5, written by an observer.
+// Stage 5 of the data path: the JSON-lines trace of docs/semantics.md, "The trace", written by an
+// observer.
 
 #include <ostream>
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-// Stage 5 of the data path, read back: the records of a trace (DESIGN 5) or of a recording, in the
+// Stage 5 of the data path, read back: the records of a trace (docs/semantics.md) or of a recording, in the
 // order they were written, checked once here so that every tool reports a bad file the same way.
 
 #include <cstdint>
