@@ -375,7 +375,6 @@ int run(const Options& options) {
   }
   watcher.reset();
   manager.finish();  // outputs the safe values, whatever ended the run
-  manager.finish();
   if (recorder && recorder->dropped() > 0) {
     std::cerr << fmt::format(
         "arbiter run: the recording dropped {} steps (the disk kept up too "

@@ -863,9 +863,10 @@ TEST_CASE("a missing config is an error of its own and the other files are still
   const auto result = run_cli(std::string("validate missing.yaml ") + kWalkAndKick +
                               " tests/data/invalid/unknown_key.yaml");
   CHECK(result.exit_code == 1);
-  CHECK(contains(result.err, "missing.yaml: error: cannot open: No such file or directory\n"));
+  CHECK(contains(result.err,
+                 "missing.yaml: error[file-not-found]: cannot open: No such file or directory\n"));
   CHECK(contains(result.err, std::string(kWalkAndKick) + ": ok\n"));
-  CHECK(contains(result.err, "unknown_key.yaml:3:1: error: unknown key 'rate'"));
+  CHECK(contains(result.err, "unknown_key.yaml:3:1: error[unknown-key]: unknown key 'rate'"));
   CHECK(contains(result.err, "4 error(s), 0 warning(s)\n"));
   SECTION("as JSON, located at the file") {
     const auto json = run_cli("validate --format json missing.yaml");
@@ -880,7 +881,8 @@ TEST_CASE("a missing config is an error of its own and the other files are still
       INFO(command);
       const auto other = run_cli(command);
       CHECK(other.exit_code == 1);
-      CHECK(other.err == "missing.yaml: error: cannot open: No such file or directory\n");
+      CHECK(other.err ==
+            "missing.yaml: error[file-not-found]: cannot open: No such file or directory\n");
     }
   }
 }

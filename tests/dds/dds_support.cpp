@@ -164,12 +164,16 @@ std::vector<std::string> arbiter_run(const std::string& config, std::uint64_t st
 }
 
 std::vector<nlohmann::json> read_trace(const std::string& path) {
-  Diagnostic error;
-  const auto trace = arbiter::read_trace(path, error);
-  if (!trace) throw std::runtime_error(format(error));
-  std::vector<nlohmann::json> steps;
-  for (const auto& step : trace->steps) steps.push_back(nlohmann::json::parse(step.text));
-  return steps;
+  const auto source = open_trace(path);
+  std::vector<nlohmann::json> records;
+  TraceRecord record;
+  while (source->next(record)) {
+    if (record.kind == TraceRecord::Kind::kStep || record.kind == TraceRecord::Kind::kSafe) {
+      records.push_back(nlohmann::json::parse(record.text));
+    }
+  }
+  if (source->error()) throw std::runtime_error(format(*source->error()));
+  return records;
 }
 
 Registry make_registry() {

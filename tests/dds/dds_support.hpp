@@ -85,7 +85,7 @@ class Child {
 std::vector<std::string> arbiter_run(const std::string& config, std::uint64_t steps,
                                      const std::string& trace, bool quiet = true);
 
-/// The step records of a trace (the header skipped).
+/// The step records of a trace in file order, the safe-value passes among them.
 std::vector<nlohmann::json> read_trace(const std::string& path);
 
 /// The test registry (built-ins and test classes), dds.* and probe.Stamp.

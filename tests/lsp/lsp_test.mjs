@@ -340,11 +340,12 @@ test('a file that does not parse gets its syntax error located and keeps complet
   await withClient(async (client) => {
     const { uri, text } = yaml();
     await client.open(uri, text);
-    const broken = text.replace('      kick: {type: bool}', '      kick: {type: bool\n      x: ]');
+    const broken = text.replace('      kick: {type: bool, safe: false}', '      kick: {type: bool, safe: false\n      x: ]');
+    assert.notEqual(broken, text, 'the config changed: the edit no longer applies');
     const diagnostics = await client.change(uri, broken);
     assert.equal(diagnostics.length, 1, JSON.stringify(diagnostics));
     assert.equal(diagnostics[0].source, 'arbiter');
-    assert.ok(diagnostics[0].range.start.line >= positionOf(broken, 'kick: {type: bool').line);
+    assert.ok(diagnostics[0].range.start.line >= positionOf(broken, 'kick: {type: bool, safe: false').line);
     const edited = broken.replace('search_for_ball -> head_control', 'search_for_ball -> he');
     await client.change(uri, edited);
     const result = await client.request('textDocument/completion',
