@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include "xml.hpp"
+
 namespace arbiter::cli {
 
 namespace {
@@ -21,29 +23,6 @@ constexpr double kPad = 4;  // between rows
 constexpr double kSection = 22;
 constexpr const char* kComponentColours[] = {"#d62728", "#2ca02c", "#1f77b4", "#9467bd"};
 constexpr const char* kStateColours[] = {"#c6dbef", "#fdd0a2", "#c7e9c0", "#dadaeb", "#fcbba1"};
-
-std::string escape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 const Json& member(const Json& object, const std::string& key) {
   static const Json kNull;
@@ -79,12 +58,12 @@ class Plot {
   /// Starts a row: its `<g>`, background and label; returns the row's top.
   double open_row(const std::string& kind, const std::string& name, const std::string& label) {
     const double top = y_;
-    body_ += fmt::format(R"(<g class="row {}" data-name="{}">)", kind, escape(name));
-    body_ += fmt::format(R"(<title>{}</title>)", escape(name));
+    body_ += fmt::format(R"(<g class="row {}" data-name="{}">)", kind, xml_escaped(name));
+    body_ += fmt::format(R"(<title>{}</title>)", xml_escaped(name));
     body_ += fmt::format(R"(<rect x="{}" y="{}" width="{}" height="{}" fill="#f4f4f4"/>)", kLeft,
                          top, kWidth, kRow);
     body_ += fmt::format(R"(<text x="{}" y="{:.1f}" text-anchor="end">{}</text>)", kLeft - 8,
-                         top + kRow / 2 + 4, escape(label));
+                         top + kRow / 2 + 4, xml_escaped(label));
     y_ += kRow + kPad;
     return top;
   }
@@ -93,7 +72,7 @@ class Plot {
   void section(const std::string& title) {
     y_ += 6;
     body_ += fmt::format(R"(<text x="8" y="{:.1f}" font-weight="bold">{}</text>)", y_ + 10,
-                         escape(title));
+                         xml_escaped(title));
     body_ += "\n";
     y_ += kSection - 6;
   }
@@ -189,10 +168,10 @@ class Plot {
       body_ += fmt::format(
           R"(<rect x="{:.1f}" y="{}" width="{:.1f}" height="{}" fill="{}"><title>{}</title></rect>)",
           x(begin), top, x(end) - x(begin), kRow, kStateColours[colour % std::size(kStateColours)],
-          escape(state));
+          xml_escaped(state));
       if (x(end) - x(begin) > 7.0 * static_cast<double>(state.size())) {
         body_ += fmt::format(R"(<text x="{:.1f}" y="{:.1f}">{}</text>)", x(begin) + 3,
-                             top + kRow / 2 + 4, escape(state));
+                             top + kRow / 2 + 4, xml_escaped(state));
       }
       ++colour;
     };
@@ -213,7 +192,7 @@ class Plot {
       }
       body_ += fmt::format(
           R"(<line class="event" x1="{:.1f}" y1="{}" x2="{:.1f}" y2="{}" stroke="#333" stroke-width="1"><title>step {}: {}</title></line>)",
-          x(i), top, x(i), top + 6, step_at(i), escape(text));
+          x(i), top, x(i), top + 6, step_at(i), xml_escaped(text));
     }
     segment(trace_->records.size());
     close_row();
@@ -289,7 +268,7 @@ class Plot {
         R"(<text x="8" y="18" font-size="14" font-weight="bold">{2}</text>)"
         R"(<text x="8" y="34" fill="#444">{3}</text>)"
         "\n",
-        width, height, escape(title), escape(subtitle));
+        width, height, xml_escaped(title), xml_escaped(subtitle));
     // Step axis, with grid lines through every row.
     const auto spacing = tick_spacing(trace_->records.size());
     out += R"(<g class="axis">)";
@@ -341,7 +320,7 @@ class Plot {
       const double at = x(i) + (x(i + 1) - x(i)) / 2;
       body_ += fmt::format(
           R"(<line class="event" x1="{0:.1f}" y1="{1:.1f}" x2="{0:.1f}" y2="{2:.1f}" stroke="#e6550d" stroke-width="2"><title>step {3}: {4}</title></line>)",
-          at, top + 2, top + kRow - 2, step_at(i), escape(text));
+          at, top + 2, top + kRow - 2, step_at(i), xml_escaped(text));
       const Json& first = member(reported.front(), "text");
       const std::string label = first.is_string() ? first.get<std::string>() : "";
       // About 7 px per character at the plot's font size; overlapping labels are left out (the
@@ -349,7 +328,7 @@ class Plot {
       if (at + 3 >= label_end && !label.empty()) {
         body_ += fmt::format(
             R"(<text class="reported-label" x="{:.1f}" y="{:.1f}" font-size="11" fill="#a63603">{}</text>)",
-            at + 3, top + kRow / 2 + 4, escape(label));
+            at + 3, top + kRow / 2 + 4, xml_escaped(label));
         label_end = at + 3 + 7.0 * static_cast<double>(label.size());
       }
     }

@@ -3,18 +3,13 @@
 # use ajv compile them:
 #   run.sh ARBITER SOURCE_DIR WORK_DIR
 # The static schema (schema/arbiter.schema.json) and the one `arbiter schema` prints with every
-# plugin on the plugin path. WORK_DIR keeps node_modules: `npm ci` runs only when
-# package-lock.json changed.
+# plugin on the plugin path. WORK_DIR keeps node_modules (tests/support/npm_ci.sh).
 set -euo pipefail
 arbiter=$1
 source=$2
 work=$3
-mkdir -p "$work"
-if ! cmp -s "$source/tests/schema/package-lock.json" "$work/package-lock.json" ||
-   [[ ! -x $work/node_modules/.bin/ajv ]]; then
-  cp "$source/tests/schema/package.json" "$source/tests/schema/package-lock.json" "$work/"
-  (cd "$work" && npm ci --no-audit --no-fund --loglevel=error)
-fi
+. "$source/tests/support/npm_ci.sh"
+npm_ci_into "$source/tests/schema" "$work" node_modules/.bin/ajv
 "$arbiter" schema >"$work/extended.schema.json"
 grep -q '"dds.Bridge"' "$work/extended.schema.json" || echo "note: the dds plugin is not built"
 for schema in "$source/schema/arbiter.schema.json" "$work/extended.schema.json"; do
