@@ -104,18 +104,17 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     written.emplace(run->info);
     config = written->root();
   }
-  Diagnostics diagnostics;
-  std::optional<Program> program;
   const RecordedInputs inputs(run->inputs);
-  if (const auto document = read_document(config, diagnostics, options.load.limits)) {
-    load_plugins(*document, options.load.plugins, registry, diagnostics);
-    Model model = build_model(*document, registry, diagnostics, options.load.limits);
-    if (!diagnostics.has_errors()) inputs.replace_interfaces(model, diagnostics);
-    if (!diagnostics.has_errors()) program = compile(model, registry, diagnostics);
-  }
-  diagnostics.sort();
-  if (!diagnostics.empty()) err << format(diagnostics);
-  if (!program || diagnostics.has_errors()) return 1;
+  LoadOptions load = options.load;
+  load.lint = false;  // a replay reports whether the run repeats, not how the config reads
+  load.edit_model = [&](Model& model, Diagnostics& reported) {
+    inputs.replace_interfaces(model, reported);
+    return !reported.has_errors();
+  };
+  Loaded loaded = load_config(config, registry, load);
+  if (!loaded.diagnostics.empty()) err << format(loaded.diagnostics);
+  if (!loaded.program) return 1;
+  auto& program = loaded.program;
 
   std::uint64_t steps = inputs.steps();
   if (!run->reloads.empty()) {

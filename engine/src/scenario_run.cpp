@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "arbiter/explain.hpp"
+#include "arbiter/load.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/program.hpp"
 #include "arbiter/substitute.hpp"
@@ -47,13 +48,17 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
     if (item.inputs) substitution.cls = &inputs.interface_class();
     substitutions.push_back(std::move(substitution));
   }
-  auto model = load_substituted(scenario.config_path, substitutions, registry, diagnostics,
-                                options.limits, options.plugins);
-  if (!model || !inputs.prepare(scenario, *model, diagnostics)) {
-    diagnostics.sort();
-    return result;
-  }
-  auto program = compile(*model, registry, diagnostics);
+  LoadOptions load;
+  load.limits = options.limits;
+  load.plugins = options.plugins;
+  load.lint = false;  // a test reports what it tests; `arbiter validate` lints the config
+  load.edit_model = [&](Model& model, Diagnostics& reported) {
+    return substitute(model, substitutions, registry, reported) &&
+           inputs.prepare(scenario, model, reported);
+  };
+  Loaded loaded = load_config(scenario.config_path, registry, load);
+  diagnostics = std::move(loaded.diagnostics);
+  auto& program = loaded.program;
   ExpectationChecks checks;
   if (!program || !checks.resolve(scenario, *program, diagnostics)) {
     diagnostics.sort();

@@ -281,20 +281,4 @@ bool substitute(Model& model, const std::vector<Substitution>& substitutions,
   return diagnostics.error_count() == errors;
 }
 
-std::optional<Model> load_substituted(const std::string& path,
-                                      const std::vector<Substitution>& substitutions,
-                                      Registry& registry, Diagnostics& diagnostics,
-                                      const ReadLimits& limits, const PluginOptions& plugins) {
-  auto document = read_document(path, diagnostics, limits);
-  if (!document) return std::nullopt;
-  load_plugins(*document, plugins, registry, diagnostics);
-  Model model = build_model(*document, registry, diagnostics, limits);
-  if (diagnostics.has_errors()) {
-    check_inhibition_cycles(model, diagnostics);  // as load() does: one pass shows every problem
-    return std::nullopt;
-  }
-  if (!substitute(model, substitutions, registry, diagnostics)) return std::nullopt;
-  return model;
-}
-
 }  // namespace arbiter

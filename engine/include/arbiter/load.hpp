@@ -3,6 +3,7 @@
 // caller needs comes back together: the files read (text and tree), the model, the program and
 // the diagnostics.
 
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -22,6 +23,12 @@ struct LoadOptions {
   bool strict = false;  ///< warnings are errors
   /// Where files are read from (must outlive the call); nullptr: the disk.
   const FileSource* source = nullptr;
+  /// Changes the validated model before it is compiled, when validation found no error: how
+  /// scenario tests and replay put other classes in. Reports into the diagnostics it is given
+  /// and returns false, after reporting an error, to stop the load before compile.
+  std::function<bool(Model&, Diagnostics&)> edit_model;
+  /// Lint the compiled program (the lints' warnings join the diagnostics).
+  bool lint = true;
 };
 
 /// What one load produced.

@@ -43,13 +43,4 @@ struct Substitution {
 bool substitute(Model& model, const std::vector<Substitution>& substitutions,
                 const Registry& registry, Diagnostics& diagnostics);
 
-/// What load() does up to the model, then substitute(): reads the config, loads the plugins it
-/// names into `registry` and builds the model. Returns nullopt after reporting when any stage
-/// failed; compile() the result for a program that runs the replacements.
-std::optional<Model> load_substituted(const std::string& path,
-                                      const std::vector<Substitution>& substitutions,
-                                      Registry& registry, Diagnostics& diagnostics,
-                                      const ReadLimits& limits = {},
-                                      const PluginOptions& plugins = {});
-
 }  // namespace arbiter
