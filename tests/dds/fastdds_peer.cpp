@@ -116,6 +116,13 @@ class Node {
   dds::Subscriber* subscriber_ = nullptr;
 };
 
+/// Whether `writer` has found at least one reader.
+bool matched(dds::DataWriter* writer) {
+  dds::PublicationMatchedStatus status;
+  return writer->get_publication_matched_status(status) == ReturnCode_t::RETCODE_OK &&
+         status.current_count > 0;
+}
+
 /// The newest valid sample `reader` has, if any.
 template <typename Message>
 bool take_newest(dds::DataReader* reader, Message& out) {
@@ -181,7 +188,9 @@ int echo(int domain, double seconds) {
       if (!described) std::printf("received: %s\n", describe(newest).c_str());
       described = true;
     }
-    if (pending && Clock::now() - last_echo >= std::chrono::milliseconds(50)) {
+    // Not before the writer has found the bridge's reader: what is written before discovery
+    // completes reaches no one (volatile durability, as ROS 2's default).
+    if (pending && matched(out) && Clock::now() - last_echo >= std::chrono::milliseconds(50)) {
       out->write(&newest);
       last_echo = Clock::now();
       pending = false;
