@@ -116,6 +116,17 @@ class Node {
   dds::Subscriber* subscriber_ = nullptr;
 };
 
+}  // namespace
+
+// Debian's libfastrtps 2.9 deletes a reader through a base of another size (AddressSanitizer's
+// new-delete-type-mismatch, inside the library, when the peer closes its participant). The peer
+// stands in for a ROS 2 node; the project's own code is checked in the other processes.
+extern "C" const char* __asan_default_options() {
+  return "new_delete_type_mismatch=0";
+}
+
+namespace {
+
 /// Whether `writer` has found at least one reader.
 bool matched(dds::DataWriter* writer) {
   dds::PublicationMatchedStatus status;

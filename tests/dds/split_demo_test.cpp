@@ -136,10 +136,11 @@ TEST_CASE("the motion process stands at once when the strategy process stops or 
     }
     Child strategy(argv, dir.file("strategy.out"));
     // The URL, then a second of walking, then the page's Pause.
-    std::smatch port;
+    std::smatch port;  // points into `printed`, which must outlive it
+    std::string printed;
     for (int i = 0; i < 100; ++i) {
-      const std::string out = strategy.output();
-      if (std::regex_search(out, port, std::regex("127\\.0\\.0\\.1:(\\d+)/"))) break;
+      printed = strategy.output();
+      if (std::regex_search(printed, port, std::regex("127\\.0\\.0\\.1:(\\d+)/"))) break;
       std::this_thread::sleep_for(100ms);
     }
     REQUIRE(port.size() == 2);
