@@ -126,11 +126,7 @@ run_preset dev || status=$?
 if [[ $status -eq 0 ]]; then
   if sanitizers_work; then
     # The browser tests exercise the page, not the engine: once, in the dev preset, is enough.
-    # The safe-gait test of the split demo paces two processes in real time (10 and 100 Hz);
-    # under the sanitizers' slowdown the strategy process no longer fits its timing, so it runs
-    # in the dev preset only.
-    run_preset asan --label-exclude browser \
-        --exclude-regex "the motion process stands at once when the strategy process" || status=$?
+    run_preset asan --label-exclude browser || status=$?
   else
     echo "== asan: skipped, this compiler's address/undefined sanitizers do not run here"
   fi

@@ -105,9 +105,8 @@ TEST_CASE("the motion process stands at once when the strategy process stops or 
   };
 
   SECTION("at the end of its steps") {
-    // 1.5 s of strategy: the robot is walking to the ball when it stops. 10 s of motion, so that
-    // it is still listening when a slow start (a sanitizer build) delays the strategy's end.
-    Child motion(arbiter_run(dir.file("motion.yaml"), 1000, dir.file("motion.jsonl")),
+    // 1.5 s of strategy: the robot is walking to the ball when it stops.
+    Child motion(arbiter_run(dir.file("motion.yaml"), 400, dir.file("motion.jsonl")),
                  dir.file("motion.out"));
     Child strategy(arbiter_run(dir.file("strategy.yaml"), 15, dir.file("strategy.jsonl")),
                    dir.file("strategy.out"));
@@ -129,7 +128,7 @@ TEST_CASE("the motion process stands at once when the strategy process stops or 
   }
 
   SECTION("when paused from the live page") {
-    Child motion(arbiter_run(dir.file("motion.yaml"), 1000, dir.file("motion.jsonl")),
+    Child motion(arbiter_run(dir.file("motion.yaml"), 400, dir.file("motion.jsonl")),
                  dir.file("motion.out"));
     auto argv = arbiter_run(dir.file("strategy.yaml"), 100000, "", /*quiet=*/false);
     for (const std::string arg : {"--serve", "127.0.0.1:0", "--serve-token", "pause-test"}) {
