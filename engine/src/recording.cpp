@@ -100,8 +100,7 @@ Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slot
 
 Recorder::~Recorder() {
   if (started_ && !finished_) {
-    Slot* slot = nullptr;
-    while ((slot = claim()) == nullptr) std::this_thread::yield();
+    Slot* slot = claim_waiting();
     slot->kind = Slot::Kind::kEnd;
     publish();
   }
@@ -183,11 +182,15 @@ void Recorder::on_step(const Manager& manager) {
   publish();
 }
 
+Recorder::Slot* Recorder::claim_waiting() {
+  Slot* slot = nullptr;
+  while ((slot = claim()) == nullptr) std::this_thread::yield();
+  return slot;
+}
+
 void Recorder::on_safe(const Manager& manager) {
   if (!started_) return;
-  Slot* slot = nullptr;
-  // The last values a stopping robot was given: never dropped.
-  while ((slot = claim()) == nullptr) std::this_thread::yield();
+  Slot* slot = claim_waiting();  // the last values a stopping robot was given: never dropped
   slot->kind = Slot::Kind::kSafe;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
@@ -198,9 +201,8 @@ void Recorder::on_safe(const Manager& manager) {
 
 void Recorder::on_reload(const Manager& manager) {
   if (!started_) return;
-  Slot* slot = nullptr;
   // A reload header is never dropped: without it the steps after it could not be read.
-  while ((slot = claim()) == nullptr) std::this_thread::yield();
+  Slot* slot = claim_waiting();
   slot->kind = Slot::Kind::kHeader;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
@@ -210,8 +212,7 @@ void Recorder::on_reload(const Manager& manager) {
 
 void Recorder::on_finish(const Manager&) {
   if (!started_ || finished_) return;
-  Slot* slot = nullptr;
-  while ((slot = claim()) == nullptr) std::this_thread::yield();
+  Slot* slot = claim_waiting();
   slot->kind = Slot::Kind::kEnd;
   publish();
   writer_.join();

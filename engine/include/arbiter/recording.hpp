@@ -58,6 +58,8 @@ class Recorder : public Observer {
     std::string inputs;
   };
   Slot* claim();
+  /// claim(), waiting for the writer to free a slot: for what must never be dropped.
+  Slot* claim_waiting();
   /// A message's log time: the wall clock at the run's start plus the step's "t" (the manager's
   /// clock; a manager without one logs every step at the start).
   std::uint64_t log_time(const Manager& manager) const;
