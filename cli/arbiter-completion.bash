@@ -104,7 +104,7 @@ _arbiter() {
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
     test) options="--junit --tolerance --help" ;;
-    view) options="--trace --serve --help" ;;
+    view) options="--trace --serve --step --help" ;;
     plot) options="--output --actuators --compare --help" ;;
     replay) options="--config --trace --record --steps --help" ;;
     diff) options="--tolerance --format --help" ;;

@@ -411,6 +411,7 @@ int view(const Options& options) {
   std::string unused;  // the option's check has parsed it already
   return arbiter::cli::view_trace(*program, options.trace_path,
                                   arbiter::cli::ServeAddress::parse(options.view_serve, unused),
+                                  options.step > 0 ? std::optional(options.step) : std::nullopt,
                                   interrupted, std::cout, std::cerr);
 }
 
@@ -723,12 +724,17 @@ int main(int argc, char** argv) {
       ->check(check_serve_address, "")
       ->type_name("[ADDR:]PORT")
       ->capture_default_str();
+  view_cmd
+      ->add_option("--step", options.step,
+                   "the step the page opens at, counting from 1 (default: the last step)")
+      ->check(CLI::PositiveNumber);
   view_cmd->footer(
       std::string(
           "Examples:\n"
           "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl\n"
-          "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --serve 0\n\n"
+          "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --serve 0\n"
+          "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --step 171\n\n"
           "Ctrl-C stops the server.\n") +
       kExitCodesTrace);
 

@@ -39,7 +39,8 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
 }
 
 int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,
-               const std::atomic<bool>& interrupted, std::ostream& out, std::ostream& err) {
+               std::optional<std::uint64_t> open_step, const std::atomic<bool>& interrupted,
+               std::ostream& out, std::ostream& err) {
   std::string error;
   const auto trace = read_trace_file(trace_path, error);
   if (!trace) {
@@ -63,14 +64,25 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
   }
   std::vector<std::uint64_t> steps;
   for (const auto& record : trace->records) steps.push_back(record["step"].get<std::uint64_t>());
+  if (open_step && !std::binary_search(steps.begin(), steps.end(), *open_step)) {
+    err << fmt::format("arbiter view: --step {}: {}\n", *open_step,
+                       steps.empty() ? fmt::format("{} has no step records", trace_path)
+                                     : fmt::format("{} has steps {} to {}", trace_path,
+                                                   steps.front(), steps.back()));
+    return 2;
+  }
+  // Without --step the page opens at the last step: the end of the run, with the timelines of
+  // the steps before it.
+  const std::string info = fmt::format(R"({{"mode": "trace", "step": {}}})",
+                                       open_step ? *open_step : (steps.empty() ? 0 : steps.back()));
   const std::string graph = dump_json(program);
   std::string text = trace->header_line + "\n";
   for (const auto& line : trace->lines) text += line + "\n";
 
   WebServer server;
   auto& http = server.http();
-  http.Get("/info", [](const httplib::Request&, httplib::Response& response) {
-    response.set_content(R"({"mode": "trace"})", "application/json");
+  http.Get("/info", [&info](const httplib::Request&, httplib::Response& response) {
+    response.set_content(info, "application/json");
   });
   http.Get("/graph", [&graph](const httplib::Request&, httplib::Response& response) {
     response.set_content(graph, "application/json");

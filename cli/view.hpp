@@ -35,8 +35,10 @@ struct TraceFile {
 std::optional<TraceFile> read_trace_file(const std::string& path, std::string& error);
 
 /// Serves the page for `trace` (written by running `program`'s config) until `interrupted`;
-/// prints the URL to `out`. Returns the exit code.
+/// prints the URL to `out`. The page opens at `open_step` (a step of the trace), by default at
+/// the last step. Returns the exit code.
 int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,
-               const std::atomic<bool>& interrupted, std::ostream& out, std::ostream& err);
+               std::optional<std::uint64_t> open_step, const std::atomic<bool>& interrupted,
+               std::ostream& out, std::ostream& err);
 
 }  // namespace arbiter::cli
