@@ -28,6 +28,7 @@ const view = {
   reported: [],     // what behaviour code reported (records' "reported"), oldest first
   writes: {last: null, knownFrom: 1, at: new Map()},  // for trackWrites()
   hovered: null,
+  drawPending: false,  // live: a frame will draw the newest step
   explainPending: false,
   explainShown: '',
 };
@@ -210,7 +211,7 @@ function buildGraph(graph) {
       const reach = right + ARC_GAP + ARC_STEP * span;
       const d = `M${right},${from} C${reach},${from} ${reach},${to} ${right + 6},${to}`;
       const kind = inhibition.implicit ? 'implicit' : inhibition.chaining ? 'chaining' : 'non-chaining';
-      const g = el('g', {class: `edge ${kind}`, 'data-kind': kind,
+      const g = el('g', {class: `edge ${kind}`, 'data-kind': kind, 'data-layer': layer.name,
                          'data-from': inhibition.inhibitor, 'data-to': inhibition.inhibited}, edges);
       const how = inhibition.implicit ? `implied by chaining ${inhibition.via.join(' => ')}`
                                       : `${inhibition.inhibitor} ${inhibition.chaining ? '=>' : '->'} ${inhibition.inhibited}`;
@@ -531,7 +532,15 @@ function startLive(readonly) {
     if (view.records.length > HISTORY) view.records.splice(0, view.records.length - HISTORY);
     collectReported(record);
     if (view.reported.length > REPORTED_KEPT) view.reported.splice(0, view.reported.length - REPORTED_KEPT);
-    show(record);
+    // Steps arrive in batches (up to 300 when a page connects or falls behind): draw the newest
+    // once per frame, not every one of them.
+    if (!view.drawPending) {
+      view.drawPending = true;
+      requestAnimationFrame(() => {
+        view.drawPending = false;
+        show(view.records[view.records.length - 1]);
+      });
+    }
   });
   events.addEventListener('status', (event) => {
     const status = JSON.parse(event.data);

@@ -247,6 +247,175 @@ test('the soccer demo: interface and behaviour layers with their data flow', asy
   await page.close();
 });
 
+// Every label of the graph (SVG text) against every inhibition arc and its bar, sampled along
+// the path, at each step of the trace; and every arc inside its own layer's box. Returns what
+// overlaps, as readable strings.
+async function overlapsAtEveryStep(page) {
+  return page.evaluate(() => {
+    const problems = [];
+    const points = [];  // {x, y, r, arc, layer} in page coordinates
+    for (const edge of document.querySelectorAll('#graph .edge')) {
+      const arc = `${edge.dataset.from} -> ${edge.dataset.to}`;
+      for (const shape of edge.querySelectorAll('path, line')) {
+        const matrix = shape.getScreenCTM();
+        const r = parseFloat(getComputedStyle(shape).strokeWidth) / 2;
+        const length = shape.getTotalLength();
+        for (let i = 0; i <= 80; ++i) {
+          const p = shape.getPointAtLength(length * i / 80);
+          const q = new DOMPoint(p.x, p.y).matrixTransform(matrix);
+          points.push({x: q.x, y: q.y, r, arc, layer: edge.dataset.layer});
+        }
+      }
+    }
+    if (!points.length) problems.push('no arcs drawn');
+    for (const point of points) {
+      const box = document.querySelector(`#graph .layer[data-layer="${point.layer}"] .layer-box`).getBoundingClientRect();
+      if (point.x + point.r > box.right || point.x - point.r < box.left) {
+        problems.push(`arc ${point.arc} leaves layer ${point.layer} at x ${point.x.toFixed(1)}`);
+        break;
+      }
+    }
+    const scrub = document.querySelector('#scrub');
+    for (let index = 0; index <= Number(scrub.max); ++index) {
+      scrub.value = index;
+      scrub.dispatchEvent(new Event('input'));
+      const step = document.querySelector('#step').textContent;
+      for (const label of document.querySelectorAll('#graph text')) {
+        if (!label.textContent) continue;
+        const box = label.getBoundingClientRect();
+        for (const p of points) {
+          if (p.x + p.r > box.left && p.x - p.r < box.right && p.y + p.r > box.top && p.y - p.r < box.bottom) {
+            problems.push(`step ${step}: "${label.textContent}" under the arc ${p.arc}`);
+            break;
+          }
+        }
+      }
+      // A behaviour's text stays inside its box.
+      for (const behaviour of document.querySelectorAll('#graph .behaviour')) {
+        const box = behaviour.querySelector('rect').getBoundingClientRect();
+        for (const label of behaviour.querySelectorAll('text')) {
+          const r = label.getBoundingClientRect();
+          if (label.textContent && (r.right > box.right || r.bottom > box.bottom)) {
+            problems.push(`step ${step}: "${label.textContent}" runs out of ${behaviour.dataset.name}'s box`);
+          }
+        }
+      }
+      if (problems.length > 20) break;
+    }
+    return problems;
+  });
+}
+
+for (const [config, what] of [[soccer, 'the soccer demo'], ['tests/data/valid/twin.yaml', 'a config of two behaviour layers'],
+                              [paper, 'the paper\'s config'], ['tests/web/crowded.yaml', 'a crowded config of long names and wide arcs']]) {
+  test(`no label lies under an inhibition arc: ${what}`, async () => {
+    const trace = path.join(scratch, `${path.basename(config)}.jsonl`);
+    execFileSync(arbiter, ['run', config, '--steps', '40', '--trace', trace, '-q'], {cwd: source});
+    const {url} = await serve(['view', config, '--trace', trace, '--serve', '0']);
+    const page = await open(url);
+    assert.deepEqual(await overlapsAtEveryStep(page), []);
+    await page.close();
+  });
+}
+
+test('the trace view opens at the last step, or at --step N, or at ?step=N', async () => {
+  const trace = path.join(scratch, 'soccer-open.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '220', '--trace', trace, '-q'], {cwd: source});
+  const last = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
+  let page = await open(last.url);
+  // The end of the run, with the whole run in the timelines.
+  assert.equal(await stepShown(page), 220);
+  assert.equal(await page.$eval('#scrub', (node) => Number(node.value)), 219);
+  assert.equal(await page.textContent('#timeline-range'), 'steps 1 to 220');
+  // The address follows the step shown, so that a reload stays there.
+  await page.click('#previous');
+  assert.equal(await stepShown(page), 219);
+  assert.equal(new URL(page.url()).searchParams.get('step'), '219');
+  await page.reload();
+  await page.waitForSelector('body[data-ready="true"]');
+  assert.equal(await stepShown(page), 219);
+  await page.goto(`${last.base}?step=5`);
+  await page.waitForSelector('body[data-ready="true"]');
+  assert.equal(await stepShown(page), 5);
+  await page.close();
+
+  const kick = await serve(['view', soccer, '--trace', trace, '--serve', '0', '--step', '171']);
+  page = await open(kick.url);
+  assert.equal(await stepShown(page), 171);
+  assert.equal(await behaviour(page, 'kick_ball').getAttribute('data-active'), 'true');
+  await page.close();
+
+  // A step the trace does not have is refused, with the steps it has.
+  let failed;
+  try {
+    execFileSync(arbiter, ['view', soccer, '--trace', trace, '--serve', '0', '--step', '221'],
+                 {cwd: source, stdio: 'pipe'});
+  } catch (error) {
+    failed = error;
+  }
+  assert.ok(failed, 'arbiter view --step 221 fails');
+  assert.equal(failed.status, 2);
+  assert.match(failed.stderr.toString(), /--step 221: .*soccer-open\.jsonl has steps 1 to 220/);
+});
+
+test('an actuator value nobody wrote is drawn as held, since the step after its last write', async () => {
+  const trace = path.join(scratch, 'soccer-held.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '220', '--trace', trace, '-q'], {cwd: source});
+  const {base} = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
+  const page = await open(`${base}?step=200`);
+  const kick = page.locator('#graph .actuator[data-actuator="kick"]');
+  // kick_ball writes kick = true in step 171 only; the value stays, unwritten.
+  assert.equal(await stepShown(page), 200);
+  assert.equal(await kick.getAttribute('class'), 'port actuator held');
+  assert.equal(await kick.getAttribute('data-held-since'), '172');
+  assert.equal(await kick.locator('.value').textContent(), 'trueheld since step 172');
+  assert.match(await kick.locator('title').textContent(), /held since step 172: last written in step 171/);
+  // Written values are not marked.
+  const gait = page.locator('#graph .actuator[data-actuator="gait_velocity"]');
+  assert.equal(await gait.getAttribute('class'), 'port actuator written');
+  assert.equal(await gait.locator('.held-note').count(), 0);
+  // The held value is dimmer than a written one.
+  const fill = (locator) => locator.locator('.value').evaluate((node) => getComputedStyle(node).fill);
+  assert.notEqual(await fill(kick), await fill(gait));
+  await page.goto(`${base}?step=171`);
+  await page.waitForSelector('body[data-ready="true"]');
+  assert.equal(await kick.getAttribute('class'), 'port actuator written');
+  assert.equal(await kick.locator('.value').textContent(), 'true');
+  await page.goto(`${base}?step=3`);
+  await page.waitForSelector('body[data-ready="true"]');
+  assert.equal(await kick.locator('.value').textContent(), 'falsedefault, never written');
+  await page.close();
+});
+
+test('the live page marks held values, and says when it cannot know since when', async () => {
+  // 500 steps at 250 Hz; target_position_... is written in steps 1 and 2 only, kick in step 3.
+  const crowded = 'tests/web/crowded.yaml';
+  const {url} = await serve(['run', crowded, '--serve', '0', '--steps', '500', '-q']);
+  const page = await open(url);
+  await page.waitForSelector('#status.finished');
+  await waitForStep(page, 500);
+  const target = page.locator('#graph .actuator[data-actuator="target_position_in_the_world_frame"]');
+  const kick = page.locator('#graph .actuator[data-actuator="kick"]');
+  const speed = page.locator('#graph .actuator[data-actuator="speed"]');
+  assert.equal(await speed.getAttribute('class'), 'port actuator written');
+  // A page that has seen the run from step 1 knows; one that connected later, and was sent the
+  // last 300 steps, does not.
+  const first = await page.evaluate(() => view.records[0].step);
+  if (first === 1) {
+    assert.equal(await target.getAttribute('data-held-since'), '3');
+    assert.equal(await kick.getAttribute('data-held-since'), '4');
+  }
+  await page.reload();
+  await page.waitForSelector('body[data-ready="true"]');
+  await waitForStep(page, 500);
+  assert.equal(await page.evaluate(() => view.records[0].step), 201);
+  assert.equal(await target.getAttribute('class'), 'port actuator held');
+  assert.equal(await target.getAttribute('data-held-since'), '<201');
+  assert.match(await target.locator('.value').textContent(), /held since before step 201$/);
+  assert.equal(await kick.getAttribute('data-held-since'), '<201');
+  await page.close();
+});
+
 test('a page of another origin cannot pause the run, even in the operator\'s browser', async () => {
   const {url, base} = await serve(['run', paper, '--serve', '0', '--steps', '100000', '-q']);
   // The operator's page, opened with the token: the browser now holds the token's cookie.
