@@ -423,7 +423,7 @@ function showActuator(port, record, name) {
 function trackWrites(record) {
   const writes = view.writes;
   if (writes.last === null || record.step !== writes.last + 1) {
-    // The first record, or the page missed steps (it fell behind, or the run was reloaded):
+    // The first record, or the page missed steps (it fell behind, or was away too long):
     // what was written before them is unknown.
     writes.knownFrom = record.step;
     writes.at.clear();
