@@ -369,7 +369,7 @@ void TraceChecks::finish(std::uint64_t steps) {
     std::string what = fmt::format("{}", fmt::join(first.what, ", "));
     if (what.empty()) {
       what = diff.steps_a == diff.steps_b
-                 ? "a field of its record"
+                 ? "a step only one of them has"
                  : fmt::format("the run has {} steps, the {} {}", diff.steps_b,
                                identical ? "recording" : "trace", diff.steps_a);
     }

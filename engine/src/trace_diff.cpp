@@ -90,6 +90,20 @@ Json without_timing(Json record) {
   return record;
 }
 
+// Where two records that differ first differ: "layers.control.kick_ball.inhibited_by".
+std::string first_difference(const Json& a, const Json& b, const std::string& path) {
+  if (a.is_object() && b.is_object()) {
+    for (const auto& key : keys(a, b)) {
+      const auto x = a.find(key);
+      const auto y = b.find(key);
+      const std::string inner = path.empty() ? key : path + "." + key;
+      if (x == a.end() || y == b.end()) return inner;
+      if (*x != *y) return first_difference(*x, *y, inner);
+    }
+  }
+  return path;
+}
+
 }  // namespace
 
 TraceDiffer::TraceDiffer(double tolerance, bool exact) : tolerance_(tolerance), exact_(exact) {}
@@ -130,7 +144,12 @@ void TraceDiffer::compare(std::uint64_t step, const std::string& a, const std::s
     count(diff_.machines[name], step);
     what.push_back("machine:" + name);
   }
-  const bool differs = !what.empty() || (exact_ && without_timing(x) != without_timing(y));
+  if (exact_ && what.empty()) {
+    const Json timeless_x = without_timing(x);
+    const Json timeless_y = without_timing(y);
+    if (timeless_x != timeless_y) what.push_back(first_difference(timeless_x, timeless_y, ""));
+  }
+  const bool differs = !what.empty();
   if (differs && !diff_.first_divergence) {
     diff_.first_divergence = TraceDiff::Divergence{step, std::move(what)};
   }

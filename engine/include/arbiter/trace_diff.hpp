@@ -22,7 +22,8 @@ struct TraceDiff {
   struct Divergence {
     std::uint64_t step = 0;
     /// "layer/behaviour", "actuator:NAME", "machine:NAME"; empty when one run only has more
-    /// steps, or (exact comparison) when a field outside those differs.
+    /// steps. In an exact comparison where none of those differs, the path of the first field
+    /// that does: "layers.control.kick_ball.inhibited_by".
     std::vector<std::string> what;
   };
   bool identical = true;
