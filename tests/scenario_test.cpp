@@ -72,6 +72,48 @@ TEST_CASE("every failing or invalid scenario prints the approved output and exit
   CHECK(cases >= 8);
 }
 
+TEST_CASE(
+    "recording-based scenarios: the demo replays identically, edits fail with the diff summary, "
+    "bad replays are located errors",
+    "[scenario][replay]") {
+  // The recording is made now, beside copies of the test files (tests/cli/record_scenarios.sh),
+  // and the tests run there with the paths they have in the source tree.
+  const fs::path out = fs::temp_directory_path() / "arbiter_recorded_scenarios";
+  const auto made = test::run_captured(
+      "bash \"" + (kSourceDir / "tests/cli/record_scenarios.sh").string() + "\" \"" + ARBITER_CLI +
+      "\" \"" + kSourceDir.string() + "\" \"" + out.string() + "\"");
+  INFO(made.out << made.err);
+  REQUIRE(made.exit_code == 0);
+  const auto run_there = [&](const std::string& arguments) {
+    return test::run_captured("cd \"" + out.string() + "\" && \"" + std::string(ARBITER_CLI) +
+                              "\" " + arguments);
+  };
+  const auto passing = run_there("test tests/scenarios/recorded");
+  INFO(passing.out << passing.err);
+  CHECK(passing.exit_code == 0);
+  CHECK(count(passing.out, "PASS ") ==
+        scenarios_in(kSourceDir / "tests/scenarios/recorded").size());
+
+  std::size_t cases = 0;
+  for (const auto& path : scenarios_in(kScenarios / "recorded")) {
+    ++cases;
+    const std::string relative = fs::relative(path, kSourceDir).string();
+    DYNAMIC_SECTION(relative) {
+      const auto result = run_there("test " + relative);
+      const std::string actual =
+          result.out + result.err + "exit " + std::to_string(result.exit_code) + "\n";
+      if (test::update_golden()) {
+        test::write_text(expected_of(path), actual);
+        WARN("rewrote " << expected_of(path).string());
+      } else {
+        CHECK(actual == test::read_text(expected_of(path)));
+      }
+      CHECK(result.exit_code != 0);
+    }
+  }
+  CHECK(cases >= 8);
+}
+
 TEST_CASE("the soccer demo's scenarios pass, found by directory", "[scenario]") {
   const auto result = run_cli("test tests/scenarios/soccer");
   INFO(result.out << result.err);
