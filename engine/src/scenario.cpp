@@ -242,7 +242,7 @@ class ScenarioReader {
   }
 
   void read_expect(const Node& node, Scenario& scenario) {
-    if (node.is_scalar() && !node.quoted() && node.text() == "identical") {
+    if (node.is_scalar() && node.text() == "identical") {
       if (scenario.replay.text.empty()) {
         diagnostics_.error(node.location(), "identical-without-replay",
                            "'expect: identical' compares the run with the recording it replays, "
