@@ -114,6 +114,28 @@ TEST_CASE(
   CHECK(cases >= 8);
 }
 
+TEST_CASE(
+    "a scenario replays each of two interface layers from its own recorded inputs and reports",
+    "[scenario][replay]") {
+  const fs::path dir = fs::temp_directory_path() / "arbiter_two_counters_scenario";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string cli =
+      std::string("\"") + ARBITER_CLI + "\" --plugin-path \"" + ARBITER_TEST_PLUGIN_DIR + "\" ";
+  const std::string config = (kSourceDir / "tests/data/replay/two_counters.yaml").string();
+  const auto recorded = test::run_captured(cli + "run \"" + config + "\" --steps 6 -q --record \"" +
+                                           (dir / "two.mcap").string() + "\"");
+  INFO(recorded.out << recorded.err);
+  REQUIRE(recorded.exit_code == 0);
+  test::write_text(dir / "two.test.yaml", "arbiter_test: 1\nconfig: " + config +
+                                              "\nreplay: two.mcap\nexpect: identical\n");
+  const auto result = test::run_captured(cli + "test \"" + (dir / "two.test.yaml").string() + "\"");
+  INFO(result.out << result.err);
+  CHECK(result.exit_code == 0);
+  CHECK(result.out.find("PASS ") != std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST_CASE("the soccer demo's scenarios pass, found by directory", "[scenario]") {
   const auto result = run_cli("test tests/scenarios/soccer");
   INFO(result.out << result.err);
