@@ -708,6 +708,11 @@ int main(int argc, char** argv) {
       "    - {step: 5, active: [search_for_ball], inactive: [go_behind_ball]}\n"
       "    - {steps: [12, 40], actuators: {kick: false}}\n"
       "  steps: 40\n\n"
+      "A regression test from a recording (arbiter run --record):\n"
+      "  arbiter_test: 1\n"
+      "  config: ../walk_and_kick.yaml        # may be an edited one\n"
+      "  replay: run.mcap                     # the recording's inputs feed the interface layers\n"
+      "  expect: identical                    # or expect_trace: run.jsonl\n\n"
       "Exit codes: 0 all passed, 1 a test failed, 2 usage error or invalid test file.");
 
   auto* view_cmd = app.add_subcommand(

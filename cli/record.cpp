@@ -12,10 +12,10 @@
 #include "arbiter/document.hpp"
 #include "arbiter/model.hpp"
 #include "arbiter/plugin.hpp"
+#include "arbiter/recorded_inputs.hpp"
 #include "arbiter/trace.hpp"
 #include "arbiter/trace_diff.hpp"
 #include "arbiter/trace_reader.hpp"
-#include "recorded_inputs.hpp"
 
 namespace arbiter::cli {
 

@@ -72,6 +72,70 @@ TEST_CASE("every failing or invalid scenario prints the approved output and exit
   CHECK(cases >= 8);
 }
 
+TEST_CASE(
+    "recording-based scenarios: the demo replays identically, edits fail with the diff summary, "
+    "bad replays are located errors",
+    "[scenario][replay]") {
+  // The recording is made now, beside copies of the test files (tests/cli/record_scenarios.sh),
+  // and the tests run there with the paths they have in the source tree.
+  const fs::path out = fs::temp_directory_path() / "arbiter_recorded_scenarios";
+  const auto made = test::run_captured(
+      "bash \"" + (kSourceDir / "tests/cli/record_scenarios.sh").string() + "\" \"" + ARBITER_CLI +
+      "\" \"" + kSourceDir.string() + "\" \"" + out.string() + "\"");
+  INFO(made.out << made.err);
+  REQUIRE(made.exit_code == 0);
+  const auto run_there = [&](const std::string& arguments) {
+    return test::run_captured("cd \"" + out.string() + "\" && \"" + std::string(ARBITER_CLI) +
+                              "\" " + arguments);
+  };
+  const auto passing = run_there("test tests/scenarios/recorded");
+  INFO(passing.out << passing.err);
+  CHECK(passing.exit_code == 0);
+  CHECK(count(passing.out, "PASS ") ==
+        scenarios_in(kSourceDir / "tests/scenarios/recorded").size());
+
+  std::size_t cases = 0;
+  for (const auto& path : scenarios_in(kScenarios / "recorded")) {
+    ++cases;
+    const std::string relative = fs::relative(path, kSourceDir).string();
+    DYNAMIC_SECTION(relative) {
+      const auto result = run_there("test " + relative);
+      const std::string actual =
+          result.out + result.err + "exit " + std::to_string(result.exit_code) + "\n";
+      if (test::update_golden()) {
+        test::write_text(expected_of(path), actual);
+        WARN("rewrote " << expected_of(path).string());
+      } else {
+        CHECK(actual == test::read_text(expected_of(path)));
+      }
+      CHECK(result.exit_code != 0);
+    }
+  }
+  CHECK(cases >= 8);
+}
+
+TEST_CASE(
+    "a scenario replays each of two interface layers from its own recorded inputs and reports",
+    "[scenario][replay]") {
+  const fs::path dir = fs::temp_directory_path() / "arbiter_two_counters_scenario";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string cli =
+      std::string("\"") + ARBITER_CLI + "\" --plugin-path \"" + ARBITER_TEST_PLUGIN_DIR + "\" ";
+  const std::string config = (kSourceDir / "tests/data/replay/two_counters.yaml").string();
+  const auto recorded = test::run_captured(cli + "run \"" + config + "\" --steps 6 -q --record \"" +
+                                           (dir / "two.mcap").string() + "\"");
+  INFO(recorded.out << recorded.err);
+  REQUIRE(recorded.exit_code == 0);
+  test::write_text(dir / "two.test.yaml", "arbiter_test: 1\nconfig: " + config +
+                                              "\nreplay: two.mcap\nexpect: identical\n");
+  const auto result = test::run_captured(cli + "test \"" + (dir / "two.test.yaml").string() + "\"");
+  INFO(result.out << result.err);
+  CHECK(result.exit_code == 0);
+  CHECK(result.out.find("PASS ") != std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST_CASE("the soccer demo's scenarios pass, found by directory", "[scenario]") {
   const auto result = run_cli("test tests/scenarios/soccer");
   INFO(result.out << result.err);

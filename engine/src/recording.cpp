@@ -41,7 +41,9 @@ constexpr const char* kInputsSchema = R"({"$schema": "https://json-schema.org/dr
  "properties": {
   "step": {"type": "integer", "minimum": 1},
   "inputs": {"type": "object", "additionalProperties": {"type": "object",
-    "properties": {"value": {}, "written": {"type": "boolean"}}}}},
+    "properties": {"value": {}, "written": {"type": "boolean"}}}},
+  "reported": {"type": "array", "items": {"type": "object",
+    "properties": {"by": {"type": "string"}, "text": {"type": "string"}}}}},
  "required": ["step", "inputs"]})";
 
 constexpr const char* kHeaderSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
@@ -70,14 +72,23 @@ void append_inputs_record(const Manager& manager, std::string& out) {
     }
   }
   out += "}";
-  // What interface code reported is an input too: replay reports it again, in the output pass.
+  // What interface code reported is an input too: replay reports it again, in the output pass,
+  // from the layer that reported it.
   bool reported = false;
+  const auto behaviours = program.behaviours.size();
   for (std::size_t e = 0; e < manager.event_count(); ++e) {
     const auto& event = manager.event(e);
-    if (event.source < program.behaviours.size()) continue;
+    if (event.source < behaviours || event.source - behaviours >= program.layers.size() ||
+        !program.layers[event.source - behaviours].is_interface()) {
+      continue;
+    }
     out += reported ? ", " : R"(, "reported": [)";
     reported = true;
+    out += R"({"by": )";
+    detail::append_json_string(program.layers[event.source - behaviours].name, out);
+    out += R"(, "text": )";
     detail::append_json_string(event.text, out);
+    out += "}";
   }
   if (reported) out += "]";
   out += "}";

@@ -9,8 +9,9 @@
 namespace arbiter {
 namespace {
 
-constexpr std::string_view kTopKeys[] = {"$schema", "arbiter_test", "config", "substitute",
-                                         "inputs",  "expect",       "steps"};
+constexpr std::string_view kTopKeys[] = {"$schema",    "arbiter_test", "config",
+                                         "substitute", "inputs",       "replay",
+                                         "expect",     "expect_trace", "steps"};
 constexpr std::string_view kExpectKeys[] = {"step",      "steps",        "active",
                                             "inactive",  "activation",   "requested",
                                             "actuators", "inhibited_by", "machines"};
@@ -59,9 +60,12 @@ class ScenarioReader {
           fmt::format("this arbiter reads test files of version 1, found {}", version->describe()));
     }
     read_config(root.find("config"), root, scenario);
+    const Node* replay = root.find("replay");
+    if (replay != nullptr) read_replay(*replay, root, scenario);
     if (const Node* steps = root.find("steps")) {
+      scenario.steps_location = steps->location();
       if (auto count = positive(*steps, "'steps'")) scenario.steps = *count;
-    } else {
+    } else if (replay == nullptr) {
       diagnostics_.error(root.location(), "missing-key",
                          "a test file must say how many steps to run ('steps: N')");
     }
@@ -70,11 +74,21 @@ class ScenarioReader {
       scenario.inputs_location = key_location(root, "inputs");
       read_inputs(*inputs, scenario);
     }
-    if (const Node* expect = root.find("expect")) {
-      read_expect(*expect, scenario);
-    } else {
+    const Node* expect = root.find("expect");
+    const Node* expect_trace = root.find("expect_trace");
+    if (expect != nullptr) read_expect(*expect, scenario);
+    if (expect_trace != nullptr) {
+      TraceExpectation expectation;
+      expectation.kind = TraceExpectation::Kind::kTrace;
+      if (read_file(*expect_trace, "'expect_trace'", "trace", scenario, expectation.file,
+                    expectation.path)) {
+        scenario.trace_expectations.push_back(std::move(expectation));
+      }
+    }
+    if (expect == nullptr && expect_trace == nullptr) {
       diagnostics_.error(root.location(), "missing-key",
-                         "a test file must say what it expects ('expect: [...]')");
+                         "a test file must say what it expects ('expect: [...]', 'expect: "
+                         "identical' or 'expect_trace: FILE')");
     }
     if (diagnostics_.error_count() != errors) return std::nullopt;
     return scenario;
@@ -125,18 +139,38 @@ class ScenarioReader {
                          "to the test file)");
       return;
     }
-    auto path = text(*node, "'config'");
-    if (!path) return;
-    scenario.config = {*path, node->location()};
+    read_file(*node, "'config'", "config", scenario, scenario.config, scenario.config_path);
+  }
+
+  // A file the test file names, relative to it; reported at `node` when there is no such file.
+  bool read_file(const Node& node, std::string_view key, std::string_view what,
+                 const Scenario& scenario, ScenarioName& name, std::string& resolved_path) {
+    auto path = text(node, key);
+    if (!path) return false;
+    name = {*path, node.location()};
     namespace fs = std::filesystem;
     fs::path resolved(*path);
     if (resolved.is_relative()) resolved = fs::path(scenario.file).parent_path() / resolved;
-    scenario.config_path = resolved.lexically_normal().string();
+    resolved_path = resolved.lexically_normal().string();
     std::error_code error;
     if (!fs::is_regular_file(resolved, error)) {
       diagnostics_.error(
-          node->location(), "unreadable-file",
-          fmt::format("config '{}' does not exist (looked for {})", *path, scenario.config_path));
+          node.location(), "unreadable-file",
+          fmt::format("{} '{}' does not exist (looked for {})", what, *path, resolved_path));
+      return false;
+    }
+    return true;
+  }
+
+  void read_replay(const Node& node, const Node& root, Scenario& scenario) {
+    read_file(node, "'replay'", "recording", scenario, scenario.replay, scenario.replay_path);
+    if (root.find("inputs") != nullptr) {
+      diagnostics_
+          .error(node.location(), "conflicting-keys",
+                 "a test's inputs come from 'inputs:' or from a recording ('replay:'): give one "
+                 "of the two")
+          .notes.push_back(
+              fmt::format("'inputs:' is at line {}", key_location(root, "inputs").line));
     }
   }
 
@@ -208,10 +242,24 @@ class ScenarioReader {
   }
 
   void read_expect(const Node& node, Scenario& scenario) {
+    if (node.is_scalar() && node.text() == "identical") {
+      if (scenario.replay.text.empty()) {
+        diagnostics_.error(node.location(), "identical-without-replay",
+                           "'expect: identical' compares the run with the recording it replays, "
+                           "but the test replays none: give 'replay: RUN.mcap', or compare with "
+                           "a trace ('expect_trace: FILE')");
+        return;
+      }
+      TraceExpectation expectation;
+      expectation.kind = TraceExpectation::Kind::kIdentical;
+      expectation.file = {"identical", node.location()};
+      scenario.trace_expectations.push_back(std::move(expectation));
+      return;
+    }
     if (!node.is_sequence()) {
       diagnostics_.error(node.location(), "wrong-type",
                          fmt::format("'expect' must be a list of {{step: N, ...}} or "
-                                     "{{steps: [FIRST, LAST], ...}}, found {}",
+                                     "{{steps: [FIRST, LAST], ...}}, or 'identical', found {}",
                                      node.describe()));
       return;
     }

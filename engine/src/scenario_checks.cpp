@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "arbiter/controller.hpp"
+#include "arbiter/trace.hpp"
 
 namespace arbiter {
 namespace {
@@ -292,6 +293,97 @@ std::string ExpectationChecks::check_one(const Resolved& resolved, const Manager
     }
   }
   return {};
+}
+
+bool TraceChecks::resolve(const Scenario& scenario, const Trace* recorded, std::uint64_t steps,
+                          Diagnostics& diagnostics) {
+  const std::size_t errors = diagnostics.error_count();
+  for (std::size_t i = 0; i < scenario.trace_expectations.size(); ++i) {
+    const auto& expectation = scenario.trace_expectations[i];
+    Compared compared;
+    compared.expectation = &expectation;
+    compared.index = i;
+    if (expectation.kind == TraceExpectation::Kind::kIdentical) {
+      if (recorded == nullptr) continue;  // reported by the reader
+      compared.trace = *recorded;
+      compared.name = scenario.replay.text;
+    } else {
+      Diagnostic error;
+      auto trace = read_trace(expectation.path, error);
+      if (!trace) {
+        diagnostics.error(expectation.file.location, "unreadable-trace",
+                          fmt::format("cannot compare with trace '{}': {}", expectation.file.text,
+                                      error.message));
+        continue;
+      }
+      if (!trace->truncated.empty()) {
+        diagnostics.error(expectation.file.location, "unreadable-trace",
+                          fmt::format("trace '{}' was cut off while it was written: {}",
+                                      expectation.file.text, trace->truncated));
+        continue;
+      }
+      compared.trace = std::move(*trace);
+      compared.name = expectation.file.text;
+    }
+    // The steps after a hot reload ran another config: a test compares one.
+    auto& kept = compared.trace.steps;
+    std::size_t end = kept.size();
+    if (!compared.trace.reloads.empty()) end = std::min(end, compared.trace.reloads.front().before);
+    while (end > 0 && kept[end - 1].step > steps) --end;
+    kept.resize(end);
+    compared_.push_back(std::move(compared));
+  }
+  return diagnostics.error_count() == errors;
+}
+
+void TraceChecks::check(const Manager& manager) {
+  if (compared_.empty()) return;
+  record_.clear();
+  append_step_record(manager, record_);
+  const std::uint64_t step = manager.steps();
+  for (auto& compared : compared_) {
+    const auto& steps = compared.trace.steps;
+    while (compared.next < steps.size() && steps[compared.next].step < step) {
+      compared.differ.unmatched(steps[compared.next++].step);
+    }
+    if (compared.next < steps.size() && steps[compared.next].step == step) {
+      compared.differ.compare(step, steps[compared.next++].text, record_);
+    } else if (compared.next < steps.size()) {
+      compared.differ.unmatched(step);  // a step the trace lacks (dropped while recorded)
+    } else if (compared.first_extra == 0) {
+      compared.first_extra = step;
+    }
+  }
+}
+
+void TraceChecks::finish(std::uint64_t steps) {
+  for (auto& compared : compared_) {
+    const auto& trace = compared.trace.steps;
+    const std::uint64_t first_extra =
+        compared.next < trace.size() ? trace[compared.next].step : compared.first_extra;
+    const TraceDiff diff = compared.differ.finish(trace.size(), steps, first_extra);
+    if (diff.identical) continue;
+    const auto& expectation = *compared.expectation;
+    const bool identical = expectation.kind == TraceExpectation::Kind::kIdentical;
+    const auto& first = *diff.first_divergence;
+    std::string what = fmt::format("{}", fmt::join(first.what, ", "));
+    if (what.empty()) {
+      what = diff.steps_a == diff.steps_b
+                 ? "a step only one of them has"
+                 : fmt::format("the run has {} steps, the {} {}", diff.steps_b,
+                               identical ? "recording" : "trace", diff.steps_a);
+    }
+    Failure failure;
+    failure.expectation = compared.index;
+    failure.step = first.step;
+    failure.message = fmt::format(
+        "expected the run to be identical to {} (every step record but its timing), got a "
+        "difference at step {}: {}",
+        fmt::format("{} '{}'", identical ? "the recording" : "trace", compared.name), first.step,
+        what);
+    failure.summary = format_text(diff, compared.name, "the run");
+    failures_.push_back(std::move(failure));
+  }
 }
 
 }  // namespace arbiter

@@ -10,6 +10,8 @@
 #include "arbiter/behaviour.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/scenario.hpp"
+#include "arbiter/trace_diff.hpp"
+#include "arbiter/trace_reader.hpp"
 
 namespace arbiter {
 
@@ -49,6 +51,49 @@ class ExpectationChecks {
   std::vector<Failure> failures_;
   std::vector<std::uint32_t> inhibitors_;  // scratch, kept between steps
   std::string json_;                       // scratch
+};
+
+/// The trace expectations of a scenario (`expect: identical`, `expect_trace:`): after each step,
+/// the run's step record (append_step_record) is compared with the one of the same step in the
+/// trace it must repeat, all but the timing, as `arbiter diff` compares (TraceDiffer).
+class TraceChecks {
+ public:
+  /// A run that differs: "expected ..., got ..." at the expectation, and `arbiter diff`'s summary.
+  struct Failure {
+    std::size_t expectation = 0;  ///< in Scenario::trace_expectations
+    std::uint64_t step = 0;       ///< the first divergence
+    std::string message;
+    std::string summary;
+  };
+
+  /// Reads the traces compared with: `recorded` (the replayed recording's steps, for `identical`)
+  /// or the `expect_trace:` file, each cut to the `steps` the test runs. Reports at the
+  /// expectation a trace that cannot be read or was cut off; false when anything was wrong.
+  bool resolve(const Scenario& scenario, const Trace* recorded, std::uint64_t steps,
+               Diagnostics& diagnostics);
+
+  /// Compares the manager's last step with each trace.
+  void check(const Manager& manager);
+
+  /// Ends the comparison after `steps` steps run; a trace that differs is a failure.
+  void finish(std::uint64_t steps);
+
+  const std::vector<Failure>& failures() const { return failures_; }
+  std::size_t size() const { return compared_.size(); }
+
+ private:
+  struct Compared {
+    const TraceExpectation* expectation = nullptr;
+    std::size_t index = 0;
+    std::string name;  // the trace as the test file names it
+    Trace trace;
+    std::size_t next = 0;           // the first step record of `trace` not compared yet
+    std::uint64_t first_extra = 0;  // the first step the run has past the trace's end
+    TraceDiffer differ{0.0, true};  // every field bit for bit, as replay checks determinism
+  };
+  std::vector<Compared> compared_;
+  std::vector<Failure> failures_;
+  std::string record_;  // scratch
 };
 
 }  // namespace arbiter

@@ -90,66 +90,102 @@ Json without_timing(Json record) {
   return record;
 }
 
-}  // namespace
-
-TraceDiff diff_traces(const Trace& a, const Trace& b, double tolerance, bool exact) {
-  TraceDiff diff;
-  diff.steps_a = a.steps.size();
-  diff.steps_b = b.steps.size();
-  std::size_t i = 0;
-  std::size_t j = 0;
-  while (i < a.steps.size() && j < b.steps.size()) {
-    const auto step = std::min(a.steps[i].step, b.steps[j].step);
-    if (a.steps[i].step != b.steps[j].step) {
-      // A step one run has and the other lacks (dropped while recording): nothing to align.
-      if (!diff.first_divergence) diff.first_divergence = TraceDiff::Divergence{step, {}};
-      (a.steps[i].step < b.steps[j].step ? i : j)++;
-      continue;
-    }
-    const Json x = Json::parse(a.steps[i].text);
-    const Json y = Json::parse(b.steps[j].text);
-    ++i;
-    ++j;
-    std::vector<std::string> what;
-    const Json& layers_x = member(x, "layers");
-    const Json& layers_y = member(y, "layers");
-    for (const auto& layer : keys(layers_x, layers_y)) {
-      const Json& lx = member(layers_x, layer);
-      const Json& ly = member(layers_y, layer);
-      for (const auto& name : keys(lx, ly)) {
-        if (!behaviour_differs(member(lx, name), member(ly, name), tolerance)) continue;
-        const auto key = layer + "/" + name;
-        count(diff.behaviours[key], step);
-        what.push_back(key);
-      }
-    }
-    const Json& actuators_x = member(x, "actuators");
-    const Json& actuators_y = member(y, "actuators");
-    for (const auto& name : keys(actuators_x, actuators_y)) {
-      if (!actuator_differs(member(actuators_x, name), member(actuators_y, name), tolerance)) {
-        continue;
-      }
-      count(diff.actuators[name], step);
-      what.push_back("actuator:" + name);
-    }
-    const Json& machines_x = member(x, "controllers");
-    const Json& machines_y = member(y, "controllers");
-    for (const auto& name : keys(machines_x, machines_y)) {
-      if (!machine_differs(member(machines_x, name), member(machines_y, name))) continue;
-      count(diff.machines[name], step);
-      what.push_back("machine:" + name);
-    }
-    const bool differs = !what.empty() || (exact && without_timing(x) != without_timing(y));
-    if (differs && !diff.first_divergence) {
-      diff.first_divergence = TraceDiff::Divergence{step, std::move(what)};
+// Where two records that differ first differ: "layers.control.kick_ball.inhibited_by".
+std::string first_difference(const Json& a, const Json& b, const std::string& path) {
+  if (a.is_object() && b.is_object()) {
+    for (const auto& key : keys(a, b)) {
+      const auto x = a.find(key);
+      const auto y = b.find(key);
+      const std::string inner = path.empty() ? key : path + "." + key;
+      if (x == a.end() || y == b.end()) return inner;
+      if (*x != *y) return first_difference(*x, *y, inner);
     }
   }
-  if (!diff.first_divergence && diff.steps_a != diff.steps_b) {
-    const auto& longer = diff.steps_a > diff.steps_b ? a.steps : b.steps;
-    diff.first_divergence = TraceDiff::Divergence{longer[std::min(i, j)].step, {}};
+  return path;
+}
+
+}  // namespace
+
+TraceDiffer::TraceDiffer(double tolerance, bool exact) : tolerance_(tolerance), exact_(exact) {}
+
+void TraceDiffer::unmatched(std::uint64_t step) {
+  if (!diff_.first_divergence) diff_.first_divergence = TraceDiff::Divergence{step, {}};
+}
+
+void TraceDiffer::compare(std::uint64_t step, const std::string& a, const std::string& b) {
+  const Json x = Json::parse(a);
+  const Json y = Json::parse(b);
+  std::vector<std::string> what;
+  const Json& layers_x = member(x, "layers");
+  const Json& layers_y = member(y, "layers");
+  for (const auto& layer : keys(layers_x, layers_y)) {
+    const Json& lx = member(layers_x, layer);
+    const Json& ly = member(layers_y, layer);
+    for (const auto& name : keys(lx, ly)) {
+      if (!behaviour_differs(member(lx, name), member(ly, name), tolerance_)) continue;
+      const auto key = layer + "/" + name;
+      count(diff_.behaviours[key], step);
+      what.push_back(key);
+    }
+  }
+  const Json& actuators_x = member(x, "actuators");
+  const Json& actuators_y = member(y, "actuators");
+  for (const auto& name : keys(actuators_x, actuators_y)) {
+    if (!actuator_differs(member(actuators_x, name), member(actuators_y, name), tolerance_)) {
+      continue;
+    }
+    count(diff_.actuators[name], step);
+    what.push_back("actuator:" + name);
+  }
+  const Json& machines_x = member(x, "controllers");
+  const Json& machines_y = member(y, "controllers");
+  for (const auto& name : keys(machines_x, machines_y)) {
+    if (!machine_differs(member(machines_x, name), member(machines_y, name))) continue;
+    count(diff_.machines[name], step);
+    what.push_back("machine:" + name);
+  }
+  if (exact_ && what.empty()) {
+    const Json timeless_x = without_timing(x);
+    const Json timeless_y = without_timing(y);
+    if (timeless_x != timeless_y) what.push_back(first_difference(timeless_x, timeless_y, ""));
+  }
+  const bool differs = !what.empty();
+  if (differs && !diff_.first_divergence) {
+    diff_.first_divergence = TraceDiff::Divergence{step, std::move(what)};
+  }
+}
+
+TraceDiff TraceDiffer::finish(std::uint64_t steps_a, std::uint64_t steps_b,
+                              std::uint64_t first_extra) {
+  TraceDiff diff = diff_;
+  diff.steps_a = steps_a;
+  diff.steps_b = steps_b;
+  if (!diff.first_divergence && steps_a != steps_b) {
+    diff.first_divergence = TraceDiff::Divergence{first_extra, {}};
   }
   diff.identical = !diff.first_divergence;
   return diff;
+}
+
+TraceDiff diff_traces(const Trace& a, const Trace& b, double tolerance, bool exact) {
+  TraceDiffer differ(tolerance, exact);
+  std::size_t i = 0;
+  std::size_t j = 0;
+  while (i < a.steps.size() && j < b.steps.size()) {
+    if (a.steps[i].step != b.steps[j].step) {
+      // A step one run has and the other lacks (dropped while recording): nothing to align.
+      differ.unmatched(std::min(a.steps[i].step, b.steps[j].step));
+      (a.steps[i].step < b.steps[j].step ? i : j)++;
+      continue;
+    }
+    differ.compare(a.steps[i].step, a.steps[i].text, b.steps[j].text);
+    ++i;
+    ++j;
+  }
+  const auto& longer = a.steps.size() > b.steps.size() ? a.steps : b.steps;
+  const std::uint64_t first_extra =
+      std::min(i, j) < longer.size() ? longer[std::min(i, j)].step : 0;
+  return differ.finish(a.steps.size(), b.steps.size(), first_extra);
 }
 
 std::string format_json(const TraceDiff& diff) {

@@ -59,6 +59,15 @@ ARBITER_PLUGIN_PATH=$test_plugins expect_exit 1 "$cli" replay "$work/counter.mca
 grep -qx "$source_dir/tests/data/replay/counter_renamed.yaml:3:1: error: recorded input 'count' has no place in this config: no interface layer declares an actuator 'count'" \
   "$work/err.txt" || fail "a recorded input without a place"
 
+# Two interface layers that report: each replays its own reports, so the replay is identical.
+ARBITER_PLUGIN_PATH=$test_plugins expect_exit 0 "$cli" run \
+  "$source_dir/tests/data/replay/two_counters.yaml" --steps 6 -q --record "$work/two.mcap"
+ARBITER_PLUGIN_PATH=$test_plugins expect_exit 0 "$cli" replay "$work/two.mcap" --trace "$work/two.jsonl"
+grep -qx "replayed 6 steps of $work/two.mcap: identical to the recording" "$work/out.txt" ||
+  fail "a replay of two reporting interface layers is not identical"
+grep -q '"reported": \[{"by": "left", "text": "left ticked"}, {"by": "right", "text": "right ticked"}\]' \
+  "$work/two.jsonl" || fail "the replayed reports are not each layer's own"
+
 # Two runs on one timeline: the second run's row under each behaviour's, divergent steps shaded.
 expect_exit 0 "$cli" plot "$work/run.mcap" --compare "$work/no_kick.mcap" -o "$work/compare.svg"
 [[ $(grep -o 'class="row behaviour compared" data-name="control/kick_ball"' "$work/compare.svg" | wc -l) -eq 1 ]] ||

@@ -1,9 +1,11 @@
 // A behaviour that breaks the replay rule on purpose: test_unsteady.Dice requests a level drawn
 // from the operating system's entropy, so that no two runs agree. Replay must catch and name it.
 // test_unsteady.Counter, an interface class, writes the step number to every double actuator its
-// layer declares: inputs for replay to record and feed back.
+// layer declares and reports "LAYER ticked" every other step: inputs for replay to record and feed
+// back, each layer its own.
 
 #include <random>
+#include <string>
 #include <vector>
 
 #include "arbiter/init_context.hpp"
@@ -24,6 +26,7 @@ class Dice final : public arbiter::Behaviour {
 class Counter final : public arbiter::Interface {
  public:
   void init(arbiter::InitContext& ctx) override {
+    tick_ = ctx.name() + " ticked";
     for (const auto& actuator : ctx.layer_actuators()) {
       outputs_.push_back(ctx.output_to_actuator(actuator.name, actuator.location));
     }
@@ -35,9 +38,13 @@ class Counter final : public arbiter::Interface {
       ctx.write(output, value);
     }
   }
+  void output(const arbiter::StepContext& ctx) override {
+    if (ctx.step() % 2 == 0) ctx.report(tick_.c_str());
+  }
 
  private:
   std::vector<arbiter::AnyOutput> outputs_;
+  std::string tick_;
 };
 
 }  // namespace

@@ -65,6 +65,15 @@ struct Expectation {
   Node value;
 };
 
+/// A run compared whole with another, step record by step record, all but the timing:
+/// `expect: identical` (with the recording of `replay:`) or `expect_trace: FILE`.
+struct TraceExpectation {
+  enum class Kind { kIdentical, kTrace };
+  Kind kind = Kind::kIdentical;
+  ScenarioName file;  ///< as written: the value of `expect_trace:`, or `identical`
+  std::string path;   ///< kTrace: resolved against the test file's directory
+};
+
 struct Scenario {
   std::string file;         ///< the test file, as named
   std::string name;         ///< the file's name without `.test.yaml` / `.test.json`
@@ -73,8 +82,14 @@ struct Scenario {
   std::vector<ScenarioSubstitution> substitutions;
   SourceLocation inputs_location;     ///< where `inputs:` is written, if it is
   std::vector<ScenarioInput> inputs;  ///< by step
+  /// `replay:`: the recording whose inputs feed the interface layers (text empty when none).
+  ScenarioName replay;
+  std::string replay_path;  ///< resolved against the test file's directory
   std::vector<Expectation> expectations;
+  std::vector<TraceExpectation> trace_expectations;
+  /// 0 when `steps:` is not given: with `replay:`, the recording's steps.
   std::uint64_t steps = 0;
+  SourceLocation steps_location;  ///< where `steps:`'s value is, if it is given
 };
 
 /// Whether `path` names a scenario test file (`*.test.yaml`, `*.test.yml`, `*.test.json`).

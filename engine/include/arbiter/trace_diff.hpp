@@ -22,7 +22,8 @@ struct TraceDiff {
   struct Divergence {
     std::uint64_t step = 0;
     /// "layer/behaviour", "actuator:NAME", "machine:NAME"; empty when one run only has more
-    /// steps, or (exact comparison) when a field outside those differs.
+    /// steps. In an exact comparison where none of those differs, the path of the first field
+    /// that does: "layers.control.kick_ball.inhibited_by".
     std::vector<std::string> what;
   };
   bool identical = true;
@@ -32,6 +33,28 @@ struct TraceDiff {
   std::map<std::string, Count> behaviours;  ///< by "layer/name": `active` or `activation`
   std::map<std::string, Count> actuators;   ///< value or written flag
   std::map<std::string, Count> machines;    ///< state or events
+};
+
+/// The comparison of two runs fed one step at a time, for a caller that has one of the runs only
+/// step by step (a scenario test comparing the run it steps with a recording). diff_traces()
+/// feeds it whole traces.
+class TraceDiffer {
+ public:
+  /// As diff_traces().
+  explicit TraceDiffer(double tolerance = 1e-9, bool exact = false);
+  /// Compares the records (step records, as the trace writer writes them) of a step both runs
+  /// have.
+  void compare(std::uint64_t step, const std::string& a, const std::string& b);
+  /// A step that one run has and the other lacks.
+  void unmatched(std::uint64_t step);
+  /// The result, given how many steps each run has and, when those differ and nothing else
+  /// did, the first step only the longer run has.
+  TraceDiff finish(std::uint64_t steps_a, std::uint64_t steps_b, std::uint64_t first_extra);
+
+ private:
+  double tolerance_;
+  bool exact_;
+  TraceDiff diff_;
 };
 
 /// Aligns the steps of `a` and `b` by number. Numbers differing by at most `tolerance` are

@@ -1,4 +1,4 @@
-#include "recorded_inputs.hpp"
+#include "arbiter/recorded_inputs.hpp"
 
 #include <fmt/format.h>
 
@@ -9,7 +9,7 @@
 #include "arbiter/document.hpp"
 #include "arbiter/init_context.hpp"
 
-namespace arbiter::cli {
+namespace arbiter {
 
 namespace {
 
@@ -19,7 +19,16 @@ class Replayed : public Interface {
   explicit Replayed(const RecordedInputs& inputs) : inputs_(inputs) {}
 
   void init(InitContext& ctx) override {
-    reports_ = !inputs_.claim_reports();
+    // Resolved here, so that the output pass compares no names.
+    const bool unattributed = inputs_.claim_unattributed();
+    reports_.resize(inputs_.steps());
+    for (std::uint64_t step = 1; step <= inputs_.steps(); ++step) {
+      for (const auto& report : inputs_.reported(step)) {
+        if (report.layer == ctx.name() || (report.layer.empty() && unattributed)) {
+          reports_[step - 1].push_back(report.text.c_str());
+        }
+      }
+    }
     for (const auto& actuator : ctx.layer_actuators()) {
       const auto* column = inputs_.find(actuator.name);
       if (column == nullptr) {
@@ -52,11 +61,12 @@ class Replayed : public Interface {
     }
   }
 
-  // Reported again in the output pass, where interfaces that advance a world report; only the
-  // first interface layer reports, as the recording does not say which layer reported.
+  // Reported again in the output pass, where interfaces that advance a world report, by the
+  // layer that reported it.
   void output(const StepContext& ctx) override {
-    if (!reports_) return;
-    for (const auto& text : inputs_.reported(ctx.step())) ctx.report(text.c_str());
+    const auto index = ctx.step() - 1;
+    if (index >= reports_.size()) return;
+    for (const char* text : reports_[index]) ctx.report(text);
   }
 
   void input(ExecuteContext& ctx) override {
@@ -76,7 +86,7 @@ class Replayed : public Interface {
   };
   const RecordedInputs& inputs_;
   std::vector<Feed> feeds_;
-  bool reports_ = false;
+  std::vector<std::vector<const char*>> reports_;  // this layer's, per step - 1
 };
 
 }  // namespace
@@ -88,8 +98,13 @@ RecordedInputs::RecordedInputs(const std::vector<std::pair<std::uint64_t, std::s
     if (step == 0 || !json.is_object() || !json.contains("inputs")) continue;
     if (json.contains("reported") && json["reported"].is_array()) {
       reported_.resize(steps_);
-      for (const auto& text : json["reported"]) {
-        if (text.is_string()) reported_[step - 1].push_back(text.get<std::string>());
+      for (const auto& item : json["reported"]) {
+        // Older recordings list the texts only.
+        if (item.is_string()) reported_[step - 1].push_back({"", item.get<std::string>()});
+        if (item.is_object() && item.value("text", nlohmann::ordered_json()).is_string()) {
+          reported_[step - 1].push_back(
+              {item.value("by", std::string()), item["text"].get<std::string>()});
+        }
       }
     }
     for (const auto& [name, entry] : json["inputs"].items()) {
@@ -110,15 +125,15 @@ RecordedInputs::RecordedInputs(const std::vector<std::pair<std::uint64_t, std::s
   class_.make_interface = [this] { return std::make_unique<Replayed>(*this); };
 }
 
-const std::vector<std::string>& RecordedInputs::reported(std::uint64_t step) const {
-  static const std::vector<std::string> kNone;
+const std::vector<RecordedInputs::Report>& RecordedInputs::reported(std::uint64_t step) const {
+  static const std::vector<Report> kNone;
   return step >= 1 && step <= reported_.size() ? reported_[step - 1] : kNone;
 }
 
-bool RecordedInputs::claim_reports() const {
-  const bool claimed = reports_claimed_;
-  reports_claimed_ = true;
-  return claimed;
+bool RecordedInputs::claim_unattributed() const {
+  const bool first = !unattributed_claimed_;
+  unattributed_claimed_ = true;
+  return first;
 }
 
 const RecordedInputs::Column* RecordedInputs::find(const std::string& name) const {
@@ -129,18 +144,26 @@ const RecordedInputs::Column* RecordedInputs::find(const std::string& name) cons
 }
 
 void RecordedInputs::replace_interfaces(Model& model, Diagnostics& diagnostics) const {
-  std::vector<std::string> declared;
   for (auto& layer : model.layers) {
     if (!layer.is_interface()) continue;
     layer.interface = &class_;
     layer.params = {};
     layer.ports.clear();
+  }
+  check_places(model, model.location, diagnostics);
+}
+
+void RecordedInputs::check_places(const Model& model, const SourceLocation& where,
+                                  Diagnostics& diagnostics) const {
+  std::vector<std::string> declared;
+  for (const auto& layer : model.layers) {
+    if (layer.interface != &class_) continue;
     for (const auto& actuator : layer.actuators) declared.push_back(actuator.name.text);
   }
   for (const auto& column : columns_) {
     if (std::find(declared.begin(), declared.end(), column.name) != declared.end()) continue;
     diagnostics
-        .error(model.location, "replay-input",
+        .error(where, "replay-input",
                fmt::format("recorded input '{}' has no place in this config: no interface layer "
                            "declares an actuator '{}'",
                            column.name, column.name))
@@ -149,4 +172,4 @@ void RecordedInputs::replace_interfaces(Model& model, Diagnostics& diagnostics) 
   }
 }
 
-}  // namespace arbiter::cli
+}  // namespace arbiter

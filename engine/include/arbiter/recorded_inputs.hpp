@@ -1,0 +1,69 @@
+#pragma once
+// The inputs of a recorded run (recording.hpp) as an interface class: each interface layer that
+// has it writes, step by step, the values its actuators had in the recorded run, and reports
+// again what that layer reported, instead of talking to a world, a robot or DDS. It feeds
+// `arbiter replay` and the scenario tests that replay a recording (`replay:`, scenario.hpp).
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "arbiter/diagnostics.hpp"
+#include "arbiter/model.hpp"
+#include "arbiter/registry.hpp"
+
+namespace arbiter {
+
+/// The recorded inputs of a run, by actuator name and step.
+class RecordedInputs {
+ public:
+  /// `messages`: each step's `/arbiter/inputs` message (RecordedRun::inputs).
+  explicit RecordedInputs(const std::vector<std::pair<std::uint64_t, std::string>>& messages);
+  RecordedInputs(const RecordedInputs&) = delete;
+  RecordedInputs& operator=(const RecordedInputs&) = delete;
+
+  /// The interface class that writes the recorded inputs: substitute it for interface layers
+  /// (substitute.hpp). It must outlive the program compiled with it, and so must this object.
+  const ClassInfo& interface_class() const { return class_; }
+
+  /// Binds every interface layer of `model` to interface_class(): the layer's class is not
+  /// created, its params are not used. Then check_places().
+  void replace_interfaces(Model& model, Diagnostics& diagnostics) const;
+
+  /// Reports, at `where`, each recorded input that no layer of `model` bound to
+  /// interface_class() declares; a type that does not fit is reported when the program compiles.
+  void check_places(const Model& model, const SourceLocation& where,
+                    Diagnostics& diagnostics) const;
+
+  /// The step numbers recorded.
+  std::uint64_t steps() const { return steps_; }
+
+  struct Column {
+    std::string name;
+    /// Per step (index step - 1): the value as JSON ("" where the step was not recorded).
+    std::vector<std::string> values;
+    std::vector<char> written;
+  };
+  const Column* find(const std::string& name) const;
+
+  /// What interface code reported in a step, and which interface layer reported it ("" in
+  /// recordings that did not say: the first interface layer reports those again).
+  struct Report {
+    std::string layer;
+    std::string text;
+  };
+  /// What was reported in `step` (empty when nothing).
+  const std::vector<Report>& reported(std::uint64_t step) const;
+  /// True for the first caller only: the layer that reports what a recording did not attribute.
+  bool claim_unattributed() const;
+
+ private:
+  std::vector<Column> columns_;
+  std::vector<std::vector<Report>> reported_;  // per step - 1
+  std::uint64_t steps_ = 0;
+  ClassInfo class_;
+  mutable bool unattributed_claimed_ = false;
+};
+
+}  // namespace arbiter
