@@ -587,9 +587,9 @@ TEST_CASE("every hostile file is rejected with its error, in bounded time and me
 }
 
 TEST_CASE("every file in tests/data/hostile is a listed case", "[robustness][hostile]") {
-  for (const auto& entry : fs::directory_iterator(kHostileDir)) {
-    INFO(entry.path().filename().string());
-    CHECK(hostile_cases().count(entry.path().filename().string()) == 1);
+  for (const auto& path : test::files_in(kHostileDir, [](const fs::path&) { return true; })) {
+    INFO(path.filename().string());
+    CHECK(hostile_cases().count(path.filename().string()) == 1);
   }
 }
 
