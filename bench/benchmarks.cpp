@@ -194,6 +194,8 @@ void load(benchmark::State& state, Stage stage) {
     return;
   }
   const auto linted = stage == Stage::kLint ? compile(model, fresh, diagnostics) : std::nullopt;
+  LoadOptions total;  // the whole pipeline, as `arbiter validate` runs it
+  total.lint = lint;
   double paused = 0.0;
   const auto discard = [&](std::optional<Program>& program) {
     const double before = cpu_seconds();
@@ -222,7 +224,7 @@ void load(benchmark::State& state, Stage stage) {
         lint(model, *linted, each);
         break;
       case Stage::kTotal: {
-        auto program = arbiter::load(path, fresh, each);
+        auto program = arbiter::load(path, fresh, each, total);
         if (!program) state.SkipWithError(format(each).c_str());
         discard(program);
         break;

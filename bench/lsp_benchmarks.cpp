@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include "arbiter/lint.hpp"
 #include "generator.hpp"
 #include "lsp/server.hpp"
 #include "lsp_benchmarks.hpp"
@@ -22,7 +23,9 @@ void change(benchmark::State& state) {
   const std::string text = generate_config(options);
   // A file that need not exist: the editor's buffer is what is loaded.
   const std::string uri = "file:///tmp/arbiter_bench_lsp/config.yaml";
-  lsp::Server server(make_registry(), {});
+  LoadOptions load;
+  load.lint = lint;  // as `arbiter lsp` loads
+  lsp::Server server(make_registry(), load);
   server.handle(nlohmann::json{{"jsonrpc", "2.0"},
                                {"id", 1},
                                {"method", "initialize"},

@@ -110,6 +110,7 @@ void print_diagnostics(const arbiter::Diagnostics& diagnostics, const Options& o
 arbiter::LoadOptions load_options_of(const Options& options) {
   arbiter::LoadOptions load_options;
   load_options.strict = options.strict;
+  load_options.lint = arbiter::lint;
   load_options.plugins.path = options.plugin_path;
   if (options.max_file_bytes) load_options.limits.max_file_bytes = *options.max_file_bytes;
   return load_options;

@@ -106,7 +106,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   }
   const RecordedInputs inputs(run->inputs);
   LoadOptions load = options.load;
-  load.lint = false;  // a replay reports whether the run repeats, not how the config reads
+  load.lint = nullptr;  // a replay reports whether the run repeats, not how the config reads
   load.edit_model = [&](Model& model, Diagnostics& reported) {
     inputs.replace_interfaces(model, reported);
     return !reported.has_errors();

@@ -12,7 +12,7 @@ function(arbiter_add_plugin name)
   add_library(${name} MODULE ${ARG_SOURCES})
   # arbiter_add_test() runs scenarios with every plugin the project builds on the plugin path.
   set_property(GLOBAL APPEND PROPERTY ARBITER_PLUGIN_TARGETS ${name})
-  target_link_libraries(${name} PRIVATE arbiter::engine ${ARG_LINK_LIBRARIES})
+  target_link_libraries(${name} PRIVATE arbiter::core ${ARG_LINK_LIBRARIES})
   # The engine's headers need C++17, whatever the plugin project's default.
   target_compile_features(${name} PRIVATE cxx_std_17)
   set_target_properties(${name} PROPERTIES

@@ -1,5 +1,6 @@
 # Debian packages (`cpack -G DEB` in a build tree, docs/deploy.md), one per install component:
-#   arbiter          runtime: the engine library, the CLI, bash completion, the config schema
+#   arbiter          runtime: the engine's core and tools libraries, the CLI, bash completion, the
+#                    config schema
 #   arbiter-plugins  plugins: the plugins that were built (soccer, dds) and the demo configs
 #   arbiter-dev      dev: headers, the CMake package config and arbiter_add_plugin()
 # Library dependencies come from dpkg-shlibdeps (Debian's own package names: libyaml-cpp0.7,
@@ -15,7 +16,7 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_RELEASE 1)
 set(CPACK_DEBIAN_PACKAGE_SECTION misc)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-# The plugins link the engine library of the arbiter package, which dpkg-shlibdeps finds in the
+# The plugins link the core library of the arbiter package, which dpkg-shlibdeps finds in the
 # build tree; the dependency on it is declared below, at this exact version.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS "${PROJECT_BINARY_DIR}/engine")
 set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS ON)
@@ -25,9 +26,10 @@ set(version "${PROJECT_VERSION}-${CPACK_DEBIAN_PACKAGE_RELEASE}")
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_NAME arbiter)
 set(CPACK_DEBIAN_RUNTIME_PACKAGE_SECTION misc)
 set(CPACK_COMPONENT_RUNTIME_DESCRIPTION
-    "Data-driven behaviour engine for robots: the engine library and the arbiter command
+    "Data-driven behaviour engine for robots: the engine's libraries and the arbiter command
  Behaviour layers, inhibitions and state controllers declared in YAML or JSON configs,
- validated with file:line:column diagnostics and bound to C++ classes.")
+ validated with file:line:column diagnostics and bound to C++ classes. The core library runs
+ them; the tools library (dumps, lints, explain, the schema, scenario tests) serves the command.")
 
 set(CPACK_DEBIAN_PLUGINS_PACKAGE_NAME arbiter-plugins)
 set(CPACK_DEBIAN_PLUGINS_PACKAGE_DEPENDS "arbiter (= ${version})")
@@ -43,7 +45,8 @@ set(CPACK_DEBIAN_DEV_PACKAGE_DEPENDS "arbiter (= ${version}), libfmt-dev, cmake 
 set(CPACK_DEBIAN_DEV_PACKAGE_RECOMMENDS "g++")
 set(CPACK_COMPONENT_DEV_DESCRIPTION
     "Development files for Arbiter plugins
- The engine's headers, the CMake package config (find_package(arbiter)) and
- arbiter_add_plugin(), to build plugins against the installed engine.")
+ The engine's headers, the CMake package config (find_package(arbiter): the targets
+ arbiter::core and arbiter::tools) and arbiter_add_plugin(), to build plugins against the
+ installed core library.")
 
 include(CPack)

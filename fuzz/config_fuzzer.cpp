@@ -12,6 +12,7 @@
 
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/document.hpp"
+#include "arbiter/lint.hpp"
 #include "arbiter/load.hpp"
 #include "arbiter/manager.hpp"
 #include "test_support.hpp"
@@ -35,6 +36,7 @@ struct Fixture {
     // No plugin is loaded from an input's `plugins:` except by a relative path.
     options.plugins.use_environment = false;
     options.plugins.use_default_path = false;
+    options.lint = arbiter::lint;
   }
 };
 

@@ -39,12 +39,7 @@ bool is_config(const fs::path& path) {
 
 /// The top-level configs of `dir`, sorted by name. Subfolders hold included files only.
 std::vector<fs::path> configs_in(const fs::path& dir) {
-  std::vector<fs::path> configs;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.is_regular_file() && is_config(entry.path())) configs.push_back(entry.path());
-  }
-  std::sort(configs.begin(), configs.end());
-  return configs;
+  return test::files_in(dir, is_config);
 }
 
 /// The cases: top-level configs with an `.expected` sibling (in update mode, every config).
@@ -86,7 +81,7 @@ TEST_CASE("every invalid config reports the approved diagnostics", "[diagnostics
       std::string actual;
       {
         test::WorkingDirectory here(dir);
-        program = load(name, registry, diagnostics);
+        program = load(name, registry, diagnostics, test::with_lints());
         // Source lines are read where the config was loaded from, as the CLI reads them.
         actual = format(diagnostics, FormatOptions::readable());
       }
@@ -123,7 +118,7 @@ TEST_CASE("every config in tests/data/valid loads without any diagnostic", "[dia
     DYNAMIC_SECTION(path.filename().string()) {
       Registry registry = golden_registry();
       Diagnostics diagnostics;
-      const auto program = load(path.string(), registry, diagnostics);
+      const auto program = load(path.string(), registry, diagnostics, test::with_lints());
       INFO(format(diagnostics));
       CHECK(diagnostics.empty());
       CHECK(program.has_value());

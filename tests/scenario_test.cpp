@@ -26,12 +26,7 @@ test::CliResult run_cli(const std::string& arguments) {
 }
 
 std::vector<fs::path> scenarios_in(const fs::path& dir) {
-  std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (is_scenario_file(entry.path().string())) files.push_back(entry.path());
-  }
-  std::sort(files.begin(), files.end());
-  return files;
+  return test::files_in(dir, [](const fs::path& path) { return is_scenario_file(path.string()); });
 }
 
 fs::path expected_of(const fs::path& scenario) {

@@ -1,7 +1,5 @@
 #include "arbiter/load.hpp"
 
-#include "arbiter/lint.hpp"
-
 namespace arbiter {
 
 const Node* Loaded::document() const {
@@ -22,7 +20,7 @@ Loaded load_config(const std::string& path, Registry& registry, const LoadOption
       check_inhibition_cycles(model, diagnostics);  // a cycle is reported in the same pass
     } else if (!options.edit_model || options.edit_model(model, diagnostics)) {
       loaded.program = compile(model, registry, diagnostics);
-      if (loaded.program && options.lint) lint(model, *loaded.program, diagnostics);
+      if (loaded.program && options.lint) options.lint(model, *loaded.program, diagnostics);
     }
   }
   if (options.strict) diagnostics.promote_warnings();

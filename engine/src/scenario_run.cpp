@@ -151,7 +151,7 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
   LoadOptions load;
   load.limits = options.limits;
   load.plugins = options.plugins;
-  load.lint = false;  // a test reports what it tests; `arbiter validate` lints the config
+  // No lint step: a test reports what it tests; `arbiter validate` lints the config.
   load.edit_model = [&](Model& model, Diagnostics& reported) {
     std::vector<const ClassInfo*> before;
     for (const auto& layer : model.layers) before.push_back(layer.interface);

@@ -1,7 +1,8 @@
 # The plugin SDK end to end, run by CTest as `cmake -P`:
 #   1. installs Arbiter's build tree (BUILD_DIR) to a fresh prefix under WORK_DIR;
 #   2. configures and builds this folder, the out-of-tree plugin project, against that prefix
-#      with find_package(arbiter), nothing else;
+#      with find_package(arbiter), nothing else; the plugin needs the core library, not the
+#      tools one, and the package exports both targets;
 #   3. runs the project's config with the *installed* CLI, finding the plugin through
 #      --plugin-path and through ARBITER_PLUGIN_PATH, and checks what it reports;
 #   4. runs the project's scenario tests through its CTest (arbiter_add_test);
@@ -60,6 +61,17 @@ run_checked(output 0 "${CMAKE_COMMAND}" --build "${consumer_build}" -j2)
 if(NOT EXISTS "${consumer_build}/arbiter_patrol.so")
   message(FATAL_ERROR "the consumer build made no ${consumer_build}/arbiter_patrol.so")
 endif()
+find_program(OBJDUMP objdump REQUIRED)
+run_checked(needed 0 "${OBJDUMP}" -p "${consumer_build}/arbiter_patrol.so")
+expect_in("${needed}" "the libraries arbiter_patrol.so needs" "NEEDED +libarbiter\\.so\\.0\n")
+if(needed MATCHES "libarbiter-tools")
+  message(FATAL_ERROR "arbiter_patrol.so needs the tools library:\n${needed}")
+endif()
+file(GLOB_RECURSE targets "${prefix}/*/arbiterTargets.cmake")
+file(READ "${targets}" targets_text)
+expect_in("${targets_text}" "the installed package's targets"
+  "add_library\\(arbiter::core SHARED IMPORTED\\)"
+  "add_library\\(arbiter::tools SHARED IMPORTED\\)")
 
 # The project's scenario tests, registered with arbiter_add_test(), pass in its own CTest.
 message(STATUS "running the consumer's scenario tests with ctest")

@@ -1,88 +1,29 @@
 // The DDS bridge in the step loop: after warm-up, a step that publishes and receives values of
 // every type allocates nothing with operator new (the engine's and the bridge's code). Cyclone
 // DDS is C and allocates with malloc; this binary counts that too (where no sanitizer owns
-// malloc) and reports it. It replaces the global allocation functions, so it stands apart.
+// malloc) and reports it. It replaces the global allocation functions (operator new with the
+// suite's counter, support/counting_new.cpp; malloc here), so it stands apart.
 
 #include <catch2/catch.hpp>
 
 #include <signal.h>
 
-#include <algorithm>
 #include <atomic>
 #include <cstdlib>
-#include <new>
+#include <thread>
 
+#include "counting_new.hpp"
 #include "dds_support.hpp"
 
-namespace {
+using arbiter::test::allocations;
+using arbiter::test::counting;
+using arbiter::test::only_thread;
 
-std::atomic<bool> counting{false};
-thread_local bool stepping_thread = false;  // static TLS: reading it does not allocate
-std::atomic<std::size_t> new_calls{0};
+namespace {
 std::atomic<std::size_t> step_mallocs{0};   // on the stepping thread, during step()
 std::atomic<std::size_t> step_reallocs{0};  // ... of which realloc
 std::atomic<std::size_t> other_mallocs{0};  // on other threads (Cyclone's), meanwhile
-
 }  // namespace
-
-void* operator new(std::size_t size) {
-  if (counting.load(std::memory_order_relaxed) && stepping_thread) new_calls.fetch_add(1);
-  if (void* memory = std::malloc(size == 0 ? 1 : size)) return memory;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) {
-  return operator new(size);
-}
-void operator delete(void* memory) noexcept {
-  std::free(memory);
-}
-void operator delete[](void* memory) noexcept {
-  std::free(memory);
-}
-void operator delete(void* memory, std::size_t) noexcept {
-  std::free(memory);
-}
-void operator delete[](void* memory, std::size_t) noexcept {
-  std::free(memory);
-}
-// The nothrow and over-aligned forms too (std::stable_sort's buffer is nothrow-new'd, and its
-// delete must match the new under a sanitizer).
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  if (counting.load(std::memory_order_relaxed) && stepping_thread) new_calls.fetch_add(1);
-  return std::malloc(size == 0 ? 1 : size);
-}
-void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
-  return operator new(size, tag);
-}
-void operator delete(void* memory, const std::nothrow_t&) noexcept {
-  std::free(memory);
-}
-void operator delete[](void* memory, const std::nothrow_t&) noexcept {
-  std::free(memory);
-}
-void* operator new(std::size_t size, std::align_val_t align) {
-  if (counting.load(std::memory_order_relaxed) && stepping_thread) new_calls.fetch_add(1);
-  const auto alignment = static_cast<std::size_t>(align);
-  const std::size_t rounded =
-      (std::max<std::size_t>(size, 1) + alignment - 1) / alignment * alignment;
-  if (void* memory = std::aligned_alloc(alignment, rounded)) return memory;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size, std::align_val_t align) {
-  return operator new(size, align);
-}
-void operator delete(void* memory, std::align_val_t) noexcept {
-  std::free(memory);
-}
-void operator delete[](void* memory, std::align_val_t) noexcept {
-  std::free(memory);
-}
-void operator delete(void* memory, std::size_t, std::align_val_t) noexcept {
-  std::free(memory);
-}
-void operator delete[](void* memory, std::size_t, std::align_val_t) noexcept {
-  std::free(memory);
-}
 
 #if defined(__SANITIZE_ADDRESS__)
 constexpr bool kCountsMalloc = false;
@@ -92,6 +33,7 @@ constexpr bool kCountsMalloc = true;
 namespace {
 void count_malloc(bool is_realloc = false) {
   if (!counting.load(std::memory_order_relaxed)) return;
+  const bool stepping_thread = arbiter::test::counts_here();
   (stepping_thread ? step_mallocs : other_mallocs).fetch_add(1, std::memory_order_relaxed);
   if (is_realloc && stepping_thread) step_reallocs.fetch_add(1, std::memory_order_relaxed);
 }
@@ -193,7 +135,8 @@ TEST_CASE("a step that publishes and receives over DDS allocates nothing with op
   const auto published_before = bridge.stats().published;
   constexpr int kSteps = 200;
   int steps = 0;
-  stepping_thread = true;
+  allocations = 0;
+  only_thread = std::this_thread::get_id();
   counting = true;
   REQUIRE(step_until(
       host,
@@ -205,16 +148,16 @@ TEST_CASE("a step that publishes and receives over DDS allocates nothing with op
       },
       20s));
   counting = false;
-  stepping_thread = false;
+  only_thread = std::thread::id();
 
   const auto taken = bridge.stats().samples_taken - taken_before;
   const auto published = bridge.stats().published - published_before;
   CHECK(published == 6u * kSteps);
   CHECK(taken > 0);
-  CHECK(new_calls.load() == 0);
+  CHECK(allocations.load() == 0);
   if (kCountsMalloc) {
     WARN("over " << kSteps << " steps (" << published << " samples published, " << taken
-                 << " taken): operator new " << new_calls.load() << "; malloc in step() "
+                 << " taken): operator new " << allocations.load() << "; malloc in step() "
                  << step_mallocs.load() << " (" << static_cast<double>(step_mallocs.load()) / kSteps
                  << " per step; realloc " << step_reallocs.load()
                  << "), on Cyclone DDS's threads meanwhile " << other_mallocs.load());

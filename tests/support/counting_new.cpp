@@ -1,7 +1,8 @@
 // Replaces every form of the global operator new with one that counts while `counting` is set
-// (tests/support/counting_new.hpp), so that a test can check that a stretch of code does not
-// touch the heap. Every form is replaced so that each allocation pairs with its deallocation,
-// also under AddressSanitizer. Link it only into a test binary of its own.
+// (on the thread `only_thread` names, when it names one: tests/support/counting_new.hpp), so that
+// a test can check that a stretch of code does not touch the heap. Every form is replaced so that
+// each allocation pairs with its deallocation, also under AddressSanitizer. Link it only into a
+// test binary of its own.
 
 #include "counting_new.hpp"
 
@@ -12,13 +13,14 @@
 namespace arbiter::test {
 std::atomic<bool> counting{false};
 std::atomic<std::size_t> allocations{0};
+std::atomic<std::thread::id> only_thread{};
 }  // namespace arbiter::test
 
 using arbiter::test::allocations;
-using arbiter::test::counting;
+using arbiter::test::counts_here;
 
 void* operator new(std::size_t size) {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  if (counts_here()) allocations.fetch_add(1);
   if (void* memory = std::malloc(size == 0 ? 1 : size)) return memory;
   throw std::bad_alloc();
 }
@@ -39,7 +41,7 @@ void operator delete[](void* memory, std::size_t) noexcept {
 }
 // The nothrow forms (std::stable_sort's buffer) must pair with the delete above, and count too.
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  if (counts_here()) allocations.fetch_add(1);
   return std::malloc(size == 0 ? 1 : size);
 }
 void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
@@ -53,7 +55,7 @@ void operator delete[](void* memory, const std::nothrow_t&) noexcept {
 }
 // Over-aligned types have operators of their own; they count too.
 void* operator new(std::size_t size, std::align_val_t align) {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  if (counts_here()) allocations.fetch_add(1);
   const auto alignment = static_cast<std::size_t>(align);
   const std::size_t rounded =
       (std::max<std::size_t>(size, 1) + alignment - 1) / alignment * alignment;

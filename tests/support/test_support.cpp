@@ -3,12 +3,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
 
+#include "arbiter/lint.hpp"
 #include "arbiter/trace.hpp"
 #include "builtins.hpp"
 
@@ -155,6 +157,29 @@ Registry make_test_registry() {
   auto& pose = add_state_class<Pose>(registry, "test.Pose");
   pose.param("x", ParamKind::kDouble).range(-10.0, 10.0);
   return registry;
+}
+
+LoadOptions with_lints() {
+  LoadOptions options;
+  options.lint = lint;
+  return options;
+}
+
+std::vector<std::filesystem::path> files_in(
+    const std::filesystem::path& dir, const std::function<bool(const std::filesystem::path&)>& keep,
+    Walk walk) {
+  std::vector<std::filesystem::path> files;
+  const auto visit = [&](const std::filesystem::directory_entry& entry) {
+    if (entry.is_regular_file() && keep(entry.path())) files.push_back(entry.path());
+  };
+  if (walk == Walk::kRecursive) {
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(dir)) visit(entry);
+  } else {
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) visit(entry);
+  }
+  if (files.empty()) throw std::runtime_error("no file to test in " + dir.string());
+  std::sort(files.begin(), files.end());
+  return files;
 }
 
 std::string read_text(const std::filesystem::path& path) {

@@ -3,11 +3,13 @@
 // compile a config written inline.
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "arbiter/controller.hpp"
 #include "arbiter/init_context.hpp"
+#include "arbiter/load.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/program.hpp"
 #include "arbiter/registry.hpp"
@@ -102,6 +104,16 @@ Registry make_test_registry();
 std::string read_text(const std::filesystem::path& path);
 void write_text(const std::filesystem::path& path, const std::string& text);
 
+/// How far files_in() looks: `dir` itself, or its subfolders too.
+enum class Walk { kTop, kRecursive };
+
+/// The regular files in `dir` that `keep` accepts, sorted. Throws when there is none: a test that
+/// checks each file of a folder must not pass, checking nothing, when the folder is empty, gone or
+/// its files renamed.
+std::vector<std::filesystem::path> files_in(
+    const std::filesystem::path& dir, const std::function<bool(const std::filesystem::path&)>& keep,
+    Walk walk = Walk::kTop);
+
 /// True when ARBITER_UPDATE_GOLDEN=1: golden-file tests rewrite their expected files.
 bool update_golden();
 
@@ -135,6 +147,9 @@ class WorkingDirectory {
  private:
   std::filesystem::path previous_;
 };
+
+/// Load options with the lint step, as `arbiter validate` loads: for the tests of what a user sees.
+LoadOptions with_lints();
 
 /// Parses, validates and compiles `text` (YAML, or JSON when `file` ends in .json). Throws
 /// ConfigError with every diagnostic when it is invalid.

@@ -1,7 +1,7 @@
 #pragma once
-// The load pipeline as one call: read → document → model → program, then the lints. What every
-// caller needs comes back together: the files read (text and tree), the model, the program and
-// the diagnostics.
+// The load pipeline as one call: read → document → model → program, then the lints when the caller
+// brings them. What every caller needs comes back together: the files read (text and tree), the
+// model, the program and the diagnostics.
 
 #include <functional>
 #include <optional>
@@ -27,8 +27,10 @@ struct LoadOptions {
   /// scenario tests and replay put other classes in. Reports into the diagnostics it is given
   /// and returns false, after reporting an error, to stop the load before compile.
   std::function<bool(Model&, Diagnostics&)> edit_model;
-  /// Lint the compiled program (the lints' warnings join the diagnostics).
-  bool lint = true;
+  /// Runs on the compiled program when no stage reported an error; what it reports joins the
+  /// diagnostics. The lints are in the tools library, not in the core one a robot runs:
+  /// `options.lint = arbiter::lint` (arbiter/lint.hpp, arbiter::tools) lints; empty, no lints.
+  std::function<void(const Model&, const Program&, Diagnostics&)> lint;
 };
 
 /// What one load produced.
@@ -46,7 +48,8 @@ struct Loaded {
   const Node* document() const;
 };
 
-/// read the file → load the plugins it names into `registry` → build_model → compile → lint.
+/// read the file → load the plugins it names into `registry` → build_model → compile → the lint
+/// step of `options`.
 /// Every stage that can run does, so that one load reports every problem.
 Loaded load_config(const std::string& path, Registry& registry, const LoadOptions& options = {});
 
