@@ -2,6 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <limits>
+
+#include "arbiter/trace.hpp"
+
 namespace arbiter::cli {
 
 namespace {
@@ -57,13 +62,7 @@ void RunReport::on_step(const Manager& manager) {
                         behaviour.name));
     }
   }
-  report_controllers(manager);
-  for (std::size_t e = 0; e < manager.event_count(); ++e) {
-    const auto& event = manager.event(e);
-    ++event_counts_[fmt::format("{}: {}", manager.event_source(event), event.text)];
-    if (quiet_) continue;
-    print_event(manager.steps(), fmt::format("{}: {}", manager.event_source(event), event.text));
-  }
+  report_story(manager);
   // Each step's lines go out at once, also into a pipe or a file (`--watch` is watched live);
   // a step that printed nothing has nothing to flush.
   if (!quiet_) out_.flush();
@@ -96,31 +95,70 @@ void RunReport::on_reload(const Manager& manager) {
                     program.controllers.size()));
 }
 
-void RunReport::report_controllers(const Manager& manager) {
+void RunReport::report_story(const Manager& manager) {
   const Program& program = manager.program();
+  // What the state machines did and what code reported, in the order it happened: an interface
+  // layer's report in the input pass comes before the state a behaviour then planned.
+  struct Line {
+    std::uint64_t order;  // sequence × 2, + 1 for a status change after the last event
+    std::string text;
+    bool reported;
+  };
+  std::vector<Line> lines;
+  const auto step = manager.steps();
   for (std::size_t c = 0; c < program.controllers.size(); ++c) {
     const Controller& controller = *program.controllers[c];
     const bool status_changed = controller.status() != controller_status_[c];
     controller_status_[c] = controller.status();
     if (quiet_) continue;
+    std::uint64_t last = std::numeric_limits<std::uint32_t>::max();
     for (std::size_t e = 0; e < controller.event_count(); ++e) {
       const auto& event = controller.events()[e];
-      if (event.kind != Controller::Event::Kind::kActivate) continue;
+      last = event.sequence;
+      if (event.kind == Controller::Event::Kind::kExecute) continue;
+      const std::string& state = controller.states()[event.state].name;
+      std::string params = params_text(event_params(controller, event, false));
+      if (!params.empty()) params.insert(0, " ");
+      if (event.kind == Controller::Event::Kind::kDeactivate) {
+        lines.push_back(
+            {2 * std::uint64_t{event.sequence},
+             fmt::format("step {:>4}  {}: {}{} ended ({})\n", step, controller.name(), state,
+                         params, end_text(state_end(controller, event), controller.cycle())),
+             false});
+        continue;
+      }
       std::string queue;
       for (std::size_t i = 0; i < controller.queue_size(); ++i) {
         queue += fmt::format("{}{}", i == 0 ? "" : ", ", controller.queued(i));
       }
-      print(fmt::format("step {:>4}  {}: {} (cycle {}; queued: {})\n", manager.steps(),
-                        controller.name(), controller.states()[event.state].name,
-                        controller.cycle(), queue.empty() ? "nothing" : queue));
+      lines.push_back(
+          {2 * std::uint64_t{event.sequence},
+           fmt::format("step {:>4}  {}: {}{} (cycle {}; queued: {})\n", step, controller.name(),
+                       state, params, controller.cycle(), queue.empty() ? "nothing" : queue),
+           false});
     }
     if (!status_changed) continue;
-    if (controller.status() == ControllerStatus::kError) {
-      print(fmt::format("step {:>4}  {}: error: {}\n", manager.steps(), controller.name(),
-                        controller.error()));
+    const std::string text = controller.status() == ControllerStatus::kError
+                                 ? fmt::format("step {:>4}  {}: error: {}\n", step,
+                                               controller.name(), controller.error())
+                                 : fmt::format("step {:>4}  {}: {}\n", step, controller.name(),
+                                               to_string(controller.status()));
+    lines.push_back({2 * last + 1, text, false});
+  }
+  for (std::size_t e = 0; e < manager.event_count(); ++e) {
+    const auto& event = manager.event(e);
+    std::string text = fmt::format("{}: {}", manager.event_source(event), event.text);
+    ++event_counts_[text];
+    if (quiet_) continue;
+    lines.push_back({2 * std::uint64_t{event.sequence}, std::move(text), true});
+  }
+  std::stable_sort(lines.begin(), lines.end(),
+                   [](const Line& a, const Line& b) { return a.order < b.order; });
+  for (const auto& line : lines) {
+    if (line.reported) {
+      print_event(step, line.text);
     } else {
-      print(fmt::format("step {:>4}  {}: {}\n", manager.steps(), controller.name(),
-                        to_string(controller.status())));
+      print(line.text);
     }
   }
 }

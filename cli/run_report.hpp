@@ -22,7 +22,9 @@ class RunReport : public Observer {
   void on_safe(const Manager& manager) override;
 
  private:
-  void report_controllers(const Manager& manager);
+  /// The state machines' transitions, with why each state ended, and what behaviour and
+  /// interface code reported, in the order they happened in the step.
+  void report_story(const Manager& manager);
   /// Writes a line of the report, after the repeats of the last event line, if any.
   void print(const std::string& line);
   /// An event line: printed unless it repeats the event line just before, whose repeats are

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -87,29 +88,35 @@ std::string edited(std::string text, const std::string& from, const std::string&
   return text.replace(at, from.size(), to);
 }
 
-/// What happened in each step: "11 activate walk_to_pose" for a goalie state that became current,
-/// "201 world: shot on goal" for an event reported by behaviour or interface code.
+/// What happened in each step, in the order it happened: "11 activate walk_to_pose" for a goalie
+/// state that became current, "201 world: shot on goal" for an event reported by behaviour or
+/// interface code.
 class StoryLog : public arbiter::Observer {
  public:
   void on_step(const Manager& manager) override {
     const std::string step = std::to_string(manager.steps());
+    std::vector<std::pair<std::uint32_t, std::string>> happened;  // by sequence
     const Controller* goalie = manager.program().find_controller("goalie");
     if (goalie != nullptr) {
       for (std::size_t e = 0; e < goalie->event_count(); ++e) {
         const auto& event = goalie->events()[e];
         if (event.kind != Controller::Event::Kind::kActivate) continue;
-        lines.push_back(step + " activate " + goalie->states()[event.state].name);
+        happened.emplace_back(event.sequence,
+                              step + " activate " + goalie->states()[event.state].name);
         const Pose robot = world_link(manager).world()->robot();
         poses.push_back(robot);
-      }
-      if (goalie->status() != ControllerStatus::kRunning && !ended) {
-        ended = true;
-        lines.push_back(step + " " + arbiter::to_string(goalie->status()));
       }
     }
     for (std::size_t e = 0; e < manager.event_count(); ++e) {
       const auto& event = manager.event(e);
-      lines.push_back(step + " " + manager.event_source(event) + ": " + event.text);
+      happened.emplace_back(event.sequence,
+                            step + " " + manager.event_source(event) + ": " + event.text);
+    }
+    std::sort(happened.begin(), happened.end());
+    for (auto& [sequence, line] : happened) lines.push_back(std::move(line));
+    if (goalie != nullptr && goalie->status() != ControllerStatus::kRunning && !ended) {
+      ended = true;
+      lines.push_back(step + " " + arbiter::to_string(goalie->status()));
     }
   }
 
@@ -659,8 +666,9 @@ TEST_CASE("the goalie waits for the button, takes its place, re-plans and dives 
   // The shot leaves at the end of step 200 (config: shot_step); the goalie dives when it first
   // sees the ball coming, lies for 2 s (30 steps) and monitors again.
   CHECK(activations[5] == "201 activate dive");
-  CHECK(lines_with(log, "201 ") == std::vector<std::string>{"201 activate dive",
-                                                            "201 world: shot on goal",
+  // The world reports the shot in the input pass, before the goalie sees it and dives.
+  CHECK(lines_with(log, "201 ") == std::vector<std::string>{"201 world: shot on goal",
+                                                            "201 activate dive",
                                                             "201 goalie: goalie dives left"});
   REQUIRE(activations.size() >= 7);
   CHECK(activations[6] == "231 activate monitor_ball");
@@ -707,7 +715,7 @@ TEST_CASE("a button press pre-empts the goalie back to waiting", "[soccer][goali
     CHECK(goalie.current_state() == "wait_for_button");
     CHECK(goalie.queued(0) == "monitor_ball");
     CHECK(lines_with(log, "41 ") ==
-          std::vector<std::string>{"41 activate wait_for_button", "41 world: button pressed"});
+          std::vector<std::string>{"41 world: button pressed", "41 activate wait_for_button"});
     const Pose stopped = world.robot();
     step_until(80);
     CHECK(goalie.current_state() == "wait_for_button");

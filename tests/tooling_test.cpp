@@ -36,6 +36,7 @@
 #include "arbiter/state.hpp"
 #include "arbiter/trace.hpp"
 #include "builtins.hpp"
+#include "run_report.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -999,6 +1000,200 @@ TEST_CASE("explain tells what a state machine did in a step", "[explain]") {
     REQUIRE(explanation.status == Explanation::Status::kOk);
     CHECK(contains(explanation.text, "wait_for_button executed and held: it runs again at step 3"));
   }
+  {
+    // The scripted button press: the actual cause, not a list of the possible ones.
+    std::istringstream trace(trace_text);
+    const auto explanation = explain(program, trace, 40, "goalie");
+    REQUIRE(explanation.status == Explanation::Status::kOk);
+    CHECK(contains(explanation.text,
+                   "    - monitor_ball was deactivated: pre-empted by wait_for_button (preempt: at "
+                   "cycle 40); it had asked to proceed\n"));
+  }
+}
+
+// --- why a state ended: the trace's `ended`, run's report and explain ---
+
+namespace {
+
+/// A run of a config of one state machine `m`, with the test classes: its trace, run's report,
+/// and what explain says about `m` at every step.
+struct Story {
+  std::vector<Json> records;  ///< per step, from 1 (0: the header)
+  std::string report;
+  std::vector<std::string> explained;  ///< per step, from 1 (0: unused)
+
+  /// The trace's `ended` of `m` at `step` (null when there is none).
+  const Json& ended(std::size_t step) const {
+    static const Json kNull;
+    const Json& entry = records.at(step)["controllers"]["m"];
+    return entry.contains("ended") ? entry["ended"] : kNull;
+  }
+};
+
+Story story_of(const std::string& states, const std::string& queue, int steps,
+               const std::string& extra = "", ControllerHooks* hooks = nullptr) {
+  const std::string yaml = "arbiter: 1\nname: t\nstate_machines:\n  m:\n    states:\n" + states +
+                           "    queue: " + queue + "\n" + extra;
+  Registry registry = tooling_registry();
+  Manager manager(test::compile_text(yaml, registry));
+  if (hooks != nullptr) manager.program().find_controller("m")->set_hooks(hooks);
+  std::ostringstream trace_out;
+  std::ostringstream report_out;
+  TraceWriter trace(trace_out);
+  cli::RunReport report(report_out, false);
+  manager.add_observer(trace);
+  manager.add_observer(report);
+  for (int i = 0; i < steps; ++i) manager.step();
+  manager.finish();
+  Story story;
+  story.report = report_out.str();
+  std::istringstream lines(trace_out.str());
+  for (std::string line; std::getline(lines, line);) story.records.push_back(Json::parse(line));
+  story.explained.emplace_back();
+  for (int step = 1; step <= steps; ++step) {
+    std::istringstream in(trace_out.str());
+    const auto explanation = explain(manager.program(), in, static_cast<std::uint64_t>(step), "m");
+    REQUIRE(explanation.status == Explanation::Status::kOk);
+    story.explained.push_back(explanation.text);
+  }
+  return story;
+}
+
+}  // namespace
+
+TEST_CASE("a state that asked to proceed ended because it proceeded", "[scl][explain][run]") {
+  const auto story = story_of("      a: scripted\n      b: scripted\n", "[a, b]", 2);
+  CHECK(story.ended(1).is_null());
+  CHECK(story.ended(2) == Json::parse(R"([{"state": "a", "cause": "proceeded"}])"));
+  CHECK(contains(story.report,
+                 "step    2  m: a ended (proceeded)\n"
+                 "step    2  m: b (cycle 2; queued: nothing)\n"));
+  CHECK(contains(story.explained[2], "    - a was deactivated: proceeded\n"));
+  CHECK(contains(story.explained[1], "    - a executed and is deactivated at step 2: proceeded\n"));
+}
+
+TEST_CASE("a state that proceeded with nothing queued ended the machine", "[scl][explain][run]") {
+  const auto story = story_of("      a: scripted\n", "[a]", 2);
+  CHECK(story.ended(2) == Json::parse(R"([{"state": "a", "cause": "queue_empty"}])"));
+  CHECK(contains(story.report,
+                 "step    2  m: a ended (proceeded, queue empty)\n"
+                 "step    2  m: finished\n"));
+  CHECK(contains(story.explained[2], "    - a was deactivated: proceeded, queue empty\n"));
+}
+
+TEST_CASE("a pre-empted state says what pre-empted it", "[scl][explain][run]") {
+  SECTION("the config's preempt: entry") {
+    const auto story = story_of(
+        "      wait: {type: scripted, params: {hold: 100}}\n"
+        "      walk: {type: scripted, params: {hold: 100}}\n",
+        "[wait, walk]", 3,
+        "    preempt:\n      - {cycle: 2, go_to: wait}\n      - {cycle: 3, go_to: walk}\n");
+    CHECK(story.ended(3) ==
+          Json::parse(R"([{"state": "wait", "cause": "preempted", "to": "walk", "preempt": 1}])"));
+    CHECK(contains(story.report,
+                   "step    3  m: wait ended (pre-empted by walk (preempt: at cycle 3))\n"));
+    CHECK(contains(story.explained[3],
+                   "    - wait was deactivated: pre-empted by walk (preempt: at cycle 3)\n"));
+    // At cycle 2 the pre-emption planned wait again: the wait of cycle 1 ended for it.
+    CHECK(story.ended(2)[0]["to"] == "wait");
+  }
+  SECTION("a hook, after the state had asked to proceed") {
+    struct ButtonPress : ControllerHooks {
+      bool pre_step(Controller& controller, Plan& plan) override {
+        if (controller.cycle() != 2) return false;
+        plan.go_to("walk");
+        return true;
+      }
+    } hooks;
+    const auto story =
+        story_of("      wait: scripted\n      walk: scripted\n      other: scripted\n",
+                 "[wait, other]", 2, "", &hooks);
+    CHECK(story.ended(2) == Json::parse(R"([{"state": "wait", "cause": "preempted", "to": "walk",
+                                             "proceeded": true}])"));
+    CHECK(contains(story.report,
+                   "step    2  m: wait ended (pre-empted by walk; it had asked to proceed)\n"));
+    CHECK(contains(story.explained[2],
+                   "    - wait was deactivated: pre-empted by walk; it had asked to proceed\n"));
+  }
+}
+
+TEST_CASE("a state that went to another with go_to says so", "[scl][explain][run]") {
+  const auto story = story_of(
+      "      a: {type: test.Planner, params: {op: go_to, target: c}}\n"
+      "      b: scripted\n      c: scripted\n",
+      "[a, b, b]", 2);
+  CHECK(story.ended(2) == Json::parse(R"([{"state": "a", "cause": "go_to", "to": "c"}])"));
+  CHECK(contains(story.report, "step    2  m: a ended (go_to c)\n"));
+  CHECK(contains(story.explained[2], "    - a was deactivated: go_to c\n"));
+}
+
+TEST_CASE("a state that terminated its machine says so", "[scl][explain][run]") {
+  SECTION("itself, in the step it ran") {
+    const auto story = story_of(
+        "      a: {type: scripted, params: {terminate: true}}\n      b: scripted\n", "[a, b]", 1);
+    CHECK(story.ended(1) == Json::parse(R"([{"state": "a", "cause": "terminated", "by": "a"}])"));
+    CHECK(contains(story.report,
+                   "step    1  m: a ended (terminated)\n"
+                   "step    1  m: finished\n"));
+    CHECK(contains(story.explained[1], "    - a was deactivated: terminated\n"));
+  }
+  SECTION("the state after a proceeding one, in its activate()") {
+    const auto story = story_of(
+        "      a: scripted\n      b: {type: test.Planner, params: {op: terminate_in_activate}}\n",
+        "[a, b]", 2);
+    CHECK(story.ended(2) == Json::parse(R"([{"state": "a", "cause": "proceeded"},
+                                            {"state": "b", "cause": "terminated", "by": "b"}])"));
+    CHECK(contains(story.report,
+                   "step    2  m: a ended (proceeded)\n"
+                   "step    2  m: b (cycle 2; queued: nothing)\n"
+                   "step    2  m: b ended (terminated)\n"
+                   "step    2  m: finished\n"));
+    CHECK(contains(story.explained[2],
+                   "    - a was deactivated: proceeded\n"
+                   "    - b became the current state (the head of the queue) "
+                   "and was activated\n"
+                   "    - b was deactivated: terminated\n"));
+  }
+}
+
+TEST_CASE("a planned state shows its per-instance params", "[scl][explain][run]") {
+  // From the config's queue, and from a Plan call at run time (x passed by test.Planner).
+  const auto story = story_of(
+      "      p: test.Pose\n      a: {type: test.Planner, params: {op: append, target: p, "
+      "x: 2.5}}\n",
+      "[{p: {x: 1.25}}, a]", 4);
+  CHECK(story.records[1]["controllers"]["m"]["params"] == Json::parse(R"({"x": 1.25})"));
+  CHECK(story.ended(2) ==
+        Json::parse(R"([{"state": "p", "params": {"x": 1.25}, "cause": "proceeded"}])"));
+  CHECK_FALSE(story.records[2]["controllers"]["m"].contains("params"));  // a has none of its own
+  CHECK(story.records[3]["controllers"]["m"]["params"] == Json::parse(R"({"x": 2.5})"));
+  CHECK(contains(story.report,
+                 "step    1  m: p {x: 1.25} (cycle 1; queued: a)\n"
+                 "step    2  m: p {x: 1.25} ended (proceeded)\n"
+                 "step    2  m: a (cycle 2; queued: p)\n"
+                 "step    3  m: a ended (proceeded)\n"
+                 "step    3  m: p {x: 2.5} (cycle 3; queued: nothing)\n"
+                 "step    4  m: p {x: 2.5} ended (proceeded, queue empty)\n"));
+  CHECK(contains(story.explained[1], "after the step: state p {x: 1.25}; queue: a\n"));
+  CHECK(contains(story.explained[2], "    - p {x: 1.25} was deactivated: proceeded\n"));
+  CHECK(contains(story.explained[3],
+                 "    - p {x: 2.5} became the current state (the head of the queue)"));
+}
+
+TEST_CASE("arbiter run prints a step's events in the order they happened", "[run][cli][soccer]") {
+  // The world reports the shot in the input pass; the goalie behaviour then sees it, pre-empts
+  // its plan to dive and reports the dive.
+  const auto result = run_cli("run configs/soccer/goalie.yaml --steps 210");
+  REQUIRE(result.exit_code == 0);
+  CHECK(contains(result.out,
+                 "step  201  world: shot on goal\n"
+                 "step  201  goalie: monitor_ball ended (pre-empted by dive)\n"
+                 "step  201  goalie: dive (cycle 201; queued: monitor_ball)\n"
+                 "step  201  goalie: goalie dives left\n"));
+  CHECK(contains(result.out,
+                 "step   11  goalie: wait_for_button ended (proceeded)\n"
+                 "step   11  goalie: walk_to_pose {x: -4.2, y: 0.0, theta: 0.0} "
+                 "(cycle 11; queued: monitor_ball)\n"));
 }
 
 TEST_CASE("explain reads a trace of a run reloaded with --watch", "[explain][reload]") {

@@ -59,11 +59,15 @@ void Plan::clear() {
 }
 bool Plan::go_to(std::string_view state, std::initializer_list<Arg> args) {
   clear();
-  return append(state, args);
+  const bool planned = append(state, args);
+  if (planned) controller_->note_go_to();
+  return planned;
 }
 bool Plan::go_to(const PlannedState& planned) {
   clear();
-  return append(planned);
+  const bool done = append(planned);
+  if (done) controller_->note_go_to();
+  return done;
 }
 std::string_view Plan::peek(std::size_t index) const {
   const auto& queue = controller_->queue_;
@@ -81,6 +85,8 @@ bool Plan::contains(std::string_view state) const {
 }
 void Plan::terminate() {
   controller_->terminate_ = true;
+  const auto by = controller_->callback_;
+  controller_->terminated_by_ = by == kUnbound ? kUnbound : controller_->instances_[by].state;
 }
 
 // --- StateContext --------------------------------------------------------------------------------
@@ -315,21 +321,70 @@ void Controller::reset_queue() {
   cycle_ = 0;
   proceed_ = false;
   terminate_ = false;
+  went_to_ = kUnbound;
+  terminated_by_ = kUnbound;
   for (const auto& planned : initial_) {
     insert(queue_.size(), create(planned.state, &planned.params, {}));
   }
 }
 
-void Controller::record(Event::Kind kind, std::uint32_t instance) {
-  if (event_count_ < kMaxEventsPerStep) events_[event_count_] = {kind, instances_[instance].state};
-  ++event_count_;
+void Controller::note_go_to() {
+  // Only the current state's own go_to tells why it ends; a hook's is a pre-emption.
+  if (callback_ == kUnbound || callback_ != current_ || queue_.empty()) return;
+  went_to_ = instances_[queue_.front()].state;
 }
 
-void Controller::deactivate_current(StateContext& context) {
-  record(Event::Kind::kDeactivate, current_);
-  instances_[current_].object->deactivate(context);
+namespace {
+
+// Run-time args hold only the kinds convert_arg() produces.
+Arg::Value arg_value(const ParamValue& value) {
+  if (const auto* flag = std::get_if<bool>(&value)) return *flag;
+  if (const auto* integer = std::get_if<std::int64_t>(&value)) return *integer;
+  if (const auto* vec = std::get_if<Vec2>(&value)) return *vec;
+  if (const auto* vec = std::get_if<Vec3>(&value)) return *vec;
+  if (const auto* real = std::get_if<double>(&value)) return *real;
+  return false;
+}
+
+}  // namespace
+
+void Controller::record(const StepContext& context, Event::Kind kind, std::uint32_t instance,
+                        const Ending& ending) {
+  const std::uint32_t sequence = context.data_->sequence++;
+  if (event_count_ >= kMaxEventsPerStep) {
+    ++event_count_;
+    return;
+  }
+  const Instance& of = instances_[instance];
+  Event& event = events_[event_count_++];
+  event = Event{};
+  event.kind = kind;
+  event.state = of.state;
+  event.sequence = sequence;
+  if (kind == Event::Kind::kExecute) return;
+  event.cause = ending.cause;
+  event.proceeded = ending.proceeded;
+  event.other = ending.other;
+  event.preempt = ending.preempt;
+  event.planned = of.planned;
+  event.args_begin = static_cast<std::uint32_t>(event_args_used_);
+  for (const auto& [param, value] : of.args) {
+    if (event_args_used_ == event_args_.size()) break;
+    event_args_[event_args_used_++] = {param, arg_value(value)};
+  }
+  event.args_count = static_cast<std::uint32_t>(event_args_used_) - event.args_begin;
+}
+
+void Controller::deactivate_current(StateContext& context, const Ending& ending) {
+  record(context, Event::Kind::kDeactivate, current_, ending);
+  in_callback(current_, [&] { instances_[current_].object->deactivate(context); });
   release(current_);
   current_ = kUnbound;
+}
+
+Controller::Ending Controller::stop_ending() const {
+  if (status_ != ControllerStatus::kRunning) return {EndCause::kError};
+  return {EndCause::kTerminated, false, terminated_by_};
 }
 
 void Controller::finish() {
@@ -346,10 +401,7 @@ void Controller::restart(const StepContext& context) {
   }
   if (current_ != kUnbound) {
     StateContext state_context(context, nullptr, *this, current_);
-    instances_[current_].object->deactivate(state_context);
-    record(Event::Kind::kDeactivate, current_);
-    release(current_);
-    current_ = kUnbound;
+    deactivate_current(state_context, {EndCause::kRestarted});
   }
   reset_queue();
 }
@@ -367,18 +419,39 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
   try {
     Plan plan(*this);
     bool leave = proceed_ || current_ == kUnbound;
-    for (const auto& preemption : preemptions_) {
-      if (preemption.cycle == cycle_ && plan.go_to(preemption.go_to)) leave = true;
+    Ending ending;
+    for (std::uint32_t p = 0; p < preemptions_.size(); ++p) {
+      if (preemptions_[p].cycle == cycle_ && plan.go_to(preemptions_[p].go_to)) {
+        leave = true;
+        ending.cause = EndCause::kPreempted;
+        ending.preempt = p;
+      }
     }
-    if (hooks_ != nullptr && hooks_->pre_step(*this, plan)) leave = true;
+    if (hooks_ != nullptr && hooks_->pre_step(*this, plan)) {
+      leave = true;
+      ending.cause = EndCause::kPreempted;
+      ending.preempt = kUnbound;
+    }
     if (status_ != ControllerStatus::kRunning) {
       stepping_ = false;
       return;
     }
     if (leave) {
       if (current_ != kUnbound) {
+        // A pre-emption tells the story even of a state that had asked to proceed: it decided
+        // what follows.
+        if (ending.cause == EndCause::kPreempted) {
+          ending.proceeded = proceed_;
+          ending.other = queue_.empty() ? kUnbound : instances_[queue_.front()].state;
+        } else if (queue_.empty()) {
+          ending.cause = EndCause::kQueueEmpty;
+        } else if (went_to_ != kUnbound) {
+          ending = {EndCause::kGoTo, false, went_to_};
+        } else {
+          ending.cause = EndCause::kProceeded;
+        }
         StateContext old_context(context, execute, *this, current_);
-        deactivate_current(old_context);
+        deactivate_current(old_context, ending);
       }
       proceed_ = false;
       if (queue_.empty()) {
@@ -388,16 +461,17 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
       }
       current_ = queue_.front();
       queue_.erase(queue_.begin());
+      went_to_ = kUnbound;
       const auto& name = states_[instances_[current_].state].name;
       if (hooks_ != nullptr) hooks_->pre_activate(*this, name);
       StateContext activate_context(context, execute, *this, current_);
-      record(Event::Kind::kActivate, current_);
-      instances_[current_].object->activate(activate_context);
+      record(context, Event::Kind::kActivate, current_);
+      in_callback(current_, [&] { instances_[current_].object->activate(activate_context); });
     }
     if (terminate_ || status_ != ControllerStatus::kRunning) {
       if (current_ != kUnbound) {
         StateContext end_context(context, execute, *this, current_);
-        deactivate_current(end_context);
+        deactivate_current(end_context, stop_ending());
       }
       finish();
       stepping_ = false;
@@ -406,14 +480,15 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
     const auto& name = states_[instances_[current_].state].name;
     if (hooks_ != nullptr) hooks_->pre_execute(*this, name);
     StateContext execute_context(context, execute, *this, current_);
-    record(Event::Kind::kExecute, current_);
-    StateResult result = instances_[current_].object->execute(execute_context);
+    record(context, Event::Kind::kExecute, current_);
+    StateResult result = in_callback(
+        current_, [&] { return instances_[current_].object->execute(execute_context); });
     ++instances_[current_].executions;
     if (hooks_ != nullptr && hooks_->post_execute(*this, name, result)) {
       result = StateResult::kProceed;
     }
     if (terminate_ || status_ != ControllerStatus::kRunning) {
-      deactivate_current(execute_context);
+      deactivate_current(execute_context, stop_ending());
       finish();
       stepping_ = false;
       return;
@@ -511,7 +586,7 @@ void Controller::end(const StepContext& context) {
   if (stepping_ || current_ == kUnbound) return;
   StateContext state_context(context, nullptr, *this, current_);
   try {
-    deactivate_current(state_context);
+    deactivate_current(state_context, {EndCause::kDropped});
   } catch (...) {
     // The controller is being dropped: there is nothing left for its error status to stop.
   }

@@ -1,5 +1,7 @@
 #include "arbiter/explain.hpp"
 
+#include "arbiter/trace.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -12,7 +14,8 @@ namespace arbiter {
 
 namespace {
 
-using Json = nlohmann::json;
+// Ordered: params are shown in the order the trace gives them.
+using Json = nlohmann::ordered_json;
 using Status = Explanation::Status;
 
 std::string number(double value) {
@@ -359,11 +362,60 @@ std::string state_of(const Json& record) {
   return state.is_string() ? state.get<std::string>() : std::string();
 }
 
+/// ` {x: 0.0, y: -4.2}` for a trace's `params` object; "" without one.
+std::string params_of(const Json& params) {
+  if (!params.is_object()) return {};
+  ParamTexts texts;
+  const auto shown = [](const Json& value) {
+    return value.is_number_float() ? short_number(value.get<double>()) : value.dump();
+  };
+  for (const auto& [name, value] : params.items()) {
+    if (!value.is_array()) {
+      texts.emplace_back(name, shown(value));
+      continue;
+    }
+    std::vector<std::string> items;
+    for (const auto& item : value) items.push_back(shown(item));
+    texts.emplace_back(name, "[" + join(items, ", ") + "]");
+  }
+  const std::string text = params_text(texts);
+  return text.empty() ? text : " " + text;
+}
+
 std::string describe_state(const Json& record) {
   const std::string state = state_of(record);
   const auto queue = strings(at(record, "queue"));
-  return fmt::format("state {}; queue: {}", state.empty() ? "(none)" : state,
+  return fmt::format("state {}; queue: {}",
+                     state.empty() ? "(none)" : state + params_of(at(record, "params")),
                      queue.empty() ? "(empty)" : join(queue, ", "));
+}
+
+/// The trace's `ended` entries of a controller's record, in the order of its deactivations.
+struct Ended {
+  StateEnd end;
+  std::string params;  ///< params_of()
+};
+std::vector<Ended> ended_of(const Json& record) {
+  std::vector<Ended> out;
+  const Json& list = at(record, "ended");
+  if (!list.is_array()) return out;
+  const auto text = [](const Json& value) {
+    return value.is_string() ? value.get<std::string>() : std::string();
+  };
+  for (const auto& item : list) {
+    Ended ended;
+    ended.end.state = text(at(item, "state"));
+    ended.end.cause = text(at(item, "cause"));
+    ended.end.to = text(at(item, "to"));
+    ended.end.by = text(at(item, "by"));
+    if (const Json& preempt = at(item, "preempt"); preempt.is_number_integer()) {
+      ended.end.preempt = preempt.get<std::int64_t>();
+    }
+    ended.end.proceeded = at(item, "proceeded").is_boolean() && at(item, "proceeded").get<bool>();
+    ended.params = params_of(at(item, "params"));
+    out.push_back(std::move(ended));
+  }
+  return out;
 }
 
 Explanation explain_controller(const Program& program, std::uint32_t target, std::uint64_t step,
@@ -416,28 +468,58 @@ Explanation explain_controller(const Program& program, std::uint32_t target, std
     }
   }
   std::string popped;
-  for (const auto& event : events) {
+  const std::uint64_t cycle = now->value("cycle", std::uint64_t{0});
+  const auto ended = ended_of(*now);
+  std::size_t deactivations = 0;
+  for (std::size_t e = 0; e < events.size(); ++e) {
+    const auto& event = events[e];
     const auto space = event.find(' ');
     const std::string verb = event.substr(0, space);
     const std::string state = space == std::string::npos ? "" : event.substr(space + 1);
     if (verb == "deactivate") {
-      meaning.push_back(fmt::format(
-          "{} was deactivated: it had asked to proceed, the plan was pre-empted, or the "
-          "controller was terminated",
-          state));
+      const std::size_t index = deactivations++;
+      if (index < ended.size()) {
+        meaning.push_back(fmt::format("{}{} was deactivated: {}", state, ended[index].params,
+                                      end_text(ended[index].end, cycle)));
+      } else {  // a trace without `ended` (written before it was recorded)
+        meaning.push_back(fmt::format(
+            "{} was deactivated: it had asked to proceed, the plan was pre-empted, or the "
+            "controller was terminated",
+            state));
+      }
     } else if (verb == "activate") {
       popped = state;
-      meaning.push_back(fmt::format(
-          "{} became the current state (the head of the queue) and was activated", state));
+      // Its params: those of the current state, or, when it ended in this very step, those its
+      // `ended` entry gives.
+      std::string params;
+      std::size_t ends_before = 0;
+      for (std::size_t i = 0; i < e; ++i) {
+        if (events[i].rfind("deactivate ", 0) == 0) ++ends_before;
+      }
+      const bool ends_here = std::find(events.begin() + static_cast<std::ptrdiff_t>(e),
+                                       events.end(), "deactivate " + state) != events.end();
+      if (ends_here && ends_before < ended.size()) {
+        params = ended[ends_before].params;
+      } else if (!ends_here) {
+        params = params_of(at(*now, "params"));
+      }
+      meaning.push_back(
+          fmt::format("{}{} became the current state (the head of the queue) and was activated",
+                      state, params));
     } else if (verb == "execute") {
       std::string outcome;
       if (after != nullptr) {
         const auto next_events = strings(at(*after, "events"));
+        const auto next_ended = ended_of(*after);
         if (!next_events.empty() && next_events.front() == "deactivate " + state) {
-          outcome = fmt::format(
-              " and is deactivated at step {}: it asked to proceed (or the plan "
-              "was pre-empted)",
-              step + 1);
+          outcome = next_ended.empty()
+                        ? fmt::format(
+                              " and is deactivated at step {}: it asked to proceed (or the plan "
+                              "was pre-empted)",
+                              step + 1)
+                        : fmt::format(" and is deactivated at step {}: {}", step + 1,
+                                      end_text(next_ended.front().end,
+                                               after->value("cycle", std::uint64_t{0})));
         } else if (std::find(next_events.begin(), next_events.end(), "execute " + state) !=
                    next_events.end()) {
           outcome = fmt::format(" and held: it runs again at step {}", step + 1);

@@ -412,6 +412,7 @@ void Manager::safe_pass() {
     actuator_written_[a] = safe;
   }
   data_.event_count = 0;
+  data_.sequence = 0;
   for (const auto& controller : program_.controllers) controller->clear_events();
   for (const auto& layer : program_.layers) {
     if (!layer.is_interface()) continue;
@@ -543,6 +544,7 @@ void Manager::step() {
   if (clock_ != nullptr) step_time_ = clock_->now();
   ++data_.step;
   data_.event_count = 0;
+  data_.sequence = 0;
   const bool first_step = data_.step == 1;
   for (const auto& controller : program_.controllers) controller->clear_events();
   const auto interface_index = [&](const CompiledLayer& layer) {

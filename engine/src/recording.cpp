@@ -30,7 +30,16 @@ constexpr const char* kStepSchema = R"({"$schema": "https://json-schema.org/draf
   "controllers": {"type": "object", "additionalProperties": {"type": "object", "properties": {
     "cycle": {"type": "integer"}, "state": {"type": ["string", "null"]},
     "queue": {"type": "array", "items": {"type": "string"}},
-    "events": {"type": "array", "items": {"type": "string"}}, "status": {"type": "string"}}}},
+    "params": {"type": "object", "description": "the current state's per-instance params"},
+    "events": {"type": "array", "items": {"type": "string"}},
+    "ended": {"type": "array", "description": "why each state deactivated in the step ended, in order",
+      "items": {"type": "object", "properties": {
+        "state": {"type": "string"}, "params": {"type": "object"},
+        "cause": {"enum": ["proceeded", "queue_empty", "preempted", "go_to", "terminated", "error", "restarted", "reloaded"]},
+        "to": {"type": "string"}, "by": {"type": "string"},
+        "preempt": {"type": "integer", "minimum": 0}, "proceeded": {"type": "boolean"}},
+       "required": ["state", "cause"]}},
+    "status": {"type": "string"}}}},
   "reported": {"type": "array", "items": {"type": "object",
     "properties": {"by": {"type": "string"}, "text": {"type": "string"}}}}},
  "required": ["step", "layers"]})";

@@ -77,10 +77,14 @@ struct StepData {
   struct Event {
     std::uint32_t source;  ///< a behaviour index, or the number of behaviours + a layer index
     const char* text;
+    std::uint32_t sequence;  ///< see `sequence` below
   };
   Event* events = nullptr;
   std::size_t event_capacity = 0;
   std::size_t event_count = 0;
+  /// Counts what happens in the step, reports and state machine events alike (from 0 in every
+  /// step), so that observers can tell them in the order they happened.
+  std::uint32_t sequence = 0;
 };
 
 template <typename T>
@@ -116,12 +120,14 @@ class StepContext {
   /// beyond a per-step capacity further events are dropped.
   void report(const char* text) const {
     if (data_->event_count < data_->event_capacity) {
-      data_->events[data_->event_count] = {self_, text};
+      data_->events[data_->event_count] = {self_, text, data_->sequence};
     }
     ++data_->event_count;
+    ++data_->sequence;
   }
 
  protected:
+  friend class Controller;  // numbers its events in the step's sequence
   detail::StepData* data_;
   std::uint32_t self_;
 };

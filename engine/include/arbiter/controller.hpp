@@ -4,6 +4,7 @@
 // its owner (a behaviour or a parent state) or, when standalone, by the manager after the output
 // pass.
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -34,10 +35,45 @@ bool same_params(const std::vector<Param>& a, const std::vector<Param>& b);
 
 class Controller {
  public:
+  /// Why a state was deactivated (docs/semantics.md, "State machines"). Recorded as it happens,
+  /// with indices only; observers turn it into text (end_text() in trace.hpp).
+  enum class EndCause : std::uint8_t {
+    kNone,        ///< not a deactivation
+    kProceeded,   ///< it asked to proceed; the head of the queue followed
+    kQueueEmpty,  ///< it asked to proceed with nothing queued: the controller finished
+    kPreempted,   ///< a pre-emption (a hook, or a `preempt:` entry) replaced the plan
+    kGoTo,        ///< it asked to proceed after replacing the plan with go_to
+    kTerminated,  ///< terminate() ended the controller
+    kError,       ///< the controller stopped with an error (an impossible plan edit)
+    kRestarted,   ///< restart(): its owner started the controller again
+    kDropped,     ///< end(): a hot reload dropped the controller
+  };
+  /// A run-time param of a state instance as planned (Plan calls), copied when the event is
+  /// recorded: the instance may be planned anew, with other params, later in the same step.
+  struct EventArg {
+    std::uint32_t param;  ///< index into the state class's params
+    Arg::Value value;
+  };
   struct Event {
     enum class Kind : std::uint8_t { kActivate, kExecute, kDeactivate };
-    Kind kind;
-    std::uint32_t state;
+    Kind kind = Kind::kExecute;
+    EndCause cause = EndCause::kNone;
+    /// kPreempted: the state had asked to proceed too (the pre-emption decided what followed).
+    bool proceeded = false;
+    std::uint32_t state = kUnbound;
+    /// kPreempted, kGoTo: the state planned in its place (kUnbound: none); kTerminated: the
+    /// state whose callback called terminate() (kUnbound: a hook of the owner).
+    std::uint32_t other = kUnbound;
+    /// kPreempted: the index of the `preempt:` entry that fired (kUnbound: a hook).
+    std::uint32_t preempt = kUnbound;
+    /// Where in the step it happened: reports (StepContext::report) and the events of every
+    /// controller draw from one counter per step, so observers can print them in order.
+    std::uint32_t sequence = 0;
+    /// kActivate, kDeactivate: the instance's per-instance params from the config (or null) and
+    /// its run-time ones (event_args()).
+    const std::vector<Param>* planned = nullptr;
+    std::uint32_t args_begin = 0;
+    std::uint32_t args_count = 0;
   };
   static constexpr std::size_t kMaxEventsPerStep = 64;
 
@@ -60,12 +96,32 @@ class Controller {
 
   /// The current state's name, or "" before the first step and once finished.
   std::string_view current_state() const;
+  /// The current instance's per-instance params from the config's plan (or null), and from Plan
+  /// calls (class param index, value); null and empty when there is no current state.
+  const std::vector<Param>* current_planned() const {
+    return current_ == kUnbound ? nullptr : instances_[current_].planned;
+  }
+  const std::vector<std::pair<std::uint32_t, ParamValue>>& current_args() const {
+    static const std::vector<std::pair<std::uint32_t, ParamValue>> kNone;
+    return current_ == kUnbound ? kNone : instances_[current_].args;
+  }
+  /// The current state's index, or kUnbound.
+  std::uint32_t current_state_index() const {
+    return current_ == kUnbound ? kUnbound : instances_[current_].state;
+  }
   std::size_t queue_size() const { return queue_.size(); }
   std::string_view queued(std::size_t index) const;
   const Event* events() const { return events_.data(); }
   std::size_t event_count() const { return std::min(event_count_, kMaxEventsPerStep); }
+  /// The run-time params of an activation or deactivation: [first, first + event.args_count).
+  const EventArg* event_args(const Event& event) const {
+    return event_args_.data() + event.args_begin;
+  }
   /// Called by the manager at the start of every step, so a paused controller shows no events.
-  void clear_events() { event_count_ = 0; }
+  void clear_events() {
+    event_count_ = 0;
+    event_args_used_ = 0;
+  }
 
   /// Not owned; the hooks must outlive the controller or be reset.
   void set_hooks(ControllerHooks* hooks) { hooks_ = hooks; }
@@ -118,6 +174,10 @@ class Controller {
         instances_.push_back(std::move(instance));
       }
     }
+    // Room to copy the run-time params of every event a step can record.
+    std::size_t most_params = 0;
+    for (const auto& state : states_) most_params = std::max(most_params, state.cls->params.size());
+    event_args_.resize(kMaxEventsPerStep * most_params);
     reset_queue();
   }
   std::optional<std::uint32_t> find_state(std::string_view name) const;
@@ -142,10 +202,36 @@ class Controller {
   bool insert(std::size_t index, std::optional<std::uint32_t> instance);
   void release(std::uint32_t instance);
   void reset_queue();
-  void record(Event::Kind kind, std::uint32_t instance);
+  /// Why the current state is left, as found in the first phase of a step.
+  struct Ending {
+    EndCause cause = EndCause::kNone;
+    bool proceeded = false;
+    std::uint32_t other = kUnbound;
+    std::uint32_t preempt = kUnbound;
+  };
+  void record(const StepContext& context, Event::Kind kind, std::uint32_t instance,
+              const Ending& ending);
+  void record(const StepContext& context, Event::Kind kind, std::uint32_t instance) {
+    record(context, kind, instance, Ending{});
+  }
   void fail(std::string message);
   const ParamValue* find_param(std::uint32_t instance, std::string_view name) const;
-  void deactivate_current(StateContext& context);
+  void deactivate_current(StateContext& context, const Ending& ending);
+  /// Why terminate() or an error ends the current state.
+  Ending stop_ending() const;
+  void note_go_to();
+  /// Calls a callback of `instance`, so that plan edits know which state made them.
+  template <typename Call>
+  auto in_callback(std::uint32_t instance, Call&& call) {
+    const std::uint32_t outer = callback_;
+    callback_ = instance;
+    struct Restore {
+      std::uint32_t& callback;
+      std::uint32_t outer;
+      ~Restore() { callback = outer; }
+    } restore{callback_, outer};
+    return call();
+  }
   void finish();
 
   std::string name_;
@@ -173,6 +259,14 @@ class Controller {
   std::uint32_t owner_behaviour_ = kUnbound;
   std::array<Event, kMaxEventsPerStep> events_{};
   std::size_t event_count_ = 0;
+  std::vector<EventArg> event_args_;  ///< sized at build_pool()
+  std::size_t event_args_used_ = 0;
+  /// The instance whose callback is running (kUnbound: none, or a hook).
+  std::uint32_t callback_ = kUnbound;
+  /// The state the current instance replaced the plan with (go_to), or kUnbound.
+  std::uint32_t went_to_ = kUnbound;
+  /// The state whose callback called terminate() (kUnbound: a hook), valid with terminate_.
+  std::uint32_t terminated_by_ = kUnbound;
   ControllerHooks* hooks_ = nullptr;
   spdlog::logger* logger_ = nullptr;
   std::string error_;

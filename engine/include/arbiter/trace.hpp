@@ -4,6 +4,8 @@
 
 #include <ostream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "arbiter/manager.hpp"
 
@@ -35,6 +37,39 @@ std::string trace_header(const Program& program);
 std::string reload_header(const Manager& manager);
 /// "activate walk_to_pose", as in the trace.
 std::string event_text(const Controller& controller, const Controller::Event& event);
+
+/// A deactivation's cause as the trace's `ended` entries name it: "proceeded", "queue_empty",
+/// "preempted", "go_to", "terminated", "error", "restarted", "reloaded" ("" for kNone).
+const char* cause_name(Controller::EndCause cause);
+
+/// Why a state ended, as the trace tells it (docs/semantics.md, "The trace").
+struct StateEnd {
+  std::string state;
+  std::string cause;  ///< cause_name()
+  std::string to;     ///< preempted, go_to: the state planned in its place ("": none)
+  std::string by;     ///< terminated: the state that called terminate() ("": the owner's hook)
+  /// preempted: by the config's `preempt:` entry of this index (from 0); -1: by a hook
+  std::int64_t preempt = -1;
+  bool proceeded = false;  ///< preempted after it had asked to proceed
+};
+/// The state end of a deactivation event.
+StateEnd state_end(const Controller& controller, const Controller::Event& event);
+/// What `run` and `explain` say about it: "pre-empted by dive", "proceeded", "go_to c".
+std::string end_text(const StateEnd& end, std::uint64_t cycle);
+
+/// Per-instance params (the queue entry's, then those of Plan calls), each with its value as
+/// JSON text, in the order they were given: `[("x", "0.0"), ("y", "-4.2")]`.
+using ParamTexts = std::vector<std::pair<std::string, std::string>>;
+/// Of the instance an activation or deactivation event is about. Not `exact`: numbers to 4
+/// significant digits (short_number()), as `run` shows them.
+ParamTexts event_params(const Controller& controller, const Controller::Event& event,
+                        bool exact = true);
+/// Of the controller's current instance, exact.
+ParamTexts current_params(const Controller& controller);
+/// A param's number for a person: 4 significant digits, as JSON (`-4.07`, `0.0`).
+std::string short_number(double value);
+/// `{x: 0.0, y: -4.2}`, as `run` and `explain` show them; "" when there are none.
+std::string params_text(const ParamTexts& params);
 /// The record of the manager's last step, without the newline: with `"safe": true` during the
 /// safe-value pass, and `"t"` and `"duration"` (seconds) when the manager has a clock.
 void append_step_record(const Manager& manager, std::string& out);
