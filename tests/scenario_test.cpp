@@ -35,6 +35,19 @@ fs::path expected_of(const fs::path& scenario) {
   return scenario.parent_path() / (name + ".expected");
 }
 
+/// Compares what `arbiter test` printed, and its exit code, with the approved output beside the
+/// scenario (or rewrites it under ARBITER_UPDATE_GOLDEN).
+void check_against_golden(const fs::path& scenario, const test::CliResult& result) {
+  const std::string actual =
+      result.out + result.err + "exit " + std::to_string(result.exit_code) + "\n";
+  if (test::update_golden()) {
+    test::write_text(expected_of(scenario), actual);
+    WARN("rewrote " << expected_of(scenario).string());
+  } else {
+    CHECK(actual == test::read_text(expected_of(scenario)));
+  }
+}
+
 std::size_t count(const std::string& text, const std::string& part) {
   std::size_t n = 0;
   for (auto at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) ++n;
@@ -52,14 +65,7 @@ TEST_CASE("every failing or invalid scenario prints the approved output and exit
       const std::string relative = fs::relative(path, kSourceDir).string();
       DYNAMIC_SECTION(relative) {
         const auto result = run_cli("test " + relative);
-        const std::string actual =
-            result.out + result.err + "exit " + std::to_string(result.exit_code) + "\n";
-        if (test::update_golden()) {
-          test::write_text(expected_of(path), actual);
-          WARN("rewrote " << expected_of(path).string());
-        } else {
-          CHECK(actual == test::read_text(expected_of(path)));
-        }
+        check_against_golden(path, result);
         CHECK(result.exit_code == (std::string(kind) == "failing" ? 1 : 2));
       }
     }
@@ -95,14 +101,7 @@ TEST_CASE(
     const std::string relative = fs::relative(path, kSourceDir).string();
     DYNAMIC_SECTION(relative) {
       const auto result = run_there("test " + relative);
-      const std::string actual =
-          result.out + result.err + "exit " + std::to_string(result.exit_code) + "\n";
-      if (test::update_golden()) {
-        test::write_text(expected_of(path), actual);
-        WARN("rewrote " << expected_of(path).string());
-      } else {
-        CHECK(actual == test::read_text(expected_of(path)));
-      }
+      check_against_golden(path, result);
       CHECK(result.exit_code != 0);
     }
   }
