@@ -755,7 +755,8 @@ std::vector<json> Server::handle(const std::string& text) {
   json message;
   try {
     message = json::parse(text);
-  } catch (const json::parse_error& error) {
+  } catch (const json::exception& error) {
+    // Not only syntax errors: a number too large for a double is refused after parsing it.
     return {{{"jsonrpc", "2.0"},
              {"id", nullptr},
              {"error",

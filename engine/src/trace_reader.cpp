@@ -27,6 +27,16 @@ std::string parse_message(const Json::parse_error& error) {
   return text;
 }
 
+/// nlohmann's message without its "[json.exception.KIND.ID] " prefix.
+std::string without_prefix(const Json::exception& error) {
+  std::string text = error.what();
+  if (const auto end = text.find("] ");
+      text.rfind("[json.exception.", 0) == 0 && end != std::string::npos) {
+    return text.substr(end + 2);
+  }
+  return text;
+}
+
 bool is_header(const Json& json) {
   return json.is_object() && json.value("arbiter_trace", Json()) == 1;
 }
@@ -140,6 +150,10 @@ bool TraceSource::accept(TraceRecord& record) {
     auto where = record.location;
     if (where.line > 0) where.column = static_cast<int>(std::max<std::size_t>(bad.byte, 1));
     fail(std::move(where), "not JSON: " + parse_message(bad));
+    return false;
+  } catch (const Json::exception& bad) {
+    // Valid syntax the parser still refuses, such as a number too large for a double.
+    fail(record.location, "not readable JSON: " + without_prefix(bad));
     return false;
   }
   if (!header_seen_) {

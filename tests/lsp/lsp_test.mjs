@@ -403,8 +403,11 @@ test('malformed messages get JSON-RPC errors and the server keeps serving', asyn
   await client.start();
   await assert.rejects(client.request('arbiter/nonsense', {}), (error) => error.code === -32601);
   await assert.rejects(client.request('textDocument/hover', { position: 3 }), (error) => error.code === -32602);
-  // Raw bytes: invalid JSON, then a frame without Content-Length.
+  // Raw bytes: invalid JSON, valid JSON with a number no double holds, then a frame without
+  // Content-Length.
   client.process.stdin.write('Content-Length: 5\r\n\r\n{bad}');
+  const huge = '{"id": 1e999999}';
+  client.process.stdin.write(`Content-Length: ${huge.length}\r\n\r\n${huge}`);
   client.process.stdin.write('X-Nothing: 1\r\n\r\n');
   const { uri, text } = yaml();
   assert.deepEqual(await client.open(uri, text), []);
