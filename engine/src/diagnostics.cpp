@@ -37,12 +37,14 @@ void Diagnostics::sort() {
   });
 }
 
-namespace {
+namespace {}  // namespace
 
-std::string format_location(const SourceLocation& where) {
+std::string to_string(const SourceLocation& where) {
   if (where.line <= 0) return where.file;
   return fmt::format("{}:{}:{}", where.file, where.line, where.column);
 }
+
+namespace {
 
 const char* severity_name(Severity severity) {
   return severity == Severity::kError ? "error" : "warning";
@@ -199,7 +201,7 @@ std::string source_excerpt(std::string_view line, const SourceLocation& where, P
 std::string format_one(const Diagnostic& diagnostic, const FormatOptions& options,
                        SourceLines& sources) {
   const Paint paint{options.color};
-  const std::string where = format_location(diagnostic.location);
+  const std::string where = to_string(diagnostic.location);
   std::string label = severity_name(diagnostic.severity);
   if (options.codes && !diagnostic.code.empty()) label += fmt::format("[{}]", diagnostic.code);
   const char* colour = diagnostic.severity == Severity::kError ? kRed : kMagenta;

@@ -14,12 +14,14 @@ Loaded load_config(const std::string& path, Registry& registry, const LoadOption
     // Plugins first: their classes are what the model is checked against. A plugin that fails
     // still lets validation run, so that every other problem is reported too.
     load_plugins(*document, options.plugins, registry, diagnostics);
-    Model& model =
-        loaded.model.emplace(build_model(*document, registry, diagnostics, loaded.files));
+    loaded.model =
+        std::make_shared<Model>(build_model(*document, registry, diagnostics, loaded.files));
+    Model& model = *loaded.model;
     if (diagnostics.has_errors()) {
       check_inhibition_cycles(model, diagnostics);  // a cycle is reported in the same pass
     } else if (!options.edit_model || options.edit_model(model, diagnostics)) {
       loaded.program = compile(model, registry, diagnostics);
+      if (loaded.program) loaded.program->model = loaded.model;
       if (loaded.program && options.lint) options.lint(model, *loaded.program, diagnostics);
     }
   }

@@ -22,15 +22,6 @@ class Inert final : public Behaviour {
   double activation(const StepContext&) override { return 0.0; }
 };
 
-// How many doubles of a value a non-finite check looks at: double, vec2 and vec3 values.
-std::uint8_t finite_components(const ValueType& type) {
-  if (type.cpp_type == nullptr) return 0;
-  if (*type.cpp_type == typeid(double)) return 1;
-  if (*type.cpp_type == typeid(Vec2)) return 2;
-  if (*type.cpp_type == typeid(Vec3)) return 3;
-  return 0;
-}
-
 bool is_finite(const void* value, std::uint8_t components) {
   switch (components) {
     case 1:
@@ -80,49 +71,19 @@ bool is_finite(const void* value, std::uint8_t components) {
     return false;                                                     \
   }()
 
-// A program with every buffer the step needs sized for it: what the constructor starts with,
-// and what stage() prepares for a swap. After the swap it holds what was replaced.
+// What stage() prepares for a swap: the program, its run state and the carry-over from the
+// running program. After the swap it holds what was replaced.
 struct Manager::Staged {
   Program program;
+  RunState state;
   CarryPlan plan;
-  std::unique_ptr<std::byte[]> values;
-  std::unique_ptr<bool[]> actuator_written;
-  std::unique_ptr<bool[]> slot_written;
-  std::vector<double> requested;
-  std::vector<double> activation;
-  std::vector<double> factors;
-  std::vector<Behaviour*> instances;
-  std::vector<char> active;
-  std::vector<char> nan_reported;
-  std::vector<char> exception_reported;
-  std::vector<std::uint64_t> faulted_step;
-  std::vector<char> disabled;
-  std::vector<std::uint32_t> suspended;
-  std::vector<std::uint8_t> finite_components;
-  std::vector<char> non_finite_reported;
-  std::vector<const void*> mean_values;
-  std::vector<double> mean_weights;
-  std::vector<ValueBox> safe_values;
-  // Scratch for the swap: which running behaviours, layers and controllers go on in the new
-  // program (kept, or taken over by carry_over()), and which new instances took over.
+  // Scratch for the swap, per running behaviour, layer and controller: which go on in the new
+  // program (kept, or taken over by carry_over()); and per new behaviour and layer, which took
+  // over.
   std::vector<char> behaviour_continues;
   std::vector<char> interface_continues;
   std::vector<char> controller_continues;
   std::vector<char> took_over;
-
-  Staged() = default;
-  Staged(Program p, CarryPlan c) : program(std::move(p)), plan(std::move(c)) {}
-  Staged(const Staged&) = delete;
-  Staged& operator=(const Staged&) = delete;
-  ~Staged() {
-    if (!values) return;
-    for (const auto& actuator : program.actuators) {
-      actuator.type->destroy(values.get() + actuator.offset);
-    }
-    for (std::size_t s = 0; s < program.slots.size(); ++s) {
-      program.slot_types[s]->destroy(values.get() + program.slot_offsets[s]);
-    }
-  }
 };
 
 struct Manager::Reloading {
@@ -142,99 +103,40 @@ Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
   data_.events = events_.data();
   data_.event_capacity = events_.size();
   data_.step = 0;
-  Staged first(std::move(program), CarryPlan{});
-  prepare(first);
-  swap_buffers(first);
+  const auto first = prepare(std::move(program), CarryPlan{});
+  swap_in(*first);
 }
 
 Manager::Manager(Manager&&) noexcept = default;
-Manager::~Manager() {
-  // The running program's values are destroyed as a replaced one's are: through a Staged.
-  Staged last;
-  swap_buffers(last);
-}
+Manager::~Manager() = default;
 
-void Manager::prepare(Staged& staged) const {
-  const Program& program = staged.program;
-  const std::size_t behaviours = program.behaviours.size();
-  const std::size_t actuators = program.actuators.size();
-  const std::size_t slots = program.slots.size();
-  staged.values = std::make_unique<std::byte[]>(std::max<std::size_t>(program.value_bytes, 1));
-  staged.actuator_written = std::make_unique<bool[]>(std::max<std::size_t>(actuators, 1));
-  staged.slot_written = std::make_unique<bool[]>(std::max<std::size_t>(slots, 1));
-  staged.requested.assign(behaviours, 0.0);
-  staged.activation.assign(behaviours, 0.0);
-  staged.factors.assign(2 * behaviours, 1.0);
-  staged.instances.reserve(behaviours);
-  for (const auto& behaviour : program.behaviours) {
-    staged.instances.push_back(behaviour.instance.get());
-  }
-  staged.active.assign(behaviours, 0);
-  staged.nan_reported.assign(behaviours, 0);
-  staged.exception_reported.assign(behaviours + program.layers.size(), 0);
-  staged.faulted_step.assign(behaviours + program.layers.size(), 0);
-  staged.disabled.assign(behaviours + program.layers.size(), 0);
-  staged.suspended.reserve(behaviours);
-  staged.non_finite_reported.assign(slots, 0);
-  staged.finite_components.resize(slots);
-  for (std::size_t s = 0; s < slots; ++s) {
-    staged.finite_components[s] = finite_components(*program.slot_types[s]);
-  }
-  staged.mean_values.assign(program.max_writers, nullptr);
-  staged.mean_weights.assign(program.max_writers, 0.0);
-  for (const auto& actuator : program.actuators) {
-    void* at = staged.values.get() + actuator.offset;
-    actuator.type->construct(at);
-    if (actuator.default_value) {
-      std::string expected;
-      actuator.type->from_node(*actuator.default_value, at, expected);  // validated at load
-    }
-  }
-  staged.safe_values.resize(actuators);
-  for (std::size_t a = 0; a < actuators; ++a) {
-    const auto& actuator = program.actuators[a];
-    if (!actuator.safe_value) continue;
-    staged.safe_values[a] = ValueBox(*actuator.type);
-    std::string expected;
-    actuator.type->from_node(*actuator.safe_value, staged.safe_values[a].data(), expected);
-  }
-  for (std::size_t s = 0; s < slots; ++s) {
-    program.slot_types[s]->construct(staged.values.get() + program.slot_offsets[s]);
-  }
+std::unique_ptr<Manager::Staged> Manager::prepare(Program program, CarryPlan plan) const {
+  auto staged = std::make_unique<Staged>();
+  staged->state = RunState(program);
   for (const auto& controller : program.controllers) controller->set_logger(logger_.get());
-  staged.behaviour_continues.assign(program_.behaviours.size(), 0);
-  staged.interface_continues.assign(program_.layers.size(), 0);
-  staged.controller_continues.assign(program_.controllers.size(), 0);
-  staged.took_over.assign(behaviours + program.layers.size(), 0);
+  staged->behaviour_continues.assign(program_.behaviours.size(), 0);
+  staged->interface_continues.assign(program_.layers.size(), 0);
+  staged->controller_continues.assign(program_.controllers.size(), 0);
+  staged->took_over.assign(program.behaviours.size() + program.layers.size(), 0);
+  staged->program = std::move(program);
+  staged->plan = std::move(plan);
+  return staged;
 }
 
-// Exchanges the running program and its buffers with `staged`'s; allocates nothing.
-void Manager::swap_buffers(Staged& staged) noexcept {
+// Exchanges the running program and its run state with `staged`'s; allocates nothing.
+void Manager::swap_in(Staged& staged) noexcept {
   std::swap(program_, staged.program);
-  std::swap(values_, staged.values);
-  std::swap(actuator_written_, staged.actuator_written);
-  std::swap(slot_written_, staged.slot_written);
-  requested_.swap(staged.requested);
-  activation_.swap(staged.activation);
-  factors_.swap(staged.factors);
-  instances_.swap(staged.instances);
-  active_.swap(staged.active);
-  nan_reported_.swap(staged.nan_reported);
-  exception_reported_.swap(staged.exception_reported);
-  faulted_step_.swap(staged.faulted_step);
-  disabled_.swap(staged.disabled);
-  suspended_.swap(staged.suspended);
-  finite_components_.swap(staged.finite_components);
-  non_finite_reported_.swap(staged.non_finite_reported);
-  mean_values_.swap(staged.mean_values);
-  mean_weights_.swap(staged.mean_weights);
-  safe_values_.swap(staged.safe_values);
-  data_.values = values_.get();
+  std::swap(run_, staged.state);
+  point_step_data();
+}
+
+void Manager::point_step_data() noexcept {
+  data_.values = run_.values.data();
   data_.actuator_offset = program_.actuator_offsets.data();
-  data_.actuator_written = actuator_written_.get();
+  data_.actuator_written = run_.actuator_written.get();
   data_.slot_offset = program_.slot_offsets.data();
   data_.slot_type = program_.slot_types.data();
-  data_.slot_written = slot_written_.get();
+  data_.slot_written = run_.slot_written.get();
   data_.period = 1.0 / program_.rate_hz;
 }
 
@@ -254,8 +156,7 @@ void Manager::stage(Program program, CarryPlan plan) {
     throw std::invalid_argument(
         "Manager::stage: the carry-over plan does not fit the programs (build it with Reloader)");
   }
-  auto staged = std::make_unique<Staged>(std::move(program), std::move(plan));
-  prepare(*staged);
+  auto staged = prepare(std::move(program), std::move(plan));
   std::unique_ptr<Staged> dropped;
   std::unique_ptr<Staged> retired;
   {
@@ -299,7 +200,8 @@ void Manager::apply(Staged& staged) {
     }
     Behaviour& previous = *program_.behaviours[from].instance;
     bool took = false;
-    ARBITER_GUARDED(from, "carry_over", took = next.behaviours[b].instance->carry_over(previous));
+    ARBITER_GUARDED(from, Callback::kCarryOver,
+                    took = next.behaviours[b].instance->carry_over(previous));
     staged.took_over[b] = took ? 1 : 0;
     staged.behaviour_continues[from] = took ? 1 : 0;
   }
@@ -313,7 +215,7 @@ void Manager::apply(Staged& staged) {
     }
     Interface& previous = *program_.layers[from].interface;
     bool took = false;
-    ARBITER_GUARDED(program_.behaviours.size() + from, "carry_over",
+    ARBITER_GUARDED(program_.behaviours.size() + from, Callback::kCarryOver,
                     took = next.layers[l].interface->carry_over(previous));
     staged.took_over[behaviours + l] = took ? 1 : 0;
     staged.interface_continues[from] = took ? 1 : 0;
@@ -323,7 +225,7 @@ void Manager::apply(Staged& staged) {
   }
   end_replaced(staged);
 
-  swap_buffers(staged);
+  swap_in(staged);
   // From here on `staged` holds the replaced program and its buffers.
   carry_values(staged);
   for (std::uint32_t b = 0; b < program_.behaviours.size(); ++b) {
@@ -331,14 +233,14 @@ void Manager::apply(Staged& staged) {
     if (from == kUnbound) continue;
     if (plan.behaviour_kept[b] != 0) {
       std::swap(program_.behaviours[b].instance, staged.program.behaviours[from].instance);
-      instances_[b] = program_.behaviours[b].instance.get();
+      run_.instances[b] = program_.behaviours[b].instance.get();
     } else if (staged.took_over[b] == 0) {
       continue;
     }
-    active_[b] = staged.active[from];
-    requested_[b] = staged.requested[from];
-    activation_[b] = staged.activation[from];
-    nan_reported_[b] = staged.nan_reported[from];
+    run_.active[b] = staged.state.active[from];
+    run_.requested[b] = staged.state.requested[from];
+    run_.activation[b] = staged.state.activation[from];
+    run_.nan_reported[b] = staged.state.nan_reported[from];
   }
   for (std::uint32_t l = 0; l < program_.layers.size(); ++l) {
     const std::uint32_t from = plan.interface_from[l];
@@ -356,9 +258,9 @@ void Manager::apply(Staged& staged) {
 // state of controllers, against the running program's buffers.
 void Manager::end_replaced(Staged& staged) {
   for (std::uint32_t b = 0; b < program_.behaviours.size(); ++b) {
-    if (staged.behaviour_continues[b] != 0 || disabled_[b] != 0) continue;
-    const InhibitedContext context(data_, b, active_[b] != 0);
-    ARBITER_GUARDED(b, "inhibited", program_.behaviours[b].instance->inhibited(context));
+    if (staged.behaviour_continues[b] != 0 || run_.disabled[b] != 0) continue;
+    const InhibitedContext context(data_, b, run_.active[b] != 0);
+    ARBITER_GUARDED(b, Callback::kInhibited, program_.behaviours[b].instance->inhibited(context));
   }
   const StepContext context(data_, kUnbound);
   for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
@@ -371,9 +273,10 @@ void Manager::carry_values(const Staged& staged) {
   for (std::uint32_t a = 0; a < program_.actuators.size(); ++a) {
     const std::uint32_t from = staged.plan.actuator_from[a];
     if (from == kUnbound) continue;
-    program_.actuators[a].type->assign(values_.get() + program_.actuators[a].offset,
-                                       staged.values.get() + staged.program.actuators[from].offset);
-    actuator_written_[a] = staged.actuator_written[from];
+    program_.actuators[a].type->assign(
+        run_.values.at(program_.actuators[a].offset),
+        staged.state.values.at(staged.program.actuators[from].offset));
+    run_.actuator_written[a] = staged.state.actuator_written[from];
   }
 }
 
@@ -399,17 +302,17 @@ void Manager::finish() {
 }
 
 void Manager::safe_pass() {
-  const bool any_safe = std::any_of(safe_values_.begin(), safe_values_.end(),
+  const bool any_safe = std::any_of(run_.safe_values.begin(), run_.safe_values.end(),
                                     [](const ValueBox& box) { return box.data() != nullptr; });
   if (data_.step == 0 || !any_safe) return;
   if (clock_ != nullptr) step_time_ = clock_->now();
   for (std::uint32_t a = 0; a < program_.actuators.size(); ++a) {
-    const bool safe = safe_values_[a].data() != nullptr;
+    const bool safe = run_.safe_values[a].data() != nullptr;
     if (safe) {
-      program_.actuators[a].type->assign(values_.get() + program_.actuators[a].offset,
-                                         safe_values_[a].data());
+      program_.actuators[a].type->assign(run_.values.at(program_.actuators[a].offset),
+                                         run_.safe_values[a].data());
     }
-    actuator_written_[a] = safe;
+    run_.actuator_written[a] = safe;
   }
   data_.event_count = 0;
   data_.sequence = 0;
@@ -419,7 +322,8 @@ void Manager::safe_pass() {
     const auto index =
         static_cast<std::uint32_t>(program_.behaviours.size() + (&layer - program_.layers.data()));
     const StepContext context(data_, index);
-    if (disabled_[index] == 0) ARBITER_GUARDED(index, "output", layer.interface->output(context));
+    if (run_.disabled[index] == 0)
+      ARBITER_GUARDED(index, Callback::kOutput, layer.interface->output(context));
   }
   if (clock_ != nullptr) step_duration_ = clock_->now() - step_time_;
   ++safe_passes_;
@@ -428,29 +332,49 @@ void Manager::safe_pass() {
   in_safe_pass_ = false;
 }
 
+const char* Manager::name(Callback callback) {
+  switch (callback) {
+    case Callback::kUpdate:
+      return "update";
+    case Callback::kActivation:
+      return "activation";
+    case Callback::kExecute:
+      return "execute";
+    case Callback::kInhibited:
+      return "inhibited";
+    case Callback::kInput:
+      return "input";
+    case Callback::kOutput:
+      return "output";
+    case Callback::kCarryOver:
+      return "carry_over";
+  }
+  return "?";
+}
+
 // Called from ARBITER_GUARDED's handlers: reports the exception once and applies the thrower's
 // on_exception policy. Every policy drops the thrower's writes of this step (resolve_actuators
-// skips a writer whose faulted_step_ is this step).
-void Manager::report_exception(std::uint32_t index, const char* callback, const char* what) {
+// skips a writer whose run_.faulted_step is this step).
+void Manager::report_exception(std::uint32_t index, Callback callback, const char* what) {
   const bool is_behaviour = index < program_.behaviours.size();
   const FaultPolicy policy =
       is_behaviour ? program_.behaviours[index].on_exception : program_.on_exception;
-  faulted_step_[index] = data_.step;
-  if (is_behaviour && instances_[index] != inert_.get()) {
+  run_.faulted_step[index] = data_.step;
+  if (is_behaviour && run_.instances[index] != inert_.get()) {
     // A throw from update() leaves nothing to ask for a level: the behaviour sits out the
     // rest of the step (and, when disabled, the rest of the run).
     if (policy == FaultPolicy::kDisable) {
-      instances_[index] = inert_.get();
-    } else if (std::string_view(callback) == "update") {
-      instances_[index] = inert_.get();
-      suspended_.push_back(index);
+      run_.instances[index] = inert_.get();
+    } else if (callback == Callback::kUpdate) {
+      run_.instances[index] = inert_.get();
+      run_.suspended.push_back(index);
     }
   }
-  if (policy == FaultPolicy::kDisable) disabled_[index] = 1;
+  if (policy == FaultPolicy::kDisable) run_.disabled[index] = 1;
   // Formatting allocates: a behaviour that throws in every step is described once (and once more
   // for the stop reason), not in every step.
   const bool sets_stop_reason = policy == FaultPolicy::kStop && !stopping_;
-  if (exception_reported_[index] != 0 && !sets_stop_reason) return;
+  if (run_.exception_reported[index] != 0 && !sets_stop_reason) return;
   const char* outcome =
       "it counts as inactive in each step where it throws (on_exception: "
       "inactive; reported once)";
@@ -462,31 +386,30 @@ void Manager::report_exception(std::uint32_t index, const char* callback, const 
   std::string message;
   if (is_behaviour) {
     const auto& behaviour = program_.behaviours[index];
-    message =
-        fmt::format("{}:{}:{}: behaviour '{}' ({}) threw from {}() in step {}: {}",
-                    behaviour.location.file, behaviour.location.line, behaviour.location.column,
-                    behaviour.name, behaviour.cls->name, callback, data_.step, what);
+    message = fmt::format("{}: behaviour '{}' ({}) threw from {}() in step {}: {}",
+                          to_string(behaviour.location), behaviour.name, behaviour.cls->name,
+                          name(callback), data_.step, what);
   } else {
     const auto& layer = program_.layers[index - program_.behaviours.size()];
-    message = fmt::format("{}:{}:{}: interface of layer '{}' ({}) threw from {}() in step {}: {}",
-                          layer.location.file, layer.location.line, layer.location.column,
-                          layer.name, layer.interface_class->name, callback, data_.step, what);
+    message = fmt::format("{}: interface of layer '{}' ({}) threw from {}() in step {}: {}",
+                          to_string(layer.location), layer.name, layer.interface_class->name,
+                          name(callback), data_.step, what);
   }
   if (policy == FaultPolicy::kStop && !stopping_) {
     stopping_ = true;
     stop_reason_ = message;
   }
-  if (exception_reported_[index] != 0) return;
-  exception_reported_[index] = 1;
+  if (run_.exception_reported[index] != 0) return;
+  run_.exception_reported[index] = 1;
   logger_->error("{}; {}", message, outcome);
 }
 
 // End of a step: behaviours that sat out this step come back; a stop takes effect.
 void Manager::finish_faults() {
-  for (const std::uint32_t b : suspended_) {
-    if (disabled_[b] == 0) instances_[b] = program_.behaviours[b].instance.get();
+  for (const std::uint32_t b : run_.suspended) {
+    if (run_.disabled[b] == 0) run_.instances[b] = program_.behaviours[b].instance.get();
   }
-  suspended_.clear();
+  run_.suspended.clear();
   if (program_.on_exception == FaultPolicy::kStop && !stopping_) {
     // A state's exception stops its controller with status error (docs/semantics.md, "State
     // machines"); under `on_exception: stop` it stops the manager too.
@@ -503,8 +426,8 @@ void Manager::finish_faults() {
 }
 
 void Manager::report_non_finite_write(std::uint32_t slot) {
-  if (non_finite_reported_[slot] != 0) return;
-  non_finite_reported_[slot] = 1;
+  if (run_.non_finite_reported[slot] != 0) return;
+  run_.non_finite_reported[slot] = 1;
   const WriterSlot& writer = program_.slots[slot];
   const CompiledActuator& actuator = program_.actuators[writer.actuator];
   const SourceLocation* where = &program_.layers[actuator.layer].location;
@@ -516,9 +439,9 @@ void Manager::report_non_finite_write(std::uint32_t slot) {
                       program_.behaviours[writer.owner].cls->name);
   }
   logger_->warn(
-      "{}:{}:{}: {} wrote a non-finite value (NaN or infinity) to actuator '{}' in step {}; "
+      "{}: {} wrote a non-finite value (NaN or infinity) to actuator '{}' in step {}; "
       "such writes are ignored (reported once)",
-      where->file, where->line, where->column, who, actuator.name, data_.step);
+      to_string(*where), who, actuator.name, data_.step);
 }
 
 void Manager::step() {
@@ -556,12 +479,12 @@ void Manager::step() {
     if (!layer.is_interface()) continue;
     for (std::uint32_t a = layer.actuator_begin; a < layer.actuator_end; ++a) {
       for (auto s = program_.actuator_slot_begin[a]; s < program_.actuator_slot_begin[a + 1]; ++s) {
-        slot_written_[program_.actuator_slots[s]] = false;
+        run_.slot_written[program_.actuator_slots[s]] = false;
       }
     }
     ExecuteContext context(data_, interface_index(layer), 1.0, first_step);
-    if (disabled_[interface_index(layer)] == 0) {
-      ARBITER_GUARDED(interface_index(layer), "input", layer.interface->input(context));
+    if (run_.disabled[interface_index(layer)] == 0) {
+      ARBITER_GUARDED(interface_index(layer), Callback::kInput, layer.interface->input(context));
     }
     resolve_actuators(layer);
   }
@@ -573,8 +496,8 @@ void Manager::step() {
   for (const auto& layer : program_.layers) {
     if (!layer.is_interface()) continue;
     const StepContext context(data_, interface_index(layer));
-    if (disabled_[interface_index(layer)] == 0) {
-      ARBITER_GUARDED(interface_index(layer), "output", layer.interface->output(context));
+    if (run_.disabled[interface_index(layer)] == 0) {
+      ARBITER_GUARDED(interface_index(layer), Callback::kOutput, layer.interface->output(context));
     }
   }
 
@@ -598,16 +521,16 @@ void Manager::run_layer(const CompiledLayer& layer) {
   // "Timing: the one-step delay".
   for (std::uint32_t a = layer.actuator_begin; a < layer.actuator_end; ++a) {
     for (auto s = program_.actuator_slot_begin[a]; s < program_.actuator_slot_begin[a + 1]; ++s) {
-      slot_written_[program_.actuator_slots[s]] = false;
+      run_.slot_written[program_.actuator_slots[s]] = false;
     }
   }
   update_behaviours(begin, end);
   request_and_refine(begin, end);
   if (layer.normalise) {
     double sum = 0.0;
-    for (std::uint32_t b = begin; b < end; ++b) sum += activation_[b];
+    for (std::uint32_t b = begin; b < end; ++b) sum += run_.activation[b];
     if (sum > 0.0) {
-      for (std::uint32_t b = begin; b < end; ++b) activation_[b] /= sum;
+      for (std::uint32_t b = begin; b < end; ++b) run_.activation[b] /= sum;
     }
   }
   execute_behaviours(begin, end);
@@ -620,7 +543,7 @@ void Manager::run_layer(const CompiledLayer& layer) {
 ARBITER_NOINLINE void Manager::update_behaviours(std::uint32_t begin, std::uint32_t end) {
   for (std::uint32_t b = begin; b < end; ++b) {
     const StepContext context(data_, b);
-    ARBITER_GUARDED(b, "update", instances_[b]->update(context));
+    ARBITER_GUARDED(b, Callback::kUpdate, run_.instances[b]->update(context));
   }
 }
 
@@ -637,14 +560,15 @@ ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_NOINLINE void Manager::request_a
   const std::uint32_t* recipe = recipes.begin.data();
   const std::uint32_t* split = recipes.split.data();
   const std::uint32_t* terms = recipes.terms.data();
-  double* factor = factors_.data();
+  double* factor = run_.factors.data();
   for (std::uint32_t b = begin; b < end; ++b) {
     const StepContext context(data_, b);
     double level = 0.0;
-    if (!ARBITER_GUARDED(b, "activation", level = instances_[b]->activation(context))) level = 0.0;
+    if (!ARBITER_GUARDED(b, Callback::kActivation, level = run_.instances[b]->activation(context)))
+      level = 0.0;
     if (!std::isfinite(level)) level = non_finite_level(b, level);
     level = std::clamp(level, 0.0, 1.0);
-    requested_[b] = level;
+    run_.requested[b] = level;
 
     // The first factor starts the product: a multiplication by 1.0 would lengthen a chain's
     // latency, which runs from behaviour to behaviour.
@@ -655,7 +579,7 @@ ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_NOINLINE void Manager::request_a
     }
     level *= chained;
     for (auto t = split[b]; t < recipe[b + 1]; ++t) level *= factor[terms[t]];
-    activation_[b] = level;
+    run_.activation[b] = level;
     factor[2 * b] = 1.0 - level;
     factor[2 * b + 1] = (1.0 - level) * chained;
   }
@@ -664,13 +588,13 @@ ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_NOINLINE void Manager::request_a
 // NaN counts as 0, ±infinity is clamped; each reported once per behaviour.
 double Manager::non_finite_level(std::uint32_t b, double level) {
   const double clamped = std::isnan(level) ? 0.0 : std::clamp(level, 0.0, 1.0);
-  if (nan_reported_[b] != 0) return clamped;
-  nan_reported_[b] = 1;
+  if (run_.nan_reported[b] != 0) return clamped;
+  run_.nan_reported[b] = 1;
   const auto& where = program_.behaviours[b].location;
   logger_->warn(
-      "{}:{}:{}: behaviour '{}' requested a{} activation level; it counts as {} (reported "
+      "{}: behaviour '{}' requested a{} activation level; it counts as {} (reported "
       "once)",
-      where.file, where.line, where.column, program_.behaviours[b].name,
+      to_string(where), program_.behaviours[b].name,
       std::isnan(level) ? " NaN"
       : level > 0       ? "n infinite"
                         : " negative infinite",
@@ -680,16 +604,16 @@ double Manager::non_finite_level(std::uint32_t b, double level) {
 
 ARBITER_NOINLINE void Manager::execute_behaviours(std::uint32_t begin, std::uint32_t end) {
   for (std::uint32_t b = begin; b < end; ++b) {
-    Behaviour& behaviour = *instances_[b];
-    const bool was_active = active_[b] != 0;
-    const bool is_active = activation_[b] > 0.0;
-    active_[b] = is_active ? 1 : 0;
+    Behaviour& behaviour = *run_.instances[b];
+    const bool was_active = run_.active[b] != 0;
+    const bool is_active = run_.activation[b] > 0.0;
+    run_.active[b] = is_active ? 1 : 0;
     if (is_active) {
-      ExecuteContext context(data_, b, activation_[b], !was_active);
-      ARBITER_GUARDED(b, "execute", behaviour.execute(context));
+      ExecuteContext context(data_, b, run_.activation[b], !was_active);
+      ARBITER_GUARDED(b, Callback::kExecute, behaviour.execute(context));
     } else {
       const InhibitedContext context(data_, b, was_active);
-      ARBITER_GUARDED(b, "inhibited", behaviour.inhibited(context));
+      ARBITER_GUARDED(b, Callback::kInhibited, behaviour.inhibited(context));
     }
   }
 }
@@ -699,37 +623,37 @@ void Manager::resolve_actuators(const CompiledLayer& layer) {
       static_cast<std::uint32_t>(program_.behaviours.size() + (&layer - program_.layers.data()));
   for (std::uint32_t a = layer.actuator_begin; a < layer.actuator_end; ++a) {
     const CompiledActuator& actuator = program_.actuators[a];
-    void* value = values_.get() + actuator.offset;
+    void* value = run_.values.at(actuator.offset);
     std::size_t count = 0;
     double best = 0.0;
     std::uint32_t winner = kUnbound;
     for (auto s = program_.actuator_slot_begin[a]; s < program_.actuator_slot_begin[a + 1]; ++s) {
       const std::uint32_t slot = program_.actuator_slots[s];
-      if (!slot_written_[slot]) continue;
+      if (!run_.slot_written[slot]) continue;
       const std::uint32_t owner = program_.slots[slot].owner;
-      const double weight = owner == kUnbound ? 1.0 : activation_[owner];
+      const double weight = owner == kUnbound ? 1.0 : run_.activation[owner];
       if (weight <= 0.0) continue;  // writes of inactive behaviours are ignored
       // Writes of a writer that threw this step, and non-finite numbers, are ignored too.
-      if (faulted_step_[owner == kUnbound ? interface : owner] == data_.step) continue;
-      if (finite_components_[slot] != 0 &&
-          !is_finite(values_.get() + program_.slot_offsets[slot], finite_components_[slot])) {
+      if (run_.faulted_step[owner == kUnbound ? interface : owner] == data_.step) continue;
+      if (run_.finite_components[slot] != 0 &&
+          !is_finite(run_.values.at(program_.slot_offsets[slot]), run_.finite_components[slot])) {
         report_non_finite_write(slot);
         continue;
       }
-      mean_values_[count] = values_.get() + program_.slot_offsets[slot];
-      mean_weights_[count] = weight;
+      run_.mean_values[count] = run_.values.at(program_.slot_offsets[slot]);
+      run_.mean_weights[count] = weight;
       ++count;
       if (weight > best) {  // strictly greater: on a tie the earlier writer wins
         best = weight;
         winner = slot;
       }
     }
-    actuator_written_[a] = count > 0;
+    run_.actuator_written[a] = count > 0;
     if (count == 0) continue;  // values persist
     if (actuator.aggregate) {
-      actuator.type->mean(value, mean_values_.data(), mean_weights_.data(), count);
+      actuator.type->mean(value, run_.mean_values.data(), run_.mean_weights.data(), count);
     } else {
-      actuator.type->assign(value, values_.get() + program_.slot_offsets[winner]);
+      actuator.type->assign(value, run_.values.at(program_.slot_offsets[winner]));
     }
   }
 }

@@ -463,38 +463,28 @@ Reloader::Reloader(Registry& registry, LoadOptions options)
 
 Reloader::~Reloader() = default;
 
-// The pipeline's model is kept: it tells the next reload whose params changed.
-std::optional<Program> Reloader::load_model(Diagnostics& diagnostics, Model& model) {
+std::optional<Program> Reloader::load_program(Diagnostics& diagnostics) {
   Loaded loaded = load_config(path_, registry_, options_);
   diagnostics = std::move(loaded.diagnostics);
-  if (loaded.model) {
-    if (!loaded.model->files.empty()) files_ = loaded.model->files;
-    model = std::move(*loaded.model);
-  }
+  if (loaded.model && !loaded.model->files.empty()) files_ = loaded.model->files;
   return std::move(loaded.program);
 }
 
 std::optional<Program> Reloader::load(const std::string& path, Diagnostics& diagnostics) {
   path_ = path;
   files_ = {path};
-  Model model;
-  auto program = load_model(diagnostics, model);
-  if (program) running_ = std::move(model);
-  staged_.reset();
-  return program;
+  return load_program(diagnostics);
 }
 
 ReloadResult Reloader::reload(Manager& manager) {
   ReloadResult result;
   // After withdraw() the manager's program stays put until stage(), so it can be read here.
-  const bool taken_back = manager.withdraw();
-  if (staged_ && !taken_back) running_ = std::move(staged_);
-  staged_.reset();
-  Model model;
-  auto program = load_model(result.diagnostics, model);
+  manager.withdraw();
+  auto program = load_program(result.diagnostics);
   if (!program) return result;
   const Model no_model;
-  Planner planner(manager.program(), running_ ? *running_ : no_model, *program, model);
+  const Program& running = manager.program();
+  Planner planner(running, running.model ? *running.model : no_model, *program, *program->model);
   CarryPlan plan = planner.run(result.diff, result.restarted);
   ProgramDiff structure = diff(manager.program(), *program);
   // Structure first, then the params changes the plan found.
@@ -502,7 +492,6 @@ ReloadResult Reloader::reload(Manager& manager) {
                            result.diff.changes.end());
   result.diff = std::move(structure);
   manager.stage(std::move(*program), std::move(plan));
-  staged_ = std::move(model);
   result.staged = true;
   return result;
 }

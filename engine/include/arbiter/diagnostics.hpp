@@ -19,6 +19,9 @@ struct SourceLocation {
   SourceLocation shifted(int offset) const { return {file, line, column + offset}; }
 };
 
+/// "file:line:column", or "file" when the line is unknown: the one way a location is written.
+std::string to_string(const SourceLocation& where);
+
 enum class Severity { kError, kWarning };
 
 struct Diagnostic {

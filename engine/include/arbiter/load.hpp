@@ -4,6 +4,7 @@
 // model, the program and the diagnostics.
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -38,7 +39,8 @@ struct Loaded {
   /// Every file read, the config first, with its text and (when it parsed) its tree.
   SourceFiles files;
   /// Set once the config was read far enough to be validated; meaningful only without errors.
-  std::optional<Model> model;
+  /// Shared with the program (Program::model).
+  std::shared_ptr<Model> model;
   /// Set when no stage reported an error.
   std::optional<Program> program;
   /// Every stage's errors, warnings and lints, sorted (warnings promoted under `strict`).

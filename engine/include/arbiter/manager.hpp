@@ -10,6 +10,7 @@
 
 #include "arbiter/behaviour.hpp"
 #include "arbiter/program.hpp"
+#include "arbiter/run_state.hpp"
 
 namespace spdlog {
 class logger;
@@ -131,14 +132,16 @@ class Manager {
   /// Steps completed so far.
   std::uint64_t steps() const { return data_.step; }
 
-  double requested(std::uint32_t behaviour) const { return requested_[behaviour]; }
-  double activation(std::uint32_t behaviour) const { return activation_[behaviour]; }
-  bool active(std::uint32_t behaviour) const { return active_[behaviour] != 0; }
+  double requested(std::uint32_t behaviour) const { return run_.requested[behaviour]; }
+  double activation(std::uint32_t behaviour) const { return run_.activation[behaviour]; }
+  bool active(std::uint32_t behaviour) const { return run_.active[behaviour] != 0; }
   /// The actuator's current value (of its ValueType) and whether it was written this step.
   const void* actuator_value(std::uint32_t actuator) const {
-    return values_.get() + program_.actuator_offsets[actuator];
+    return run_.values.at(program_.actuator_offsets[actuator]);
   }
-  bool actuator_written(std::uint32_t actuator) const { return actuator_written_[actuator] != 0; }
+  bool actuator_written(std::uint32_t actuator) const {
+    return run_.actuator_written[actuator] != 0;
+  }
   /// Events that behaviour and interface code reported in the last step (StepContext::report).
   std::size_t event_count() const { return std::min(data_.event_count, data_.event_capacity); }
   const detail::StepData::Event& event(std::size_t index) const { return events_[index]; }
@@ -158,53 +161,36 @@ class Manager {
   void execute_behaviours(std::uint32_t begin, std::uint32_t end);
   void resolve_actuators(const CompiledLayer& layer);
   // Faults of behaviour code (docs/robustness.md).
-  void report_exception(std::uint32_t behaviour, const char* callback, const char* what);
+  /// The callbacks of behaviour and interface code, as named in fault reports.
+  enum class Callback { kUpdate, kActivation, kExecute, kInhibited, kInput, kOutput, kCarryOver };
+  static const char* name(Callback callback);
+  void report_exception(std::uint32_t behaviour, Callback callback, const char* what);
   void finish_faults();
   double non_finite_level(std::uint32_t behaviour, double level);
   void report_non_finite_write(std::uint32_t slot);
 
-  struct Staged;     // a program and every buffer sized for it
+  struct Staged;     // a program, its run state and the carry-over from the running one
   struct Reloading;  // the hand-over between stage() and step(); on the heap: Manager moves
-  void prepare(Staged& staged) const;
-  void swap_buffers(Staged& staged) noexcept;
+  std::unique_ptr<Staged> prepare(Program program, CarryPlan plan) const;
+  void swap_in(Staged& staged) noexcept;
+  void point_step_data() noexcept;
   void apply(Staged& staged);
   void end_replaced(Staged& staged);
   void carry_values(const Staged& staged);
 
   Program program_;
+  RunState run_;  // the running program's; a reload swaps it whole with the staged one
   std::unique_ptr<Reloading> reloading_;
   std::shared_ptr<spdlog::logger> logger_;
-  std::unique_ptr<std::byte[]> values_;
-  // bool vectors are bit-packed; the contexts need addressable flags.
-  std::unique_ptr<bool[]> actuator_written_;
-  std::unique_ptr<bool[]> slot_written_;
-  std::vector<double> requested_;
-  std::vector<double> activation_;
-  std::vector<double> factors_;        // two per behaviour: see Inhibitions::recipes()
-  std::vector<Behaviour*> instances_;  // the behaviours' objects, contiguous for the passes
-  std::vector<char> active_;
-  std::vector<char> nan_reported_;
-  std::vector<char> exception_reported_;
-  // Fault handling: a behaviour whose code threw is replaced in instances_ by inert_ for the
-  // step (suspended_) or for good (disabled_, which also covers interfaces: behaviours first,
-  // then one per layer); faulted_step_ is the step in which each last threw.
-  std::unique_ptr<Behaviour> inert_;
-  std::vector<std::uint64_t> faulted_step_;
-  std::vector<char> disabled_;
-  std::vector<std::uint32_t> suspended_;
-  std::vector<std::uint8_t> finite_components_;  // per slot: doubles to check (double, vec2, vec3)
-  std::vector<char> non_finite_reported_;        // per slot
+  std::unique_ptr<Behaviour> inert_;  // stands in for a behaviour whose code threw
   bool stopping_ = false;
   bool stopped_ = false;
   std::string stop_reason_;
-  std::vector<ValueBox> safe_values_;  // per actuator; empty for one without `safe:`
   bool in_safe_pass_ = false;
   std::uint64_t safe_passes_ = 0;
   StepClock* clock_ = nullptr;
   double step_time_ = 0.0;
   double step_duration_ = 0.0;
-  std::vector<const void*> mean_values_;  // scratch for aggregation, sized max_writers
-  std::vector<double> mean_weights_;
   std::vector<Observer*> observers_;
   std::vector<detail::StepData::Event> events_;
   detail::StepData data_;

@@ -190,6 +190,9 @@ class Program {
   std::vector<std::uint32_t> actuator_offsets;
   /// SCL controllers in declaration order; owned ones are stepped by their owner only.
   std::vector<std::unique_ptr<Controller>> controllers;
+  /// The model it was compiled from, when load_config() compiled it (else null): a hot reload
+  /// compares params with it. Read-only from here on.
+  std::shared_ptr<const Model> model;
 
   /// Index of a behaviour by layer and name, for tests and tools (not for the step).
   std::optional<std::uint32_t> find_behaviour(std::string_view layer, std::string_view name) const;

@@ -67,7 +67,7 @@ class Reloader {
   Reloader& operator=(const Reloader&) = delete;
 
   /// The first load of `path` (as load_config does), for the manager that reload() will
-  /// update: remembers the model, which tells later reloads whose params changed.
+  /// update.
   std::optional<Program> load(const std::string& path, Diagnostics& diagnostics);
 
   /// Loads the config of load() again and, when it is valid, stages it in `manager` (which must
@@ -81,14 +81,12 @@ class Reloader {
   const std::vector<std::string>& files() const { return files_; }
 
  private:
-  std::optional<Program> load_model(Diagnostics& diagnostics, Model& model);
+  std::optional<Program> load_program(Diagnostics& diagnostics);
 
   Registry& registry_;
   LoadOptions options_;
   std::string path_;
   std::vector<std::string> files_;
-  std::optional<Model> running_;  // the model of the program the manager runs
-  std::optional<Model> staged_;   // the model of the program staged last, if any
 };
 
 }  // namespace arbiter
