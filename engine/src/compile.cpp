@@ -204,10 +204,6 @@ std::vector<std::uint32_t> Inhibitions::chain(std::uint32_t from, std::uint32_t 
 
 namespace {
 
-std::string where(const SourceLocation& location) {
-  return fmt::format("{}:{}:{}", location.file, location.line, location.column);
-}
-
 struct Edge {
   std::uint32_t from = 0;  // declaration indices within the layer
   std::uint32_t to = 0;
@@ -310,7 +306,7 @@ void report_cycle(const LayerDecl& layer, const std::vector<Edge>& edges,
       text += fmt::format(" {} {}", declared->chaining ? "=>" : "->", names[to].name.text);
       notes.push_back(fmt::format("{} {} {} declared at {}", names[from].name.text,
                                   declared->chaining ? "=>" : "->", names[to].name.text,
-                                  where(declared->location)));
+                                  to_string(declared->location)));
       if (report_at == nullptr || i + 1 == best.size()) report_at = &declared->location;
       continue;
     }
@@ -326,7 +322,7 @@ void report_cycle(const LayerDecl& layer, const std::vector<Edge>& edges,
     std::string declared_at;
     for (const Edge* edge : chain) {
       via += " => " + names[edge->to].name.text;
-      declared_at += (declared_at.empty() ? "" : ", ") + where(edge->location);
+      declared_at += (declared_at.empty() ? "" : ", ") + to_string(edge->location);
     }
     notes.push_back(fmt::format("{} => {} is implicit: chaining {} (declared at {})",
                                 names[from].name.text, names[to].name.text, via, declared_at));

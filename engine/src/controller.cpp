@@ -145,12 +145,10 @@ std::string_view Controller::queued(std::size_t index) const {
 void Controller::fail(std::string message) {
   if (status_ == ControllerStatus::kError) return;
   status_ = ControllerStatus::kError;
-  std::string where = fmt::format("controller '{}' ({}:{}:{})", name_, location_.file,
-                                  location_.line, location_.column);
+  std::string where = fmt::format("controller '{}' ({})", name_, to_string(location_));
   if (current_ != kUnbound) {
     const auto& state = states_[instances_[current_].state];
-    where += fmt::format(", state '{}' ({}:{}:{})", state.name, state.location.file,
-                         state.location.line, state.location.column);
+    where += fmt::format(", state '{}' ({})", state.name, to_string(state.location));
   }
   error_ = fmt::format("{}: {}", where, message);
   if (logger_ != nullptr) {

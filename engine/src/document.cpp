@@ -885,8 +885,8 @@ class TreeBuilder : public YAML::EventHandler {
     if (const Node::Entry* first = parent.find(key)) {
       const auto& where = first->key_location;
       diagnostics_.error(location, "duplicate-key", fmt::format("duplicate key '{}'", key))
-          .notes.push_back(fmt::format("first defined at {}:{}:{}; the second is ignored",
-                                       where.file(), where.line(), where.column()));
+          .notes.push_back(
+              fmt::format("first defined at {}; the second is ignored", to_string(where.get())));
       parent.drop_value = true;
       return;
     }

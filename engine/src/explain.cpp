@@ -22,10 +22,6 @@ std::string number(double value) {
   return fmt::format("{:.6g}", value);
 }
 
-std::string where(const SourceLocation& location) {
-  return fmt::format("{}:{}:{}", location.file, location.line, location.column);
-}
-
 /// The member `key` of `object`, or null (nlohmann's const operator[] asserts on a missing key).
 const Json& at(const Json& object, const std::string& key) {
   static const Json kNull;
@@ -300,14 +296,14 @@ Explanation explain_behaviour(const Program& program, std::uint32_t target, std:
           chain.push_back(program.behaviours[links[i]].name);
           if (i == 0) continue;
           if (const auto edge = program.declared(links[i - 1], links[i])) {
-            declared.push_back(where(edge->location));
+            declared.push_back(to_string(edge->location));
           }
         }
         how = fmt::format("implicit, from chaining {} (declared at {})", join(chain, " => "),
                           join(declared, ", "));
       } else {
         how = fmt::format("declared {} {} {} at {}", name, inhibition.chaining ? "=>" : "->",
-                          behaviour.name, where(inhibition.location));
+                          behaviour.name, to_string(inhibition.location));
       }
       text += fmt::format("    {:<{}}  activation {:<{}}  factor {:<{}}  {}\n", name, width,
                           number(level), level_width, number(factor), factor_width, how);

@@ -27,10 +27,6 @@ constexpr std::size_t kMaxLinks = 12;
 /// Pairs of writers named in notes, at most.
 constexpr std::size_t kMaxPairs = 6;
 
-std::string where(const SourceLocation& location) {
-  return fmt::format("{}:{}:{}", location.file, location.line, location.column);
-}
-
 const char* arrow(bool chaining) {
   return chaining ? "=>" : "->";
 }
@@ -293,7 +289,7 @@ class Linter {
     for (const auto* link : links) {
       warning->notes.push_back(fmt::format("{} => {} declared at {}", link->decl->inhibitor.text,
                                            link->decl->inhibited.text,
-                                           where(link->decl->location)));
+                                           to_string(link->decl->location)));
     }
     warning->notes.push_back("remove it: the closure gives the same inhibition");
   }
@@ -377,11 +373,11 @@ class Linter {
     warning->notes.push_back(fmt::format(
         "'{}' is scripted to request 1 at every step ({}) and nothing can inhibit it", inhibitor,
         param->defaulted ? "its default activation"
-                         : fmt::format("activation at {}", where(param->location))));
+                         : fmt::format("activation at {}", to_string(param->location))));
     if (const auto* direct = graph.declared(cause, b)) {
       warning->notes.push_back(fmt::format("{} {} {} declared at {}", inhibitor,
                                            arrow(direct->decl->chaining), inhibited.name,
-                                           where(direct->decl->location)));
+                                           to_string(direct->decl->location)));
       return;
     }
     // Back from b along the edges the cover came through, to the cover.
@@ -453,7 +449,7 @@ class Linter {
             "layers run in declaration order; a sensor sees this step's value only of an "
             "actuator of an earlier layer or of an interface layer");
         warning->notes.push_back(
-            fmt::format("'{}' is declared at {}", actuator.name, where(actuator.location)));
+            fmt::format("'{}' is declared at {}", actuator.name, to_string(actuator.location)));
       }
     }
   }

@@ -287,7 +287,7 @@ class ModelBuilder {
     if (!document) return;
     include_stack_.push_back(canonical);
     include_names_.push_back(path);
-    include_chain_.push_back(fmt::format("{}:{}:{}", where.file, where.line, where.column));
+    include_chain_.push_back(fmt::format("{}", to_string(where)));
     read_file(*document, /*is_root=*/false);
     include_chain_.pop_back();
     include_names_.pop_back();
@@ -698,8 +698,8 @@ class ModelBuilder {
         if (other.name.text == layer.name.text) {
           auto& error = diagnostics_.error(layer.name.location, "duplicate-name",
                                            fmt::format("duplicate layer '{}'", layer.name.text));
-          error.notes.push_back(fmt::format("first declared at {}:{}:{}", other.name.location.file,
-                                            other.name.location.line, other.name.location.column));
+          error.notes.push_back(
+              fmt::format("first declared at {}", to_string(other.name.location)));
         }
       }
     }
@@ -740,7 +740,7 @@ class ModelBuilder {
   static std::string layer_label(const LayerDecl& layer) {
     if (!layer.name.text.empty()) return fmt::format("layer '{}'", layer.name.text);
     const auto& where = layer.name.location;
-    return fmt::format("the unnamed layer at {}:{}:{}", where.file, where.line, where.column);
+    return fmt::format("the unnamed layer at {}", to_string(where));
   }
 
   void read_actuators(const Node& node, LayerDecl& layer) {
@@ -825,9 +825,8 @@ class ModelBuilder {
             fmt::format("duplicate actuator '{}': actuator names are unique in the manager",
                         entry.key));
         const auto& first = found->second;
-        error.notes.push_back(fmt::format("first declared in layer '{}' at {}:{}:{}", first.layer,
-                                          first.location.file, first.location.line,
-                                          first.location.column));
+        error.notes.push_back(fmt::format("first declared in layer '{}' at {}", first.layer,
+                                          to_string(first.location)));
         continue;
       }
       actuator_index_[entry.key] = {actuator.layer, entry.key_location, actuator.type};
@@ -867,8 +866,7 @@ class ModelBuilder {
           diagnostics_
               .error(where, "duplicate-name",
                      fmt::format("sensor '{}' listed twice in {}", name, layer_label(layer)))
-              .notes.push_back(fmt::format("first listed at {}:{}:{}", existing.location.file,
-                                           existing.location.line, existing.location.column));
+              .notes.push_back(fmt::format("first listed at {}", to_string(existing.location)));
           return;
         }
       }
@@ -898,9 +896,8 @@ class ModelBuilder {
               .error(type->location(), "type-mismatch",
                      fmt::format("sensor '{}' expects type '{}' but actuator '{}' is '{}'", name,
                                  *text, name, actuator.type->name))
-              .notes.push_back(fmt::format("'{}' is declared in layer '{}' at {}:{}:{}", name,
-                                           actuator.layer, actuator.location.file,
-                                           actuator.location.line, actuator.location.column));
+              .notes.push_back(fmt::format("'{}' is declared in layer '{}' at {}", name,
+                                           actuator.layer, to_string(actuator.location)));
         }
       }
       layer.sensors.push_back({name, where});
@@ -1319,8 +1316,7 @@ class ModelBuilder {
           inhibition.location, "duplicate-inhibition",
           fmt::format("duplicate inhibition {} {} {}: applied once", inhibition.inhibitor.text,
                       inhibition.chaining ? "=>" : "->", inhibition.inhibited.text));
-      warning.notes.push_back(fmt::format("first declared at {}:{}:{}", existing.location.file,
-                                          existing.location.line, existing.location.column));
+      warning.notes.push_back(fmt::format("first declared at {}", to_string(existing.location)));
       if (inhibition.chaining != existing.chaining) {
         existing.chaining = true;
         warning.notes.push_back(
@@ -1348,8 +1344,7 @@ class ModelBuilder {
           diagnostics_
               .error(entry.key_location, "duplicate-name",
                      fmt::format("duplicate state machine '{}'", entry.key))
-              .notes.push_back(fmt::format("first declared at {}:{}:{}", other.location.file,
-                                           other.location.line, other.location.column));
+              .notes.push_back(fmt::format("first declared at {}", to_string(other.location)));
         }
       }
       StateMachineDecl machine;
@@ -1431,8 +1426,7 @@ class ModelBuilder {
                      fmt::format("state machine '{}' already has an owner; a controller is "
                                  "stepped by one owner only",
                                  child.text))
-              .notes.push_back(fmt::format("first claimed at {}:{}:{}", it->second->location.file,
-                                           it->second->location.line, it->second->location.column));
+              .notes.push_back(fmt::format("first claimed at {}", to_string(it->second->location)));
           continue;
         }
         children[machine.name.text].push_back(child.text);

@@ -141,10 +141,10 @@ std::vector<std::string> Registry::value_type_names() const {
 void Registry::merge(Registry&& other, const SourceLocation& where, Diagnostics& diagnostics) {
   for (auto& [key, info] : other.classes_) {
     if (const ClassInfo* existing = find_class(info.kind, info.name)) {
-      diagnostics.error(where, "class-clash",
-                        fmt::format("{} class '{}' from {} clashes with the one from {}",
-                                    to_string(info.kind), info.name, info.origin,
-                                    existing->origin));
+      diagnostics.error(
+          where, "class-clash",
+          fmt::format("{} class '{}' from {} clashes with the one from {}", to_string(info.kind),
+                      info.name, info.origin, existing->origin));
       continue;
     }
     classes_.emplace(key, std::move(info));

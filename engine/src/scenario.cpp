@@ -226,8 +226,7 @@ class ScenarioReader {
           diagnostics_
               .error(step->location(), "duplicate-step",
                      fmt::format("two 'inputs' entries for step {}", input.step))
-              .notes.push_back(fmt::format("the other is at {}:{}:{}", other.location.file,
-                                           other.location.line, other.location.column));
+              .notes.push_back(fmt::format("the other is at {}", to_string(other.location)));
         }
       }
       for (const auto& entry : item.entries()) {

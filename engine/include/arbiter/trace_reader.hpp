@@ -1,6 +1,7 @@
 #pragma once
-// Stage 5 of the data path, read back: the records of a trace (docs/semantics.md) or of a recording, in the
-// order they were written, checked once here so that every tool reports a bad file the same way.
+// Stage 5 of the data path, read back: the records of a trace (docs/semantics.md) or of a
+// recording, in the order they were written, checked once here so that every tool reports a bad
+// file the same way.
 
 #include <cstdint>
 #include <istream>
