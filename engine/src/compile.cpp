@@ -669,11 +669,11 @@ class InstanceInit final : public InitContext {
     return nullptr;
   }
 
-  void error(const SourceLocation& at, std::string message) override {
-    error_at(at, "class-error", std::move(message));
+  Diagnostic& error(const SourceLocation& at, std::string message) override {
+    return error_at(at, "class-error", std::move(message));
   }
-  void warning(const SourceLocation& at, std::string message) override {
-    diagnostics_.warning(at, "class-warning", std::move(message));
+  Diagnostic& warning(const SourceLocation& at, std::string message) override {
+    return diagnostics_.warning(at, "class-warning", std::move(message));
   }
 
  protected:

@@ -306,8 +306,9 @@ class Goalie final : public Behaviour, private ControllerHooks {
       for (const auto& state : controller_->states()) known.push_back(state.name);
       ctx.error(ctx.param_location(param),
                 fmt::format("the goalie plans state '{}' ({}), which state machine '{}' does not "
-                            "declare; it declares: {}",
-                            name, param, controller_->name(), fmt::join(known, ", ")));
+                            "declare",
+                            name, param, controller_->name()))
+          .notes.push_back(suggest(name, known, "it declares"));
       return false;
     }
     const CompiledState& state = controller_->states()[*index];

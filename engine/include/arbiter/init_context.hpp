@@ -72,8 +72,10 @@ class InitContext {
   /// already has an owner.
   virtual Controller* claim_controller(const std::string& machine, const SourceLocation& where) = 0;
 
-  virtual void error(const SourceLocation& where, std::string message) = 0;
-  virtual void warning(const SourceLocation& where, std::string message) = 0;
+  /// Reports a problem of the config at `where` (fails the load) and returns the report, to
+  /// which notes can be added: `ctx.error(at, "...").notes.push_back("did you mean ...")`.
+  virtual Diagnostic& error(const SourceLocation& where, std::string message) = 0;
+  virtual Diagnostic& warning(const SourceLocation& where, std::string message) = 0;
 
  protected:
   virtual const ParamValue* find_param(std::string_view param_name,
