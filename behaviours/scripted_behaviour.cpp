@@ -53,13 +53,13 @@ void register_scripted_behaviour(Registry& registry) {
                    .describe(
                        "Requests a scripted activation level each step and writes fixed values "
                        "while active.");
-  info.param("activation", ParamKind::kDoubleList)
+  info.param<std::vector<double>>("activation")
       .fallback(std::vector<double>{1.0})
       .range(0.0, 1.0)
       .describe(
           "the requested level: a number, or a list with one level per step (the last is "
           "held)");
-  info.param("writes", ParamKind::kAny)
+  info.param<Node>("writes")
       .fallback(Node())
       .schema(R"({"type": ["object", "null"],
                   "propertyNames": {"$ref": "#/definitions/identifier"},

@@ -102,24 +102,21 @@ void register_scripted_state(Registry& registry) {
               "Holds for a number of executions, then appends or prepends planned states, or "
               "terminates "
               "the controller, and proceeds. With a child machine, steps it until it finishes.");
-  info.param("hold", ParamKind::kInt)
-      .fallback(std::int64_t{1})
-      .at_least(1)
-      .describe("executions before proceeding");
+  info.param<std::int64_t>("hold").fallback(1).at_least(1).describe("executions before proceeding");
   // The entries are written as the queue's (`arbiter schema` refers editors to its definition).
   const std::string planned_states =
       R"({"type": ["array", "null"], "items": {"$ref": "#/definitions/queue_entry"}})";
-  info.param("append", ParamKind::kAny)
+  info.param<Node>("append")
       .fallback(Node())
       .schema(planned_states)
       .state_level()
       .describe("states to append to the queue when proceeding: names or {name: {params}}");
-  info.param("prepend", ParamKind::kAny)
+  info.param<Node>("prepend")
       .fallback(Node())
       .schema(planned_states)
       .state_level()
       .describe("states to put at the head of the queue when proceeding, in this order");
-  info.param("terminate", ParamKind::kBool)
+  info.param<bool>("terminate")
       .fallback(false)
       .describe("terminate the controller instead of proceeding");
 }
@@ -127,16 +124,14 @@ void register_scripted_state(Registry& registry) {
 void register_state_machine_behaviour(Registry& registry) {
   auto& info = registry.add_behaviour<StateMachineBehaviour>("state_machine")
                    .describe("Steps a state machine's controller while active.");
-  info.param("machine", ParamKind::kString).describe("the state machine to step");
-  info.param("activation", ParamKind::kDouble)
+  info.param<std::string>("machine").describe("the state machine to step");
+  info.param<double>("activation")
       .fallback(1.0)
       .range(0.0, 1.0)
       .describe("the level requested while the controller is running");
-  info.param("restart", ParamKind::kBool)
-      .fallback(false)
-      .describe(
-          "start the controller again from its configured queue whenever the behaviour "
-          "is activated anew");
+  info.param<bool>("restart").fallback(false).describe(
+      "start the controller again from its configured queue whenever the behaviour "
+      "is activated anew");
 }
 
 }  // namespace arbiter

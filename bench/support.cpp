@@ -61,12 +61,12 @@ Registry make_registry() {
   register_builtin_behaviours(registry);
   auto& trivial = registry.add_behaviour<Trivial>("bench.Trivial")
                       .describe("Requests a fixed level; writes 0.5 * in + 1 to out while active.");
-  trivial.param("activation", ParamKind::kDouble).range(0.0, 1.0).describe("the requested level");
+  trivial.param<double>("activation").range(0.0, 1.0).describe("the requested level");
   trivial.input<double>("in").make_optional().describe("read while active");
   trivial.output<double>("out").make_optional().describe("written while active");
   add_state_class<Proceed>(registry, "bench.Proceed")
       .describe("Proceeds after every execution, appending `append` to the plan when it does.")
-      .param("append", ParamKind::kStringList)
+      .param<std::vector<std::string>>("append")
       .fallback(std::vector<std::string>{})
       .describe("states to append when proceeding");
   return registry;

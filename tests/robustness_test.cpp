@@ -211,28 +211,28 @@ Registry make_registry() {
   r.set_origin("robustness_test");
   constexpr std::int64_t kForever = std::numeric_limits<std::int64_t>::max();
   auto& faulty = r.add_behaviour<Faulty>("robust.Faulty");
-  faulty.param("callback", ParamKind::kString)
+  faulty.param<std::string>("callback")
       .fallback(std::string("activation"))
       .one_of({"init", "update", "activation", "execute", "inhibited"});
-  faulty.param("from", ParamKind::kInt).fallback(std::int64_t{1});
-  faulty.param("until", ParamKind::kInt).fallback(kForever);
-  faulty.param("level", ParamKind::kDouble).fallback(1.0);
-  faulty.param("value", ParamKind::kDouble).fallback(0.0);
+  faulty.param<std::int64_t>("from").fallback(1);
+  faulty.param<std::int64_t>("until").fallback(kForever);
+  faulty.param<double>("level").fallback(1.0);
+  faulty.param<double>("value").fallback(0.0);
   faulty.output<double>("out").make_optional();
   auto& odd = r.add_behaviour<Odd>("robust.Odd");
-  odd.param("level", ParamKind::kString).fallback(std::string("1"));
-  odd.param("value", ParamKind::kString).fallback(std::string("0"));
-  odd.param("from", ParamKind::kInt).fallback(std::int64_t{1});
+  odd.param<std::string>("level").fallback(std::string("1"));
+  odd.param<std::string>("value").fallback(std::string("0"));
+  odd.param<std::int64_t>("from").fallback(1);
   odd.output<double>("out").make_optional();
   odd.output<Vec2>("out2").make_optional();
   odd.output<Vec3>("out3").make_optional();
   auto& feed = r.add_interface<FaultyFeed>("robust.FaultyFeed");
-  feed.param("callback", ParamKind::kString).fallback(std::string("input"));
-  feed.param("from", ParamKind::kInt).fallback(std::int64_t{1});
-  feed.param("until", ParamKind::kInt).fallback(kForever);
+  feed.param<std::string>("callback").fallback(std::string("input"));
+  feed.param<std::int64_t>("from").fallback(1);
+  feed.param<std::int64_t>("until").fallback(kForever);
   feed.output<double>("out").make_optional();
   auto& state = add_state_class<FaultyState>(r, "robust.FaultyState");
-  state.param("callback", ParamKind::kString)
+  state.param<std::string>("callback")
       .fallback(std::string("execute"))
       .one_of({"init", "activate", "execute", "deactivate"});
   return r;

@@ -42,6 +42,19 @@ const char* to_string(ParamKind kind) {
   return "?";
 }
 
+ParamSpec& ParamSpec::fallback(ParamValue value) {
+  if (kind == ParamKind::kDouble && std::holds_alternative<std::int64_t>(value)) {
+    value = static_cast<double>(std::get<std::int64_t>(value));
+  }
+  if (value.index() != static_cast<std::size_t>(kind)) {
+    throw std::logic_error(fmt::format("param '{}' is of kind {}, but its fallback is of kind {}",
+                                       name, to_string(kind),
+                                       to_string(static_cast<ParamKind>(value.index()))));
+  }
+  default_value = std::move(value);
+  return *this;
+}
+
 const Param* ParamSet::find(std::string_view name) const {
   for (const auto& item : items) {
     if (item.name == name) return &item;

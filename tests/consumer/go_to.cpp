@@ -56,12 +56,10 @@ class GoTo final : public arbiter::Behaviour {
 void register_go_to(arbiter::Registry& registry) {
   auto& info = registry.add_behaviour<GoTo>("patrol.GoTo")
                    .describe("Drives to a point and is active until it is there.");
-  info.param("target", arbiter::ParamKind::kVec2).describe("where to go: x, y (m)");
-  info.param("gain", arbiter::ParamKind::kDouble)
-      .fallback(1.0)
-      .range(0.0, 10.0)
-      .describe("commanded speed per metre still to go (1/s)");
-  info.param("tolerance", arbiter::ParamKind::kDouble)
+  info.param<arbiter::Vec2>("target").describe("where to go: x, y (m)");
+  info.param<double>("gain").fallback(1.0).range(0.0, 10.0).describe(
+      "commanded speed per metre still to go (1/s)");
+  info.param<double>("tolerance")
       .fallback(0.05)
       .range(0.001, 1.0)
       .describe("how close counts as there (m)");

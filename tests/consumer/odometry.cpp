@@ -51,10 +51,10 @@ class Odometry final : public arbiter::Interface {
 void register_odometry(arbiter::Registry& registry) {
   auto& info = registry.add_interface<Odometry>("patrol.Odometry")
                    .describe("A simulated robot base that drives at the commanded velocity.");
-  info.param("start", arbiter::ParamKind::kVec2)
+  info.param<arbiter::Vec2>("start")
       .fallback(Vec2{0.0, 0.0})
       .describe("where the robot starts: x, y (m)");
-  info.param("max_speed", arbiter::ParamKind::kDouble)
+  info.param<double>("max_speed")
       .fallback(0.5)
       .range(0.0, 2.0)
       .describe("the fastest the base drives (m/s)");

@@ -69,10 +69,8 @@ double monotonic_seconds() {
 void register_probe(Registry& registry) {
   auto& info = registry.add_behaviour<Stamp>("probe.Stamp")
                    .describe("Writes values of every type, derived from the step number.");
-  info.param("every", ParamKind::kInt)
-      .fallback(std::int64_t{1})
-      .at_least(1)
-      .describe("active (and writing) only in steps that are a multiple of this");
+  info.param<std::int64_t>("every").fallback(1).at_least(1).describe(
+      "active (and writing) only in steps that are a multiple of this");
   info.output<bool>("flag").make_optional().describe("step is odd");
   info.output<std::int64_t>("count").make_optional().describe("the step");
   info.output<double>("level").make_optional().describe("step / 2");

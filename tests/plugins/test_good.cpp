@@ -43,11 +43,11 @@ class Faulty final : public arbiter::Behaviour {
 
 ARBITER_PLUGIN(registry) {
   auto& constant = registry.add_behaviour<Constant>("test_good.Constant");
-  constant.param("level", arbiter::ParamKind::kDouble).fallback(1.0).range(0.0, 1.0);
-  constant.param("value", arbiter::ParamKind::kDouble).fallback(0.0);
+  constant.param<double>("level").fallback(1.0).range(0.0, 1.0);
+  constant.param<double>("value").fallback(0.0);
   constant.output<double>("out");
   registry.add_behaviour<Faulty>("test_good.Faulty")
-      .param("throw_at", arbiter::ParamKind::kInt)
-      .fallback(std::int64_t{1})
+      .param<std::int64_t>("throw_at")
+      .fallback(1)
       .range(1, 1000000);
 }

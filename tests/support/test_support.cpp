@@ -138,10 +138,10 @@ Registry make_test_registry() {
   register_builtin_behaviours(registry);
   registry.set_origin("tests");
   auto& probe = registry.add_behaviour<Probe>("test.Probe");
-  probe.param("levels", ParamKind::kDoubleList).fallback(std::vector<double>{1.0});
-  probe.param("value", ParamKind::kDouble).fallback(0.0);
-  probe.param("overwrite", ParamKind::kBool).fallback(false);
-  probe.param("record", ParamKind::kBool).fallback(true);
+  probe.param<std::vector<double>>("levels").fallback(std::vector<double>{1.0});
+  probe.param<double>("value").fallback(0.0);
+  probe.param<bool>("overwrite").fallback(false);
+  probe.param<bool>("record").fallback(true);
   probe.input<double>("in").make_optional();
   probe.output<double>("out").make_optional();
   registry.add_behaviour<NanLevel>("test.NanLevel");
@@ -150,12 +150,12 @@ Registry make_test_registry() {
   feed.output<double>("out").make_optional();
   feed.input<double>("in").make_optional();
   auto& planner = add_state_class<Planner>(registry, "test.Planner");
-  planner.param("op", ParamKind::kString).fallback(std::string("none"));
-  planner.param("target", ParamKind::kString).fallback(std::string());
-  planner.param("hold", ParamKind::kInt).fallback(std::int64_t{1}).at_least(1);
-  planner.param("x", ParamKind::kDouble).fallback(0.0);
+  planner.param<std::string>("op").fallback(std::string("none"));
+  planner.param<std::string>("target").fallback(std::string());
+  planner.param<std::int64_t>("hold").fallback(1).at_least(1);
+  planner.param<double>("x").fallback(0.0);
   auto& pose = add_state_class<Pose>(registry, "test.Pose");
-  pose.param("x", ParamKind::kDouble).range(-10.0, 10.0);
+  pose.param<double>("x").range(-10.0, 10.0);
   return registry;
 }
 
@@ -233,13 +233,13 @@ class Wait : public State {
 
 void add_param_check_classes(Registry& registry) {
   auto& tuned = registry.add_behaviour<Tuned>("test.Tuned");
-  tuned.param("gain", ParamKind::kDouble).range(0.0, 1.0);
-  tuned.param("mode", ParamKind::kString).fallback(std::string("soft")).one_of({"soft", "hard"});
-  tuned.param("retries", ParamKind::kInt).fallback(std::int64_t{3}).at_least(0);
-  tuned.param("offset", ParamKind::kVec2).fallback(Vec2{});
+  tuned.param<double>("gain").range(0.0, 1.0);
+  tuned.param<std::string>("mode").fallback(std::string("soft")).one_of({"soft", "hard"});
+  tuned.param<std::int64_t>("retries").fallback(3).at_least(0);
+  tuned.param<Vec2>("offset").fallback(Vec2{});
   auto& wait = add_state_class<Wait>(registry, "test.Wait");
-  wait.param("ticks", ParamKind::kInt).at_least(1);
-  wait.param("label", ParamKind::kString).fallback(std::string());
+  wait.param<std::int64_t>("ticks").at_least(1);
+  wait.param<std::string>("label").fallback(std::string());
 }
 
 Diagnostics diagnose_text(const std::string& text, const Registry& registry,

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <typeinfo>
 #include <variant>
 #include <vector>
@@ -42,6 +43,29 @@ const char* to_string(ParamKind kind);
 using ParamValue = std::variant<bool, std::int64_t, double, std::string, Vec2, Vec3,
                                 std::vector<double>, std::vector<std::string>, Node>;
 
+/// The kind of params whose values have C++ type T (ParamValue's alternatives, in kind order).
+template <typename T>
+constexpr ParamKind param_kind_of() {
+  static_assert(std::variant_size_v<ParamValue> == static_cast<std::size_t>(ParamKind::kAny) + 1,
+                "ParamValue's alternatives follow ParamKind's order");
+  if constexpr (std::is_same_v<T, bool>) return ParamKind::kBool;
+  if constexpr (std::is_same_v<T, std::int64_t>) return ParamKind::kInt;
+  if constexpr (std::is_same_v<T, double>) return ParamKind::kDouble;
+  if constexpr (std::is_same_v<T, std::string>) return ParamKind::kString;
+  if constexpr (std::is_same_v<T, Vec2>) return ParamKind::kVec2;
+  if constexpr (std::is_same_v<T, Vec3>) return ParamKind::kVec3;
+  if constexpr (std::is_same_v<T, std::vector<double>>) return ParamKind::kDoubleList;
+  if constexpr (std::is_same_v<T, std::vector<std::string>>) return ParamKind::kStringList;
+  if constexpr (std::is_same_v<T, Node>) return ParamKind::kAny;
+  static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int64_t> ||
+                    std::is_same_v<T, double> || std::is_same_v<T, std::string> ||
+                    std::is_same_v<T, Vec2> || std::is_same_v<T, Vec3> ||
+                    std::is_same_v<T, std::vector<double>> ||
+                    std::is_same_v<T, std::vector<std::string>> || std::is_same_v<T, Node>,
+                "a param's C++ type is bool, std::int64_t, double, std::string, Vec2, Vec3, "
+                "std::vector<double>, std::vector<std::string> or Node");
+}
+
 /// A validated param of one instance.
 struct Param {
   std::string name;
@@ -69,10 +93,10 @@ struct ParamSpec {
   /// its kind gives: how a structured (kAny) param tells editors and CI its shape.
   std::string json_schema;
 
-  ParamSpec& fallback(ParamValue value) {
-    default_value = std::move(value);
-    return *this;
-  }
+  /// The default, which makes the param optional. It has the kind's C++ type (an integer is
+  /// taken for a double); any other type is a mistake in the class's registration, which then
+  /// throws std::logic_error (reported against the plugin).
+  ParamSpec& fallback(ParamValue value);
   ParamSpec& range(double low, double high) {
     minimum = low;
     maximum = high;
@@ -136,6 +160,12 @@ struct ClassInfo {
     spec.name = std::move(param_name);
     spec.kind = param_kind;
     return spec;
+  }
+  /// A param of the kind whose C++ type is T, the type `ctx.param<T>()` reads it as:
+  /// `info.param<double>("speed").fallback(0.5)`.
+  template <typename T>
+  ParamSpec& param(std::string param_name) {
+    return param(std::move(param_name), param_kind_of<T>());
   }
   template <typename T>
   PortSpec& input(std::string port_name) {
