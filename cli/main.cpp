@@ -53,6 +53,7 @@ struct Options {
   std::string format = "text";
   bool strict = false;
   std::uint64_t steps = 100;
+  bool steps_given = false;  ///< `--steps` was on the command line: it overrides the config's
   std::string trace_path;
   std::string layer;
   bool quiet = false;
@@ -290,6 +291,8 @@ int run(const Options& options) {
                                : load_or_report(options.file, registry, options);
   if (!program) return kExitInvalid;
   const double rate_hz = program->rate_hz;
+  const std::uint64_t steps =
+      options.steps_given || options.watch || program->steps == 0 ? options.steps : program->steps;
 
   std::ofstream trace_file;
   if (!options.trace_path.empty()) {
@@ -352,7 +355,7 @@ int run(const Options& options) {
   // a burst of catch-up steps: the next one waits for the next period boundary, and the periods
   // skipped are counted.
   auto next = started;
-  for (std::uint64_t i = 0; i < options.steps && !interrupted; ++i) {
+  for (std::uint64_t i = 0; i < steps && !interrupted; ++i) {
     if (live && live->will_hold()) manager.safe_pass();  // paused from the page: make it safe
     if (live && live->hold(manager, interrupted)) {
       if (interrupted) break;
@@ -548,7 +551,9 @@ int main(int argc, char** argv) {
   auto* run_cmd = app.add_subcommand(
       "run", "Run a config's behaviour manager for a number of steps and report what happened.");
   run_cmd->add_option("FILE", options.file, "the config to run")->required();
-  run_cmd->add_option("--steps", options.steps, "number of steps to run")
+  run_cmd
+      ->add_option("--steps", options.steps,
+                   "number of steps to run (default: the config's 'steps:', else 100)")
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1} << 40))
       ->capture_default_str();
   run_cmd->add_option("--trace", options.trace_path,
@@ -887,7 +892,8 @@ int main(int argc, char** argv) {
     options.diagnostic_format = arbiter::FormatOptions::readable(use_color(options.color));
     if (validate_cmd->parsed()) return validate(options);
     if (run_cmd->parsed()) {
-      if (options.watch && run_cmd->count("--steps") == 0) options.steps = std::uint64_t{1} << 40;
+      options.steps_given = run_cmd->count("--steps") > 0;
+      if (options.watch && !options.steps_given) options.steps = std::uint64_t{1} << 40;
       return run(options);
     }
     if (dump_cmd->parsed()) return dump(options);

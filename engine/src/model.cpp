@@ -171,12 +171,13 @@ class ModelBuilder {
     std::vector<std::string_view> allowed = {"arbiter", "include", "layers", "state_machines",
                                              "$schema"};
     if (is_root) {
-      for (auto key : {"name", "rate_hz", "plugins", "normalise", "lint", "on_exception"}) {
+      for (auto key :
+           {"name", "rate_hz", "steps", "plugins", "normalise", "lint", "on_exception"}) {
         allowed.emplace_back(key);
       }
     }
-    static constexpr std::string_view kRootOnly[] = {"name",      "rate_hz", "plugins",
-                                                     "normalise", "lint",    "on_exception"};
+    static constexpr std::string_view kRootOnly[] = {
+        "name", "rate_hz", "steps", "plugins", "normalise", "lint", "on_exception"};
     if (!is_root) allowed.insert(allowed.end(), std::begin(kRootOnly), std::end(kRootOnly));
     Fields fields(root, is_root ? "the config" : "an included file", allowed, diagnostics_);
     if (!is_root) {
@@ -222,6 +223,18 @@ class ModelBuilder {
                           value && !std::isfinite(*value) ? "finite " : "", rate->describe()));
         } else {
           model_.rate_hz = *value;
+        }
+      }
+      if (const Node* steps = fields.optional("steps")) {
+        // The same bound as `arbiter run --steps`.
+        constexpr long long kMaxSteps = 1LL << 40;
+        const auto value = steps->as_int();
+        if (!value || *value < 1 || *value > kMaxSteps) {
+          diagnostics_.error(steps->location(), value ? "out-of-range" : "wrong-type",
+                             fmt::format("'steps' must be an integer in [1, {}], found {}",
+                                         kMaxSteps, steps->describe()));
+        } else {
+          model_.steps = static_cast<std::uint64_t>(*value);
         }
       }
       if (const Node* normalise = fields.optional("normalise")) {
