@@ -260,9 +260,10 @@ int explain(const Options& options) {
     return kExitOk;
   }
   if (explanation.where) {
-    std::cerr << arbiter::format(arbiter::Diagnostic{*explanation.where, arbiter::Severity::kError,
-                                                     "bad-trace", explanation.text,
-                                                     explanation.notes});
+    std::cerr << arbiter::format(
+        arbiter::Diagnostic{*explanation.where, arbiter::Severity::kError, "bad-trace",
+                            explanation.text, explanation.notes},
+        options.diagnostic_format);
     return kExitInvalid;
   }
   std::cerr << fmt::format("arbiter explain: {}\n", explanation.text);
@@ -416,12 +417,13 @@ int view(const Options& options) {
   return arbiter::cli::view_trace(*program, options.trace_path,
                                   arbiter::cli::ServeAddress::parse(options.view_serve, unused),
                                   options.step > 0 ? std::optional(options.step) : std::nullopt,
-                                  interrupted, std::cout, std::cerr);
+                                  interrupted, std::cout, std::cerr, options.diagnostic_format);
 }
 
 int plot(const Options& options) {
   std::string error;
-  const auto trace = arbiter::cli::read_trace_file(options.trace_path, error);
+  const auto trace =
+      arbiter::cli::read_trace_file(options.trace_path, error, options.diagnostic_format);
   if (!trace) {
     std::cerr << error << "\n";
     return kExitInvalid;
@@ -433,7 +435,7 @@ int plot(const Options& options) {
   plot_options.actuators = options.actuators;
   std::optional<arbiter::cli::TraceFile> compare;  // --compare
   if (!options.compare_path.empty()) {
-    compare = arbiter::cli::read_trace_file(options.compare_path, error);
+    compare = arbiter::cli::read_trace_file(options.compare_path, error, options.diagnostic_format);
     if (!compare) {
       std::cerr << error << "\n";
       return kExitInvalid;

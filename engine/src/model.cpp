@@ -1171,7 +1171,7 @@ class ModelBuilder {
     layer.inhibitions.reserve(layer.inhibitions.size() + node.items().size());
     for (const auto& item : node.items()) {
       InhibitionDecl inhibition;
-      inhibition.location = item.location();
+      inhibition.location = entry_location(item);
       if (item.is_scalar()) {
         if (!parse_inhibition(item, inhibition)) continue;
       } else {
@@ -1195,6 +1195,18 @@ class ModelBuilder {
     }
   }
 
+  /// Where an inhibition is written: an unquoted `a => b` spans its whole text, so that errors
+  /// about the inhibition underline all of it, not only its first name.
+  static SourceLocation entry_location(const Node& item) {
+    SourceLocation where = item.location();
+    if (item.is_scalar() && !item.quoted()) {
+      int characters = 0;
+      for (const char c : item.text()) characters += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+      where.length = characters;
+    }
+    return where;
+  }
+
   bool parse_inhibition(const Node& item, InhibitionDecl& inhibition) {
     const std::string& text = item.text();
     // Every arrow, in order: `a => b => c` is two inhibitions written as one.
@@ -1209,7 +1221,7 @@ class ModelBuilder {
     };
     if (arrows.empty()) {
       auto& error = diagnostics_.error(
-          item.location(), "bad-inhibition",
+          inhibition.location, "bad-inhibition",
           fmt::format("cannot read inhibition '{}': write 'a => b' (chaining) or 'a -> b' "
                       "(non-chaining)",
                       text));
@@ -1231,7 +1243,7 @@ class ModelBuilder {
     if (arrows.size() > 1 && folded != std::string::npos && !item.quoted() &&
         folded > arrows.front()) {
       diagnostics_
-          .error(item.location(), "bad-inhibition",
+          .error(inhibition.location, "bad-inhibition",
                  fmt::format("inhibition '{}' runs on into the next item", text))
           .notes.push_back(fmt::format(
               "the '- {}' after it is indented deeper than this item's '- ', so YAML reads it "
@@ -1319,7 +1331,7 @@ class ModelBuilder {
     if (!ok) return;
     if (inhibition.inhibitor.text == inhibition.inhibited.text) {
       diagnostics_.error(
-          inhibition.inhibitor.location, "self-inhibition",
+          inhibition.location, "self-inhibition",
           fmt::format("behaviour '{}' cannot inhibit itself", inhibition.inhibitor.text));
       return;
     }
