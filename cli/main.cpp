@@ -308,10 +308,18 @@ int run(const Options& options) {
   if (trace_file.is_open()) manager.add_observer(trace);
   arbiter::cli::RunReport report(std::cout, options.quiet);
   manager.add_observer(report);
+  // In a terminal, a watched run keeps a status line on stderr: it shows an idle run is alive.
+  std::optional<arbiter::cli::StatusLine> status;
+  std::optional<arbiter::cli::StatusClearer> clear_out, clear_err;
+  if (options.watch && !options.quiet && ::isatty(STDERR_FILENO) == 1) {
+    status.emplace(STDERR_FILENO);
+    clear_out.emplace(std::cout, *status);
+    clear_err.emplace(std::cerr, *status);
+  }
   std::optional<arbiter::cli::Watcher> watcher;
   if (options.watch)
     watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
-                    options.diagnostic_format);
+                    options.diagnostic_format, status ? &*status : nullptr);
   std::unique_ptr<arbiter::Recorder> recorder;  // --record
   if (!options.record_path.empty()) {
     recorder = std::make_unique<arbiter::Recorder>(
@@ -367,6 +375,7 @@ int run(const Options& options) {
       timing.record_lateness(std::chrono::duration<double>(Clock::now() - next).count());
     }
     manager.step();
+    if (watcher) watcher->set_step(manager.steps());
     timing.record_step(manager.step_duration());
     if (manager.stopped()) break;  // on_exception: stop — the run ends with this step
     if (options.realtime) {
@@ -379,6 +388,9 @@ int run(const Options& options) {
     }
   }
   watcher.reset();
+  clear_err.reset();
+  clear_out.reset();
+  status.reset();
   manager.finish();  // outputs the safe values, whatever ended the run
   if (recorder && recorder->dropped() > 0) {
     std::cerr << fmt::format(
