@@ -448,7 +448,8 @@ state_machines:
   Manager manager(load(reloader, config.path()));
   manager.step();
   std::string after = before;
-  after.replace(after.find("      go: scripted\n"), 19, "      run: scripted\n      rest: scripted\n");
+  after.replace(after.find("      go: scripted\n"), 19,
+                "      run: scripted\n      rest: scripted\n");
   after.replace(after.find("[wait, go]"), 10, "[wait, run, rest]");
   config.write(after);
   const ReloadResult result = reloader.reload(manager);

@@ -138,7 +138,8 @@ std::string queue_text(const Controller& controller) {
 }
 
 /// What differs in a state machine's declaration: states added, removed or changed (class,
-/// params), the queue old -> new, the capacity; "pre-emptions" when only those differ.
+/// params), the queue old -> new, else the capacity; "pre-emptions or nested machines" when
+/// only those differ.
 std::string controller_change(const Controller& before, const Controller& after) {
   if (before.same_declaration(after)) return {};
   std::vector<std::string> parts;
@@ -170,7 +171,8 @@ std::string controller_change(const Controller& before, const Controller& after)
   const std::string old_queue = queue_text(before);
   const std::string new_queue = queue_text(after);
   if (old_queue != new_queue) parts.push_back(fmt::format("queue {} -> {}", old_queue, new_queue));
-  if (before.capacity() != after.capacity()) {
+  // The capacity follows the states unless written: shown only when nothing else explains it.
+  if (parts.empty() && before.capacity() != after.capacity()) {
     parts.push_back(fmt::format("capacity {} -> {}", before.capacity(), after.capacity()));
   }
   if (parts.empty()) parts.emplace_back("pre-emptions or nested machines");
