@@ -55,6 +55,8 @@ void World::step(const Command& command) {
   button_pressed_ = false;
   saved_ = false;
   kicked_off_ = false;
+  // Counted before this step can score, so that the kick-off comes kick_off_delay after the goal.
+  const bool kick_off_due = kick_off_steps_ > 0 && --kick_off_steps_ == 0;
   shot_ = config_.shot_step >= 1 && steps_ + 1 == config_.shot_step;
   if (shot_) shoot(config_.shot_target, config_.shot_speed);
   if (command.kick && !down() && ball_in_reach()) {
@@ -77,7 +79,7 @@ void World::step(const Command& command) {
   const double target = std::clamp(command.head_angle, -config_.head_limit, config_.head_limit);
   head_yaw_ = approach(head_yaw_, target, config_.head_speed * config_.dt);
   if (down_steps_ > 0 && --down_steps_ == 0) dive_side_ = 0;
-  if (kick_off_steps_ > 0 && --kick_off_steps_ == 0) kick_off();
+  if (kick_off_due) kick_off();
   ++steps_;
 }
 
