@@ -569,7 +569,8 @@ TEST_CASE("a config's steps: is how long arbiter run runs unless --steps says ot
   REQUIRE(by_option.exit_code == 0);
   CHECK(contains(by_option.out, "\n30 steps.\n"));
   // Without steps: in the config, the default stays 100.
-  const auto default_length = run_cli(std::string("run ") + kWalkAndKick + " -q --trace /dev/stdout");
+  const auto default_length =
+      run_cli(std::string("run ") + kWalkAndKick + " -q --trace /dev/stdout");
   REQUIRE(default_length.exit_code == 0);
   CHECK(contains(default_length.out, "{\"step\": 100,"));
   CHECK_FALSE(contains(default_length.out, "{\"step\": 101,"));
