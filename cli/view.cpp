@@ -58,10 +58,15 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     return 1;
   }
   if (!trace->reloads.empty()) {
-    err << fmt::format(
-        "{}:{}:1: error: the config was reloaded during this run (a reload header); the view "
-        "shows a run of one config: 'arbiter plot {}' draws all of it\n",
-        trace_path, trace->reloads.front().line, trace_path);
+    err << format(Diagnostic{{trace_path, static_cast<int>(trace->reloads.front().line), 1},
+                             Severity::kError,
+                             "bad-trace",
+                             fmt::format("the config was reloaded during this run (a reload "
+                                         "header); the view shows a run of one config: 'arbiter "
+                                         "plot {}' draws all of it",
+                                         trace_path),
+                             {}},
+                  format_options);
     return 1;
   }
   std::vector<std::uint64_t> steps;

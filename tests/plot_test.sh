@@ -77,7 +77,7 @@ status=0
 timeout 10 "$arbiter" view "$source/configs/paper/walk_and_kick.yaml" --trace "$work/reloaded.jsonl" \
   --serve 0 2>"$work/err" >/dev/null || status=$?
 [[ $status == 1 ]] || fail "view of a reloaded run exits 1, not $status"
-grep -q "reloaded.jsonl:4:1: error: the config was reloaded during this run" "$work/err" ||
+grep -q "reloaded.jsonl:4:1: error\[bad-trace\]: the config was reloaded during this run" "$work/err" ||
   fail "$(cat "$work/err")"
 
 # A broken line is reported where it is, with the line and the place underlined.
