@@ -1,6 +1,7 @@
 // The `arbiter` command: a thin client of the engine library.
 
 #include <fmt/format.h>
+#include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
@@ -316,6 +317,14 @@ int run(const Options& options) {
     clear_out.emplace(std::cout, *status);
     clear_err.emplace(std::cerr, *status);
   }
+  // The log goes through std::cerr meanwhile, so that it too takes the status line away first.
+  std::vector<spdlog::sink_ptr> log_sinks;
+  if (status) {
+    auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(std::cerr, true);
+    sink->set_pattern("%l: %v");
+    log_sinks.swap(spdlog::default_logger()->sinks());
+    spdlog::default_logger()->sinks().push_back(std::move(sink));
+  }
   std::optional<arbiter::cli::Watcher> watcher;
   if (options.watch)
     watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
@@ -388,6 +397,7 @@ int run(const Options& options) {
     }
   }
   watcher.reset();
+  if (status) spdlog::default_logger()->sinks().swap(log_sinks);
   clear_err.reset();
   clear_out.reset();
   status.reset();
