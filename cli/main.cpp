@@ -1,6 +1,7 @@
 // The `arbiter` command: a thin client of the engine library.
 
 #include <fmt/format.h>
+#include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
@@ -53,6 +54,7 @@ struct Options {
   std::string format = "text";
   bool strict = false;
   std::uint64_t steps = 100;
+  bool steps_given = false;  ///< `--steps` was on the command line: it overrides the config's
   std::string trace_path;
   std::string layer;
   bool quiet = false;
@@ -259,9 +261,10 @@ int explain(const Options& options) {
     return kExitOk;
   }
   if (explanation.where) {
-    std::cerr << arbiter::format(arbiter::Diagnostic{*explanation.where, arbiter::Severity::kError,
-                                                     "bad-trace", explanation.text,
-                                                     explanation.notes});
+    std::cerr << arbiter::format(
+        arbiter::Diagnostic{*explanation.where, arbiter::Severity::kError, "bad-trace",
+                            explanation.text, explanation.notes},
+        options.diagnostic_format);
     return kExitInvalid;
   }
   std::cerr << fmt::format("arbiter explain: {}\n", explanation.text);
@@ -290,6 +293,8 @@ int run(const Options& options) {
                                : load_or_report(options.file, registry, options);
   if (!program) return kExitInvalid;
   const double rate_hz = program->rate_hz;
+  const std::uint64_t steps =
+      options.steps_given || options.watch || program->steps == 0 ? options.steps : program->steps;
 
   std::ofstream trace_file;
   if (!options.trace_path.empty()) {
@@ -304,10 +309,26 @@ int run(const Options& options) {
   if (trace_file.is_open()) manager.add_observer(trace);
   arbiter::cli::RunReport report(std::cout, options.quiet);
   manager.add_observer(report);
+  // In a terminal, a watched run keeps a status line on stderr: it shows an idle run is alive.
+  std::optional<arbiter::cli::StatusLine> status;
+  std::optional<arbiter::cli::StatusClearer> clear_out, clear_err;
+  if (options.watch && !options.quiet && ::isatty(STDERR_FILENO) == 1) {
+    status.emplace(STDERR_FILENO);
+    clear_out.emplace(std::cout, *status);
+    clear_err.emplace(std::cerr, *status);
+  }
+  // The log goes through std::cerr meanwhile, so that it too takes the status line away first.
+  std::vector<spdlog::sink_ptr> log_sinks;
+  if (status) {
+    auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(std::cerr, true);
+    sink->set_pattern("%l: %v");
+    log_sinks.swap(spdlog::default_logger()->sinks());
+    spdlog::default_logger()->sinks().push_back(std::move(sink));
+  }
   std::optional<arbiter::cli::Watcher> watcher;
   if (options.watch)
     watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
-                    options.diagnostic_format);
+                    options.diagnostic_format, status ? &*status : nullptr);
   std::unique_ptr<arbiter::Recorder> recorder;  // --record
   if (!options.record_path.empty()) {
     recorder = std::make_unique<arbiter::Recorder>(
@@ -352,7 +373,7 @@ int run(const Options& options) {
   // a burst of catch-up steps: the next one waits for the next period boundary, and the periods
   // skipped are counted.
   auto next = started;
-  for (std::uint64_t i = 0; i < options.steps && !interrupted; ++i) {
+  for (std::uint64_t i = 0; i < steps && !interrupted; ++i) {
     if (live && live->will_hold()) manager.safe_pass();  // paused from the page: make it safe
     if (live && live->hold(manager, interrupted)) {
       if (interrupted) break;
@@ -363,6 +384,7 @@ int run(const Options& options) {
       timing.record_lateness(std::chrono::duration<double>(Clock::now() - next).count());
     }
     manager.step();
+    if (watcher) watcher->set_step(manager.steps());
     timing.record_step(manager.step_duration());
     if (manager.stopped()) break;  // on_exception: stop — the run ends with this step
     if (options.realtime) {
@@ -375,6 +397,10 @@ int run(const Options& options) {
     }
   }
   watcher.reset();
+  if (status) spdlog::default_logger()->sinks().swap(log_sinks);
+  clear_err.reset();
+  clear_out.reset();
+  status.reset();
   manager.finish();  // outputs the safe values, whatever ended the run
   if (recorder && recorder->dropped() > 0) {
     std::cerr << fmt::format(
@@ -413,12 +439,13 @@ int view(const Options& options) {
   return arbiter::cli::view_trace(*program, options.trace_path,
                                   arbiter::cli::ServeAddress::parse(options.view_serve, unused),
                                   options.step > 0 ? std::optional(options.step) : std::nullopt,
-                                  interrupted, std::cout, std::cerr);
+                                  interrupted, std::cout, std::cerr, options.diagnostic_format);
 }
 
 int plot(const Options& options) {
   std::string error;
-  const auto trace = arbiter::cli::read_trace_file(options.trace_path, error);
+  const auto trace =
+      arbiter::cli::read_trace_file(options.trace_path, error, options.diagnostic_format);
   if (!trace) {
     std::cerr << error << "\n";
     return kExitInvalid;
@@ -430,7 +457,7 @@ int plot(const Options& options) {
   plot_options.actuators = options.actuators;
   std::optional<arbiter::cli::TraceFile> compare;  // --compare
   if (!options.compare_path.empty()) {
-    compare = arbiter::cli::read_trace_file(options.compare_path, error);
+    compare = arbiter::cli::read_trace_file(options.compare_path, error, options.diagnostic_format);
     if (!compare) {
       std::cerr << error << "\n";
       return kExitInvalid;
@@ -548,7 +575,9 @@ int main(int argc, char** argv) {
   auto* run_cmd = app.add_subcommand(
       "run", "Run a config's behaviour manager for a number of steps and report what happened.");
   run_cmd->add_option("FILE", options.file, "the config to run")->required();
-  run_cmd->add_option("--steps", options.steps, "number of steps to run")
+  run_cmd
+      ->add_option("--steps", options.steps,
+                   "number of steps to run (default: the config's 'steps:', else 100)")
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1} << 40))
       ->capture_default_str();
   run_cmd->add_option("--trace", options.trace_path,
@@ -887,7 +916,8 @@ int main(int argc, char** argv) {
     options.diagnostic_format = arbiter::FormatOptions::readable(use_color(options.color));
     if (validate_cmd->parsed()) return validate(options);
     if (run_cmd->parsed()) {
-      if (options.watch && run_cmd->count("--steps") == 0) options.steps = std::uint64_t{1} << 40;
+      options.steps_given = run_cmd->count("--steps") > 0;
+      if (options.watch && !options.steps_given) options.steps = std::uint64_t{1} << 40;
       return run(options);
     }
     if (dump_cmd->parsed()) return dump(options);

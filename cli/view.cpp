@@ -15,11 +15,12 @@
 
 namespace arbiter::cli {
 
-std::optional<TraceFile> read_trace_file(const std::string& path, std::string& error) {
+std::optional<TraceFile> read_trace_file(const std::string& path, std::string& error,
+                                         const FormatOptions& format_options) {
   Diagnostic problem;
   auto read = read_trace(path, problem);
   if (!read) {
-    error = format(problem);
+    error = format(problem, format_options);
     error.pop_back();  // the caller ends the line
     return std::nullopt;
   }
@@ -40,9 +41,9 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
 
 int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,
                std::optional<std::uint64_t> open_step, const std::atomic<bool>& interrupted,
-               std::ostream& out, std::ostream& err) {
+               std::ostream& out, std::ostream& err, const FormatOptions& format_options) {
   std::string error;
-  const auto trace = read_trace_file(trace_path, error);
+  const auto trace = read_trace_file(trace_path, error, format_options);
   if (!trace) {
     err << error << "\n";
     return 1;
@@ -51,15 +52,21 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     err << fmt::format("{}: warning: {}\n", trace_path, trace->truncated);
   if (const auto header = check_trace_header(program, trace->header_line);
       header.status != Explanation::Status::kOk) {
-    err << fmt::format("{}:1:1: error: {}\n", trace_path, header.text);
-    for (const auto& note : header.notes) err << fmt::format("  note: {}\n", note);
+    err << format(
+        Diagnostic{{trace_path, 1, 1}, Severity::kError, "bad-trace", header.text, header.notes},
+        format_options);
     return 1;
   }
   if (!trace->reloads.empty()) {
-    err << fmt::format(
-        "{}:{}:1: error: the config was reloaded during this run (a reload header); the view "
-        "shows a run of one config: 'arbiter plot {}' draws all of it\n",
-        trace_path, trace->reloads.front().line, trace_path);
+    err << format(Diagnostic{{trace_path, static_cast<int>(trace->reloads.front().line), 1},
+                             Severity::kError,
+                             "bad-trace",
+                             fmt::format("the config was reloaded during this run (a reload "
+                                         "header); the view shows a run of one config: 'arbiter "
+                                         "plot {}' draws all of it",
+                                         trace_path),
+                             {}},
+                  format_options);
     return 1;
   }
   std::vector<std::uint64_t> steps;

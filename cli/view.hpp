@@ -31,14 +31,16 @@ struct TraceFile {
   std::string truncated;  ///< what a recording cut off while written lost (TraceSource)
 };
 
-/// Reads `path`; on failure nullopt, and `error` says where and what (`file:line:col: ...`).
-std::optional<TraceFile> read_trace_file(const std::string& path, std::string& error);
+/// Reads `path`; on failure nullopt, and `error` says where and what (`file:line:col: ...`),
+/// rendered as config errors are (with `format_options.source`, the trace's line underlined).
+std::optional<TraceFile> read_trace_file(const std::string& path, std::string& error,
+                                         const FormatOptions& format_options = {});
 
 /// Serves the page for `trace` (written by running `program`'s config) until `interrupted`;
 /// prints the URL to `out`. The page opens at `open_step` (a step of the trace), by default at
 /// the last step. Returns the exit code.
 int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,
                std::optional<std::uint64_t> open_step, const std::atomic<bool>& interrupted,
-               std::ostream& out, std::ostream& err);
+               std::ostream& out, std::ostream& err, const FormatOptions& format_options = {});
 
 }  // namespace arbiter::cli

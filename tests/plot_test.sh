@@ -77,16 +77,18 @@ status=0
 timeout 10 "$arbiter" view "$source/configs/paper/walk_and_kick.yaml" --trace "$work/reloaded.jsonl" \
   --serve 0 2>"$work/err" >/dev/null || status=$?
 [[ $status == 1 ]] || fail "view of a reloaded run exits 1, not $status"
-grep -q "reloaded.jsonl:4:1: error: the config was reloaded during this run" "$work/err" ||
+grep -q "reloaded.jsonl:4:1: error\[bad-trace\]: the config was reloaded during this run" "$work/err" ||
   fail "$(cat "$work/err")"
 
-# A broken line is reported where it is.
+# A broken line is reported where it is, with the line and the place underlined.
 head -n 3 "$work/paper.jsonl" >"$work/broken.jsonl"
 echo '{"step": 3, "layers": {,}}' >>"$work/broken.jsonl"
 status=0
 "$arbiter" plot "$work/broken.jsonl" -o "$work/broken.svg" 2>"$work/err" || status=$?
 [[ $status == 1 ]] || fail "a broken trace exits 1, not $status"
-grep -q "^$work/broken.jsonl:4:24: error: not JSON: " "$work/err" || fail "$(cat "$work/err")"
+grep -q "^$work/broken.jsonl:4:24: error\[bad-trace\]: not JSON: " "$work/err" || fail "$(cat "$work/err")"
+grep -qx '4 | {"step": 3, "layers": {,}}' "$work/err" || fail "no source line: $(cat "$work/err")"
+grep -qx '  |                        ^' "$work/err" || fail "no underline: $(cat "$work/err")"
 [[ ! -e $work/broken.svg ]] || fail "no SVG for a broken trace"
 
 # A JSON object that is not a trace header.
@@ -94,5 +96,5 @@ echo '{"arbiter": 1, "name": "walk_and_kick"}' >"$work/config.json"
 status=0
 "$arbiter" plot "$work/config.json" 2>"$work/err" >/dev/null || status=$?
 [[ $status == 1 ]] || fail "a config given as trace exits 1, not $status"
-grep -q "config.json:1:1: error: a trace starts with a header" "$work/err" || fail "$(cat "$work/err")"
+grep -q "config.json:1:1: error\[bad-trace\]: a trace starts with a header" "$work/err" || fail "$(cat "$work/err")"
 echo "plot ok"

@@ -223,8 +223,8 @@ state_machines:
   CHECK(format(result.diff) ==
         "  - behaviour control/dropped (test.Probe)\n"
         "  + actuator added (bool)\n"
-        "  ~ behaviour control/tuned: params\n"
-        "  ~ behaviour control/counted: params\n");
+        "  ~ behaviour control/tuned: params: value 5.0 -> 6.0\n"
+        "  ~ behaviour control/counted: params: gain 1.0 -> 2.0\n");
   CHECK(result.restarted == std::vector<std::string>{"control/tuned", "control/counted"});
   // Still running the old program: the dropped behaviour is alive until the swap.
   CHECK(dropped->events.back() == "execute 3");
@@ -290,7 +290,7 @@ state_machines:
   config.write(after);
   const ReloadResult result = reloader.reload(manager);
   REQUIRE(result.staged);
-  CHECK(format(result.diff) == "  ~ controller plan: declaration\n");
+  CHECK(format(result.diff) == "  ~ controller plan: state wait: params hold 100 -> 50\n");
   CHECK(result.restarted == std::vector<std::string>{"state machine plan"});
   test::ControllerLog log("plan");
   manager.add_observer(log);
@@ -431,4 +431,31 @@ TEST_CASE("a carry-over plan that does not fit is refused before it reaches step
                   std::invalid_argument);
   manager.step();
   CHECK(manager.reloads() == 0);
+}
+
+TEST_CASE("a reload's diff tells what changed in a state machine, old -> new", "[reload]") {
+  const std::string before = R"(arbiter: 1
+name: plans
+state_machines:
+  plan:
+    states:
+      wait: {type: scripted, params: {hold: 100}}
+      go: scripted
+    queue: [wait, go]
+)";
+  ConfigFile config(before);
+  Reloader reloader(registry());
+  Manager manager(load(reloader, config.path()));
+  manager.step();
+  std::string after = before;
+  after.replace(after.find("      go: scripted\n"), 19,
+                "      run: scripted\n      rest: scripted\n");
+  after.replace(after.find("[wait, go]"), 10, "[wait, run, rest]");
+  config.write(after);
+  const ReloadResult result = reloader.reload(manager);
+  INFO(format(result.diagnostics));
+  REQUIRE(result.staged);
+  CHECK(format(result.diff) ==
+        "  ~ controller plan: states added: run, rest; states removed: go; queue [wait, go] -> "
+        "[wait, run, rest]\n");
 }

@@ -344,6 +344,45 @@ TEST_CASE("a goal is scored when the ball crosses a goal line between the posts"
   }
 }
 
+TEST_CASE("after a goal the world kicks off again once kick_off_delay has passed",
+          "[soccer][world]") {
+  WorldConfig config = quiet_world();
+  config.kick_off_delay = 1.0;  // 15 steps at 1/15 s
+  SECTION("the ball back on the centre spot, the robot at its start, reported once") {
+    World world(config);
+    world.place_robot({1.0, 1.0, 2.0});
+    world.place_ball({4.0, 0.0}, {3.0, 0.0});
+    int steps = 0;
+    while (world.goals_at(1) == 0 && steps < 30) {
+      world.step({});
+      ++steps;
+    }
+    REQUIRE(world.goals_at(1) == 1);
+    run(world, 14);
+    CHECK(world.ball().x == 4.5);
+    CHECK_FALSE(world.observe().kick_off);
+    world.step({});
+    CHECK(world.observe().kick_off);
+    CHECK(world.ball().x == 0.0);
+    CHECK(world.ball().y == 0.0);
+    CHECK(world.ball_velocity().x == 0.0);
+    CHECK(world.robot().x == config.robot_start.x);
+    CHECK(world.robot().y == config.robot_start.y);
+    CHECK(world.robot().theta == config.robot_start.theta);
+    world.step({});
+    CHECK_FALSE(world.observe().kick_off);
+    CHECK(world.goals_at(1) == 1);
+  }
+  SECTION("a negative delay: never, the ball stays in the goal") {
+    config.kick_off_delay = -1.0;
+    World world(config);
+    world.place_ball({4.0, 0.0}, {3.0, 0.0});
+    run(world, 200);
+    CHECK(world.goals_at(1) == 1);
+    CHECK(world.ball().x == 4.5);
+  }
+}
+
 TEST_CASE("a ball lying on a line slides along it instead of leaving the field",
           "[soccer][world]") {
   SECTION("on the touch line") {

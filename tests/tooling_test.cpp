@@ -558,6 +558,31 @@ TEST_CASE("arbiter dump rejects an unknown layer as a usage error", "[dump][cli]
   CHECK(run_cli(std::string("dump ") + kWalkAndKick + " --format svg").exit_code == 2);
 }
 
+TEST_CASE("a config's steps: is how long arbiter run runs unless --steps says otherwise",
+          "[run][cli]") {
+  const std::string goalie = "configs/soccer/goalie.yaml";
+  const auto by_config = run_cli("run " + goalie);
+  REQUIRE(by_config.exit_code == 0);
+  CHECK(contains(by_config.out, "\n240 steps.\n"));
+  CHECK(contains(by_config.out, "simulated 16.00 s at 15 Hz"));
+  const auto by_option = run_cli("run " + goalie + " --steps 30");
+  REQUIRE(by_option.exit_code == 0);
+  CHECK(contains(by_option.out, "\n30 steps.\n"));
+  // Without steps: in the config, the default stays 100.
+  const auto default_length =
+      run_cli(std::string("run ") + kWalkAndKick + " -q --trace /dev/stdout");
+  REQUIRE(default_length.exit_code == 0);
+  CHECK(contains(default_length.out, "{\"step\": 100,"));
+  CHECK_FALSE(contains(default_length.out, "{\"step\": 101,"));
+
+  const auto text = run_cli("dump " + goalie);
+  CHECK(contains(text.out, "manager goalie (15 Hz, 240 steps, 2 layers, 1 behaviours)"));
+  const auto json = Json::parse(run_cli("dump " + goalie + " --format json").out);
+  CHECK(json["steps"] == 240);
+  CHECK_FALSE(Json::parse(run_cli(std::string("dump ") + kWalkAndKick + " --format json").out)
+                  .contains("steps"));
+}
+
 // --- lints ---
 
 TEST_CASE("each lint is reported once, located, with its code", "[lint]") {

@@ -777,6 +777,7 @@ class Compiler {
     program_.libraries = registry_.libraries();
     program_.name = model_.name;
     program_.rate_hz = model_.rate_hz;
+    program_.steps = model_.steps;
     program_.on_exception = model_.on_exception;
     std::size_t behaviours = 0;
     std::size_t inhibitions = 0;

@@ -157,6 +157,16 @@ std::size_t token_bytes(std::string_view line, std::size_t start) {
   return end - start;
 }
 
+/// The bytes that `count` characters from `start` take, up to the line's end; at least 1.
+std::size_t bytes_of_characters(std::string_view line, std::size_t start, int count) {
+  std::size_t end = start;
+  for (int seen = 0; end < line.size(); ++end) {
+    if (is_continuation_byte(line[end])) continue;
+    if (seen++ == count) break;
+  }
+  return std::max<std::size_t>(1, end - std::min(start, end));
+}
+
 /// Characters, not bytes: what the underline spans on screen.
 std::size_t characters(std::string_view text) {
   std::size_t count = 0;
@@ -167,7 +177,8 @@ std::size_t characters(std::string_view text) {
 /// `  12 | source line` and `     |   ^~~~` under it.
 std::string source_excerpt(std::string_view line, const SourceLocation& where, Paint paint) {
   std::size_t start = byte_of_column(line, where.column);
-  std::size_t length = token_bytes(line, start);
+  std::size_t length =
+      where.length > 0 ? bytes_of_characters(line, start, where.length) : token_bytes(line, start);
   // A long line is cut to a window around the place, marked with "...".
   std::string_view shown = line;
   std::string before, after;

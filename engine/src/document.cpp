@@ -589,6 +589,83 @@ std::optional<std::size_t> open_flow_bracket(std::string_view text, std::size_t 
   return open.back();
 }
 
+/// How far off the indentation of the line holding `at` is, when it lines up with no block it
+/// could belong to: the lines above it that enclose it (each less or as far indented as the ones
+/// after it) give the columns its key (or its `- `) could start at. "this line is indented one
+/// space too much to line up with 'actuators' on line 5"; empty when it lines up with one, or
+/// nothing encloses it.
+std::string indent_mistake(std::string_view text, std::size_t at) {
+  auto line_start = [&](std::size_t offset) {
+    const auto newline = offset == 0 ? std::string_view::npos : text.rfind('\n', offset - 1);
+    return newline == std::string_view::npos ? std::size_t{0} : newline + 1;
+  };
+  auto indent_of = [&](std::size_t begin) {
+    std::size_t i = begin;
+    while (i < text.size() && text[i] == ' ') ++i;
+    return i - begin;
+  };
+  const std::size_t begin = line_start(std::min(at, text.size()));
+  const std::size_t indent = indent_of(begin);
+  const bool item = text.compare(begin + indent, 2, "- ") == 0;
+  struct Candidate {
+    std::size_t column;  // 0-based
+    std::size_t line_begin;
+  };
+  std::vector<Candidate> candidates;
+  std::optional<std::size_t> enclosing;  // lines above indented deeper are in other blocks
+  int lines = 0;
+  for (std::size_t end = begin; end > 0 && lines < 1000; ++lines) {
+    const std::size_t start = line_start(end - 1);
+    const std::size_t depth = indent_of(start);
+    const std::size_t content = start + depth;
+    end = start;
+    if (content >= text.size() || text[content] == '\n' || text[content] == '#' ||
+        text[content] == '\r' || text[content] == '\t') {
+      continue;  // blank, a comment, or a tab (reported on its own)
+    }
+    if (enclosing && depth > *enclosing) continue;
+    enclosing = depth;
+    // `- key: value` opens a list (items at the dash) and a mapping (keys after it).
+    std::size_t column = depth;
+    while (text.compare(start + column, 2, "- ") == 0) {
+      if (item) candidates.push_back({column, start});
+      column += 2;
+      while (start + column < text.size() && text[start + column] == ' ') ++column;
+    }
+    candidates.push_back({column, start});
+    if (depth == 0) break;
+  }
+  const Candidate* nearest = nullptr;
+  std::size_t best = std::string_view::npos;
+  for (const auto& candidate : candidates) {
+    const std::size_t distance =
+        candidate.column > indent ? candidate.column - indent : indent - candidate.column;
+    if (distance == 0) return {};
+    // A tie goes to the outer block: a key is more often pushed in than pulled out.
+    if (distance < best || (distance == best && candidate.column < nearest->column)) {
+      best = distance;
+      nearest = &candidate;
+    }
+  }
+  if (nearest == nullptr) return {};
+  std::size_t word_end = nearest->line_begin + nearest->column;
+  while (word_end < text.size() && text[word_end] != ':' && text[word_end] != '\n' &&
+         text[word_end] != ' ') {
+    ++word_end;
+  }
+  const std::string_view word = text.substr(nearest->line_begin + nearest->column,
+                                            word_end - nearest->line_begin - nearest->column);
+  const std::size_t line_number =
+      static_cast<std::size_t>(std::count(text.begin(), text.begin() + nearest->line_begin, '\n')) +
+      1;
+  return fmt::format(
+      "this line is indented {} space{} too {} to line up with {} on line {}",
+      best == 1 ? std::string("one") : std::to_string(best), best == 1 ? "" : "s",
+      nearest->column > indent ? "little" : "much",
+      word == "-" || word.empty() ? std::string("the list item") : fmt::format("'{}'", word),
+      line_number);
+}
+
 /// Turns a yaml-cpp exception into a diagnostic that says what is wrong in the user's terms.
 void report_yaml_error(const SourceText& source, const YAML::Exception& error,
                        Diagnostics& diagnostics) {
@@ -613,18 +690,29 @@ void report_yaml_error(const SourceText& source, const YAML::Exception& error,
                                      source.describe(at), text[*opener] == '{' ? '}' : ']'));
     return;
   }
+  // Where the line's indentation lines up with nothing above it, that is the mistake to name.
+  const std::string off = structural && what != YAML::ErrorMsg::END_OF_MAP_FLOW &&
+                                  what != YAML::ErrorMsg::END_OF_SEQ_FLOW
+                              ? indent_mistake(text, at)
+                              : std::string();
   if (what == YAML::ErrorMsg::MAP_VALUE) {
     message = "invalid YAML: a mapping value (':') is not allowed here";
-    notes.push_back("check the indentation of this line against the lines above");
-    notes.push_back("a value that contains ': ' must be quoted");
+    if (off.empty()) {
+      notes.push_back("check the indentation of this line against the lines above");
+      notes.push_back("a value that contains ': ' must be quoted");
+    } else {
+      notes.push_back(off);
+    }
   } else if (what == YAML::ErrorMsg::BLOCK_ENTRY) {
     message = "invalid YAML: a list item ('- ') is not allowed here";
-    notes.push_back("check the indentation of this line against the lines above");
+    notes.push_back(off.empty() ? "check the indentation of this line against the lines above"
+                                : off);
   } else if (what == YAML::ErrorMsg::END_OF_MAP || what == YAML::ErrorMsg::END_OF_SEQ) {
     message = fmt::format("invalid YAML: this line does not fit the {} above it",
                           what == YAML::ErrorMsg::END_OF_MAP ? "mapping" : "list");
-    notes.push_back(
-        "check its indentation; keys of one mapping (and items of one list) line up exactly");
+    notes.push_back(off.empty() ? "check its indentation; keys of one mapping (and items of one "
+                                  "list) line up exactly"
+                                : off);
   } else if (what == YAML::ErrorMsg::FLOW_END) {
     message = fmt::format("invalid YAML: '{}' closes nothing", here);
   } else if (what == YAML::ErrorMsg::UNKNOWN_TOKEN) {

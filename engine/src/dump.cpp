@@ -56,8 +56,10 @@ std::string join_names(const Program& program, const std::vector<std::uint32_t>&
 }  // namespace
 
 std::string dump_text(const Program& program, std::string_view only_layer) {
-  std::string out = fmt::format("manager {} ({} Hz, {} layers, {} behaviours)\n", program.name,
-                                program.rate_hz, program.layers.size(), program.behaviours.size());
+  std::string out =
+      fmt::format("manager {} ({} Hz, {}{} layers, {} behaviours)\n", program.name, program.rate_hz,
+                  program.steps > 0 ? fmt::format("{} steps, ", program.steps) : "",
+                  program.layers.size(), program.behaviours.size());
   for (std::uint32_t l = 0; l < program.layers.size(); ++l) {
     const CompiledLayer& layer = program.layers[l];
     if (!only_layer.empty() && layer.name != only_layer) continue;
@@ -411,11 +413,10 @@ std::string dump_json(const Program& program, std::string_view only_layer) {
       machines.push_back(controller_json(*controller));
     }
   }
-  const Json dump = {{"arbiter_dump", 1},
-                     {"name", program.name},
-                     {"rate_hz", program.rate_hz},
-                     {"layers", std::move(layers)},
-                     {"state_machines", std::move(machines)}};
+  Json dump = {{"arbiter_dump", 1}, {"name", program.name}, {"rate_hz", program.rate_hz}};
+  if (program.steps > 0) dump["steps"] = program.steps;
+  dump["layers"] = std::move(layers);
+  dump["state_machines"] = std::move(machines);
   return dump.dump(2) + "\n";
 }
 

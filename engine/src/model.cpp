@@ -171,12 +171,13 @@ class ModelBuilder {
     std::vector<std::string_view> allowed = {"arbiter", "include", "layers", "state_machines",
                                              "$schema"};
     if (is_root) {
-      for (auto key : {"name", "rate_hz", "plugins", "normalise", "lint", "on_exception"}) {
+      for (auto key :
+           {"name", "rate_hz", "steps", "plugins", "normalise", "lint", "on_exception"}) {
         allowed.emplace_back(key);
       }
     }
-    static constexpr std::string_view kRootOnly[] = {"name",      "rate_hz", "plugins",
-                                                     "normalise", "lint",    "on_exception"};
+    static constexpr std::string_view kRootOnly[] = {
+        "name", "rate_hz", "steps", "plugins", "normalise", "lint", "on_exception"};
     if (!is_root) allowed.insert(allowed.end(), std::begin(kRootOnly), std::end(kRootOnly));
     Fields fields(root, is_root ? "the config" : "an included file", allowed, diagnostics_);
     if (!is_root) {
@@ -222,6 +223,18 @@ class ModelBuilder {
                           value && !std::isfinite(*value) ? "finite " : "", rate->describe()));
         } else {
           model_.rate_hz = *value;
+        }
+      }
+      if (const Node* steps = fields.optional("steps")) {
+        // The same bound as `arbiter run --steps`.
+        constexpr long long kMaxSteps = 1LL << 40;
+        const auto value = steps->as_int();
+        if (!value || *value < 1 || *value > kMaxSteps) {
+          diagnostics_.error(steps->location(), value ? "out-of-range" : "wrong-type",
+                             fmt::format("'steps' must be an integer in [1, {}], found {}",
+                                         kMaxSteps, steps->describe()));
+        } else {
+          model_.steps = static_cast<std::uint64_t>(*value);
         }
       }
       if (const Node* normalise = fields.optional("normalise")) {
@@ -1155,7 +1168,7 @@ class ModelBuilder {
     layer.inhibitions.reserve(layer.inhibitions.size() + node.items().size());
     for (const auto& item : node.items()) {
       InhibitionDecl inhibition;
-      inhibition.location = item.location();
+      inhibition.location = entry_location(item);
       if (item.is_scalar()) {
         if (!parse_inhibition(item, inhibition)) continue;
       } else {
@@ -1179,6 +1192,18 @@ class ModelBuilder {
     }
   }
 
+  /// Where an inhibition is written: an unquoted `a => b` spans its whole text, so that errors
+  /// about the inhibition underline all of it, not only its first name.
+  static SourceLocation entry_location(const Node& item) {
+    SourceLocation where = item.location();
+    if (item.is_scalar() && !item.quoted()) {
+      int characters = 0;
+      for (const char c : item.text()) characters += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+      where.length = characters;
+    }
+    return where;
+  }
+
   bool parse_inhibition(const Node& item, InhibitionDecl& inhibition) {
     const std::string& text = item.text();
     // Every arrow, in order: `a => b => c` is two inhibitions written as one.
@@ -1193,7 +1218,7 @@ class ModelBuilder {
     };
     if (arrows.empty()) {
       auto& error = diagnostics_.error(
-          item.location(), "bad-inhibition",
+          inhibition.location, "bad-inhibition",
           fmt::format("cannot read inhibition '{}': write 'a => b' (chaining) or 'a -> b' "
                       "(non-chaining)",
                       text));
@@ -1215,7 +1240,7 @@ class ModelBuilder {
     if (arrows.size() > 1 && folded != std::string::npos && !item.quoted() &&
         folded > arrows.front()) {
       diagnostics_
-          .error(item.location(), "bad-inhibition",
+          .error(inhibition.location, "bad-inhibition",
                  fmt::format("inhibition '{}' runs on into the next item", text))
           .notes.push_back(fmt::format(
               "the '- {}' after it is indented deeper than this item's '- ', so YAML reads it "
@@ -1303,7 +1328,7 @@ class ModelBuilder {
     if (!ok) return;
     if (inhibition.inhibitor.text == inhibition.inhibited.text) {
       diagnostics_.error(
-          inhibition.inhibitor.location, "self-inhibition",
+          inhibition.location, "self-inhibition",
           fmt::format("behaviour '{}' cannot inhibit itself", inhibition.inhibitor.text));
       return;
     }

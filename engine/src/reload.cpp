@@ -2,8 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <map>
 #include <unordered_map>
+
+#include "arbiter/trace.hpp"
 
 namespace arbiter {
 
@@ -94,6 +97,88 @@ const BehaviourDecl* find_behaviour(const Model& model, const std::string& layer
     if (behaviour.name.text == name) return &behaviour;
   }
   return nullptr;
+}
+
+/// The params that differ, each old -> new: "kick_distance 0.3 -> 0.25, gain 1.0 -> (none)".
+std::string params_change(const std::vector<Param>& before, const std::vector<Param>& after) {
+  const auto find = [](const std::vector<Param>& params, const std::string& name) {
+    const auto found = std::find_if(params.begin(), params.end(),
+                                    [&](const Param& param) { return param.name == name; });
+    return found == params.end() ? nullptr : &*found;
+  };
+  std::string out;
+  const auto add = [&](const std::string& name, const Param* old, const Param* now) {
+    out += fmt::format("{}{} {} -> {}", out.empty() ? "" : ", ", name,
+                       old != nullptr ? param_value_text(old->value) : "(none)",
+                       now != nullptr ? param_value_text(now->value) : "(none)");
+  };
+  for (const auto& param : before) {
+    const Param* now = find(after, param.name);
+    if (now == nullptr || !same_params({param}, {*now})) add(param.name, &param, now);
+  }
+  for (const auto& param : after) {
+    if (find(before, param.name) == nullptr) add(param.name, nullptr, &param);
+  }
+  return out;
+}
+
+/// `[wait_for_button, walk_to_pose {x: -4.2}, monitor_ball]`
+std::string queue_text(const Controller& controller) {
+  std::string out = "[";
+  for (const auto& planned : controller.initial_queue()) {
+    if (out.size() > 1) out += ", ";
+    out += controller.states()[planned.state].name;
+    ParamTexts params;
+    for (const auto& param : planned.params) {
+      params.emplace_back(param.name, param_value_text(param.value));
+    }
+    if (!params.empty()) out += " " + params_text(params);
+  }
+  return out + "]";
+}
+
+/// What differs in a state machine's declaration: states added, removed or changed (class,
+/// params), the queue old -> new, else the capacity; "pre-emptions or nested machines" when
+/// only those differ.
+std::string controller_change(const Controller& before, const Controller& after) {
+  if (before.same_declaration(after)) return {};
+  std::vector<std::string> parts;
+  const auto find = [](const Controller& controller, const std::string& name) {
+    for (const auto& state : controller.states()) {
+      if (state.name == name) return &state;
+    }
+    return static_cast<const CompiledState*>(nullptr);
+  };
+  std::string added, removed;
+  for (const auto& state : after.states()) {
+    if (find(before, state.name) == nullptr) added += (added.empty() ? "" : ", ") + state.name;
+  }
+  for (const auto& state : before.states()) {
+    const CompiledState* now = find(after, state.name);
+    if (now == nullptr) {
+      removed += (removed.empty() ? "" : ", ") + state.name;
+    } else if (now->cls != state.cls) {
+      parts.push_back(fmt::format("state {}: class {} -> {}", state.name, class_name(state.cls),
+                                  class_name(now->cls)));
+    } else if (!same_params(state.params, now->params)) {
+      parts.push_back(
+          fmt::format("state {}: params {}", state.name, params_change(state.params, now->params)));
+    }
+  }
+  if (!added.empty()) parts.insert(parts.begin(), "states added: " + added);
+  if (!removed.empty())
+    parts.insert(parts.begin() + (added.empty() ? 0 : 1), "states removed: " + removed);
+  const std::string old_queue = queue_text(before);
+  const std::string new_queue = queue_text(after);
+  if (old_queue != new_queue) parts.push_back(fmt::format("queue {} -> {}", old_queue, new_queue));
+  // The capacity follows the states unless written: shown only when nothing else explains it.
+  if (parts.empty() && before.capacity() != after.capacity()) {
+    parts.push_back(fmt::format("capacity {} -> {}", before.capacity(), after.capacity()));
+  }
+  if (parts.empty()) parts.emplace_back("pre-emptions or nested machines");
+  std::string out;
+  for (const auto& part : parts) out += (out.empty() ? "" : "; ") + part;
+  return out;
 }
 
 bool same_ports(const std::vector<PortBinding>& a, const std::vector<PortBinding>& b) {
@@ -219,7 +304,10 @@ class Planner {
                                arbiter::same_params(old_decl->params.items, new_decl->params.items);
       if (!same_params) {
         diff.changes.push_back(
-            {Change::Kind::kChanged, "behaviour", behaviour_key(after_, b), "params"});
+            {Change::Kind::kChanged, "behaviour", behaviour_key(after_, b),
+             "params: " + (old_decl != nullptr && new_decl != nullptr
+                               ? params_change(old_decl->params.items, new_decl->params.items)
+                               : std::string("changed"))});
       }
       const bool same_declaration = same_params && same_ports(old_decl->ports, new_decl->ports) &&
                                     old.on_exception == now.on_exception;
@@ -242,8 +330,13 @@ class Planner {
         const bool same_params =
             old_decl != nullptr && new_decl != nullptr &&
             arbiter::same_params(old_decl->params.items, new_decl->params.items);
-        if (!same_params)
-          diff.changes.push_back({Change::Kind::kChanged, "layer", now.name, "params"});
+        if (!same_params) {
+          diff.changes.push_back(
+              {Change::Kind::kChanged, "layer", now.name,
+               "params: " + (old_decl != nullptr && new_decl != nullptr
+                                 ? params_change(old_decl->params.items, new_decl->params.items)
+                                 : std::string("changed"))});
+        }
         plan.interface_kept[l] = same_params && same_ports(old_decl->ports, new_decl->ports) &&
                                          same_handles(from, before_.behaviours.size() + from,
                                                       after_.behaviours.size() + l)
@@ -434,10 +527,7 @@ ProgramDiff diff(const Program& before, const Program& after) {
         return fmt::format("{} state{}", controller->states().size(),
                            controller->states().size() == 1 ? "" : "s");
       },
-      [](const Owned& a, const Owned& b) {
-        return a->same_declaration(*b) ? std::string() : std::string("declaration");
-      },
-      out);
+      [](const Owned& a, const Owned& b) { return controller_change(*a, *b); }, out);
   return out;
 }
 

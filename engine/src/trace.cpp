@@ -188,6 +188,12 @@ ParamTexts merged_params(const CompiledState& state, const std::vector<Param>* p
 
 }  // namespace
 
+std::string param_value_text(const ParamValue& value) {
+  std::string out;
+  append_param_json(value, true, out);
+  return out;
+}
+
 std::string short_number(double value) {
   std::string out;
   if (std::isfinite(value)) value = std::strtod(fmt::format("{:.4g}", value).c_str(), nullptr);

@@ -37,6 +37,23 @@ std::string without_prefix(const Json::exception& error) {
   return text;
 }
 
+/// Where a record's top-level `"key": value` is written, spanning both, for an error about its
+/// value; the record's own location when it cannot be found (or the record is not a line).
+SourceLocation field_location(const TraceRecord& record, const std::string& key) {
+  SourceLocation where = record.location;
+  if (where.line <= 0) return where;
+  const std::string quoted = "\"" + key + "\"";
+  const auto at = record.text.find(quoted);
+  if (at == std::string::npos) return where;
+  auto end = record.text.find_first_of(",}", at + quoted.size());
+  if (end == std::string::npos) end = record.text.size();
+  while (end > at && record.text[end - 1] == ' ') --end;
+  // Traces are ASCII outside their strings, so bytes are characters here.
+  where.column = static_cast<int>(at) + 1;
+  where.length = static_cast<int>(end - at);
+  return where;
+}
+
 bool is_header(const Json& json) {
   return json.is_object() && json.value("arbiter_trace", Json()) == 1;
 }
@@ -191,7 +208,7 @@ bool TraceSource::accept(TraceRecord& record) {
     return true;
   }
   if (step <= last_step_) {
-    fail(record.location,
+    fail(field_location(record, "step"),
          fmt::format("step {} follows step {}; steps must increase", step, last_step_));
     return false;
   }

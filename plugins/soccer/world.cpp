@@ -23,6 +23,7 @@ Observation World::observe() {
   seen.goal = goal_;
   seen.shot = shot_;
   seen.ball_saved = saved_;
+  seen.kick_off = kicked_off_;
   seen.ball_visible = ball_in_view();
   if (seen.ball_visible) {
     seen.ball = to_robot(robot_, ball_);
@@ -53,6 +54,9 @@ void World::step(const Command& command) {
   goal_ = 0;
   button_pressed_ = false;
   saved_ = false;
+  kicked_off_ = false;
+  // Counted before this step can score, so that the kick-off comes kick_off_delay after the goal.
+  const bool kick_off_due = kick_off_steps_ > 0 && --kick_off_steps_ == 0;
   shot_ = config_.shot_step >= 1 && steps_ + 1 == config_.shot_step;
   if (shot_) shoot(config_.shot_target, config_.shot_speed);
   if (command.kick && !down() && ball_in_reach()) {
@@ -75,6 +79,7 @@ void World::step(const Command& command) {
   const double target = std::clamp(command.head_angle, -config_.head_limit, config_.head_limit);
   head_yaw_ = approach(head_yaw_, target, config_.head_speed * config_.dt);
   if (down_steps_ > 0 && --down_steps_ == 0) dive_side_ = 0;
+  if (kick_off_due) kick_off();
   ++steps_;
 }
 
@@ -230,6 +235,17 @@ void World::score(int side) {
   in_goal_ = true;
   goal_ = side;
   ++(side > 0 ? goals_positive_ : goals_negative_);
+  if (config_.kick_off_delay >= 0.0) {
+    kick_off_steps_ = std::max<std::int64_t>(1, std::lround(config_.kick_off_delay / config_.dt));
+  }
+}
+
+void World::kick_off() {
+  place_ball({0.0, 0.0});
+  place_robot(config_.robot_start);
+  down_steps_ = 0;
+  dive_side_ = 0;
+  kicked_off_ = true;
 }
 
 void World::place_ball(Point position, Point velocity) {

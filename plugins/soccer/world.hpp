@@ -38,6 +38,9 @@ struct WorldConfig {
   std::int64_t shot_step = -1;
   Point shot_target{-4.5, 0.0};
   double shot_speed = 3.5;  ///< m/s
+  /// Seconds from a goal to the kick-off that follows it: the ball back on the centre spot and
+  /// the robot at robot_start, so that play goes on; negative: never (the ball stays in the goal).
+  double kick_off_delay = 2.0;
 
   double ball_deceleration = 0.6;  ///< rolling friction, m/s²
   /// Robot radius plus ball radius: closer than this, the robot pushes the ball.
@@ -81,6 +84,7 @@ struct Observation {
   int goal = 0;             ///< +1 or -1: the ball entered the goal at x = ±4.5 in the last step()
   bool shot = false;        ///< the ball was shot on goal (shot_step) in the last step()
   bool ball_saved = false;  ///< a diving robot stopped the ball in the last step()
+  bool kick_off = false;    ///< the last step() ended with a kick-off after a goal
 };
 
 struct Command {
@@ -97,7 +101,8 @@ class World {
 
   /// The robot's senses now. Draws measurement noise, so it is called once per step.
   Observation observe();
-  /// Advances the world by one dt: shot, kick, dive, walk, roll, push, then move the head.
+  /// Advances the world by one dt: shot, kick, dive, walk, roll, push, move the head, then the
+  /// kick-off when a goal's kick_off_delay has passed.
   void step(const Command& command);
 
   const WorldConfig& config() const { return config_; }
@@ -134,6 +139,7 @@ class World {
   void push_ball();
   void move_ball_to(Point target);
   void score(int side);
+  void kick_off();
   /// Whether the ball, moving from where it lies to `target`, runs into the body of the robot
   /// lying after a dive; if so, `fraction` is the part of the path it covers until it touches,
   /// and `contact` the body's point closest to it there.
@@ -157,6 +163,9 @@ class World {
   bool button_pressed_ = false;
   bool shot_ = false;
   bool saved_ = false;
+  bool kicked_off_ = false;
+  /// Steps left until the kick-off after a goal; 0: none pending.
+  std::int64_t kick_off_steps_ = 0;
   std::int64_t down_steps_ = 0;
   int dive_side_ = 0;
   int kicks_ = 0;

@@ -25,6 +25,7 @@ void WorldLink::init(InitContext& ctx) {
   const Vec2 shot_target = ctx.param<Vec2>("shot_target");
   config.shot_target = {shot_target.x, shot_target.y};
   config.shot_speed = ctx.param<double>("shot_speed");
+  config.kick_off_delay = ctx.param<double>("kick_off_delay");
 
   // Vector params carry no range in the schema, so the field's bounds are checked here.
   const double half_length = 0.5 * config.field_length;
@@ -75,6 +76,7 @@ void WorldLink::input(ExecuteContext& ctx) {
   if (seen.ball_kicked) ctx.report("ball kicked");
   if (seen.ball_saved) ctx.report("ball saved");
   if (seen.goal != 0) ctx.report("goal!");
+  if (seen.kick_off) ctx.report("kick-off");
 }
 
 void WorldLink::output(const StepContext& ctx) {
@@ -101,7 +103,8 @@ void register_world_link(Registry& registry) {
               "A simulated 9 m x 6 m soccer field with one robot and a ball. The input pass "
               "publishes what the robot senses; the output pass applies the walk, head, kick and "
               "dive commands and advances the world by dt. Reports the events 'button pressed', "
-              "'shot on goal', 'ball kicked', 'ball saved' and 'goal!'.");
+              "'shot on goal', 'ball kicked', 'ball saved', 'goal!' and 'kick-off' (after a "
+              "goal: the ball back on the centre spot, the robot at robot_start).");
   info.param("seed", ParamKind::kInt)
       .fallback(std::int64_t{0})
       .range(0.0, 4294967295.0)
@@ -141,6 +144,12 @@ void register_world_link(Registry& registry) {
       .fallback(3.5)
       .range(0.1, 10.0)
       .describe("the ball's speed when shot (m/s); it then slows down at 0.6 m/s²");
+  info.param("kick_off_delay", ParamKind::kDouble)
+      .fallback(2.0)
+      .range(-1.0, 60.0)
+      .describe(
+          "seconds from a goal to the kick-off that follows it (the ball back on the centre "
+          "spot, the robot at robot_start, play goes on); negative for never");
 
   info.output<bool>("ball_visible").describe("whether the head camera sees the ball");
   info.output<Vec2>("ball_position")

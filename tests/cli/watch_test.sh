@@ -39,6 +39,10 @@ grep -q '^reload of .*robot.yaml: 1 change, swapped in at the next step$' "$work
   fail "no reload line"
 grep -q '^  + behaviour control/wave (scripted)$' "$work/out.txt" || fail "no diff line"
 
+# A params edit: the diff gives the param's old and new value.
+sed -i 's/turn_rate: 0.6/turn_rate: 0.5/' "$work/robot.yaml"
+wait_for '^  ~ behaviour control/search_for_ball: params: turn_rate 0.6 -> 0.5$' "$work/out.txt"
+
 # A broken edit: an unknown class, reported where it is written; the run goes on.
 line=$(grep -n 'wave: ' "$work/robot.yaml" | cut -d: -f1)
 sed -i 's/type: scripted, params: {activation: 1}/type: scriptd, params: {activation: 1}/' \
@@ -63,4 +67,29 @@ grep -q '^  control/wave .*(removed by a reload)$' "$work/out.txt" || fail "no s
 # The trace records each swap with a header of the program that follows.
 [ "$(grep -c '^{"arbiter_trace": 1, "reload": [12], "after_step": ' "$work/trace.jsonl")" -eq 2 ] ||
   fail "the trace does not have the two reload headers"
-echo "watched: 2 edits swapped in, 1 broken edit rejected: 1 passed, 0 failed"
+# Not a terminal: no status line, no terminal control in the output.
+! grep -q 'watching' "$work/out.txt" "$work/err.txt" || fail "a status line outside a terminal"
+! grep -q $'\r' "$work/out.txt" "$work/err.txt" || fail "a carriage return outside a terminal"
+
+# In a terminal (a pty from script(1)): the status line, rewritten in place, names the config,
+# the step and the last reload; every other line starts on a cleared line.
+if command -v script >/dev/null; then
+  cp "$config" "$work/tty.yaml"
+  ARBITER_CLI="$cli" CONFIG="$work/tty.yaml" script -qfec \
+    'timeout -s INT 3 "$ARBITER_CLI" run "$CONFIG" --watch --realtime' /dev/null \
+    >"$work/tty.txt" 2>&1 &
+  tty_pid=$!
+  sleep 1.5
+  sed -i 's/turn_rate: 0.6/turn_rate: 0.5/' "$work/tty.yaml"
+  wait "$tty_pid" || true
+  grep -q $'\r\e\[Kwatching .*tty.yaml — step [0-9]*, no reload yet' "$work/tty.txt" ||
+    fail "no status line before the reload: $(cat -v "$work/tty.txt" | head -5)"
+  grep -q $'\r\e\[Kwatching .*tty.yaml — step [0-9]*, last reload at step [0-9]' "$work/tty.txt" ||
+    fail "no status line after the reload: $(cat -v "$work/tty.txt" | tail -5)"
+  grep -q $'\r\e\[Kreload of .*tty.yaml: 1 change' "$work/tty.txt" ||
+    grep -q $'^reload of .*tty.yaml: 1 change' "$work/tty.txt" || fail "no reload line in the terminal"
+  # The status line never runs into another line: it is followed by a clear (or its redraw).
+  ! grep -aqP 'watching [^\r\n]*?(no reload yet|last reload at step \d+)[^\r\d]' "$work/tty.txt" ||
+    fail "a line written over the status line"
+fi
+echo "watched: 3 edits swapped in, 1 broken edit rejected, the status line in a terminal: 1 passed, 0 failed"

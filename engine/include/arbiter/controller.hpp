@@ -86,6 +86,8 @@ class Controller {
   std::uint64_t cycle() const { return cycle_; }
   std::size_t capacity() const { return capacity_; }
   const std::vector<CompiledState>& states() const { return states_; }
+  /// The configured initial queue (`queue:`), which a restart begins with.
+  const std::vector<PlannedState>& initial_queue() const { return initial_; }
 
   /// One controller step (docs/semantics.md, "State machines"). `execute` is the owner's execute
   /// context, through which states write actuators; null for a standalone controller (its states

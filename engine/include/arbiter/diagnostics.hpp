@@ -14,6 +14,9 @@ struct SourceLocation {
   std::string file;
   int line = 0;
   int column = 0;
+  /// How many characters the place spans, for the underline; 0: the token at the column (a
+  /// name, a scalar, a flow collection).
+  int length = 0;
 
   /// The location `offset` characters further along the same line.
   SourceLocation shifted(int offset) const { return {file, line, column + offset}; }
@@ -72,8 +75,8 @@ struct FormatOptions {
 /// `file:line:col: error: message` followed by one `file:line:col: note: ...` line per note.
 /// With `options.source`, the line the location points into is read from its file (relative
 /// names are resolved against the working directory, as when loading) and shown under the
-/// message, numbered, with the token at the column underlined (`^~~~`); a file that cannot be
-/// read again simply gets no source line.
+/// message, numbered, with the token at the column (or the location's `length` characters)
+/// underlined (`^~~~`); a file that cannot be read again simply gets no source line.
 std::string format(const Diagnostic& diagnostic, const FormatOptions& options = {});
 std::string format(const Diagnostics& diagnostics, const FormatOptions& options = {});
 

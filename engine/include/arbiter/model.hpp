@@ -3,6 +3,7 @@
 // checked to resolve, every type to match and every param to fit its class's schema; each item
 // keeps the location it was declared at for later diagnostics.
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -107,6 +108,7 @@ struct Model {
   std::string name;
   SourceLocation location;
   double rate_hz = 15.0;
+  std::uint64_t steps = 0;  ///< `steps:`, the default length of `arbiter run`; 0: not set
   bool normalise = false;
   FaultPolicy on_exception = FaultPolicy::kInactive;  ///< for behaviours and interfaces
   std::vector<Name> plugins;

@@ -172,6 +172,8 @@ class Program {
 
   std::string name;
   double rate_hz = 15.0;
+  /// The config's `steps:`, how many steps `arbiter run` takes without `--steps`; 0: not set.
+  std::uint64_t steps = 0;
   FaultPolicy on_exception = FaultPolicy::kInactive;  ///< the config's; interfaces follow it
   std::vector<CompiledLayer> layers;
   std::vector<CompiledBehaviour> behaviours;  ///< layer by layer, each in topological order

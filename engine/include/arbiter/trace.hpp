@@ -68,6 +68,8 @@ ParamTexts event_params(const Controller& controller, const Controller::Event& e
 ParamTexts current_params(const Controller& controller);
 /// A param's number for a person: 4 significant digits, as JSON (`-4.07`, `0.0`).
 std::string short_number(double value);
+/// A param's value as JSON text, exact (`0.25`, `[1.0, 2.0]`, `"fast"`).
+std::string param_value_text(const ParamValue& value);
 /// `{x: 0.0, y: -4.2}`, as `run` and `explain` show them; "" when there are none.
 std::string params_text(const ParamTexts& params);
 /// The record of the manager's last step, without the newline: with `"safe": true` during the
