@@ -304,10 +304,6 @@ int run(const Options& options) {
   if (trace_file.is_open()) manager.add_observer(trace);
   arbiter::cli::RunReport report(std::cout, options.quiet);
   manager.add_observer(report);
-  std::optional<arbiter::cli::Watcher> watcher;
-  if (options.watch)
-    watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
-                    options.diagnostic_format);
   std::unique_ptr<arbiter::Recorder> recorder;  // --record
   if (!options.record_path.empty()) {
     recorder = std::make_unique<arbiter::Recorder>(
@@ -318,7 +314,14 @@ int run(const Options& options) {
       return kExitUsage;
     }
     manager.add_observer(*recorder);
+    // A reload's files go into the recording, for replay to reload them too.
+    reloader.set_on_staging(
+        [&recorder](const arbiter::Reloader::FileTexts& files) { recorder->stage_files(files); });
   }
+  std::optional<arbiter::cli::Watcher> watcher;
+  if (options.watch)
+    watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
+                    options.diagnostic_format);
   std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
   if (!options.serve.empty()) {
     arbiter::cli::LiveAccess access;

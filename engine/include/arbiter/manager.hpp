@@ -66,6 +66,9 @@ struct CarryPlan {
 
 class Manager {
  public:
+  /// Reports (StepContext::report) kept per step; later ones are dropped.
+  static constexpr std::size_t kEventsPerStep = 64;
+
   /// Takes the program; run-time warnings go to `logger` (default: spdlog's default logger).
   explicit Manager(Program program, std::shared_ptr<spdlog::logger> logger = nullptr);
   ~Manager();

@@ -2,6 +2,7 @@
 // Stage 5 of the data path: the JSON-lines trace of docs/semantics.md, "The trace", written by an
 // observer.
 
+#include <memory>
 #include <ostream>
 #include <string>
 #include <utility>
@@ -14,7 +15,8 @@ namespace arbiter {
 /// Writes the header when attached and one line per step. The stream must outlive the writer.
 class TraceWriter : public Observer {
  public:
-  explicit TraceWriter(std::ostream& out) : out_(out) {}
+  explicit TraceWriter(std::ostream& out);
+  ~TraceWriter() override;
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
   /// Writes a new header record (reload_header()): the step records after it follow it.
@@ -25,6 +27,8 @@ class TraceWriter : public Observer {
 
  private:
   std::ostream& out_;
+  struct Step;  // the program's layout and a snapshot sized for it, rebuilt at a reload
+  std::unique_ptr<Step> step_;
   std::string line_;  // reused between steps
 };
 
