@@ -1,6 +1,7 @@
 #pragma once
-// Stage 5 of the data path, read back: the records of a trace (docs/semantics.md) or of a recording, in the
-// order they were written, checked once here so that every tool reports a bad file the same way.
+// Stage 5 of the data path, read back: the records of a trace (docs/semantics.md) or of a
+// recording, in the order they were written, checked once here so that every tool reports a bad
+// file the same way.
 
 #include <cstdint>
 #include <istream>
@@ -51,6 +52,7 @@ class TraceSource {
   /// At the end of the input: false, with error() set when there was no header at all.
   bool end(SourceLocation where);
   void set_truncated(std::string what) { truncated_ = std::move(what); }
+  bool header_seen() const { return header_seen_; }
   void reset_error() { error_.reset(); }
 
  private:
