@@ -94,6 +94,11 @@ struct Recorder::Output {
   std::uint64_t dropped = 0;
   std::string record;  // reused between messages
   std::string inputs_record;
+  detail::StepSnapshot::Levels levels;  // the writer's, as of the last slot it formatted
+  // The stepping thread's: the levels as the last slot published left them, and whether that
+  // slot is the one before the next (no step dropped since), so the next copies what changed.
+  detail::StepSnapshot::Levels last;
+  bool chained = false;
 };
 
 Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots)
@@ -120,7 +125,11 @@ bool Recorder::ok() const {
 
 Recorder::Slot* Recorder::claim() {
   const auto head = head_.load(std::memory_order_relaxed);
-  if ((head + 1) % ring_size_ == tail_.load(std::memory_order_acquire)) return nullptr;
+  const auto next = (head + 1) % ring_size_;
+  if (next == tail_seen_) {
+    tail_seen_ = tail_.load(std::memory_order_acquire);
+    if (next == tail_seen_) return nullptr;
+  }
   return &ring_[head];
 }
 
@@ -167,17 +176,26 @@ constexpr std::size_t kReportTextBytes = 4096;
 
 void Recorder::size_ring(const Manager& manager) {
   layout_ = std::make_unique<detail::StepLayout>(manager.program());
-  for (std::size_t i = 0; i < ring_size_; ++i)
+  for (std::size_t i = 0; i < ring_size_; ++i) {
     ring_[i].snapshot.size_for(*layout_, kReportTextBytes);
+  }
+  const auto behaviours = layout_->behaviours.size();
+  out_->last.requested.assign(behaviours, 0.0);
+  out_->last.activation.assign(behaviours, 0.0);
+  out_->last.active.assign(behaviours, 0);
+  out_->chained = false;
 }
 
 void Recorder::on_step(const Manager& manager) {
   if (!started_) return;
   Slot* slot = claim();
-  if (slot == nullptr || !slot->snapshot.capture(manager, *layout_)) {
+  if (slot == nullptr ||
+      !slot->snapshot.capture(manager, *layout_, false, &out_->last, out_->chained)) {
     dropped_total_.fetch_add(1, std::memory_order_relaxed);
+    out_->chained = false;  // the next slot copies every level
     return;
   }
+  out_->chained = true;
   slot->kind = Slot::Kind::kStep;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
@@ -196,7 +214,8 @@ void Recorder::on_safe(const Manager& manager) {
   slot->kind = Slot::Kind::kSafe;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
-  slot->snapshot.capture(manager, *layout_, true);
+  slot->snapshot.capture(manager, *layout_, true, &out_->last, out_->chained);
+  out_->chained = true;
   publish();
 }
 
@@ -238,13 +257,27 @@ void Recorder::on_finish(const Manager&) {
   finished_ = true;
 }
 
+void Recorder::format_step(detail::StepSnapshot& snapshot, std::string& record,
+                           std::string* inputs) {
+  auto& levels = out_->levels;
+  snapshot.apply_levels(levels);
+  snapshot.swap_levels(levels);
+  detail::append_step_record(*layout_, snapshot, record);
+  if (inputs != nullptr) detail::append_inputs_record(*layout_, snapshot, *inputs);
+  snapshot.swap_levels(levels);
+}
+
 void Recorder::write_loop() {
   auto& out = *out_;
+  std::size_t head_seen = 0;  // head_ is read again only once the writer has caught up with it
   while (true) {
     const auto tail = tail_.load(std::memory_order_relaxed);
-    if (tail == head_.load(std::memory_order_acquire)) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-      continue;
+    if (tail == head_seen) {
+      head_seen = head_.load(std::memory_order_acquire);
+      if (tail == head_seen) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        continue;
+      }
     }
     Slot& slot = ring_[tail];
     if (slot.kind == Slot::Kind::kEnd) {
@@ -261,7 +294,7 @@ void Recorder::write_loop() {
       out.last_step = slot.step;
     } else if (slot.kind == Slot::Kind::kSafe) {
       out.record.clear();
-      detail::append_step_record(*layout_, slot.snapshot, out.record);
+      format_step(slot.snapshot, out.record, nullptr);
       out.writer.message(out.step, slot.log_time, out.record);  // no inputs: nothing was read
     } else {
       if (slot.step > out.last_step + 1) {
@@ -272,9 +305,8 @@ void Recorder::write_loop() {
       }
       out.last_step = slot.step;
       out.record.clear();
-      detail::append_step_record(*layout_, slot.snapshot, out.record);
       out.inputs_record.clear();
-      detail::append_inputs_record(*layout_, slot.snapshot, out.inputs_record);
+      format_step(slot.snapshot, out.record, &out.inputs_record);
       out.writer.message(out.step, slot.log_time, out.record);
       out.writer.message(out.inputs, slot.log_time, out.inputs_record);
     }

@@ -165,6 +165,9 @@ void StepSnapshot::size_for(const StepLayout& layout, std::size_t text_bytes) {
   requested.assign(behaviours, 0.0);
   activation.assign(behaviours, 0.0);
   active.assign(behaviours, 0);
+  levels_full = true;
+  changed_blocks.assign((behaviours + kLevelBlock - 1) / kLevelBlock, 0);
+  changed_count = 0;
   written.assign(layout.actuators.size(), 0);
   values_ = std::make_unique<std::byte[]>(std::max<std::size_t>(layout.value_bytes, 1));
   if (!layout.plain_values) {
@@ -192,18 +195,73 @@ void StepSnapshot::size_for(const StepLayout& layout, std::size_t text_bytes) {
   texts.reserve(text_bytes);
 }
 
-bool StepSnapshot::capture(const Manager& manager, const StepLayout& layout, bool grow) {
+void StepSnapshot::apply_levels(Levels& current) const {
+  if (levels_full) {
+    current.requested = requested;
+    current.activation = activation;
+    current.active = active;
+    return;
+  }
+  const auto behaviours = requested.size();
+  for (std::size_t i = 0; i < changed_count; ++i) {
+    const std::size_t begin = changed_blocks[i] * kLevelBlock;
+    const std::size_t end = std::min(begin + kLevelBlock, behaviours);
+    std::copy(requested.begin() + begin, requested.begin() + end,
+              current.requested.begin() + begin);
+    std::copy(activation.begin() + begin, activation.begin() + end,
+              current.activation.begin() + begin);
+    std::copy(active.begin() + begin, active.begin() + end, current.active.begin() + begin);
+  }
+}
+
+bool StepSnapshot::capture(const Manager& manager, const StepLayout& layout, bool grow,
+                           Levels* last, bool chained) {
   const Program& program = manager.program();
   step = manager.steps();
   safe = manager.in_safe_pass();
   timed = manager.timed();
   t = manager.step_time();
   duration = manager.step_duration();
-  const auto behaviours = layout.behaviours.size();
-  for (std::uint32_t b = 0; b < behaviours; ++b) {
-    requested[b] = manager.requested(b);
-    activation[b] = manager.activation(b);
-    active[b] = manager.active(b) ? 1 : 0;
+  const std::size_t behaviours = layout.behaviours.size();
+  const double* requested_now = manager.requested_levels();
+  const double* activation_now = manager.activation_levels();
+  const char* active_now = manager.active_flags();
+  if (last != nullptr && chained) {
+    // Compared where they are hot (the manager's levels and `last`), written to the slot, which
+    // is cold, only by the block that changed. Bytes, not values: -0.0 prints apart from 0.0.
+    levels_full = false;
+    changed_count = 0;
+    const auto same = [&](std::size_t begin, std::size_t count) {
+      return std::memcmp(requested_now + begin, last->requested.data() + begin,
+                         count * sizeof(double)) == 0 &&
+             std::memcmp(activation_now + begin, last->activation.data() + begin,
+                         count * sizeof(double)) == 0 &&
+             std::memcmp(active_now + begin, last->active.data() + begin, count) == 0;
+    };
+    if (behaviours > 0 && !same(0, behaviours)) {
+      for (std::size_t begin = 0; begin < behaviours; begin += kLevelBlock) {
+        const auto count = std::min(kLevelBlock, behaviours - begin);
+        if (same(begin, count)) continue;
+        changed_blocks[changed_count++] = static_cast<std::uint32_t>(begin / kLevelBlock);
+        const auto copy = [&](const auto* from, auto& to, auto& kept) {
+          std::copy(from + begin, from + begin + count, to.begin() + begin);
+          std::copy(from + begin, from + begin + count, kept.begin() + begin);
+        };
+        copy(requested_now, requested, last->requested);
+        copy(activation_now, activation, last->activation);
+        copy(active_now, active, last->active);
+      }
+    }
+  } else {
+    levels_full = true;
+    std::copy(requested_now, requested_now + behaviours, requested.begin());
+    std::copy(activation_now, activation_now + behaviours, activation.begin());
+    std::copy(active_now, active_now + behaviours, active.begin());
+    if (last != nullptr) {
+      std::copy(requested_now, requested_now + behaviours, last->requested.begin());
+      std::copy(activation_now, activation_now + behaviours, last->activation.begin());
+      std::copy(active_now, active_now + behaviours, last->active.begin());
+    }
   }
   const auto actuators = static_cast<std::uint32_t>(layout.actuators.size());
   if (actuators > 0 && layout.plain_values) {

@@ -68,10 +68,33 @@ class StepSnapshot {
 
   /// Storage for every value of `layout`'s program, and `text_bytes` of reported text.
   void size_for(const StepLayout& layout, std::size_t text_bytes);
+  /// The behaviours' levels and active flags, the bulk of a big graph's step.
+  struct Levels {
+    std::vector<double> requested;
+    std::vector<double> activation;
+    std::vector<char> active;
+  };
+  /// Behaviours per block of levels that a chained capture copies or skips as one.
+  static constexpr std::size_t kLevelBlock = 8;
+
   /// Copies the manager's last step (or safe pass). False when something does not fit the
   /// storage (reported text, a string value longer than its reserve) and `grow` is false: the
   /// snapshot is then incomplete and must not be formatted. With `grow`, it makes room.
-  bool capture(const Manager& manager, const StepLayout& layout, bool grow = false);
+  /// With `last` (the levels as the previous snapshot left them, kept up to date here) and
+  /// `chained` (that snapshot will be formatted just before this one), only the blocks of levels
+  /// that changed are copied (levels_full false): a reader brings its own levels up to date
+  /// with apply_levels(), in order.
+  bool capture(const Manager& manager, const StepLayout& layout, bool grow = false,
+               Levels* last = nullptr, bool chained = false);
+  /// Brings `current` (a reader's levels, of the snapshots before this one) up to this one's.
+  void apply_levels(Levels& current) const;
+  /// Exchanges the snapshot's levels with `levels`: after apply_levels(), so that the snapshot
+  /// holds all of them to be formatted; again after, to give them back.
+  void swap_levels(Levels& levels) {
+    requested.swap(levels.requested);
+    activation.swap(levels.activation);
+    active.swap(levels.active);
+  }
 
   struct Machine {
     std::uint64_t cycle = 0;
@@ -95,6 +118,10 @@ class StepSnapshot {
   std::vector<double> requested;
   std::vector<double> activation;
   std::vector<char> active;
+  /// False: requested, activation and active hold only the blocks in changed_blocks.
+  bool levels_full = true;
+  std::vector<std::uint32_t> changed_blocks;
+  std::size_t changed_count = 0;
   std::vector<char> written;
   std::vector<Machine> machines;
   std::vector<std::pair<std::uint32_t, Arg::Value>> current_args;

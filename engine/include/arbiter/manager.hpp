@@ -137,6 +137,11 @@ class Manager {
   double requested(std::uint32_t behaviour) const { return requested_[behaviour]; }
   double activation(std::uint32_t behaviour) const { return activation_[behaviour]; }
   bool active(std::uint32_t behaviour) const { return active_[behaviour] != 0; }
+  /// The same of every behaviour, by index (active: non-zero), for observers that copy them
+  /// whole.
+  const double* requested_levels() const { return requested_.data(); }
+  const double* activation_levels() const { return activation_.data(); }
+  const char* active_flags() const { return active_.data(); }
   /// The actuator's current value (of its ValueType) and whether it was written this step.
   const void* actuator_value(std::uint32_t actuator) const {
     return values_.get() + program_.actuator_offsets[actuator];

@@ -21,7 +21,8 @@ namespace arbiter {
 
 namespace detail {
 struct StepLayout;
-}
+class StepSnapshot;
+}  // namespace detail
 
 /// What a recording keeps besides the steps, for replaying the run.
 struct RecordingInfo {
@@ -52,6 +53,12 @@ class Recorder : public Observer {
   void on_finish(const Manager& manager) override;
 
   std::uint64_t dropped() const { return dropped_total_.load(); }
+  /// Steps copied and not yet written (any thread).
+  std::size_t backlog() const {
+    const auto head = head_.load(std::memory_order_acquire);
+    const auto tail = tail_.load(std::memory_order_acquire);
+    return (head + ring_size_ - tail) % ring_size_;
+  }
 
   /// The files (path, text) of a config about to be staged for a hot reload: the recording's
   /// reload record, written when the manager swaps it in (on_reload()), keeps them, so that a
@@ -71,14 +78,19 @@ class Recorder : public Observer {
   void size_ring(const Manager& manager);
   void publish();
   void write_loop();
+  /// The writer's: a slot's step record (and inputs message), its levels brought up to date.
+  void format_step(detail::StepSnapshot& snapshot, std::string& record, std::string* inputs);
 
   std::FILE* file_ = nullptr;
   RecordingInfo info_;
   std::unique_ptr<Slot[]> ring_;
   std::size_t ring_size_ = 0;
-  std::atomic<std::size_t> head_{0};  // next slot the stepping thread fills
-  std::atomic<std::size_t> tail_{0};  // next slot the writer reads
-  std::atomic<std::uint64_t> dropped_total_{0};
+  // Each on a cache line of its own, so that the two threads do not take the line from each
+  // other at every step; the stepping thread reads tail_ only when the ring looks full.
+  alignas(64) std::atomic<std::size_t> head_{0};  // next slot the stepping thread fills
+  std::size_t tail_seen_ = 0;                     // tail_ as the stepping thread last read it
+  alignas(64) std::atomic<std::size_t> tail_{0};  // next slot the writer reads
+  alignas(64) std::atomic<std::uint64_t> dropped_total_{0};
   // The names a slot's values are formatted with. Replaced only by on_reload(), once the writer
   // has emptied the ring, so the writer reads it without a lock.
   std::unique_ptr<detail::StepLayout> layout_;
