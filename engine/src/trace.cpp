@@ -140,17 +140,27 @@ void append_step_record(const Manager& manager, std::string& out) {
   detail::append_step_record(layout, step, out);
 }
 
-struct TraceWriter::Step {
-  explicit Step(const Program& program) : layout(program) { snapshot.size_for(layout, 1024); }
+struct StepRecordFormatter::State {
+  explicit State(const Program& program) : layout(program) { snapshot.size_for(layout, 1024); }
   detail::StepLayout layout;
   detail::StepSnapshot snapshot;
 };
 
-TraceWriter::TraceWriter(std::ostream& out) : out_(out) {}
-TraceWriter::~TraceWriter() = default;
+StepRecordFormatter::StepRecordFormatter() = default;
+StepRecordFormatter::~StepRecordFormatter() = default;
+
+void StepRecordFormatter::reset(const Program& program) {
+  state_ = std::make_unique<State>(program);
+}
+
+void StepRecordFormatter::append(const Manager& manager, std::string& out) {
+  if (!state_) reset(manager.program());
+  state_->snapshot.capture(manager, state_->layout, true);
+  detail::append_step_record(state_->layout, state_->snapshot, out);
+}
 
 void TraceWriter::on_start(const Manager& manager) {
-  step_ = std::make_unique<Step>(manager.program());
+  records_.reset(manager.program());
   out_ << trace_header(manager.program()) << '\n';
 }
 
@@ -159,10 +169,8 @@ void TraceWriter::on_safe(const Manager& manager) {
 }
 
 void TraceWriter::on_step(const Manager& manager) {
-  if (!step_) step_ = std::make_unique<Step>(manager.program());
   line_.clear();
-  step_->snapshot.capture(manager, step_->layout, true);
-  detail::append_step_record(step_->layout, step_->snapshot, line_);
+  records_.append(manager, line_);
   line_ += '\n';
   out_ << line_;
 }
@@ -176,7 +184,7 @@ std::string reload_header(const Manager& manager) {
 }
 
 void TraceWriter::on_reload(const Manager& manager) {
-  step_ = std::make_unique<Step>(manager.program());
+  records_.reset(manager.program());
   out_ << reload_header(manager) << '\n';
 }
 

@@ -12,11 +12,29 @@
 
 namespace arbiter {
 
+/// append_step_record() for an observer that formats every step: what the record needs of the
+/// program (names, closed inhibitions) is gathered once, and again after reset() (at a reload),
+/// not at every call.
+class StepRecordFormatter {
+ public:
+  StepRecordFormatter();
+  ~StepRecordFormatter();
+  StepRecordFormatter(const StepRecordFormatter&) = delete;
+  StepRecordFormatter& operator=(const StepRecordFormatter&) = delete;
+  /// For `program` from now on (call it from Observer::on_start and on_reload).
+  void reset(const Program& program);
+  /// The record of the manager's last step; gathers the program's on first use.
+  void append(const Manager& manager, std::string& out);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
 /// Writes the header when attached and one line per step. The stream must outlive the writer.
 class TraceWriter : public Observer {
  public:
-  explicit TraceWriter(std::ostream& out);
-  ~TraceWriter() override;
+  explicit TraceWriter(std::ostream& out) : out_(out) {}
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
   /// Writes a new header record (reload_header()): the step records after it follow it.
@@ -27,8 +45,7 @@ class TraceWriter : public Observer {
 
  private:
   std::ostream& out_;
-  struct Step;  // the program's layout and a snapshot sized for it, rebuilt at a reload
-  std::unique_ptr<Step> step_;
+  StepRecordFormatter records_;
   std::string line_;  // reused between steps
 };
 
