@@ -170,14 +170,11 @@ StateEnd make_state_end(const Controller::Event& event, Name name) {
 /// "activate", "execute" or "deactivate".
 const char* event_verb(Controller::Event::Kind kind);
 
-/// Per-instance params of a state of class `cls`: those `planned` in the config, then `args`
-/// (param index, value) from Plan calls; see event_params() in trace.hpp.
-template <typename Args, typename ValueOf>
-ParamTexts merged_params(const ClassInfo& cls, const std::vector<Param>* planned, const Args& args,
-                         ValueOf value_of, bool exact);
-
+/// A param's value as JSON; not `exact`: numbers to 4 significant digits (short_number()).
 void append_param_json(const ParamValue& value, bool exact, std::string& out);
 
+/// Per-instance params of a state of class `cls`: those `planned` in the config, then `args`
+/// (param index, value) from Plan calls; see event_params() in trace.hpp.
 template <typename Args, typename ValueOf>
 ParamTexts merged_params(const ClassInfo& cls, const std::vector<Param>* planned, const Args& args,
                          ValueOf value_of, bool exact) {
