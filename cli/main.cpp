@@ -325,10 +325,6 @@ int run(const Options& options) {
     log_sinks.swap(spdlog::default_logger()->sinks());
     spdlog::default_logger()->sinks().push_back(std::move(sink));
   }
-  std::optional<arbiter::cli::Watcher> watcher;
-  if (options.watch)
-    watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
-                    options.diagnostic_format, status ? &*status : nullptr);
   std::unique_ptr<arbiter::Recorder> recorder;  // --record
   if (!options.record_path.empty()) {
     recorder = std::make_unique<arbiter::Recorder>(
@@ -339,7 +335,15 @@ int run(const Options& options) {
       return kExitUsage;
     }
     manager.add_observer(*recorder);
+    // A reload's files go into the recording, for replay to reload them too.
+    reloader.set_on_staging(
+        [&recorder](const arbiter::Reloader::FileTexts& files) { recorder->stage_files(files); });
   }
+  // After the recorder: a reload staged by the watcher is recorded with its files.
+  std::optional<arbiter::cli::Watcher> watcher;
+  if (options.watch)
+    watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
+                    options.diagnostic_format, status ? &*status : nullptr);
   std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
   if (!options.serve.empty()) {
     arbiter::cli::LiveAccess access;

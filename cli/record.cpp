@@ -13,6 +13,7 @@
 #include "arbiter/model.hpp"
 #include "arbiter/plugin.hpp"
 #include "arbiter/recorded_inputs.hpp"
+#include "arbiter/reload.hpp"
 #include "arbiter/trace.hpp"
 #include "arbiter/trace_diff.hpp"
 #include "arbiter/trace_reader.hpp"
@@ -36,31 +37,29 @@ std::string file_text(const std::string& path) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-/// The recorded config's files, written under a fresh directory with their recorded relative
-/// layout, so that includes resolve as they did; removed with the object.
+/// The recorded config's files, in memory under a directory that does not exist, with their
+/// recorded relative layout, so that includes resolve as they did and nothing on disk is read in
+/// their place. A recorded hot reload puts its files over them.
 class RecordedConfig {
  public:
-  explicit RecordedConfig(const RecordingInfo& info) {
-    dir_ = fs::temp_directory_path() / fmt::format("arbiter_replay_{}", ::getpid());
-    fs::remove_all(dir_);
-    for (const auto& [name, text] : info.files) {
-      const auto path = dir_ / fs::path(name).relative_path();
-      fs::create_directories(path.parent_path());
-      std::ofstream(path, std::ios::binary) << text;
-      if (root_.empty()) root_ = path.string();
-    }
+  explicit RecordedConfig(const RecordingInfo& info)
+      : dir_(fs::temp_directory_path() / fmt::format("arbiter_replay_{}", ::getpid())) {
+    set(info.files);
+    root_ = path_of(info.files.front().first);
   }
-  ~RecordedConfig() {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
+  void set(const std::vector<std::pair<std::string, std::string>>& files) {
+    for (const auto& [name, text] : files) overlay_.set(path_of(name), text);
   }
-  RecordedConfig(const RecordedConfig&) = delete;
-  RecordedConfig& operator=(const RecordedConfig&) = delete;
   const std::string& root() const { return root_; }
+  const FileSource& source() const { return overlay_; }
 
  private:
+  std::string path_of(const std::string& name) const {
+    return (dir_ / fs::path(name).relative_path()).lexically_normal().string();
+  }
   fs::path dir_;
   std::string root_;
+  Overlay overlay_;
 };
 
 /// A recording cut off while written is read up to there: say so, once per file.
@@ -107,23 +106,36 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   const RecordedInputs inputs(run->inputs);
   LoadOptions load = options.load;
   load.lint = nullptr;  // a replay reports whether the run repeats, not how the config reads
+  if (written) load.source = &written->source();
   load.edit_model = [&](Model& model, Diagnostics& reported) {
     inputs.replace_interfaces(model, reported);
     return !reported.has_errors();
   };
-  Loaded loaded = load_config(config, registry, load);
-  if (!loaded.diagnostics.empty()) err << format(loaded.diagnostics);
-  if (!loaded.program) return 1;
-  auto& program = loaded.program;
+  // The recorded config reloads as the run did, at the same steps; an edited one runs alone.
+  Reloader reloader(registry, load);
+  Diagnostics diagnostics;
+  auto program = reloader.load(config, diagnostics);
+  if (!diagnostics.empty()) err << format(diagnostics);
+  if (!program) return 1;
 
   std::uint64_t steps = inputs.steps();
-  if (!run->reloads.empty()) {
-    // The reloaded configs' files are not replayed: the first config runs up to the first reload.
-    steps = std::min(steps, run->reloads.front());
+  std::size_t next_reload = 0;  // of run->reloads, applied when its step is done
+  if (!run->reloads.empty() && !written) {
     err << fmt::format(
-        "{}: warning: the config was reloaded after step {}; replay runs the first "
-        "config up to there\n",
-        options.recording, run->reloads.front());
+        "{}: note: the config was reloaded after step {}; with --config the recorded reloads "
+        "are not applied\n",
+        options.recording, run->reloads.front().after_step);
+    next_reload = run->reloads.size();
+  }
+  for (std::size_t r = next_reload; r < run->reloads.size(); ++r) {
+    if (!run->reloads[r].files.empty()) continue;
+    // A recording that did not keep a reload's files: the replay ends where it cannot follow.
+    steps = std::min(steps, run->reloads[r].after_step);
+    err << fmt::format(
+        "{}: warning: the config was reloaded after step {} and the recording does not hold "
+        "its files; replay runs up to there\n",
+        options.recording, run->reloads[r].after_step);
+    break;
   }
   if (run->first_gap) {
     // The inputs of dropped steps are lost: the run cannot be repeated past them.
@@ -156,6 +168,20 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   for (std::uint64_t i = 0; i < steps && !manager.stopped(); ++i) {
     clock.t = static_cast<double>(i) / manager.program().rate_hz;
     manager.step();
+    // Staged now, swapped in at the start of the next step, as in the recorded run.
+    while (next_reload < run->reloads.size() &&
+           run->reloads[next_reload].after_step == manager.steps()) {
+      written->set(run->reloads[next_reload].files);
+      if (recorder) recorder->stage_files(run->reloads[next_reload].files);
+      const auto reloaded = reloader.reload(manager);
+      if (!reloaded.diagnostics.empty()) err << format(reloaded.diagnostics);
+      if (!reloaded.staged) {
+        err << fmt::format("{}: error: the config reloaded after step {} does not load\n",
+                           options.recording, manager.steps());
+        return 1;
+      }
+      ++next_reload;
+    }
   }
   manager.finish();
   if (!options.trace.empty()) {

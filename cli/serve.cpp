@@ -462,8 +462,9 @@ void LiveView::on_start(const Manager& manager) {
   publish_graph(manager);
   // Sized from the record of step 0 with room to grow, so that copying a record into its slot
   // does not allocate.
+  records_.reset(manager.program());
   scratch_.clear();
-  append_step_record(manager, scratch_);
+  records_.append(manager, scratch_);
   for (std::size_t i = 0; i < kRingSize; ++i) {
     std::lock_guard lock(ring_[i].mutex);
     ring_[i].record.reserve(2 * scratch_.size() + 256);
@@ -472,12 +473,13 @@ void LiveView::on_start(const Manager& manager) {
 }
 
 void LiveView::on_reload(const Manager& manager) {
+  records_.reset(manager.program());
   publish_graph(manager);
 }
 
 void LiveView::on_step(const Manager& manager) {
   scratch_.clear();
-  append_step_record(manager, scratch_);
+  records_.append(manager, scratch_);
   const auto step = manager.steps();
   {
     Slot& slot = ring_[step % kRingSize];

@@ -21,6 +21,7 @@
 
 #include "arbiter/explain.hpp"
 #include "arbiter/manager.hpp"
+#include "arbiter/trace.hpp"
 
 namespace httplib {
 class Server;
@@ -152,6 +153,7 @@ class LiveView : public Observer {
   std::atomic<std::uint64_t> graph_version_{0};
   std::atomic<std::uint64_t> status_version_{0};
   std::atomic<bool> finished_{false};
+  StepRecordFormatter records_;
   std::string scratch_;  // the stepping thread's record, built before taking a slot's lock
   std::mutex mutex_;     // guards what follows; held only to copy, never across I/O
   std::condition_variable changed_;  // control from the page, explain requests, stopping

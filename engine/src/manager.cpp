@@ -98,7 +98,6 @@ Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
     : reloading_(std::make_unique<Reloading>()),
       logger_(logger ? std::move(logger) : spdlog::default_logger()) {
   inert_ = std::make_unique<Inert>();
-  constexpr std::size_t kEventsPerStep = 64;
   events_.resize(kEventsPerStep);
   data_.events = events_.data();
   data_.event_capacity = events_.size();

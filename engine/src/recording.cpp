@@ -8,6 +8,7 @@
 
 #include "arbiter/trace.hpp"
 #include "mcap.hpp"
+#include "step_record.hpp"
 
 namespace arbiter {
 
@@ -66,42 +67,22 @@ constexpr const char* kHeaderSchema = R"({"$schema": "https://json-schema.org/dr
 }  // namespace
 
 void append_inputs_record(const Manager& manager, std::string& out) {
-  const Program& program = manager.program();
-  fmt::format_to(std::back_inserter(out), R"({{"step": {}, "inputs": {{)", manager.steps());
-  bool first = true;
-  for (const auto& layer : program.layers) {
-    if (!layer.is_interface()) continue;
-    for (auto a = layer.actuator_begin; a < layer.actuator_end; ++a) {
-      if (!first) out += ", ";
-      first = false;
-      detail::append_json_string(program.actuators[a].name, out);
-      out += R"(: {"value": )";
-      program.actuators[a].type->append_json(manager.actuator_value(a), out);
-      out += manager.actuator_written(a) ? R"(, "written": true})" : R"(, "written": false})";
-    }
-  }
-  out += "}";
-  // What interface code reported is an input too: replay reports it again, in the output pass,
-  // from the layer that reported it.
-  bool reported = false;
-  const auto behaviours = program.behaviours.size();
-  for (std::size_t e = 0; e < manager.event_count(); ++e) {
-    const auto& event = manager.event(e);
-    if (event.source < behaviours || event.source - behaviours >= program.layers.size() ||
-        !program.layers[event.source - behaviours].is_interface()) {
-      continue;
-    }
-    out += reported ? ", " : R"(, "reported": [)";
-    reported = true;
-    out += R"({"by": )";
-    detail::append_json_string(program.layers[event.source - behaviours].name, out);
-    out += R"(, "text": )";
-    detail::append_json_string(event.text, out);
-    out += "}";
-  }
-  if (reported) out += "]";
-  out += "}";
+  const detail::StepLayout layout(manager.program());
+  detail::StepSnapshot step;
+  step.size_for(layout, 0);
+  step.capture(manager, layout, true);
+  detail::append_inputs_record(layout, step, out);
 }
+
+struct Recorder::Slot {
+  enum class Kind { kStep, kSafe, kHeader, kEnd };
+  Kind kind = Kind::kStep;
+  std::uint64_t step = 0;
+  std::uint64_t log_time = 0;
+  detail::StepSnapshot snapshot;                           // kStep, kSafe
+  std::string header;                                      // kHeader
+  std::vector<std::pair<std::string, std::string>> files;  // kHeader: the reloaded config's
+};
 
 struct Recorder::Output {
   explicit Output(std::FILE* file) : writer(file) {}
@@ -111,10 +92,20 @@ struct Recorder::Output {
   std::uint16_t inputs = 0;
   std::uint64_t last_step = 0;
   std::uint64_t dropped = 0;
+  std::string record;  // reused between messages
+  std::string inputs_record;
+  detail::StepSnapshot::Levels levels;  // the writer's, as of the last slot it formatted
+  // The stepping thread's: the levels as the last slot published left them, and whether that
+  // slot is the one before the next (no step dropped since), so the next copies what changed.
+  detail::StepSnapshot::Levels last;
+  bool chained = false;
 };
 
 Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots)
-    : file_(std::fopen(path.c_str(), "wb")), info_(std::move(info)), ring_(slots + 1) {
+    : file_(std::fopen(path.c_str(), "wb")),
+      info_(std::move(info)),
+      ring_(std::make_unique<Slot[]>(slots + 1)),
+      ring_size_(slots + 1) {
   if (file_ != nullptr) out_ = std::make_unique<Output>(file_);
 }
 
@@ -134,13 +125,16 @@ bool Recorder::ok() const {
 
 Recorder::Slot* Recorder::claim() {
   const auto head = head_.load(std::memory_order_relaxed);
-  if ((head + 1) % ring_.size() == tail_.load(std::memory_order_acquire)) return nullptr;
+  const auto next = (head + 1) % ring_size_;
+  if (next == tail_seen_) {
+    tail_seen_ = tail_.load(std::memory_order_acquire);
+    if (next == tail_seen_) return nullptr;
+  }
   return &ring_[head];
 }
 
 void Recorder::publish() {
-  head_.store((head_.load(std::memory_order_relaxed) + 1) % ring_.size(),
-              std::memory_order_release);
+  head_.store((head_.load(std::memory_order_relaxed) + 1) % ring_size_, std::memory_order_release);
 }
 
 void Recorder::on_start(const Manager& manager) {
@@ -167,15 +161,7 @@ void Recorder::on_start(const Manager& manager) {
   for (const auto& [file, text] : info_.files) config.emplace_back("file:" + file, text);
   writer.metadata("arbiter.config", config);
   writer.message(out_->header, wall_start_ns_, trace_header(manager.program()));
-  // Sized now, so that the step copies into the slots without allocating.
-  std::string sample;
-  append_step_record(manager, sample);
-  std::string inputs;
-  append_inputs_record(manager, inputs);
-  for (auto& slot : ring_) {
-    slot.record.reserve(2 * sample.size() + 1024);
-    slot.inputs.reserve(2 * inputs.size() + 256);
-  }
+  size_ring(manager);
   started_ = true;
   writer_ = std::thread([this] { write_loop(); });
 }
@@ -185,20 +171,34 @@ std::uint64_t Recorder::log_time(const Manager& manager) const {
   return wall_start_ns_ + static_cast<std::uint64_t>(since_start * 1e9);
 }
 
+// Reported text a slot holds; a step that reported more is dropped.
+constexpr std::size_t kReportTextBytes = 4096;
+
+void Recorder::size_ring(const Manager& manager) {
+  layout_ = std::make_unique<detail::StepLayout>(manager.program());
+  for (std::size_t i = 0; i < ring_size_; ++i) {
+    ring_[i].snapshot.size_for(*layout_, kReportTextBytes);
+  }
+  const auto behaviours = layout_->behaviours.size();
+  out_->last.requested.assign(behaviours, 0.0);
+  out_->last.activation.assign(behaviours, 0.0);
+  out_->last.active.assign(behaviours, 0);
+  out_->chained = false;
+}
+
 void Recorder::on_step(const Manager& manager) {
   if (!started_) return;
   Slot* slot = claim();
-  if (slot == nullptr) {
+  if (slot == nullptr ||
+      !slot->snapshot.capture(manager, *layout_, false, &out_->last, out_->chained)) {
     dropped_total_.fetch_add(1, std::memory_order_relaxed);
+    out_->chained = false;  // the next slot copies every level
     return;
   }
+  out_->chained = true;
   slot->kind = Slot::Kind::kStep;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
-  slot->record.clear();
-  append_step_record(manager, slot->record);
-  slot->inputs.clear();
-  append_inputs_record(manager, slot->inputs);
   publish();
 }
 
@@ -214,19 +214,37 @@ void Recorder::on_safe(const Manager& manager) {
   slot->kind = Slot::Kind::kSafe;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
-  slot->record.clear();
-  append_step_record(manager, slot->record);
+  slot->snapshot.capture(manager, *layout_, true, &out_->last, out_->chained);
+  out_->chained = true;
   publish();
+}
+
+void Recorder::stage_files(std::vector<std::pair<std::string, std::string>> files) {
+  std::lock_guard<std::mutex> lock(staged_mutex_);
+  staged_files_ = std::move(files);
 }
 
 void Recorder::on_reload(const Manager& manager) {
   if (!started_) return;
+  // The slots still waiting were taken with the replaced program's layout: the writer formats
+  // them all before the layout and the slots are made over for the new one. (Their state
+  // machines' config params point into the replaced program, which the next reload frees.)
+  while (tail_.load(std::memory_order_acquire) != head_.load(std::memory_order_relaxed)) {
+    std::this_thread::yield();
+  }
+  size_ring(manager);
   // A reload header is never dropped: without it the steps after it could not be read.
   Slot* slot = claim_waiting();
   slot->kind = Slot::Kind::kHeader;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
-  slot->record = reload_header(manager);
+  slot->header = reload_header(manager);
+  {
+    std::lock_guard<std::mutex> lock(staged_mutex_);
+    slot->files = staged_files_ ? std::move(*staged_files_)
+                                : std::vector<std::pair<std::string, std::string>>{};
+    staged_files_.reset();
+  }
   publish();
 }
 
@@ -239,26 +257,45 @@ void Recorder::on_finish(const Manager&) {
   finished_ = true;
 }
 
+void Recorder::format_step(detail::StepSnapshot& snapshot, std::string& record,
+                           std::string* inputs) {
+  auto& levels = out_->levels;
+  snapshot.apply_levels(levels);
+  snapshot.swap_levels(levels);
+  detail::append_step_record(*layout_, snapshot, record);
+  if (inputs != nullptr) detail::append_inputs_record(*layout_, snapshot, *inputs);
+  snapshot.swap_levels(levels);
+}
+
 void Recorder::write_loop() {
   auto& out = *out_;
+  std::size_t head_seen = 0;  // head_ is read again only once the writer has caught up with it
   while (true) {
     const auto tail = tail_.load(std::memory_order_relaxed);
-    if (tail == head_.load(std::memory_order_acquire)) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-      continue;
+    if (tail == head_seen) {
+      head_seen = head_.load(std::memory_order_acquire);
+      if (tail == head_seen) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        continue;
+      }
     }
     Slot& slot = ring_[tail];
     if (slot.kind == Slot::Kind::kEnd) {
-      tail_.store((tail + 1) % ring_.size(), std::memory_order_release);
+      tail_.store((tail + 1) % ring_size_, std::memory_order_release);
       break;
     }
     if (slot.kind == Slot::Kind::kHeader) {
-      out.writer.metadata("arbiter.reload",
-                          {{"after_step", std::to_string(slot.step)}, {"header", slot.record}});
-      out.writer.message(out.header, slot.log_time, slot.record);
+      std::vector<std::pair<std::string, std::string>> reload{
+          {"after_step", std::to_string(slot.step)}, {"header", slot.header}};
+      for (auto& [file, text] : slot.files) reload.emplace_back("file:" + file, std::move(text));
+      slot.files.clear();
+      out.writer.metadata("arbiter.reload", reload);
+      out.writer.message(out.header, slot.log_time, slot.header);
       out.last_step = slot.step;
     } else if (slot.kind == Slot::Kind::kSafe) {
-      out.writer.message(out.step, slot.log_time, slot.record);  // no inputs: nothing was read
+      out.record.clear();
+      format_step(slot.snapshot, out.record, nullptr);
+      out.writer.message(out.step, slot.log_time, out.record);  // no inputs: nothing was read
     } else {
       if (slot.step > out.last_step + 1) {
         const auto gap = slot.step - out.last_step - 1;
@@ -267,10 +304,13 @@ void Recorder::write_loop() {
                                             {"dropped", std::to_string(gap)}});
       }
       out.last_step = slot.step;
-      out.writer.message(out.step, slot.log_time, slot.record);
-      out.writer.message(out.inputs, slot.log_time, slot.inputs);
+      out.record.clear();
+      out.inputs_record.clear();
+      format_step(slot.snapshot, out.record, &out.inputs_record);
+      out.writer.message(out.step, slot.log_time, out.record);
+      out.writer.message(out.inputs, slot.log_time, out.inputs_record);
     }
-    tail_.store((tail + 1) % ring_.size(), std::memory_order_release);
+    tail_.store((tail + 1) % ring_size_, std::memory_order_release);
   }
   out.writer.metadata("arbiter.summary", {{"steps", std::to_string(out.last_step)},
                                           {"dropped", std::to_string(out.dropped)}});
@@ -308,9 +348,13 @@ std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic
           }
         }
       } else if (record.name == "arbiter.reload") {
-        for (const auto& [key, value] : record.metadata) {
-          if (key == "after_step") run.reloads.push_back(std::strtoull(value.c_str(), nullptr, 10));
+        RecordedRun::Reload reload;
+        for (auto& [key, value] : record.metadata) {
+          if (key == "after_step") reload.after_step = std::strtoull(value.c_str(), nullptr, 10);
+          if (key.rfind("file:", 0) == 0)
+            reload.files.emplace_back(key.substr(5), std::move(value));
         }
+        run.reloads.push_back(std::move(reload));
       } else if (record.name == "arbiter.gap") {
         for (const auto& [key, value] : record.metadata) {
           if (key == "dropped") run.dropped += std::strtoull(value.c_str(), nullptr, 10);

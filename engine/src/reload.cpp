@@ -556,7 +556,14 @@ Reloader::~Reloader() = default;
 std::optional<Program> Reloader::load_program(Diagnostics& diagnostics) {
   Loaded loaded = load_config(path_, registry_, options_);
   diagnostics = std::move(loaded.diagnostics);
-  if (loaded.model && !loaded.model->files.empty()) files_ = loaded.model->files;
+  texts_.clear();
+  if (loaded.model) {
+    for (const auto& file : loaded.model->files) {
+      const SourceFile* read = loaded.files.find(file);
+      texts_.emplace_back(file, read != nullptr ? read->text : std::string());
+    }
+    if (!loaded.model->files.empty()) files_ = loaded.model->files;
+  }
   return std::move(loaded.program);
 }
 
@@ -581,6 +588,7 @@ ReloadResult Reloader::reload(Manager& manager) {
   structure.changes.insert(structure.changes.end(), result.diff.changes.begin(),
                            result.diff.changes.end());
   result.diff = std::move(structure);
+  if (on_staging_) on_staging_(texts_);
   manager.stage(std::move(*program), std::move(plan));
   result.staged = true;
   return result;

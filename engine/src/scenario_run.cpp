@@ -59,14 +59,14 @@ std::optional<Replayed> read_replayed(const Scenario& scenario, Diagnostics& dia
   replayed.inputs = std::make_unique<RecordedInputs>(run->inputs);
   replayed.trace = std::move(*trace);
   replayed.steps = replayed.inputs->steps();
-  // As `arbiter replay`: a reloaded config's files are not recorded, a dropped step's inputs are
-  // lost; what can be replayed ends before either.
-  if (!run->reloads.empty() && run->reloads.front() < replayed.steps) {
-    replayed.steps = run->reloads.front();
+  // A scenario test replays the first config only (`arbiter replay` applies recorded reloads);
+  // a dropped step's inputs are lost: what can be replayed ends before either.
+  if (!run->reloads.empty() && run->reloads.front().after_step < replayed.steps) {
+    replayed.steps = run->reloads.front().after_step;
     diagnostics.warning(where, "replay-cut",
                         fmt::format("the config was reloaded after step {}; the test replays up "
                                     "to there",
-                                    run->reloads.front()));
+                                    run->reloads.front().after_step));
   }
   if (run->first_gap && *run->first_gap < replayed.steps) {
     replayed.steps = *run->first_gap;

@@ -116,6 +116,14 @@ class McapSource : public TraceSource {
       fail({file_, 0, 0}, reader_.error());
       return false;
     }
+    if (reader_.truncated() && !header_seen()) {
+      // Not an empty recording: one that was cut off before anything could be read.
+      fail({file_, 0, 0},
+           fmt::format("the recording was cut off while it was written, before its trace header: "
+                       "it holds no step (it is whole up to byte {})",
+                       reader_.good_until()));
+      return false;
+    }
     if (reader_.truncated()) {
       set_truncated(fmt::format(
           "the recording was cut off while it was written: it ends after step {} (byte {}); "

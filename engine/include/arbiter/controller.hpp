@@ -113,6 +113,8 @@ class Controller {
   }
   std::size_t queue_size() const { return queue_.size(); }
   std::string_view queued(std::size_t index) const;
+  /// The state index of the queue's entry `index` (< queue_size()).
+  std::uint32_t queued_state(std::size_t index) const { return instances_[queue_[index]].state; }
   const Event* events() const { return events_.data(); }
   std::size_t event_count() const { return std::min(event_count_, kMaxEventsPerStep); }
   /// The run-time params of an activation or deactivation: [first, first + event.args_count).

@@ -67,6 +67,9 @@ struct CarryPlan {
 
 class Manager {
  public:
+  /// Reports (StepContext::report) kept per step; later ones are dropped.
+  static constexpr std::size_t kEventsPerStep = 64;
+
   /// Takes the program; run-time warnings go to `logger` (default: spdlog's default logger).
   explicit Manager(Program program, std::shared_ptr<spdlog::logger> logger = nullptr);
   ~Manager();
@@ -135,6 +138,11 @@ class Manager {
   double requested(std::uint32_t behaviour) const { return run_.requested[behaviour]; }
   double activation(std::uint32_t behaviour) const { return run_.activation[behaviour]; }
   bool active(std::uint32_t behaviour) const { return run_.active[behaviour] != 0; }
+  /// The same of every behaviour, by index (active: non-zero), for observers that copy them
+  /// whole.
+  const double* requested_levels() const { return run_.requested.data(); }
+  const double* activation_levels() const { return run_.activation.data(); }
+  const char* active_flags() const { return run_.active.data(); }
   /// The actuator's current value (of its ValueType) and whether it was written this step.
   const void* actuator_value(std::uint32_t actuator) const {
     return run_.values.at(program_.actuator_offsets[actuator]);

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -17,6 +18,11 @@
 #include "arbiter/manager.hpp"
 
 namespace arbiter {
+
+namespace detail {
+struct StepLayout;
+class StepSnapshot;
+}  // namespace detail
 
 /// What a recording keeps besides the steps, for replaying the run.
 struct RecordingInfo {
@@ -47,31 +53,49 @@ class Recorder : public Observer {
   void on_finish(const Manager& manager) override;
 
   std::uint64_t dropped() const { return dropped_total_.load(); }
+  /// Steps copied and not yet written (any thread).
+  std::size_t backlog() const {
+    const auto head = head_.load(std::memory_order_acquire);
+    const auto tail = tail_.load(std::memory_order_acquire);
+    return (head + ring_size_ - tail) % ring_size_;
+  }
+
+  /// The files (path, text) of a config about to be staged for a hot reload: the recording's
+  /// reload record, written when the manager swaps it in (on_reload()), keeps them, so that a
+  /// replay can reload it too. Any thread; call it before Manager::stage() (Reloader's
+  /// on_staging does).
+  void stage_files(std::vector<std::pair<std::string, std::string>> files);
 
  private:
-  struct Slot {
-    enum class Kind { kStep, kSafe, kHeader, kEnd };
-    Kind kind = Kind::kStep;
-    std::uint64_t step = 0;
-    std::uint64_t log_time = 0;
-    std::string record;
-    std::string inputs;
-  };
+  struct Slot;
   Slot* claim();
   /// claim(), waiting for the writer to free a slot: for what must never be dropped.
   Slot* claim_waiting();
   /// A message's log time: the wall clock at the run's start plus the step's "t" (the manager's
   /// clock; a manager without one logs every step at the start).
   std::uint64_t log_time(const Manager& manager) const;
+  /// Lays the ring out for the manager's program: what a step copies is sized here.
+  void size_ring(const Manager& manager);
   void publish();
   void write_loop();
+  /// The writer's: a slot's step record (and inputs message), its levels brought up to date.
+  void format_step(detail::StepSnapshot& snapshot, std::string& record, std::string* inputs);
 
   std::FILE* file_ = nullptr;
   RecordingInfo info_;
-  std::vector<Slot> ring_;
-  std::atomic<std::size_t> head_{0};  // next slot the stepping thread fills
-  std::atomic<std::size_t> tail_{0};  // next slot the writer reads
-  std::atomic<std::uint64_t> dropped_total_{0};
+  std::unique_ptr<Slot[]> ring_;
+  std::size_t ring_size_ = 0;
+  // Each on a cache line of its own, so that the two threads do not take the line from each
+  // other at every step; the stepping thread reads tail_ only when the ring looks full.
+  alignas(64) std::atomic<std::size_t> head_{0};  // next slot the stepping thread fills
+  std::size_t tail_seen_ = 0;                     // tail_ as the stepping thread last read it
+  alignas(64) std::atomic<std::size_t> tail_{0};  // next slot the writer reads
+  alignas(64) std::atomic<std::uint64_t> dropped_total_{0};
+  // The names a slot's values are formatted with. Replaced only by on_reload(), once the writer
+  // has emptied the ring, so the writer reads it without a lock.
+  std::unique_ptr<detail::StepLayout> layout_;
+  std::mutex staged_mutex_;
+  std::optional<std::vector<std::pair<std::string, std::string>>> staged_files_;
   std::thread writer_;
   struct Output;
   std::unique_ptr<Output> out_;
@@ -90,8 +114,13 @@ struct RecordedRun {
   RecordingInfo info;
   /// Each step's `/arbiter/inputs` message, in order.
   std::vector<std::pair<std::uint64_t, std::string>> inputs;
-  /// The last step before each hot reload.
-  std::vector<std::uint64_t> reloads;
+  /// Each hot reload: the last step before it, and the files (path, text) of the config it
+  /// loaded (empty in recordings that did not keep them).
+  struct Reload {
+    std::uint64_t after_step = 0;
+    std::vector<std::pair<std::string, std::string>> files;
+  };
+  std::vector<Reload> reloads;
   std::uint64_t dropped = 0;               ///< steps the recorder dropped (its gap records)
   std::optional<std::uint64_t> first_gap;  ///< the last step before the first dropped one
 };

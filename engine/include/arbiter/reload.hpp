@@ -4,8 +4,10 @@
 // the start of its next step, carrying over what matches. The structural diff between the two
 // programs tells a person (or an embedder's log) what the edit changed.
 
+#include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "arbiter/load.hpp"
@@ -79,6 +81,12 @@ class Reloader {
   /// The config file and every file it includes (of the last config that was read far enough
   /// to know them), to watch for changes.
   const std::vector<std::string>& files() const { return files_; }
+  /// Files of a config: (path, text), the config first, then its includes.
+  using FileTexts = std::vector<std::pair<std::string, std::string>>;
+  /// Called by reload(), on its thread, with the files of the new config just before it is
+  /// staged: what a recording keeps of the reload (Recorder::stage_files). Set it before any
+  /// reload() call.
+  void set_on_staging(std::function<void(const FileTexts&)> hook) { on_staging_ = std::move(hook); }
 
  private:
   std::optional<Program> load_program(Diagnostics& diagnostics);
@@ -87,6 +95,8 @@ class Reloader {
   LoadOptions options_;
   std::string path_;
   std::vector<std::string> files_;
+  FileTexts texts_;  // of the last load
+  std::function<void(const FileTexts&)> on_staging_;
 };
 
 }  // namespace arbiter

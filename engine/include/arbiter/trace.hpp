@@ -2,6 +2,7 @@
 // Stage 5 of the data path: the JSON-lines trace of docs/semantics.md, "The trace", written by an
 // observer.
 
+#include <memory>
 #include <ostream>
 #include <string>
 #include <utility>
@@ -10,6 +11,25 @@
 #include "arbiter/manager.hpp"
 
 namespace arbiter {
+
+/// append_step_record() for an observer that formats every step: what the record needs of the
+/// program (names, closed inhibitions) is gathered once, and again after reset() (at a reload),
+/// not at every call.
+class StepRecordFormatter {
+ public:
+  StepRecordFormatter();
+  ~StepRecordFormatter();
+  StepRecordFormatter(const StepRecordFormatter&) = delete;
+  StepRecordFormatter& operator=(const StepRecordFormatter&) = delete;
+  /// For `program` from now on (call it from Observer::on_start and on_reload).
+  void reset(const Program& program);
+  /// The record of the manager's last step; gathers the program's on first use.
+  void append(const Manager& manager, std::string& out);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 /// Writes the header when attached and one line per step. The stream must outlive the writer.
 class TraceWriter : public Observer {
@@ -25,6 +45,7 @@ class TraceWriter : public Observer {
 
  private:
   std::ostream& out_;
+  StepRecordFormatter records_;
   std::string line_;  // reused between steps
 };
 

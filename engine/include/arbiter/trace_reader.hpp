@@ -52,6 +52,7 @@ class TraceSource {
   /// At the end of the input: false, with error() set when there was no header at all.
   bool end(SourceLocation where);
   void set_truncated(std::string what) { truncated_ = std::move(what); }
+  bool header_seen() const { return header_seen_; }
   void reset_error() { error_.reset(); }
 
  private:
