@@ -271,8 +271,8 @@ state_machines:
   }
 }
 
-TEST_CASE("a controller whose declaration changed restarts from its queue", "[reload]") {
-  const std::string before = R"(arbiter: 1
+/// One state machine of two scripted states, the first holding for 100 steps.
+const char* const kPlans = R"(arbiter: 1
 name: plans
 state_machines:
   plan:
@@ -281,6 +281,9 @@ state_machines:
       go: scripted
     queue: [wait, go]
 )";
+
+TEST_CASE("a controller whose declaration changed restarts from its queue", "[reload]") {
+  const std::string before = kPlans;
   ConfigFile config(before);
   Reloader reloader(registry());
   Manager manager(load(reloader, config.path()));
@@ -434,15 +437,7 @@ TEST_CASE("a carry-over plan that does not fit is refused before it reaches step
 }
 
 TEST_CASE("a reload's diff tells what changed in a state machine, old -> new", "[reload]") {
-  const std::string before = R"(arbiter: 1
-name: plans
-state_machines:
-  plan:
-    states:
-      wait: {type: scripted, params: {hold: 100}}
-      go: scripted
-    queue: [wait, go]
-)";
+  const std::string before = kPlans;
   ConfigFile config(before);
   Reloader reloader(registry());
   Manager manager(load(reloader, config.path()));
