@@ -10,6 +10,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "fields.hpp"
+
 namespace arbiter {
 
 const LayerDecl* Model::find_layer(std::string_view name) const {
@@ -51,74 +53,7 @@ bool is_identifier(std::string_view text) {
 
 namespace {
 
-std::vector<std::string> keys_of(const std::vector<std::string_view>& keys) {
-  return {keys.begin(), keys.end()};
-}
-
-/// Checks that a node is a mapping with only the given keys; hands out the values.
-class Fields {
- public:
-  /// `shape` says what was expected when the node is not a mapping.
-  Fields(const Node& node, std::string what, std::vector<std::string_view> allowed,
-         Diagnostics& diagnostics, std::string_view shape = "a mapping")
-      : node_(node), what_(std::move(what)), diagnostics_(diagnostics) {
-    if (!node.is_mapping()) {
-      diagnostics.error(node.location(), "wrong-type",
-                        fmt::format("{} must be {}, found {}", what_, shape, node.describe()));
-      ok_ = false;
-      return;
-    }
-    for (const auto& entry : node.entries()) {
-      bool known = false;
-      for (auto key : allowed) known = known || key == entry.key;
-      if (!known) {
-        auto& error = diagnostics.error(entry.key_location, "unknown-key",
-                                        fmt::format("unknown key '{}' in {}", entry.key, what_));
-        const auto hint = suggest(entry.key, keys_of(allowed));
-        if (!hint.empty()) error.notes.push_back(hint);
-        // A misspelt required key is reported once, as misspelt, not also as missing.
-        if (auto meant = closest(entry.key, keys_of(allowed))) {
-          misspelt_.push_back(*meant);
-        } else {
-          unknown_.emplace_back(entry.key, diagnostics.items().size() - 1);
-        }
-      }
-    }
-  }
-
-  bool ok() const { return ok_; }
-
-  /// The unknown keys that are no misspelling of an allowed one, with the index of their error.
-  const std::vector<std::pair<std::string, std::size_t>>& unknown() const { return unknown_; }
-
-  const Node* optional(std::string_view key) const { return ok_ ? node_.find(key) : nullptr; }
-
-  const Node* required(std::string_view key) const {
-    if (!ok_) return nullptr;
-    const Node* value = node_.find(key);
-    if (value == nullptr && std::find(misspelt_.begin(), misspelt_.end(), key) == misspelt_.end()) {
-      diagnostics_.error(node_.location(), "missing-key",
-                         fmt::format("{} is missing the required key '{}'", what_, key));
-    }
-    return value;
-  }
-
-  /// Where `key` was written (the mapping's location when it is absent).
-  SourceLocation key_location(std::string_view key) const {
-    for (const auto& entry : node_.entries()) {
-      if (entry.key == key) return entry.key_location;
-    }
-    return node_.location();
-  }
-
- private:
-  const Node& node_;
-  std::string what_;
-  Diagnostics& diagnostics_;
-  std::vector<std::string> misspelt_;
-  std::vector<std::pair<std::string, std::size_t>> unknown_;
-  bool ok_ = true;
-};
+using detail::Fields;
 
 class ModelBuilder {
  public:
