@@ -301,6 +301,41 @@ TEST_CASE("a controller whose declaration changed restarts from its queue", "[re
   CHECK(log.lines == std::vector<std::string>{"cycle 1: activate wait, execute wait"});
 }
 
+TEST_CASE("what a swap replaced outlives the observers' on_reload()", "[reload]") {
+  // An observer may read the replaced program in on_reload() (a recorder formats its last steps
+  // then); a reload on another thread meanwhile must not free it.
+  struct SlowObserver : Observer {
+    std::atomic<bool> entered{false};
+    std::atomic<bool> release{false};
+    void on_step(const Manager&) override {}
+    void on_reload(const Manager&) override {
+      entered = true;
+      while (!release) std::this_thread::yield();
+    }
+  };
+  ConfigFile config(kPlans);
+  Reloader reloader(registry());
+  Manager manager(load(reloader, config.path()));
+  SlowObserver observer;
+  manager.add_observer(observer);
+  manager.step();
+  REQUIRE(reloader.reload(manager).staged);
+  std::thread stepping([&] { manager.step(); });  // swaps, then waits in on_reload()
+  while (!observer.entered) std::this_thread::yield();
+  std::atomic<bool> withdrawn{false};
+  std::thread reloading([&] {
+    manager.withdraw();  // would free the replaced program
+    withdrawn = true;
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  CHECK_FALSE(withdrawn);
+  observer.release = true;
+  stepping.join();
+  reloading.join();
+  CHECK(withdrawn);
+  CHECK(manager.reloads() == 1);
+}
+
 TEST_CASE("the swap inside step() allocates nothing", "[reload][alloc]") {
   const std::string before = R"(arbiter: 1
 name: swap

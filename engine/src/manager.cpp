@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <typeinfo>
 
 namespace arbiter {
@@ -92,6 +93,20 @@ struct Manager::Reloading {
   std::unique_ptr<Staged> pending;
   std::unique_ptr<Staged> retired;
   std::atomic<std::uint64_t> reloads{0};
+  /// False from a swap until the observers' on_reload() returned: until then they may still read
+  /// what the swap replaced (a recorder formats the replaced program's last steps then), so
+  /// `retired` is not freed.
+  std::atomic<bool> observed{true};
+
+  /// The lock, taken once the last swap's observers are done with the program it replaced.
+  std::unique_lock<std::mutex> lock_when_observed() {
+    for (;;) {
+      std::unique_lock<std::mutex> lock(mutex);
+      if (observed.load(std::memory_order_acquire)) return lock;
+      lock.unlock();
+      std::this_thread::yield();
+    }
+  }
 };
 
 Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
@@ -159,7 +174,7 @@ void Manager::stage(Program program, CarryPlan plan) {
   std::unique_ptr<Staged> dropped;
   std::unique_ptr<Staged> retired;
   {
-    std::lock_guard<std::mutex> lock(reloading_->mutex);
+    const auto lock = reloading_->lock_when_observed();
     dropped = std::move(reloading_->pending);
     retired = std::move(reloading_->retired);
     reloading_->pending = std::move(staged);
@@ -172,7 +187,7 @@ bool Manager::withdraw() {
   std::unique_ptr<Staged> dropped;
   std::unique_ptr<Staged> retired;
   {
-    std::lock_guard<std::mutex> lock(reloading_->mutex);
+    const auto lock = reloading_->lock_when_observed();
     dropped = std::move(reloading_->pending);
     retired = std::move(reloading_->retired);
     reloading_->has_pending.store(false, std::memory_order_relaxed);
@@ -456,10 +471,12 @@ void Manager::step() {
       // destroyed here: the replaced program waits for them.
       reloading.retired = std::move(staged);
       reloading.reloads.fetch_add(1, std::memory_order_relaxed);
+      reloading.observed.store(false, std::memory_order_relaxed);
     }
     reloading.mutex.unlock();
     if (swapped) {
       for (Observer* observer : observers_) observer->on_reload(*this);
+      reloading.observed.store(true, std::memory_order_release);
     }
   }
   if (stopped_) return;

@@ -228,7 +228,8 @@ void Recorder::on_reload(const Manager& manager) {
   if (!started_) return;
   // The slots still waiting were taken with the replaced program's layout: the writer formats
   // them all before the layout and the slots are made over for the new one. (Their state
-  // machines' config params point into the replaced program, which the next reload frees.)
+  // machines' config params point into the replaced program: the Manager frees it only after
+  // every observer's on_reload() returned.)
   while (tail_.load(std::memory_order_acquire) != head_.load(std::memory_order_relaxed)) {
     std::this_thread::yield();
   }

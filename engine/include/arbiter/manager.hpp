@@ -124,7 +124,9 @@ class Manager {
   /// sizes or indices do not fit the two programs.
   void stage(Program program, CarryPlan plan);
   /// Takes back a staged program not swapped in yet (returns true then) and frees what the last
-  /// swap replaced (the old program and its instances). Until the next stage(), program() then
+  /// swap replaced (the old program and its instances). stage() frees that too. Both wait, when
+  /// they must, until the observers' on_reload() of that swap returned, as observers may read the
+  /// replaced program until then. Until the next stage(), program() then
   /// stays as it is, so the staging thread may read it while another thread steps.
   bool withdraw();
   /// How many staged programs step() has swapped in.
