@@ -231,12 +231,23 @@ bool WebServer::start(const ServeAddress& address, std::string& error) {
   url_ = fmt::format(v6 ? "http://[{}]:{}/" : "http://{}:{}/", address.host, port);
   host_ = address.host;
   port_ = port;
-  thread_ = std::thread([this] { server_->listen_after_bind(); });
+  thread_ = std::thread([this] {
+    server_->listen_after_bind();
+    listen_ended_ = true;
+  });
   return true;
 }
 
 void WebServer::stop() {
   stopping_ = true;
+  // httplib's stop() does nothing before the listening thread has started to listen, and that
+  // thread would then listen for ever: a stop right after start() (a SIGTERM while the server
+  // starts) waits for it first.
+  if (thread_.joinable()) {
+    while (!server_->is_running() && !listen_ended_) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
   server_->stop();
   if (thread_.joinable()) thread_.join();
 }

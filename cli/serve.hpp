@@ -81,6 +81,7 @@ class WebServer {
   std::thread thread_;
   std::string url_;
   std::atomic<bool> stopping_{false};
+  std::atomic<bool> listen_ended_{false};  // the listening thread returned
 };
 
 /// Live view of a running manager. As an observer (on the stepping thread) it copies each step
