@@ -34,6 +34,7 @@
 #include <cstdlib>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -193,15 +194,20 @@ int echo(int domain, double seconds) {
   int echoed = 0;
   Message newest;
   bool pending = false;
+  std::optional<Clock::time_point> matched_since;
   while (Clock::now() < deadline && echoed < 5) {
     if (take_newest(in, newest)) {
       pending = true;
       if (!described) std::printf("received: %s\n", describe(newest).c_str());
       described = true;
     }
-    // Not before the writer has found the bridge's reader: what is written before discovery
-    // completes reaches no one (volatile durability, as ROS 2's default).
-    if (pending && matched(out) && Clock::now() - last_echo >= std::chrono::milliseconds(50)) {
+    // Not before the writer has found the bridge's reader, and not at once: what is written
+    // before discovery completes on both sides reaches no one (volatile durability, as ROS 2's
+    // default), and the writer finding the reader does not mean the reader has found the writer.
+    if (!matched_since && matched(out)) matched_since = Clock::now();
+    if (pending && matched_since &&
+        Clock::now() - *matched_since >= std::chrono::milliseconds(250) &&
+        Clock::now() - last_echo >= std::chrono::milliseconds(50)) {
       out->write(&newest);
       last_echo = Clock::now();
       pending = false;
