@@ -206,7 +206,7 @@ int echo(int domain, double seconds) {
     // default), and the writer finding the reader does not mean the reader has found the writer.
     if (!matched_since && matched(out)) matched_since = Clock::now();
     if (pending && matched_since &&
-        Clock::now() - *matched_since >= std::chrono::milliseconds(250) &&
+        Clock::now() - *matched_since >= std::chrono::milliseconds(1000) &&
         Clock::now() - last_echo >= std::chrono::milliseconds(50)) {
       out->write(&newest);
       last_echo = Clock::now();
