@@ -558,7 +558,9 @@ std::optional<Program> Reloader::load_program(Diagnostics& diagnostics) {
   diagnostics = std::move(loaded.diagnostics);
   texts_.clear();
   if (loaded.model) {
-    for (const auto& file : loaded.model->files) {
+    // Copies of every file's text: only a recording's reload record needs them.
+    for (std::size_t i = 0; on_staging_ && i < loaded.model->files.size(); ++i) {
+      const std::string& file = loaded.model->files[i];
       const SourceFile* read = loaded.files.find(file);
       texts_.emplace_back(file, read != nullptr ? read->text : std::string());
     }
