@@ -150,6 +150,15 @@ std::string Child::output() const {
   return text.str();
 }
 
+bool Child::wait_for_output(const std::string& text, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (output().find(text) != std::string::npos) return true;
+    if (wait(std::chrono::milliseconds(20))) return output().find(text) != std::string::npos;
+  }
+  return false;
+}
+
 std::vector<std::string> arbiter_run(const std::string& config, std::uint64_t steps,
                                      const std::string& trace, bool quiet) {
   std::vector<std::string> argv = {

@@ -73,6 +73,9 @@ class Child {
   std::optional<int> wait(std::chrono::milliseconds timeout);
   const std::string& output_file() const { return output_; }
   std::string output() const;
+  /// Whether `text` appears in the output within `timeout` (false at once if the child exits
+  /// without it).
+  bool wait_for_output(const std::string& text, std::chrono::milliseconds timeout);
 
  private:
   pid_t pid_ = -1;
