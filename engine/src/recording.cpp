@@ -74,7 +74,8 @@ void append_inputs_record(const Manager& manager, std::string& out) {
   detail::append_inputs_record(layout, step, out);
 }
 
-struct Recorder::Slot {
+// Cache-line aligned: the stepping thread fills one slot while the writer reads an earlier one.
+struct alignas(64) Recorder::Slot {
   enum class Kind { kStep, kSafe, kHeader, kEnd };
   Kind kind = Kind::kStep;
   std::uint64_t step = 0;
@@ -97,8 +98,12 @@ struct Recorder::Output {
   detail::StepSnapshot::Levels levels;  // the writer's, as of the last slot it formatted
   // The stepping thread's: the levels as the last slot published left them, and whether that
   // slot is the one before the next (no step dropped since), so the next copies what changed.
-  detail::StepSnapshot::Levels last;
-  bool chained = false;
+  // On cache lines of their own: the writer writes the members above at every message, and a
+  // line shared with them would move between the cores at every step.
+  struct alignas(64) Stepping {
+    detail::StepSnapshot::Levels last;
+    bool chained = false;
+  } stepping;
 };
 
 Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots)
@@ -180,22 +185,22 @@ void Recorder::size_ring(const Manager& manager) {
     ring_[i].snapshot.size_for(*layout_, kReportTextBytes);
   }
   const auto behaviours = layout_->behaviours.size();
-  out_->last.requested.assign(behaviours, 0.0);
-  out_->last.activation.assign(behaviours, 0.0);
-  out_->last.active.assign(behaviours, 0);
-  out_->chained = false;
+  out_->stepping.last.requested.assign(behaviours, 0.0);
+  out_->stepping.last.activation.assign(behaviours, 0.0);
+  out_->stepping.last.active.assign(behaviours, 0);
+  out_->stepping.chained = false;
 }
 
 void Recorder::on_step(const Manager& manager) {
   if (!started_) return;
   Slot* slot = claim();
-  if (slot == nullptr ||
-      !slot->snapshot.capture(manager, *layout_, false, &out_->last, out_->chained)) {
+  if (slot == nullptr || !slot->snapshot.capture(manager, *layout_, false, &out_->stepping.last,
+                                                 out_->stepping.chained)) {
     dropped_total_.fetch_add(1, std::memory_order_relaxed);
-    out_->chained = false;  // the next slot copies every level
+    out_->stepping.chained = false;  // the next slot copies every level
     return;
   }
-  out_->chained = true;
+  out_->stepping.chained = true;
   slot->kind = Slot::Kind::kStep;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
@@ -214,8 +219,8 @@ void Recorder::on_safe(const Manager& manager) {
   slot->kind = Slot::Kind::kSafe;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
-  slot->snapshot.capture(manager, *layout_, true, &out_->last, out_->chained);
-  out_->chained = true;
+  slot->snapshot.capture(manager, *layout_, true, &out_->stepping.last, out_->stepping.chained);
+  out_->stepping.chained = true;
   publish();
 }
 
