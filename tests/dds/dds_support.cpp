@@ -2,8 +2,8 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/file.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -31,7 +31,9 @@ DomainLease::DomainLease() {
   for (int i = 0; i < kCount; ++i) {
     const int id = kFirst + (start + i) % kCount;
     const std::string path = dir + "/arbiter-dds-test-domain-" + std::to_string(id) + ".lock";
-    const int fd = open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0666);
+    // Not close-on-exec: the children started under the lease inherit the lock, which so lasts
+    // until the last of them is gone, even if the test process is not.
+    const int fd = open(path.c_str(), O_CREAT | O_RDWR, 0666);
     if (fd < 0) continue;
     if (flock(fd, LOCK_EX | LOCK_NB) == 0) {
       id_ = id;
@@ -84,11 +86,6 @@ std::string fill(std::string text, const std::vector<std::pair<std::string, std:
 Child::Child(const std::vector<std::string>& argv, const std::string& output,
              const std::string& directory)
     : output_(output) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  if (!directory.empty()) posix_spawn_file_actions_addchdir_np(&actions, directory.c_str());
-  posix_spawn_file_actions_addopen(&actions, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
   std::vector<char*> args;
   for (const auto& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
   args.push_back(nullptr);
@@ -112,9 +109,21 @@ Child::Child(const std::vector<std::string>& argv, const std::string& output,
   std::vector<char*> envp;
   for (auto& variable : variables) envp.push_back(variable.data());
   envp.push_back(nullptr);
-  const int failed = posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), envp.data());
-  posix_spawn_file_actions_destroy(&actions);
-  if (failed != 0) throw std::runtime_error("cannot start " + argv[0]);
+  // fork and exec rather than posix_spawn, for PR_SET_PDEATHSIG: a test process that aborts runs
+  // no destructor, and a child left running would disturb later tests on its DDS domain. Between
+  // fork and exec the child calls only async-signal-safe functions.
+  const pid_t parent = getpid();
+  pid_ = fork();
+  if (pid_ < 0) throw std::runtime_error("cannot start " + argv[0]);
+  if (pid_ == 0) {
+    if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent) _exit(127);
+    if (!directory.empty() && chdir(directory.c_str()) != 0) _exit(127);
+    const int fd = open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd < 0 || dup2(fd, 1) < 0 || dup2(fd, 2) < 0) _exit(127);
+    close(fd);
+    execve(args[0], args.data(), envp.data());
+    _exit(127);
+  }
 }
 
 Child::~Child() {
