@@ -385,12 +385,12 @@ TEST_CASE("every scenario test file fits schema/arbiter-test.schema.json, a miss
   std::size_t checked = 0;
   for (const auto& dir : {kSourceDir / "tests" / "scenarios", kDataDir / "scenarios" / "failing",
                           kDataDir / "scenarios" / "recorded"}) {
-    for (const auto& entry : fs::recursive_directory_iterator(dir)) {
-      if (!is_scenario_file(entry.path().string())) continue;
-      if (entry.path().filename() == "inputs_and_replay.test.yaml") continue;  // below
-      const auto document = config_json(entry.path());
+    const auto is_test_file = [](const fs::path& path) { return is_scenario_file(path.string()); };
+    for (const auto& path : files_in(dir, is_test_file, Walk::kRecursive)) {
+      if (path.filename() == "inputs_and_replay.test.yaml") continue;  // below
+      const auto document = config_json(path);
       REQUIRE(document);
-      INFO(entry.path().string());
+      INFO(path.string());
       CHECK(schema.errors(*document) == "");
       ++checked;
     }
