@@ -1,14 +1,231 @@
-// The load pipeline (engine/src/load.cpp) as the language server and reload use it.
+// The load pipeline (engine/src/load.cpp). Error messages are API: every config in
+// tests/data/invalid is loaded and its diagnostics are compared, as text, with the approved
+// `<case>.expected` beside it. Run with ARBITER_UPDATE_GOLDEN=1 to rewrite the expected files from
+// the current output (then review the diff by eye; never in CI).
 
-#include <catch2/catch.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
+#include <catch2/catch.hpp>
+
 #include "arbiter/load.hpp"
+#include "arbiter/program.hpp"
+#include "arbiter/state.hpp"
 #include "test_support.hpp"
 
+namespace fs = std::filesystem;
 using namespace arbiter;
+
+namespace {
+
+const fs::path kDataDir = fs::path(ARBITER_SOURCE_DIR) / "tests" / "data";
+
+using test::read_text;
+using test::update_golden;
+using test::write_text;
+
+bool is_config(const fs::path& path) {
+  const auto extension = path.extension();
+  return extension == ".yaml" || extension == ".yml" || extension == ".json";
+}
+
+/// The top-level configs of `dir`, sorted by name. Subfolders hold included files only.
+std::vector<fs::path> configs_in(const fs::path& dir) {
+  return test::files_in(dir, is_config);
+}
+
+/// The cases: top-level configs with an `.expected` sibling (in update mode, every config).
+std::vector<fs::path> golden_cases(const fs::path& dir) {
+  std::vector<fs::path> cases;
+  for (const auto& config : configs_in(dir)) {
+    if (update_golden() || fs::exists(fs::path(config).replace_extension(".expected"))) {
+      cases.push_back(config);
+    }
+  }
+  return cases;
+}
+
+/// The test registry plus the classes whose params exercise every param check.
+Registry golden_registry() {
+  Registry registry = test::make_test_registry();
+  registry.set_origin("invalid_configs_test");
+  test::add_param_check_classes(registry);
+  return registry;
+}
+
+bool starts_with(const std::string& text, const std::string& prefix) {
+  return text.compare(0, prefix.size(), prefix) == 0;
+}
+
+}  // namespace
+
+TEST_CASE("every invalid config reports the approved diagnostics", "[diagnostics]") {
+  const fs::path dir = kDataDir / "invalid";
+  const auto cases = golden_cases(dir);
+  REQUIRE(cases.size() >= 30);
+
+  for (const auto& path : cases) {
+    const std::string name = path.filename().string();
+    DYNAMIC_SECTION(name) {
+      Registry registry = golden_registry();  // fresh: loading may add a config's plugins
+      Diagnostics diagnostics;
+      std::optional<Program> program;
+      std::string actual;
+      {
+        test::WorkingDirectory here(dir);
+        program = load(name, registry, diagnostics, test::with_lints());
+        // Source lines are read where the config was loaded from, as the CLI reads them.
+        actual = format(diagnostics, FormatOptions::readable());
+      }
+      const fs::path expected_path = fs::path(path).replace_extension(".expected");
+      if (update_golden()) {
+        write_text(expected_path, actual);
+        WARN("rewrote " << expected_path.filename().string());
+      } else {
+        CHECK(actual == read_text(expected_path));
+      }
+      if (starts_with(name, "warn_")) {
+        CHECK(program.has_value());
+        CHECK(diagnostics.error_count() == 0);
+        CHECK(diagnostics.warning_count() > 0);
+      } else {
+        CHECK_FALSE(program.has_value());
+        CHECK(diagnostics.error_count() > 0);
+      }
+    }
+  }
+}
+
+TEST_CASE("every config in tests/data/invalid has an expected file", "[diagnostics]") {
+  for (const auto& config : configs_in(kDataDir / "invalid")) {
+    INFO(config.filename().string());
+    CHECK(fs::exists(fs::path(config).replace_extension(".expected")));
+  }
+}
+
+TEST_CASE("every config in tests/data/valid loads without any diagnostic", "[diagnostics]") {
+  const auto configs = configs_in(kDataDir / "valid");
+  REQUIRE(configs.size() >= 3);
+  for (const auto& path : configs) {
+    DYNAMIC_SECTION(path.filename().string()) {
+      Registry registry = golden_registry();
+      Diagnostics diagnostics;
+      const auto program = load(path.string(), registry, diagnostics, test::with_lints());
+      INFO(format(diagnostics));
+      CHECK(diagnostics.empty());
+      CHECK(program.has_value());
+    }
+  }
+}
+
+TEST_CASE("a JSON config and its YAML twin compile to the same graph", "[diagnostics]") {
+  Registry registry = golden_registry();
+  const auto yaml = load_program((kDataDir / "valid" / "twin.yaml").string(), registry);
+  const auto json = load_program((kDataDir / "valid" / "twin.json").string(), registry);
+  REQUIRE(yaml.behaviours.size() == json.behaviours.size());
+  for (std::size_t b = 0; b < yaml.behaviours.size(); ++b) {
+    CHECK(yaml.behaviours[b].name == json.behaviours[b].name);
+  }
+  REQUIRE(yaml.inhibitions.size() == json.inhibitions.size());
+  for (std::size_t i = 0; i < yaml.inhibitions.size(); ++i) {
+    CHECK(yaml.inhibitions[i].inhibitor == json.inhibitions[i].inhibitor);
+    CHECK(yaml.inhibitions[i].inhibited == json.inhibitions[i].inhibited);
+    CHECK(yaml.inhibitions[i].chaining == json.inhibitions[i].chaining);
+    CHECK(yaml.inhibitions[i].implicit == json.inhibitions[i].implicit);
+  }
+  REQUIRE(yaml.actuators.size() == json.actuators.size());
+  for (std::size_t a = 0; a < yaml.actuators.size(); ++a) {
+    CHECK(yaml.actuators[a].name == json.actuators[a].name);
+    CHECK(yaml.actuators[a].type == json.actuators[a].type);
+    CHECK(yaml.actuators[a].aggregate == json.actuators[a].aggregate);
+  }
+}
+
+namespace {
+
+/// Runs the `arbiter` CLI with `arguments` (already shell-quoted).
+test::CliResult run_cli(const std::string& arguments) {
+  return test::run_captured("\"" + std::string(ARBITER_CLI) + "\" " + arguments);
+}
+
+std::string quoted(const fs::path& path) {
+  return "\"" + path.string() + "\"";
+}
+
+}  // namespace
+
+TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
+  SECTION("a valid config") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
+    CHECK(result.exit_code == 0);
+  }
+  SECTION("an invalid config prints its diagnostics to stderr") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "invalid" / "unknown_key.yaml"));
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("unknown_key.yaml:") != std::string::npos);
+    CHECK(result.err.find("error[unknown-key]: unknown key") != std::string::npos);
+  }
+  SECTION("one invalid config among valid ones fails the run") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml") + " " +
+                                quoted(kDataDir / "invalid" / "self_inhibition.yaml"));
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("cannot inhibit itself") != std::string::npos);
+  }
+  SECTION("an unknown option is a usage error") {
+    const auto result =
+        run_cli("validate --no-such-option " + quoted(kDataDir / "valid" / "twin.yaml"));
+    CHECK(result.exit_code == 2);
+  }
+  SECTION("a missing command is a usage error") {
+    CHECK(run_cli("").exit_code == 2);
+  }
+}
+
+TEST_CASE("arbiter validate colours its diagnostics only when asked or in a terminal", "[cli]") {
+  const std::string config = quoted(kDataDir / "invalid" / "unknown_key.yaml");
+  const std::string escape = "\x1b[";
+  SECTION("--color always colours the severity, the code and the underline") {
+    const auto result = run_cli("--color always validate " + config);
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("\x1b[1;31merror[unknown-key]\x1b[0m") != std::string::npos);
+    CHECK(result.err.find("\x1b[1;32m^~~~\x1b[0m") != std::string::npos);
+  }
+  SECTION("auto leaves a pipe uncoloured, with the source line and its underline") {
+    const auto result = run_cli("validate " + config);
+    CHECK(result.err.find(escape) == std::string::npos);
+    CHECK(result.err.find("3 | rate: 15\n  | ^~~~\n") != std::string::npos);
+  }
+  SECTION("--color never, given after the command, too") {
+    const auto result = run_cli("validate " + config + " --color never");
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find(escape) == std::string::npos);
+  }
+  SECTION("anything else is a usage error") {
+    CHECK(run_cli("--color sometimes validate " + config).exit_code == 2);
+  }
+}
+
+TEST_CASE("the compact format is one line per diagnostic and per note, without codes",
+          "[diagnostics]") {
+  Diagnostics diagnostics;
+  diagnostics.error({"no_such_file.yaml", 3, 1}, "unknown-key", "unknown key 'rate'").notes = {
+      "did you mean 'rate_hz'?"};
+  CHECK(format(diagnostics) ==
+        "no_such_file.yaml:3:1: error: unknown key 'rate'\n"
+        "no_such_file.yaml:3:1: note: did you mean 'rate_hz'?\n");
+  // A file that cannot be read gets no source line, but keeps its code.
+  CHECK(format(diagnostics, FormatOptions::readable()) ==
+        "no_such_file.yaml:3:1: error[unknown-key]: unknown key 'rate'\n"
+        "no_such_file.yaml:3:1: note: did you mean 'rate_hz'?\n");
+}
 
 TEST_CASE("load_config reads texts held in memory before the disk, for included files too",
           "[load]") {
