@@ -1,5 +1,5 @@
-// The CLI's commands as a user meets them: validate --format json, plugins, run's steps and
-// events, and every command's help.
+// The CLI's commands as a user meets them: validate (exit codes, colours, --format json),
+// plugins, run's steps and events, and every command's help.
 
 #include <unistd.h>
 
@@ -197,4 +197,55 @@ TEST_CASE("every command's help ends with examples", "[help][cli]") {
     }
   }
   CHECK(contains(run_cli("validate --help").out, "redundant-inhibition"));
+}
+
+TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
+  SECTION("a valid config") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
+    CHECK(result.exit_code == 0);
+  }
+  SECTION("an invalid config prints its diagnostics to stderr") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "invalid" / "unknown_key.yaml"));
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("unknown_key.yaml:") != std::string::npos);
+    CHECK(result.err.find("error[unknown-key]: unknown key") != std::string::npos);
+  }
+  SECTION("one invalid config among valid ones fails the run") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml") + " " +
+                                quoted(kDataDir / "invalid" / "self_inhibition.yaml"));
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("cannot inhibit itself") != std::string::npos);
+  }
+  SECTION("an unknown option is a usage error") {
+    const auto result =
+        run_cli("validate --no-such-option " + quoted(kDataDir / "valid" / "twin.yaml"));
+    CHECK(result.exit_code == 2);
+  }
+  SECTION("a missing command is a usage error") {
+    CHECK(run_cli("").exit_code == 2);
+  }
+}
+
+TEST_CASE("arbiter validate colours its diagnostics only when asked or in a terminal", "[cli]") {
+  const std::string config = quoted(kDataDir / "invalid" / "unknown_key.yaml");
+  const std::string escape = "\x1b[";
+  SECTION("--color always colours the severity, the code and the underline") {
+    const auto result = run_cli("--color always validate " + config);
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("\x1b[1;31merror[unknown-key]\x1b[0m") != std::string::npos);
+    CHECK(result.err.find("\x1b[1;32m^~~~\x1b[0m") != std::string::npos);
+  }
+  SECTION("auto leaves a pipe uncoloured, with the source line and its underline") {
+    const auto result = run_cli("validate " + config);
+    CHECK(result.err.find(escape) == std::string::npos);
+    CHECK(result.err.find("3 | rate: 15\n  | ^~~~\n") != std::string::npos);
+  }
+  SECTION("--color never, given after the command, too") {
+    const auto result = run_cli("validate " + config + " --color never");
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find(escape) == std::string::npos);
+  }
+  SECTION("anything else is a usage error") {
+    CHECK(run_cli("--color sometimes validate " + config).exit_code == 2);
+  }
 }

@@ -74,6 +74,10 @@ CliResult run_cli(const std::string& arguments) {
                       "\" " + arguments);
 }
 
+std::string quoted(const fs::path& path) {
+  return "\"" + path.string() + "\"";
+}
+
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }

@@ -39,6 +39,9 @@ bool plugins_built(const std::filesystem::path& config);
 /// Runs `arbiter ARGUMENTS` in the source directory (paths relative to it), capturing both streams.
 CliResult run_cli(const std::string& arguments);
 
+/// `path` in double quotes, for a command line.
+std::string quoted(const std::filesystem::path& path);
+
 bool contains(const std::string& text, const std::string& part);
 
 /// Loads a config as `arbiter` does (relative to the source directory), with the test classes.
