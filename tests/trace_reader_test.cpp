@@ -36,15 +36,15 @@ std::string step_record(int step) {
 TEST_CASE("each malformed trace or recording gets its exact located error", "[trace_reader]") {
   const WorkingDirectory here(kBadTraces);
   std::size_t files = 0;
-  for (const auto& entry : fs::directory_iterator(kBadTraces)) {
-    const auto name = entry.path().filename().string();
-    if (entry.path().extension() == ".err") continue;
+  const auto is_trace = [](const fs::path& path) { return path.extension() != ".err"; };
+  for (const auto& path : files_in(kBadTraces, is_trace)) {
+    const auto name = path.filename().string();
     ++files;
     DYNAMIC_SECTION(name) {
       Diagnostic error;
       const auto trace = read_trace(name, error);
       REQUIRE_FALSE(trace);
-      const auto expected = entry.path().string() + ".err";
+      const auto expected = path.string() + ".err";
       const std::string text = format(error, FormatOptions::readable());
       if (update_golden()) write_text(expected, text);
       CHECK(text == read_text(expected));

@@ -4,15 +4,13 @@
 
 #include <catch2/catch.hpp>
 
-#include <algorithm>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
 
 #include "dds_support.hpp"
+#include "test_support.hpp"
 
 namespace fs = std::filesystem;
 using namespace arbiter::dds_test;
@@ -22,24 +20,15 @@ namespace {
 
 const fs::path kInvalidDir = fs::path(ARBITER_SOURCE_DIR) / "tests" / "dds" / "invalid";
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-bool update_golden() {
-  const char* value = std::getenv("ARBITER_UPDATE_GOLDEN");
-  return value != nullptr && std::string(value) == "1";
-}
+using arbiter::test::files_in;
+using arbiter::test::read_text;
+using arbiter::test::update_golden;
 
 }  // namespace
 
 TEST_CASE("a bad DDS parameter is a config error at its file, line and column", "[dds]") {
-  std::vector<fs::path> cases;
-  for (const auto& entry : fs::directory_iterator(kInvalidDir)) {
-    if (entry.path().extension() == ".yaml") cases.push_back(entry.path());
-  }
-  std::sort(cases.begin(), cases.end());
+  const auto cases =
+      files_in(kInvalidDir, [](const fs::path& path) { return path.extension() == ".yaml"; });
   REQUIRE(cases.size() >= 8);
   TempDir dir;
   for (const auto& path : cases) {

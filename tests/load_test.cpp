@@ -1,10 +1,7 @@
-// Error messages are API: every config in tests/data/invalid is loaded and its diagnostics are
-// compared, as text, with the approved `<case>.expected` beside it. Run with
-// ARBITER_UPDATE_GOLDEN=1 to rewrite the expected files from the current output (then review the
-// diff by eye; never in CI).
-
-#include <sys/wait.h>
-#include <unistd.h>
+// The load pipeline (engine/src/load.cpp). Error messages are API: every config in
+// tests/data/invalid is loaded and its diagnostics are compared, as text, with the approved
+// `<case>.expected` beside it. Run with ARBITER_UPDATE_GOLDEN=1 to rewrite the expected files from
+// the current output (then review the diff by eye; never in CI).
 
 #include <algorithm>
 #include <cstdlib>
@@ -149,70 +146,6 @@ TEST_CASE("a JSON config and its YAML twin compile to the same graph", "[diagnos
   }
 }
 
-namespace {
-
-/// Runs the `arbiter` CLI with `arguments` (already shell-quoted).
-test::CliResult run_cli(const std::string& arguments) {
-  return test::run_captured("\"" + std::string(ARBITER_CLI) + "\" " + arguments);
-}
-
-std::string quoted(const fs::path& path) {
-  return "\"" + path.string() + "\"";
-}
-
-}  // namespace
-
-TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
-  SECTION("a valid config") {
-    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
-    CHECK(result.exit_code == 0);
-  }
-  SECTION("an invalid config prints its diagnostics to stderr") {
-    const auto result = run_cli("validate " + quoted(kDataDir / "invalid" / "unknown_key.yaml"));
-    CHECK(result.exit_code == 1);
-    CHECK(result.err.find("unknown_key.yaml:") != std::string::npos);
-    CHECK(result.err.find("error[unknown-key]: unknown key") != std::string::npos);
-  }
-  SECTION("one invalid config among valid ones fails the run") {
-    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml") + " " +
-                                quoted(kDataDir / "invalid" / "self_inhibition.yaml"));
-    CHECK(result.exit_code == 1);
-    CHECK(result.err.find("cannot inhibit itself") != std::string::npos);
-  }
-  SECTION("an unknown option is a usage error") {
-    const auto result =
-        run_cli("validate --no-such-option " + quoted(kDataDir / "valid" / "twin.yaml"));
-    CHECK(result.exit_code == 2);
-  }
-  SECTION("a missing command is a usage error") {
-    CHECK(run_cli("").exit_code == 2);
-  }
-}
-
-TEST_CASE("arbiter validate colours its diagnostics only when asked or in a terminal", "[cli]") {
-  const std::string config = quoted(kDataDir / "invalid" / "unknown_key.yaml");
-  const std::string escape = "\x1b[";
-  SECTION("--color always colours the severity, the code and the underline") {
-    const auto result = run_cli("--color always validate " + config);
-    CHECK(result.exit_code == 1);
-    CHECK(result.err.find("\x1b[1;31merror[unknown-key]\x1b[0m") != std::string::npos);
-    CHECK(result.err.find("\x1b[1;32m^~~~\x1b[0m") != std::string::npos);
-  }
-  SECTION("auto leaves a pipe uncoloured, with the source line and its underline") {
-    const auto result = run_cli("validate " + config);
-    CHECK(result.err.find(escape) == std::string::npos);
-    CHECK(result.err.find("3 | rate: 15\n  | ^~~~\n") != std::string::npos);
-  }
-  SECTION("--color never, given after the command, too") {
-    const auto result = run_cli("validate " + config + " --color never");
-    CHECK(result.exit_code == 1);
-    CHECK(result.err.find(escape) == std::string::npos);
-  }
-  SECTION("anything else is a usage error") {
-    CHECK(run_cli("--color sometimes validate " + config).exit_code == 2);
-  }
-}
-
 TEST_CASE("the compact format is one line per diagnostic and per note, without codes",
           "[diagnostics]") {
   Diagnostics diagnostics;
@@ -225,4 +158,39 @@ TEST_CASE("the compact format is one line per diagnostic and per note, without c
   CHECK(format(diagnostics, FormatOptions::readable()) ==
         "no_such_file.yaml:3:1: error[unknown-key]: unknown key 'rate'\n"
         "no_such_file.yaml:3:1: note: did you mean 'rate_hz'?\n");
+}
+
+TEST_CASE("load_config reads texts held in memory before the disk, for included files too",
+          "[load]") {
+  const auto dir = std::filesystem::temp_directory_path() / "arbiter_overlay_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string main = (dir / "main.yaml").string();
+  const std::string part = (dir / "part.yaml").string();
+  test::write_text(main,
+                   "arbiter: 1\nname: m\ninclude: [part.yaml]\nlayers:\n  - name: control\n"
+                   "    behaviours:\n      a: {type: scripted, params: {activation: 1}}\n");
+  test::write_text(part, "arbiter: 1\nlayers:\n  - name: other\n");
+  Registry registry = test::make_test_registry();
+
+  Overlay overlay;
+  overlay.set(part, "arbiter: 1\nlayers:\n  - name: other\n    sensors: [sped]\n");
+  LoadOptions options;
+  options.source = &overlay;
+  Loaded loaded = load_config(main, registry, options);
+  REQUIRE_FALSE(loaded.program);
+  REQUIRE(loaded.diagnostics.items().size() == 1);
+  CHECK(loaded.diagnostics.items()[0].location.file == part);
+  CHECK(loaded.diagnostics.items()[0].location.line == 4);
+  REQUIRE(loaded.files.files().size() == 2);
+  CHECK(loaded.files.files()[1]->text == *overlay.find(part));
+  REQUIRE(loaded.model);
+  CHECK(loaded.model->files == std::vector<std::string>{main, part});
+
+  overlay.erase(part);  // the disk again
+  Loaded fixed = load_config(main, registry, options);
+  CHECK(fixed.program);
+  CHECK(fixed.diagnostics.empty());
+  CHECK(fixed.document() != nullptr);
+  std::filesystem::remove_all(dir);
 }

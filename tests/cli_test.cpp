@@ -1,0 +1,251 @@
+// The CLI's commands as a user meets them: validate (exit codes, colours, --format json),
+// plugins, run's steps and events, and every command's help.
+
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <string>
+#include "arbiter/catalog.hpp"
+#include "tooling_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace arbiter;
+using namespace arbiter::test;
+using Json = nlohmann::json;
+TEST_CASE("a config's steps: is how long arbiter run runs unless --steps says otherwise",
+          "[run][cli]") {
+  const std::string goalie = "configs/soccer/goalie.yaml";
+  const auto by_config = run_cli("run " + goalie);
+  REQUIRE(by_config.exit_code == 0);
+  CHECK(contains(by_config.out, "\n240 steps.\n"));
+  CHECK(contains(by_config.out, "simulated 16.00 s at 15 Hz"));
+  const auto by_option = run_cli("run " + goalie + " --steps 30");
+  REQUIRE(by_option.exit_code == 0);
+  CHECK(contains(by_option.out, "\n30 steps.\n"));
+  // Without steps: in the config, the default stays 100.
+  const auto default_length =
+      run_cli(std::string("run ") + kWalkAndKick + " -q --trace /dev/stdout");
+  REQUIRE(default_length.exit_code == 0);
+  CHECK(contains(default_length.out, "{\"step\": 100,"));
+  CHECK_FALSE(contains(default_length.out, "{\"step\": 101,"));
+
+  const auto text = run_cli("dump " + goalie);
+  CHECK(contains(text.out, "manager goalie (15 Hz, 240 steps, 2 layers, 1 behaviours)"));
+  const auto json = Json::parse(run_cli("dump " + goalie + " --format json").out);
+  CHECK(json["steps"] == 240);
+  CHECK_FALSE(Json::parse(run_cli(std::string("dump ") + kWalkAndKick + " --format json").out)
+                  .contains("steps"));
+}
+
+TEST_CASE("arbiter validate --format json prints located diagnostics for machines",
+          "[validate][cli]") {
+  SECTION("errors, with exit code 1") {
+    const auto result = run_cli("validate --format json tests/data/invalid/unknown_key.yaml");
+    CHECK(result.exit_code == 1);
+    const Json diagnostics = Json::parse(result.out);
+    REQUIRE(diagnostics.is_array());
+    REQUIRE(!diagnostics.empty());
+    const Json& first = diagnostics[0];
+    CHECK(first["file"] == "tests/data/invalid/unknown_key.yaml");
+    CHECK(first["line"] == 3);
+    CHECK(first["column"] == 1);
+    CHECK(first["severity"] == "error");
+    CHECK(first["code"] == "unknown-key");
+    CHECK(first["message"] == "unknown key 'rate' in the config");
+    CHECK(first["notes"].is_array());
+    for (const auto& item : diagnostics) {
+      for (const char* key : {"file", "line", "column", "severity", "code", "message", "notes"}) {
+        CHECK(item.contains(key));
+      }
+    }
+  }
+  SECTION("a valid config gives an empty array") {
+    const auto result = run_cli(std::string("validate --format json ") + kWalkAndKick);
+    CHECK(result.exit_code == 0);
+    CHECK(Json::parse(result.out) == Json::array());
+  }
+  SECTION("lints are warnings; --strict makes them errors") {
+    const std::string config = "tests/data/golden/lints.yaml";
+    // The test classes are not in the CLI: a copy with built-in classes only.
+    std::string text = read_text(kSourceDir / config);
+    for (const std::string from :
+         {"interface: test.Feed\n    ports: {out: distance, in: speed}", "test.Probe"}) {
+      for (auto at = text.find(from); at != std::string::npos; at = text.find(from)) {
+        text.replace(at, from.size(), from == "test.Probe" ? "scripted" : "");
+      }
+    }
+    const fs::path copy =
+        fs::temp_directory_path() / ("arbiter_lints_" + std::to_string(::getpid()) + ".yaml");
+    write_text(copy, text);
+    const auto lenient = run_cli("validate --format json \"" + copy.string() + "\"");
+    CHECK(lenient.exit_code == 0);
+    const Json warnings = Json::parse(lenient.out);
+    REQUIRE(!warnings.empty());
+    CHECK(warnings[0]["severity"] == "warning");
+    const auto strict = run_cli("validate --strict --format json \"" + copy.string() + "\"");
+    CHECK(strict.exit_code == 1);
+    CHECK(Json::parse(strict.out)[0]["severity"] == "error");
+    const auto text_output = run_cli("validate \"" + copy.string() + "\"");
+    CHECK(text_output.exit_code == 0);
+    CHECK(contains(text_output.err, ": warning["));
+    CHECK(contains(text_output.err, "never be active"));
+    fs::remove(copy);
+  }
+}
+
+TEST_CASE("a missing config is an error of its own and the other files are still checked",
+          "[validate][cli]") {
+  const auto result = run_cli(std::string("validate missing.yaml ") + kWalkAndKick +
+                              " tests/data/invalid/unknown_key.yaml");
+  CHECK(result.exit_code == 1);
+  CHECK(contains(result.err,
+                 "missing.yaml: error[file-not-found]: cannot open: No such file or directory\n"));
+  CHECK(contains(result.err, std::string(kWalkAndKick) + ": ok\n"));
+  CHECK(contains(result.err, "unknown_key.yaml:3:1: error[unknown-key]: unknown key 'rate'"));
+  CHECK(contains(result.err, "4 error(s), 0 warning(s)\n"));
+  SECTION("as JSON, located at the file") {
+    const auto json = run_cli("validate --format json missing.yaml");
+    CHECK(json.exit_code == 1);
+    const Json diagnostics = Json::parse(json.out);
+    REQUIRE(diagnostics.size() == 1);
+    CHECK(diagnostics[0]["file"] == "missing.yaml");
+    CHECK(diagnostics[0]["code"] == "file-not-found");
+  }
+  SECTION("the commands that run or print a config say the same") {
+    for (const char* command : {"run missing.yaml", "dump missing.yaml"}) {
+      INFO(command);
+      const auto other = run_cli(command);
+      CHECK(other.exit_code == 1);
+      CHECK(other.err ==
+            "missing.yaml: error[file-not-found]: cannot open: No such file or directory\n");
+    }
+  }
+}
+
+TEST_CASE("arbiter plugins lists every class with its params and ports", "[plugins][cli]") {
+  SECTION("the built-ins, as JSON") {
+    const auto result = run_cli("plugins --builtin --format json");
+    REQUIRE(result.exit_code == 0);
+    const Json catalog = Json::parse(result.out);
+    CHECK(catalog == Json::parse(catalog_json(builtin_registry())));
+    const Json* scripted = nullptr;
+    for (const auto& cls : catalog["classes"]) {
+      if (cls["name"] == "scripted" && cls["kind"] == "behaviour") scripted = &cls;
+    }
+    REQUIRE(scripted != nullptr);
+    CHECK((*scripted)["origin"] == "built-in");
+    const Json& activation = (*scripted)["params"][0];
+    CHECK(activation["name"] == "activation");
+    CHECK(activation["type"] == "list of double");
+    CHECK(activation["required"] == false);
+    CHECK(activation["default"] == Json({1.0}));
+    CHECK(activation["minimum"] == 0.0);
+    CHECK(activation["maximum"] == 1.0);
+    CHECK_FALSE(activation["description"].get<std::string>().empty());
+    CHECK(catalog["value_types"].size() == 6);
+  }
+  SECTION("a plugin on the path, as text") {
+    const auto result = run_cli("plugins --load soccer");
+    INFO(result.err);
+    REQUIRE(result.exit_code == 0);
+    CHECK(contains(result.out, "behaviour classes\n  scripted (built-in)\n"));
+    CHECK(contains(result.out, "  soccer.SearchForBall (plugin soccer ("));
+    CHECK(contains(result.out, "      turn_rate: double, default "));
+    CHECK(contains(result.out, "      gait_velocity: output vec3\n"));
+    CHECK(contains(result.out, "      ball_visible: input bool"));
+    CHECK(contains(result.out, "interface classes\n  soccer.WorldLink"));
+  }
+  SECTION("every plugin on the path, by default") {
+    const auto result = run_cli("plugins --format json");
+    REQUIRE(result.exit_code == 0);
+    CHECK(contains(result.out, "\"name\": \"soccer.KickBall\""));
+  }
+  SECTION("a plugin that is not there") {
+    const auto result = run_cli("plugins --load no_such_plugin");
+    CHECK(result.exit_code == 1);
+    CHECK(contains(result.err,
+                   "arbiter plugins: error[plugin-not-found]: plugin 'no_such_plugin' not found"));
+  }
+}
+
+TEST_CASE("arbiter run prints a step's events in the order they happened", "[run][cli][soccer]") {
+  // The world reports the shot in the input pass; the goalie behaviour then sees it, pre-empts
+  // its plan to dive and reports the dive.
+  const auto result = run_cli("run configs/soccer/goalie.yaml --steps 210");
+  REQUIRE(result.exit_code == 0);
+  CHECK(contains(result.out,
+                 "step  201  world: shot on goal\n"
+                 "step  201  goalie: monitor_ball ended (pre-empted by dive)\n"
+                 "step  201  goalie: dive (cycle 201; queued: monitor_ball)\n"
+                 "step  201  goalie: goalie dives left\n"));
+  CHECK(contains(result.out,
+                 "step   11  goalie: wait_for_button ended (proceeded)\n"
+                 "step   11  goalie: walk_to_pose {x: -4.2, y: 0.0, theta: 0.0} "
+                 "(cycle 11; queued: monitor_ball)\n"));
+}
+
+TEST_CASE("every command's help ends with examples", "[help][cli]") {
+  for (const std::string command :
+       {"", "validate", "run", "dump", "explain", "plugins", "schema"}) {
+    DYNAMIC_SECTION("arbiter " << command << " --help") {
+      const auto result = run_cli(command + " --help");
+      CHECK(result.exit_code == 0);
+      CHECK(contains(result.out, "\nExamples:\n  arbiter "));
+      CHECK(contains(result.out, "\n  arbiter " + command));
+      CHECK(contains(result.out, "Exit codes: 0 ok"));
+    }
+  }
+  CHECK(contains(run_cli("validate --help").out, "redundant-inhibition"));
+}
+
+TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
+  SECTION("a valid config") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
+    CHECK(result.exit_code == 0);
+  }
+  SECTION("an invalid config prints its diagnostics to stderr") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "invalid" / "unknown_key.yaml"));
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("unknown_key.yaml:") != std::string::npos);
+    CHECK(result.err.find("error[unknown-key]: unknown key") != std::string::npos);
+  }
+  SECTION("one invalid config among valid ones fails the run") {
+    const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml") + " " +
+                                quoted(kDataDir / "invalid" / "self_inhibition.yaml"));
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("cannot inhibit itself") != std::string::npos);
+  }
+  SECTION("an unknown option is a usage error") {
+    const auto result =
+        run_cli("validate --no-such-option " + quoted(kDataDir / "valid" / "twin.yaml"));
+    CHECK(result.exit_code == 2);
+  }
+  SECTION("a missing command is a usage error") {
+    CHECK(run_cli("").exit_code == 2);
+  }
+}
+
+TEST_CASE("arbiter validate colours its diagnostics only when asked or in a terminal", "[cli]") {
+  const std::string config = quoted(kDataDir / "invalid" / "unknown_key.yaml");
+  const std::string escape = "\x1b[";
+  SECTION("--color always colours the severity, the code and the underline") {
+    const auto result = run_cli("--color always validate " + config);
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find("\x1b[1;31merror[unknown-key]\x1b[0m") != std::string::npos);
+    CHECK(result.err.find("\x1b[1;32m^~~~\x1b[0m") != std::string::npos);
+  }
+  SECTION("auto leaves a pipe uncoloured, with the source line and its underline") {
+    const auto result = run_cli("validate " + config);
+    CHECK(result.err.find(escape) == std::string::npos);
+    CHECK(result.err.find("3 | rate: 15\n  | ^~~~\n") != std::string::npos);
+  }
+  SECTION("--color never, given after the command, too") {
+    const auto result = run_cli("validate " + config + " --color never");
+    CHECK(result.exit_code == 1);
+    CHECK(result.err.find(escape) == std::string::npos);
+  }
+  SECTION("anything else is a usage error") {
+    CHECK(run_cli("--color sometimes validate " + config).exit_code == 2);
+  }
+}

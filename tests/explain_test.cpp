@@ -1,0 +1,348 @@
+// explain (engine/src/explain.cpp) from a trace, and why a state ended as the trace's `ended`,
+// run's report (cli/run_report.cpp) and explain tell it.
+
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "arbiter/explain.hpp"
+#include "arbiter/state.hpp"
+#include "arbiter/trace.hpp"
+#include "run_report.hpp"
+#include "tooling_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace arbiter;
+using namespace arbiter::test;
+using Json = nlohmann::json;
+TEST_CASE("explain tells why search_for_ball is inactive at step 8 of the paper example",
+          "[explain]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const Program program = load_config(kWalkAndKick, registry, diagnostics);
+  std::istringstream trace(trace_of(kWalkAndKick, 20));
+  const auto explanation = explain(program, trace, 8, "search_for_ball");
+  REQUIRE(explanation.status == Explanation::Status::kOk);
+  check_golden("explain_search_for_ball.txt", explanation.text);
+  CHECK(contains(explanation.text, "at step 8: inactive, activation 0\n"));
+  CHECK(contains(explanation.text, "requested: 0.5\n"));
+  CHECK(contains(explanation.text,
+                 "implicit, from chaining kick_ball => go_behind_ball => "
+                 "search_for_ball"));
+  CHECK(contains(explanation.text, "inactive: go_behind_ball is fully active (factor 0)"));
+}
+
+TEST_CASE("explain gives the product of the factors and the normalisation", "[explain]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const std::string config = "tests/data/golden/relay.yaml";
+  const Program program = load_config(config, registry, diagnostics);
+  const std::string trace_text = trace_of(config, 6);
+  std::istringstream trace(trace_text);
+  const auto explanation = explain(program, trace, 2, "planning/retreat");
+  REQUIRE(explanation.status == Explanation::Status::kOk);
+  // approach 0.6 => retreat 0.3: refined 0.3 × 0.4 = 0.12; wait 0.5 × 0.4 × 0.88 = 0.176;
+  // the layer's sum is 0.6 + 0.12 + 0.176 = 0.896.
+  CHECK(contains(explanation.text, "refined = 0.3 × 0.4 = 0.12\n"));
+  CHECK(contains(explanation.text,
+                 "0.12 / 0.896 (the sum of the layer's refined levels) = "
+                 "0.133929\n"));
+  CHECK_FALSE(contains(explanation.text, "note:"));
+}
+
+TEST_CASE("explain tells what a state machine did in a step", "[explain]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const std::string config = "configs/paper/goalie_plan.yaml";
+  const Program program = load_config(config, registry, diagnostics);
+  const std::string trace_text = trace_of(config, 50);
+  {
+    std::istringstream trace(trace_text);
+    const auto explanation = explain(program, trace, 6, "goalie");
+    REQUIRE(explanation.status == Explanation::Status::kOk);
+    check_golden("explain_goalie.txt", explanation.text);
+    CHECK(contains(explanation.text,
+                   "events, in order: deactivate wait_for_button, "
+                   "activate walk_to_pose, execute walk_to_pose\n"));
+  }
+  {
+    std::istringstream trace(trace_text);
+    const auto explanation = explain(program, trace, 2, "state_machines/goalie");
+    REQUIRE(explanation.status == Explanation::Status::kOk);
+    CHECK(contains(explanation.text, "wait_for_button executed and held: it runs again at step 3"));
+  }
+  {
+    // The scripted button press: the actual cause, not a list of the possible ones.
+    std::istringstream trace(trace_text);
+    const auto explanation = explain(program, trace, 40, "goalie");
+    REQUIRE(explanation.status == Explanation::Status::kOk);
+    CHECK(contains(explanation.text,
+                   "    - monitor_ball was deactivated: pre-empted by wait_for_button (preempt: at "
+                   "cycle 40); it had asked to proceed\n"));
+  }
+}
+
+namespace {
+
+/// A run of a config of one state machine `m`, with the test classes: its trace, run's report,
+/// and what explain says about `m` at every step.
+struct Story {
+  std::vector<Json> records;  ///< per step, from 1 (0: the header)
+  std::string report;
+  std::vector<std::string> explained;  ///< per step, from 1 (0: unused)
+
+  /// The trace's `ended` of `m` at `step` (null when there is none).
+  const Json& ended(std::size_t step) const {
+    static const Json kNull;
+    const Json& entry = records.at(step)["controllers"]["m"];
+    return entry.contains("ended") ? entry["ended"] : kNull;
+  }
+};
+
+Story story_of(const std::string& states, const std::string& queue, int steps,
+               const std::string& extra = "", ControllerHooks* hooks = nullptr) {
+  const std::string yaml = "arbiter: 1\nname: t\nstate_machines:\n  m:\n    states:\n" + states +
+                           "    queue: " + queue + "\n" + extra;
+  Registry registry = tooling_registry();
+  Manager manager(test::compile_text(yaml, registry));
+  if (hooks != nullptr) manager.program().find_controller("m")->set_hooks(hooks);
+  std::ostringstream trace_out;
+  std::ostringstream report_out;
+  TraceWriter trace(trace_out);
+  cli::RunReport report(report_out, false);
+  manager.add_observer(trace);
+  manager.add_observer(report);
+  for (int i = 0; i < steps; ++i) manager.step();
+  manager.finish();
+  Story story;
+  story.report = report_out.str();
+  std::istringstream lines(trace_out.str());
+  for (std::string line; std::getline(lines, line);) story.records.push_back(Json::parse(line));
+  story.explained.emplace_back();
+  for (int step = 1; step <= steps; ++step) {
+    std::istringstream in(trace_out.str());
+    const auto explanation = explain(manager.program(), in, static_cast<std::uint64_t>(step), "m");
+    REQUIRE(explanation.status == Explanation::Status::kOk);
+    story.explained.push_back(explanation.text);
+  }
+  return story;
+}
+
+}  // namespace
+
+TEST_CASE("a state that asked to proceed ended because it proceeded", "[scl][explain][run]") {
+  const auto story = story_of("      a: scripted\n      b: scripted\n", "[a, b]", 2);
+  CHECK(story.ended(1).is_null());
+  CHECK(story.ended(2) == Json::parse(R"([{"state": "a", "cause": "proceeded"}])"));
+  CHECK(contains(story.report,
+                 "step    2  m: a ended (proceeded)\n"
+                 "step    2  m: b (cycle 2; queued: nothing)\n"));
+  CHECK(contains(story.explained[2], "    - a was deactivated: proceeded\n"));
+  CHECK(contains(story.explained[1], "    - a executed and is deactivated at step 2: proceeded\n"));
+}
+
+TEST_CASE("a state that proceeded with nothing queued ended the machine", "[scl][explain][run]") {
+  const auto story = story_of("      a: scripted\n", "[a]", 2);
+  CHECK(story.ended(2) == Json::parse(R"([{"state": "a", "cause": "queue_empty"}])"));
+  CHECK(contains(story.report,
+                 "step    2  m: a ended (proceeded, queue empty)\n"
+                 "step    2  m: finished\n"));
+  CHECK(contains(story.explained[2], "    - a was deactivated: proceeded, queue empty\n"));
+}
+
+TEST_CASE("a pre-empted state says what pre-empted it", "[scl][explain][run]") {
+  SECTION("the config's preempt: entry") {
+    const auto story = story_of(
+        "      wait: {type: scripted, params: {hold: 100}}\n"
+        "      walk: {type: scripted, params: {hold: 100}}\n",
+        "[wait, walk]", 3,
+        "    preempt:\n      - {cycle: 2, go_to: wait}\n      - {cycle: 3, go_to: walk}\n");
+    CHECK(story.ended(3) ==
+          Json::parse(R"([{"state": "wait", "cause": "preempted", "to": "walk", "preempt": 1}])"));
+    CHECK(contains(story.report,
+                   "step    3  m: wait ended (pre-empted by walk (preempt: at cycle 3))\n"));
+    CHECK(contains(story.explained[3],
+                   "    - wait was deactivated: pre-empted by walk (preempt: at cycle 3)\n"));
+    // At cycle 2 the pre-emption planned wait again: the wait of cycle 1 ended for it.
+    CHECK(story.ended(2)[0]["to"] == "wait");
+  }
+  SECTION("a hook, after the state had asked to proceed") {
+    struct ButtonPress : ControllerHooks {
+      bool pre_step(Controller& controller, Plan& plan) override {
+        if (controller.cycle() != 2) return false;
+        plan.go_to("walk");
+        return true;
+      }
+    } hooks;
+    const auto story =
+        story_of("      wait: scripted\n      walk: scripted\n      other: scripted\n",
+                 "[wait, other]", 2, "", &hooks);
+    CHECK(story.ended(2) == Json::parse(R"([{"state": "wait", "cause": "preempted", "to": "walk",
+                                             "proceeded": true}])"));
+    CHECK(contains(story.report,
+                   "step    2  m: wait ended (pre-empted by walk; it had asked to proceed)\n"));
+    CHECK(contains(story.explained[2],
+                   "    - wait was deactivated: pre-empted by walk; it had asked to proceed\n"));
+  }
+}
+
+TEST_CASE("a state that went to another with go_to says so", "[scl][explain][run]") {
+  const auto story = story_of(
+      "      a: {type: test.Planner, params: {op: go_to, target: c}}\n"
+      "      b: scripted\n      c: scripted\n",
+      "[a, b, b]", 2);
+  CHECK(story.ended(2) == Json::parse(R"([{"state": "a", "cause": "go_to", "to": "c"}])"));
+  CHECK(contains(story.report, "step    2  m: a ended (go_to c)\n"));
+  CHECK(contains(story.explained[2], "    - a was deactivated: go_to c\n"));
+}
+
+TEST_CASE("a state that terminated its machine says so", "[scl][explain][run]") {
+  SECTION("itself, in the step it ran") {
+    const auto story = story_of(
+        "      a: {type: scripted, params: {terminate: true}}\n      b: scripted\n", "[a, b]", 1);
+    CHECK(story.ended(1) == Json::parse(R"([{"state": "a", "cause": "terminated", "by": "a"}])"));
+    CHECK(contains(story.report,
+                   "step    1  m: a ended (terminated)\n"
+                   "step    1  m: finished\n"));
+    CHECK(contains(story.explained[1], "    - a was deactivated: terminated\n"));
+  }
+  SECTION("the state after a proceeding one, in its activate()") {
+    const auto story = story_of(
+        "      a: scripted\n      b: {type: test.Planner, params: {op: terminate_in_activate}}\n",
+        "[a, b]", 2);
+    CHECK(story.ended(2) == Json::parse(R"([{"state": "a", "cause": "proceeded"},
+                                            {"state": "b", "cause": "terminated", "by": "b"}])"));
+    CHECK(contains(story.report,
+                   "step    2  m: a ended (proceeded)\n"
+                   "step    2  m: b (cycle 2; queued: nothing)\n"
+                   "step    2  m: b ended (terminated)\n"
+                   "step    2  m: finished\n"));
+    CHECK(contains(story.explained[2],
+                   "    - a was deactivated: proceeded\n"
+                   "    - b became the current state (the head of the queue) "
+                   "and was activated\n"
+                   "    - b was deactivated: terminated\n"));
+  }
+}
+
+TEST_CASE("a planned state shows its per-instance params", "[scl][explain][run]") {
+  // From the config's queue, and from a Plan call at run time (x passed by test.Planner).
+  const auto story = story_of(
+      "      p: test.Pose\n      a: {type: test.Planner, params: {op: append, target: p, "
+      "x: 2.5}}\n",
+      "[{p: {x: 1.25}}, a]", 4);
+  CHECK(story.records[1]["controllers"]["m"]["params"] == Json::parse(R"({"x": 1.25})"));
+  CHECK(story.ended(2) ==
+        Json::parse(R"([{"state": "p", "params": {"x": 1.25}, "cause": "proceeded"}])"));
+  CHECK_FALSE(story.records[2]["controllers"]["m"].contains("params"));  // a has none of its own
+  CHECK(story.records[3]["controllers"]["m"]["params"] == Json::parse(R"({"x": 2.5})"));
+  CHECK(contains(story.report,
+                 "step    1  m: p {x: 1.25} (cycle 1; queued: a)\n"
+                 "step    2  m: p {x: 1.25} ended (proceeded)\n"
+                 "step    2  m: a (cycle 2; queued: p)\n"
+                 "step    3  m: a ended (proceeded)\n"
+                 "step    3  m: p {x: 2.5} (cycle 3; queued: nothing)\n"
+                 "step    4  m: p {x: 2.5} ended (proceeded, queue empty)\n"));
+  CHECK(contains(story.explained[1], "after the step: state p {x: 1.25}; queue: a\n"));
+  CHECK(contains(story.explained[2], "    - p {x: 1.25} was deactivated: proceeded\n"));
+  CHECK(contains(story.explained[3],
+                 "    - p {x: 2.5} became the current state (the head of the queue)"));
+}
+
+TEST_CASE("explain reads a trace of a run reloaded with --watch", "[explain][reload]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const Program program = load_config(kWalkAndKick, registry, diagnostics);
+  std::vector<std::string> lines;
+  {
+    std::istringstream in(trace_of(kWalkAndKick, 10));
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+  }
+  REQUIRE(lines.size() == 11);
+  // The header a reload after step 5 writes, for the program it swapped in.
+  const auto reload_header = [](std::string header) {
+    const std::string start = "{\"arbiter_trace\": 1, ";
+    REQUIRE(header.rfind(start, 0) == 0);
+    return start + "\"reload\": 1, \"after_step\": 5, " + header.substr(start.size());
+  };
+  const auto reloaded = [&](const std::string& header) {
+    std::string text;
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      if (i == 6) text += reload_header(header) + "\n";
+      text += lines[i] + "\n";
+    }
+    return text;
+  };
+  const auto explain_text = [&](const std::string& trace, std::uint64_t step) {
+    std::istringstream in(trace);
+    return explain(program, in, step, "search_for_ball");
+  };
+  std::string other_header;
+  std::getline(std::istringstream(trace_of("configs/paper/hierarchical.yaml", 1)) >> std::ws,
+               other_header);
+
+  // Reloaded into the config given: steps on both sides of the reload are explained.
+  const std::string same = reloaded(lines[0]);
+  CHECK(explain_text(same, 3).status == Explanation::Status::kOk);
+  std::string whole;
+  for (const auto& line : lines) whole += line + "\n";
+  const auto after = explain_text(same, 7);
+  REQUIRE(after.status == Explanation::Status::kOk);
+  CHECK(after.text == explain_text(whole, 7).text);
+
+  // Reloaded into another config: the steps before it still match this one, those after do not.
+  const std::string other = reloaded(other_header);
+  CHECK(explain_text(other, 5).status == Explanation::Status::kOk);
+  const auto mismatch = explain_text(other, 7);
+  CHECK(mismatch.status == Explanation::Status::kBadTrace);
+  CHECK(mismatch.text == "the trace was written for 'hierarchical', not for 'walk_and_kick'");
+}
+
+TEST_CASE("explain reports what it cannot explain", "[explain]") {
+  Registry registry = tooling_registry();
+  Diagnostics diagnostics;
+  const Program program = load_config(kWalkAndKick, registry, diagnostics);
+  const std::string trace_text = trace_of(kWalkAndKick, 20);
+  const auto explain_text = [&](const std::string& trace, std::uint64_t step,
+                                const std::string& target) {
+    std::istringstream in(trace);
+    return explain(program, in, step, target);
+  };
+  auto result = explain_text(trace_text, 8, "search_for_bal");
+  CHECK(result.status == Explanation::Status::kNotFound);
+  REQUIRE(!result.notes.empty());
+  CHECK(contains(result.notes[0], "did you mean 'search_for_ball'?"));
+  result = explain_text(trace_text, 21, "search_for_ball");
+  CHECK(result.status == Explanation::Status::kNotFound);
+  CHECK(result.text == "the trace has steps 1 to 20, not step 21");
+  result = explain_text(trace_of("configs/paper/hierarchical.yaml", 3), 2, "kick_ball");
+  CHECK(result.status == Explanation::Status::kBadTrace);
+  CHECK(result.text == "the trace was written for 'hierarchical', not for 'walk_and_kick'");
+  result = explain_text("{\"arbiter_trace\": 1, \"name\": \"walk_and_kick\"\n", 1, "kick_ball");
+  CHECK(result.status == Explanation::Status::kBadTrace);
+}
+
+TEST_CASE("arbiter explain runs from a trace file", "[explain][cli]") {
+  const fs::path trace =
+      fs::temp_directory_path() / ("arbiter_explain_" + std::to_string(::getpid()) + ".jsonl");
+  REQUIRE(
+      run_cli(std::string("run -q --steps 20 --trace \"") + trace.string() + "\" " + kWalkAndKick)
+          .exit_code == 0);
+  const std::string base =
+      std::string("explain ") + kWalkAndKick + " --trace \"" + trace.string() + "\"";
+  const auto ok = run_cli(base + " --step 8 search_for_ball");
+  CHECK(ok.exit_code == 0);
+  CHECK(ok.out == read_text(kGoldenDir / "explain_search_for_ball.txt"));
+  CHECK(run_cli(base + " --step 8 control/search_for_ball").exit_code == 0);
+  const auto unknown = run_cli(base + " --step 8 nobody");
+  CHECK(unknown.exit_code == 2);
+  CHECK(contains(unknown.err, "arbiter explain: 'nobody' names no behaviour"));
+  CHECK(run_cli(base + " --step 99 kick_ball").exit_code == 2);
+  CHECK(run_cli(std::string("explain ") + kWalkAndKick + " --step 1 kick_ball").exit_code == 2);
+  fs::remove(trace);
+}
