@@ -202,7 +202,7 @@ class Linter {
         diagnostics_
             .warning(name.location, "unknown-lint",
                      fmt::format("'{}' names no lint; it silences nothing", name.text))
-            .notes.push_back(suggest(name.text, known));
+            .unknown_name(name.text, known);
       }
     };
     check(model_.lint_ignore);

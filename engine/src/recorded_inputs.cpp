@@ -167,8 +167,8 @@ void RecordedInputs::check_places(const Model& model, const SourceLocation& wher
                fmt::format("recorded input '{}' has no place in this config: no interface layer "
                            "declares an actuator '{}'",
                            column.name, column.name))
-        .notes.push_back(declared.empty() ? "the config has no interface layer"
-                                          : suggest(column.name, declared, "interface actuators"));
+        .unknown_name(column.name, declared, "the config has no interface layer",
+                      "interface actuators");
   }
 }
 

@@ -65,13 +65,12 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
     }
     if (matches.size() == 1) return matches.front();
     if (matches.empty()) {
-      auto& error = diagnostics.error(
-          name.location, "unknown-behaviour",
-          fmt::format("'{}' is not a behaviour of config '{}'", name.text, program.name));
       std::vector<std::string> known = behaviour_names;
       for (const auto& behaviour : program.behaviours) known.push_back(behaviour.name);
-      const auto hint = suggest(name.text, known);
-      if (!hint.empty()) error.notes.push_back(hint);
+      diagnostics
+          .error(name.location, "unknown-behaviour",
+                 fmt::format("'{}' is not a behaviour of config '{}'", name.text, program.name))
+          .unknown_name(name.text, known);
       return std::nullopt;
     }
     std::vector<std::string> choices;
@@ -106,11 +105,11 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
         if (!actuator) {
           std::vector<std::string> known;
           for (const auto& compiled : program.actuators) known.push_back(compiled.name);
-          auto& error = diagnostics.error(expectation.target.location, "unknown-actuator",
-                                          fmt::format("'{}' is not an actuator of config '{}'",
-                                                      expectation.target.text, program.name));
-          const auto hint = suggest(expectation.target.text, known);
-          if (!hint.empty()) error.notes.push_back(hint);
+          diagnostics
+              .error(expectation.target.location, "unknown-actuator",
+                     fmt::format("'{}' is not an actuator of config '{}'", expectation.target.text,
+                                 program.name))
+              .unknown_name(expectation.target.text, known);
           continue;
         }
         const ValueType& type = *program.actuators[*actuator].type;
@@ -137,11 +136,11 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
           if (program.controllers[c]->name() == expectation.target.text) resolved.index = c;
         }
         if (resolved.index == kUnbound) {
-          auto& error = diagnostics.error(expectation.target.location, "unknown-machine",
-                                          fmt::format("'{}' is not a state machine of config '{}'",
-                                                      expectation.target.text, program.name));
-          const auto hint = suggest(expectation.target.text, known);
-          error.notes.push_back(hint.empty() ? "the config has no state machines" : hint);
+          diagnostics
+              .error(expectation.target.location, "unknown-machine",
+                     fmt::format("'{}' is not a state machine of config '{}'",
+                                 expectation.target.text, program.name))
+              .unknown_name(expectation.target.text, known, "the config has no state machines");
           continue;
         }
         const Controller& controller = *program.controllers[resolved.index];
@@ -152,11 +151,10 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
         bool ok = true;
         for (const auto& state : named) {
           if (controller.find_state(state)) continue;
-          auto& error = diagnostics.error(
-              expectation.target.location, "unknown-state",
-              fmt::format("state machine '{}' has no state '{}'", controller.name(), state));
-          const auto hint = suggest(state, states);
-          if (!hint.empty()) error.notes.push_back(hint);
+          diagnostics
+              .error(expectation.target.location, "unknown-state",
+                     fmt::format("state machine '{}' has no state '{}'", controller.name(), state))
+              .unknown_name(state, states);
           ok = false;
         }
         if (!ok) continue;
