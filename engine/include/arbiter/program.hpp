@@ -219,9 +219,4 @@ class Program {
 std::optional<Program> compile(const Model& model, const Registry& registry,
                                Diagnostics& diagnostics);
 
-/// Reports each layer's inhibition cycle, as compile() does, for a model that may have other
-/// errors: inhibitions that name no valid behaviour are left out. Lets the load pipeline report a
-/// cycle in the same pass as the model's problems.
-void check_inhibition_cycles(const Model& model, Diagnostics& diagnostics);
-
 }  // namespace arbiter
