@@ -174,6 +174,7 @@ class InstanceInit final : public InitContext {
   Diagnostic& warning(const SourceLocation& at, std::string message) override {
     return diagnostics_.warning(at, "class-warning", std::move(message));
   }
+  Diagnostics& diagnostics() override { return diagnostics_; }
 
  protected:
   const ParamValue* find_param(std::string_view param_name,

@@ -76,6 +76,9 @@ class InitContext {
   /// which notes can be added: `ctx.error(at, "...").notes.push_back("did you mean ...")`.
   virtual Diagnostic& error(const SourceLocation& where, std::string message) = 0;
   virtual Diagnostic& warning(const SourceLocation& where, std::string message) = 0;
+  /// The load's diagnostics, for reading a structured param with Fields (<arbiter/fields.hpp>):
+  /// its mistakes are then reported with the model's codes and notes.
+  virtual Diagnostics& diagnostics() = 0;
 
  protected:
   virtual const ParamValue* find_param(std::string_view param_name,

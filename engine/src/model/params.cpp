@@ -8,8 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "arbiter/fields.hpp"
 #include "builder.hpp"
-#include "fields.hpp"
 
 namespace arbiter::detail {
 
