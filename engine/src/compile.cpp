@@ -20,8 +20,8 @@ using detail::PositionEdge;
 /// Who steps each controller, filled as behaviours and states claim them.
 struct Claim {
   bool claimed = false;
-  std::uint32_t layer = kUnbound;      ///< the layer whose sensors the states read
-  std::uint32_t owner = kUnbound;  ///< the behaviour whose outputs the states write through
+  std::uint32_t layer = kNoIndex;      ///< the layer whose sensors the states read
+  std::uint32_t owner = kNoBehaviour;  ///< the behaviour whose outputs the states write through
 };
 
 /// What an instance being initialised belongs to, beyond its layer.
@@ -158,7 +158,7 @@ class InstanceInit final : public InitContext {
       const bool in_program = !program_.layers.empty() && &layer_ >= &program_.layers.front() &&
                               &layer_ <= &program_.layers.back();
       claim = {true,
-               in_program ? static_cast<std::uint32_t>(&layer_ - program_.layers.data()) : kUnbound,
+               in_program ? static_cast<std::uint32_t>(&layer_ - program_.layers.data()) : kNoIndex,
                owner_};
       controller.set_owned(owner_);
       return &controller;
@@ -388,7 +388,7 @@ class Compiler {
     CompiledLayer& layer = program_.layers[l];
     if (decl.interface != nullptr) {
       layer.interface = decl.interface->make_interface();
-      InstanceInit init(program_, registry_, diagnostics_, layer, kUnbound, layer.name,
+      InstanceInit init(program_, registry_, diagnostics_, layer, kNoBehaviour, layer.name,
                         layer.location, *decl.interface, decl.params, decl.ports,
                         InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
       guarded_init(diagnostics_, *decl.interface, layer.location,
@@ -454,9 +454,9 @@ class Compiler {
       for (std::uint32_t c = 0; c < model_.state_machines.size(); ++c) {
         if (model_.state_machines[c].name.text == name) return c;
       }
-      return kUnbound;
+      return kNoController;
     };
-    std::vector<std::uint32_t> parent(program_.controllers.size(), kUnbound);
+    std::vector<std::uint32_t> parent(program_.controllers.size(), kNoController);
     for (std::uint32_t c = 0; c < model_.state_machines.size(); ++c) {
       Controller& controller = *program_.controllers[c];
       std::vector<Controller*> children;
@@ -464,7 +464,7 @@ class Compiler {
       for (std::uint32_t s = 0; s < decl.states.size(); ++s) {
         if (!decl.states[s].machine) continue;
         const auto child = index_of(decl.states[s].machine->text);
-        if (child == kUnbound) continue;
+        if (child == kNoController) continue;
         if (claims_[child].claimed) {
           diagnostics_.error(decl.states[s].machine->location, "machine-owned-twice",
                              fmt::format("state machine '{}' is stepped by a behaviour and "
@@ -481,7 +481,7 @@ class Compiler {
     }
     for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
       auto root = c;
-      while (parent[root] != kUnbound && !claims_[root].claimed) root = parent[root];
+      while (parent[root] != kNoController && !claims_[root].claimed) root = parent[root];
       if (root != c) claims_[c] = {true, claims_[root].layer, claims_[root].owner};
     }
     static const CompiledLayer kNoLayer;
@@ -490,9 +490,9 @@ class Compiler {
       const StateMachineDecl& decl = model_.state_machines[c];
       const Claim& claim = claims_[c];
       const CompiledLayer& layer =
-          claim.layer == kUnbound ? kNoLayer : program_.layers[claim.layer];
+          claim.layer == kNoIndex ? kNoLayer : program_.layers[claim.layer];
       const std::vector<Name>* sensors =
-          claim.layer == kUnbound ? nullptr : &model_.layers[claim.layer].sensors;
+          claim.layer == kNoIndex ? nullptr : &model_.layers[claim.layer].sensors;
       std::vector<ParamSet> params(decl.states.size());
       std::vector<std::vector<PortBinding>> ports(decl.states.size());
       for (std::uint32_t s = 0; s < decl.states.size(); ++s) {

@@ -95,9 +95,9 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
         if (!behaviour) continue;
         resolved.index = *behaviour;
         for (const auto& inhibitor : expectation.names) {
-          if (!find_behaviour({inhibitor, expectation.target.location})) resolved.index = kUnbound;
+          if (!find_behaviour({inhibitor, expectation.target.location})) resolved.index = kNoIndex;
         }
-        if (resolved.index == kUnbound) continue;
+        if (resolved.index == kNoIndex) continue;
         break;
       }
       case Expectation::Kind::kActuator: {
@@ -130,12 +130,12 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
       case Expectation::Kind::kState:
       case Expectation::Kind::kQueue: {
         std::vector<std::string> known;
-        resolved.index = kUnbound;
+        resolved.index = kNoIndex;
         for (std::uint32_t c = 0; c < program.controllers.size(); ++c) {
           known.push_back(program.controllers[c]->name());
           if (program.controllers[c]->name() == expectation.target.text) resolved.index = c;
         }
-        if (resolved.index == kUnbound) {
+        if (resolved.index == kNoIndex) {
           diagnostics
               .error(expectation.target.location, "unknown-machine",
                      fmt::format("'{}' is not a state machine of config '{}'",
@@ -186,7 +186,7 @@ void ExpectationChecks::check(const Manager& manager, double tolerance) {
              s < program.actuator_slot_begin[resolved.index + 1]; ++s) {
           const auto owner = program.slots[program.actuator_slots[s]].owner;
           // The writers whose value could have counted: the active ones.
-          if (owner != kUnbound && manager.active(owner)) {
+          if (owner != kNoBehaviour && manager.active(owner)) {
             failure.explain.push_back(qualified(program, owner));
           }
         }

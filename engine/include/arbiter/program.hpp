@@ -143,7 +143,7 @@ struct CompiledActuator {
 /// One writer's contribution to an actuator: a behaviour's (or an interface's) output.
 struct WriterSlot {
   std::uint32_t actuator = 0;
-  std::uint32_t owner = 0;  ///< a behaviour index, or kUnbound for the layer's interface
+  std::uint32_t owner = 0;  ///< a behaviour index, or kNoBehaviour for the layer's interface
   std::uint32_t offset = 0;
 };
 
