@@ -2,8 +2,9 @@
 # The core library (arbiter::core, the one a plugin links) holds what runs on the robot, and the
 # tools library the rest: checked on the dynamic symbols of the two built libraries.
 #   1. each entry point of the tools (dumps, lints, explain, the schema, the class catalog, trace
-#      reading and diffing, scenario tests, class substitution) is defined in the tools library
-#      and not in the core one;
+#      reading and diffing, reading recordings and their MCAP container, scenario tests, class
+#      substitution) is defined in the tools library and not in the core one: a robot writes
+#      recordings, it does not read them;
 #   2. the core library leaves no arbiter symbol undefined: it calls nothing in the tools library.
 #   core_library_test.sh CORE_LIBRARY TOOLS_LIBRARY
 set -euo pipefail
@@ -19,7 +20,7 @@ core_undefined=$(symbols "$core" --undefined-only)
 failed=0
 for entry in dump_text dump_dot dump_json explain check_trace_header lint lint_codes \
     config_schema catalog_text catalog_json read_trace open_trace diff_traces read_scenario \
-    run_scenario substitute; do
+    run_scenario substitute read_recorded_run mcap::Reader::next; do
   pattern="^arbiter::$entry(\[abi:[a-z0-9]+\])?\("  # functions returning std::string carry a tag
   if ! grep -qE "$pattern" <<<"$tools_defined"; then
     echo "FAILED: arbiter::$entry is not defined in $tools"

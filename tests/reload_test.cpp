@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include "../engine/src/carryover.hpp"  // internal: one test stages a carry-over by hand
 #include "arbiter/reload.hpp"
 #include "arbiter/trace.hpp"
 #include "counting_new.hpp"
@@ -465,7 +466,7 @@ TEST_CASE("1000 reloads of the soccer demo keep resident memory flat", "[reload]
 TEST_CASE("a carry-over plan that does not fit is refused before it reaches step()", "[reload]") {
   Manager manager(test::compile_text(kTwoProbes, registry()));
   manager.step();
-  CHECK_THROWS_AS(manager.stage(test::compile_text(kTwoProbes, registry()), CarryPlan{}),
+  CHECK_THROWS_AS(manager.stage(test::compile_text(kTwoProbes, registry()), detail::Carryover{}),
                   std::invalid_argument);
   manager.step();
   CHECK(manager.reloads() == 0);

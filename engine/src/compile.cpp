@@ -2,220 +2,26 @@
 
 #include <algorithm>
 #include <cassert>
-#include <deque>
-#include <mutex>
-#include <queue>
 #include <unordered_map>
 
 #include "arbiter/init_context.hpp"
 #include "arbiter/program.hpp"
+#include "layer_order.hpp"
 
 namespace arbiter {
 
-std::optional<std::uint32_t> Program::find_behaviour(std::string_view layer,
-                                                     std::string_view name) const {
-  for (const auto& compiled : layers) {
-    if (compiled.name != layer) continue;
-    for (std::uint32_t b = compiled.behaviour_begin; b < compiled.behaviour_end; ++b) {
-      if (behaviours[b].name == name) return b;
-    }
-  }
-  return std::nullopt;
-}
-
-Controller* Program::find_controller(std::string_view name) const {
-  for (const auto& controller : controllers) {
-    if (controller->name() == name) return controller.get();
-  }
-  return nullptr;
-}
-
-std::optional<std::uint32_t> Program::find_actuator(std::string_view name) const {
-  for (std::uint32_t a = 0; a < actuators.size(); ++a) {
-    if (actuators[a].name == name) return a;
-  }
-  return std::nullopt;
-}
-
-Inhibitions::Inhibitions(std::vector<std::string> files, std::vector<Declared> declared,
-                         Recipes recipes, const std::vector<CompiledBehaviour>& behaviours)
-    : files_(std::move(files)),
-      declared_(std::move(declared)),
-      recipes_(std::move(recipes)),
-      behaviours_(behaviours.data()),
-      lists_(std::make_shared<Lists>()) {
-  recipes_.terms.shrink_to_fit();  // held for the program's life
-  const std::size_t n = behaviours.size();
-  declared_begin_.assign(n + 1, 0);
-  chaining_out_begin_.assign(n + 1, 0);
-  for (const auto& inhibition : declared_) {
-    ++declared_begin_[inhibition.inhibited + 1];
-    if (inhibition.chaining) ++chaining_out_begin_[inhibition.inhibitor + 1];
-  }
-  for (std::size_t b = 0; b < n; ++b) {
-    declared_begin_[b + 1] += declared_begin_[b];
-    chaining_out_begin_[b + 1] += chaining_out_begin_[b];
-  }
-  // declared_ is by inhibited, so each inhibitor's list comes out by inhibited too.
-  chaining_out_.resize(chaining_out_begin_[n]);
-  std::vector<std::uint32_t> fill(chaining_out_begin_.begin(), chaining_out_begin_.end() - 1);
-  for (std::uint32_t d = 0; d < declared_.size(); ++d) {
-    if (declared_[d].chaining) chaining_out_[fill[declared_[d].inhibitor]++] = d;
-  }
-  // A block term stands for its behaviour and everything chained to it.
-  std::vector<std::size_t> chained(n, 0);
-  closed_begin_.assign(n + 1, 0);
-  for (std::size_t b = 0; b < n; ++b) {
-    std::size_t count = 0;
-    for (auto t = recipes_.begin[b]; t < recipes_.split[b]; ++t) {
-      const std::uint32_t term = recipes_.terms[t];
-      count += (term & 1u) != 0 ? 1 + chained[term >> 1] : 1;
-    }
-    chained[b] = count;
-    closed_begin_[b + 1] = closed_begin_[b] + count + (recipes_.begin[b + 1] - recipes_.split[b]);
-  }
-}
-
-void Inhibitions::closed(std::uint32_t behaviour, std::vector<std::uint32_t>& out) const {
-  out.clear();
-  const auto& [begin, split, terms] = recipes_;
-  out.insert(out.end(), terms.begin() + begin[behaviour], terms.begin() + begin[behaviour + 1]);
-  // `out` is its own work list: a block term expands into its behaviour's chained terms.
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    const std::uint32_t term = out[i];
-    const std::uint32_t of = term >> 1;
-    out[i] = of;
-    if ((term & 1u) != 0) {
-      out.insert(out.end(), terms.begin() + begin[of], terms.begin() + split[of]);
-    }
-  }
-  // The expansion is disjoint, so a large one is put in order through a bitmap of the range it
-  // spans, in linear time (a long chain's behaviours each have thousands).
-  constexpr std::size_t kSortBelow = 64;
-  if (out.size() < kSortBelow) {
-    std::sort(out.begin(), out.end());
-    return;
-  }
-  const auto [low, high] = std::minmax_element(out.begin(), out.end());
-  const std::uint32_t first = *low;
-  std::vector<std::uint64_t> bits((*high - first) / 64 + 1, 0);
-  for (const auto inhibitor : out)
-    bits[(inhibitor - first) / 64] |= 1ull << ((inhibitor - first) % 64);
-  out.clear();
-  for (std::size_t w = 0; w < bits.size(); ++w) {
-    for (std::uint64_t word = bits[w]; word != 0; word &= word - 1) {
-      out.push_back(first + static_cast<std::uint32_t>(64 * w + __builtin_ctzll(word)));
-    }
-  }
-}
-
-std::vector<std::uint32_t> Inhibitions::closed(std::uint32_t behaviour) const {
-  std::vector<std::uint32_t> out;
-  out.reserve(closed_count(behaviour));
-  closed(behaviour, out);
-  return out;
-}
-
-const Inhibitions::Declared* Inhibitions::find_declared(std::uint32_t inhibitor,
-                                                        std::uint32_t inhibited) const {
-  if (inhibited + 1 >= declared_begin_.size()) return nullptr;
-  const auto first = declared_.begin() + declared_begin_[inhibited];
-  const auto last = declared_.begin() + declared_begin_[inhibited + 1];
-  const auto found = std::lower_bound(
-      first, last, inhibitor,
-      [](const Declared& declared, std::uint32_t value) { return declared.inhibitor < value; });
-  return found != last && found->inhibitor == inhibitor ? &*found : nullptr;
-}
-
-struct Inhibitions::Lists {
-  std::once_flag declared_once;
-  std::vector<CompiledInhibition> declared;  // as declared_
-  std::once_flag all_once;
-  std::vector<CompiledInhibition> all;
-};
-
-const CompiledInhibition* Inhibitions::declared(std::uint32_t inhibitor,
-                                                std::uint32_t inhibited) const {
-  const Declared* found = find_declared(inhibitor, inhibited);
-  if (found == nullptr) return nullptr;
-  std::call_once(lists_->declared_once, [&] {
-    lists_->declared.reserve(declared_.size());
-    for (const auto& declared : declared_) {
-      lists_->declared.push_back(make(declared.inhibitor, declared.inhibited));
-    }
-  });
-  return &lists_->declared[static_cast<std::size_t>(found - declared_.data())];
-}
-
-CompiledInhibition Inhibitions::make(std::uint32_t inhibitor, std::uint32_t inhibited) const {
-  CompiledInhibition inhibition;
-  inhibition.inhibitor = inhibitor;
-  inhibition.inhibited = inhibited;
-  if (const Declared* declared = find_declared(inhibitor, inhibited)) {
-    inhibition.chaining = declared->chaining;
-    inhibition.location = {files_[declared->file], declared->line, declared->column};
-  } else {
-    inhibition.chaining = true;
-    inhibition.implicit = true;
-    inhibition.location = behaviours_[inhibited].location;
-  }
-  return inhibition;
-}
-
-std::vector<CompiledInhibition> Inhibitions::of(std::uint32_t behaviour) const {
-  std::vector<CompiledInhibition> out;
-  for (const auto inhibitor : closed(behaviour)) out.push_back(make(inhibitor, behaviour));
-  return out;
-}
-
-const std::vector<CompiledInhibition>& Inhibitions::list() const {
-  static const std::vector<CompiledInhibition> kNone;
-  if (!lists_) return kNone;
-  std::call_once(lists_->all_once, [&] {
-    lists_->all.reserve(size());
-    std::vector<std::uint32_t> inhibitors;
-    for (std::uint32_t b = 0; b + 1 < closed_begin_.size(); ++b) {
-      closed(b, inhibitors);
-      for (const auto inhibitor : inhibitors) lists_->all.push_back(make(inhibitor, b));
-    }
-  });
-  return lists_->all;
-}
-
-std::vector<std::uint32_t> Inhibitions::chain(std::uint32_t from, std::uint32_t to) const {
-  // Breadth-first over declared chaining inhibitions: the shortest chain explains best.
-  std::unordered_map<std::uint32_t, std::uint32_t> parent{{from, from}};
-  std::deque<std::uint32_t> frontier{from};
-  while (!frontier.empty()) {
-    const std::uint32_t at = frontier.front();
-    frontier.pop_front();
-    if (at == to) break;
-    for (auto i = chaining_out_begin_[at]; i < chaining_out_begin_[at + 1]; ++i) {
-      const std::uint32_t next = declared_[chaining_out_[i]].inhibited;
-      if (parent.emplace(next, at).second) frontier.push_back(next);
-    }
-  }
-  if (parent.count(to) == 0 || from == to) return {};
-  std::vector<std::uint32_t> path{to};
-  while (path.back() != from) path.push_back(parent[path.back()]);
-  std::reverse(path.begin(), path.end());
-  return path;
-}
-
 namespace {
 
-struct Edge {
-  std::uint32_t from = 0;  // declaration indices within the layer
-  std::uint32_t to = 0;
-  bool chaining = false;
-  SourceLocation location;
-};
+using detail::LayerClosure;
+using detail::LayerGraph;
+using detail::order_behaviours;
+using detail::PositionEdge;
 
 /// Who steps each controller, filled as behaviours and states claim them.
 struct Claim {
   bool claimed = false;
-  std::uint32_t layer = kUnbound;  ///< the layer whose sensors the states read
-  std::uint32_t owner = kUnbound;  ///< the behaviour whose outputs the states write through
+  std::uint32_t layer = kNoIndex;      ///< the layer whose sensors the states read
+  std::uint32_t owner = kNoBehaviour;  ///< the behaviour whose outputs the states write through
 };
 
 /// What an instance being initialised belongs to, beyond its layer.
@@ -231,308 +37,6 @@ struct InitScope {
   Controller* controller = nullptr;            ///< for states: their controller
   const StateMachineDecl* machine = nullptr;   ///< ... and its declaration
   const std::vector<Name>* sensors = nullptr;  ///< the layer's sensors as declared, if it has one
-};
-
-// Reports one shortest cycle of the closed graph among the behaviours Kahn could not order.
-void report_cycle(const LayerDecl& layer, const std::vector<Edge>& edges,
-                  const std::vector<std::vector<std::uint32_t>>& out,
-                  const std::vector<bool>& remaining, Diagnostics& diagnostics) {
-  const std::size_t n = remaining.size();
-  // A closed edge u→v: declared, or implied by a chain of two or more chaining edges.
-  auto chain_reach = [&](std::uint32_t from) {
-    std::vector<std::int64_t> parent(n, -1);
-    std::deque<std::uint32_t> frontier{from};
-    while (!frontier.empty()) {
-      const auto at = frontier.front();
-      frontier.pop_front();
-      for (auto e : out[at]) {
-        if (!edges[e].chaining || parent[edges[e].to] != -1 || edges[e].to == from) continue;
-        parent[edges[e].to] = e;
-        frontier.push_back(edges[e].to);
-      }
-    }
-    return parent;  // edge id into each reachable behaviour
-  };
-  std::vector<std::uint32_t> best;
-  std::vector<std::vector<std::int64_t>> reach(n);
-  constexpr std::size_t kMaxStarts = 256;
-  std::size_t starts = 0;
-  for (std::uint32_t s = 0; s < n && starts < kMaxStarts; ++s) {
-    if (!remaining[s]) continue;
-    ++starts;
-    std::vector<std::int64_t> previous(n, -1);
-    std::deque<std::uint32_t> frontier{s};
-    bool closed = false;
-    std::uint32_t last = s;
-    while (!frontier.empty() && !closed) {
-      const auto at = frontier.front();
-      frontier.pop_front();
-      if (reach[at].empty()) reach[at] = chain_reach(at);
-      std::vector<std::uint32_t> successors;
-      for (auto e : out[at]) successors.push_back(edges[e].to);
-      for (std::uint32_t v = 0; v < n; ++v) {
-        if (reach[at][v] != -1) successors.push_back(v);
-      }
-      for (auto v : successors) {
-        if (v == s) {
-          closed = true;
-          last = at;
-          break;
-        }
-        if (previous[v] == -1 && remaining[v]) {
-          previous[v] = at;
-          frontier.push_back(v);
-        }
-      }
-    }
-    if (!closed) continue;
-    std::vector<std::uint32_t> cycle{last};
-    while (cycle.back() != s) cycle.push_back(static_cast<std::uint32_t>(previous[cycle.back()]));
-    std::reverse(cycle.begin(), cycle.end());
-    if (best.empty() || cycle.size() < best.size()) best = cycle;
-  }
-  const auto& names = layer.behaviours;
-  std::string text = names[best.front()].name.text;
-  std::vector<std::string> notes;
-  const SourceLocation* report_at = nullptr;
-  for (std::size_t i = 0; i < best.size(); ++i) {
-    const auto from = best[i];
-    const auto to = best[(i + 1) % best.size()];
-    const Edge* declared = nullptr;
-    for (auto e : out[from]) {
-      if (edges[e].to == to && (declared == nullptr || edges[e].chaining)) declared = &edges[e];
-    }
-    if (declared != nullptr) {
-      text += fmt::format(" {} {}", declared->chaining ? "=>" : "->", names[to].name.text);
-      notes.push_back(fmt::format("{} {} {} declared at {}", names[from].name.text,
-                                  declared->chaining ? "=>" : "->", names[to].name.text,
-                                  to_string(declared->location)));
-      if (report_at == nullptr || i + 1 == best.size()) report_at = &declared->location;
-      continue;
-    }
-    text += fmt::format(" => {} (implicit)", names[to].name.text);
-    std::vector<const Edge*> chain;
-    for (auto at = to; at != from;) {
-      const Edge& edge = edges[static_cast<std::size_t>(reach[from][at])];
-      chain.push_back(&edge);
-      at = edge.from;
-    }
-    std::reverse(chain.begin(), chain.end());
-    std::string via = names[from].name.text;
-    std::string declared_at;
-    for (const Edge* edge : chain) {
-      via += " => " + names[edge->to].name.text;
-      declared_at += (declared_at.empty() ? "" : ", ") + to_string(edge->location);
-    }
-    notes.push_back(fmt::format("{} => {} is implicit: chaining {} (declared at {})",
-                                names[from].name.text, names[to].name.text, via, declared_at));
-  }
-  auto& error =
-      diagnostics.error(report_at != nullptr ? *report_at : layer.name.location, "inhibition-cycle",
-                        fmt::format("inhibition cycle in layer '{}': {}", layer.name.text, text));
-  error.notes = std::move(notes);
-}
-
-/// A layer's declared inhibitions as a graph over its behaviours (declaration indices), and
-/// their topological order.
-struct LayerGraph {
-  std::vector<Edge> edges;
-  std::vector<std::vector<std::uint32_t>> out;  // edge ids by inhibitor
-  std::vector<std::uint32_t> order;             // all behaviours, unless there is a cycle
-};
-
-/// Kahn's algorithm, always taking the ready behaviour declared first; reports a cycle.
-/// Inhibitions naming no valid behaviour (in a model with errors) are left out.
-LayerGraph order_behaviours(const LayerDecl& layer, Diagnostics& diagnostics) {
-  const std::size_t n = layer.behaviours.size();
-  LayerGraph graph;
-  graph.out.resize(n);
-  std::unordered_map<std::string_view, std::uint32_t> index(2 * n);
-  for (std::uint32_t i = 0; i < n; ++i) index[layer.behaviours[i].name.text] = i;
-  std::vector<std::uint32_t> in_degree(n, 0);
-  for (const auto& inhibition : layer.inhibitions) {
-    const auto from = index.find(inhibition.inhibitor.text);
-    const auto to = index.find(inhibition.inhibited.text);
-    if (from == index.end() || to == index.end()) continue;
-    graph.out[from->second].push_back(static_cast<std::uint32_t>(graph.edges.size()));
-    ++in_degree[to->second];
-    graph.edges.push_back({from->second, to->second, inhibition.chaining, inhibition.location});
-  }
-  std::priority_queue<std::uint32_t, std::vector<std::uint32_t>, std::greater<>> ready;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    if (in_degree[i] == 0) ready.push(i);
-  }
-  while (!ready.empty()) {
-    const std::uint32_t next = ready.top();
-    ready.pop();
-    graph.order.push_back(next);
-    for (auto e : graph.out[next]) {
-      if (--in_degree[graph.edges[e].to] == 0) ready.push(graph.edges[e].to);
-    }
-  }
-  if (graph.order.size() != n) {
-    std::vector<bool> remaining(n, true);
-    for (auto i : graph.order) remaining[i] = false;
-    report_cycle(layer, graph.edges, graph.out, remaining, diagnostics);
-  }
-  return graph;
-}
-
-/// A declared inhibition of one layer between topological positions.
-struct PositionEdge {
-  std::uint32_t from = 0;
-  std::uint32_t to = 0;
-  bool chaining = false;
-  const SourceLocation* location = nullptr;
-};
-
-/// The chaining closure of one layer, turned into refinement recipes (Inhibitions::recipes()).
-/// chained(p), the behaviours with a chain of chaining inhibitions to p, is a bitset over earlier
-/// positions, kept only for behaviours on a chaining inhibition and only as wide as their
-/// position: at most n²/16 bytes, and only while compiling.
-class LayerClosure {
- public:
-  LayerClosure(std::size_t n, std::vector<PositionEdge> edges) : n_(n), edges_(std::move(edges)) {
-    // A pair declared both ways counts as chaining (docs/semantics.md, "Inhibitions and their
-    // closure"). The model merges duplicates; this keeps the closure right whatever it is given.
-    std::sort(edges_.begin(), edges_.end(), [](const PositionEdge& a, const PositionEdge& b) {
-      if (a.to != b.to) return a.to < b.to;
-      if (a.from != b.from) return a.from < b.from;
-      return a.chaining > b.chaining;
-    });
-    edges_.erase(std::unique(edges_.begin(), edges_.end(),
-                             [](const PositionEdge& a, const PositionEdge& b) {
-                               return a.to == b.to && a.from == b.from;
-                             }),
-                 edges_.end());
-    in_begin_.assign(n_ + 1, 0);
-    for (const auto& edge : edges_) ++in_begin_[edge.to + 1];
-    for (std::size_t p = 0; p < n_; ++p) in_begin_[p + 1] += in_begin_[p];
-
-    offset_.assign(n_, kNone);
-    for (const auto& edge : edges_) {
-      if (edge.chaining) offset_[edge.from] = offset_[edge.to] = 0;
-    }
-    std::size_t total = 0;
-    for (std::size_t p = 0; p < n_; ++p) {
-      if (offset_[p] == kNone) continue;
-      offset_[p] = total;
-      total += words(p);
-    }
-    bits_.assign(total, 0);
-    size_.assign(n_, 0);
-    for (std::uint32_t p = 0; p < n_; ++p) {
-      if (offset_[p] == kNone) continue;
-      std::uint64_t* mine = chained(p);
-      for (auto e = in_begin_[p]; e < in_begin_[p + 1]; ++e) {
-        if (!edges_[e].chaining) continue;
-        const std::uint32_t q = edges_[e].from;
-        const std::uint64_t* theirs = chained(q);
-        for (std::size_t w = 0; w < words(q); ++w) mine[w] |= theirs[w];
-        mine[q / 64] |= bit(q);
-      }
-      for (std::size_t w = 0; w < words(p); ++w) {
-        size_[p] += static_cast<std::uint32_t>(__builtin_popcountll(mine[w]));
-      }
-    }
-  }
-
-  /// The declared inhibitions, by inhibited, then inhibitor; duplicates merged.
-  const std::vector<PositionEdge>& edges() const { return edges_; }
-
-  /// Appends one recipe per behaviour, in position order; behaviour indices start at `base`.
-  /// The chained part takes the chaining inhibitor with the largest closed set as one block,
-  /// then covers the rest of chained(p) greedily: an inhibitor whose closed set is disjoint
-  /// from what is covered is one more block; one that overlaps it is a single term, and its own
-  /// chaining inhibitors are looked at in turn.
-  void append_recipes(std::uint32_t base, Inhibitions::Recipes& recipes) const {
-    std::vector<std::uint64_t> covered(n_ / 64 + 1, 0);
-    std::vector<std::uint32_t> visited(n_, 0);  // p + 1 once looked at for p
-    std::vector<std::uint32_t> pending;
-    std::vector<std::uint32_t> parents;
-    auto& terms = recipes.terms;
-    const auto single = [&](std::uint32_t q) { return 2 * (base + q); };
-    const auto block = [&](std::uint32_t q) { return 2 * (base + q) + 1; };
-    const auto cover = [&](std::uint32_t q) {
-      const std::uint64_t* theirs = chained(q);
-      for (std::size_t w = 0; w < words(q); ++w) covered[w] |= theirs[w];
-      covered[q / 64] |= bit(q);
-    };
-    for (std::uint32_t p = 0; p < n_; ++p) {
-      const std::size_t first = terms.size();
-      chaining_parents(p, pending);
-      if (pending.size() == 1) {
-        terms.push_back(block(pending[0]));
-      } else if (!pending.empty()) {
-        std::fill(covered.begin(), covered.begin() + static_cast<std::ptrdiff_t>(words(p)), 0);
-        terms.push_back(block(pending.back()));
-        cover(pending.back());
-        pending.pop_back();
-        while (!pending.empty()) {  // the largest closed set first
-          const std::uint32_t q = pending.back();
-          pending.pop_back();
-          if (visited[q] == p + 1) continue;  // covered when it was first looked at
-          visited[q] = p + 1;
-          const bool self = (covered[q / 64] & bit(q)) != 0;
-          bool inside = self;
-          bool outside = !self;
-          const std::uint64_t* theirs = chained(q);
-          for (std::size_t w = 0; w < words(q) && !(inside && outside); ++w) {
-            inside = inside || (theirs[w] & covered[w]) != 0;
-            outside = outside || (theirs[w] & ~covered[w]) != 0;
-          }
-          if (!outside) continue;
-          if (!inside) {
-            terms.push_back(block(q));
-            cover(q);
-            continue;
-          }
-          if (!self) {
-            terms.push_back(single(q));
-            covered[q / 64] |= bit(q);
-          }
-          chaining_parents(q, parents);
-          pending.insert(pending.end(), parents.begin(), parents.end());
-        }
-      }
-      std::sort(terms.begin() + static_cast<std::ptrdiff_t>(first), terms.end());
-      recipes.split.push_back(static_cast<std::uint32_t>(terms.size()));
-      const std::size_t rest = terms.size();
-      for (auto e = in_begin_[p]; e < in_begin_[p + 1]; ++e) {
-        const std::uint32_t q = edges_[e].from;
-        if (edges_[e].chaining) continue;
-        if (offset_[p] != kNone && (chained(p)[q / 64] & bit(q)) != 0) continue;
-        terms.push_back(single(q));
-      }
-      std::sort(terms.begin() + static_cast<std::ptrdiff_t>(rest), terms.end());
-      recipes.begin.push_back(static_cast<std::uint32_t>(terms.size()));
-    }
-  }
-
- private:
-  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
-  static std::size_t words(std::size_t p) { return p / 64 + 1; }
-  static std::uint64_t bit(std::size_t p) { return std::uint64_t{1} << (p % 64); }
-  std::uint64_t* chained(std::size_t p) { return bits_.data() + offset_[p]; }
-  const std::uint64_t* chained(std::size_t p) const { return bits_.data() + offset_[p]; }
-
-  // p's chaining inhibitors, the one with the fewest chained behaviours first.
-  void chaining_parents(std::uint32_t p, std::vector<std::uint32_t>& out) const {
-    out.clear();
-    for (auto e = in_begin_[p]; e < in_begin_[p + 1]; ++e) {
-      if (edges_[e].chaining) out.push_back(edges_[e].from);
-    }
-    std::sort(out.begin(), out.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return size_[a] != size_[b] ? size_[a] < size_[b] : a < b;
-    });
-  }
-
-  std::size_t n_;
-  std::vector<PositionEdge> edges_;
-  std::vector<std::uint32_t> in_begin_;  // edges_ by inhibited
-  std::vector<std::size_t> offset_;      // into bits_; kNone off the chaining inhibitions
-  std::vector<std::uint64_t> bits_;
-  std::vector<std::uint32_t> size_;  // |chained(p)|
 };
 
 class InstanceInit final : public InitContext {
@@ -578,8 +82,7 @@ class InstanceInit final : public InitContext {
                       actuator, program_.layers[program_.actuators[*other].layer].name));
       return {};
     }
-    const auto hint = suggest(actuator, own);
-    diagnostic.notes.push_back(hint.empty() ? "the layer declares no actuators" : hint);
+    diagnostic.unknown_name(actuator, own, "the layer declares no actuators");
     return {};
   }
 
@@ -632,11 +135,9 @@ class InstanceInit final : public InitContext {
       out.state = s;
       return diagnostics_.error_count() == errors;
     }
-    auto& error = error_at(
-        at, "unknown-state",
-        fmt::format("state machine '{}' has no state '{}'", scope_.machine->name.text, state));
-    const auto hint = suggest(state, known);
-    if (!hint.empty()) error.notes.push_back(hint);
+    error_at(at, "unknown-state",
+             fmt::format("state machine '{}' has no state '{}'", scope_.machine->name.text, state))
+        .unknown_name(state, known);
     return false;
   }
 
@@ -657,15 +158,13 @@ class InstanceInit final : public InitContext {
       const bool in_program = !program_.layers.empty() && &layer_ >= &program_.layers.front() &&
                               &layer_ <= &program_.layers.back();
       claim = {true,
-               in_program ? static_cast<std::uint32_t>(&layer_ - program_.layers.data()) : kUnbound,
+               in_program ? static_cast<std::uint32_t>(&layer_ - program_.layers.data()) : kNoIndex,
                owner_};
       controller.set_owned(owner_);
       return &controller;
     }
-    auto& error =
-        error_at(at, "unknown-machine", fmt::format("no state machine named '{}'", machine));
-    const auto hint = suggest(machine, known);
-    error.notes.push_back(hint.empty() ? "the config declares no state_machines" : hint);
+    error_at(at, "unknown-machine", fmt::format("no state machine named '{}'", machine))
+        .unknown_name(machine, known, "the config declares no state_machines");
     return nullptr;
   }
 
@@ -675,6 +174,7 @@ class InstanceInit final : public InitContext {
   Diagnostic& warning(const SourceLocation& at, std::string message) override {
     return diagnostics_.warning(at, "class-warning", std::move(message));
   }
+  Diagnostics& diagnostics() override { return diagnostics_; }
 
  protected:
   const ParamValue* find_param(std::string_view param_name,
@@ -734,11 +234,9 @@ class InstanceInit final : public InitContext {
                            sensor, actuator.type->name));
       return kUnbound;
     }
-    auto& diagnostic =
-        error_at(at, "unknown-actuator",
-                 fmt::format("'{}' is not a sensor of layer '{}'", sensor, layer_.name));
-    const auto hint = suggest(sensor, own);
-    diagnostic.notes.push_back(hint.empty() ? "the layer reads no sensors" : hint);
+    error_at(at, "unknown-actuator",
+             fmt::format("'{}' is not a sensor of layer '{}'", sensor, layer_.name))
+        .unknown_name(sensor, own, "the layer reads no sensors");
     return kUnbound;
   }
 
@@ -890,7 +388,7 @@ class Compiler {
     CompiledLayer& layer = program_.layers[l];
     if (decl.interface != nullptr) {
       layer.interface = decl.interface->make_interface();
-      InstanceInit init(program_, registry_, diagnostics_, layer, kUnbound, layer.name,
+      InstanceInit init(program_, registry_, diagnostics_, layer, kNoBehaviour, layer.name,
                         layer.location, *decl.interface, decl.params, decl.ports,
                         InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
       guarded_init(diagnostics_, *decl.interface, layer.location,
@@ -956,9 +454,9 @@ class Compiler {
       for (std::uint32_t c = 0; c < model_.state_machines.size(); ++c) {
         if (model_.state_machines[c].name.text == name) return c;
       }
-      return kUnbound;
+      return kNoController;
     };
-    std::vector<std::uint32_t> parent(program_.controllers.size(), kUnbound);
+    std::vector<std::uint32_t> parent(program_.controllers.size(), kNoController);
     for (std::uint32_t c = 0; c < model_.state_machines.size(); ++c) {
       Controller& controller = *program_.controllers[c];
       std::vector<Controller*> children;
@@ -966,7 +464,7 @@ class Compiler {
       for (std::uint32_t s = 0; s < decl.states.size(); ++s) {
         if (!decl.states[s].machine) continue;
         const auto child = index_of(decl.states[s].machine->text);
-        if (child == kUnbound) continue;
+        if (child == kNoController) continue;
         if (claims_[child].claimed) {
           diagnostics_.error(decl.states[s].machine->location, "machine-owned-twice",
                              fmt::format("state machine '{}' is stepped by a behaviour and "
@@ -983,7 +481,7 @@ class Compiler {
     }
     for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
       auto root = c;
-      while (parent[root] != kUnbound && !claims_[root].claimed) root = parent[root];
+      while (parent[root] != kNoController && !claims_[root].claimed) root = parent[root];
       if (root != c) claims_[c] = {true, claims_[root].layer, claims_[root].owner};
     }
     static const CompiledLayer kNoLayer;
@@ -992,9 +490,9 @@ class Compiler {
       const StateMachineDecl& decl = model_.state_machines[c];
       const Claim& claim = claims_[c];
       const CompiledLayer& layer =
-          claim.layer == kUnbound ? kNoLayer : program_.layers[claim.layer];
+          claim.layer == kNoIndex ? kNoLayer : program_.layers[claim.layer];
       const std::vector<Name>* sensors =
-          claim.layer == kUnbound ? nullptr : &model_.layers[claim.layer].sensors;
+          claim.layer == kNoIndex ? nullptr : &model_.layers[claim.layer].sensors;
       std::vector<ParamSet> params(decl.states.size());
       std::vector<std::vector<PortBinding>> ports(decl.states.size());
       for (std::uint32_t s = 0; s < decl.states.size(); ++s) {
@@ -1139,10 +637,6 @@ class Compiler {
 std::optional<Program> compile(const Model& model, const Registry& registry,
                                Diagnostics& diagnostics) {
   return Compiler(model, registry, diagnostics).run();
-}
-
-void check_inhibition_cycles(const Model& model, Diagnostics& diagnostics) {
-  for (const auto& layer : model.layers) order_behaviours(layer, diagnostics);
 }
 
 }  // namespace arbiter

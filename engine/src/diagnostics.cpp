@@ -372,6 +372,16 @@ std::string suggest(std::string_view wrong, const std::vector<std::string>& know
   return fmt::format("{}: {}", label, list);
 }
 
+Diagnostic& Diagnostic::unknown_name(std::string_view name, const std::vector<std::string>& known,
+                                     std::string_view none_known, std::string_view label) {
+  if (!known.empty()) {
+    notes.push_back(suggest(name, known, label));
+  } else if (!none_known.empty()) {
+    notes.emplace_back(none_known);
+  }
+  return *this;
+}
+
 ConfigError::ConfigError(Diagnostics diagnostics)
     : std::runtime_error(format(diagnostics)), diagnostics_(std::move(diagnostics)) {}
 

@@ -14,7 +14,7 @@ std::vector<std::uint32_t> writers_of(const Program& program, std::uint32_t a) {
   std::vector<std::uint32_t> writers;
   for (auto s = program.actuator_slot_begin[a]; s < program.actuator_slot_begin[a + 1]; ++s) {
     const auto owner = program.slots[program.actuator_slots[s]].owner;
-    if (owner != kUnbound) writers.push_back(owner);
+    if (owner != kNoBehaviour) writers.push_back(owner);
   }
   return writers;
 }
@@ -102,7 +102,7 @@ std::string dump_text(const Program& program, std::string_view only_layer) {
       std::vector<std::uint32_t> writers;
       for (auto s = program.actuator_slot_begin[a]; s < program.actuator_slot_begin[a + 1]; ++s) {
         const auto owner = program.slots[program.actuator_slots[s]].owner;
-        if (owner != kUnbound) writers.push_back(owner);
+        if (owner != kNoBehaviour) writers.push_back(owner);
       }
       std::string readers;
       for (const auto& other : program.layers) {

@@ -202,7 +202,7 @@ class Linter {
         diagnostics_
             .warning(name.location, "unknown-lint",
                      fmt::format("'{}' names no lint; it silences nothing", name.text))
-            .notes.push_back(suggest(name.text, known));
+            .unknown_name(name.text, known);
       }
     };
     check(model_.lint_ignore);
@@ -466,7 +466,7 @@ class Linter {
       std::vector<std::uint32_t> writers;
       for (auto s = program_.actuator_slot_begin[a]; s < program_.actuator_slot_begin[a + 1]; ++s) {
         const auto owner = program_.slots[program_.actuator_slots[s]].owner;
-        if (owner != kUnbound && !never_active_[owner]) writers.push_back(owner);
+        if (owner != kNoBehaviour && !never_active_[owner]) writers.push_back(owner);
       }
       std::sort(writers.begin(), writers.end());
       writers.erase(std::unique(writers.begin(), writers.end()), writers.end());

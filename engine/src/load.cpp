@@ -1,5 +1,7 @@
 #include "arbiter/load.hpp"
 
+#include "layer_order.hpp"
+
 namespace arbiter {
 
 const Node* Loaded::document() const {
@@ -18,7 +20,7 @@ Loaded load_config(const std::string& path, Registry& registry, const LoadOption
         std::make_shared<Model>(build_model(*document, registry, diagnostics, loaded.files));
     Model& model = *loaded.model;
     if (diagnostics.has_errors()) {
-      check_inhibition_cycles(model, diagnostics);  // a cycle is reported in the same pass
+      detail::check_inhibition_cycles(model, diagnostics);  // a cycle is reported in the same pass
     } else if (!options.edit_model || options.edit_model(model, diagnostics)) {
       loaded.program = compile(model, registry, diagnostics);
       if (loaded.program) loaded.program->model = loaded.model;

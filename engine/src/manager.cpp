@@ -1,5 +1,7 @@
 #include "arbiter/manager.hpp"
 
+#include "carryover.hpp"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -86,7 +88,7 @@ bool is_finite(const void* value, std::uint8_t components) {
 struct Manager::Staged {
   Program program;
   RunState state;
-  CarryPlan plan;
+  detail::Carryover carryover;
   // Scratch for the swap, per running behaviour, layer and controller: which go on in the new
   // program (kept, or taken over by carry_over()); and per new behaviour and layer, which took
   // over.
@@ -126,14 +128,15 @@ Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
   data_.events = events_.data();
   data_.event_capacity = events_.size();
   data_.step = 0;
-  const auto first = prepare(std::move(program), CarryPlan{});
+  const auto first = prepare(std::move(program), detail::Carryover{});
   swap_in(*first);
 }
 
 Manager::Manager(Manager&&) noexcept = default;
 Manager::~Manager() = default;
 
-std::unique_ptr<Manager::Staged> Manager::prepare(Program program, CarryPlan plan) const {
+std::unique_ptr<Manager::Staged> Manager::prepare(Program program,
+                                                  detail::Carryover carryover) const {
   auto staged = std::make_unique<Staged>();
   staged->state = RunState(program);
   for (const auto& controller : program.controllers) controller->set_logger(logger_.get());
@@ -142,7 +145,7 @@ std::unique_ptr<Manager::Staged> Manager::prepare(Program program, CarryPlan pla
   staged->controller_continues.assign(program_.controllers.size(), 0);
   staged->took_over.assign(program.behaviours.size() + program.layers.size(), 0);
   staged->program = std::move(program);
-  staged->plan = std::move(plan);
+  staged->carryover = std::move(carryover);
   return staged;
 }
 
@@ -163,23 +166,23 @@ void Manager::point_step_data() noexcept {
   data_.period = 1.0 / program_.rate_hz;
 }
 
-void Manager::stage(Program program, CarryPlan plan) {
-  // A plan that does not fit would index out of bounds inside step(): refuse it here.
+void Manager::stage(Program program, detail::Carryover carryover) {
+  // A carry-over that does not fit would index out of bounds inside step(): refuse it here.
   const auto fits = [](const auto& from, std::size_t size, std::size_t limit) {
     return from.size() == size && std::all_of(from.begin(), from.end(), [&](std::uint32_t index) {
-             return index == kUnbound || index < limit;
+             return index == detail::kNoMatch || index < limit;
            });
   };
-  if (!fits(plan.behaviour_from, program.behaviours.size(), program_.behaviours.size()) ||
-      plan.behaviour_kept.size() != program.behaviours.size() ||
-      !fits(plan.actuator_from, program.actuators.size(), program_.actuators.size()) ||
-      !fits(plan.interface_from, program.layers.size(), program_.layers.size()) ||
-      plan.interface_kept.size() != program.layers.size() ||
-      !fits(plan.controller_kept, program.controllers.size(), program_.controllers.size())) {
+  if (!fits(carryover.behaviour_from, program.behaviours.size(), program_.behaviours.size()) ||
+      carryover.behaviour_kept.size() != program.behaviours.size() ||
+      !fits(carryover.actuator_from, program.actuators.size(), program_.actuators.size()) ||
+      !fits(carryover.interface_from, program.layers.size(), program_.layers.size()) ||
+      carryover.interface_kept.size() != program.layers.size() ||
+      !fits(carryover.controller_kept, program.controllers.size(), program_.controllers.size())) {
     throw std::invalid_argument(
-        "Manager::stage: the carry-over plan does not fit the programs (build it with Reloader)");
+        "Manager::stage: the carry-over does not fit the programs (build it with Reloader)");
   }
-  auto staged = prepare(std::move(program), std::move(plan));
+  auto staged = prepare(std::move(program), std::move(carryover));
   std::unique_ptr<Staged> dropped;
   std::unique_ptr<Staged> retired;
   {
@@ -213,12 +216,12 @@ std::uint64_t Manager::reloads() const {
 // on is carried over. Every buffer was sized by prepare(): nothing here allocates.
 void Manager::apply(Staged& staged) {
   levels_changed_ = true;
-  const CarryPlan& plan = staged.plan;
+  const detail::Carryover& carryover = staged.carryover;
   Program& next = staged.program;
   for (std::uint32_t b = 0; b < next.behaviours.size(); ++b) {
-    const std::uint32_t from = plan.behaviour_from[b];
-    if (from == kUnbound) continue;
-    if (plan.behaviour_kept[b] != 0) {
+    const std::uint32_t from = carryover.behaviour_from[b];
+    if (from == detail::kNoMatch) continue;
+    if (carryover.behaviour_kept[b] != 0) {
       staged.behaviour_continues[from] = 1;
       continue;
     }
@@ -231,9 +234,9 @@ void Manager::apply(Staged& staged) {
   }
   const auto behaviours = static_cast<std::uint32_t>(next.behaviours.size());
   for (std::uint32_t l = 0; l < next.layers.size(); ++l) {
-    const std::uint32_t from = plan.interface_from[l];
-    if (from == kUnbound) continue;
-    if (plan.interface_kept[l] != 0) {
+    const std::uint32_t from = carryover.interface_from[l];
+    if (from == detail::kNoMatch) continue;
+    if (carryover.interface_kept[l] != 0) {
       staged.interface_continues[from] = 1;
       continue;
     }
@@ -244,8 +247,8 @@ void Manager::apply(Staged& staged) {
     staged.took_over[behaviours + l] = took ? 1 : 0;
     staged.interface_continues[from] = took ? 1 : 0;
   }
-  for (const auto from : plan.controller_kept) {
-    if (from != kUnbound) staged.controller_continues[from] = 1;
+  for (const auto from : carryover.controller_kept) {
+    if (from != detail::kNoMatch) staged.controller_continues[from] = 1;
   }
   end_replaced(staged);
 
@@ -253,9 +256,9 @@ void Manager::apply(Staged& staged) {
   // From here on `staged` holds the replaced program and its buffers.
   carry_values(staged);
   for (std::uint32_t b = 0; b < program_.behaviours.size(); ++b) {
-    const std::uint32_t from = plan.behaviour_from[b];
-    if (from == kUnbound) continue;
-    if (plan.behaviour_kept[b] != 0) {
+    const std::uint32_t from = carryover.behaviour_from[b];
+    if (from == detail::kNoMatch) continue;
+    if (carryover.behaviour_kept[b] != 0) {
       std::swap(program_.behaviours[b].instance, staged.program.behaviours[from].instance);
       run_.instances[b] = program_.behaviours[b].instance.get();
     } else if (staged.took_over[b] == 0) {
@@ -267,14 +270,15 @@ void Manager::apply(Staged& staged) {
     run_.nan_reported[b] = staged.state.nan_reported[from];
   }
   for (std::uint32_t l = 0; l < program_.layers.size(); ++l) {
-    const std::uint32_t from = plan.interface_from[l];
-    if (from != kUnbound && plan.interface_kept[l] != 0) {
+    const std::uint32_t from = carryover.interface_from[l];
+    if (from != detail::kNoMatch && carryover.interface_kept[l] != 0) {
       std::swap(program_.layers[l].interface, staged.program.layers[from].interface);
     }
   }
   for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
-    const std::uint32_t from = plan.controller_kept[c];
-    if (from != kUnbound) std::swap(program_.controllers[c], staged.program.controllers[from]);
+    const std::uint32_t from = carryover.controller_kept[c];
+    if (from != detail::kNoMatch)
+      std::swap(program_.controllers[c], staged.program.controllers[from]);
   }
 }
 
@@ -286,7 +290,7 @@ void Manager::end_replaced(Staged& staged) {
     const InhibitedContext context(data_, b, run_.active[b] != 0);
     ARBITER_GUARDED(b, Callback::kInhibited, program_.behaviours[b].instance->inhibited(context));
   }
-  const StepContext context(data_, kUnbound);
+  const StepContext context(data_, kNoBehaviour);
   for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
     if (staged.controller_continues[c] == 0) program_.controllers[c]->end(context);
   }
@@ -295,8 +299,8 @@ void Manager::end_replaced(Staged& staged) {
 // Actuators that go on keep their value and written flag (docs/semantics.md, "Persistence").
 void Manager::carry_values(const Staged& staged) {
   for (std::uint32_t a = 0; a < program_.actuators.size(); ++a) {
-    const std::uint32_t from = staged.plan.actuator_from[a];
-    if (from == kUnbound) continue;
+    const std::uint32_t from = staged.carryover.actuator_from[a];
+    if (from == detail::kNoMatch) continue;
     program_.actuators[a].type->assign(
         run_.values.at(program_.actuators[a].offset),
         staged.state.values.at(staged.program.actuators[from].offset));
@@ -306,7 +310,7 @@ void Manager::carry_values(const Staged& staged) {
 
 const std::string& Manager::event_source(const detail::StepData::Event& event) const {
   static const std::string kStandalone = "state machines";
-  if (event.source == kUnbound) return kStandalone;
+  if (event.source == kNoBehaviour) return kStandalone;
   if (event.source < program_.behaviours.size()) return program_.behaviours[event.source].name;
   return program_.layers[event.source - program_.behaviours.size()].name;
 }
@@ -457,7 +461,7 @@ void Manager::report_non_finite_write(std::uint32_t slot) {
   const SourceLocation* where = &program_.layers[actuator.layer].location;
   std::string who =
       fmt::format("the interface of layer '{}'", program_.layers[actuator.layer].name);
-  if (writer.owner != kUnbound) {
+  if (writer.owner != kNoBehaviour) {
     where = &program_.behaviours[writer.owner].location;
     who = fmt::format("behaviour '{}' ({})", program_.behaviours[writer.owner].name,
                       program_.behaviours[writer.owner].cls->name);
@@ -530,7 +534,7 @@ void Manager::step() {
 
   // Standalone controllers run after the output pass (docs/semantics.md, "State machines"); a
   // controller contains the exceptions of its states itself.
-  const StepContext standalone(data_, kUnbound);
+  const StepContext standalone(data_, kNoBehaviour);
   for (const auto& controller : program_.controllers) {
     if (!controller->owned()) controller->step(standalone);
   }
@@ -666,15 +670,15 @@ void Manager::resolve_actuators(const CompiledLayer& layer) {
     void* value = run_.values.at(actuator.offset);
     std::size_t count = 0;
     double best = 0.0;
-    std::uint32_t winner = kUnbound;
+    std::uint32_t winner = kNoBehaviour;
     for (auto s = program_.actuator_slot_begin[a]; s < program_.actuator_slot_begin[a + 1]; ++s) {
       const std::uint32_t slot = program_.actuator_slots[s];
       if (!run_.slot_written[slot]) continue;
       const std::uint32_t owner = program_.slots[slot].owner;
-      const double weight = owner == kUnbound ? 1.0 : run_.activation[owner];
+      const double weight = owner == kNoBehaviour ? 1.0 : run_.activation[owner];
       if (weight <= 0.0) continue;  // writes of inactive behaviours are ignored
       // Writes of a writer that threw this step, and non-finite numbers, are ignored too.
-      if (run_.faulted_step[owner == kUnbound ? interface : owner] == data_.step) continue;
+      if (run_.faulted_step[owner == kNoBehaviour ? interface : owner] == data_.step) continue;
       if (run_.finite_components[slot] != 0 &&
           !is_finite(run_.values.at(program_.slot_offsets[slot]), run_.finite_components[slot])) {
         report_non_finite_write(slot);

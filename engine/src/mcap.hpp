@@ -13,6 +13,26 @@ namespace arbiter::mcap {
 
 inline constexpr std::string_view kMagic{"\x89MCAP0\r\n", 8};
 
+/// Record opcodes.
+enum Op : std::uint8_t {
+  kHeader = 0x01,
+  kFooter = 0x02,
+  kSchema = 0x03,
+  kChannel = 0x04,
+  kMessage = 0x05,
+  kChunk = 0x06,
+  kMessageIndex = 0x07,
+  kChunkIndex = 0x08,
+  kStatistics = 0x0B,
+  kMetadata = 0x0C,
+  kMetadataIndex = 0x0D,
+  kSummaryOffset = 0x0E,
+  kDataEnd = 0x0F,
+};
+
+/// zlib's CRC-32 of `bytes`, continuing `running`: every CRC in a file is this one.
+std::uint32_t crc(std::uint32_t running, std::string_view bytes);
+
 /// Writes one MCAP file into a byte sink. Not thread-safe: one writer thread owns it.
 class Writer {
  public:
@@ -71,7 +91,8 @@ struct Record {
   std::uint64_t offset = 0;  ///< the byte of the file where the record (or its chunk) starts
 };
 
-/// Reads the records of a whole file held in memory, in file order.
+/// Reads the records of a whole file held in memory, in file order. Part of the tools library
+/// (mcap_reader.cpp): a robot writes recordings, it does not read them.
 class Reader {
  public:
   explicit Reader(std::string bytes);

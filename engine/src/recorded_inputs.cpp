@@ -3,11 +3,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "arbiter/behaviour.hpp"
 #include "arbiter/document.hpp"
 #include "arbiter/init_context.hpp"
+#include "mcap.hpp"
 
 namespace arbiter {
 
@@ -167,9 +170,72 @@ void RecordedInputs::check_places(const Model& model, const SourceLocation& wher
                fmt::format("recorded input '{}' has no place in this config: no interface layer "
                            "declares an actuator '{}'",
                            column.name, column.name))
-        .notes.push_back(declared.empty() ? "the config has no interface layer"
-                                          : suggest(column.name, declared, "interface actuators"));
+        .unknown_name(column.name, declared, "the config has no interface layer",
+                      "interface actuators");
   }
+}
+
+std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error) {
+  const auto fail = [&](std::string message) {
+    error = Diagnostic{{path, 0, 0}, Severity::kError, "bad-recording", std::move(message), {}};
+    return std::nullopt;
+  };
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail("cannot read the recording");
+  mcap::Reader reader(
+      std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()));
+  RecordedRun run;
+  bool config = false;
+  mcap::Record record;
+  while (reader.next(record)) {
+    if (record.kind == mcap::Record::Kind::kMetadata) {
+      if (record.name == "arbiter.config") {
+        config = true;
+        for (auto& [key, value] : record.metadata) {
+          if (key.rfind("file:", 0) == 0) {
+            run.info.files.emplace_back(key.substr(5), std::move(value));
+          } else if (key == "version") {
+            run.info.version = value;
+          } else if (key == "plugins" && !value.empty()) {
+            std::size_t start = 0;
+            while (start <= value.size()) {
+              const auto end = std::min(value.find('\n', start), value.size());
+              run.info.plugins.push_back(value.substr(start, end - start));
+              start = end + 1;
+            }
+          }
+        }
+      } else if (record.name == "arbiter.reload") {
+        RecordedRun::Reload reload;
+        for (auto& [key, value] : record.metadata) {
+          if (key == "after_step") reload.after_step = std::strtoull(value.c_str(), nullptr, 10);
+          if (key.rfind("file:", 0) == 0)
+            reload.files.emplace_back(key.substr(5), std::move(value));
+        }
+        run.reloads.push_back(std::move(reload));
+      } else if (record.name == "arbiter.gap") {
+        for (const auto& [key, value] : record.metadata) {
+          if (key == "dropped") run.dropped += std::strtoull(value.c_str(), nullptr, 10);
+          if (key == "after_step" && !run.first_gap) {
+            run.first_gap = std::strtoull(value.c_str(), nullptr, 10);
+          }
+        }
+      }
+    } else if (record.topic == "/arbiter/inputs") {
+      const auto key = record.data.find("\"step\": ");
+      const auto step =
+          key == std::string::npos ? 0 : std::strtoull(record.data.c_str() + key + 8, nullptr, 10);
+      run.inputs.emplace_back(step, std::move(record.data));
+    }
+    record = mcap::Record();
+  }
+  if (!reader.error().empty()) return fail(reader.error());
+  if (!config || run.info.files.empty()) {
+    return fail(
+        "the recording has no 'arbiter.config' metadata with the config's files; record "
+        "one with 'arbiter run CONFIG --record RUN.mcap'");
+  }
+  return run;
 }
 
 }  // namespace arbiter

@@ -3,8 +3,6 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <fstream>
-#include <iterator>
 
 #include "arbiter/trace.hpp"
 #include "mcap.hpp"
@@ -321,69 +319,6 @@ void Recorder::write_loop() {
   out.writer.metadata("arbiter.summary", {{"steps", std::to_string(out.last_step)},
                                           {"dropped", std::to_string(out.dropped)}});
   out.writer.finish();
-}
-
-std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error) {
-  const auto fail = [&](std::string message) {
-    error = Diagnostic{{path, 0, 0}, Severity::kError, "bad-recording", std::move(message), {}};
-    return std::nullopt;
-  };
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail("cannot read the recording");
-  mcap::Reader reader(
-      std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()));
-  RecordedRun run;
-  bool config = false;
-  mcap::Record record;
-  while (reader.next(record)) {
-    if (record.kind == mcap::Record::Kind::kMetadata) {
-      if (record.name == "arbiter.config") {
-        config = true;
-        for (auto& [key, value] : record.metadata) {
-          if (key.rfind("file:", 0) == 0) {
-            run.info.files.emplace_back(key.substr(5), std::move(value));
-          } else if (key == "version") {
-            run.info.version = value;
-          } else if (key == "plugins" && !value.empty()) {
-            std::size_t start = 0;
-            while (start <= value.size()) {
-              const auto end = std::min(value.find('\n', start), value.size());
-              run.info.plugins.push_back(value.substr(start, end - start));
-              start = end + 1;
-            }
-          }
-        }
-      } else if (record.name == "arbiter.reload") {
-        RecordedRun::Reload reload;
-        for (auto& [key, value] : record.metadata) {
-          if (key == "after_step") reload.after_step = std::strtoull(value.c_str(), nullptr, 10);
-          if (key.rfind("file:", 0) == 0)
-            reload.files.emplace_back(key.substr(5), std::move(value));
-        }
-        run.reloads.push_back(std::move(reload));
-      } else if (record.name == "arbiter.gap") {
-        for (const auto& [key, value] : record.metadata) {
-          if (key == "dropped") run.dropped += std::strtoull(value.c_str(), nullptr, 10);
-          if (key == "after_step" && !run.first_gap) {
-            run.first_gap = std::strtoull(value.c_str(), nullptr, 10);
-          }
-        }
-      }
-    } else if (record.topic == "/arbiter/inputs") {
-      const auto key = record.data.find("\"step\": ");
-      const auto step =
-          key == std::string::npos ? 0 : std::strtoull(record.data.c_str() + key + 8, nullptr, 10);
-      run.inputs.emplace_back(step, std::move(record.data));
-    }
-    record = mcap::Record();
-  }
-  if (!reader.error().empty()) return fail(reader.error());
-  if (!config || run.info.files.empty()) {
-    return fail(
-        "the recording has no 'arbiter.config' metadata with the config's files; record "
-        "one with 'arbiter run CONFIG --record RUN.mcap'");
-  }
-  return run;
 }
 
 }  // namespace arbiter

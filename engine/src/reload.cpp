@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "arbiter/trace.hpp"
+#include "carryover.hpp"
 
 namespace arbiter {
 
@@ -189,62 +190,63 @@ bool same_ports(const std::vector<PortBinding>& a, const std::vector<PortBinding
   return true;
 }
 
-/// Builds the carry-over plan of `after` against the running `before` (docs/hot_reload.md).
-class Planner {
+/// Builds the carry-over of `after` against the running `before` (docs/hot_reload.md): which of
+/// its parts match a running one.
+class CarryoverMatcher {
  public:
-  Planner(const Program& before, const Model& before_model, const Program& after,
-          const Model& after_model)
+  CarryoverMatcher(const Program& before, const Model& before_model, const Program& after,
+                   const Model& after_model)
       : before_(before), old_model_(before_model), after_(after), new_model_(after_model) {}
 
-  CarryPlan run(ProgramDiff& diff, std::vector<std::string>& restarted) {
-    CarryPlan plan;
-    match_actuators(plan);
+  detail::Carryover run(ProgramDiff& diff, std::vector<std::string>& restarted) {
+    detail::Carryover carryover;
+    match_actuators(carryover);
     slots_of(before_, old_slots_);
     slots_of(after_, new_slots_);
-    match_behaviours(plan, diff);
-    match_interfaces(plan, diff);
+    match_behaviours(carryover, diff);
+    match_interfaces(carryover, diff);
     // A kept behaviour holds pointers to the controllers it claimed, so those must be kept with
     // it, and a controller is kept only with its owner: demote until both agree.
     for (bool changed = true; changed;) {
-      match_controllers(plan);
-      changed = demote_owners(plan);
+      match_controllers(carryover);
+      changed = demote_owners(carryover);
     }
     for (std::uint32_t b = 0; b < after_.behaviours.size(); ++b) {
-      if (plan.behaviour_from[b] != kUnbound && plan.behaviour_kept[b] == 0) {
+      if (carryover.behaviour_from[b] != detail::kNoMatch && carryover.behaviour_kept[b] == 0) {
         restarted.push_back(behaviour_key(after_, b));
       }
     }
     for (std::uint32_t l = 0; l < after_.layers.size(); ++l) {
-      if (plan.interface_from[l] != kUnbound && plan.interface_kept[l] == 0) {
+      if (carryover.interface_from[l] != detail::kNoMatch && carryover.interface_kept[l] == 0) {
         restarted.push_back(fmt::format("interface of layer {}", after_.layers[l].name));
       }
     }
     for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
-      if (plan.controller_kept[c] == kUnbound &&
+      if (carryover.controller_kept[c] == detail::kNoMatch &&
           before_.find_controller(after_.controllers[c]->name()) != nullptr) {
         restarted.push_back(fmt::format("state machine {}", after_.controllers[c]->name()));
       }
     }
-    return plan;
+    return carryover;
   }
 
  private:
-  void match_actuators(CarryPlan& plan) {
+  void match_actuators(detail::Carryover& carryover) {
     std::unordered_map<std::string, std::uint32_t> index;
     for (std::uint32_t a = 0; a < before_.actuators.size(); ++a) {
       index.emplace(before_.actuators[a].name, a);
     }
-    plan.actuator_from.assign(after_.actuators.size(), kUnbound);
+    carryover.actuator_from.assign(after_.actuators.size(), detail::kNoMatch);
     for (std::uint32_t a = 0; a < after_.actuators.size(); ++a) {
       const auto found = index.find(after_.actuators[a].name);
       if (found != index.end() &&
           before_.actuators[found->second].type == after_.actuators[a].type) {
-        plan.actuator_from[a] = found->second;
+        carryover.actuator_from[a] = found->second;
       }
     }
     same_index_.assign(before_.actuators.size(), 0);
     for (std::uint32_t a = 0; a < before_.actuators.size() && a < after_.actuators.size(); ++a) {
-      same_index_[a] = plan.actuator_from[a] == a ? 1 : 0;
+      same_index_[a] = carryover.actuator_from[a] == a ? 1 : 0;
     }
   }
 
@@ -253,9 +255,10 @@ class Planner {
     out.assign(program.behaviours.size() + program.layers.size(), {});
     for (std::uint32_t s = 0; s < program.slots.size(); ++s) {
       const WriterSlot& slot = program.slots[s];
-      const std::size_t owner = slot.owner != kUnbound ? slot.owner
-                                                       : program.behaviours.size() +
-                                                             program.actuators[slot.actuator].layer;
+      const std::size_t owner =
+          slot.owner != kNoBehaviour
+              ? slot.owner
+              : program.behaviours.size() + program.actuators[slot.actuator].layer;
       out[owner].push_back(s);
     }
   }
@@ -282,13 +285,13 @@ class Planner {
     return true;
   }
 
-  void match_behaviours(CarryPlan& plan, ProgramDiff& diff) {
+  void match_behaviours(detail::Carryover& carryover, ProgramDiff& diff) {
     std::unordered_map<std::string, std::uint32_t> index;
     for (std::uint32_t b = 0; b < before_.behaviours.size(); ++b) {
       index.emplace(behaviour_key(before_, b), b);
     }
-    plan.behaviour_from.assign(after_.behaviours.size(), kUnbound);
-    plan.behaviour_kept.assign(after_.behaviours.size(), 0);
+    carryover.behaviour_from.assign(after_.behaviours.size(), detail::kNoMatch);
+    carryover.behaviour_kept.assign(after_.behaviours.size(), 0);
     for (std::uint32_t b = 0; b < after_.behaviours.size(); ++b) {
       const auto found = index.find(behaviour_key(after_, b));
       if (found == index.end()) continue;
@@ -296,7 +299,7 @@ class Planner {
       const CompiledBehaviour& old = before_.behaviours[from];
       const CompiledBehaviour& now = after_.behaviours[b];
       if (old.cls != now.cls) continue;
-      plan.behaviour_from[b] = from;
+      carryover.behaviour_from[b] = from;
       const std::string& layer = after_.layers[now.layer].name;
       const BehaviourDecl* old_decl = find_behaviour(old_model_, layer, now.name);
       const BehaviourDecl* new_decl = find_behaviour(new_model_, layer, now.name);
@@ -311,20 +314,20 @@ class Planner {
       }
       const bool same_declaration = same_params && same_ports(old_decl->ports, new_decl->ports) &&
                                     old.on_exception == now.on_exception;
-      plan.behaviour_kept[b] = same_declaration && same_handles(old.layer, from, b) ? 1 : 0;
+      carryover.behaviour_kept[b] = same_declaration && same_handles(old.layer, from, b) ? 1 : 0;
     }
   }
 
-  void match_interfaces(CarryPlan& plan, ProgramDiff& diff) {
-    plan.interface_from.assign(after_.layers.size(), kUnbound);
-    plan.interface_kept.assign(after_.layers.size(), 0);
+  void match_interfaces(detail::Carryover& carryover, ProgramDiff& diff) {
+    carryover.interface_from.assign(after_.layers.size(), detail::kNoMatch);
+    carryover.interface_kept.assign(after_.layers.size(), 0);
     for (std::uint32_t l = 0; l < after_.layers.size(); ++l) {
       const CompiledLayer& now = after_.layers[l];
       if (!now.is_interface()) continue;
       for (std::uint32_t from = 0; from < before_.layers.size(); ++from) {
         const CompiledLayer& old = before_.layers[from];
         if (old.name != now.name || old.interface_class != now.interface_class) continue;
-        plan.interface_from[l] = from;
+        carryover.interface_from[l] = from;
         const LayerDecl* old_decl = find_layer(old_model_, now.name);
         const LayerDecl* new_decl = find_layer(new_model_, now.name);
         const bool same_params =
@@ -337,17 +340,17 @@ class Planner {
                                  ? params_change(old_decl->params.items, new_decl->params.items)
                                  : std::string("changed"))});
         }
-        plan.interface_kept[l] = same_params && same_ports(old_decl->ports, new_decl->ports) &&
-                                         same_handles(from, before_.behaviours.size() + from,
-                                                      after_.behaviours.size() + l)
-                                     ? 1
-                                     : 0;
+        carryover.interface_kept[l] = same_params && same_ports(old_decl->ports, new_decl->ports) &&
+                                              same_handles(from, before_.behaviours.size() + from,
+                                                           after_.behaviours.size() + l)
+                                          ? 1
+                                          : 0;
       }
     }
   }
 
   static std::vector<std::uint32_t> parents(const Program& program) {
-    std::vector<std::uint32_t> parent(program.controllers.size(), kUnbound);
+    std::vector<std::uint32_t> parent(program.controllers.size(), kNoController);
     for (std::uint32_t c = 0; c < program.controllers.size(); ++c) {
       const Controller& controller = *program.controllers[c];
       for (std::uint32_t s = 0; s < controller.states().size(); ++s) {
@@ -362,17 +365,17 @@ class Planner {
   }
 
   static std::uint32_t root_of(const std::vector<std::uint32_t>& parent, std::uint32_t c) {
-    while (parent[c] != kUnbound) c = parent[c];
+    while (parent[c] != kNoController) c = parent[c];
     return c;
   }
 
   // A controller is kept with its whole tree (parents hold pointers to their children): when
   // every controller of the tree was declared alike and the root's owner is kept, or both roots
   // are standalone.
-  void match_controllers(CarryPlan& plan) {
+  void match_controllers(detail::Carryover& carryover) {
     const auto old_parent = parents(before_);
     const auto new_parent = parents(after_);
-    std::vector<std::uint32_t> from(after_.controllers.size(), kUnbound);
+    std::vector<std::uint32_t> from(after_.controllers.size(), detail::kNoMatch);
     for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
       for (std::uint32_t o = 0; o < before_.controllers.size(); ++o) {
         if (before_.controllers[o]->name() == after_.controllers[c]->name()) from[c] = o;
@@ -380,53 +383,54 @@ class Planner {
     }
     std::vector<char> tree_ok(after_.controllers.size(), 1);
     for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
-      const bool ok = from[c] != kUnbound &&
+      const bool ok = from[c] != detail::kNoMatch &&
                       after_.controllers[c]->same_declaration(*before_.controllers[from[c]]);
       if (!ok) tree_ok[root_of(new_parent, c)] = 0;
     }
     for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
-      if (new_parent[c] != kUnbound || from[c] == kUnbound) continue;
+      if (new_parent[c] != kNoController || from[c] == detail::kNoMatch) continue;
       const Controller& now = *after_.controllers[c];
       const Controller& old = *before_.controllers[from[c]];
-      if (old_parent[from[c]] != kUnbound) tree_ok[c] = 0;
+      if (old_parent[from[c]] != kNoController) tree_ok[c] = 0;
       const std::uint32_t owner = now.owner_behaviour();
       if (now.owned() != old.owned()) tree_ok[c] = 0;
-      if (owner == kUnbound) {
-        if (old.owner_behaviour() != kUnbound) tree_ok[c] = 0;
-      } else if (plan.behaviour_kept[owner] == 0 ||
-                 plan.behaviour_from[owner] != old.owner_behaviour()) {
+      if (owner == kNoBehaviour) {
+        if (old.owner_behaviour() != kNoBehaviour) tree_ok[c] = 0;
+      } else if (carryover.behaviour_kept[owner] == 0 ||
+                 carryover.behaviour_from[owner] != old.owner_behaviour()) {
         tree_ok[c] = 0;
       }
     }
-    plan.controller_kept.assign(after_.controllers.size(), kUnbound);
+    carryover.controller_kept.assign(after_.controllers.size(), detail::kNoMatch);
     for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
-      if (tree_ok[root_of(new_parent, c)] != 0) plan.controller_kept[c] = from[c];
+      if (tree_ok[root_of(new_parent, c)] != 0) carryover.controller_kept[c] = from[c];
     }
   }
 
   // A kept behaviour whose controllers are not all kept is given a new instance instead.
-  bool demote_owners(CarryPlan& plan) {
+  bool demote_owners(detail::Carryover& carryover) {
     bool changed = false;
     std::vector<char> old_kept(before_.controllers.size(), 0);
-    for (const auto from : plan.controller_kept) {
-      if (from != kUnbound) old_kept[from] = 1;
+    for (const auto from : carryover.controller_kept) {
+      if (from != detail::kNoMatch) old_kept[from] = 1;
     }
     for (std::uint32_t b = 0; b < after_.behaviours.size(); ++b) {
-      if (plan.behaviour_kept[b] == 0) continue;
+      if (carryover.behaviour_kept[b] == 0) continue;
       bool keep = true;
       for (std::uint32_t c = 0; c < after_.controllers.size(); ++c) {
-        if (after_.controllers[c]->owner_behaviour() == b && plan.controller_kept[c] == kUnbound) {
+        if (after_.controllers[c]->owner_behaviour() == b &&
+            carryover.controller_kept[c] == detail::kNoMatch) {
           keep = false;
         }
       }
       for (std::uint32_t o = 0; o < before_.controllers.size(); ++o) {
-        if (before_.controllers[o]->owner_behaviour() == plan.behaviour_from[b] &&
+        if (before_.controllers[o]->owner_behaviour() == carryover.behaviour_from[b] &&
             old_kept[o] == 0) {
           keep = false;
         }
       }
       if (!keep) {
-        plan.behaviour_kept[b] = 0;
+        carryover.behaviour_kept[b] = 0;
         changed = true;
       }
     }
@@ -583,15 +587,16 @@ ReloadResult Reloader::reload(Manager& manager) {
   if (!program) return result;
   const Model no_model;
   const Program& running = manager.program();
-  Planner planner(running, running.model ? *running.model : no_model, *program, *program->model);
-  CarryPlan plan = planner.run(result.diff, result.restarted);
+  CarryoverMatcher matcher(running, running.model ? *running.model : no_model, *program,
+                           *program->model);
+  detail::Carryover carryover = matcher.run(result.diff, result.restarted);
   ProgramDiff structure = diff(manager.program(), *program);
-  // Structure first, then the params changes the plan found.
+  // Structure first, then the params changes the matcher found.
   structure.changes.insert(structure.changes.end(), result.diff.changes.begin(),
                            result.diff.changes.end());
   result.diff = std::move(structure);
   if (on_staging_) on_staging_(texts_);
-  manager.stage(std::move(*program), std::move(plan));
+  manager.stage(std::move(*program), std::move(carryover));
   result.staged = true;
   return result;
 }

@@ -106,9 +106,10 @@ class ScenarioReader {
                   std::string_view what) {
     for (const auto& entry : mapping.entries()) {
       if (std::find(allowed.begin(), allowed.end(), entry.key) != allowed.end()) continue;
-      auto& error = diagnostics_.error(entry.key_location, "unknown-key",
-                                       fmt::format("unknown key '{}' in {}", entry.key, what));
-      error.notes.push_back(suggest(entry.key, allowed, "allowed"));
+      diagnostics_
+          .error(entry.key_location, "unknown-key",
+                 fmt::format("unknown key '{}' in {}", entry.key, what))
+          .unknown_name(entry.key, allowed, {}, "allowed");
     }
   }
 

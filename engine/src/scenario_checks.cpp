@@ -65,13 +65,12 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
     }
     if (matches.size() == 1) return matches.front();
     if (matches.empty()) {
-      auto& error = diagnostics.error(
-          name.location, "unknown-behaviour",
-          fmt::format("'{}' is not a behaviour of config '{}'", name.text, program.name));
       std::vector<std::string> known = behaviour_names;
       for (const auto& behaviour : program.behaviours) known.push_back(behaviour.name);
-      const auto hint = suggest(name.text, known);
-      if (!hint.empty()) error.notes.push_back(hint);
+      diagnostics
+          .error(name.location, "unknown-behaviour",
+                 fmt::format("'{}' is not a behaviour of config '{}'", name.text, program.name))
+          .unknown_name(name.text, known);
       return std::nullopt;
     }
     std::vector<std::string> choices;
@@ -96,9 +95,9 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
         if (!behaviour) continue;
         resolved.index = *behaviour;
         for (const auto& inhibitor : expectation.names) {
-          if (!find_behaviour({inhibitor, expectation.target.location})) resolved.index = kUnbound;
+          if (!find_behaviour({inhibitor, expectation.target.location})) resolved.index = kNoIndex;
         }
-        if (resolved.index == kUnbound) continue;
+        if (resolved.index == kNoIndex) continue;
         break;
       }
       case Expectation::Kind::kActuator: {
@@ -106,11 +105,11 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
         if (!actuator) {
           std::vector<std::string> known;
           for (const auto& compiled : program.actuators) known.push_back(compiled.name);
-          auto& error = diagnostics.error(expectation.target.location, "unknown-actuator",
-                                          fmt::format("'{}' is not an actuator of config '{}'",
-                                                      expectation.target.text, program.name));
-          const auto hint = suggest(expectation.target.text, known);
-          if (!hint.empty()) error.notes.push_back(hint);
+          diagnostics
+              .error(expectation.target.location, "unknown-actuator",
+                     fmt::format("'{}' is not an actuator of config '{}'", expectation.target.text,
+                                 program.name))
+              .unknown_name(expectation.target.text, known);
           continue;
         }
         const ValueType& type = *program.actuators[*actuator].type;
@@ -131,17 +130,17 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
       case Expectation::Kind::kState:
       case Expectation::Kind::kQueue: {
         std::vector<std::string> known;
-        resolved.index = kUnbound;
+        resolved.index = kNoIndex;
         for (std::uint32_t c = 0; c < program.controllers.size(); ++c) {
           known.push_back(program.controllers[c]->name());
           if (program.controllers[c]->name() == expectation.target.text) resolved.index = c;
         }
-        if (resolved.index == kUnbound) {
-          auto& error = diagnostics.error(expectation.target.location, "unknown-machine",
-                                          fmt::format("'{}' is not a state machine of config '{}'",
-                                                      expectation.target.text, program.name));
-          const auto hint = suggest(expectation.target.text, known);
-          error.notes.push_back(hint.empty() ? "the config has no state machines" : hint);
+        if (resolved.index == kNoIndex) {
+          diagnostics
+              .error(expectation.target.location, "unknown-machine",
+                     fmt::format("'{}' is not a state machine of config '{}'",
+                                 expectation.target.text, program.name))
+              .unknown_name(expectation.target.text, known, "the config has no state machines");
           continue;
         }
         const Controller& controller = *program.controllers[resolved.index];
@@ -152,11 +151,10 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
         bool ok = true;
         for (const auto& state : named) {
           if (controller.find_state(state)) continue;
-          auto& error = diagnostics.error(
-              expectation.target.location, "unknown-state",
-              fmt::format("state machine '{}' has no state '{}'", controller.name(), state));
-          const auto hint = suggest(state, states);
-          if (!hint.empty()) error.notes.push_back(hint);
+          diagnostics
+              .error(expectation.target.location, "unknown-state",
+                     fmt::format("state machine '{}' has no state '{}'", controller.name(), state))
+              .unknown_name(state, states);
           ok = false;
         }
         if (!ok) continue;
@@ -188,7 +186,7 @@ void ExpectationChecks::check(const Manager& manager, double tolerance) {
              s < program.actuator_slot_begin[resolved.index + 1]; ++s) {
           const auto owner = program.slots[program.actuator_slots[s]].owner;
           // The writers whose value could have counted: the active ones.
-          if (owner != kUnbound && manager.active(owner)) {
+          if (owner != kNoBehaviour && manager.active(owner)) {
             failure.explain.push_back(qualified(program, owner));
           }
         }

@@ -88,8 +88,7 @@ bool ScheduledInputs::prepare(const Scenario& scenario, const Model& model,
                               "'inputs:'",
                               name, actuator->layer));
         if (actuator == nullptr) {
-          const auto hint = suggest(name, fed_actuators);
-          if (!hint.empty()) error.notes.push_back(hint);
+          error.unknown_name(name, fed_actuators);
         } else {
           error.notes.push_back(
               fmt::format("inputs write the actuators of layer {}", fmt::join(fed_layers, ", ")));

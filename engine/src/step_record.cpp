@@ -55,10 +55,10 @@ ParamValue param_value(const Arg::Value& value) {
   return std::visit([](auto v) { return ParamValue(v); }, value);
 }
 
-// Who reported: a behaviour, an interface layer, or a standalone state machine (kUnbound).
+// Who reported: a behaviour, an interface layer, or a standalone state machine (kNoBehaviour).
 const std::string& source_name(const StepLayout& layout, std::uint32_t source) {
   static const std::string kStandalone = "state machines";
-  if (source == kUnbound) return kStandalone;
+  if (source == kNoBehaviour) return kStandalone;
   if (source < layout.behaviours.size()) return layout.behaviours[source];
   return layout.layers[source - layout.behaviours.size()].name;
 }
@@ -402,7 +402,7 @@ void append_step_record(const StepLayout& layout, const StepSnapshot& step, std:
     if (c > 0) out += ", ";
     append_name(machine.name, out);
     fmt::format_to(std::back_inserter(out), R"(: {{"cycle": {}, "state": )", taken.cycle);
-    if (taken.current == kUnbound) {
+    if (taken.current == kNoState) {
       out += "null";
     } else {
       append_name(name(taken.current), out);
@@ -413,7 +413,7 @@ void append_step_record(const StepLayout& layout, const StepSnapshot& step, std:
       append_name(name(step.queue[taken.queue_begin + i]), out);
     }
     out += "]";
-    if (taken.current != kUnbound) {
+    if (taken.current != kNoState) {
       const auto* first = step.current_args.data() + taken.args_begin;
       append_params(merged_params(*machine.states[taken.current].cls, taken.planned,
                                   std::vector<std::pair<std::uint32_t, Arg::Value>>(

@@ -99,7 +99,7 @@ class StepSnapshot {
   struct Machine {
     std::uint64_t cycle = 0;
     ControllerStatus status = ControllerStatus::kRunning;
-    std::uint32_t current = kUnbound;  // state index
+    std::uint32_t current = kNoState;  // state index
     const std::vector<Param>* planned = nullptr;
     std::uint32_t args_begin = 0, args_count = 0;  // into current_args
     std::uint32_t queue_begin = 0, queue_count = 0;
@@ -152,7 +152,7 @@ void append_inputs_record(const StepLayout& layout, const StepSnapshot& step, st
 template <typename Name>
 StateEnd make_state_end(const Controller::Event& event, Name name) {
   const auto named = [&](std::uint32_t state) {
-    return state == kUnbound ? std::string() : std::string(name(state));
+    return state == kNoState ? std::string() : std::string(name(state));
   };
   StateEnd end;
   end.state = named(event.state);

@@ -126,12 +126,12 @@ class Substituter {
           if (std::find(known.begin(), known.end(), *name) == known.end()) known.push_back(*name);
         }
       }
-      auto& error = diagnostics_.error(
-          substitution.location, "substitute-target",
-          fmt::format("'{}' names no behaviour, state, interface layer or class of config '{}'",
-                      substitution.target, model_.name));
-      const auto hint = suggest(substitution.target, known);
-      if (!hint.empty()) error.notes.push_back(hint);
+      diagnostics_
+          .error(substitution.location, "substitute-target",
+                 fmt::format("'{}' names no behaviour, state, interface layer or class of "
+                             "config '{}'",
+                             substitution.target, model_.name))
+          .unknown_name(substitution.target, known);
       return {};
     }
     std::vector<std::string> names;
@@ -191,7 +191,7 @@ class Substituter {
         diagnostics_
             .error(entry.key_location, "unknown-key",
                    fmt::format("unknown key '{}' in the replacement of {}", entry.key, owner))
-            .notes.push_back(suggest(entry.key, {"type", "params", "ports"}, "allowed"));
+            .unknown_name(entry.key, {"type", "params", "ports"}, {}, "allowed");
       }
       if (type == nullptr) {
         diagnostics_.error(

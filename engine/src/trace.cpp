@@ -102,7 +102,7 @@ ParamTexts event_params(const Controller& controller, const Controller::Event& e
 
 ParamTexts current_params(const Controller& controller) {
   const auto state = controller.current_state_index();
-  if (state == kUnbound) return {};
+  if (state == kNoState) return {};
   return detail::merged_params(
       *controller.states()[state].cls, controller.current_planned(), controller.current_args(),
       [](const ParamValue& value) { return value; }, true);

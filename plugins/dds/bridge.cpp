@@ -13,6 +13,7 @@
 #include <sstream>
 #include <thread>
 
+#include "arbiter/fields.hpp"
 #include "arbiter/init_context.hpp"
 #include "domain.hpp"
 #include "messages.hpp"
@@ -200,8 +201,8 @@ std::string check_topic_name(const std::string& name) {
   return {};
 }
 
-/// What the config says about one topic.
-struct Plan {
+/// What the config binds one actuator or sensor to: its topic, message and QoS.
+struct TopicBinding {
   std::string name;
   std::string topic;  // as the config writes it (ROS 2 style), before prefix and namespace
   SourceLocation location;
@@ -213,142 +214,116 @@ struct Plan {
   bool subscribe = false;
 };
 
-/// Reads the bridge's params and reports their problems, counting the errors.
-class ParamReader {
- public:
-  explicit ParamReader(InitContext& ctx) : ctx_(ctx) {}
-
-  void error(const SourceLocation& at, std::string message) {
-    ++errors_;
-    ctx_.error(at, std::move(message));
+/// The `qos` profile, then the policies the config writes beside it.
+TopicQos bridge_qos(InitContext& ctx) {
+  TopicQos qos = qos_profile(ctx.param<std::string>("qos")).value_or(TopicQos{});
+  if (param_written(ctx, "reliability")) {
+    qos.reliable = ctx.param<std::string>("reliability") == "reliable";
   }
-  int errors() const { return errors_; }
-
-  /// The `qos` profile, then the policies the config writes beside it.
-  TopicQos bridge_qos() {
-    TopicQos qos = qos_profile(ctx_.param<std::string>("qos")).value_or(TopicQos{});
-    if (param_written(ctx_, "reliability")) {
-      qos.reliable = ctx_.param<std::string>("reliability") == "reliable";
-    }
-    if (param_written(ctx_, "history")) {
-      qos.keep_all = ctx_.param<std::string>("history") == "keep_all";
-    }
-    if (param_written(ctx_, "depth")) {
-      qos.depth = static_cast<std::int32_t>(ctx_.param<std::int64_t>("depth"));
-    }
-    if (param_written(ctx_, "durability")) {
-      qos.transient_local = ctx_.param<std::string>("durability") == "transient_local";
-    }
-    return qos;
+  if (param_written(ctx, "history")) {
+    qos.keep_all = ctx.param<std::string>("history") == "keep_all";
   }
+  if (param_written(ctx, "depth")) {
+    qos.depth = static_cast<std::int32_t>(ctx.param<std::int64_t>("depth"));
+  }
+  if (param_written(ctx, "durability")) {
+    qos.transient_local = ctx.param<std::string>("durability") == "transient_local";
+  }
+  return qos;
+}
 
-  /// Applies one entry of `topics:` (a topic name, or a mapping of options) to `plan`.
-  void apply(const Node& value, Plan& plan) {
-    if (value.is_scalar() && !value.reads_as_null()) {
-      set_topic(value, plan);
-      return;
+void check_topic(InitContext& ctx, const std::string& topic, const SourceLocation& at,
+                 const char* what) {
+  const std::string problem = check_topic_name(topic);
+  if (!problem.empty()) {
+    ctx.error(at, fmt::format("{} '{}' is not a valid ROS 2 topic name: {}", what, topic, problem));
+  }
+}
+
+void set_topic(InitContext& ctx, const Node& node, TopicBinding& binding) {
+  if (!node.is_scalar() || node.reads_as_null()) {
+    ctx.error(node.location(), fmt::format("the topic of '{}' must be a name, found {}",
+                                           binding.name, node.describe()));
+    return;
+  }
+  binding.topic = node.text();
+  binding.topic_location = node.location();
+  check_topic(ctx, binding.topic, node.location(), "topic");
+}
+
+void set_message(InitContext& ctx, const Node& node, TopicBinding& binding) {
+  const auto message = message_named(node.text());
+  if (node.is_scalar() && message && carries(*message, binding.kind)) {
+    binding.message = *message;
+    return;
+  }
+  const auto allowed = messages_for(binding.kind);
+  std::string list;
+  for (const auto& name : allowed) list += (list.empty() ? "" : ", ") + name;
+  ctx.error(node.location(), fmt::format("'{}' cannot travel as {}; its message can be: {}",
+                                         binding.name, node.describe(), list));
+}
+
+std::optional<std::string> choose(InitContext& ctx, const Node& node, const std::string& key,
+                                  const std::vector<std::string>& allowed) {
+  if (node.is_scalar() && std::find(allowed.begin(), allowed.end(), node.text()) != allowed.end()) {
+    return node.text();
+  }
+  ctx.error(node.location(), fmt::format("{} must be one of {}, found {}", key,
+                                         fmt::join(allowed, ", "), node.describe()));
+  return std::nullopt;
+}
+
+/// Applies one entry of `topics:` (a topic name, or a mapping of options) to `binding`. The
+/// mapping is read as the model reads its own (Fields): a key that is none of the options is an
+/// `unknown-key` error with a suggestion, anything but a mapping a `wrong-type` one.
+void read_topic_options(InitContext& ctx, const Node& value, TopicBinding& binding) {
+  if (value.is_scalar() && !value.reads_as_null()) {
+    set_topic(ctx, value, binding);
+    return;
+  }
+  static const std::vector<std::string_view> kKeys = {
+      "topic", "message", "qos", "reliability", "history", "depth", "durability"};
+  const Fields fields(value, fmt::format("topic '{}'", binding.name), kKeys, ctx.diagnostics(),
+                      "a topic name or a mapping with topic, message, qos, reliability, history, "
+                      "depth, durability");
+  if (!fields.ok()) return;
+  // A profile replaces the bridge's QoS for this topic, wherever the mapping writes it; the
+  // policies written beside it then change it.
+  if (const Node* profile = fields.optional("qos")) {
+    if (auto choice = choose(ctx, *profile, "qos", kQosProfiles)) {
+      binding.qos = *qos_profile(*choice);
     }
-    if (!value.is_mapping()) {
-      error(value.location(),
-            fmt::format("topics: '{}' must map to a topic name or to a mapping with "
-                        "topic, message, qos, reliability, history, depth, durability; found {}",
-                        plan.name, value.describe()));
-      return;
-    }
-    static const std::vector<std::string> kKeys = {"topic",   "message", "qos",       "reliability",
-                                                   "history", "depth",   "durability"};
-    // A profile replaces the bridge's QoS for this topic, wherever the mapping writes it; the
-    // policies written beside it then change it.
-    for (const auto& entry : value.entries()) {
-      if (entry.key != "qos") continue;
-      if (auto choice = choose(entry.value, entry.key, kQosProfiles)) {
-        plan.qos = *qos_profile(*choice);
+  }
+  for (const auto& entry : value.entries()) {
+    const Node& option = entry.value;
+    if (entry.key == "topic") {
+      set_topic(ctx, option, binding);
+    } else if (entry.key == "message") {
+      set_message(ctx, option, binding);
+    } else if (entry.key == "reliability") {
+      if (auto choice = choose(ctx, option, entry.key, {"reliable", "best_effort"})) {
+        binding.qos.reliable = *choice == "reliable";
+      }
+    } else if (entry.key == "history") {
+      if (auto choice = choose(ctx, option, entry.key, {"keep_last", "keep_all"})) {
+        binding.qos.keep_all = *choice == "keep_all";
+      }
+    } else if (entry.key == "durability") {
+      if (auto choice = choose(ctx, option, entry.key, {"volatile", "transient_local"})) {
+        binding.qos.transient_local = *choice == "transient_local";
+      }
+    } else if (entry.key == "depth") {
+      const auto depth = option.as_int();
+      if (!depth || *depth < 1 || *depth > 10000) {
+        ctx.error(option.location(), fmt::format("depth must be an integer in [1, 10000], found {}",
+                                                 option.describe()));
+      } else {
+        binding.qos.depth = static_cast<std::int32_t>(*depth);
       }
     }
-    for (const auto& entry : value.entries()) {
-      if (std::find(kKeys.begin(), kKeys.end(), entry.key) == kKeys.end()) {
-        error(entry.key_location, fmt::format("unknown key '{}' for topic '{}'; {}", entry.key,
-                                              plan.name, suggest(entry.key, kKeys, "allowed")));
-        continue;
-      }
-      const Node& option = entry.value;
-      if (entry.key == "qos") {
-        continue;
-      } else if (entry.key == "topic") {
-        set_topic(option, plan);
-      } else if (entry.key == "message") {
-        set_message(option, plan);
-      } else if (entry.key == "reliability") {
-        if (auto choice = choose(option, entry.key, {"reliable", "best_effort"})) {
-          plan.qos.reliable = *choice == "reliable";
-        }
-      } else if (entry.key == "history") {
-        if (auto choice = choose(option, entry.key, {"keep_last", "keep_all"})) {
-          plan.qos.keep_all = *choice == "keep_all";
-        }
-      } else if (entry.key == "durability") {
-        if (auto choice = choose(option, entry.key, {"volatile", "transient_local"})) {
-          plan.qos.transient_local = *choice == "transient_local";
-        }
-      } else if (entry.key == "depth") {
-        const auto depth = option.as_int();
-        if (!depth || *depth < 1 || *depth > 10000) {
-          error(option.location(), fmt::format("depth must be an integer in [1, 10000], "
-                                               "found {}",
-                                               option.describe()));
-        } else {
-          plan.qos.depth = static_cast<std::int32_t>(*depth);
-        }
-      }
-    }
   }
-
-  void check_topic(const std::string& topic, const SourceLocation& at, const char* what) {
-    const std::string problem = check_topic_name(topic);
-    if (!problem.empty()) {
-      error(at, fmt::format("{} '{}' is not a valid ROS 2 topic name: {}", what, topic, problem));
-    }
-  }
-
- private:
-  void set_topic(const Node& node, Plan& plan) {
-    if (!node.is_scalar() || node.reads_as_null()) {
-      error(node.location(),
-            fmt::format("the topic of '{}' must be a name, found {}", plan.name, node.describe()));
-      return;
-    }
-    plan.topic = node.text();
-    plan.topic_location = node.location();
-    check_topic(plan.topic, node.location(), "topic");
-  }
-
-  void set_message(const Node& node, Plan& plan) {
-    const auto message = message_named(node.text());
-    if (node.is_scalar() && message && carries(*message, plan.kind)) {
-      plan.message = *message;
-      return;
-    }
-    const auto allowed = messages_for(plan.kind);
-    std::string list;
-    for (const auto& name : allowed) list += (list.empty() ? "" : ", ") + name;
-    error(node.location(), fmt::format("'{}' cannot travel as {}; its message can be: {}",
-                                       plan.name, node.describe(), list));
-  }
-
-  std::optional<std::string> choose(const Node& node, const std::string& key,
-                                    const std::vector<std::string>& allowed) {
-    if (node.is_scalar() &&
-        std::find(allowed.begin(), allowed.end(), node.text()) != allowed.end()) {
-      return node.text();
-    }
-    error(node.location(), fmt::format("{} must be one of {}, found {}", key,
-                                       fmt::join(allowed, ", "), node.describe()));
-    return std::nullopt;
-  }
-
-  InitContext& ctx_;
-  int errors_ = 0;
-};
+}
 
 dds_qos_t* make_qos(const TopicQos& topic, bool writer) {
   dds_qos_t* qos = dds_create_qos();
@@ -382,7 +357,7 @@ std::optional<std::string> read_cyclone_config(const std::string& value, const S
 }
 
 /// `domain_id`, or else ROS_DOMAIN_ID as a ROS 2 node reads it, or else 0.
-std::optional<std::int64_t> domain_id_of(InitContext& ctx, ParamReader& params) {
+std::optional<std::int64_t> domain_id_of(InitContext& ctx) {
   if (param_written(ctx, "domain_id")) return ctx.param<std::int64_t>("domain_id");
   const char* variable = std::getenv("ROS_DOMAIN_ID");
   if (variable == nullptr || *variable == '\0') return 0;
@@ -390,11 +365,11 @@ std::optional<std::int64_t> domain_id_of(InitContext& ctx, ParamReader& params) 
   errno = 0;
   const long long value = std::strtoll(variable, &end, 10);
   if (errno != 0 || *end != '\0' || value < 0 || value > 232) {
-    params.error(ctx.location(),
-                 fmt::format("the environment variable ROS_DOMAIN_ID is '{}', which is not a DDS "
-                             "domain id (an integer in [0, 232]); set it to one, or set "
-                             "'domain_id' in the bridge's params",
-                             variable));
+    ctx.error(ctx.location(),
+              fmt::format("the environment variable ROS_DOMAIN_ID is '{}', which is not a DDS "
+                          "domain id (an integer in [0, 232]); set it to one, or set "
+                          "'domain_id' in the bridge's params",
+                          variable));
     return std::nullopt;
   }
   return value;
@@ -446,80 +421,79 @@ std::uint32_t sensor_actuator(InitContext& ctx, const std::string& sensor, Value
   return kUnbound;
 }
 
-/// A plan for each actuator (subscribed) and sensor (published) of the layer, with the options
+/// A binding for each actuator (subscribed) and sensor (published) of the layer, with the options
 /// `topics:` gives them.
-std::vector<Plan> plan_topics(InitContext& ctx, ParamReader& params,
-                              const std::vector<LayerItem>& actuators,
-                              const std::vector<LayerItem>& sensors) {
-  const TopicQos qos = params.bridge_qos();
-  std::vector<Plan> plans;
+std::vector<TopicBinding> bind_topics(InitContext& ctx, const std::vector<LayerItem>& actuators,
+                                      const std::vector<LayerItem>& sensors) {
+  const TopicQos qos = bridge_qos(ctx);
+  std::vector<TopicBinding> bindings;
   const auto add = [&](const LayerItem& item, bool subscribe) {
     const auto kind = kind_of(item.type->name);
     if (!kind) {
-      params.error(item.location, fmt::format("{} '{}' has type '{}', which the DDS bridge does "
-                                              "not carry; it carries {}",
-                                              subscribe ? "actuator" : "sensor", item.name,
-                                              item.type->name, carried_types()));
+      ctx.error(item.location, fmt::format("{} '{}' has type '{}', which the DDS bridge does "
+                                           "not carry; it carries {}",
+                                           subscribe ? "actuator" : "sensor", item.name,
+                                           item.type->name, carried_types()));
       return;
     }
-    Plan plan;
-    plan.name = item.name;
-    plan.topic = item.name;
-    plan.location = item.location;
-    plan.topic_location = item.location;
-    plan.kind = *kind;
-    plan.message = default_message(*kind);
-    plan.qos = qos;
-    plan.subscribe = subscribe;
-    if (!subscribe) plan.actuator = sensor_actuator(ctx, item.name, *kind, item.location);
-    plans.push_back(std::move(plan));
+    TopicBinding binding;
+    binding.name = item.name;
+    binding.topic = item.name;
+    binding.location = item.location;
+    binding.topic_location = item.location;
+    binding.kind = *kind;
+    binding.message = default_message(*kind);
+    binding.qos = qos;
+    binding.subscribe = subscribe;
+    if (!subscribe) binding.actuator = sensor_actuator(ctx, item.name, *kind, item.location);
+    bindings.push_back(std::move(binding));
   };
   for (const auto& item : actuators) add(item, true);
   for (const auto& item : sensors) add(item, false);
 
   const Node topics = ctx.param<Node>("topics");
   if (!topics.reads_as_null() && !topics.is_mapping()) {
-    params.error(topics.location(),
-                 fmt::format("'topics' must map actuators and sensors of this layer to topic "
-                             "names, found {}",
-                             topics.describe()));
-    return plans;
+    ctx.error(topics.location(),
+              fmt::format("'topics' must map actuators and sensors of this layer to topic "
+                          "names, found {}",
+                          topics.describe()));
+    return bindings;
   }
   std::vector<std::string> known;
   for (const auto& item : actuators) known.push_back(item.name);
   for (const auto& item : sensors) known.push_back(item.name);
   for (const auto& entry : topics.entries()) {
-    const auto plan = std::find_if(plans.begin(), plans.end(), [&](const Plan& candidate) {
-      return candidate.name == entry.key;
-    });
-    if (plan != plans.end()) {
-      params.apply(entry.value, *plan);
+    const auto binding =
+        std::find_if(bindings.begin(), bindings.end(),
+                     [&](const TopicBinding& candidate) { return candidate.name == entry.key; });
+    if (binding != bindings.end()) {
+      read_topic_options(ctx, entry.value, *binding);
     } else if (std::find(known.begin(), known.end(), entry.key) == known.end()) {
-      params.error(entry.key_location,
-                   fmt::format("topics: '{}' is neither an actuator nor a sensor of layer '{}'; {}",
-                               entry.key, ctx.name(),
-                               known.empty() ? std::string("the layer has none")
-                                             : suggest(entry.key, known)));
+      ctx.error(entry.key_location,
+                fmt::format(
+                    "topics: '{}' is neither an actuator nor a sensor of layer '{}'; {}", entry.key,
+                    ctx.name(),
+                    known.empty() ? std::string("the layer has none") : suggest(entry.key, known)));
     }
   }
-  return plans;
+  return bindings;
 }
 
 std::unique_ptr<Bridge::Subscription> subscribe(InitContext& ctx, dds_entity_t participant,
                                                 dds_entity_t topic, const std::string& topic_name,
-                                                const Plan& plan) {
+                                                const TopicBinding& binding) {
   auto subscription = std::make_unique<Bridge::Subscription>();
   Bridge::Subscription& in = *subscription;
-  in.name = plan.name;
+  in.name = binding.name;
   in.topic = topic_name;
-  in.kind = plan.kind;
-  in.message = plan.message;
-  in.output = ctx.output_to_actuator(plan.name, plan.location);
+  in.kind = binding.kind;
+  in.message = binding.message;
+  in.output = ctx.output_to_actuator(binding.name, binding.location);
   if (in.output.type != nullptr) in.staged = ValueBox(*in.output.type);
   const std::size_t batch =
-      plan.qos.keep_all
+      binding.qos.keep_all
           ? kMaxBatch
-          : std::min<std::size_t>(kMaxBatch, static_cast<std::size_t>(plan.qos.depth));
+          : std::min<std::size_t>(kMaxBatch, static_cast<std::size_t>(binding.qos.depth));
   in.samples.resize(batch, SampleStorage{});
   for (auto& sample : in.samples) in.buffers.push_back(&sample);
   in.infos.resize(batch);
@@ -530,39 +504,39 @@ std::unique_ptr<Bridge::Subscription> subscribe(InitContext& ctx, dds_entity_t p
   dds_lset_data_available(in.listener, on_data_available);
   dds_lset_subscription_matched(in.listener, on_subscription_matched);
   dds_lset_requested_incompatible_qos(in.listener, on_requested_incompatible_qos);
-  in.incompatible_events = incompatible_qos_events(in.name, topic_name, plan.qos, true);
-  dds_qos_t* qos = make_qos(plan.qos, false);
+  in.incompatible_events = incompatible_qos_events(in.name, topic_name, binding.qos, true);
+  dds_qos_t* qos = make_qos(binding.qos, false);
   in.reader = dds_create_reader(participant, topic, qos, in.listener);
   dds_delete_qos(qos);
   if (in.reader < 0) {
-    ctx.error(plan.topic_location, fmt::format("cannot subscribe to DDS topic '{}': {}", topic_name,
-                                               retcode_name(in.reader)));
+    ctx.error(binding.topic_location, fmt::format("cannot subscribe to DDS topic '{}': {}",
+                                                  topic_name, retcode_name(in.reader)));
   }
   return subscription;
 }
 
 std::unique_ptr<Bridge::Publication> publish(InitContext& ctx, dds_entity_t participant,
                                              dds_entity_t topic, const std::string& topic_name,
-                                             const Plan& plan) {
+                                             const TopicBinding& binding) {
   auto publication = std::make_unique<Bridge::Publication>();
   Bridge::Publication& out = *publication;
-  out.name = plan.name;
+  out.name = binding.name;
   out.topic = topic_name;
-  out.kind = plan.kind;
-  out.message = plan.message;
-  out.actuator = plan.actuator;
+  out.kind = binding.kind;
+  out.message = binding.message;
+  out.actuator = binding.actuator;
   out.failed_event =
       fmt::format("{}: publishing on {} failed; the history is full", out.name, topic_name);
   out.listener = dds_create_listener(&out);
   dds_lset_publication_matched(out.listener, on_publication_matched);
   dds_lset_offered_incompatible_qos(out.listener, on_offered_incompatible_qos);
-  out.incompatible_events = incompatible_qos_events(out.name, topic_name, plan.qos, false);
-  dds_qos_t* qos = make_qos(plan.qos, true);
+  out.incompatible_events = incompatible_qos_events(out.name, topic_name, binding.qos, false);
+  dds_qos_t* qos = make_qos(binding.qos, true);
   out.writer = dds_create_writer(participant, topic, qos, out.listener);
   dds_delete_qos(qos);
   if (out.writer < 0) {
-    ctx.error(plan.topic_location, fmt::format("cannot publish DDS topic '{}': {}", topic_name,
-                                               retcode_name(out.writer)));
+    ctx.error(binding.topic_location, fmt::format("cannot publish DDS topic '{}': {}", topic_name,
+                                                  retcode_name(out.writer)));
   }
   return publication;
 }
@@ -570,12 +544,13 @@ std::unique_ptr<Bridge::Publication> publish(InitContext& ctx, dds_entity_t part
 }  // namespace
 
 void Bridge::init(InitContext& ctx) {
-  ParamReader params(ctx);
+  // Nothing joins the network while the config has an error: counted from here.
+  const std::size_t errors_before = ctx.diagnostics().error_count();
   publish_unwritten_ = ctx.param<std::string>("publish") == "every_step";
   const std::string prefix = ctx.param<std::string>("topic_prefix");
   std::string ns = ctx.param<std::string>("namespace");
   if (!ns.empty()) {
-    params.check_topic(ns, ctx.param_location("namespace"), "namespace");
+    check_topic(ctx, ns, ctx.param_location("namespace"), "namespace");
     ns.erase(0, ns.find_first_not_of('/'));
   }
 
@@ -587,17 +562,17 @@ void Bridge::init(InitContext& ctx) {
                             "subscribes to a topic for each actuator and publishes each sensor",
                             ctx.name()));
   }
-  const std::vector<Plan> plans = plan_topics(ctx, params, actuators, sensors);
-  std::map<std::string, const Plan*> published;
-  for (const auto& plan : plans) {
-    if (plan.subscribe) continue;
-    const std::string topic = full_topic(prefix, ns, plan.topic);
-    const auto [first, fresh] = published.emplace(topic, &plan);
+  const std::vector<TopicBinding> bindings = bind_topics(ctx, actuators, sensors);
+  std::map<std::string, const TopicBinding*> published;
+  for (const auto& binding : bindings) {
+    if (binding.subscribe) continue;
+    const std::string topic = full_topic(prefix, ns, binding.topic);
+    const auto [first, fresh] = published.emplace(topic, &binding);
     if (!fresh) {
-      params.error(plan.topic_location,
-                   fmt::format("sensors '{}' and '{}' are both published on topic '{}'; a topic "
-                               "carries one value",
-                               first->second->name, plan.name, topic));
+      ctx.error(binding.topic_location,
+                fmt::format("sensors '{}' and '{}' are both published on topic '{}'; a topic "
+                            "carries one value",
+                            first->second->name, binding.name, topic));
     }
   }
 
@@ -610,12 +585,11 @@ void Bridge::init(InitContext& ctx) {
     if (text) {
       config = *text;
     } else {
-      params.error(ctx.param_location("cyclone_config"), problem);
+      ctx.error(ctx.param_location("cyclone_config"), problem);
     }
   }
-  const auto domain = domain_id_of(ctx, params);
-  // Nothing joins the network while the config has an error.
-  if (params.errors() > 0 || !domain) return;
+  const auto domain = domain_id_of(ctx);
+  if (ctx.diagnostics().error_count() > errors_before || !domain) return;
 
   const auto domain_id = static_cast<std::uint32_t>(*domain);
   std::string problem;
@@ -635,18 +609,19 @@ void Bridge::init(InitContext& ctx) {
     participant_ = 0;
     return;
   }
-  for (const auto& plan : plans) {
-    const std::string topic_name = full_topic(prefix, ns, plan.topic);
-    const dds_topic_descriptor_t& type = descriptor(plan.message);
+  for (const auto& binding : bindings) {
+    const std::string topic_name = full_topic(prefix, ns, binding.topic);
+    const dds_topic_descriptor_t& type = descriptor(binding.message);
     const dds_entity_t topic =
         dds_create_topic(participant_, &type, topic_name.c_str(), nullptr, nullptr);
     if (topic < 0) {
-      ctx.error(plan.topic_location, fmt::format("cannot create DDS topic '{}' of type {}: {}",
-                                                 topic_name, type.m_typename, retcode_name(topic)));
-    } else if (plan.subscribe) {
-      subscriptions_.push_back(subscribe(ctx, participant_, topic, topic_name, plan));
+      ctx.error(binding.topic_location,
+                fmt::format("cannot create DDS topic '{}' of type {}: {}", topic_name,
+                            type.m_typename, retcode_name(topic)));
+    } else if (binding.subscribe) {
+      subscriptions_.push_back(subscribe(ctx, participant_, topic, topic_name, binding));
     } else {
-      publications_.push_back(publish(ctx, participant_, topic, topic_name, plan));
+      publications_.push_back(publish(ctx, participant_, topic, topic_name, binding));
     }
   }
 }

@@ -18,7 +18,17 @@
 
 namespace arbiter {
 
-inline constexpr std::uint32_t kUnbound = std::numeric_limits<std::uint32_t>::max();
+/// The index that names nothing. Each role it plays has its own name, so that a reader knows
+/// which absence is meant.
+inline constexpr std::uint32_t kNoIndex = std::numeric_limits<std::uint32_t>::max();
+/// A port, input or output bound to no actuator (an optional port with nothing to bind).
+inline constexpr std::uint32_t kUnbound = kNoIndex;
+/// No behaviour: the layer's interface writes, or the code runs outside any behaviour.
+inline constexpr std::uint32_t kNoBehaviour = kNoIndex;
+/// No controller: a state machine with no parent, a state with no child machine.
+inline constexpr std::uint32_t kNoController = kNoIndex;
+/// No state: a state machine that is not in any state.
+inline constexpr std::uint32_t kNoState = kNoIndex;
 
 /// Reads the actuator a sensor names. Unbound (an optional port with nothing to bind) reads the
 /// type's zero value.

@@ -33,6 +33,12 @@ struct Diagnostic {
   std::string code;  ///< stable, kebab-case; listed in docs/diagnostics.md
   std::string message;
   std::vector<std::string> notes;
+
+  /// For a name that names nothing: the note offering the closest of `known` and listing them
+  /// (suggest(name, known, label)), or `none_known` when `known` is empty (then no note if that
+  /// is empty too). Every "unknown X" report writes its note this way.
+  Diagnostic& unknown_name(std::string_view name, const std::vector<std::string>& known,
+                           std::string_view none_known = {}, std::string_view label = "known");
 };
 
 /// The sink every pipeline stage reports into. Stages keep going after an error so that one run

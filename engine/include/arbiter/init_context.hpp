@@ -73,9 +73,13 @@ class InitContext {
   virtual Controller* claim_controller(const std::string& machine, const SourceLocation& where) = 0;
 
   /// Reports a problem of the config at `where` (fails the load) and returns the report, to
-  /// which notes can be added: `ctx.error(at, "...").notes.push_back("did you mean ...")`.
+  /// which notes can be added: `ctx.error(at, "...").unknown_name(name, known)` for a name that
+  /// names nothing.
   virtual Diagnostic& error(const SourceLocation& where, std::string message) = 0;
   virtual Diagnostic& warning(const SourceLocation& where, std::string message) = 0;
+  /// The load's diagnostics, for reading a structured param with Fields (<arbiter/fields.hpp>):
+  /// its mistakes are then reported with the model's codes and notes.
+  virtual Diagnostics& diagnostics() = 0;
 
  protected:
   virtual const ParamValue* find_param(std::string_view param_name,

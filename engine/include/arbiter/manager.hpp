@@ -46,24 +46,9 @@ class StepClock {
   virtual double now() = 0;
 };
 
-/// How the parts of a program staged for hot reload map onto the running program's, by index
-/// (Reloader builds it; docs/hot_reload.md). kUnbound: nothing carries over, the part starts
-/// afresh.
-struct CarryPlan {
-  /// Per behaviour of the new program: the running behaviour of the same layer, name and class.
-  std::vector<std::uint32_t> behaviour_from;
-  /// Per behaviour: non-zero when it keeps the running instance as it is (declaration and port
-  /// handles unchanged); else a matched behaviour's new instance is offered carry_over().
-  std::vector<char> behaviour_kept;
-  /// Per actuator: the running actuator of the same name and type, whose value it keeps.
-  std::vector<std::uint32_t> actuator_from;
-  /// Per layer: the running layer of the same name and interface class, and whether it keeps
-  /// that interface object (else its new one is offered carry_over()), as for behaviours.
-  std::vector<std::uint32_t> interface_from;
-  std::vector<char> interface_kept;
-  /// Per controller: the running controller it keeps, with its current state and queue.
-  std::vector<std::uint32_t> controller_kept;
-};
+namespace detail {
+struct Carryover;  // carryover.hpp, not installed: the Reloader builds it
+}  // namespace detail
 
 class Manager {
  public:
@@ -117,12 +102,12 @@ class Manager {
 
   /// Hot reload, first half (docs/hot_reload.md); Reloader does all of it for a config file.
   /// Prepares on the calling thread everything the swap of `program` needs (buffers sized for
-  /// it, the carry-over of `plan`, made against program()) and hands it to step(), which swaps
+  /// it, the carry-over `carryover`, made against program()) and hands it to step(), which swaps
   /// it in at its start without allocating, then calls the observers' on_reload(). Replaces a
   /// staged program not yet swapped in. One thread at a time may stage and withdraw, while
-  /// another steps; step() never waits for it. Throws std::invalid_argument when the plan's
-  /// sizes or indices do not fit the two programs.
-  void stage(Program program, CarryPlan plan);
+  /// another steps; step() never waits for it. Throws std::invalid_argument when the
+  /// carry-over's sizes or indices do not fit the two programs.
+  void stage(Program program, detail::Carryover carryover);
   /// Takes back a staged program not swapped in yet (returns true then) and frees what the last
   /// swap replaced (the old program and its instances). stage() frees that too. Both wait, when
   /// they must, until the observers' on_reload() of that swap returned, as observers may read the
@@ -185,7 +170,7 @@ class Manager {
 
   struct Staged;     // a program, its run state and the carry-over from the running one
   struct Reloading;  // the hand-over between stage() and step(); on the heap: Manager moves
-  std::unique_ptr<Staged> prepare(Program program, CarryPlan plan) const;
+  std::unique_ptr<Staged> prepare(Program program, detail::Carryover carryover) const;
   void swap_in(Staged& staged) noexcept;
   void point_step_data() noexcept;
   void apply(Staged& staged);

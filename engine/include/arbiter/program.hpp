@@ -143,7 +143,7 @@ struct CompiledActuator {
 /// One writer's contribution to an actuator: a behaviour's (or an interface's) output.
 struct WriterSlot {
   std::uint32_t actuator = 0;
-  std::uint32_t owner = 0;  ///< a behaviour index, or kUnbound for the layer's interface
+  std::uint32_t owner = 0;  ///< a behaviour index, or kNoBehaviour for the layer's interface
   std::uint32_t offset = 0;
 };
 
@@ -218,10 +218,5 @@ class Program {
 /// classes came from) must outlive the program.
 std::optional<Program> compile(const Model& model, const Registry& registry,
                                Diagnostics& diagnostics);
-
-/// Reports each layer's inhibition cycle, as compile() does, for a model that may have other
-/// errors: inhibitions that name no valid behaviour are left out. Lets the load pipeline report a
-/// cycle in the same pass as the model's problems.
-void check_inhibition_cycles(const Model& model, Diagnostics& diagnostics);
 
 }  // namespace arbiter

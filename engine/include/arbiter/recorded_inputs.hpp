@@ -5,15 +5,37 @@
 // `arbiter replay` and the scenario tests that replay a recording (`replay:`, scenario.hpp).
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/model.hpp"
+#include "arbiter/recording.hpp"
 #include "arbiter/registry.hpp"
 
 namespace arbiter {
+
+/// What replay needs of a recording besides its steps (read those with open_trace()).
+struct RecordedRun {
+  RecordingInfo info;
+  /// Each step's `/arbiter/inputs` message, in order.
+  std::vector<std::pair<std::uint64_t, std::string>> inputs;
+  /// Each hot reload: the last step before it, and the files (path, text) of the config it
+  /// loaded (empty in recordings that did not keep them).
+  struct Reload {
+    std::uint64_t after_step = 0;
+    std::vector<std::pair<std::string, std::string>> files;
+  };
+  std::vector<Reload> reloads;
+  std::uint64_t dropped = 0;               ///< steps the recorder dropped (its gap records)
+  std::optional<std::uint64_t> first_gap;  ///< the last step before the first dropped one
+};
+
+/// Reads the config, inputs and reloads of the recording at `path`; nullopt with `error` set when
+/// it is not a readable recording. A recording cut off while written gives what it holds.
+std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error);
 
 /// The recorded inputs of a run, by actuator name and step.
 class RecordedInputs {

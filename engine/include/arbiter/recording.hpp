@@ -109,24 +109,4 @@ class Recorder : public Observer {
 /// reported something in the step.
 void append_inputs_record(const Manager& manager, std::string& out);
 
-/// What replay needs of a recording besides its steps (read those with open_trace()).
-struct RecordedRun {
-  RecordingInfo info;
-  /// Each step's `/arbiter/inputs` message, in order.
-  std::vector<std::pair<std::uint64_t, std::string>> inputs;
-  /// Each hot reload: the last step before it, and the files (path, text) of the config it
-  /// loaded (empty in recordings that did not keep them).
-  struct Reload {
-    std::uint64_t after_step = 0;
-    std::vector<std::pair<std::string, std::string>> files;
-  };
-  std::vector<Reload> reloads;
-  std::uint64_t dropped = 0;               ///< steps the recorder dropped (its gap records)
-  std::optional<std::uint64_t> first_gap;  ///< the last step before the first dropped one
-};
-
-/// Reads the config, inputs and reloads of the recording at `path`; nullopt with `error` set when
-/// it is not a readable recording. A recording cut off while written gives what it holds.
-std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error);
-
 }  // namespace arbiter

@@ -7,8 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "arbiter/fields.hpp"
 #include "builder.hpp"
-#include "fields.hpp"
 
 namespace arbiter::detail {
 
@@ -189,12 +189,12 @@ void ModelBuilder::add_inhibition(InhibitionDecl inhibition, LayerDecl& layer,
               "above influence layers below through actuators and sensors");
       continue;
     }
-    auto& error = diagnostics_.error(end->location, "unknown-behaviour",
-                                     fmt::format("inhibition names unknown behaviour '{}' in {}",
-                                                 end->text, layer_label(layer)));
-    const auto hint = suggest(end->text, declared);
-    error.notes.push_back(
-        hint.empty() ? fmt::format("{} declares no behaviours", layer_label(layer)) : hint);
+    diagnostics_
+        .error(end->location, "unknown-behaviour",
+               fmt::format("inhibition names unknown behaviour '{}' in {}", end->text,
+                           layer_label(layer)))
+        .unknown_name(end->text, declared,
+                      fmt::format("{} declares no behaviours", layer_label(layer)));
   }
   if (!ok) return;
   if (inhibition.inhibitor.text == inhibition.inhibited.text) {

@@ -5,8 +5,8 @@
 
 #include <fmt/format.h>
 
+#include "arbiter/fields.hpp"
 #include "builder.hpp"
-#include "fields.hpp"
 
 namespace arbiter::detail {
 
@@ -111,9 +111,10 @@ void ModelBuilder::read_actuators(const Node& node, LayerDecl& layer) {
         // A value type of a listed plugin that did not load: the plugin's error says it.
         if (actuator.type == nullptr &&
             !(from_unloaded_plugin(*text) && diagnostics_.has_errors())) {
-          auto& error = diagnostics_.error(type->location(), "unknown-type",
-                                           fmt::format("unknown value type '{}'", *text));
-          error.notes.push_back(suggest(*text, registry_.value_type_names()));
+          diagnostics_
+              .error(type->location(), "unknown-type",
+                     fmt::format("unknown value type '{}'", *text))
+              .unknown_name(*text, registry_.value_type_names());
         }
       }
     }
@@ -204,8 +205,7 @@ void ModelBuilder::read_sensors(const Node& node, LayerDecl& layer, PendingLayer
           where, "unknown-actuator",
           fmt::format("sensor '{}' of {} names no actuator", name, layer_label(layer)));
       const auto names = actuator_names();
-      const auto hint = suggest(name, names);
-      error.notes.push_back(hint.empty() ? "the config declares no actuators" : hint);
+      error.unknown_name(name, names, "the config declares no actuators");
       if (auto meant = closest(name, names)) {
         pending.misspelt_sensors.emplace_back(std::move(*meant), diagnostics_.items().size() - 1);
       }
@@ -272,11 +272,10 @@ std::vector<PortBinding> ModelBuilder::bind_ports(const ClassInfo& cls, const No
     for (const auto& spec : cls.ports) declared.push_back(spec.name);
     for (const auto& entry : ports->entries()) {
       if (cls.find_port(entry.key) == nullptr) {
-        auto& error = diagnostics_.error(
-            entry.key_location, "unknown-port",
-            fmt::format("unknown port '{}' for {} ({})", entry.key, owner, cls.name));
-        const auto hint = suggest(entry.key, declared);
-        error.notes.push_back(hint.empty() ? fmt::format("{} declares no ports", cls.name) : hint);
+        diagnostics_
+            .error(entry.key_location, "unknown-port",
+                   fmt::format("unknown port '{}' for {} ({})", entry.key, owner, cls.name))
+            .unknown_name(entry.key, declared, fmt::format("{} declares no ports", cls.name));
       }
     }
   }
@@ -328,8 +327,7 @@ std::vector<PortBinding> ModelBuilder::bind_ports(const ClassInfo& cls, const No
                                 "actuators of its own layer",
                                 target, other->second.layer));
       } else {
-        const auto hint = suggest(target, candidates);
-        if (!hint.empty()) error.notes.push_back(hint);
+        error.unknown_name(target, candidates);
       }
       if (explicit_target == nullptr) {
         error.notes.push_back(fmt::format("bind it with 'ports: {{{}: NAME}}'", spec.name));

@@ -5,9 +5,9 @@
 
 #include <fmt/format.h>
 
+#include "arbiter/fields.hpp"
 #include "arbiter/model.hpp"
 #include "builder.hpp"
-#include "fields.hpp"
 
 namespace arbiter {
 

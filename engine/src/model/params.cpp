@@ -8,8 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "arbiter/fields.hpp"
 #include "builder.hpp"
-#include "fields.hpp"
 
 namespace arbiter::detail {
 
@@ -113,7 +113,7 @@ std::optional<FaultPolicy> ModelBuilder::read_fault_policy(const Node& node) {
   auto& error = diagnostics_.error(
       node.location(), node.is_scalar() ? "out-of-range" : "wrong-type",
       fmt::format("'on_exception' must be inactive, disable or stop, found {}", node.describe()));
-  if (node.is_scalar()) error.notes.push_back(suggest(node.text(), kChoices, "allowed"));
+  if (node.is_scalar()) error.unknown_name(node.text(), kChoices, {}, "allowed");
   return std::nullopt;
 }
 
@@ -178,9 +178,7 @@ const ClassInfo* ModelBuilder::read_class(const Node& node, ClassKind kind, std:
     const auto known = registry_.class_names(kind);
     auto& error = diagnostics_.error(node.location(), "unknown-class",
                                      fmt::format("unknown {} class '{}'", to_string(kind), *text));
-    const auto hint = suggest(*text, known);
-    error.notes.push_back(
-        hint.empty() ? fmt::format("no {} classes are registered", to_string(kind)) : hint);
+    error.unknown_name(*text, known, fmt::format("no {} classes are registered", to_string(kind)));
     // `soccer.KickBall` that is not a typo of a known class probably lives in a plugin.
     if (!closest(*text, known) && text->find('.') != std::string::npos) {
       error.notes.push_back(
@@ -189,11 +187,11 @@ const ClassInfo* ModelBuilder::read_class(const Node& node, ClassKind kind, std:
     return nullptr;
   }
   if (cls->kind != kind) {
-    auto& error = diagnostics_.error(
-        node.location(), "wrong-class-kind",
-        fmt::format("'{}' is {}; {} needs {}", *text, a_class(cls->kind), what, a_class(kind)));
-    const auto hint = suggest(*text, registry_.class_names(kind), "known");
-    if (!hint.empty()) error.notes.push_back(hint);
+    diagnostics_
+        .error(
+            node.location(), "wrong-class-kind",
+            fmt::format("'{}' is {}; {} needs {}", *text, a_class(cls->kind), what, a_class(kind)))
+        .unknown_name(*text, registry_.class_names(kind));
     return nullptr;
   }
   return cls;
@@ -257,11 +255,11 @@ std::optional<ParamValue> ModelBuilder::read_param(const ParamSpec& spec, const 
         bool allowed = false;
         for (const auto& choice : spec.choices) allowed = allowed || choice == node.text();
         if (!allowed) {
-          auto& error = diagnostics_.error(
-              node.location(), "out-of-range",
-              fmt::format("param '{}' of {} is '{}', not one of the allowed values", spec.name,
-                          owner, node.text()));
-          error.notes.push_back(suggest(node.text(), spec.choices, "allowed"));
+          diagnostics_
+              .error(node.location(), "out-of-range",
+                     fmt::format("param '{}' of {} is '{}', not one of the allowed values",
+                                 spec.name, owner, node.text()))
+              .unknown_name(node.text(), spec.choices, {}, "allowed");
           return std::nullopt;
         }
       }
@@ -337,11 +335,10 @@ ParamSet ModelBuilder::read_params(const ClassInfo& cls, const Node* params,
   if (params != nullptr && params->is_mapping()) {
     for (const auto& entry : params->entries()) {
       if (cls.find_param(entry.key) == nullptr) {
-        auto& error = diagnostics_.error(
-            entry.key_location, "unknown-param",
-            fmt::format("unknown param '{}' for {} ({})", entry.key, owner, cls.name));
-        const auto hint = suggest(entry.key, declared);
-        error.notes.push_back(hint.empty() ? fmt::format("{} declares no params", cls.name) : hint);
+        diagnostics_
+            .error(entry.key_location, "unknown-param",
+                   fmt::format("unknown param '{}' for {} ({})", entry.key, owner, cls.name))
+            .unknown_name(entry.key, declared, fmt::format("{} declares no params", cls.name));
       }
     }
   }

@@ -7,8 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "arbiter/fields.hpp"
 #include "builder.hpp"
-#include "fields.hpp"
 
 namespace arbiter::detail {
 
@@ -71,12 +71,11 @@ std::optional<QueueEntry> ModelBuilder::read_queue_entry(const Node& item,
         declared->find("states")->find(entry.state.text) != nullptr) {
       return std::nullopt;
     }
-    auto& error =
-        diagnostics_.error(entry.state.location, "unknown-state",
-                           fmt::format("{} of state machine '{}' names unknown state '{}'", what,
-                                       machine.name.text, entry.state.text));
-    const auto hint = suggest(entry.state.text, state_names);
-    if (!hint.empty()) error.notes.push_back(hint);
+    diagnostics_
+        .error(entry.state.location, "unknown-state",
+               fmt::format("{} of state machine '{}' names unknown state '{}'", what,
+                           machine.name.text, entry.state.text))
+        .unknown_name(entry.state.text, state_names);
     return std::nullopt;
   }
   entry.overrides = check_instance_params(*state, overrides, entry.state.location);
@@ -93,11 +92,11 @@ void ModelBuilder::check_machine_ownership() {
       if (!state.machine) continue;
       const Name& child = *state.machine;
       if (std::find(names.begin(), names.end(), child.text) == names.end()) {
-        auto& error = diagnostics_.error(child.location, "unknown-machine",
-                                         fmt::format("state '{}' names unknown state machine '{}'",
-                                                     state.name.text, child.text));
-        const auto hint = suggest(child.text, names);
-        if (!hint.empty()) error.notes.push_back(hint);
+        diagnostics_
+            .error(child.location, "unknown-machine",
+                   fmt::format("state '{}' names unknown state machine '{}'", state.name.text,
+                               child.text))
+            .unknown_name(child.text, names);
         continue;
       }
       if (auto [it, fresh] = owner_of.emplace(child.text, &child); !fresh) {

@@ -1,11 +1,10 @@
-// Fields: the reader of one mapping of a config (see fields.hpp).
-#include "fields.hpp"
+#include "arbiter/fields.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 
-namespace arbiter::detail {
+namespace arbiter {
 
 namespace {
 
@@ -27,10 +26,10 @@ Fields::Fields(const Node& node, std::string what, std::vector<std::string_view>
     bool known = false;
     for (auto key : allowed) known = known || key == entry.key;
     if (!known) {
-      auto& error = diagnostics.error(entry.key_location, "unknown-key",
-                                      fmt::format("unknown key '{}' in {}", entry.key, what_));
-      const auto hint = suggest(entry.key, keys_of(allowed));
-      if (!hint.empty()) error.notes.push_back(hint);
+      diagnostics
+          .error(entry.key_location, "unknown-key",
+                 fmt::format("unknown key '{}' in {}", entry.key, what_))
+          .unknown_name(entry.key, keys_of(allowed));
       // A misspelt required key is reported once, as misspelt, not also as missing.
       if (auto meant = closest(entry.key, keys_of(allowed))) {
         misspelt_.push_back(*meant);
@@ -58,4 +57,4 @@ SourceLocation Fields::key_location(std::string_view key) const {
   return node_.location();
 }
 
-}  // namespace arbiter::detail
+}  // namespace arbiter

@@ -1,6 +1,9 @@
 #pragma once
 // Fields reads one mapping of a config: it checks that the node is a mapping with only the allowed
-// keys, reports missing required keys, and hands out the values. Private to engine/src.
+// keys, reports missing required keys, and hands out the values. The model reads its sections with
+// it; a class reads a structured param (a `Node` param) with it too, so that its mistakes are
+// reported as the model's are: `unknown-key` with a suggestion, `missing-key`, `wrong-type`, each
+// at its place (InitContext::diagnostics() is the sink).
 
 #include <cstddef>
 #include <string>
@@ -11,7 +14,7 @@
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/document.hpp"
 
-namespace arbiter::detail {
+namespace arbiter {
 
 /// Checks that a node is a mapping with only the given keys; hands out the values.
 class Fields {
@@ -41,4 +44,4 @@ class Fields {
   bool ok_ = true;
 };
 
-}  // namespace arbiter::detail
+}  // namespace arbiter
