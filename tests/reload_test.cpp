@@ -30,22 +30,12 @@ namespace fs = std::filesystem;
 /// A config file in a fresh directory, rewritten by each edit.
 class ConfigFile {
  public:
-  explicit ConfigFile(const std::string& text) {
-    static int count = 0;
-    dir_ = fs::temp_directory_path() /
-           ("arbiter-reload-" + std::to_string(::getpid()) + "-" + std::to_string(++count));
-    fs::create_directories(dir_);
-    write(text);
-  }
-  ~ConfigFile() {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
-  }
-  void write(const std::string& text) const { std::ofstream(path()) << text; }
-  std::string path() const { return (dir_ / "robot.yaml").string(); }
+  explicit ConfigFile(const std::string& text) { write(text); }
+  void write(const std::string& text) const { dir_.write("robot.yaml", text); }
+  std::string path() const { return dir_.file("robot.yaml"); }
 
  private:
-  fs::path dir_;
+  test::TempDir dir_;
 };
 
 /// A probe that keeps its run-time state (how often it executed) across a params change.

@@ -49,25 +49,6 @@ DomainLease::~DomainLease() {
   if (fd_ >= 0) close(fd_);
 }
 
-TempDir::TempDir() {
-  std::string pattern = std::filesystem::temp_directory_path().string() + "/arbiter-dds-XXXXXX";
-  if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-  path_ = pattern;
-}
-
-TempDir::~TempDir() {
-  std::error_code ignored;
-  std::filesystem::remove_all(path_, ignored);
-}
-
-std::string TempDir::write(const std::string& name, const std::string& text) const {
-  const std::string path = file(name);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + path);
-  return path;
-}
-
 std::string loopback_xml() {
   return ARBITER_SOURCE_DIR "/configs/soccer/split/cyclonedds-loopback.xml";
 }

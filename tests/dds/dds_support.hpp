@@ -17,6 +17,7 @@
 #include "arbiter/program.hpp"
 #include "arbiter/registry.hpp"
 #include "bridge.hpp"
+#include "test_support.hpp"
 
 namespace arbiter::dds_test {
 
@@ -35,21 +36,7 @@ class DomainLease {
   int fd_ = -1;
 };
 
-/// A temporary directory, removed with everything in it.
-class TempDir {
- public:
-  TempDir();
-  ~TempDir();
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::string& path() const { return path_; }
-  /// Writes `text` to `name` in the directory; returns the file's path.
-  std::string write(const std::string& name, const std::string& text) const;
-  std::string file(const std::string& name) const { return path_ + "/" + name; }
-
- private:
-  std::string path_;
-};
+using test::TempDir;
 
 /// The Cyclone DDS configuration of the tests and the split demo: loopback only.
 std::string loopback_xml();

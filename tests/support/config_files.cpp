@@ -11,22 +11,6 @@ namespace fs = std::filesystem;
 
 namespace arbiter::test {
 
-TempDir::TempDir() {
-  static int counter = 0;
-  path_ = fs::temp_directory_path() /
-          ("arbiter_robustness_" + std::to_string(::getpid()) + "_" + std::to_string(++counter));
-  fs::create_directories(path_);
-}
-
-TempDir::~TempDir() {
-  std::error_code ignored;
-  fs::permissions(path_, fs::perms::owner_all, fs::perm_options::add, ignored);
-  for (const auto& entry : fs::recursive_directory_iterator(path_, ignored)) {
-    fs::permissions(entry.path(), fs::perms::owner_all, fs::perm_options::add, ignored);
-  }
-  fs::remove_all(path_, ignored);
-}
-
 Outcome load_file(const fs::path& path, const LoadOptions& options) {
   Registry fresh = make_test_registry();  // loading may add plugins to it
   Outcome outcome;

@@ -8,22 +8,9 @@
 
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/load.hpp"
+#include "test_support.hpp"
 
 namespace arbiter::test {
-
-/// A fresh directory under the system's temporary one, removed at the end of the scope.
-class TempDir {
- public:
-  TempDir();
-  ~TempDir();
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  std::filesystem::path path_;
-};
 
 struct Outcome {
   Diagnostics diagnostics;

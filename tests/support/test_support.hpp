@@ -148,6 +148,24 @@ class WorkingDirectory {
   std::filesystem::path previous_;
 };
 
+/// A fresh directory under the system's temporary one, removed with everything in it at the end
+/// of the scope (even what a test made unreadable).
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  /// Writes `text` to `name` in the directory; returns the file's path.
+  std::string write(const std::string& name, const std::string& text) const;
+
+ private:
+  std::filesystem::path path_;
+};
+
 /// Load options with the lint step, as `arbiter validate` loads: for the tests of what a user sees.
 LoadOptions with_lints();
 
