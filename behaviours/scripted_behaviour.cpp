@@ -54,13 +54,13 @@ void register_scripted_behaviour(Registry& registry) {
                        "Requests a scripted activation level each step and writes fixed values "
                        "while active.");
   info.param<std::vector<double>>("activation")
-      .fallback(std::vector<double>{1.0})
+      .defaults_to(std::vector<double>{1.0})
       .range(0.0, 1.0)
       .describe(
           "the requested level: a number, or a list with one level per step (the last is "
           "held)");
   info.param<Node>("writes")
-      .fallback(Node())
+      .defaults_to(Node())
       .schema(R"({"type": ["object", "null"],
                   "propertyNames": {"$ref": "#/definitions/identifier"},
                   "additionalProperties": {"title": "Value written"}})")

@@ -102,22 +102,22 @@ void register_scripted_state(Registry& registry) {
               "Holds for a number of executions, then appends or prepends planned states, or "
               "terminates "
               "the controller, and proceeds. With a child machine, steps it until it finishes.");
-  info.param<std::int64_t>("hold").fallback(1).at_least(1).describe("executions before proceeding");
+  info.param<std::int64_t>("hold").defaults_to(1).at_least(1).describe("executions before proceeding");
   // The entries are written as the queue's (`arbiter schema` refers editors to its definition).
   const std::string planned_states =
       R"({"type": ["array", "null"], "items": {"$ref": "#/definitions/queue_entry"}})";
   info.param<Node>("append")
-      .fallback(Node())
+      .defaults_to(Node())
       .schema(planned_states)
       .state_level()
       .describe("states to append to the queue when proceeding: names or {name: {params}}");
   info.param<Node>("prepend")
-      .fallback(Node())
+      .defaults_to(Node())
       .schema(planned_states)
       .state_level()
       .describe("states to put at the head of the queue when proceeding, in this order");
   info.param<bool>("terminate")
-      .fallback(false)
+      .defaults_to(false)
       .describe("terminate the controller instead of proceeding");
 }
 
@@ -126,10 +126,10 @@ void register_state_machine_behaviour(Registry& registry) {
                    .describe("Steps a state machine's controller while active.");
   info.param<std::string>("machine").describe("the state machine to step");
   info.param<double>("activation")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 1.0)
       .describe("the level requested while the controller is running");
-  info.param<bool>("restart").fallback(false).describe(
+  info.param<bool>("restart").defaults_to(false).describe(
       "start the controller again from its configured queue whenever the behaviour "
       "is activated anew");
 }

@@ -67,7 +67,7 @@ Registry make_registry() {
   add_state_class<Proceed>(registry, "bench.Proceed")
       .describe("Proceeds after every execution, appending `append` to the plan when it does.")
       .param<std::vector<std::string>>("append")
-      .fallback(std::vector<std::string>{})
+      .defaults_to(std::vector<std::string>{})
       .describe("states to append when proceeding");
   return registry;
 }

@@ -63,7 +63,7 @@ class Counter : public Behaviour {
 
 Registry make_registry() {
   Registry registry = test::make_test_registry();
-  registry.add_behaviour<Counter>("test.Counter").param<double>("gain").fallback(1.0);
+  registry.add_behaviour<Counter>("test.Counter").param<double>("gain").defaults_to(1.0);
   return registry;
 }
 

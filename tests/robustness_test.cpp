@@ -212,28 +212,28 @@ Registry make_registry() {
   constexpr std::int64_t kForever = std::numeric_limits<std::int64_t>::max();
   auto& faulty = r.add_behaviour<Faulty>("robust.Faulty");
   faulty.param<std::string>("callback")
-      .fallback(std::string("activation"))
+      .defaults_to(std::string("activation"))
       .one_of({"init", "update", "activation", "execute", "inhibited"});
-  faulty.param<std::int64_t>("from").fallback(1);
-  faulty.param<std::int64_t>("until").fallback(kForever);
-  faulty.param<double>("level").fallback(1.0);
-  faulty.param<double>("value").fallback(0.0);
+  faulty.param<std::int64_t>("from").defaults_to(1);
+  faulty.param<std::int64_t>("until").defaults_to(kForever);
+  faulty.param<double>("level").defaults_to(1.0);
+  faulty.param<double>("value").defaults_to(0.0);
   faulty.output<double>("out").make_optional();
   auto& odd = r.add_behaviour<Odd>("robust.Odd");
-  odd.param<std::string>("level").fallback(std::string("1"));
-  odd.param<std::string>("value").fallback(std::string("0"));
-  odd.param<std::int64_t>("from").fallback(1);
+  odd.param<std::string>("level").defaults_to(std::string("1"));
+  odd.param<std::string>("value").defaults_to(std::string("0"));
+  odd.param<std::int64_t>("from").defaults_to(1);
   odd.output<double>("out").make_optional();
   odd.output<Vec2>("out2").make_optional();
   odd.output<Vec3>("out3").make_optional();
   auto& feed = r.add_interface<FaultyFeed>("robust.FaultyFeed");
-  feed.param<std::string>("callback").fallback(std::string("input"));
-  feed.param<std::int64_t>("from").fallback(1);
-  feed.param<std::int64_t>("until").fallback(kForever);
+  feed.param<std::string>("callback").defaults_to(std::string("input"));
+  feed.param<std::int64_t>("from").defaults_to(1);
+  feed.param<std::int64_t>("until").defaults_to(kForever);
   feed.output<double>("out").make_optional();
   auto& state = add_state_class<FaultyState>(r, "robust.FaultyState");
   state.param<std::string>("callback")
-      .fallback(std::string("execute"))
+      .defaults_to(std::string("execute"))
       .one_of({"init", "activate", "execute", "deactivate"});
   return r;
 }

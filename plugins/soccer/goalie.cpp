@@ -33,7 +33,7 @@ double out_of_goal(Point goal) {
 
 ParamSpec& declare_own_goal(ClassInfo& info) {
   return info.param<Vec2>("goal")
-      .fallback(Vec2{-4.5, 0.0})
+      .defaults_to(Vec2{-4.5, 0.0})
       .describe("the centre of the goal to keep (m, field frame), on its goal line");
 }
 
@@ -419,29 +419,29 @@ void register_walk_to_pose(Registry& registry) {
       .range(-2.0 * kPi, 2.0 * kPi)
       .describe("the target heading (rad, from the field's x axis)");
   info.param<double>("position_tolerance")
-      .fallback(0.1)
+      .defaults_to(0.1)
       .range(0.01, 2.0)
       .describe("arrived when this close to the target position (m)");
   info.param<double>("angle_tolerance")
-      .fallback(0.15)
+      .defaults_to(0.15)
       .range(0.01, 3.2)
       .describe("... and this close to the target heading (rad)");
   info.param<double>("near_distance")
-      .fallback(0.7)
+      .defaults_to(0.7)
       .range(0.0, 10.0)
       .describe("within this distance of the target, step straight to it (m)");
-  info.param<double>("gain").fallback(1.5).range(0.0, 10.0).describe(
+  info.param<double>("gain").defaults_to(1.5).range(0.0, 10.0).describe(
       "walking speed per metre of distance to the target (1/s)");
   info.param<double>("max_forward")
-      .fallback(0.3)
+      .defaults_to(0.3)
       .range(0.0, 1.0)
       .describe("the fastest forward (and backward) speed requested (m/s)");
   info.param<double>("max_sideways")
-      .fallback(0.2)
+      .defaults_to(0.2)
       .range(0.0, 1.0)
       .describe("the fastest sideways speed requested (m/s)");
   info.param<double>("max_turn")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 3.0)
       .describe("the fastest turn rate requested (rad/s)");
   info.input<Vec3>("robot_pose").describe("the robot's pose on the field: x, y (m), heading (rad)");
@@ -458,41 +458,41 @@ void register_monitor_ball(Registry& registry) {
               "walk_state to it followed by another instance of this state, and proceeds.");
   declare_own_goal(info);
   info.param<double>("distance")
-      .fallback(0.5)
+      .defaults_to(0.5)
       .range(0.0, 3.0)
       .describe("how far out from the goal's centre, towards the ball, to stand (m)");
-  info.param<double>("depth").fallback(1.0).range(0.05, 3.0).describe(
+  info.param<double>("depth").defaults_to(1.0).range(0.05, 3.0).describe(
       "the goal area's depth: never farther out from the goal line (m)");
   info.param<double>("half_width")
-      .fallback(1.1)
+      .defaults_to(1.1)
       .range(0.0, 3.0)
       .describe("never farther to the side of the goal's centre (m)");
   info.param<double>("replan_distance")
-      .fallback(0.2)
+      .defaults_to(0.2)
       .range(0.0, 5.0)
       .describe("plan a walk when the best position is farther than this (m)");
   info.param<double>("replan_angle")
-      .fallback(0.35)
+      .defaults_to(0.35)
       .range(0.0, 3.2)
       .describe("... or the best heading differs by more than this (rad)");
   info.param<double>("ball_timeout")
-      .fallback(2.0)
+      .defaults_to(2.0)
       .range(0.0, 60.0)
       .describe("how long a ball seen by this instance counts as known (s)");
   info.param<double>("search_time")
-      .fallback(3.0)
+      .defaults_to(3.0)
       .range(0.0, 60.0)
       .describe("without a known ball after this long, take the position straight out (s)");
   info.param<double>("head_sweep")
-      .fallback(1.2)
+      .defaults_to(1.2)
       .range(0.0, kHeadLimit)
       .describe("amplitude of the head sweep while the ball is unknown (rad)");
   info.param<double>("sweep_time")
-      .fallback(3.0)
+      .defaults_to(3.0)
       .range(0.1, 60.0)
       .describe("duration of one full head sweep, left and right (s)");
   info.param<std::string>("walk_state")
-      .fallback(std::string("walk_to_pose"))
+      .defaults_to(std::string("walk_to_pose"))
       .state_level()
       .describe(
           "the state planned to walk (with params x, y, theta); the state machine must declare "
@@ -507,7 +507,7 @@ void register_dive(Registry& registry) {
                        "Dives to the side on which the ball will pass the robot, reports 'goalie "
                        "dives left' or 'goalie dives right', and proceeds after duration.");
   info.param<double>("duration")
-      .fallback(2.0)
+      .defaults_to(2.0)
       .range(0.0, 60.0)
       .describe("how long the state lasts from the dive (s)");
   info.input<Vec2>("ball_position")
@@ -529,31 +529,31 @@ void register_goalie_behaviour(Registry& registry) {
                        "queued after either.");
   info.param<std::string>("machine").describe("the state machine to own and step");
   info.param<std::string>("wait_state")
-      .fallback(std::string("wait_for_button"))
+      .defaults_to(std::string("wait_for_button"))
       .describe("the machine's state that waits for the button");
   info.param<std::string>("dive_state")
-      .fallback(std::string("dive"))
+      .defaults_to(std::string("dive"))
       .describe("the machine's state that dives");
   info.param<std::string>("monitor_state")
-      .fallback(std::string("monitor_ball"))
+      .defaults_to(std::string("monitor_ball"))
       .describe("the machine's state that watches the ball, queued after a pre-emption");
   declare_own_goal(info);
   info.param<double>("goal_width")
-      .fallback(2.6)
+      .defaults_to(2.6)
       .range(0.1, 10.0)
       .describe("the distance between the posts (m)");
   info.param<double>("shot_speed")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 20.0)
       .describe("a ball slower than this is no shot (m/s)");
-  info.param<double>("reach").fallback(0.85).range(0.0, 5.0).describe(
+  info.param<double>("reach").defaults_to(0.85).range(0.0, 5.0).describe(
       "dive only for a ball that will pass this close to the robot's centre (m)");
   info.param<double>("warning_time")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 10.0)
       .describe("dive when the ball will pass the robot within this time (s)");
   info.param<double>("ball_deceleration")
-      .fallback(0.6)
+      .defaults_to(0.6)
       .range(0.0, 10.0)
       .describe("the rolling ball's loss of speed, for predicting where it stops (m/s²)");
   info.input<bool>("button").describe("true in the step the button is pressed");

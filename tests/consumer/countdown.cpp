@@ -36,9 +36,9 @@ class Countdown final : public arbiter::State {
 void register_countdown(arbiter::Registry& registry) {
   auto& info = arbiter::add_state_class<Countdown>(registry, "patrol.Countdown")
                    .describe("Waits a number of steps, a number of times in a row.");
-  info.param<std::int64_t>("steps").fallback(3).range(1, 1000).describe(
+  info.param<std::int64_t>("steps").defaults_to(3).range(1, 1000).describe(
       "executions before it proceeds");
-  info.param<std::int64_t>("rounds").fallback(1).range(1, 100).describe(
+  info.param<std::int64_t>("rounds").defaults_to(1).range(1, 100).describe(
       "how many times it runs in a row");
 }
 

@@ -52,10 +52,10 @@ void register_odometry(arbiter::Registry& registry) {
   auto& info = registry.add_interface<Odometry>("patrol.Odometry")
                    .describe("A simulated robot base that drives at the commanded velocity.");
   info.param<arbiter::Vec2>("start")
-      .fallback(Vec2{0.0, 0.0})
+      .defaults_to(Vec2{0.0, 0.0})
       .describe("where the robot starts: x, y (m)");
   info.param<double>("max_speed")
-      .fallback(0.5)
+      .defaults_to(0.5)
       .range(0.0, 2.0)
       .describe("the fastest the base drives (m/s)");
   info.output<Vec2>("position").describe("where the robot is: x, y (m)");

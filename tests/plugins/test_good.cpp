@@ -43,11 +43,11 @@ class Faulty final : public arbiter::Behaviour {
 
 ARBITER_PLUGIN(registry) {
   auto& constant = registry.add_behaviour<Constant>("test_good.Constant");
-  constant.param<double>("level").fallback(1.0).range(0.0, 1.0);
-  constant.param<double>("value").fallback(0.0);
+  constant.param<double>("level").defaults_to(1.0).range(0.0, 1.0);
+  constant.param<double>("value").defaults_to(0.0);
   constant.output<double>("out");
   registry.add_behaviour<Faulty>("test_good.Faulty")
       .param<std::int64_t>("throw_at")
-      .fallback(1)
+      .defaults_to(1)
       .range(1, 1000000);
 }

@@ -138,10 +138,10 @@ Registry make_test_registry() {
   register_builtin_behaviours(registry);
   registry.set_origin("tests");
   auto& probe = registry.add_behaviour<Probe>("test.Probe");
-  probe.param<std::vector<double>>("levels").fallback(std::vector<double>{1.0});
-  probe.param<double>("value").fallback(0.0);
-  probe.param<bool>("overwrite").fallback(false);
-  probe.param<bool>("record").fallback(true);
+  probe.param<std::vector<double>>("levels").defaults_to(std::vector<double>{1.0});
+  probe.param<double>("value").defaults_to(0.0);
+  probe.param<bool>("overwrite").defaults_to(false);
+  probe.param<bool>("record").defaults_to(true);
   probe.input<double>("in").make_optional();
   probe.output<double>("out").make_optional();
   registry.add_behaviour<NanLevel>("test.NanLevel");
@@ -150,10 +150,10 @@ Registry make_test_registry() {
   feed.output<double>("out").make_optional();
   feed.input<double>("in").make_optional();
   auto& planner = add_state_class<Planner>(registry, "test.Planner");
-  planner.param<std::string>("op").fallback(std::string("none"));
-  planner.param<std::string>("target").fallback(std::string());
-  planner.param<std::int64_t>("hold").fallback(1).at_least(1);
-  planner.param<double>("x").fallback(0.0);
+  planner.param<std::string>("op").defaults_to(std::string("none"));
+  planner.param<std::string>("target").defaults_to(std::string());
+  planner.param<std::int64_t>("hold").defaults_to(1).at_least(1);
+  planner.param<double>("x").defaults_to(0.0);
   auto& pose = add_state_class<Pose>(registry, "test.Pose");
   pose.param<double>("x").range(-10.0, 10.0);
   return registry;
@@ -234,12 +234,12 @@ class Wait : public State {
 void add_param_check_classes(Registry& registry) {
   auto& tuned = registry.add_behaviour<Tuned>("test.Tuned");
   tuned.param<double>("gain").range(0.0, 1.0);
-  tuned.param<std::string>("mode").fallback(std::string("soft")).one_of({"soft", "hard"});
-  tuned.param<std::int64_t>("retries").fallback(3).at_least(0);
-  tuned.param<Vec2>("offset").fallback(Vec2{});
+  tuned.param<std::string>("mode").defaults_to(std::string("soft")).one_of({"soft", "hard"});
+  tuned.param<std::int64_t>("retries").defaults_to(3).at_least(0);
+  tuned.param<Vec2>("offset").defaults_to(Vec2{});
   auto& wait = add_state_class<Wait>(registry, "test.Wait");
   wait.param<std::int64_t>("ticks").at_least(1);
-  wait.param<std::string>("label").fallback(std::string());
+  wait.param<std::string>("label").defaults_to(std::string());
 }
 
 Diagnostics diagnose_text(const std::string& text, const Registry& registry,
