@@ -13,7 +13,7 @@ namespace {
 /// inhibition graphs can be tried without writing C++.
 class ScriptedBehaviour final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     levels_ = ctx.param<std::vector<double>>("activation");
     const Node writes = ctx.param<Node>("writes");
     if (writes.reads_as_null()) return;

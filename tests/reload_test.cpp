@@ -50,7 +50,7 @@ class ConfigFile {
 /// A probe that keeps its run-time state (how often it executed) across a params change.
 class Counter : public Behaviour {
  public:
-  void init(InitContext& ctx) override { gain = ctx.param<double>("gain"); }
+  void init(BehaviourInitContext& ctx) override { gain = ctx.param<double>("gain"); }
   double activation(const StepContext&) override { return 1.0; }
   void execute(ExecuteContext&) override { ++executions; }
   bool carry_over(Behaviour& previous) override {

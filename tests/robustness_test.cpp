@@ -47,7 +47,7 @@ const fs::path kHostileDir = fs::path(ARBITER_SOURCE_DIR) / "tests" / "data" / "
 /// execute() leaves a write behind. Counts its calls.
 class Faulty : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     callback = ctx.param<std::string>("callback");
     from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
     until = static_cast<std::uint64_t>(ctx.param<std::int64_t>("until"));
@@ -106,7 +106,7 @@ double number_of(const std::string& text) {
 /// step in which it writes.
 class Odd : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     level = number_of(ctx.param<std::string>("level"));
     value = number_of(ctx.param<std::string>("value"));
     from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
@@ -141,7 +141,7 @@ class FaultyFeed : public Interface {
     out = ctx.output<double>("out");
     if (callback == "init") throw 7;
   }
-  void input(ExecuteContext& ctx) override {
+  void input(WriteContext& ctx) override {
     ++inputs;
     ctx.write(out, static_cast<double>(ctx.step()));
     if (callback == "input" && ctx.step() >= from && ctx.step() <= until) {
@@ -165,7 +165,7 @@ class FaultyFeed : public Interface {
 /// after its first execution.
 class FaultyState : public State {
  public:
-  void init(InitContext& ctx) override {
+  void init(StateInitContext& ctx) override {
     callback = ctx.param<std::string>("callback");
     if (callback == "init") throw std::runtime_error("faulty state init");
   }

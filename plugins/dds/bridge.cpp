@@ -667,7 +667,7 @@ void report_incompatible(const StepContext& ctx, Endpoint& endpoint) {
 
 }  // namespace
 
-void Bridge::input(ExecuteContext& ctx) {
+void Bridge::input(WriteContext& ctx) {
   for (auto& owned : subscriptions_) {
     Subscription& in = *owned;
     const std::int32_t publishers = in.publishers.load(std::memory_order_acquire);

@@ -16,7 +16,7 @@ namespace {
 template <typename T>
 class Hold final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     from_ = ctx.input<T>("from");
     to_ = ctx.output<T>("to");
     level_ = ctx.param<double>("activation");

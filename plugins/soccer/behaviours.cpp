@@ -29,7 +29,7 @@ ParamSpec& declare_ball_timeout(ClassInfo& info, std::int64_t steps) {
 /// turns again there.
 class SearchForBall final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     memory_.init(ctx);
     lost_steps_ = ctx.param<std::int64_t>("lost_steps");
     turn_rate_ = ctx.param<double>("turn_rate");
@@ -115,7 +115,7 @@ class SearchForBall final : public Behaviour {
 /// so as not to push the ball towards the wrong goal.
 class GoBehindBall final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     memory_.init(ctx);
     goal_ = to_point(ctx.param<Vec2>("goal"));
     ball_timeout_ = ctx.param<std::int64_t>("ball_timeout");
@@ -185,7 +185,7 @@ class GoBehindBall final : public Behaviour {
 /// exactly 0 or 1 so that `kick_ball => go_behind_ball` silences go_behind_ball completely.
 class KickBall final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     memory_.init(ctx);
     goal_ = to_point(ctx.param<Vec2>("goal"));
     max_age_ = ctx.param<std::int64_t>("max_age");
@@ -228,7 +228,7 @@ class KickBall final : public Behaviour {
 /// Points the head at the ball while its position is known.
 class HeadControl final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     memory_.init(ctx);
     ball_timeout_ = ctx.param<std::int64_t>("ball_timeout");
     max_angle_ = ctx.param<double>("max_angle");

@@ -57,7 +57,7 @@ void WorldLink::init(InitContext& ctx) {
   dive_ = ctx.input<std::int64_t>("dive");
 }
 
-void WorldLink::input(ExecuteContext& ctx) {
+void WorldLink::input(WriteContext& ctx) {
   const Observation seen = world_->observe();
   ctx.write(ball_visible_, seen.ball_visible);
   // Left unwritten when the ball is not seen: the actuator keeps the last measurement and its

@@ -13,7 +13,7 @@ using arbiter::Vec2;
 /// is within `tolerance` of it. Flashes the beacon while it drives.
 class GoTo final : public arbiter::Behaviour {
  public:
-  void init(arbiter::InitContext& ctx) override {
+  void init(arbiter::BehaviourInitContext& ctx) override {
     target_ = ctx.param<Vec2>("target");
     gain_ = ctx.param<double>("gain");
     tolerance_ = ctx.param<double>("tolerance");

@@ -21,7 +21,7 @@ class Odometry final : public arbiter::Interface {
     beacon_ = ctx.input<Beacon>("beacon");
   }
 
-  void input(arbiter::ExecuteContext& ctx) override { ctx.write(position_, here_); }
+  void input(arbiter::WriteContext& ctx) override { ctx.write(position_, here_); }
 
   void output(const arbiter::StepContext& ctx) override {
     // Values persist until overwritten: the base stops in a step in which nobody commands it.

@@ -15,7 +15,7 @@ namespace {
 /// point = (N, -N), vector = (N, 2N, -0.5), text = "step N" and time = the monotonic clock.
 class Stamp final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     every_ = ctx.param<std::int64_t>("every");
     flag_ = ctx.output<bool>("flag");
     count_ = ctx.output<std::int64_t>("count");
