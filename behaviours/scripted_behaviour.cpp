@@ -13,7 +13,7 @@ namespace {
 /// inhibition graphs can be tried without writing C++.
 class ScriptedBehaviour final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     levels_ = ctx.param<std::vector<double>>("activation");
     const Node writes = ctx.param<Node>("writes");
     if (writes.reads_as_null()) return;
@@ -54,13 +54,13 @@ void register_scripted_behaviour(Registry& registry) {
                        "Requests a scripted activation level each step and writes fixed values "
                        "while active.");
   info.param<std::vector<double>>("activation")
-      .fallback(std::vector<double>{1.0})
+      .defaults_to(std::vector<double>{1.0})
       .range(0.0, 1.0)
       .describe(
           "the requested level: a number, or a list with one level per step (the last is "
           "held)");
   info.param<Node>("writes")
-      .fallback(Node())
+      .defaults_to(Node())
       .schema(R"({"type": ["object", "null"],
                   "propertyNames": {"$ref": "#/definitions/identifier"},
                   "additionalProperties": {"title": "Value written"}})")

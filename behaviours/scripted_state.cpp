@@ -14,14 +14,16 @@ namespace {
 /// without writing C++.
 class ScriptedState final : public State {
  public:
-  void init(InitContext& ctx) override {
+  void init(StateInitContext& ctx) override {
     read_list(ctx, "append", append_);
     read_list(ctx, "prepend", prepend_);
+    hold_ = ctx.param_handle<std::int64_t>("hold");
+    terminate_ = ctx.param_handle<bool>("terminate");
   }
 
   StateResult execute(StateContext& ctx) override {
     // hold and terminate may differ per planned instance, so they are read per execution.
-    const auto hold = static_cast<std::uint64_t>(ctx.param<std::int64_t>("hold"));
+    const auto hold = static_cast<std::uint64_t>(ctx.param(hold_));
     if (Controller* child = ctx.child()) {
       child->step(ctx.step_context(), ctx.execute_context());
       if (child->status() == ControllerStatus::kRunning) return StateResult::kHold;
@@ -31,12 +33,12 @@ class ScriptedState final : public State {
     for (const auto& planned : append_) ctx.plan().append(planned);
     // Prepending in reverse keeps the list's order at the head of the queue.
     for (auto it = prepend_.rbegin(); it != prepend_.rend(); ++it) ctx.plan().prepend(*it);
-    if (ctx.param<bool>("terminate")) ctx.terminate();
+    if (ctx.param(terminate_)) ctx.terminate();
     return StateResult::kProceed;
   }
 
  private:
-  static void read_list(InitContext& ctx, const char* param, std::vector<PlannedState>& out) {
+  static void read_list(StateInitContext& ctx, const char* param, std::vector<PlannedState>& out) {
     const Node list = ctx.param<Node>(param);
     if (list.reads_as_null()) return;
     if (!list.is_sequence()) {
@@ -64,13 +66,15 @@ class ScriptedState final : public State {
 
   std::vector<PlannedState> append_;
   std::vector<PlannedState> prepend_;
+  StateParam<std::int64_t> hold_;
+  StateParam<bool> terminate_;
 };
 
 /// Steps a state machine while active (docs/config.md, "Built-in classes"): requests `activation`
 /// while its controller is running and 0 once it has finished; pauses it while inhibited.
 class StateMachineBehaviour final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     level_ = ctx.param<double>("activation");
     restart_ = ctx.param<bool>("restart");
     controller_ =
@@ -102,22 +106,23 @@ void register_scripted_state(Registry& registry) {
               "Holds for a number of executions, then appends or prepends planned states, or "
               "terminates "
               "the controller, and proceeds. With a child machine, steps it until it finishes.");
-  info.param<std::int64_t>("hold").fallback(1).at_least(1).describe("executions before proceeding");
+  info.param<std::int64_t>("hold").defaults_to(1).at_least(1).describe(
+      "executions before proceeding");
   // The entries are written as the queue's (`arbiter schema` refers editors to its definition).
   const std::string planned_states =
       R"({"type": ["array", "null"], "items": {"$ref": "#/definitions/queue_entry"}})";
   info.param<Node>("append")
-      .fallback(Node())
+      .defaults_to(Node())
       .schema(planned_states)
       .state_level()
       .describe("states to append to the queue when proceeding: names or {name: {params}}");
   info.param<Node>("prepend")
-      .fallback(Node())
+      .defaults_to(Node())
       .schema(planned_states)
       .state_level()
       .describe("states to put at the head of the queue when proceeding, in this order");
   info.param<bool>("terminate")
-      .fallback(false)
+      .defaults_to(false)
       .describe("terminate the controller instead of proceeding");
 }
 
@@ -126,10 +131,10 @@ void register_state_machine_behaviour(Registry& registry) {
                    .describe("Steps a state machine's controller while active.");
   info.param<std::string>("machine").describe("the state machine to step");
   info.param<double>("activation")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 1.0)
       .describe("the level requested while the controller is running");
-  info.param<bool>("restart").fallback(false).describe(
+  info.param<bool>("restart").defaults_to(false).describe(
       "start the controller again from its configured queue whenever the behaviour "
       "is activated anew");
 }

@@ -18,7 +18,7 @@ namespace {
 /// beyond the transition and the queue edits, so the SCL benchmark measures the controller.
 class Proceed final : public State {
  public:
-  void init(InitContext& ctx) override {
+  void init(StateInitContext& ctx) override {
     for (const auto& state : ctx.param<std::vector<std::string>>("append")) {
       PlannedState planned;
       if (ctx.plan_state(state, nullptr, ctx.param_location("append"), planned)) {
@@ -40,7 +40,7 @@ class Proceed final : public State {
 /// ports are optional: unbound, they cost one branch.
 class Trivial final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     level_ = ctx.param<double>("activation");
     in_ = ctx.input<double>("in");
     out_ = ctx.output<double>("out");
@@ -67,7 +67,7 @@ Registry make_registry() {
   add_state_class<Proceed>(registry, "bench.Proceed")
       .describe("Proceeds after every execution, appending `append` to the plan when it does.")
       .param<std::vector<std::string>>("append")
-      .fallback(std::vector<std::string>{})
+      .defaults_to(std::vector<std::string>{})
       .describe("states to append when proceeding");
   return registry;
 }

@@ -149,6 +149,20 @@ state_machines:
     queue: [a, again]
 )",
                             300) == 0);
+  // Plan edits through handles with run-time params, and reads of them through param handles.
+  CHECK(allocations_per_run(R"(
+arbiter: 1
+name: handles
+state_machines:
+  loop:
+    states:
+      a: {type: test.Planner, params: {op: go_to, target: b, x: 1.5}}
+      b: {type: test.Planner, params: {op: prepend, target: a, x: 2.5}}
+      c: {type: test.Planner, params: {op: insert_before, target: p, x: 0.5}}
+      p: test.Pose
+    queue: [c, a]
+)",
+                            300) == 0);
 }
 
 TEST_CASE("every config in configs/ steps without allocating", "[alloc]") {

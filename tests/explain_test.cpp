@@ -173,9 +173,12 @@ TEST_CASE("a pre-empted state says what pre-empted it", "[scl][explain][run]") {
   }
   SECTION("a hook, after the state had asked to proceed") {
     struct ButtonPress : ControllerHooks {
+      PlannedState target;
       bool pre_step(Controller& controller, Plan& plan) override {
         if (controller.cycle() != 2) return false;
-        plan.go_to("walk");
+        // Kept by the hooks: the planned instance refers to it.
+        target = test::planned(controller, "walk");
+        plan.go_to(target);
         return true;
       }
     } hooks;

@@ -39,8 +39,8 @@ class Lister : public Interface {
 Registry make_registry() {
   Registry registry = test::make_test_registry();
   auto& lister = registry.add_interface<Lister>("test.Lister");
-  lister.param<std::string>("read").fallback(std::string());
-  lister.param<std::string>("as").fallback(std::string("double"));
+  lister.param<std::string>("read").defaults_to(std::string());
+  lister.param<std::string>("as").defaults_to(std::string("double"));
   return registry;
 }
 

@@ -35,7 +35,7 @@ namespace {
 /// execute() leaves a write behind. Counts its calls.
 class Faulty : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     callback = ctx.param<std::string>("callback");
     from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
     until = static_cast<std::uint64_t>(ctx.param<std::int64_t>("until"));
@@ -94,7 +94,7 @@ double number_of(const std::string& text) {
 /// step in which it writes.
 class Odd : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     level = number_of(ctx.param<std::string>("level"));
     value = number_of(ctx.param<std::string>("value"));
     from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
@@ -129,7 +129,7 @@ class FaultyFeed : public Interface {
     out = ctx.output<double>("out");
     if (callback == "init") throw 7;
   }
-  void input(ExecuteContext& ctx) override {
+  void input(WriteContext& ctx) override {
     ++inputs;
     ctx.write(out, static_cast<double>(ctx.step()));
     if (callback == "input" && ctx.step() >= from && ctx.step() <= until) {
@@ -153,7 +153,7 @@ class FaultyFeed : public Interface {
 /// after its first execution.
 class FaultyState : public State {
  public:
-  void init(InitContext& ctx) override {
+  void init(StateInitContext& ctx) override {
     callback = ctx.param<std::string>("callback");
     if (callback == "init") throw std::runtime_error("faulty state init");
   }
@@ -200,28 +200,28 @@ Registry make_registry() {
   constexpr std::int64_t kForever = std::numeric_limits<std::int64_t>::max();
   auto& faulty = r.add_behaviour<Faulty>("robust.Faulty");
   faulty.param<std::string>("callback")
-      .fallback(std::string("activation"))
+      .defaults_to(std::string("activation"))
       .one_of({"init", "update", "activation", "execute", "inhibited"});
-  faulty.param<std::int64_t>("from").fallback(1);
-  faulty.param<std::int64_t>("until").fallback(kForever);
-  faulty.param<double>("level").fallback(1.0);
-  faulty.param<double>("value").fallback(0.0);
+  faulty.param<std::int64_t>("from").defaults_to(1);
+  faulty.param<std::int64_t>("until").defaults_to(kForever);
+  faulty.param<double>("level").defaults_to(1.0);
+  faulty.param<double>("value").defaults_to(0.0);
   faulty.output<double>("out").make_optional();
   auto& odd = r.add_behaviour<Odd>("robust.Odd");
-  odd.param<std::string>("level").fallback(std::string("1"));
-  odd.param<std::string>("value").fallback(std::string("0"));
-  odd.param<std::int64_t>("from").fallback(1);
+  odd.param<std::string>("level").defaults_to(std::string("1"));
+  odd.param<std::string>("value").defaults_to(std::string("0"));
+  odd.param<std::int64_t>("from").defaults_to(1);
   odd.output<double>("out").make_optional();
   odd.output<Vec2>("out2").make_optional();
   odd.output<Vec3>("out3").make_optional();
   auto& feed = r.add_interface<FaultyFeed>("robust.FaultyFeed");
-  feed.param<std::string>("callback").fallback(std::string("input"));
-  feed.param<std::int64_t>("from").fallback(1);
-  feed.param<std::int64_t>("until").fallback(kForever);
+  feed.param<std::string>("callback").defaults_to(std::string("input"));
+  feed.param<std::int64_t>("from").defaults_to(1);
+  feed.param<std::int64_t>("until").defaults_to(kForever);
   feed.output<double>("out").make_optional();
   auto& state = add_state_class<FaultyState>(r, "robust.FaultyState");
   state.param<std::string>("callback")
-      .fallback(std::string("execute"))
+      .defaults_to(std::string("execute"))
       .one_of({"init", "activate", "execute", "deactivate"});
   return r;
 }

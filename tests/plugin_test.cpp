@@ -359,16 +359,16 @@ TEST_CASE("a param declared by its C++ type gets that type's kind and a default 
   CHECK(info.param<std::int64_t>("rounds").kind == ParamKind::kInt);
   CHECK(info.param<std::vector<std::string>>("names").kind == ParamKind::kStringList);
   CHECK(info.param<Vec2>("target").kind == ParamKind::kVec2);
-  // An integer literal is taken for a double, so that `.fallback(3)` means 3.0.
-  const auto& gain = info.param<double>("speed").fallback(3);
+  // An integer literal is taken for a double, so that `.defaults_to(3)` means 3.0.
+  const auto& gain = info.param<double>("speed").defaults_to(3);
   REQUIRE(gain.default_value);
   CHECK(std::get<double>(*gain.default_value) == 3.0);
-  CHECK(std::get<std::int64_t>(*info.param<std::int64_t>("steps").fallback(3).default_value) == 3);
+  CHECK(std::get<std::int64_t>(*info.param<std::int64_t>("steps").defaults_to(3).default_value) == 3);
   // A default of another type is the registration's mistake, told with the param's name.
-  CHECK_THROWS_WITH(info.param<std::int64_t>("count").fallback("3"),
-                    "param 'count' is of kind int, but its fallback is of kind string");
-  CHECK_THROWS_WITH(info.param<bool>("loud").fallback(1),
-                    "param 'loud' is of kind bool, but its fallback is of kind int");
+  CHECK_THROWS_WITH(info.param<std::int64_t>("count").defaults_to("3"),
+                    "param 'count' is of kind int, but its default is of kind string");
+  CHECK_THROWS_WITH(info.param<bool>("loud").defaults_to(1),
+                    "param 'loud' is of kind bool, but its default is of kind int");
 }
 
 TEST_CASE("a plugin class named like a built-in one is reported with both origins",

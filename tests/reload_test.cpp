@@ -41,7 +41,7 @@ class ConfigFile {
 /// A probe that keeps its run-time state (how often it executed) across a params change.
 class Counter : public Behaviour {
  public:
-  void init(InitContext& ctx) override { gain = ctx.param<double>("gain"); }
+  void init(BehaviourInitContext& ctx) override { gain = ctx.param<double>("gain"); }
   double activation(const StepContext&) override { return 1.0; }
   void execute(ExecuteContext&) override { ++executions; }
   bool carry_over(Behaviour& previous) override {
@@ -54,7 +54,7 @@ class Counter : public Behaviour {
 
 Registry make_registry() {
   Registry registry = test::make_test_registry();
-  registry.add_behaviour<Counter>("test.Counter").param<double>("gain").fallback(1.0);
+  registry.add_behaviour<Counter>("test.Counter").param<double>("gain").defaults_to(1.0);
   return registry;
 }
 

@@ -96,9 +96,12 @@ TEST_CASE("pre-emption from pre-step leaves the current state at once", "[scl]")
   }
   SECTION("by a hook") {
     struct ButtonPress : ControllerHooks {
+      PlannedState target;
       bool pre_step(Controller& controller, Plan& plan) override {
         if (controller.cycle() != 3) return false;
-        plan.go_to("wait");
+        // Kept by the hooks: the planned instance refers to it.
+        target = test::planned(controller, "wait");
+        plan.go_to(target);
         return true;
       }
     } hooks;
@@ -258,26 +261,16 @@ TEST_CASE("misuse is an error naming the controller and the state", "[scl][error
                               Catch::Matchers::Contains("state 'a'") &&
                               Catch::Matchers::Contains("capacity of 3"));
   }
-  SECTION("an unknown state name at run time") {
-    Manager manager(test::compile_text(
-        machine("      a: {type: test.Planner, params: {op: append, target: wlak}}\n"
-                "      walk: scripted\n",
-                "[a]"),
-        registry()));
-    manager.step();
-    const Controller& m = *manager.program().find_controller("m");
-    CHECK(m.status() == ControllerStatus::kError);
-    CHECK_THAT(m.error(), Catch::Matchers::Contains("unknown state 'wlak'") &&
-                              Catch::Matchers::Contains("did you mean 'walk'"));
-  }
   SECTION("a run-time plan without a required param") {
     Manager manager(test::compile_text(
         machine("      a: {type: test.Planner, params: {op: clear}}\n      p: test.Pose\n", "[a]",
                 "    preempt: []\n"),
         registry()));
     manager.step();
-    Plan plan(*manager.program().find_controller("m"));
-    CHECK_FALSE(plan.append("p"));
+    Controller& m = *manager.program().find_controller("m");
+    Plan plan(m);
+    const PlannedState p = test::planned(m, "p");
+    CHECK_FALSE(plan.append(p));
     CHECK_THAT(manager.program().find_controller("m")->error(),
                Catch::Matchers::Contains("required param 'x'"));
   }
@@ -319,4 +312,87 @@ TEST_CASE("names written in the config are checked at load", "[scl][errors]") {
   CHECK_THAT(text, Catch::Matchers::Contains("has no state 'walk'"));
   CHECK_THAT(text, Catch::Matchers::Contains("param 'hold'"));
   CHECK_THAT(text, Catch::Matchers::Contains("required param 'x'"));
+}
+
+namespace {
+
+/// Resolves one handle wrongly in init(), as `mistake` says.
+class Mistaken final : public State {
+ public:
+  void init(StateInitContext& ctx) override {
+    const auto mistake = ctx.param<std::string>("mistake");
+    if (mistake == "param name") ctx.param_handle<double>("speeed");
+    if (mistake == "param kind") ctx.param_handle<std::int64_t>("speed");
+    if (mistake == "state") ctx.plan_state<double>("pp", {"x"});
+    if (mistake == "slot name") ctx.plan_state<double>("p", {"y"});
+    if (mistake == "slot kind") ctx.plan_state<std::int64_t>("p", {"x"});
+    if (mistake == "slot twice") ctx.plan_state<double, double>("p", {"x", "x"});
+    if (mistake == "required") ctx.plan_state<>("p");
+    if (mistake == "none") {
+      ctx.param_handle<double>("speed");
+      ctx.plan_state<double>("p", {"x"});
+    }
+  }
+  StateResult execute(StateContext&) override { return StateResult::kProceed; }
+};
+
+const Registry& mistaken_registry() {
+  static const Registry instance = [] {
+    Registry registry = test::make_test_registry();
+    auto& info = add_state_class<Mistaken>(registry, "test.Mistaken");
+    info.param<std::string>("mistake");
+    info.param<double>("speed").defaults_to(1.0);
+    return registry;
+  }();
+  return instance;
+}
+
+std::string load_errors(const std::string& mistake) {
+  return format(test::diagnose_text(machine("      a: {type: test.Mistaken, params: {mistake: " +
+                                                mistake + "}}\n      p: test.Pose\n",
+                                            "[a]"),
+                                    mistaken_registry()));
+}
+
+}  // namespace
+
+TEST_CASE("a wrong name or kind in a state's handles fails the load at the state",
+          "[scl][errors]") {
+  // The state 'a' is declared at inline.yaml:6:7.
+  CHECK(load_errors("none").empty());
+  CHECK(load_errors("'param name'") ==
+        "inline.yaml:6:7: error: class test.Mistaken reads param 'speeed' that it "
+        "does not declare\ninline.yaml:6:7: note: did you mean 'speed'? known: mistake, speed\n");
+  CHECK(load_errors("'param kind'") ==
+        "inline.yaml:6:7: error: class test.Mistaken reads param 'speed' (double) "
+        "through a handle of kind int\n");
+  CHECK(load_errors("state") ==
+        "inline.yaml:6:7: error: state machine 'm' has no state 'pp'\n"
+        "inline.yaml:6:7: note: did you mean 'p'? known: a, p\n");
+  CHECK(load_errors("'slot name'") ==
+        "inline.yaml:6:7: error: class test.Mistaken plans state 'p' (test.Pose) "
+        "with param 'y', which its class does not declare\n"
+        "inline.yaml:6:7: note: did you mean 'x'? known: x\n"
+        "inline.yaml:6:7: error: class test.Mistaken plans state 'p' without its "
+        "required param 'x'; give it a slot or set it on the state\n");
+  CHECK(load_errors("'slot kind'") ==
+        "inline.yaml:6:7: error: class test.Mistaken plans param 'x' (double) of "
+        "state 'p' in a slot of kind int\n");
+  CHECK(load_errors("'slot twice'") ==
+        "inline.yaml:6:7: error: class test.Mistaken plans param 'x' of state 'p' "
+        "twice\n");
+  CHECK(load_errors("required") ==
+        "inline.yaml:6:7: error: class test.Mistaken plans state 'p' without its "
+        "required param 'x'; give it a slot or set it on the state\n");
+}
+
+TEST_CASE("a state name planned from a config param is checked at that param", "[scl][errors]") {
+  const auto text = format(test::diagnose_text(
+      machine("      a: {type: test.Planner, params: {op: append, target: wlak}}\n"
+              "      walk: scripted\n",
+              "[a]"),
+      registry()));
+  CHECK(text ==
+        "inline.yaml:6:60: error: state machine 'm' has no state 'wlak'\n"
+        "inline.yaml:6:60: note: did you mean 'walk'? known: a, walk\n");
 }

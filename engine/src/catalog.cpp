@@ -26,10 +26,10 @@ std::string param_line(const ParamSpec& spec) {
   std::string line = fmt::format("{}: {}", spec.name, to_string(spec.kind));
   if (spec.required()) {
     line += ", required";
-  } else if (const Json fallback = detail::param_json(*spec.default_value); fallback.is_null()) {
+  } else if (const Json json = detail::param_json(*spec.default_value); json.is_null()) {
     line += ", optional";
   } else {
-    line += ", default " + fallback.dump();
+    line += ", default " + json.dump();
   }
   if (const auto range = range_of(spec); !range.empty()) line += ", " + range;
   if (!spec.choices.empty()) {

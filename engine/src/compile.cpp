@@ -6,6 +6,7 @@
 
 #include "arbiter/init_context.hpp"
 #include "arbiter/program.hpp"
+#include "controller_builder.hpp"
 #include "layer_order.hpp"
 
 namespace arbiter {
@@ -24,13 +25,13 @@ struct Claim {
   std::uint32_t owner = kNoBehaviour;  ///< the behaviour whose outputs the states write through
 };
 
-/// What an instance being initialised belongs to, beyond its layer.
 /// Lookups shared by every instance's init, so that binding stays linear in the config's size.
 struct Bindings {
   std::unordered_map<std::string, std::uint32_t> actuator;  ///< name → actuator index
   std::unordered_map<std::uint64_t, std::uint32_t> slot;    ///< (actuator, owner) → writer slot
 };
 
+/// What an instance being initialised belongs to, beyond its layer.
 struct InitScope {
   Bindings* bindings = nullptr;
   std::vector<Claim>* claims = nullptr;
@@ -39,7 +40,9 @@ struct InitScope {
   const std::vector<Name>* sensors = nullptr;  ///< the layer's sensors as declared, if it has one
 };
 
-class InstanceInit final : public InitContext {
+/// What every class's init() may do; the behaviour's and the state's contexts below add theirs.
+template <typename Base>
+class InstanceInit : public Base {
  public:
   InstanceInit(Program& program, const Registry& registry, Diagnostics& diagnostics,
                const CompiledLayer& layer, std::uint32_t owner, const std::string& name,
@@ -118,56 +121,6 @@ class InstanceInit final : public InitContext {
     return box;
   }
 
-  bool plan_state(const std::string& state, const Node* params, const SourceLocation& at,
-                  PlannedState& out) override {
-    if (scope_.machine == nullptr || scope_.controller == nullptr) {
-      error_at(at, "class-error",
-               fmt::format("class {} plans states but is not a state", cls_.name));
-      return false;
-    }
-    std::vector<std::string> known;
-    for (std::uint32_t s = 0; s < scope_.machine->states.size(); ++s) {
-      const StateDecl& decl = scope_.machine->states[s];
-      known.push_back(decl.name.text);
-      if (decl.name.text != state) continue;
-      const std::size_t errors = diagnostics_.error_count();
-      out.params = check_state_params(decl, params, at, registry_, diagnostics_);
-      out.state = s;
-      return diagnostics_.error_count() == errors;
-    }
-    error_at(at, "unknown-state",
-             fmt::format("state machine '{}' has no state '{}'", scope_.machine->name.text, state))
-        .unknown_name(state, known);
-    return false;
-  }
-
-  Controller* claim_controller(const std::string& machine, const SourceLocation& at) override {
-    std::vector<std::string> known;
-    for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
-      Controller& controller = *program_.controllers[c];
-      known.push_back(controller.name());
-      if (controller.name() != machine) continue;
-      Claim& claim = (*scope_.claims)[c];
-      if (claim.claimed) {
-        error_at(at, "machine-owned-twice",
-                 fmt::format("state machine '{}' already has an owner; a controller is stepped "
-                             "by one owner only",
-                             machine));
-        return nullptr;
-      }
-      const bool in_program = !program_.layers.empty() && &layer_ >= &program_.layers.front() &&
-                              &layer_ <= &program_.layers.back();
-      claim = {true,
-               in_program ? static_cast<std::uint32_t>(&layer_ - program_.layers.data()) : kNoIndex,
-               owner_};
-      controller.set_owned(owner_);
-      return &controller;
-    }
-    error_at(at, "unknown-machine", fmt::format("no state machine named '{}'", machine))
-        .unknown_name(machine, known, "the config declares no state_machines");
-    return nullptr;
-  }
-
   Diagnostic& error(const SourceLocation& at, std::string message) override {
     return error_at(at, "class-error", std::move(message));
   }
@@ -240,7 +193,7 @@ class InstanceInit final : public InitContext {
     return kUnbound;
   }
 
- private:
+ protected:
   Diagnostic& error_at(const SourceLocation& at, std::string code, std::string message) {
     return diagnostics_.error(at, std::move(code), std::move(message));
   }
@@ -264,6 +217,141 @@ class InstanceInit final : public InitContext {
   const ParamSet& params_;
   const std::vector<PortBinding>& ports_;
   InitScope scope_;
+};
+
+class BehaviourInit final : public InstanceInit<BehaviourInitContext> {
+ public:
+  using InstanceInit::InstanceInit;
+
+  Controller* claim_controller(const std::string& machine, const SourceLocation& at) override {
+    std::vector<std::string> known;
+    for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
+      Controller& controller = *program_.controllers[c];
+      known.push_back(controller.name());
+      if (controller.name() != machine) continue;
+      Claim& claim = (*scope_.claims)[c];
+      if (claim.claimed) {
+        error_at(at, "machine-owned-twice",
+                 fmt::format("state machine '{}' already has an owner; a controller is stepped "
+                             "by one owner only",
+                             machine));
+        return nullptr;
+      }
+      const bool in_program = !program_.layers.empty() && &layer_ >= &program_.layers.front() &&
+                              &layer_ <= &program_.layers.back();
+      claim = {true,
+               in_program ? static_cast<std::uint32_t>(&layer_ - program_.layers.data()) : kNoIndex,
+               owner_};
+      ControllerBuilder(controller).set_owned(owner_);
+      return &controller;
+    }
+    error_at(at, "unknown-machine", fmt::format("no state machine named '{}'", machine))
+        .unknown_name(machine, known, "the config declares no state_machines");
+    return nullptr;
+  }
+};
+
+class StateInit final : public InstanceInit<StateInitContext> {
+ public:
+  using InstanceInit::InstanceInit;
+
+  bool plan_state(const std::string& state, const Node* params, const SourceLocation& at,
+                  PlannedState& out) override {
+    const std::uint32_t s = find_declared(state, at);
+    if (s == kNoState) return false;
+    const StateDecl& decl = scope_.machine->states[s];
+    const std::size_t errors = diagnostics_.error_count();
+    out.params = check_state_params(decl, params, at, registry_, diagnostics_);
+    out.state = s;
+    index_params(*decl.cls, out);
+    return diagnostics_.error_count() == errors;
+  }
+
+ protected:
+  std::uint32_t resolve_param(std::string_view param_name, ParamKind kind) override {
+    const ParamSpec* spec = cls_.find_param(param_name);
+    if (spec == nullptr) {
+      std::vector<std::string> known;
+      for (const auto& declared : cls_.params) known.push_back(declared.name);
+      error_at(
+          location_, "class-error",
+          fmt::format("class {} reads param '{}' that it does not declare", cls_.name, param_name))
+          .unknown_name(std::string(param_name), known);
+      return kUnbound;
+    }
+    if (spec->kind != kind) {
+      error_at(location_, "class-error",
+               fmt::format("class {} reads param '{}' ({}) through a handle of kind {}", cls_.name,
+                           param_name, to_string(spec->kind), to_string(kind)));
+      return kUnbound;
+    }
+    return static_cast<std::uint32_t>(spec - cls_.params.data());
+  }
+
+  std::uint32_t resolve_state(const std::string& state, const std::string_view* params,
+                              const ParamKind* kinds, std::size_t count, std::uint32_t* indices,
+                              const SourceLocation& at) override {
+    const std::uint32_t s = find_declared(state, at);
+    if (s == kNoState) return kNoState;
+    const StateDecl& decl = scope_.machine->states[s];
+    const ClassInfo& cls = *decl.cls;
+    const std::size_t errors = diagnostics_.error_count();
+    std::vector<std::string> known;
+    for (const auto& declared : cls.params) known.push_back(declared.name);
+    for (std::size_t i = 0; i < count; ++i) {
+      const ParamSpec* spec = cls.find_param(params[i]);
+      if (spec == nullptr) {
+        error_at(at, "class-error",
+                 fmt::format("class {} plans state '{}' ({}) with param '{}', which its class "
+                             "does not declare",
+                             cls_.name, state, cls.name, params[i]))
+            .unknown_name(params[i], known);
+        continue;
+      }
+      indices[i] = static_cast<std::uint32_t>(spec - cls.params.data());
+      if (spec->kind != kinds[i]) {
+        error_at(
+            at, "class-error",
+            fmt::format("class {} plans param '{}' ({}) of state '{}' in a slot of kind {}",
+                        cls_.name, params[i], to_string(spec->kind), state, to_string(kinds[i])));
+      }
+      for (std::size_t j = 0; j < i; ++j) {
+        if (params[j] == params[i]) {
+          error_at(at, "class-error",
+                   fmt::format("class {} plans param '{}' of state '{}' twice", cls_.name,
+                               params[i], state));
+        }
+      }
+    }
+    for (std::size_t p = 0; p < cls.params.size(); ++p) {
+      const ParamSpec& spec = cls.params[p];
+      if (!spec.required() || decl.params.find(spec.name) != nullptr) continue;
+      bool slotted = false;
+      for (std::size_t i = 0; i < count; ++i) slotted = slotted || params[i] == spec.name;
+      if (!slotted) {
+        error_at(at, "class-error",
+                 fmt::format("class {} plans state '{}' without its required param '{}'; give "
+                             "it a slot or set it on the state",
+                             cls_.name, state, spec.name));
+      }
+    }
+    return diagnostics_.error_count() == errors ? s : kNoState;
+  }
+
+ private:
+  // A state of this state's machine, reported at `at` when there is none.
+  std::uint32_t find_declared(const std::string& state, const SourceLocation& at) {
+    std::vector<std::string> known;
+    for (std::uint32_t s = 0; s < scope_.machine->states.size(); ++s) {
+      const StateDecl& decl = scope_.machine->states[s];
+      if (decl.name.text == state) return s;
+      known.push_back(decl.name.text);
+    }
+    error_at(at, "unknown-state",
+             fmt::format("state machine '{}' has no state '{}'", scope_.machine->name.text, state))
+        .unknown_name(state, known);
+    return kNoState;
+  }
 };
 
 class Compiler {
@@ -388,9 +476,10 @@ class Compiler {
     CompiledLayer& layer = program_.layers[l];
     if (decl.interface != nullptr) {
       layer.interface = decl.interface->make_interface();
-      InstanceInit init(program_, registry_, diagnostics_, layer, kNoBehaviour, layer.name,
-                        layer.location, *decl.interface, decl.params, decl.ports,
-                        InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
+      InstanceInit<InitContext> init(
+          program_, registry_, diagnostics_, layer, kNoBehaviour, layer.name, layer.location,
+          *decl.interface, decl.params, decl.ports,
+          InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
       guarded_init(diagnostics_, *decl.interface, layer.location,
                    [&] { layer.interface->init(init); });
       return;
@@ -409,9 +498,9 @@ class Compiler {
       CompiledBehaviour& behaviour = program_.behaviours[b];
       const BehaviourDecl* source = sources_[b];
       behaviour.instance = behaviour.cls->make_behaviour();
-      InstanceInit init(program_, registry_, diagnostics_, layer, b, behaviour.name,
-                        behaviour.location, *behaviour.cls, source->params, source->ports,
-                        InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
+      BehaviourInit init(program_, registry_, diagnostics_, layer, b, behaviour.name,
+                         behaviour.location, *behaviour.cls, source->params, source->ports,
+                         InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
       guarded_init(diagnostics_, *behaviour.cls, behaviour.location,
                    [&] { behaviour.instance->init(init); });
     }
@@ -440,7 +529,7 @@ class Compiler {
         compiled.cls = state.cls;
         compiled.location = state.location;
         compiled.params = state.params.items;
-        controller->add_state(std::move(compiled));
+        ControllerBuilder(*controller).add_state(std::move(compiled));
       }
       program_.controllers.push_back(std::move(controller));
     }
@@ -472,12 +561,13 @@ class Compiler {
                                          decl.states[s].machine->text, decl.states[s].name.text));
           continue;
         }
-        program_.controllers[child]->set_owned();
+        ControllerBuilder(*program_.controllers[child]).set_owned();
         parent[child] = c;
-        controller.set_state_child(s, static_cast<std::uint32_t>(children.size()));
+        ControllerBuilder(controller)
+            .set_state_child(s, static_cast<std::uint32_t>(children.size()));
         children.push_back(program_.controllers[child].get());
       }
-      controller.set_children(std::move(children));
+      ControllerBuilder(controller).set_children(std::move(children));
     }
     for (std::uint32_t c = 0; c < program_.controllers.size(); ++c) {
       auto root = c;
@@ -501,22 +591,25 @@ class Compiler {
       }
       std::vector<PlannedState> initial;
       for (const auto& entry : decl.queue) {
-        const auto s = controller.find_state(entry.state.text);
-        if (s) initial.push_back({*s, entry.overrides});
+        const auto s = find_state(controller, entry.state.text);
+        if (s) initial.push_back({*s, entry.overrides, {}});
       }
-      controller.set_initial_queue(std::move(initial));
+      ControllerBuilder(controller).set_initial_queue(std::move(initial));
       for (const auto& preemption : decl.preempt) {
-        const auto s = controller.find_state(preemption.go_to.state.text);
-        if (s) controller.add_preemption(preemption.cycle, {*s, preemption.go_to.overrides});
+        const auto s = find_state(controller, preemption.go_to.state.text);
+        if (s) {
+          ControllerBuilder(controller)
+              .add_preemption(preemption.cycle, {*s, preemption.go_to.overrides, {}});
+        }
       }
       std::vector<bool> reported(decl.states.size(), false);
-      controller.build_pool([&](std::uint32_t s, State& state) {
+      ControllerBuilder(controller).build_pool([&](std::uint32_t s, State& state) {
         // Every pooled object is initialised alike; report problems once, for the first.
         Diagnostics repeat;
-        InstanceInit init(program_, registry_, reported[s] ? repeat : diagnostics_, layer,
-                          claim.owner, decl.states[s].name.text, decl.states[s].location,
-                          *decl.states[s].cls, params[s], ports[s],
-                          InitScope{&bindings_, &claims_, &controller, &decl, sensors});
+        StateInit init(program_, registry_, reported[s] ? repeat : diagnostics_, layer, claim.owner,
+                       decl.states[s].name.text, decl.states[s].location, *decl.states[s].cls,
+                       params[s], ports[s],
+                       InitScope{&bindings_, &claims_, &controller, &decl, sensors});
         guarded_init(reported[s] ? repeat : diagnostics_, *decl.states[s].cls,
                      decl.states[s].location, [&] { state.init(init); });
         reported[s] = true;

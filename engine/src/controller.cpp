@@ -1,5 +1,7 @@
 #include "arbiter/controller.hpp"
 
+#include "controller_builder.hpp"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -22,26 +24,24 @@ const char* to_string(ControllerStatus status) {
 
 // --- Plan ----------------------------------------------------------------------------------------
 
-bool Plan::append(std::string_view state, std::initializer_list<Arg> args) {
-  return controller_->insert(controller_->queue_.size(), controller_->create(state, args));
-}
-bool Plan::prepend(std::string_view state, std::initializer_list<Arg> args) {
-  return controller_->insert(0, controller_->create(state, args));
-}
-bool Plan::insert_before(std::size_t index, std::string_view state,
-                         std::initializer_list<Arg> args) {
-  return controller_->insert(index, controller_->create(state, args));
-}
-bool Plan::insert_after(std::size_t index, std::string_view state,
-                        std::initializer_list<Arg> args) {
-  return controller_->insert(index + 1, controller_->create(state, args));
+bool Plan::edit(Mode mode, std::size_t index, std::uint32_t state, const detail::PlanArg* args,
+                std::size_t count) {
+  if (state == kUnbound) {
+    // Only a handle whose resolution failed the load, or a default-constructed one, is unbound.
+    controller_->fail("planned a state handle that init() did not resolve");
+    return false;
+  }
+  if (mode == kGoTo) clear();
+  const bool planned = controller_->insert(index, controller_->create(state, nullptr, args, count));
+  if (planned && mode == kGoTo) controller_->note_go_to();
+  return planned;
 }
 bool Plan::append(const PlannedState& planned) {
   return controller_->insert(controller_->queue_.size(),
-                             controller_->create(planned.state, &planned.params, {}));
+                             controller_->create(planned.state, &planned, nullptr, 0));
 }
 bool Plan::prepend(const PlannedState& planned) {
-  return controller_->insert(0, controller_->create(planned.state, &planned.params, {}));
+  return controller_->insert(0, controller_->create(planned.state, &planned, nullptr, 0));
 }
 bool Plan::remove(std::size_t index) {
   auto& queue = controller_->queue_;
@@ -56,12 +56,6 @@ bool Plan::remove(std::size_t index) {
 void Plan::clear() {
   for (auto instance : controller_->queue_) controller_->release(instance);
   controller_->queue_.clear();
-}
-bool Plan::go_to(std::string_view state, std::initializer_list<Arg> args) {
-  clear();
-  const bool planned = append(state, args);
-  if (planned) controller_->note_go_to();
-  return planned;
 }
 bool Plan::go_to(const PlannedState& planned) {
   clear();
@@ -105,8 +99,9 @@ std::uint64_t StateContext::cycle() const {
 std::uint64_t StateContext::executions() const {
   return controller_->instances_[instance_].executions;
 }
-const ParamValue* StateContext::find_param(std::string_view name) const {
-  return controller_->find_param(instance_, name);
+const ParamValue* StateContext::param_value(std::uint32_t index) const {
+  const auto& values = controller_->instances_[instance_].values;
+  return index < values.size() ? values[index] : nullptr;
 }
 Controller* StateContext::child() const {
   const auto state = controller_->instances_[instance_].state;
@@ -121,16 +116,36 @@ Controller::Controller(std::string name, SourceLocation location, std::size_t ca
   queue_.reserve(capacity_);
 }
 
-std::uint32_t Controller::add_state(CompiledState state) {
-  states_.push_back(std::move(state));
-  return static_cast<std::uint32_t>(states_.size() - 1);
-}
-
-std::optional<std::uint32_t> Controller::find_state(std::string_view name) const {
-  for (std::uint32_t s = 0; s < states_.size(); ++s) {
-    if (states_[s].name == name) return s;
+std::optional<std::uint32_t> find_state(const Controller& controller, std::string_view name) {
+  const auto& states = controller.states();
+  for (std::uint32_t s = 0; s < states.size(); ++s) {
+    if (states[s].name == name) return s;
   }
   return std::nullopt;
+}
+
+void index_params(const ClassInfo& cls, PlannedState& planned) {
+  planned.param_index.clear();
+  for (const auto& param : planned.params) {
+    std::uint32_t index = 0;
+    while (index < cls.params.size() && cls.params[index].name != param.name) ++index;
+    planned.param_index.push_back(index);
+  }
+}
+
+void ControllerBuilder::index_state_values() {
+  c_.state_values_.assign(c_.states_.size(), {});
+  for (std::uint32_t s = 0; s < c_.states_.size(); ++s) {
+    const auto& state = c_.states_[s];
+    auto& values = c_.state_values_[s];
+    for (const auto& spec : state.cls->params) {
+      const ParamValue* value = spec.default_value ? &*spec.default_value : nullptr;
+      for (const auto& param : state.params) {
+        if (param.name == spec.name) value = &param.value;
+      }
+      values.push_back(value);
+    }
+  }
 }
 
 std::string_view Controller::current_state() const {
@@ -158,22 +173,10 @@ void Controller::fail(std::string message) {
   }
 }
 
-std::optional<std::uint32_t> Controller::create(std::string_view state,
-                                                std::initializer_list<Arg> args) {
-  const auto index = find_state(state);
-  if (!index) {
-    std::vector<std::string> known;
-    for (const auto& candidate : states_) known.push_back(candidate.name);
-    fail(fmt::format("unknown state '{}' planned at run time; {}", state, suggest(state, known)));
-    return std::nullopt;
-  }
-  return create(*index, nullptr, args);
-}
-
 namespace {
 
 // Converts a run-time argument to the param's kind; empty string when it fits.
-std::string convert_arg(const ParamSpec& spec, const Arg::Value& value, ParamValue& out) {
+std::string convert_arg(const ParamSpec& spec, const ArgValue& value, ParamValue& out) {
   const auto in_range = [&](double number) {
     return std::isfinite(number) && (!spec.minimum || number >= *spec.minimum) &&
            (!spec.maximum || number <= *spec.maximum);
@@ -224,9 +227,8 @@ std::string convert_arg(const ParamSpec& spec, const Arg::Value& value, ParamVal
 
 }  // namespace
 
-std::optional<std::uint32_t> Controller::create(std::uint32_t state,
-                                                const std::vector<Param>* planned,
-                                                std::initializer_list<Arg> args) {
+std::optional<std::uint32_t> Controller::create(std::uint32_t state, const PlannedState* planned,
+                                                const detail::PlanArg* args, std::size_t count) {
   const auto& compiled = states_[state];
   if (live_ >= capacity_ || pools_[state].empty()) {
     fail(
@@ -239,33 +241,36 @@ std::optional<std::uint32_t> Controller::create(std::uint32_t state,
   pools_[state].pop_back();
   ++live_;
   Instance& created = instances_[instance];
-  created.planned = planned;
+  created.planned = planned == nullptr ? nullptr : &planned->params;
   created.args.clear();
   created.executions = 0;
-  const auto& specs = compiled.cls->params;
-  for (const Arg& arg : args) {
-    std::uint32_t param = 0;
-    while (param < specs.size() && specs[param].name != arg.name) ++param;
-    if (param == specs.size()) {
-      std::vector<std::string> known;
-      for (const auto& spec : specs) known.push_back(spec.name);
-      fail(fmt::format("state '{}' ({}) has no param '{}'; {}", compiled.name, compiled.cls->name,
-                       arg.name, suggest(arg.name, known)));
-      release(instance);
-      return std::nullopt;
+  std::copy(state_values_[state].begin(), state_values_[state].end(), created.values.begin());
+  if (planned != nullptr) {
+    for (std::size_t i = 0; i < planned->params.size() && i < planned->param_index.size(); ++i) {
+      if (planned->param_index[i] < created.values.size()) {
+        created.values[planned->param_index[i]] = &planned->params[i].value;
+      }
     }
+  }
+  const auto& specs = compiled.cls->params;
+  for (std::size_t a = 0; a < count; ++a) {
+    const std::uint32_t param = args[a].param;
     ParamValue value;
-    if (auto expected = convert_arg(specs[param], arg.value, value); !expected.empty()) {
-      fail(fmt::format("param '{}' of state '{}' must be {}", arg.name, compiled.name, expected));
+    if (auto expected = convert_arg(specs[param], args[a].value, value); !expected.empty()) {
+      fail(fmt::format("param '{}' of state '{}' must be {}", specs[param].name, compiled.name,
+                       expected));
       release(instance);
       return std::nullopt;
     }
     created.args.emplace_back(param, std::move(value));
   }
-  for (const auto& spec : specs) {
-    if (spec.required() && find_param(instance, spec.name) == nullptr) {
+  // Pointers into args only once it is complete: it is reserved to the class's param count, and
+  // load checks that the slots of a handle name distinct params.
+  for (const auto& [param, value] : created.args) created.values[param] = &value;
+  for (std::uint32_t p = 0; p < specs.size(); ++p) {
+    if (specs[p].required() && created.values[p] == nullptr) {
       fail(fmt::format("state '{}' ({}) planned without its required param '{}'", compiled.name,
-                       compiled.cls->name, spec.name));
+                       compiled.cls->name, specs[p].name));
       release(instance);
       return std::nullopt;
     }
@@ -289,26 +294,6 @@ void Controller::release(std::uint32_t instance) {
   --live_;
 }
 
-const ParamValue* Controller::find_param(std::uint32_t instance, std::string_view name) const {
-  const Instance& of = instances_[instance];
-  const auto& specs = states_[of.state].cls->params;
-  for (const auto& [param, value] : of.args) {
-    if (specs[param].name == name) return &value;
-  }
-  if (of.planned != nullptr) {
-    for (const auto& param : *of.planned) {
-      if (param.name == name) return &param.value;
-    }
-  }
-  for (const auto& param : states_[of.state].params) {
-    if (param.name == name) return &param.value;
-  }
-  for (const auto& spec : specs) {
-    if (spec.name == name && spec.default_value) return &*spec.default_value;
-  }
-  return nullptr;
-}
-
 void Controller::reset_queue() {
   if (current_ != kUnbound) release(current_);
   current_ = kUnbound;
@@ -322,7 +307,7 @@ void Controller::reset_queue() {
   went_to_ = kUnbound;
   terminated_by_ = kUnbound;
   for (const auto& planned : initial_) {
-    insert(queue_.size(), create(planned.state, &planned.params, {}));
+    insert(queue_.size(), create(planned.state, &planned, nullptr, 0));
   }
 }
 
@@ -335,7 +320,7 @@ void Controller::note_go_to() {
 namespace {
 
 // Run-time args hold only the kinds convert_arg() produces.
-Arg::Value arg_value(const ParamValue& value) {
+ArgValue arg_value(const ParamValue& value) {
   if (const auto* flag = std::get_if<bool>(&value)) return *flag;
   if (const auto* integer = std::get_if<std::int64_t>(&value)) return *integer;
   if (const auto* vec = std::get_if<Vec2>(&value)) return *vec;

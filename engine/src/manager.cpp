@@ -499,7 +499,6 @@ void Manager::step() {
   ++data_.step;
   data_.event_count = 0;
   data_.sequence = 0;
-  const bool first_step = data_.step == 1;
   for (const auto& controller : program_.controllers) controller->clear_events();
   const auto interface_index = [&](const CompiledLayer& layer) {
     return static_cast<std::uint32_t>(program_.behaviours.size() +
@@ -513,7 +512,7 @@ void Manager::step() {
         run_.slot_written[program_.actuator_slots[s]] = false;
       }
     }
-    ExecuteContext context(data_, interface_index(layer), 1.0, first_step);
+    WriteContext context(data_, interface_index(layer));
     if (run_.disabled[interface_index(layer)] == 0) {
       ARBITER_GUARDED(interface_index(layer), Callback::kInput, layer.interface->input(context));
     }

@@ -72,7 +72,7 @@ class Replayed : public Interface {
     for (const char* text : reports_[index]) ctx.report(text);
   }
 
-  void input(ExecuteContext& ctx) override {
+  void input(WriteContext& ctx) override {
     const auto index = ctx.step() - 1;
     for (auto& feed : feeds_) {
       if (index < feed.values.size() && feed.written[index]) {

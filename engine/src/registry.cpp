@@ -42,12 +42,12 @@ const char* to_string(ParamKind kind) {
   return "?";
 }
 
-ParamSpec& ParamSpec::fallback(ParamValue value) {
+ParamSpec& ParamSpec::defaults_to(ParamValue value) {
   if (kind == ParamKind::kDouble && std::holds_alternative<std::int64_t>(value)) {
     value = static_cast<double>(std::get<std::int64_t>(value));
   }
   if (value.index() != static_cast<std::size_t>(kind)) {
-    throw std::logic_error(fmt::format("param '{}' is of kind {}, but its fallback is of kind {}",
+    throw std::logic_error(fmt::format("param '{}' is of kind {}, but its default is of kind {}",
                                        name, to_string(kind),
                                        to_string(static_cast<ParamKind>(value.index()))));
   }

@@ -8,6 +8,7 @@
 
 #include "arbiter/controller.hpp"
 #include "arbiter/trace.hpp"
+#include "controller_builder.hpp"
 
 namespace arbiter {
 namespace {
@@ -150,7 +151,7 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
         if (expectation.kind == Expectation::Kind::kState) named = {expectation.state};
         bool ok = true;
         for (const auto& state : named) {
-          if (controller.find_state(state)) continue;
+          if (find_state(controller, state)) continue;
           diagnostics
               .error(expectation.target.location, "unknown-state",
                      fmt::format("state machine '{}' has no state '{}'", controller.name(), state))

@@ -22,7 +22,7 @@ class InputsInterface final : public Interface {
     }
   }
 
-  void input(ExecuteContext& ctx) override {
+  void input(WriteContext& ctx) override {
     for (auto& bound : bound_) {
       const auto& steps = bound.track->steps;
       while (bound.next < steps.size() && steps[bound.next] <= ctx.step()) ++bound.next;

@@ -112,8 +112,8 @@ Json param_schema(const ClassInfo& cls, const ParamSpec& spec) {
     out["description"] = spec.description;
   }
   if (spec.default_value) {
-    if (Json fallback = detail::param_json(*spec.default_value); !fallback.is_null()) {
-      out["default"] = std::move(fallback);
+    if (Json json = detail::param_json(*spec.default_value); !json.is_null()) {
+      out["default"] = std::move(json);
     }
   }
   return out;

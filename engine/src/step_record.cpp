@@ -51,7 +51,7 @@ void append_end(const StateEnd& end, const ParamTexts& params, std::string& out)
   out += "}";
 }
 
-ParamValue param_value(const Arg::Value& value) {
+ParamValue param_value(const ArgValue& value) {
   return std::visit([](auto v) { return ParamValue(v); }, value);
 }
 
@@ -392,7 +392,7 @@ void append_step_record(const StepLayout& layout, const StepSnapshot& step, std:
     out += step.written[a] != 0 ? R"(, "written": true})" : R"(, "written": false})";
   }
   out += R"(}, "controllers": {)";
-  std::vector<std::pair<std::uint32_t, Arg::Value>> args;
+  std::vector<std::pair<std::uint32_t, ArgValue>> args;
   for (std::size_t c = 0; c < layout.machines.size(); ++c) {
     const auto& machine = layout.machines[c];
     const auto& taken = step.machines[c];
@@ -416,7 +416,7 @@ void append_step_record(const StepLayout& layout, const StepSnapshot& step, std:
     if (taken.current != kNoState) {
       const auto* first = step.current_args.data() + taken.args_begin;
       append_params(merged_params(*machine.states[taken.current].cls, taken.planned,
-                                  std::vector<std::pair<std::uint32_t, Arg::Value>>(
+                                  std::vector<std::pair<std::uint32_t, ArgValue>>(
                                       first, first + taken.args_count),
                                   param_value, true),
                     out);

@@ -124,7 +124,7 @@ class StepSnapshot {
   std::size_t changed_count = 0;
   std::vector<char> written;
   std::vector<Machine> machines;
-  std::vector<std::pair<std::uint32_t, Arg::Value>> current_args;
+  std::vector<std::pair<std::uint32_t, ArgValue>> current_args;
   std::vector<std::uint32_t> queue;
   std::vector<Controller::Event> events;  // args_begin rebased into event_args
   std::vector<Controller::EventArg> event_args;

@@ -87,16 +87,14 @@ std::string short_number(double value) {
 
 ParamTexts event_params(const Controller& controller, const Controller::Event& event, bool exact) {
   if (event.kind == Controller::Event::Kind::kExecute) return {};
-  std::vector<std::pair<std::uint32_t, Arg::Value>> args;
+  std::vector<std::pair<std::uint32_t, ArgValue>> args;
   const auto* first = controller.event_args(event);
   for (std::uint32_t i = 0; i < event.args_count; ++i) {
     args.emplace_back(first[i].param, first[i].value);
   }
   return detail::merged_params(
       *controller.states()[event.state].cls, event.planned, args,
-      [](const Arg::Value& value) {
-        return std::visit([](auto v) { return ParamValue(v); }, value);
-      },
+      [](const ArgValue& value) { return std::visit([](auto v) { return ParamValue(v); }, value); },
       exact);
 }
 

@@ -642,7 +642,7 @@ void report_incompatible(const StepContext& ctx, Endpoint& endpoint) {
 
 }  // namespace
 
-void Bridge::input(ExecuteContext& ctx) {
+void Bridge::input(WriteContext& ctx) {
   for (auto& owned : subscriptions_) {
     Subscription& in = *owned;
     const std::int32_t publishers = in.publishers.load(std::memory_order_acquire);
@@ -836,57 +836,57 @@ void register_bridge(Registry& registry) {
               "double, vec2, vec3 and string values. Reports 'NAME: publisher found' and "
               "'NAME: publisher lost' events. See docs/dds.md.");
   info.param<std::int64_t>("domain_id")
-      .fallback(0)
+      .defaults_to(0)
       .range(0.0, 232.0)
       .describe(
           "the DDS domain; when not set, the environment variable ROS_DOMAIN_ID, as for a ROS 2 "
           "node, or else 0");
   info.param<std::string>("cyclone_config")
-      .fallback(std::string())
+      .defaults_to(std::string())
       .describe(
           "a Cyclone DDS XML configuration file, relative to this config file (or XML text "
           "starting with '<'); empty: Cyclone's defaults, or the file CYCLONEDDS_URI names");
   info.param<std::string>("qos")
-      .fallback(std::string("default"))
+      .defaults_to(std::string("default"))
       .one_of(kQosProfiles)
       .describe(
           "the ROS 2 QoS profile of every reader and writer: default (reliable, keep last 10, "
           "volatile), sensor_data (best effort, keep last 5, volatile) or system_default (the "
           "DDS implementation's); the params below change it, 'topics' per topic");
   info.param<std::string>("reliability")
-      .fallback(std::string("reliable"))
+      .defaults_to(std::string("reliable"))
       .one_of({"reliable", "best_effort"})
       .describe("reliability QoS of every reader and writer, instead of the profile's");
   info.param<std::string>("history")
-      .fallback(std::string("keep_last"))
+      .defaults_to(std::string("keep_last"))
       .one_of({"keep_last", "keep_all"})
       .describe("history QoS of every reader and writer, instead of the profile's");
   info.param<std::int64_t>("depth")
-      .fallback(10)
+      .defaults_to(10)
       .range(1.0, 10000.0)
       .describe(
           "the history depth for keep_last, instead of the profile's: how many samples a reader "
           "keeps between steps");
   info.param<std::string>("durability")
-      .fallback(std::string("volatile"))
+      .defaults_to(std::string("volatile"))
       .one_of({"volatile", "transient_local"})
       .describe(
           "durability QoS, instead of the profile's: transient_local lets a subscriber that "
           "joins late get the last value");
   info.param<std::string>("topic_prefix")
-      .fallback(std::string("rt/"))
+      .defaults_to(std::string("rt/"))
       .describe("prepended to every topic name: 'rt/' is ROS 2's prefix for topics");
   info.param<std::string>("namespace")
-      .fallback(std::string())
+      .defaults_to(std::string())
       .describe("a ROS 2 namespace for topic names that do not start with '/'");
   info.param<Node>("topics")
-      .fallback(Node())
+      .defaults_to(Node())
       .schema(topics_schema())
       .describe(
           "per actuator or sensor of the layer: its topic name (default: its own name), or "
           "{topic, message, qos, reliability, history, depth, durability}");
   info.param<std::string>("publish")
-      .fallback(std::string("written"))
+      .defaults_to(std::string("written"))
       .one_of({"written", "every_step"})
       .describe(
           "written: publish a sensor only in steps in which its actuator was written; "

@@ -32,7 +32,7 @@ class Bridge final : public Interface {
   void init(InitContext& ctx) override;
   /// Writes each actuator whose topic delivered since the last step with the newest sample;
   /// the others keep their value, unwritten.
-  void input(ExecuteContext& ctx) override;
+  void input(WriteContext& ctx) override;
   /// Publishes each sensor (by default only those written this step). Never waits.
   void output(const StepContext& ctx) override;
 

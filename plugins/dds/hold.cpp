@@ -16,7 +16,7 @@ namespace {
 template <typename T>
 class Hold final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     from_ = ctx.input<T>("from");
     to_ = ctx.output<T>("to");
     level_ = ctx.param<double>("activation");
@@ -58,13 +58,13 @@ void register_hold(Registry& registry, const std::string& type) {
               "another write; requests activation 0 after that. Bridges a command sent at a "
               "lower rate (through dds.Bridge) to a layer that needs it every step.");
   info.param<double>("timeout")
-      .fallback(0.25)
+      .defaults_to(0.25)
       .range(0.0, 3600.0)
       .describe(
           "seconds (steps at the config's rate_hz, at least one) that a value is held after "
           "it was last written");
   info.param<double>("activation")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 1.0)
       .describe("the activation level requested while holding");
   info.input<T>("from").describe("the received value, e.g. an actuator of a dds.Bridge layer");

@@ -13,13 +13,13 @@ namespace {
 
 ParamSpec& declare_goal(ClassInfo& info) {
   return info.param<Vec2>("goal")
-      .fallback(Vec2{4.5, 0.0})
+      .defaults_to(Vec2{4.5, 0.0})
       .describe("the point to kick the ball to (m, field frame): the opponent goal's centre");
 }
 
 ParamSpec& declare_ball_timeout(ClassInfo& info, std::int64_t steps) {
   return info.param<std::int64_t>("ball_timeout")
-      .fallback(steps)
+      .defaults_to(steps)
       .range(0.0, 10000.0)
       .describe("steps after the ball was last seen for which its remembered position is used");
 }
@@ -29,7 +29,7 @@ ParamSpec& declare_ball_timeout(ClassInfo& info, std::int64_t steps) {
 /// turns again there.
 class SearchForBall final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     memory_.init(ctx);
     lost_steps_ = ctx.param<std::int64_t>("lost_steps");
     turn_rate_ = ctx.param<double>("turn_rate");
@@ -115,7 +115,7 @@ class SearchForBall final : public Behaviour {
 /// so as not to push the ball towards the wrong goal.
 class GoBehindBall final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     memory_.init(ctx);
     goal_ = to_point(ctx.param<Vec2>("goal"));
     ball_timeout_ = ctx.param<std::int64_t>("ball_timeout");
@@ -185,7 +185,7 @@ class GoBehindBall final : public Behaviour {
 /// exactly 0 or 1 so that `kick_ball => go_behind_ball` silences go_behind_ball completely.
 class KickBall final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     memory_.init(ctx);
     goal_ = to_point(ctx.param<Vec2>("goal"));
     max_age_ = ctx.param<std::int64_t>("max_age");
@@ -228,7 +228,7 @@ class KickBall final : public Behaviour {
 /// Points the head at the ball while its position is known.
 class HeadControl final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     memory_.init(ctx);
     ball_timeout_ = ctx.param<std::int64_t>("ball_timeout");
     max_angle_ = ctx.param<double>("max_angle");
@@ -259,28 +259,28 @@ void register_search_for_ball(Registry& registry) {
                        "spot sweeping the head, and after a full turn without the ball walks to "
                        "the search point and turns again there.");
   info.param<std::int64_t>("lost_steps")
-      .fallback(15)
+      .defaults_to(15)
       .range(0.0, 10000.0)
       .describe("steps without seeing the ball before the search starts");
   info.param<double>("turn_rate")
-      .fallback(0.6)
+      .defaults_to(0.6)
       .range(0.0, 1.5)
       .describe("turn rate on the spot (rad/s)");
   info.param<double>("walk_speed")
-      .fallback(0.3)
+      .defaults_to(0.3)
       .range(0.0, 0.4)
       .describe("walking speed towards the search point (m/s)");
   info.param<Vec2>("search_point")
-      .fallback(Vec2{0.0, 0.0})
+      .defaults_to(Vec2{0.0, 0.0})
       .describe(
           "where to walk after a full turn without seeing the ball (m, field frame); the centre "
           "spot sees most of the field");
   info.param<double>("head_sweep")
-      .fallback(1.2)
+      .defaults_to(1.2)
       .range(0.0, 1.5)
       .describe("amplitude of the head sweep either side of straight ahead (rad)");
   info.param<std::int64_t>("sweep_steps")
-      .fallback(45)
+      .defaults_to(45)
       .range(2.0, 10000.0)
       .describe("steps for one full head sweep, left and right");
   BallMemory::declare_ports(info);
@@ -298,31 +298,31 @@ void register_go_behind_ball(Registry& registry) {
   declare_goal(info);
   declare_ball_timeout(info, 45);
   info.param<double>("behind_distance")
-      .fallback(0.2)
+      .defaults_to(0.2)
       .range(0.0, 2.0)
       .describe("distance from the ball to the target point (m)");
   info.param<double>("clearance")
-      .fallback(0.4)
+      .defaults_to(0.4)
       .range(0.0, 2.0)
       .describe("how far to the side of the ball to pass when going round it (m)");
   info.param<double>("near_distance")
-      .fallback(0.5)
+      .defaults_to(0.5)
       .range(0.0, 5.0)
       .describe(
           "within this distance of the target the robot steps sideways and turns to face the "
           "goal; further away it walks forwards towards the target (m)");
-  info.param<double>("gain").fallback(1.5).range(0.0, 10.0).describe(
+  info.param<double>("gain").defaults_to(1.5).range(0.0, 10.0).describe(
       "walking speed per metre of distance to the target (1/s)");
   info.param<double>("max_forward")
-      .fallback(0.35)
+      .defaults_to(0.35)
       .range(0.0, 1.0)
       .describe("the fastest forward speed requested (m/s)");
   info.param<double>("max_sideways")
-      .fallback(0.2)
+      .defaults_to(0.2)
       .range(0.0, 1.0)
       .describe("the fastest sideways speed requested (m/s)");
   info.param<double>("max_turn")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 3.0)
       .describe("the fastest turn rate requested (rad/s)");
   BallMemory::declare_ports(info);
@@ -336,19 +336,19 @@ void register_kick_ball(Registry& registry) {
                        "robot faces the goal, else 0; kicks and stands still while active.");
   declare_goal(info);
   info.param<std::int64_t>("max_age")
-      .fallback(2)
+      .defaults_to(2)
       .range(0.0, 100.0)
       .describe("kick only if the ball was seen within this many steps");
   info.param<double>("max_distance")
-      .fallback(0.27)
+      .defaults_to(0.27)
       .range(0.0, 1.0)
       .describe("the farthest the ball may be from the robot's centre (m)");
   info.param<double>("max_bearing")
-      .fallback(0.3)
+      .defaults_to(0.3)
       .range(0.0, 1.5)
       .describe("the largest bearing of the ball from straight ahead (rad)");
   info.param<double>("max_heading_error")
-      .fallback(0.15)
+      .defaults_to(0.15)
       .range(0.0, 3.2)
       .describe(
           "how far the robot's heading may be off the direction from the ball to the goal (rad)");
@@ -364,7 +364,7 @@ void register_head_control(Registry& registry) {
                        "it, so that it stays in view while the robot walks.");
   declare_ball_timeout(info, 45);
   info.param<double>("max_angle")
-      .fallback(1.5)
+      .defaults_to(1.5)
       .range(0.0, 3.2)
       .describe("the head yaw target is limited to this either side of straight ahead (rad)");
   BallMemory::declare_ports(info);

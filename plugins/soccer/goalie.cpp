@@ -33,7 +33,7 @@ double out_of_goal(Point goal) {
 
 ParamSpec& declare_own_goal(ClassInfo& info) {
   return info.param<Vec2>("goal")
-      .fallback(Vec2{-4.5, 0.0})
+      .defaults_to(Vec2{-4.5, 0.0})
       .describe("the centre of the goal to keep (m, field frame), on its goal line");
 }
 
@@ -41,7 +41,7 @@ ParamSpec& declare_own_goal(ClassInfo& info) {
 /// is the press that sent the goalie back to waiting.
 class WaitForButton final : public State {
  public:
-  void init(InitContext& ctx) override { button_ = ctx.input<bool>("button"); }
+  void init(StateInitContext& ctx) override { button_ = ctx.input<bool>("button"); }
 
   StateResult execute(StateContext& ctx) override {
     const bool pressed = ctx.written(button_) && ctx.read(button_);
@@ -56,20 +56,30 @@ class WaitForButton final : public State {
 /// straight there while turning to the pose's heading. Proceeds once within the tolerances.
 class WalkToPose final : public State {
  public:
-  void init(InitContext& ctx) override {
+  void init(StateInitContext& ctx) override {
     pose_ = ctx.input<Vec3>("robot_pose");
     gait_velocity_ = ctx.output<Vec3>("gait_velocity");
+    x_ = ctx.param_handle<double>("x");
+    y_ = ctx.param_handle<double>("y");
+    theta_ = ctx.param_handle<double>("theta");
+    position_tolerance_param_ = ctx.param_handle<double>("position_tolerance");
+    angle_tolerance_param_ = ctx.param_handle<double>("angle_tolerance");
+    near_distance_param_ = ctx.param_handle<double>("near_distance");
+    gain_param_ = ctx.param_handle<double>("gain");
+    max_forward_param_ = ctx.param_handle<double>("max_forward");
+    max_sideways_param_ = ctx.param_handle<double>("max_sideways");
+    max_turn_param_ = ctx.param_handle<double>("max_turn");
   }
 
   void activate(StateContext& ctx) override {
-    target_ = {ctx.param<double>("x"), ctx.param<double>("y"), ctx.param<double>("theta")};
-    position_tolerance_ = ctx.param<double>("position_tolerance");
-    angle_tolerance_ = ctx.param<double>("angle_tolerance");
-    near_distance_ = ctx.param<double>("near_distance");
-    gain_ = ctx.param<double>("gain");
-    max_forward_ = ctx.param<double>("max_forward");
-    max_sideways_ = ctx.param<double>("max_sideways");
-    max_turn_ = ctx.param<double>("max_turn");
+    target_ = {ctx.param(x_), ctx.param(y_), ctx.param(theta_)};
+    position_tolerance_ = ctx.param(position_tolerance_param_);
+    angle_tolerance_ = ctx.param(angle_tolerance_param_);
+    near_distance_ = ctx.param(near_distance_param_);
+    gain_ = ctx.param(gain_param_);
+    max_forward_ = ctx.param(max_forward_param_);
+    max_sideways_ = ctx.param(max_sideways_param_);
+    max_turn_ = ctx.param(max_turn_param_);
   }
 
   StateResult execute(StateContext& ctx) override {
@@ -103,6 +113,16 @@ class WalkToPose final : public State {
  private:
   Input<Vec3> pose_;
   Output<Vec3> gait_velocity_;
+  StateParam<double> x_;
+  StateParam<double> y_;
+  StateParam<double> theta_;
+  StateParam<double> position_tolerance_param_;
+  StateParam<double> angle_tolerance_param_;
+  StateParam<double> near_distance_param_;
+  StateParam<double> gain_param_;
+  StateParam<double> max_forward_param_;
+  StateParam<double> max_sideways_param_;
+  StateParam<double> max_turn_param_;
   Pose target_;
   double position_tolerance_ = 0.0;
   double angle_tolerance_ = 0.0;
@@ -120,28 +140,40 @@ class WalkToPose final : public State {
 /// proceeds.
 class MonitorBall final : public State {
  public:
-  void init(InitContext& ctx) override {
+  void init(StateInitContext& ctx) override {
     memory_.init(ctx);
     head_angle_ = ctx.output<double>("head_angle");
-    walk_state_ = ctx.param<std::string>("walk_state");
-    // Planned again after each walk: resolved here once, so that a re-plan looks up no name.
-    ctx.plan_state(ctx.name(), nullptr, ctx.location(), again_);
+    // Resolved here once, so that a re-plan looks up no name and a walk state the machine does
+    // not declare fails the load.
+    walk_ = ctx.plan_state<double, double, double>(ctx.param<std::string>("walk_state"),
+                                                   {"x", "y", "theta"},
+                                                   ctx.param_location("walk_state"));
+    again_ = ctx.plan_state<>(ctx.name());
+    goal_param_ = ctx.param_handle<Vec2>("goal");
+    distance_param_ = ctx.param_handle<double>("distance");
+    depth_param_ = ctx.param_handle<double>("depth");
+    half_width_param_ = ctx.param_handle<double>("half_width");
+    replan_distance_param_ = ctx.param_handle<double>("replan_distance");
+    replan_angle_param_ = ctx.param_handle<double>("replan_angle");
+    ball_timeout_ = ctx.param_handle<double>("ball_timeout");
+    search_time_ = ctx.param_handle<double>("search_time");
+    head_sweep_param_ = ctx.param_handle<double>("head_sweep");
+    sweep_time_ = ctx.param_handle<double>("sweep_time");
   }
 
   void activate(StateContext& ctx) override {
     memory_.reset();
-    goal_ = to_point(ctx.param<Vec2>("goal"));
+    goal_ = to_point(ctx.param(goal_param_));
     out_ = out_of_goal(goal_);
-    distance_ = ctx.param<double>("distance");
-    depth_ = ctx.param<double>("depth");
-    half_width_ = ctx.param<double>("half_width");
-    replan_distance_ = ctx.param<double>("replan_distance");
-    replan_angle_ = ctx.param<double>("replan_angle");
-    timeout_steps_ = steps_for(ctx.param<double>("ball_timeout"), ctx.period());
-    search_steps_ = steps_for(ctx.param<double>("search_time"), ctx.period());
-    head_sweep_ = ctx.param<double>("head_sweep");
-    sweep_steps_ =
-        std::max<std::int64_t>(2, steps_for(ctx.param<double>("sweep_time"), ctx.period()));
+    distance_ = ctx.param(distance_param_);
+    depth_ = ctx.param(depth_param_);
+    half_width_ = ctx.param(half_width_param_);
+    replan_distance_ = ctx.param(replan_distance_param_);
+    replan_angle_ = ctx.param(replan_angle_param_);
+    timeout_steps_ = steps_for(ctx.param(ball_timeout_), ctx.period());
+    search_steps_ = steps_for(ctx.param(search_time_), ctx.period());
+    head_sweep_ = ctx.param(head_sweep_param_);
+    sweep_steps_ = std::max<std::int64_t>(2, steps_for(ctx.param(sweep_time_), ctx.period()));
   }
 
   StateResult execute(StateContext& ctx) override {
@@ -162,10 +194,7 @@ class MonitorBall final : public State {
         std::abs(wrap_angle(best.theta - robot.theta)) <= replan_angle_) {
       return StateResult::kHold;
     }
-    // A walk state the machine does not declare stops the controller with an error naming it.
-    if (!ctx.plan().append(walk_state_, {{"x", best.x}, {"y", best.y}, {"theta", best.theta}})) {
-      return StateResult::kHold;
-    }
+    if (!ctx.plan().append(walk_, best.x, best.y, best.theta)) return StateResult::kHold;
     ctx.plan().append(again_);
     return StateResult::kProceed;
   }
@@ -199,8 +228,18 @@ class MonitorBall final : public State {
 
   BallMemory memory_;
   Output<double> head_angle_;
-  std::string walk_state_;
-  PlannedState again_;
+  PlannedStateRef<double, double, double> walk_;
+  PlannedStateRef<> again_;
+  StateParam<Vec2> goal_param_;
+  StateParam<double> distance_param_;
+  StateParam<double> depth_param_;
+  StateParam<double> half_width_param_;
+  StateParam<double> replan_distance_param_;
+  StateParam<double> replan_angle_param_;
+  StateParam<double> ball_timeout_;
+  StateParam<double> search_time_;
+  StateParam<double> head_sweep_param_;
+  StateParam<double> sweep_time_;
   Point goal_;
   double out_ = 0.0;
   double distance_ = 0.0;
@@ -218,14 +257,15 @@ class MonitorBall final : public State {
 /// then lies there for `duration` before the plan continues.
 class Dive final : public State {
  public:
-  void init(InitContext& ctx) override {
+  void init(StateInitContext& ctx) override {
     position_ = ctx.input<Vec2>("ball_position");
     velocity_ = ctx.input<Vec2>("ball_velocity");
     dive_ = ctx.output<std::int64_t>("dive");
+    duration_ = ctx.param_handle<double>("duration");
   }
 
   void activate(StateContext& ctx) override {
-    hold_steps_ = steps_for(ctx.param<double>("duration"), ctx.period());
+    hold_steps_ = steps_for(ctx.param(duration_), ctx.period());
   }
 
   StateResult execute(StateContext& ctx) override {
@@ -252,6 +292,7 @@ class Dive final : public State {
   Input<Vec2> position_;
   Input<Vec2> velocity_;
   Output<std::int64_t> dive_;
+  StateParam<double> duration_;
   std::int64_t hold_steps_ = 1;
 };
 
@@ -260,7 +301,7 @@ class Dive final : public State {
 /// will pass within reach makes it dive; either way monitoring follows.
 class Goalie final : public Behaviour, private ControllerHooks {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     button_ = ctx.input<bool>("button");
     visible_ = ctx.input<bool>("ball_visible");
     position_ = ctx.input<Vec2>("ball_position");
@@ -300,10 +341,12 @@ class Goalie final : public Behaviour, private ControllerHooks {
   /// Looks a state the hooks plan up once, so that a pre-emption looks up no name.
   bool resolve(InitContext& ctx, const char* param, PlannedState& out) {
     const std::string name = ctx.param<std::string>(param);
-    const auto index = controller_->find_state(name);
-    if (!index) {
+    const auto& states = controller_->states();
+    const auto found = std::find_if(states.begin(), states.end(),
+                                    [&](const CompiledState& state) { return state.name == name; });
+    if (found == states.end()) {
       std::vector<std::string> known;
-      for (const auto& state : controller_->states()) known.push_back(state.name);
+      for (const auto& state : states) known.push_back(state.name);
       ctx.error(ctx.param_location(param),
                 fmt::format("the goalie plans state '{}' ({}), which state machine '{}' does not "
                             "declare",
@@ -311,7 +354,7 @@ class Goalie final : public Behaviour, private ControllerHooks {
           .notes.push_back(suggest(name, known, "it declares"));
       return false;
     }
-    const CompiledState& state = controller_->states()[*index];
+    const CompiledState& state = *found;
     for (const auto& spec : state.cls->params) {
       const bool given = std::any_of(state.params.begin(), state.params.end(),
                                      [&](const Param& p) { return p.name == spec.name; });
@@ -323,18 +366,15 @@ class Goalie final : public Behaviour, private ControllerHooks {
         return false;
       }
     }
-    out = PlannedState{*index, {}};
+    out = PlannedState{static_cast<std::uint32_t>(found - states.begin()), {}, {}};
     return true;
   }
 
   bool pre_step(Controller& controller, Plan& plan) override {
     if (!button_pressed_ && !shot_) return false;
-    // Names are compared only in the rare steps with a press or a shot.
-    const std::string_view current = controller.current_state();
-    const auto is = [&](const PlannedState& planned) {
-      return current == controller.states()[planned.state].name;
-    };
-    if (current.empty() || is(wait_)) return false;
+    const std::uint32_t current = controller.current_state_index();
+    const auto is = [&](const PlannedState& planned) { return current == planned.state; };
+    if (current == kUnbound || is(wait_)) return false;
     if (button_pressed_) {
       plan.go_to(wait_);
     } else if (is(dive_)) {
@@ -419,29 +459,29 @@ void register_walk_to_pose(Registry& registry) {
       .range(-2.0 * kPi, 2.0 * kPi)
       .describe("the target heading (rad, from the field's x axis)");
   info.param<double>("position_tolerance")
-      .fallback(0.1)
+      .defaults_to(0.1)
       .range(0.01, 2.0)
       .describe("arrived when this close to the target position (m)");
   info.param<double>("angle_tolerance")
-      .fallback(0.15)
+      .defaults_to(0.15)
       .range(0.01, 3.2)
       .describe("... and this close to the target heading (rad)");
   info.param<double>("near_distance")
-      .fallback(0.7)
+      .defaults_to(0.7)
       .range(0.0, 10.0)
       .describe("within this distance of the target, step straight to it (m)");
-  info.param<double>("gain").fallback(1.5).range(0.0, 10.0).describe(
+  info.param<double>("gain").defaults_to(1.5).range(0.0, 10.0).describe(
       "walking speed per metre of distance to the target (1/s)");
   info.param<double>("max_forward")
-      .fallback(0.3)
+      .defaults_to(0.3)
       .range(0.0, 1.0)
       .describe("the fastest forward (and backward) speed requested (m/s)");
   info.param<double>("max_sideways")
-      .fallback(0.2)
+      .defaults_to(0.2)
       .range(0.0, 1.0)
       .describe("the fastest sideways speed requested (m/s)");
   info.param<double>("max_turn")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 3.0)
       .describe("the fastest turn rate requested (rad/s)");
   info.input<Vec3>("robot_pose").describe("the robot's pose on the field: x, y (m), heading (rad)");
@@ -458,45 +498,45 @@ void register_monitor_ball(Registry& registry) {
               "walk_state to it followed by another instance of this state, and proceeds.");
   declare_own_goal(info);
   info.param<double>("distance")
-      .fallback(0.5)
+      .defaults_to(0.5)
       .range(0.0, 3.0)
       .describe("how far out from the goal's centre, towards the ball, to stand (m)");
-  info.param<double>("depth").fallback(1.0).range(0.05, 3.0).describe(
+  info.param<double>("depth").defaults_to(1.0).range(0.05, 3.0).describe(
       "the goal area's depth: never farther out from the goal line (m)");
   info.param<double>("half_width")
-      .fallback(1.1)
+      .defaults_to(1.1)
       .range(0.0, 3.0)
       .describe("never farther to the side of the goal's centre (m)");
   info.param<double>("replan_distance")
-      .fallback(0.2)
+      .defaults_to(0.2)
       .range(0.0, 5.0)
       .describe("plan a walk when the best position is farther than this (m)");
   info.param<double>("replan_angle")
-      .fallback(0.35)
+      .defaults_to(0.35)
       .range(0.0, 3.2)
       .describe("... or the best heading differs by more than this (rad)");
   info.param<double>("ball_timeout")
-      .fallback(2.0)
+      .defaults_to(2.0)
       .range(0.0, 60.0)
       .describe("how long a ball seen by this instance counts as known (s)");
   info.param<double>("search_time")
-      .fallback(3.0)
+      .defaults_to(3.0)
       .range(0.0, 60.0)
       .describe("without a known ball after this long, take the position straight out (s)");
   info.param<double>("head_sweep")
-      .fallback(1.2)
+      .defaults_to(1.2)
       .range(0.0, kHeadLimit)
       .describe("amplitude of the head sweep while the ball is unknown (rad)");
   info.param<double>("sweep_time")
-      .fallback(3.0)
+      .defaults_to(3.0)
       .range(0.1, 60.0)
       .describe("duration of one full head sweep, left and right (s)");
   info.param<std::string>("walk_state")
-      .fallback(std::string("walk_to_pose"))
+      .defaults_to(std::string("walk_to_pose"))
       .state_level()
       .describe(
           "the state planned to walk (with params x, y, theta); the state machine must declare "
-          "it, else the first re-plan stops the controller with an error naming it");
+          "it, else the load fails naming it");
   BallMemory::declare_ports(info);
   info.output<double>("head_angle").describe("the head yaw target (rad)");
 }
@@ -507,7 +547,7 @@ void register_dive(Registry& registry) {
                        "Dives to the side on which the ball will pass the robot, reports 'goalie "
                        "dives left' or 'goalie dives right', and proceeds after duration.");
   info.param<double>("duration")
-      .fallback(2.0)
+      .defaults_to(2.0)
       .range(0.0, 60.0)
       .describe("how long the state lasts from the dive (s)");
   info.input<Vec2>("ball_position")
@@ -529,31 +569,31 @@ void register_goalie_behaviour(Registry& registry) {
                        "queued after either.");
   info.param<std::string>("machine").describe("the state machine to own and step");
   info.param<std::string>("wait_state")
-      .fallback(std::string("wait_for_button"))
+      .defaults_to(std::string("wait_for_button"))
       .describe("the machine's state that waits for the button");
   info.param<std::string>("dive_state")
-      .fallback(std::string("dive"))
+      .defaults_to(std::string("dive"))
       .describe("the machine's state that dives");
   info.param<std::string>("monitor_state")
-      .fallback(std::string("monitor_ball"))
+      .defaults_to(std::string("monitor_ball"))
       .describe("the machine's state that watches the ball, queued after a pre-emption");
   declare_own_goal(info);
   info.param<double>("goal_width")
-      .fallback(2.6)
+      .defaults_to(2.6)
       .range(0.1, 10.0)
       .describe("the distance between the posts (m)");
   info.param<double>("shot_speed")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 20.0)
       .describe("a ball slower than this is no shot (m/s)");
-  info.param<double>("reach").fallback(0.85).range(0.0, 5.0).describe(
+  info.param<double>("reach").defaults_to(0.85).range(0.0, 5.0).describe(
       "dive only for a ball that will pass this close to the robot's centre (m)");
   info.param<double>("warning_time")
-      .fallback(1.0)
+      .defaults_to(1.0)
       .range(0.0, 10.0)
       .describe("dive when the ball will pass the robot within this time (s)");
   info.param<double>("ball_deceleration")
-      .fallback(0.6)
+      .defaults_to(0.6)
       .range(0.0, 10.0)
       .describe("the rolling ball's loss of speed, for predicting where it stops (m/s²)");
   info.input<bool>("button").describe("true in the step the button is pressed");

@@ -57,7 +57,7 @@ void WorldLink::init(InitContext& ctx) {
   dive_ = ctx.input<std::int64_t>("dive");
 }
 
-void WorldLink::input(ExecuteContext& ctx) {
+void WorldLink::input(WriteContext& ctx) {
   const Observation seen = world_->observe();
   ctx.write(ball_visible_, seen.ball_visible);
   // Left unwritten when the ball is not seen: the actuator keeps the last measurement and its
@@ -106,41 +106,41 @@ void register_world_link(Registry& registry) {
               "'shot on goal', 'ball kicked', 'ball saved', 'goal!' and 'kick-off' (after a "
               "goal: the ball back on the centre spot, the robot at robot_start).");
   info.param<std::int64_t>("seed")
-      .fallback(0)
+      .defaults_to(0)
       .range(0.0, 4294967295.0)
       .describe("seed of the measurement noise");
-  info.param<double>("dt").fallback(0.0).range(0.0, 1.0).describe(
+  info.param<double>("dt").defaults_to(0.0).range(0.0, 1.0).describe(
       "simulated time per step in seconds; 0 (the default) takes the step period, "
       "1 / rate_hz, so that simulated time runs at the nominal rate");
   info.param<Vec3>("robot_start")
-      .fallback(Vec3{-3.0, 0.0, 0.0})
+      .defaults_to(Vec3{-3.0, 0.0, 0.0})
       .describe("the robot's pose at the start: x, y (m, field frame) and heading (rad)");
   info.param<Vec2>("ball_start")
-      .fallback(Vec2{0.0, 0.0})
+      .defaults_to(Vec2{0.0, 0.0})
       .describe("the ball's position at the start (m, field frame, origin at the centre spot)");
-  info.param<double>("noise").fallback(0.02).range(0.0, 1.0).describe(
+  info.param<double>("noise").defaults_to(0.02).range(0.0, 1.0).describe(
       "standard deviation of each axis of the ball measurement (m)");
   info.param<std::int64_t>("button_step")
-      .fallback(-1)
+      .defaults_to(-1)
       .at_least(-1.0)
       .describe("the step (from 1) in which the button is pressed; -1 for never");
   info.param<std::int64_t>("shot_step")
-      .fallback(-1)
+      .defaults_to(-1)
       .at_least(-1.0)
       .describe(
           "the step (from 1) at the end of which an opponent shoots the ball from where it lies "
           "towards shot_target; -1 for never");
   info.param<Vec2>("shot_target")
-      .fallback(Vec2{-4.5, 0.0})
+      .defaults_to(Vec2{-4.5, 0.0})
       .describe(
           "where the shot is aimed (m, field frame); the default is the centre of the goal "
           "at x = -4.5");
   info.param<double>("shot_speed")
-      .fallback(3.5)
+      .defaults_to(3.5)
       .range(0.1, 10.0)
       .describe("the ball's speed when shot (m/s); it then slows down at 0.6 m/s²");
   info.param<double>("kick_off_delay")
-      .fallback(2.0)
+      .defaults_to(2.0)
       .range(-1.0, 60.0)
       .describe(
           "seconds from a goal to the kick-off that follows it (the ball back on the centre "

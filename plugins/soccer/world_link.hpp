@@ -13,7 +13,7 @@ namespace arbiter::soccer {
 class WorldLink final : public Interface {
  public:
   void init(InitContext& ctx) override;
-  void input(ExecuteContext& ctx) override;
+  void input(WriteContext& ctx) override;
   void output(const StepContext& ctx) override;
 
   /// The world, for tests and tools; null before init().

@@ -12,22 +12,27 @@ namespace {
 /// again, at the head of the queue, with one round fewer.
 class Countdown final : public arbiter::State {
  public:
-  void init(arbiter::InitContext& ctx) override { name_ = ctx.name(); }
+  // Names are resolved here, once: a typo fails the load at the state's location.
+  void init(arbiter::StateInitContext& ctx) override {
+    steps_ = ctx.param_handle<std::int64_t>("steps");
+    rounds_ = ctx.param_handle<std::int64_t>("rounds");
+    again_ = ctx.plan_state<std::int64_t, std::int64_t>(ctx.name(), {"steps", "rounds"});
+  }
 
-  void activate(arbiter::StateContext& ctx) override { left_ = ctx.param<std::int64_t>("steps"); }
+  void activate(arbiter::StateContext& ctx) override { left_ = ctx.param(steps_); }
 
   arbiter::StateResult execute(arbiter::StateContext& ctx) override {
     if (--left_ > 0) return arbiter::StateResult::kHold;
-    const auto rounds = ctx.param<std::int64_t>("rounds");
-    if (rounds > 1) {
-      ctx.plan().prepend(name_,
-                         {{"steps", ctx.param<std::int64_t>("steps")}, {"rounds", rounds - 1}});
-    }
+    const std::int64_t rounds = ctx.param(rounds_);
+    if (rounds > 1) ctx.plan().prepend(again_, ctx.param(steps_), rounds - 1);
     return arbiter::StateResult::kProceed;
   }
 
  private:
-  std::string name_;  // the state's name in its state machine, for planning itself
+  arbiter::StateParam<std::int64_t> steps_;
+  arbiter::StateParam<std::int64_t> rounds_;
+  // This state again, with two run-time params.
+  arbiter::PlannedStateRef<std::int64_t, std::int64_t> again_;
   std::int64_t left_ = 0;
 };
 
@@ -36,9 +41,9 @@ class Countdown final : public arbiter::State {
 void register_countdown(arbiter::Registry& registry) {
   auto& info = arbiter::add_state_class<Countdown>(registry, "patrol.Countdown")
                    .describe("Waits a number of steps, a number of times in a row.");
-  info.param<std::int64_t>("steps").fallback(3).range(1, 1000).describe(
+  info.param<std::int64_t>("steps").defaults_to(3).range(1, 1000).describe(
       "executions before it proceeds");
-  info.param<std::int64_t>("rounds").fallback(1).range(1, 100).describe(
+  info.param<std::int64_t>("rounds").defaults_to(1).range(1, 100).describe(
       "how many times it runs in a row");
 }
 

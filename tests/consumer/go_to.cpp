@@ -13,7 +13,7 @@ using arbiter::Vec2;
 /// is within `tolerance` of it. Flashes the beacon while it drives.
 class GoTo final : public arbiter::Behaviour {
  public:
-  void init(arbiter::InitContext& ctx) override {
+  void init(arbiter::BehaviourInitContext& ctx) override {
     target_ = ctx.param<Vec2>("target");
     gain_ = ctx.param<double>("gain");
     tolerance_ = ctx.param<double>("tolerance");
@@ -57,10 +57,10 @@ void register_go_to(arbiter::Registry& registry) {
   auto& info = registry.add_behaviour<GoTo>("patrol.GoTo")
                    .describe("Drives to a point and is active until it is there.");
   info.param<arbiter::Vec2>("target").describe("where to go: x, y (m)");
-  info.param<double>("gain").fallback(1.0).range(0.0, 10.0).describe(
+  info.param<double>("gain").defaults_to(1.0).range(0.0, 10.0).describe(
       "commanded speed per metre still to go (1/s)");
   info.param<double>("tolerance")
-      .fallback(0.05)
+      .defaults_to(0.05)
       .range(0.001, 1.0)
       .describe("how close counts as there (m)");
   info.input<Vec2>("position").describe("where the robot is: x, y (m)");

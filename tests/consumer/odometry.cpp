@@ -21,7 +21,7 @@ class Odometry final : public arbiter::Interface {
     beacon_ = ctx.input<Beacon>("beacon");
   }
 
-  void input(arbiter::ExecuteContext& ctx) override { ctx.write(position_, here_); }
+  void input(arbiter::WriteContext& ctx) override { ctx.write(position_, here_); }
 
   void output(const arbiter::StepContext& ctx) override {
     // Values persist until overwritten: the base stops in a step in which nobody commands it.
@@ -52,10 +52,10 @@ void register_odometry(arbiter::Registry& registry) {
   auto& info = registry.add_interface<Odometry>("patrol.Odometry")
                    .describe("A simulated robot base that drives at the commanded velocity.");
   info.param<arbiter::Vec2>("start")
-      .fallback(Vec2{0.0, 0.0})
+      .defaults_to(Vec2{0.0, 0.0})
       .describe("where the robot starts: x, y (m)");
   info.param<double>("max_speed")
-      .fallback(0.5)
+      .defaults_to(0.5)
       .range(0.0, 2.0)
       .describe("the fastest the base drives (m/s)");
   info.output<Vec2>("position").describe("where the robot is: x, y (m)");

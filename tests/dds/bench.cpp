@@ -44,7 +44,7 @@ namespace {
 /// Records, in each step in which its `time` sensor was written, how old that time is.
 class Latency final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     time_ = ctx.input<double>("time");
     ages_.reserve(1 << 20);
   }

@@ -15,7 +15,7 @@ namespace {
 /// point = (N, -N), vector = (N, 2N, -0.5), text = "step N" and time = the monotonic clock.
 class Stamp final : public Behaviour {
  public:
-  void init(InitContext& ctx) override {
+  void init(BehaviourInitContext& ctx) override {
     every_ = ctx.param<std::int64_t>("every");
     flag_ = ctx.output<bool>("flag");
     count_ = ctx.output<std::int64_t>("count");
@@ -69,7 +69,7 @@ double monotonic_seconds() {
 void register_probe(Registry& registry) {
   auto& info = registry.add_behaviour<Stamp>("probe.Stamp")
                    .describe("Writes values of every type, derived from the step number.");
-  info.param<std::int64_t>("every").fallback(1).at_least(1).describe(
+  info.param<std::int64_t>("every").defaults_to(1).at_least(1).describe(
       "active (and writing) only in steps that are a multiple of this");
   info.output<bool>("flag").make_optional().describe("step is odd");
   info.output<std::int64_t>("count").make_optional().describe("the step");

@@ -12,7 +12,7 @@ namespace {
 
 class Constant final : public arbiter::Behaviour {
  public:
-  void init(arbiter::InitContext& ctx) override {
+  void init(arbiter::BehaviourInitContext& ctx) override {
     level_ = ctx.param<double>("level");
     value_ = ctx.param<double>("value");
     out_ = ctx.output<double>("out");
@@ -28,7 +28,9 @@ class Constant final : public arbiter::Behaviour {
 
 class Faulty final : public arbiter::Behaviour {
  public:
-  void init(arbiter::InitContext& ctx) override { throw_at_ = ctx.param<std::int64_t>("throw_at"); }
+  void init(arbiter::BehaviourInitContext& ctx) override {
+    throw_at_ = ctx.param<std::int64_t>("throw_at");
+  }
   double activation(const arbiter::StepContext&) override { return 1.0; }
   void execute(arbiter::ExecuteContext&) override {
     if (++executions_ == throw_at_) throw std::runtime_error("sensor cable unplugged");
@@ -43,11 +45,11 @@ class Faulty final : public arbiter::Behaviour {
 
 ARBITER_PLUGIN(registry) {
   auto& constant = registry.add_behaviour<Constant>("test_good.Constant");
-  constant.param<double>("level").fallback(1.0).range(0.0, 1.0);
-  constant.param<double>("value").fallback(0.0);
+  constant.param<double>("level").defaults_to(1.0).range(0.0, 1.0);
+  constant.param<double>("value").defaults_to(0.0);
   constant.output<double>("out");
   registry.add_behaviour<Faulty>("test_good.Faulty")
       .param<std::int64_t>("throw_at")
-      .fallback(1)
+      .defaults_to(1)
       .range(1, 1000000);
 }

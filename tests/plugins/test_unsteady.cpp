@@ -31,7 +31,7 @@ class Counter final : public arbiter::Interface {
       outputs_.push_back(ctx.output_to_actuator(actuator.name, actuator.location));
     }
   }
-  void input(arbiter::ExecuteContext& ctx) override {
+  void input(arbiter::WriteContext& ctx) override {
     arbiter::ValueBox value(*outputs_.front().type);
     for (const auto& output : outputs_) {
       *static_cast<double*>(value.data()) = static_cast<double>(ctx.step());

@@ -16,7 +16,7 @@
 
 namespace arbiter::test {
 
-void Probe::init(InitContext& ctx) {
+void Probe::init(BehaviourInitContext& ctx) {
   levels = ctx.param<std::vector<double>>("levels");
   value = ctx.param<double>("value");
   overwrite = ctx.param<bool>("overwrite");
@@ -66,7 +66,7 @@ void Feed::init(InitContext& ctx) {
   in = ctx.input<double>("in");
 }
 
-void Feed::input(ExecuteContext& ctx) {
+void Feed::input(WriteContext& ctx) {
   ctx.write(out, static_cast<double>(ctx.step()) * 10.0);
 }
 
@@ -74,10 +74,21 @@ void Feed::output(const StepContext& ctx) {
   if (in.bound()) seen.push_back(ctx.read(in));
 }
 
-void Planner::init(InitContext& ctx) {
+void Planner::init(StateInitContext& ctx) {
   op = ctx.param<std::string>("op");
   target = ctx.param<std::string>("target");
   hold = ctx.param<std::int64_t>("hold");
+  x = ctx.param_handle<double>("x");
+  if (op != "append" && op != "prepend" && op != "go_to" && op != "insert_before" &&
+      op != "insert_after") {
+    return;
+  }
+  // x is passed only when set, so that targets without an x param can be planned too.
+  if (ctx.param<double>("x") != 0.0) {
+    with_x = ctx.plan_state<double>(target, {"x"}, ctx.param_location("target"));
+  } else {
+    plain = ctx.plan_state<>(target, {}, ctx.param_location("target"));
+  }
 }
 
 void Planner::activate(StateContext& ctx) {
@@ -87,19 +98,17 @@ void Planner::activate(StateContext& ctx) {
 StateResult Planner::execute(StateContext& ctx) {
   if (static_cast<std::int64_t>(ctx.executions()) + 1 < hold) return StateResult::kHold;
   auto& plan = ctx.plan();
-  // x is passed only when set, so that targets without an x param can be planned too.
-  const double x = ctx.param<double>("x");
-  const auto edit = [&](std::initializer_list<Arg> args) {
-    if (op == "append") plan.append(target, args);
-    if (op == "prepend") plan.prepend(target, args);
-    if (op == "go_to") plan.go_to(target, args);
-    if (op == "insert_before") plan.insert_before(1, target, args);
-    if (op == "insert_after") plan.insert_after(0, target, args);
+  const auto edit = [&](const auto& state, const auto&... args) {
+    if (op == "append") plan.append(state, args...);
+    if (op == "prepend") plan.prepend(state, args...);
+    if (op == "go_to") plan.go_to(state, args...);
+    if (op == "insert_before") plan.insert_before(1, state, args...);
+    if (op == "insert_after") plan.insert_after(0, state, args...);
   };
-  if (x != 0.0) {
-    edit({{"x", x}});
-  } else {
-    edit({});
+  if (with_x.bound()) {
+    edit(with_x, ctx.param(x));
+  } else if (plain.bound()) {
+    edit(plain);
   }
   if (op == "remove") plan.remove(static_cast<std::size_t>(std::stoul(target)));
   if (op == "clear") plan.clear();
@@ -108,8 +117,12 @@ StateResult Planner::execute(StateContext& ctx) {
   return StateResult::kProceed;
 }
 
+void Pose::init(StateInitContext& ctx) {
+  x = ctx.param_handle<double>("x");
+}
+
 void Pose::activate(StateContext& ctx) {
-  seen_x().push_back(ctx.param<double>("x"));
+  seen_x().push_back(ctx.param(x));
 }
 
 StateResult Pose::execute(StateContext&) {
@@ -119,6 +132,16 @@ StateResult Pose::execute(StateContext&) {
 std::vector<double>& Pose::seen_x() {
   static std::vector<double> values;
   return values;
+}
+
+PlannedState planned(const Controller& controller, std::string_view name) {
+  PlannedState out;
+  out.state = 0;
+  const auto& states = controller.states();
+  for (std::uint32_t s = 0; s < states.size(); ++s) {
+    if (states[s].name == name) out.state = s;
+  }
+  return out;
 }
 
 void ControllerLog::on_step(const Manager& manager) {
@@ -138,10 +161,10 @@ Registry make_test_registry() {
   register_builtin_behaviours(registry);
   registry.set_origin("tests");
   auto& probe = registry.add_behaviour<Probe>("test.Probe");
-  probe.param<std::vector<double>>("levels").fallback(std::vector<double>{1.0});
-  probe.param<double>("value").fallback(0.0);
-  probe.param<bool>("overwrite").fallback(false);
-  probe.param<bool>("record").fallback(true);
+  probe.param<std::vector<double>>("levels").defaults_to(std::vector<double>{1.0});
+  probe.param<double>("value").defaults_to(0.0);
+  probe.param<bool>("overwrite").defaults_to(false);
+  probe.param<bool>("record").defaults_to(true);
   probe.input<double>("in").make_optional();
   probe.output<double>("out").make_optional();
   registry.add_behaviour<NanLevel>("test.NanLevel");
@@ -150,10 +173,10 @@ Registry make_test_registry() {
   feed.output<double>("out").make_optional();
   feed.input<double>("in").make_optional();
   auto& planner = add_state_class<Planner>(registry, "test.Planner");
-  planner.param<std::string>("op").fallback(std::string("none"));
-  planner.param<std::string>("target").fallback(std::string());
-  planner.param<std::int64_t>("hold").fallback(1).at_least(1);
-  planner.param<double>("x").fallback(0.0);
+  planner.param<std::string>("op").defaults_to(std::string("none"));
+  planner.param<std::string>("target").defaults_to(std::string());
+  planner.param<std::int64_t>("hold").defaults_to(1).at_least(1);
+  planner.param<double>("x").defaults_to(0.0);
   auto& pose = add_state_class<Pose>(registry, "test.Pose");
   pose.param<double>("x").range(-10.0, 10.0);
   return registry;
@@ -234,12 +257,12 @@ class Wait : public State {
 void add_param_check_classes(Registry& registry) {
   auto& tuned = registry.add_behaviour<Tuned>("test.Tuned");
   tuned.param<double>("gain").range(0.0, 1.0);
-  tuned.param<std::string>("mode").fallback(std::string("soft")).one_of({"soft", "hard"});
-  tuned.param<std::int64_t>("retries").fallback(3).at_least(0);
-  tuned.param<Vec2>("offset").fallback(Vec2{});
+  tuned.param<std::string>("mode").defaults_to(std::string("soft")).one_of({"soft", "hard"});
+  tuned.param<std::int64_t>("retries").defaults_to(3).at_least(0);
+  tuned.param<Vec2>("offset").defaults_to(Vec2{});
   auto& wait = add_state_class<Wait>(registry, "test.Wait");
   wait.param<std::int64_t>("ticks").at_least(1);
-  wait.param<std::string>("label").fallback(std::string());
+  wait.param<std::string>("label").defaults_to(std::string());
 }
 
 Diagnostics diagnose_text(const std::string& text, const Registry& registry,

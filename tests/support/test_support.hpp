@@ -21,7 +21,7 @@ namespace arbiter::test {
 /// every value its `in` port read in execute() or inhibited(), and the callbacks it saw.
 class Probe : public Behaviour {
  public:
-  void init(InitContext& ctx) override;
+  void init(BehaviourInitContext& ctx) override;
   double activation(const StepContext& ctx) override;
   void update(const StepContext& ctx) override;
   void execute(ExecuteContext& ctx) override;
@@ -54,7 +54,7 @@ class Thrower : public Behaviour {
 class Feed : public Interface {
  public:
   void init(InitContext& ctx) override;
-  void input(ExecuteContext& ctx) override;
+  void input(WriteContext& ctx) override;
   void output(const StepContext& ctx) override;
 
   Output<double> out;
@@ -68,22 +68,31 @@ class Feed : public Interface {
 /// the index as text), `x` is passed as the target's param `x`.
 class Planner : public State {
  public:
-  void init(InitContext& ctx) override;
+  void init(StateInitContext& ctx) override;
   void activate(StateContext& ctx) override;
   StateResult execute(StateContext& ctx) override;
 
   std::string op;
   std::string target;
   std::int64_t hold = 1;
+  StateParam<double> x;
+  PlannedStateRef<double> with_x;  ///< target, when x is set on the state
+  PlannedStateRef<> plain;         ///< target, otherwise
 };
 
 /// A state with a param `x` (default 0) that records the x of each activation in `seen_x`.
 class Pose : public State {
  public:
+  void init(StateInitContext& ctx) override;
   void activate(StateContext& ctx) override;
   StateResult execute(StateContext& ctx) override;
   static std::vector<double>& seen_x();
+  StateParam<double> x;
 };
+
+/// State `name` of `controller`, planned without params (as a hook plans); state 0 when there is
+/// no such state, so that a misspelt test fails on its events.
+PlannedState planned(const Controller& controller, std::string_view name);
 
 /// Collects each step's controller events as "cycle N: activate a, execute a".
 class ControllerLog : public Observer {

@@ -142,11 +142,11 @@ class StepContext {
   std::uint32_t self_;
 };
 
-/// execute(): reads sensors and writes actuators; a second write to one output replaces the first.
-class ExecuteContext : public StepContext {
+/// An interface's input(): reads sensors and writes actuators; a second write to one output
+/// replaces the first.
+class WriteContext : public StepContext {
  public:
-  ExecuteContext(detail::StepData& data, std::uint32_t self, double activation, bool just_activated)
-      : StepContext(data, self), activation_(activation), just_activated_(just_activated) {}
+  WriteContext(detail::StepData& data, std::uint32_t self) : StepContext(data, self) {}
 
   template <typename T>
   void write(Output<T> output, const T& value) {
@@ -159,6 +159,14 @@ class ExecuteContext : public StepContext {
     output.type->assign(data_->values + data_->slot_offset[output.slot], value.data());
     data_->slot_written[output.slot] = true;
   }
+};
+
+/// A behaviour's execute(): writes like an interface's input(), and knows its activation.
+class ExecuteContext : public WriteContext {
+ public:
+  ExecuteContext(detail::StepData& data, std::uint32_t self, double activation, bool just_activated)
+      : WriteContext(data, self), activation_(activation), just_activated_(just_activated) {}
+
   /// This behaviour's refined activation level this step, in (0, 1].
   double activation() const { return activation_; }
   bool just_activated() const { return just_activated_; }
@@ -180,6 +188,7 @@ class InhibitedContext : public StepContext {
 };
 
 class InitContext;
+class BehaviourInitContext;
 
 /// A behaviour of the BCF. Callbacks run in this order each step (docs/semantics.md, "A step"):
 /// update(), then activation() for every behaviour of the layer, then execute() or inhibited().
@@ -187,7 +196,7 @@ class Behaviour {
  public:
   virtual ~Behaviour() = default;
   /// Reads params and resolves ports; problems go to ctx.error() and fail the load.
-  virtual void init(InitContext& /*ctx*/) {}
+  virtual void init(BehaviourInitContext& /*ctx*/) {}
   virtual void update(const StepContext& /*ctx*/) {}
   /// The requested activation level; clamped to [0, 1], NaN counts as 0.
   virtual double activation(const StepContext& ctx) = 0;
@@ -211,8 +220,9 @@ class Interface {
  public:
   virtual ~Interface() = default;
   virtual void init(InitContext& /*ctx*/) {}
-  /// Input pass: writes this layer's actuators (its output ports).
-  virtual void input(ExecuteContext& /*ctx*/) {}
+  /// Input pass, every step: writes this layer's actuators (its output ports). An interface is
+  /// never inhibited, so it has no activation; its first step is `ctx.step() == 1`.
+  virtual void input(WriteContext& /*ctx*/) {}
   /// Output pass: reads this layer's sensors (its input ports).
   virtual void output(const StepContext& /*ctx*/) {}
   /// Hot reload: as Behaviour::carry_over, for an interface whose params or handles changed.

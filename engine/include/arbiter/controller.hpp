@@ -52,7 +52,7 @@ class Controller {
   /// recorded: the instance may be planned anew, with other params, later in the same step.
   struct EventArg {
     std::uint32_t param;  ///< index into the state class's params
-    Arg::Value value;
+    ArgValue value;
   };
   struct Event {
     enum class Kind : std::uint8_t { kActivate, kExecute, kDeactivate };
@@ -153,56 +153,24 @@ class Controller {
   /// The message of the error that stopped the controller ("" unless status is error).
   const std::string& error() const { return error_; }
 
-  // --- set up by compile() ---------------------------------------------------------------------
-  std::uint32_t add_state(CompiledState state);
-  void set_initial_queue(std::vector<PlannedState> queue) { initial_ = std::move(queue); }
-  void add_preemption(std::uint64_t cycle, PlannedState go_to) {
-    preemptions_.push_back({cycle, std::move(go_to)});
-  }
-  void set_owned(std::uint32_t owner_behaviour = kUnbound) {
-    owned_ = true;
-    owner_behaviour_ = owner_behaviour;
-  }
-  /// Creates `capacity` pooled objects of every state; call init on each through `init`.
-  template <typename Init>
-  void build_pool(Init&& init) {
-    pools_.resize(states_.size());
-    for (std::uint32_t s = 0; s < states_.size(); ++s) {
-      for (std::size_t i = 0; i < capacity_; ++i) {
-        Instance instance;
-        instance.state = s;
-        instance.object = states_[s].cls->make_state();
-        instance.args.reserve(states_[s].cls->params.size());
-        init(s, *instance.object);
-        pools_[s].push_back(static_cast<std::uint32_t>(instances_.size()));
-        instances_.push_back(std::move(instance));
-      }
-    }
-    // Room to copy the run-time params of every event a step can record.
-    std::size_t most_params = 0;
-    for (const auto& state : states_) most_params = std::max(most_params, state.cls->params.size());
-    event_args_.resize(kMaxEventsPerStep * most_params);
-    reset_queue();
-  }
-  std::optional<std::uint32_t> find_state(std::string_view name) const;
-  void set_children(std::vector<Controller*> children) { children_ = std::move(children); }
-  void set_state_child(std::uint32_t state, std::uint32_t child) { states_[state].child = child; }
-
  private:
   friend class Plan;
   friend class StateContext;
+  friend class ControllerBuilder;  // sets it up at load (engine/src/controller_builder.hpp)
 
   struct Instance {
     std::uint32_t state = 0;
     std::unique_ptr<State> object;
     const std::vector<Param>* planned = nullptr;  ///< per-instance params from the config
     std::vector<std::pair<std::uint32_t, ParamValue>> args;  ///< from Plan calls, by param index
+    /// Each class param's value for this instance (args, else planned, else the state's, else
+    /// the default; null: none), so that a step reads a param by index. Sized at load.
+    std::vector<const ParamValue*> values;
     std::uint64_t executions = 0;
   };
 
-  std::optional<std::uint32_t> create(std::uint32_t state, const std::vector<Param>* planned,
-                                      std::initializer_list<Arg> args);
-  std::optional<std::uint32_t> create(std::string_view state, std::initializer_list<Arg> args);
+  std::optional<std::uint32_t> create(std::uint32_t state, const PlannedState* planned,
+                                      const detail::PlanArg* args, std::size_t count);
   bool insert(std::size_t index, std::optional<std::uint32_t> instance);
   void release(std::uint32_t instance);
   void reset_queue();
@@ -219,7 +187,6 @@ class Controller {
     record(context, kind, instance, Ending{});
   }
   void fail(std::string message);
-  const ParamValue* find_param(std::uint32_t instance, std::string_view name) const;
   void deactivate_current(StateContext& context, const Ending& ending);
   /// Why terminate() or an error ends the current state.
   Ending stop_ending() const;
@@ -242,6 +209,8 @@ class Controller {
   SourceLocation location_;
   std::size_t capacity_;
   std::vector<CompiledState> states_;
+  /// Per state, each class param's value before any planning (the state's, else the default).
+  std::vector<std::vector<const ParamValue*>> state_values_;
   std::vector<Instance> instances_;
   std::vector<std::vector<std::uint32_t>> pools_;  ///< free instances per state
   std::size_t live_ = 0;
@@ -263,7 +232,7 @@ class Controller {
   std::uint32_t owner_behaviour_ = kUnbound;
   std::array<Event, kMaxEventsPerStep> events_{};
   std::size_t event_count_ = 0;
-  std::vector<EventArg> event_args_;  ///< sized at build_pool()
+  std::vector<EventArg> event_args_;  ///< sized when the pool is built
   std::size_t event_args_used_ = 0;
   /// The instance whose callback is running (kUnbound: none, or a hook).
   std::uint32_t callback_ = kUnbound;

@@ -10,11 +10,11 @@
 
 #include "arbiter/behaviour.hpp"
 #include "arbiter/registry.hpp"
+#include "arbiter/state.hpp"
 
 namespace arbiter {
 
 class Controller;
-struct PlannedState;
 
 /// An actuator that a layer declares, or a sensor that it reads, as the config names it.
 struct LayerItem {
@@ -23,6 +23,8 @@ struct LayerItem {
   SourceLocation location;  ///< where the layer names it
 };
 
+/// What every class may do in init(). Interfaces get this; behaviours and states get their own
+/// context below, which adds what only they may do.
 class InitContext {
  public:
   virtual ~InitContext() = default;
@@ -61,17 +63,6 @@ class InitContext {
   /// Reads `node` as a value of `type`; reports at the node and returns an empty box on failure.
   virtual ValueBox make_value(const ValueType& type, const Node& node) = 0;
 
-  /// For a state class: a state of the same controller with per-instance params (a mapping node,
-  /// or null), checked now so that a typo in a config fails the load. Reports at `where` and
-  /// returns false when the state or a param is wrong.
-  virtual bool plan_state(const std::string& state, const Node* params, const SourceLocation& where,
-                          PlannedState& out) = 0;
-
-  /// Claims the controller of state machine `machine` for this instance to step (the built-in
-  /// `state_machine` behaviour does). Reports and returns nullptr when there is none, or when it
-  /// already has an owner.
-  virtual Controller* claim_controller(const std::string& machine, const SourceLocation& where) = 0;
-
   /// Reports a problem of the config at `where` (fails the load) and returns the report, to
   /// which notes can be added: `ctx.error(at, "...").unknown_name(name, known)` for a name that
   /// names nothing.
@@ -108,6 +99,62 @@ class InitContext {
  protected:
   virtual std::uint32_t resolve_sensor(const std::string& sensor, const std::type_info& type,
                                        const SourceLocation& where) = 0;
+};
+
+/// A behaviour's init(): also claims a state machine's controller to step.
+class BehaviourInitContext : public InitContext {
+ public:
+  /// Claims the controller of state machine `machine` for this instance to step (the built-in
+  /// `state_machine` behaviour does). Reports and returns nullptr when there is none, or when it
+  /// already has an owner.
+  virtual Controller* claim_controller(const std::string& machine, const SourceLocation& where) = 0;
+};
+
+/// A state's init(): also resolves its params and the states it plans to handles, so that a step
+/// looks up no name and a wrong name in code fails the load at a config location.
+class StateInitContext : public InitContext {
+ public:
+  /// A param of this state's class, read per instance in a step: `ctx.param(handle)`. Reports at
+  /// the state's location, and returns an unbound handle, when the class declares no such param
+  /// or T is not the C++ type of its kind.
+  template <typename T>
+  StateParam<T> param_handle(std::string_view param_name) {
+    return StateParam<T>{resolve_param(param_name, param_kind_of<T>())};
+  }
+
+  /// A state of the same controller with typed slots for run-time params, one per name in
+  /// `params`, in order: `ctx.plan_state<double, double>("walk", {"x", "y"})`. Reports at `where`
+  /// (by default the state's location) and returns an unbound handle when the machine declares
+  /// no such state, its class no such param, a param's kind has another C++ type than its slot,
+  /// a name comes twice, or a required param is neither a slot nor set on the state.
+  template <typename... Ts>
+  PlannedStateRef<Ts...> plan_state(
+      const std::string& state, const std::array<std::string_view, sizeof...(Ts)>& params = {}) {
+    return plan_state<Ts...>(state, params, location());
+  }
+  template <typename... Ts>
+  PlannedStateRef<Ts...> plan_state(const std::string& state,
+                                    const std::array<std::string_view, sizeof...(Ts)>& params,
+                                    const SourceLocation& where) {
+    const std::array<ParamKind, sizeof...(Ts)> kinds{param_kind_of<Ts>()...};
+    PlannedStateRef<Ts...> ref;
+    const std::uint32_t index =
+        resolve_state(state, params.data(), kinds.data(), sizeof...(Ts), ref.params.data(), where);
+    if (index != kUnbound) ref.state = index;
+    return ref;
+  }
+
+  /// A state of the same controller with per-instance params written in the config (a mapping
+  /// node, or null), checked now so that a typo in a config fails the load. Reports at `where`
+  /// and returns false when the state or a param is wrong.
+  virtual bool plan_state(const std::string& state, const Node* params, const SourceLocation& where,
+                          PlannedState& out) = 0;
+
+ protected:
+  virtual std::uint32_t resolve_param(std::string_view param_name, ParamKind kind) = 0;
+  virtual std::uint32_t resolve_state(const std::string& state, const std::string_view* params,
+                                      const ParamKind* kinds, std::size_t count,
+                                      std::uint32_t* indices, const SourceLocation& where) = 0;
 };
 
 }  // namespace arbiter

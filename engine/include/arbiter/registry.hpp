@@ -96,7 +96,7 @@ struct ParamSpec {
   /// The default, which makes the param optional. It has the kind's C++ type (an integer is
   /// taken for a double); any other type is a mistake in the class's registration, which then
   /// throws std::logic_error (reported against the plugin).
-  ParamSpec& fallback(ParamValue value);
+  ParamSpec& defaults_to(ParamValue value);
   ParamSpec& range(double low, double high) {
     minimum = low;
     maximum = high;
@@ -162,7 +162,7 @@ struct ClassInfo {
     return spec;
   }
   /// A param of the kind whose C++ type is T, the type `ctx.param<T>()` reads it as:
-  /// `info.param<double>("speed").fallback(0.5)`.
+  /// `info.param<double>("speed").defaults_to(0.5)`.
   template <typename T>
   ParamSpec& param(std::string param_name) {
     return param(std::move(param_name), param_kind_of<T>());

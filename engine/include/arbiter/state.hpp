@@ -2,10 +2,12 @@
 // The C++ API of the State Controller Library (SCL): state classes, the context their callbacks
 // receive, the plan (queue) they may edit, and the hooks a controller's owner may install.
 
+#include <array>
 #include <cstdint>
-#include <initializer_list>
 #include <string_view>
+#include <type_traits>
 #include <variant>
+#include <vector>
 
 #include "arbiter/behaviour.hpp"
 #include "arbiter/registry.hpp"
@@ -13,53 +15,100 @@
 namespace arbiter {
 
 class Controller;
+class StateInitContext;
 
 enum class StateResult { kHold, kProceed };
 
 enum class ControllerStatus { kRunning, kFinished, kError };
 const char* to_string(ControllerStatus status);
 
-/// One run-time param of a state instance created by a state: `{"x", 1.5}`.
-struct Arg {
-  using Value = std::variant<bool, std::int64_t, double, Vec2, Vec3>;
-  Arg(std::string_view param, bool value) : name(param), value(value) {}
-  Arg(std::string_view param, int value) : name(param), value(std::int64_t{value}) {}
-  Arg(std::string_view param, std::int64_t value) : name(param), value(value) {}
-  Arg(std::string_view param, double value) : name(param), value(value) {}
-  Arg(std::string_view param, Vec2 value) : name(param), value(value) {}
-  Arg(std::string_view param, Vec3 value) : name(param), value(value) {}
-  std::string_view name;
-  Value value;
+/// The value of a run-time param of a planned state instance: the kinds a plan edit may set.
+using ArgValue = std::variant<bool, std::int64_t, double, Vec2, Vec3>;
+
+/// A param of a state class, resolved in init() (StateInitContext::param_handle) and read in a
+/// step by index (StateContext::param), with no name lookup.
+template <typename T>
+struct StateParam {
+  std::uint32_t index = kUnbound;  ///< among the class's params
+  bool bound() const { return index != kUnbound; }
 };
 
-/// A state and per-instance params, resolved and validated at load (see StateInitContext).
+/// A state of the controller with per-instance params from the config, resolved and validated
+/// at load (StateInitContext::plan_state).
 struct PlannedState {
   std::uint32_t state = kUnbound;
   std::vector<Param> params;
+  /// params[i]'s index among the state class's params, resolved with them.
+  std::vector<std::uint32_t> param_index;
 };
 
+/// A state of the controller with typed slots for run-time params, resolved and checked at load
+/// (StateInitContext::plan_state<Ts...>); a plan edit fills the slots in order:
+/// `ctx.plan().append(walk_, x, y, theta)`.
+template <typename... Ts>
+struct PlannedStateRef {
+  static_assert(((std::is_same_v<Ts, bool> || std::is_same_v<Ts, std::int64_t> ||
+                  std::is_same_v<Ts, double> || std::is_same_v<Ts, Vec2> ||
+                  std::is_same_v<Ts, Vec3>)&&...),
+                "a run-time param is a bool, std::int64_t, double, Vec2 or Vec3");
+  std::uint32_t state = kUnbound;
+  std::array<std::uint32_t, sizeof...(Ts)> params{};  ///< each slot's index among the params
+  bool bound() const { return state != kUnbound; }
+};
+
+namespace detail {
+template <typename T>
+struct Same {
+  using type = T;
+};
+/// One filled slot of a plan edit.
+struct PlanArg {
+  std::uint32_t param = kUnbound;
+  ArgValue value;
+};
+}  // namespace detail
+
 /// The controller's queue of future state instances, head first. Every edit that cannot be
-/// carried out (unknown state or param, capacity exceeded, index out of range) puts the
-/// controller into `error` status with a logged message naming the controller, the state and
-/// where it was declared; the edit returns false.
+/// carried out (capacity exceeded, index out of range, a run-time value out of its param's range)
+/// puts the controller into `error` status with a logged message naming the controller, the state
+/// and where it was declared; the edit returns false. States and param names are resolved at
+/// load, so a typo there fails the load instead.
 class Plan {
  public:
   explicit Plan(Controller& controller) : controller_(&controller) {}
 
-  bool append(std::string_view state, std::initializer_list<Arg> args = {});
-  bool prepend(std::string_view state, std::initializer_list<Arg> args = {});
+  template <typename... Ts>
+  bool append(const PlannedStateRef<Ts...>& state, const typename detail::Same<Ts>::type&... args) {
+    return edit(kAt, size(), state, args...);
+  }
+  template <typename... Ts>
+  bool prepend(const PlannedStateRef<Ts...>& state,
+               const typename detail::Same<Ts>::type&... args) {
+    return edit(kAt, 0, state, args...);
+  }
   /// Inserts before the queue entry at `index` (0 = head; size() = at the end).
-  bool insert_before(std::size_t index, std::string_view state,
-                     std::initializer_list<Arg> args = {});
-  bool insert_after(std::size_t index, std::string_view state,
-                    std::initializer_list<Arg> args = {});
+  template <typename... Ts>
+  bool insert_before(std::size_t index, const PlannedStateRef<Ts...>& state,
+                     const typename detail::Same<Ts>::type&... args) {
+    return edit(kAt, index, state, args...);
+  }
+  template <typename... Ts>
+  bool insert_after(std::size_t index, const PlannedStateRef<Ts...>& state,
+                    const typename detail::Same<Ts>::type&... args) {
+    return edit(kAt, index + 1, state, args...);
+  }
+  /// Replaces the whole queue with one instance (the current state still decides when to go).
+  template <typename... Ts>
+  bool go_to(const PlannedStateRef<Ts...>& state, const typename detail::Same<Ts>::type&... args) {
+    return edit(kGoTo, 0, state, args...);
+  }
+  /// `planned` must outlive the instance it plans (the instance reads its params from it): keep
+  /// it in the state or hooks object, as their handles.
   bool append(const PlannedState& planned);
   bool prepend(const PlannedState& planned);
+  bool go_to(const PlannedState& planned);
   bool remove(std::size_t index);
   void clear();
-  /// Replaces the whole queue with one instance (the current state still decides when to go).
-  bool go_to(std::string_view state, std::initializer_list<Arg> args = {});
-  bool go_to(const PlannedState& planned);
   /// The name of the queued state at `index`, or "" past the end.
   std::string_view peek(std::size_t index = 0) const;
   std::size_t size() const;
@@ -69,6 +118,17 @@ class Plan {
   void terminate();
 
  private:
+  enum Mode { kAt, kGoTo };
+  template <typename... Ts>
+  bool edit(Mode mode, std::size_t index, const PlannedStateRef<Ts...>& state, const Ts&... args) {
+    std::array<detail::PlanArg, sizeof...(Ts)> filled{};
+    std::size_t slot = 0;
+    ((filled[slot] = detail::PlanArg{state.params[slot], ArgValue(args)}, ++slot), ...);
+    return edit(mode, index, state.state, filled.data(), filled.size());
+  }
+  bool edit(Mode mode, std::size_t index, std::uint32_t state, const detail::PlanArg* args,
+            std::size_t count);
+
   Controller* controller_;
 };
 
@@ -91,12 +151,14 @@ class StateContext : public StepContext {
   std::uint64_t cycle() const;
   /// How many times this instance has executed before this call (0 on its first execute()).
   std::uint64_t executions() const;
-  /// This instance's param (its per-instance value, else the state's, else the class default).
+  /// This instance's param (its run-time value, else its planned one, else the state's, else the
+  /// class default); the type's zero value for an optional param without a value.
   template <typename T>
-  T param(std::string_view name) const {
-    const ParamValue* value = find_param(name);
-    if (value == nullptr || !std::holds_alternative<T>(*value)) return T{};
-    return std::get<T>(*value);
+  const T& param(StateParam<T> handle) const {
+    const ParamValue* value = param_value(handle.index);
+    if (const T* typed = value == nullptr ? nullptr : std::get_if<T>(value)) return *typed;
+    static const T kZero{};
+    return kZero;
   }
   Plan& plan() { return plan_; }
   void terminate() { plan_.terminate(); }
@@ -105,7 +167,7 @@ class StateContext : public StepContext {
   const StepContext& step_context() const { return *this; }
 
  private:
-  const ParamValue* find_param(std::string_view name) const;
+  const ParamValue* param_value(std::uint32_t index) const;
   ExecuteContext* execute_;
   Controller* controller_;
   std::uint32_t instance_;
@@ -119,8 +181,9 @@ class StateContext : public StepContext {
 class State {
  public:
   virtual ~State() = default;
-  /// Once per pooled object at load: read the state's params and resolve ports.
-  virtual void init(InitContext& /*ctx*/) {}
+  /// Once per pooled object at load: read the state's params, resolve ports, params and the
+  /// states it plans to handles.
+  virtual void init(StateInitContext& /*ctx*/) {}
   virtual void activate(StateContext& /*ctx*/) {}
   virtual StateResult execute(StateContext& ctx) = 0;
   virtual void deactivate(StateContext& /*ctx*/) {}

@@ -102,7 +102,7 @@ void ModelBuilder::read_actuators(const Node& node, LayerDecl& layer) {
       if (aggregate != nullptr) {
         actuator.aggregate = read_bool(*aggregate, "aggregate").value_or(false);
       }
-      if (const Node* fallback = fields.optional("default")) actuator.default_value = *fallback;
+      if (const Node* given = fields.optional("default")) actuator.default_value = *given;
       if (const Node* safe = fields.optional("safe")) actuator.safe_value = *safe;
     }
     if (type != nullptr) {
