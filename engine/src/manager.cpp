@@ -8,8 +8,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -20,13 +18,6 @@
 namespace arbiter {
 
 namespace {
-
-// A level's bytes: levels_changed() tells -0.0 from 0.0, which a trace prints apart.
-std::uint64_t bits(double level) {
-  std::uint64_t out = 0;
-  std::memcpy(&out, &level, sizeof out);
-  return out;
-}
 
 // Stands in for a behaviour that is inactive because its code threw (docs/robustness.md).
 class Inert final : public Behaviour {
@@ -215,7 +206,6 @@ std::uint64_t Manager::reloads() const {
 // final call while its buffers are still in place; then everything is exchanged and what goes
 // on is carried over. Every buffer was sized by prepare(): nothing here allocates.
 void Manager::apply(Staged& staged) {
-  levels_changed_ = true;
   const detail::Carryover& carryover = staged.carryover;
   Program& next = staged.program;
   for (std::uint32_t b = 0; b < next.behaviours.size(); ++b) {
@@ -473,7 +463,6 @@ void Manager::report_non_finite_write(std::uint32_t slot) {
 }
 
 void Manager::step() {
-  levels_changed_ = false;
   Reloading& reloading = *reloading_;
   if (reloading.has_pending.load(std::memory_order_acquire) && reloading.mutex.try_lock()) {
     // A swap the staging thread holds the lock for waits for the next step.
@@ -560,13 +549,7 @@ void Manager::run_layer(const CompiledLayer& layer) {
     double sum = 0.0;
     for (std::uint32_t b = begin; b < end; ++b) sum += run_.activation[b];
     if (sum > 0.0) {
-      std::uint64_t differ = 0;
-      for (std::uint32_t b = begin; b < end; ++b) {
-        const double level = run_.activation[b] / sum;
-        differ |= bits(run_.activation[b]) ^ bits(level);
-        run_.activation[b] = level;
-      }
-      if (differ != 0) levels_changed_ = true;
+      for (std::uint32_t b = begin; b < end; ++b) run_.activation[b] /= sum;
     }
   }
   execute_behaviours(begin, end);
@@ -597,7 +580,6 @@ ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_NOINLINE void Manager::request_a
   const std::uint32_t* split = recipes.split.data();
   const std::uint32_t* terms = recipes.terms.data();
   double* factor = run_.factors.data();
-  std::uint64_t differ = 0;  // levels_changed()
   for (std::uint32_t b = begin; b < end; ++b) {
     const StepContext context(data_, b);
     double level = 0.0;
@@ -605,7 +587,6 @@ ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_NOINLINE void Manager::request_a
       level = 0.0;
     if (!std::isfinite(level)) level = non_finite_level(b, level);
     level = std::clamp(level, 0.0, 1.0);
-    differ |= bits(run_.requested[b]) ^ bits(level);
     run_.requested[b] = level;
 
     // The first factor starts the product: a multiplication by 1.0 would lengthen a chain's
@@ -617,12 +598,10 @@ ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_NOINLINE void Manager::request_a
     }
     level *= chained;
     for (auto t = split[b]; t < recipe[b + 1]; ++t) level *= factor[terms[t]];
-    differ |= bits(run_.activation[b]) ^ bits(level);
     run_.activation[b] = level;
     factor[2 * b] = 1.0 - level;
     factor[2 * b + 1] = (1.0 - level) * chained;
   }
-  if (differ != 0) levels_changed_ = true;
 }
 
 // NaN counts as 0, ±infinity is clamped; each reported once per behaviour.
@@ -643,12 +622,10 @@ double Manager::non_finite_level(std::uint32_t b, double level) {
 }
 
 ARBITER_NOINLINE void Manager::execute_behaviours(std::uint32_t begin, std::uint32_t end) {
-  bool differ = false;  // levels_changed()
   for (std::uint32_t b = begin; b < end; ++b) {
     Behaviour& behaviour = *run_.instances[b];
     const bool was_active = run_.active[b] != 0;
     const bool is_active = run_.activation[b] > 0.0;
-    differ = differ || was_active != is_active;
     run_.active[b] = is_active ? 1 : 0;
     if (is_active) {
       ExecuteContext context(data_, b, run_.activation[b], !was_active);
@@ -658,7 +635,6 @@ ARBITER_NOINLINE void Manager::execute_behaviours(std::uint32_t begin, std::uint
       ARBITER_GUARDED(b, Callback::kInhibited, behaviour.inhibited(context));
     }
   }
-  if (differ) levels_changed_ = true;
 }
 
 void Manager::resolve_actuators(const CompiledLayer& layer) {

@@ -238,8 +238,7 @@ bool StepSnapshot::capture(const Manager& manager, const StepLayout& layout, boo
                          count * sizeof(double)) == 0 &&
              std::memcmp(active_now + begin, last->active.data() + begin, count) == 0;
     };
-    // A step that changed no level says so: nothing to compare (every step of a steady graph).
-    if (manager.levels_changed() && behaviours > 0 && !same(0, behaviours)) {
+    if (behaviours > 0 && !same(0, behaviours)) {
       for (std::size_t begin = 0; begin < behaviours; begin += kLevelBlock) {
         const auto count = std::min(kLevelBlock, behaviours - begin);
         if (same(begin, count)) continue;

@@ -130,10 +130,6 @@ class Manager {
   const double* requested_levels() const { return run_.requested.data(); }
   const double* activation_levels() const { return run_.activation.data(); }
   const char* active_flags() const { return run_.active.data(); }
-  /// False when the last step left every behaviour's levels and active flag as the step before
-  /// left them, bit for bit (and no reload came between): an observer that kept the step
-  /// before's levels need not compare them. True may still mean no change.
-  bool levels_changed() const { return levels_changed_; }
   /// The actuator's current value (of its ValueType) and whether it was written this step.
   const void* actuator_value(std::uint32_t actuator) const {
     return run_.values.at(program_.actuator_offsets[actuator]);
@@ -186,7 +182,6 @@ class Manager {
   bool stopped_ = false;
   std::string stop_reason_;
   bool in_safe_pass_ = false;
-  bool levels_changed_ = true;
   std::uint64_t safe_passes_ = 0;
   StepClock* clock_ = nullptr;
   double step_time_ = 0.0;
