@@ -277,13 +277,13 @@ class StateInit final : public InstanceInit<StateInitContext> {
           location_, "class-error",
           fmt::format("class {} reads param '{}' that it does not declare", cls_.name, param_name))
           .unknown_name(std::string(param_name), known);
-      return kUnbound;
+      return kNoIndex;
     }
     if (spec->kind != kind) {
       error_at(location_, "class-error",
                fmt::format("class {} reads param '{}' ({}) through a handle of kind {}", cls_.name,
                            param_name, to_string(spec->kind), to_string(kind)));
-      return kUnbound;
+      return kNoIndex;
     }
     return static_cast<std::uint32_t>(spec - cls_.params.data());
   }

@@ -26,7 +26,7 @@ const char* to_string(ControllerStatus status) {
 
 bool Plan::edit(Mode mode, std::size_t index, std::uint32_t state, const detail::PlanArg* args,
                 std::size_t count) {
-  if (state == kUnbound) {
+  if (state == kNoState) {
     // Only a handle whose resolution failed the load, or a default-constructed one, is unbound.
     controller_->fail("planned a state handle that init() did not resolve");
     return false;
@@ -80,7 +80,7 @@ bool Plan::contains(std::string_view state) const {
 void Plan::terminate() {
   controller_->terminate_ = true;
   const auto by = controller_->callback_;
-  controller_->terminated_by_ = by == kUnbound ? kUnbound : controller_->instances_[by].state;
+  controller_->terminated_by_ = by == kNoIndex ? kNoState : controller_->instances_[by].state;
 }
 
 // --- StateContext --------------------------------------------------------------------------------
@@ -106,7 +106,7 @@ const ParamValue* StateContext::param_value(std::uint32_t index) const {
 Controller* StateContext::child() const {
   const auto state = controller_->instances_[instance_].state;
   const auto child = controller_->states_[state].child;
-  return child == kUnbound ? nullptr : controller_->children_[child];
+  return child == kNoController ? nullptr : controller_->children_[child];
 }
 
 // --- Controller ----------------------------------------------------------------------------------
@@ -149,7 +149,7 @@ void ControllerBuilder::index_state_values() {
 }
 
 std::string_view Controller::current_state() const {
-  return current_ == kUnbound ? std::string_view{} : states_[instances_[current_].state].name;
+  return current_ == kNoIndex ? std::string_view{} : states_[instances_[current_].state].name;
 }
 
 std::string_view Controller::queued(std::size_t index) const {
@@ -161,7 +161,7 @@ void Controller::fail(std::string message) {
   if (status_ == ControllerStatus::kError) return;
   status_ = ControllerStatus::kError;
   std::string where = fmt::format("controller '{}' ({})", name_, to_string(location_));
-  if (current_ != kUnbound) {
+  if (current_ != kNoIndex) {
     const auto& state = states_[instances_[current_].state];
     where += fmt::format(", state '{}' ({})", state.name, to_string(state.location));
   }
@@ -295,8 +295,8 @@ void Controller::release(std::uint32_t instance) {
 }
 
 void Controller::reset_queue() {
-  if (current_ != kUnbound) release(current_);
-  current_ = kUnbound;
+  if (current_ != kNoIndex) release(current_);
+  current_ = kNoIndex;
   for (auto instance : queue_) release(instance);
   queue_.clear();
   status_ = ControllerStatus::kRunning;
@@ -304,8 +304,8 @@ void Controller::reset_queue() {
   cycle_ = 0;
   proceed_ = false;
   terminate_ = false;
-  went_to_ = kUnbound;
-  terminated_by_ = kUnbound;
+  went_to_ = kNoState;
+  terminated_by_ = kNoState;
   for (const auto& planned : initial_) {
     insert(queue_.size(), create(planned.state, &planned, nullptr, 0));
   }
@@ -313,7 +313,7 @@ void Controller::reset_queue() {
 
 void Controller::note_go_to() {
   // Only the current state's own go_to tells why it ends; a hook's is a pre-emption.
-  if (callback_ == kUnbound || callback_ != current_ || queue_.empty()) return;
+  if (callback_ == kNoIndex || callback_ != current_ || queue_.empty()) return;
   went_to_ = instances_[queue_.front()].state;
 }
 
@@ -362,7 +362,7 @@ void Controller::deactivate_current(StateContext& context, const Ending& ending)
   record(context, Event::Kind::kDeactivate, current_, ending);
   in_callback(current_, [&] { instances_[current_].object->deactivate(context); });
   release(current_);
-  current_ = kUnbound;
+  current_ = kNoIndex;
 }
 
 Controller::Ending Controller::stop_ending() const {
@@ -382,7 +382,7 @@ void Controller::restart(const StepContext& context) {
     fail("restarted from inside its own callback");
     return;
   }
-  if (current_ != kUnbound) {
+  if (current_ != kNoIndex) {
     StateContext state_context(context, nullptr, *this, current_);
     deactivate_current(state_context, {EndCause::kRestarted});
   }
@@ -401,7 +401,7 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
   ++cycle_;
   try {
     Plan plan(*this);
-    bool leave = proceed_ || current_ == kUnbound;
+    bool leave = proceed_ || current_ == kNoIndex;
     Ending ending;
     for (std::uint32_t p = 0; p < preemptions_.size(); ++p) {
       if (preemptions_[p].cycle == cycle_ && plan.go_to(preemptions_[p].go_to)) {
@@ -413,22 +413,22 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
     if (hooks_ != nullptr && hooks_->pre_step(*this, plan)) {
       leave = true;
       ending.cause = EndCause::kPreempted;
-      ending.preempt = kUnbound;
+      ending.preempt = kNoIndex;
     }
     if (status_ != ControllerStatus::kRunning) {
       stepping_ = false;
       return;
     }
     if (leave) {
-      if (current_ != kUnbound) {
+      if (current_ != kNoIndex) {
         // A pre-emption tells the story even of a state that had asked to proceed: it decided
         // what follows.
         if (ending.cause == EndCause::kPreempted) {
           ending.proceeded = proceed_;
-          ending.other = queue_.empty() ? kUnbound : instances_[queue_.front()].state;
+          ending.other = queue_.empty() ? kNoState : instances_[queue_.front()].state;
         } else if (queue_.empty()) {
           ending.cause = EndCause::kQueueEmpty;
-        } else if (went_to_ != kUnbound) {
+        } else if (went_to_ != kNoState) {
           ending = {EndCause::kGoTo, false, went_to_};
         } else {
           ending.cause = EndCause::kProceeded;
@@ -444,7 +444,7 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
       }
       current_ = queue_.front();
       queue_.erase(queue_.begin());
-      went_to_ = kUnbound;
+      went_to_ = kNoState;
       const auto& name = states_[instances_[current_].state].name;
       if (hooks_ != nullptr) hooks_->pre_activate(*this, name);
       StateContext activate_context(context, execute, *this, current_);
@@ -452,7 +452,7 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
       in_callback(current_, [&] { instances_[current_].object->activate(activate_context); });
     }
     if (terminate_ || status_ != ControllerStatus::kRunning) {
-      if (current_ != kUnbound) {
+      if (current_ != kNoIndex) {
         StateContext end_context(context, execute, *this, current_);
         deactivate_current(end_context, stop_ending());
       }
@@ -566,7 +566,7 @@ bool Controller::same_declaration(const Controller& other) const {
 }
 
 void Controller::end(const StepContext& context) {
-  if (stepping_ || current_ == kUnbound) return;
+  if (stepping_ || current_ == kNoIndex) return;
   StateContext state_context(context, nullptr, *this, current_);
   try {
     deactivate_current(state_context, {EndCause::kDropped});

@@ -374,7 +374,7 @@ class Goalie final : public Behaviour, private ControllerHooks {
     if (!button_pressed_ && !shot_) return false;
     const std::uint32_t current = controller.current_state_index();
     const auto is = [&](const PlannedState& planned) { return current == planned.state; };
-    if (current == kUnbound || is(wait_)) return false;
+    if (current == kNoState || is(wait_)) return false;
     if (button_pressed_) {
       plan.go_to(wait_);
     } else if (is(dive_)) {

@@ -26,8 +26,8 @@ struct CompiledState {
   std::string name;
   const ClassInfo* cls = nullptr;
   SourceLocation location;
-  std::vector<Param> params;       ///< as written for the state (no class defaults)
-  std::uint32_t child = kUnbound;  ///< index of the controller this state owns
+  std::vector<Param> params;            ///< as written for the state (no class defaults)
+  std::uint32_t child = kNoController;  ///< index of the controller this state owns
 };
 
 /// Whether two param lists hold the same names and values, wherever they were written.
@@ -60,12 +60,12 @@ class Controller {
     EndCause cause = EndCause::kNone;
     /// kPreempted: the state had asked to proceed too (the pre-emption decided what followed).
     bool proceeded = false;
-    std::uint32_t state = kUnbound;
-    /// kPreempted, kGoTo: the state planned in its place (kUnbound: none); kTerminated: the
-    /// state whose callback called terminate() (kUnbound: a hook of the owner).
-    std::uint32_t other = kUnbound;
-    /// kPreempted: the index of the `preempt:` entry that fired (kUnbound: a hook).
-    std::uint32_t preempt = kUnbound;
+    std::uint32_t state = kNoState;
+    /// kPreempted, kGoTo: the state planned in its place (kNoState: none); kTerminated: the
+    /// state whose callback called terminate() (kNoState: a hook of the owner).
+    std::uint32_t other = kNoState;
+    /// kPreempted: the index of the `preempt:` entry that fired (kNoIndex: a hook).
+    std::uint32_t preempt = kNoIndex;
     /// Where in the step it happened: reports (StepContext::report) and the events of every
     /// controller draw from one counter per step, so observers can print them in order.
     std::uint32_t sequence = 0;
@@ -101,15 +101,15 @@ class Controller {
   /// The current instance's per-instance params from the config's plan (or null), and from Plan
   /// calls (class param index, value); null and empty when there is no current state.
   const std::vector<Param>* current_planned() const {
-    return current_ == kUnbound ? nullptr : instances_[current_].planned;
+    return current_ == kNoIndex ? nullptr : instances_[current_].planned;
   }
   const std::vector<std::pair<std::uint32_t, ParamValue>>& current_args() const {
     static const std::vector<std::pair<std::uint32_t, ParamValue>> kNone;
-    return current_ == kUnbound ? kNone : instances_[current_].args;
+    return current_ == kNoIndex ? kNone : instances_[current_].args;
   }
-  /// The current state's index, or kUnbound.
+  /// The current state's index, or kNoState.
   std::uint32_t current_state_index() const {
-    return current_ == kUnbound ? kUnbound : instances_[current_].state;
+    return current_ == kNoIndex ? kNoState : instances_[current_].state;
   }
   std::size_t queue_size() const { return queue_.size(); }
   std::string_view queued(std::size_t index) const;
@@ -134,11 +134,11 @@ class Controller {
   /// The child controller a state owns (`machine:`), or nullptr.
   const Controller* child_of(std::uint32_t state) const {
     const auto child = states_[state].child;
-    return child == kUnbound ? nullptr : children_[child];
+    return child == kNoController ? nullptr : children_[child];
   }
   /// Whether a behaviour or a parent state steps it (else the manager does: standalone).
   bool owned() const { return owned_; }
-  /// The behaviour that claimed it (and so holds a pointer to it), or kUnbound: standalone, or
+  /// The behaviour that claimed it (and so holds a pointer to it), or kNoBehaviour: standalone, or
   /// the child of a state.
   std::uint32_t owner_behaviour() const { return owner_behaviour_; }
 
@@ -178,8 +178,8 @@ class Controller {
   struct Ending {
     EndCause cause = EndCause::kNone;
     bool proceeded = false;
-    std::uint32_t other = kUnbound;
-    std::uint32_t preempt = kUnbound;
+    std::uint32_t other = kNoState;
+    std::uint32_t preempt = kNoIndex;
   };
   void record(const StepContext& context, Event::Kind kind, std::uint32_t instance,
               const Ending& ending);
@@ -215,7 +215,7 @@ class Controller {
   std::vector<std::vector<std::uint32_t>> pools_;  ///< free instances per state
   std::size_t live_ = 0;
   std::vector<std::uint32_t> queue_;  ///< reserved to capacity: edits never allocate
-  std::uint32_t current_ = kUnbound;
+  std::uint32_t current_ = kNoIndex;
   std::vector<PlannedState> initial_;
   struct Preempt {
     std::uint64_t cycle;
@@ -229,21 +229,21 @@ class Controller {
   bool terminate_ = false;
   bool stepping_ = false;
   bool owned_ = false;
-  std::uint32_t owner_behaviour_ = kUnbound;
+  std::uint32_t owner_behaviour_ = kNoBehaviour;
   std::array<Event, kMaxEventsPerStep> events_{};
   std::size_t event_count_ = 0;
   std::vector<EventArg> event_args_;  ///< sized when the pool is built
   std::size_t event_args_used_ = 0;
-  /// The instance whose callback is running (kUnbound: none, or a hook).
-  std::uint32_t callback_ = kUnbound;
-  /// The state the current instance replaced the plan with (go_to), or kUnbound.
-  std::uint32_t went_to_ = kUnbound;
-  /// The state whose callback called terminate() (kUnbound: a hook), valid with terminate_.
-  std::uint32_t terminated_by_ = kUnbound;
+  /// The instance whose callback is running (kNoIndex: none, or a hook).
+  std::uint32_t callback_ = kNoIndex;
+  /// The state the current instance replaced the plan with (go_to), or kNoState.
+  std::uint32_t went_to_ = kNoState;
+  /// The state whose callback called terminate() (kNoState: a hook), valid with terminate_.
+  std::uint32_t terminated_by_ = kNoState;
   ControllerHooks* hooks_ = nullptr;
   spdlog::logger* logger_ = nullptr;
   std::string error_;
-  std::uint32_t failing_state_ = kUnbound;
+  std::uint32_t failing_state_ = kNoState;
 };
 
 }  // namespace arbiter

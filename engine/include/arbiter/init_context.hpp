@@ -140,7 +140,7 @@ class StateInitContext : public InitContext {
     PlannedStateRef<Ts...> ref;
     const std::uint32_t index =
         resolve_state(state, params.data(), kinds.data(), sizeof...(Ts), ref.params.data(), where);
-    if (index != kUnbound) ref.state = index;
+    if (index != kNoState) ref.state = index;
     return ref;
   }
 

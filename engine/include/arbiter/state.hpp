@@ -29,14 +29,14 @@ using ArgValue = std::variant<bool, std::int64_t, double, Vec2, Vec3>;
 /// step by index (StateContext::param), with no name lookup.
 template <typename T>
 struct StateParam {
-  std::uint32_t index = kUnbound;  ///< among the class's params
-  bool bound() const { return index != kUnbound; }
+  std::uint32_t index = kNoIndex;  ///< among the class's params
+  bool bound() const { return index != kNoIndex; }
 };
 
 /// A state of the controller with per-instance params from the config, resolved and validated
 /// at load (StateInitContext::plan_state).
 struct PlannedState {
-  std::uint32_t state = kUnbound;
+  std::uint32_t state = kNoState;
   std::vector<Param> params;
   /// params[i]'s index among the state class's params, resolved with them.
   std::vector<std::uint32_t> param_index;
@@ -51,9 +51,9 @@ struct PlannedStateRef {
                   std::is_same_v<Ts, double> || std::is_same_v<Ts, Vec2> ||
                   std::is_same_v<Ts, Vec3>)&&...),
                 "a run-time param is a bool, std::int64_t, double, Vec2 or Vec3");
-  std::uint32_t state = kUnbound;
+  std::uint32_t state = kNoState;
   std::array<std::uint32_t, sizeof...(Ts)> params{};  ///< each slot's index among the params
-  bool bound() const { return state != kUnbound; }
+  bool bound() const { return state != kNoState; }
 };
 
 namespace detail {
@@ -63,7 +63,7 @@ struct Same {
 };
 /// One filled slot of a plan edit.
 struct PlanArg {
-  std::uint32_t param = kUnbound;
+  std::uint32_t param = kNoIndex;
   ArgValue value;
 };
 }  // namespace detail
