@@ -274,6 +274,20 @@ TEST_CASE("misuse is an error naming the controller and the state", "[scl][error
     CHECK_THAT(manager.program().find_controller("m")->error(),
                Catch::Matchers::Contains("required param 'x'"));
   }
+  SECTION("a planned state built by hand, its params not resolved at load") {
+    Manager manager(test::compile_text(
+        machine("      a: {type: test.Planner, params: {op: clear}}\n      p: test.Pose\n", "[a]",
+                "    preempt: []\n"),
+        registry()));
+    manager.step();
+    Controller& m = *manager.program().find_controller("m");
+    Plan plan(m);
+    PlannedState p = test::planned(m, "p");
+    p.params.push_back(Param{"x", ParamValue(1.0), SourceLocation{}, false});
+    CHECK_FALSE(plan.append(p));
+    CHECK_THAT(m.error(), Catch::Matchers::Contains("state 'p'") &&
+                              Catch::Matchers::Contains("not resolved at load"));
+  }
   SECTION("stepping a controller from its own callback") {
     struct Reenter : ControllerHooks {
       const StepContext* context = nullptr;

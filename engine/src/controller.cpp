@@ -230,6 +230,14 @@ std::string convert_arg(const ParamSpec& spec, const ArgValue& value, ParamValue
 std::optional<std::uint32_t> Controller::create(std::uint32_t state, const PlannedState* planned,
                                                 const detail::PlanArg* args, std::size_t count) {
   const auto& compiled = states_[state];
+  // Ignoring them would run the state on other values than the caller gave.
+  if (planned != nullptr && planned->param_index.size() != planned->params.size()) {
+    fail(
+        fmt::format("planned state '{}' has params not resolved at load; plan it through "
+                    "StateInitContext::plan_state()",
+                    compiled.name));
+    return std::nullopt;
+  }
   if (live_ >= capacity_ || pools_[state].empty()) {
     fail(
         fmt::format("planning state '{}' exceeds the controller's capacity of {} instances "

@@ -34,7 +34,8 @@ struct StateParam {
 };
 
 /// A state of the controller with per-instance params from the config, resolved and validated
-/// at load (StateInitContext::plan_state).
+/// at load (StateInitContext::plan_state). A plan edit refuses one with params that were not
+/// resolved so (an error of the controller), rather than run the state without them.
 struct PlannedState {
   std::uint32_t state = kNoState;
   std::vector<Param> params;
