@@ -24,24 +24,26 @@ const char* to_string(ControllerStatus status) {
 
 // --- Plan ----------------------------------------------------------------------------------------
 
-bool Plan::edit(Mode mode, std::size_t index, std::uint32_t state, const detail::PlanArg* args,
-                std::size_t count) {
+bool Plan::edit(Mode mode, std::size_t index, std::uint32_t state, const PlannedState* planned,
+                const detail::PlanArg* args, std::size_t count) {
   if (state == kNoState) {
     // Only a handle whose resolution failed the load, or a default-constructed one, is unbound.
     controller_->fail("planned a state handle that init() did not resolve");
     return false;
   }
   if (mode == kGoTo) clear();
-  const bool planned = controller_->insert(index, controller_->create(state, nullptr, args, count));
-  if (planned && mode == kGoTo) controller_->note_go_to();
-  return planned;
+  const bool done = controller_->insert(index, controller_->create(state, planned, args, count));
+  if (done && mode == kGoTo) controller_->note_go_to();
+  return done;
 }
 bool Plan::append(const PlannedState& planned) {
-  return controller_->insert(controller_->queue_.size(),
-                             controller_->create(planned.state, &planned, nullptr, 0));
+  return edit(kAt, size(), planned.state, &planned, nullptr, 0);
 }
 bool Plan::prepend(const PlannedState& planned) {
-  return controller_->insert(0, controller_->create(planned.state, &planned, nullptr, 0));
+  return edit(kAt, 0, planned.state, &planned, nullptr, 0);
+}
+bool Plan::go_to(const PlannedState& planned) {
+  return edit(kGoTo, 0, planned.state, &planned, nullptr, 0);
 }
 bool Plan::remove(std::size_t index) {
   auto& queue = controller_->queue_;
@@ -56,12 +58,6 @@ bool Plan::remove(std::size_t index) {
 void Plan::clear() {
   for (auto instance : controller_->queue_) controller_->release(instance);
   controller_->queue_.clear();
-}
-bool Plan::go_to(const PlannedState& planned) {
-  clear();
-  const bool done = append(planned);
-  if (done) controller_->note_go_to();
-  return done;
 }
 std::string_view Plan::peek(std::size_t index) const {
   const auto& queue = controller_->queue_;
@@ -254,7 +250,7 @@ std::optional<std::uint32_t> Controller::create(std::uint32_t state, const Plann
   created.executions = 0;
   std::copy(state_values_[state].begin(), state_values_[state].end(), created.values.begin());
   if (planned != nullptr) {
-    for (std::size_t i = 0; i < planned->params.size() && i < planned->param_index.size(); ++i) {
+    for (std::size_t i = 0; i < planned->params.size(); ++i) {
       if (planned->param_index[i] < created.values.size()) {
         created.values[planned->param_index[i]] = &planned->params[i].value;
       }

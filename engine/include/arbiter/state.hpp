@@ -125,10 +125,11 @@ class Plan {
     std::array<detail::PlanArg, sizeof...(Ts)> filled{};
     std::size_t slot = 0;
     ((filled[slot] = detail::PlanArg{state.params[slot], ArgValue(args)}, ++slot), ...);
-    return edit(mode, index, state.state, filled.data(), filled.size());
+    return edit(mode, index, state.state, nullptr, filled.data(), filled.size());
   }
-  bool edit(Mode mode, std::size_t index, std::uint32_t state, const detail::PlanArg* args,
-            std::size_t count);
+  /// Every edit that plans an instance: from a handle's slots (`args`) or a `planned` state.
+  bool edit(Mode mode, std::size_t index, std::uint32_t state, const PlannedState* planned,
+            const detail::PlanArg* args, std::size_t count);
 
   Controller* controller_;
 };
