@@ -351,7 +351,7 @@ class Goalie final : public Behaviour, private ControllerHooks {
                 fmt::format("the goalie plans state '{}' ({}), which state machine '{}' does not "
                             "declare",
                             name, param, controller_->name()))
-          .notes.push_back(suggest(name, known, "it declares"));
+          .unknown_name(name, known, {}, "it declares");
       return false;
     }
     const CompiledState& state = *found;
