@@ -10,6 +10,7 @@
 #include <iterator>
 #include <stdexcept>
 
+#include "../../engine/src/controller_builder.hpp"
 #include "arbiter/lint.hpp"
 #include "arbiter/trace.hpp"
 #include "builtins.hpp"
@@ -135,12 +136,13 @@ std::vector<double>& Pose::seen_x() {
 }
 
 PlannedState planned(const Controller& controller, std::string_view name) {
-  PlannedState out;
-  out.state = 0;
-  const auto& states = controller.states();
-  for (std::uint32_t s = 0; s < states.size(); ++s) {
-    if (states[s].name == name) out.state = s;
+  const auto state = find_state(controller, name);
+  if (!state) {
+    throw std::runtime_error("state machine '" + controller.name() + "' has no state '" +
+                             std::string(name) + "'");
   }
+  PlannedState out;
+  out.state = *state;
   return out;
 }
 

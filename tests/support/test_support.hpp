@@ -90,8 +90,8 @@ class Pose : public State {
   StateParam<double> x;
 };
 
-/// State `name` of `controller`, planned without params (as a hook plans); state 0 when there is
-/// no such state, so that a misspelt test fails on its events.
+/// State `name` of `controller`, planned without params (as a hook plans); throws when there is
+/// no such state, so that a misspelt test fails at the name.
 PlannedState planned(const Controller& controller, std::string_view name);
 
 /// Collects each step's controller events as "cycle N: activate a, execute a".
