@@ -209,7 +209,10 @@ int echo(int domain, double seconds) {
   while (stop_requested == 0 && Clock::now() < deadline) {
     if (take_newest(in, newest)) {
       pending = true;
-      if (!described) std::printf("received: %s\n", describe(newest).c_str());
+      if (!described) {
+        std::printf("received: %s\n", describe(newest).c_str());
+        std::fflush(stdout);  // the test waits for it
+      }
       described = true;
     }
     if (pending && matched(out) && Clock::now() - last_echo >= std::chrono::milliseconds(50)) {

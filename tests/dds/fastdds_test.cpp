@@ -94,9 +94,11 @@ void check_round_trip(const std::string& message, const std::string& type, const
              dir.file("peer.out"));
   Child arbiter(arbiter_run(config, 2000, dir.file("echo.jsonl"), /*quiet=*/false),
                 dir.file("arbiter.out"));
-  // The echoes count once the bridge's reader has found the peer's writer, as the bridge
-  // reports; from then on the peer's echoes, 50 ms apart, arrive.
-  const bool found = arbiter.wait_for_output("link: back: publisher found", 30s);
+  // The echoes count once both directions are matched: the peer has received a stamp (the
+  // bridge's writer found its reader) and the bridge's reader has found the peer's writer, as
+  // the bridge reports; from then on the peer's echoes, 50 ms apart, arrive.
+  const bool found = peer.wait_for_output("received: ", 30s) &&
+                     arbiter.wait_for_output("link: back: publisher found", 30s);
   if (found) std::this_thread::sleep_for(1s);
   peer.signal(SIGINT);
   const auto peer_status = peer.wait(30s);
