@@ -1,3 +1,4 @@
+#include <fmt/format.h>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
@@ -151,18 +152,37 @@ class ManualClock : public StepClock {
   double t = 0.0;
 };
 
-}  // namespace
+/// A layer wide enough that a recording copies its levels and values by the chunks that changed
+/// (more than SnapshotShape::kWhole bytes each): 80 behaviours whose scripted levels change at
+/// different steps, writing 40 numbers; with `strings`, a string too, beyond the small-string
+/// buffer.
+std::string wide_config(bool strings) {
+  std::string text = "arbiter: 1\nname: wide\nrate_hz: 100\nlayers:\n  - name: wide\n";
+  text += "    actuators:\n      sum: {type: double, aggregate: true}\n";
+  if (strings) text += "      mode: {type: string}\n";
+  for (int v = 0; v < 40; ++v) text += fmt::format("      v{}: {{type: double}}\n", v);
+  text += "    behaviours:\n";
+  for (int b = 0; b < 80; ++b) {
+    std::string levels;
+    for (int step = 0; step < 60; ++step) {
+      const int held = step / (b % 5 + 1);  // behaviour b changes level every b % 5 + 1 steps
+      levels += fmt::format("{}{}", step == 0 ? "" : ", ", ((held * (b + 3)) % 11) / 10.0);
+    }
+    text += fmt::format(
+        "      b{}: {{type: scripted, params: {{activation: [{}], writes: {{sum: {}, v{}: {}", b,
+        levels, b, b % 40, b * 0.25);
+    if (strings) text += fmt::format(", mode: \"behaviour {} of the wide layer, writing\"", b);
+    text += "}}}\n";
+  }
+  return text;
+}
 
-TEST_CASE("a recording's step records are the trace's lines of the same run, byte for byte",
-          "[trace_reader][record]") {
+void check_recording_matches_trace(const fs::path& config, const std::string& original,
+                                   bool reload) {
   // A ring of two slots drops steps whenever the writer lags, so that steps copied whole (after
   // a drop) and steps copied by what changed are both recorded; a hot reload lays the ring out
   // again for the new program.
   Registry registry = make_test_registry();
-  const auto dir = fs::temp_directory_path() / "arbiter_record_vs_trace";
-  fs::create_directories(dir);
-  const auto config = dir / "goalie_plan.yaml";
-  const auto original = read_text(fs::path(ARBITER_SOURCE_DIR) / "configs/paper/goalie_plan.yaml");
   write_text(config, original);
   Reloader reloader(registry);
   Diagnostics diagnostics;
@@ -175,14 +195,14 @@ TEST_CASE("a recording's step records are the trace's lines of the same run, byt
   std::ostringstream trace_text;
   TraceWriter trace(trace_text);
   manager.add_observer(trace);
-  const auto path = dir / "run.mcap";
+  const auto path = config.parent_path() / "run.mcap";
   std::uint64_t dropped = 0;
   {
     Recorder recorder(path.string(), RecordingInfo{{{config.string(), original}}, {}, "test"}, 2);
     REQUIRE(recorder.ok());
     manager.add_observer(recorder);
     for (int i = 0; i < 400; ++i) {
-      if (i == 200) {
+      if (reload && i == 200) {
         write_text(config, original + "\n# edited\n");
         REQUIRE(reloader.reload(manager).staged);
       }
@@ -199,7 +219,7 @@ TEST_CASE("a recording's step records are the trace's lines of the same run, byt
   const auto recorded = read_trace(path.string(), error);
   INFO(format(error));
   REQUIRE(recorded);
-  CHECK(recorded->reloads.size() == 1);
+  CHECK(recorded->reloads.size() == (reload ? 1 : 0));
   CHECK(recorded->steps.size() + dropped == traced->steps.size());
   CHECK(recorded->steps.size() > 20);
   std::size_t t = 0;
@@ -208,5 +228,22 @@ TEST_CASE("a recording's step records are the trace's lines of the same run, byt
     REQUIRE(t < traced->steps.size());
     CHECK(step.text == traced->steps[t].text);
   }
-  fs::remove_all(dir);
+}
+
+}  // namespace
+
+TEST_CASE("a recording's step records are the trace's lines of the same run, byte for byte",
+          "[trace_reader][record]") {
+  TempDir dir;
+  SECTION("state machines, and a hot reload") {
+    check_recording_matches_trace(
+        dir.path() / "goalie_plan.yaml",
+        read_text(fs::path(ARBITER_SOURCE_DIR) / "configs/paper/goalie_plan.yaml"), true);
+  }
+  SECTION("levels and values copied by the chunks that changed") {
+    check_recording_matches_trace(dir.path() / "wide.yaml", wide_config(false), false);
+  }
+  SECTION("a string value among them") {
+    check_recording_matches_trace(dir.path() / "wide.yaml", wide_config(true), false);
+  }
 }

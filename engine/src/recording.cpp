@@ -66,19 +66,17 @@ constexpr const char* kHeaderSchema = R"({"$schema": "https://json-schema.org/dr
 
 void append_inputs_record(const Manager& manager, std::string& out) {
   const detail::StepLayout layout(manager.program());
-  detail::StepSnapshot step;
-  step.size_for(layout, 0);
-  step.capture(manager, layout, true);
-  detail::append_inputs_record(layout, step, out);
+  detail::SnapshotBlocks storage;
+  detail::append_inputs_record(layout, detail::capture_growing(manager, layout, storage), out);
 }
 
 // Cache-line aligned: the stepping thread fills one slot while the writer reads an earlier one.
+// A step's values are in the slot's block (Output::Blocks), of the same index.
 struct alignas(64) Recorder::Slot {
   enum class Kind { kStep, kSafe, kHeader, kEnd };
   Kind kind = Kind::kStep;
   std::uint64_t step = 0;
   std::uint64_t log_time = 0;
-  detail::StepSnapshot snapshot;                           // kStep, kSafe
   std::string header;                                      // kHeader
   std::vector<std::pair<std::string, std::string>> files;  // kHeader: the reloaded config's
 };
@@ -93,15 +91,19 @@ struct Recorder::Output {
   std::uint64_t dropped = 0;
   std::string record;  // reused between messages
   std::string inputs_record;
-  detail::StepSnapshot::Levels levels;  // the writer's, as of the last slot it formatted
-  // The stepping thread's: the levels as the last slot published left them, and whether that
+  detail::StepImage image;  // the writer's, as of the last slot it formatted
+  // The stepping thread's: the tracked parts as the last slot published left them, and whether that
   // slot is the one before the next (no step dropped since), so the next copies what changed.
   // On cache lines of their own: the writer writes the members above at every message, and a
   // line shared with them would move between the cores at every step.
   struct alignas(64) Stepping {
-    detail::StepSnapshot::Levels last;
+    detail::StepImage last;
     bool chained = false;
   } stepping;
+  // The slots' blocks: both threads read where they are, neither writes that in a run.
+  struct alignas(64) Blocks {
+    detail::SnapshotBlocks of;
+  } blocks;
 };
 
 Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots)
@@ -126,9 +128,9 @@ bool Recorder::ok() const {
   return file_ != nullptr && out_ && out_->writer.ok();
 }
 
-Recorder::Slot* Recorder::claim() {
+inline Recorder::Slot* Recorder::claim() {
   const auto head = head_.load(std::memory_order_relaxed);
-  const auto next = (head + 1) % ring_size_;
+  const auto next = after(head);
   if (next == tail_seen_) {
     tail_seen_ = tail_.load(std::memory_order_acquire);
     if (next == tail_seen_) return nullptr;
@@ -136,8 +138,12 @@ Recorder::Slot* Recorder::claim() {
   return &ring_[head];
 }
 
-void Recorder::publish() {
-  head_.store((head_.load(std::memory_order_relaxed) + 1) % ring_size_, std::memory_order_release);
+inline void Recorder::publish() {
+  head_.store(after(head_.load(std::memory_order_relaxed)), std::memory_order_release);
+}
+
+inline detail::SnapshotBlock Recorder::block(const Slot* slot) const {
+  return out_->blocks.of[static_cast<std::size_t>(slot - ring_.get())];
 }
 
 void Recorder::on_start(const Manager& manager) {
@@ -169,7 +175,7 @@ void Recorder::on_start(const Manager& manager) {
   writer_ = std::thread([this] { write_loop(); });
 }
 
-std::uint64_t Recorder::log_time(const Manager& manager) const {
+inline std::uint64_t Recorder::log_time(const Manager& manager) const {
   const double since_start = manager.timed() ? manager.step_time() : 0.0;
   return wall_start_ns_ + static_cast<std::uint64_t>(since_start * 1e9);
 }
@@ -179,21 +185,17 @@ constexpr std::size_t kReportTextBytes = 4096;
 
 void Recorder::size_ring(const Manager& manager) {
   layout_ = std::make_unique<detail::StepLayout>(manager.program());
-  for (std::size_t i = 0; i < ring_size_; ++i) {
-    ring_[i].snapshot.size_for(*layout_, kReportTextBytes);
-  }
-  const auto behaviours = layout_->behaviours.size();
-  out_->stepping.last.requested.assign(behaviours, 0.0);
-  out_->stepping.last.activation.assign(behaviours, 0.0);
-  out_->stepping.last.active.assign(behaviours, 0);
+  out_->blocks.of.reset(*layout_, kReportTextBytes, ring_size_);
+  out_->stepping.last.bytes.assign(out_->blocks.of.shape().image_bytes, std::byte{0});
   out_->stepping.chained = false;
 }
 
 void Recorder::on_step(const Manager& manager) {
   if (!started_) return;
   Slot* slot = claim();
-  if (slot == nullptr || !slot->snapshot.capture(manager, *layout_, false, &out_->stepping.last,
-                                                 out_->stepping.chained)) {
+  if (slot == nullptr ||
+      !detail::capture_step(manager, *layout_, out_->blocks.of.shape(), block(slot), false,
+                            &out_->stepping.last, out_->stepping.chained)) {
     dropped_total_.fetch_add(1, std::memory_order_relaxed);
     out_->stepping.chained = false;  // the next slot copies every level
     return;
@@ -213,11 +215,17 @@ Recorder::Slot* Recorder::claim_waiting() {
 
 void Recorder::on_safe(const Manager& manager) {
   if (!started_) return;
-  Slot* slot = claim_waiting();  // the last values a stopping robot was given: never dropped
+  Slot* slot = claim_waiting();  // the last values a stopping robot was given: not dropped for room
+  if (!detail::capture_step(manager, *layout_, out_->blocks.of.shape(), block(slot), true,
+                            &out_->stepping.last, out_->stepping.chained)) {
+    // More reported text than a slot holds: the gap is recorded like a dropped step's.
+    dropped_total_.fetch_add(1, std::memory_order_relaxed);
+    out_->stepping.chained = false;
+    return;
+  }
   slot->kind = Slot::Kind::kSafe;
   slot->step = manager.steps();
   slot->log_time = log_time(manager);
-  slot->snapshot.capture(manager, *layout_, true, &out_->stepping.last, out_->stepping.chained);
   out_->stepping.chained = true;
   publish();
 }
@@ -261,14 +269,13 @@ void Recorder::on_finish(const Manager&) {
   finished_ = true;
 }
 
-void Recorder::format_step(detail::StepSnapshot& snapshot, std::string& record,
-                           std::string* inputs) {
-  auto& levels = out_->levels;
-  snapshot.apply_levels(levels);
-  snapshot.swap_levels(levels);
-  detail::append_step_record(*layout_, snapshot, record);
-  if (inputs != nullptr) detail::append_inputs_record(*layout_, snapshot, *inputs);
-  snapshot.swap_levels(levels);
+void Recorder::format_step(const Slot& slot, std::string& record, std::string* inputs) {
+  // The writer only reads the block: a line it wrote would have to come back to the stepping
+  // thread's core before that could fill the slot again.
+  detail::StepSnapshot step(out_->blocks.of.shape(), block(&slot));
+  step.apply(out_->image);
+  detail::append_step_record(*layout_, step, record);
+  if (inputs != nullptr) detail::append_inputs_record(*layout_, step, *inputs);
 }
 
 void Recorder::write_loop() {
@@ -285,7 +292,7 @@ void Recorder::write_loop() {
     }
     Slot& slot = ring_[tail];
     if (slot.kind == Slot::Kind::kEnd) {
-      tail_.store((tail + 1) % ring_size_, std::memory_order_release);
+      tail_.store(after(tail), std::memory_order_release);
       break;
     }
     if (slot.kind == Slot::Kind::kHeader) {
@@ -298,7 +305,7 @@ void Recorder::write_loop() {
       out.last_step = slot.step;
     } else if (slot.kind == Slot::Kind::kSafe) {
       out.record.clear();
-      format_step(slot.snapshot, out.record, nullptr);
+      format_step(slot, out.record, nullptr);
       out.writer.message(out.step, slot.log_time, out.record);  // no inputs: nothing was read
     } else {
       if (slot.step > out.last_step + 1) {
@@ -310,11 +317,11 @@ void Recorder::write_loop() {
       out.last_step = slot.step;
       out.record.clear();
       out.inputs_record.clear();
-      format_step(slot.snapshot, out.record, &out.inputs_record);
+      format_step(slot, out.record, &out.inputs_record);
       out.writer.message(out.step, slot.log_time, out.record);
       out.writer.message(out.inputs, slot.log_time, out.inputs_record);
     }
-    tail_.store((tail + 1) % ring_size_, std::memory_order_release);
+    tail_.store(after(tail), std::memory_order_release);
   }
   out.writer.metadata("arbiter.summary", {{"steps", std::to_string(out.last_step)},
                                           {"dropped", std::to_string(out.dropped)}});

@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <memory>
+#include <new>
+#include <stdexcept>
 #include <typeinfo>
 
 namespace arbiter::detail {
@@ -149,157 +152,255 @@ StepLayout::StepLayout(const Program& program) {
   }
 }
 
-StepSnapshot::~StepSnapshot() {
-  release();
+namespace {
+
+std::size_t round_up(std::size_t n, std::size_t to) {
+  return (n + to - 1) / to * to;
 }
 
-void StepSnapshot::release() {
-  for (const auto& [type, offset] : constructed_) type->destroy(values_.get() + offset);
-  constructed_.clear();
-  values_.reset();
+// Places `count` T at `at` or after, aligned for T: where they start; `at` moves past them.
+template <typename T>
+std::size_t place(std::size_t& at, std::size_t count) {
+  const auto start = round_up(at, alignof(T));
+  at = start + count * sizeof(T);
+  return start;
 }
 
-void StepSnapshot::size_for(const StepLayout& layout, std::size_t text_bytes) {
-  release();
-  const auto behaviours = layout.behaviours.size();
-  requested.assign(behaviours, 0.0);
-  activation.assign(behaviours, 0.0);
-  active.assign(behaviours, 0);
-  levels_full = true;
-  changed_blocks.assign((behaviours + kLevelBlock - 1) / kLevelBlock, 0);
-  changed_count = 0;
-  written.assign(layout.actuators.size(), 0);
-  values_ = std::make_unique<std::byte[]>(std::max<std::size_t>(layout.value_bytes, 1));
-  if (!layout.plain_values) {
-    for (const auto& actuator : layout.actuators) {
-      actuator.type->construct(values_.get() + actuator.offset);
-      constructed_.emplace_back(actuator.type, actuator.offset);
-    }
-  }
-  machines.assign(layout.machines.size(), Machine{});
-  std::size_t args = 0;
-  std::size_t queue_entries = 0;
-  std::size_t event_args_size = 0;
+template <typename T>
+T* part_of(std::byte* block, std::size_t at) {
+  return std::launder(reinterpret_cast<T*>(block + at));
+}
+
+template <typename T>
+const T* part_of(const std::byte* block, std::size_t at) {
+  return std::launder(reinterpret_cast<const T*>(block + at));
+}
+
+template <typename T>
+void construct_part(std::byte* block, std::size_t at, std::size_t count) {
+  std::uninitialized_value_construct_n(reinterpret_cast<T*>(block + at), count);
+}
+
+constexpr std::size_t kCacheLine = 64;
+
+}  // namespace
+
+SnapshotShape::SnapshotShape(const StepLayout& layout, std::size_t text_bytes_)
+    : behaviours(layout.behaviours.size()),
+      actuators(layout.actuators.size()),
+      machines(layout.machines.size()),
+      events(machines * Controller::kMaxEventsPerStep),
+      text_bytes(text_bytes_),
+      plain_values(layout.plain_values) {
   for (const auto& machine : layout.machines) {
     args += machine.most_params;
-    queue_entries += machine.capacity;
-    event_args_size += Controller::kMaxEventsPerStep * machine.most_params;
+    queue += machine.capacity;
+    event_args += Controller::kMaxEventsPerStep * machine.most_params;
   }
-  current_args.assign(args, {});
-  queue.assign(queue_entries, 0);
-  events.assign(layout.machines.size() * Controller::kMaxEventsPerStep, {});
-  event_args.assign(event_args_size, {});
-  report_count = 0;
-  reports.assign(Manager::kEventsPerStep, {});
-  texts.clear();
-  texts.reserve(text_bytes);
+  tracked_bytes[kRequested] = behaviours * sizeof(double);
+  tracked_bytes[kActivation] = behaviours * sizeof(double);
+  tracked_bytes[kActive] = behaviours;
+  tracked_bytes[kWritten] = actuators * sizeof(bool);
+  tracked_bytes[kValues] = layout.value_bytes;
+  // What a step writes, packed: the fewer lines a capture touches, the fewer it waits for.
+  std::size_t at = sizeof(SnapshotHeader);
+  for (std::size_t part = 0; part < kTracked; ++part) {
+    if (tracked_bytes[part] <= kWhole) continue;  // copied whole: no list of changes
+    changed_at[part] = place<std::uint32_t>(at, (tracked_bytes[part] + kChunk - 1) / kChunk);
+  }
+  for (std::size_t part = 0; part < kTracked; ++part) {
+    // The values keep the alignment the program's offsets assume.
+    const std::size_t alignment = part == kValues ? alignof(std::max_align_t) : sizeof(double);
+    tracked_at[part] = round_up(at, alignment);
+    at = tracked_at[part] + tracked_bytes[part];
+    image_at[part] = round_up(image_bytes, alignment);
+    image_bytes = image_at[part] + tracked_bytes[part];
+  }
+  machines_at = place<Machine>(at, machines);
+  args_at = place<Arg>(at, args);
+  queue_at = place<std::uint32_t>(at, queue);
+  // Whole lines: the writer reads one block while the stepping thread fills the next.
+  bytes = round_up(at, kCacheLine);
+  // What a step seldom writes, or writes only the start of, apart: room for the most a step may
+  // report would spread the blocks over many more pages than steps touch.
+  std::size_t extra = 0;
+  reports_at = place<Report>(extra, Manager::kEventsPerStep);
+  texts_at = place<char>(extra, text_bytes);
+  events_at = place<Controller::Event>(extra, events);
+  event_args_at = place<Controller::EventArg>(extra, event_args);
+  extra_bytes = round_up(extra, kCacheLine);
 }
 
-void StepSnapshot::apply_levels(Levels& current) const {
-  if (levels_full) {
-    current.requested = requested;
-    current.activation = activation;
-    current.active = active;
-    return;
-  }
-  const auto behaviours = requested.size();
-  for (std::size_t i = 0; i < changed_count; ++i) {
-    const std::size_t begin = changed_blocks[i] * kLevelBlock;
-    const std::size_t end = std::min(begin + kLevelBlock, behaviours);
-    std::copy(requested.begin() + begin, requested.begin() + end,
-              current.requested.begin() + begin);
-    std::copy(activation.begin() + begin, activation.begin() + end,
-              current.activation.begin() + begin);
-    std::copy(active.begin() + begin, active.begin() + end, current.active.begin() + begin);
-  }
+SnapshotBlocks::~SnapshotBlocks() {
+  release();
 }
 
-bool StepSnapshot::capture(const Manager& manager, const StepLayout& layout, bool grow,
-                           Levels* last, bool chained) {
-  const Program& program = manager.program();
-  step = manager.steps();
-  safe = manager.in_safe_pass();
-  timed = manager.timed();
-  t = manager.step_time();
-  duration = manager.step_duration();
-  const std::size_t behaviours = layout.behaviours.size();
-  const double* requested_now = manager.requested_levels();
-  const double* activation_now = manager.activation_levels();
-  const char* active_now = manager.active_flags();
-  if (last != nullptr && chained) {
-    // Compared where they are hot (the manager's levels and `last`), written to the slot, which
-    // is cold, only by the block that changed. Bytes, not values: -0.0 prints apart from 0.0.
-    levels_full = false;
-    changed_count = 0;
-    const auto same = [&](std::size_t begin, std::size_t count) {
-      return std::memcmp(requested_now + begin, last->requested.data() + begin,
-                         count * sizeof(double)) == 0 &&
-             std::memcmp(activation_now + begin, last->activation.data() + begin,
-                         count * sizeof(double)) == 0 &&
-             std::memcmp(active_now + begin, last->active.data() + begin, count) == 0;
-    };
-    if (behaviours > 0 && !same(0, behaviours)) {
-      for (std::size_t begin = 0; begin < behaviours; begin += kLevelBlock) {
-        const auto count = std::min(kLevelBlock, behaviours - begin);
-        if (same(begin, count)) continue;
-        changed_blocks[changed_count++] = static_cast<std::uint32_t>(begin / kLevelBlock);
-        const auto copy = [&](const auto* from, auto& to, auto& kept) {
-          std::copy(from + begin, from + begin + count, to.begin() + begin);
-          std::copy(from + begin, from + begin + count, kept.begin() + begin);
-        };
-        copy(requested_now, requested, last->requested);
-        copy(activation_now, activation, last->activation);
-        copy(active_now, active, last->active);
+void SnapshotBlocks::release() {
+  if (data_ == nullptr) return;
+  for (std::size_t i = 0; i < count_; ++i) {
+    for (const auto& [type, offset] : constructed_) type->destroy((*this)[i].main + offset);
+  }
+  ::operator delete (data_, std::align_val_t{kCacheLine});
+  data_ = nullptr;
+  count_ = 0;
+  constructed_.clear();
+}
+
+void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std::size_t count) {
+  release();
+  shape_ = SnapshotShape(layout, text_bytes);
+  const auto& s = shape_;
+  data_ = static_cast<std::byte*>(
+      ::operator new ((s.bytes + s.extra_bytes) * count, std::align_val_t{kCacheLine}));
+  count_ = count;
+  for (std::size_t i = 0; i < count; ++i) {
+    std::byte* block = (*this)[i].main;
+    std::byte* extras = (*this)[i].extras;
+    construct_part<SnapshotHeader>(block, 0, 1);
+    for (std::size_t part = 0; part < SnapshotShape::kTracked; ++part) {
+      if (s.tracked_bytes[part] <= SnapshotShape::kWhole) continue;
+      const auto chunks =
+          (s.tracked_bytes[part] + SnapshotShape::kChunk - 1) / SnapshotShape::kChunk;
+      construct_part<std::uint32_t>(block, s.changed_at[part], chunks);
+    }
+    construct_part<double>(block, s.tracked_at[SnapshotShape::kRequested], s.behaviours);
+    construct_part<double>(block, s.tracked_at[SnapshotShape::kActivation], s.behaviours);
+    construct_part<char>(block, s.tracked_at[SnapshotShape::kActive], s.behaviours);
+    construct_part<bool>(block, s.tracked_at[SnapshotShape::kWritten], s.actuators);
+    construct_part<std::byte>(block, s.tracked_at[SnapshotShape::kValues],
+                              s.tracked_bytes[SnapshotShape::kValues]);
+    construct_part<SnapshotShape::Machine>(block, s.machines_at, s.machines);
+    construct_part<SnapshotShape::Arg>(block, s.args_at, s.args);
+    construct_part<std::uint32_t>(block, s.queue_at, s.queue);
+    construct_part<SnapshotShape::Report>(extras, s.reports_at, Manager::kEventsPerStep);
+    construct_part<char>(extras, s.texts_at, s.text_bytes);
+    construct_part<Controller::Event>(extras, s.events_at, s.events);
+    construct_part<Controller::EventArg>(extras, s.event_args_at, s.event_args);
+  }
+  if (!s.plain_values) {
+    for (const auto& actuator : layout.actuators) {
+      const auto offset = s.tracked_at[SnapshotShape::kValues] + actuator.offset;
+      constructed_.emplace_back(actuator.type, offset);
+      for (std::size_t i = 0; i < count; ++i) {
+        std::byte* value = (*this)[i].main + offset;
+        actuator.type->construct(value);
+        if (*actuator.type->cpp_type == typeid(std::string)) {
+          static_cast<std::string*>(static_cast<void*>(value))
+              ->reserve(SnapshotShape::kStringBytes);
+        }
       }
     }
-  } else {
-    levels_full = true;
-    std::copy(requested_now, requested_now + behaviours, requested.begin());
-    std::copy(activation_now, activation_now + behaviours, activation.begin());
-    std::copy(active_now, active_now + behaviours, active.begin());
-    if (last != nullptr) {
-      std::copy(requested_now, requested_now + behaviours, last->requested.begin());
-      std::copy(activation_now, activation_now + behaviours, last->activation.begin());
-      std::copy(active_now, active_now + behaviours, last->active.begin());
+  }
+}
+
+namespace {
+
+bool same_chunk(const std::byte* a, const std::byte* b, std::size_t bytes) {
+  if (bytes != SnapshotShape::kChunk) return std::memcmp(a, b, bytes) == 0;
+  // Inline, whole words: a call to memcmp per line would cost more than the compare.
+  std::uint64_t x[SnapshotShape::kChunk / 8];
+  std::uint64_t y[SnapshotShape::kChunk / 8];
+  std::memcpy(x, a, sizeof x);
+  std::memcpy(y, b, sizeof y);
+  std::uint64_t differ = 0;
+  for (std::size_t i = 0; i < SnapshotShape::kChunk / 8; ++i) differ |= x[i] ^ y[i];
+  return differ == 0;
+}
+
+// Copies the chunks of `now` that differ from `kept` to `to` and `kept`, listing them in
+// `changed`: how many. Bytes, not values: -0.0 prints apart from 0.0.
+std::uint32_t copy_changed(const std::byte* now, std::byte* kept, std::byte* to, std::size_t bytes,
+                           std::uint32_t* changed) {
+  if (std::memcmp(now, kept, bytes) == 0) return 0;  // most steps, most parts: one quick pass
+  std::uint32_t count = 0;
+  std::uint32_t chunk = 0;
+  for (std::size_t at = 0; at < bytes; at += SnapshotShape::kChunk, ++chunk) {
+    const auto size = std::min(SnapshotShape::kChunk, bytes - at);
+    if (same_chunk(now + at, kept + at, size)) continue;
+    std::memcpy(to + at, now + at, size);
+    std::memcpy(kept + at, now + at, size);
+    changed[count++] = chunk;
+  }
+  return count;
+}
+
+}  // namespace
+
+bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
+                  SnapshotBlock into, bool may_allocate, StepImage* last, bool chained) {
+  const Program& program = manager.program();
+  std::byte* block = into.main;
+  // Written in place, never read here: the block is cold.
+  SnapshotHeader& header = *part_of<SnapshotHeader>(block, 0);
+  header.step = manager.steps();
+  header.safe = manager.in_safe_pass();
+  header.timed = manager.timed();
+  header.t = manager.step_time();
+  header.duration = manager.step_duration();
+  const std::size_t actuators = shape.actuators;
+  const std::byte* values_now =
+      actuators == 0
+          ? nullptr
+          : static_cast<const std::byte*>(manager.actuator_value(0)) - layout.actuators[0].offset;
+  const std::byte* now[SnapshotShape::kTracked] = {
+      reinterpret_cast<const std::byte*>(manager.requested_levels()),
+      reinterpret_cast<const std::byte*>(manager.activation_levels()),
+      reinterpret_cast<const std::byte*>(manager.active_flags()),
+      reinterpret_cast<const std::byte*>(manager.actuator_written_flags()), values_now};
+  // Values that are not plain bytes are assigned below, in full, at every capture.
+  const std::size_t tracked = shape.plain_values ? SnapshotShape::kTracked : SnapshotShape::kValues;
+  header.full = last == nullptr || !chained;
+  for (std::size_t part = 0; part < tracked; ++part) {
+    const auto bytes = shape.tracked_bytes[part];
+    if (bytes == 0) continue;
+    std::byte* to = block + shape.tracked_at[part];
+    if (bytes <= SnapshotShape::kWhole) {
+      std::memcpy(to, now[part], bytes);  // whole at every capture: `last` has no use for it
+    } else if (header.full) {
+      std::memcpy(to, now[part], bytes);
+      if (last != nullptr) std::memcpy(last->bytes.data() + shape.image_at[part], now[part], bytes);
+    } else {
+      // Compared where they are hot (the manager's and `last`), written to the block, which is
+      // cold, only by the chunk that changed.
+      header.changed_count[part] =
+          copy_changed(now[part], last->bytes.data() + shape.image_at[part], to, bytes,
+                       part_of<std::uint32_t>(block, shape.changed_at[part]));
     }
   }
-  const auto actuators = static_cast<std::uint32_t>(layout.actuators.size());
-  if (actuators > 0 && layout.plain_values) {
-    const auto* values =
-        static_cast<const std::byte*>(manager.actuator_value(0)) - layout.actuators[0].offset;
-    std::memcpy(values_.get(), values, layout.value_bytes);
-  }
-  for (std::uint32_t a = 0; a < actuators; ++a) {
-    written[a] = manager.actuator_written(a) ? 1 : 0;
-    if (layout.plain_values) continue;
-    const auto& actuator = layout.actuators[a];
-    void* to = values_.get() + actuator.offset;
-    const void* from = manager.actuator_value(a);
-    // A string longer than the copy's reserve would allocate.
-    if (!grow && *actuator.type->cpp_type == typeid(std::string) &&
-        static_cast<const std::string*>(from)->size() >
-            static_cast<const std::string*>(to)->capacity()) {
-      return false;
+  if (!shape.plain_values) {
+    std::byte* values = block + shape.tracked_at[SnapshotShape::kValues];
+    for (std::uint32_t a = 0; a < actuators; ++a) {
+      const auto& actuator = layout.actuators[a];
+      void* to = values + actuator.offset;
+      const void* from = manager.actuator_value(a);
+      // A string longer than the copy's reserve would allocate.
+      if (!may_allocate && *actuator.type->cpp_type == typeid(std::string) &&
+          static_cast<const std::string*>(from)->size() >
+              static_cast<const std::string*>(to)->capacity()) {
+        return false;
+      }
+      actuator.type->assign(to, from);
     }
-    actuator.type->assign(to, from);
   }
+  auto* machines = part_of<SnapshotShape::Machine>(block, shape.machines_at);
+  auto* current_args = part_of<SnapshotShape::Arg>(block, shape.args_at);
+  auto* queue = part_of<std::uint32_t>(block, shape.queue_at);
+  auto* events = part_of<Controller::Event>(into.extras, shape.events_at);
+  auto* event_args = part_of<Controller::EventArg>(into.extras, shape.event_args_at);
   std::uint32_t args = 0;
   std::uint32_t queued = 0;
   std::uint32_t event_index = 0;
   std::uint32_t event_arg = 0;
-  for (std::size_t c = 0; c < machines.size(); ++c) {
+  for (std::size_t c = 0; c < shape.machines; ++c) {
     const Controller& controller = *program.controllers[c];
-    Machine& machine = machines[c];
+    SnapshotShape::Machine machine;
     machine.cycle = controller.cycle();
     machine.status = controller.status();
     machine.current = controller.current_state_index();
     machine.planned = controller.current_planned();
     machine.args_begin = args;
     for (const auto& [param, value] : controller.current_args()) {
-      if (args == current_args.size()) {
-        if (!grow) return false;
-        current_args.emplace_back();
-      }
+      if (args == shape.args) return false;
       auto& to = current_args[args++];
       to.first = param;
       if (const auto* v = std::get_if<bool>(&value)) {
@@ -318,6 +419,7 @@ bool StepSnapshot::capture(const Manager& manager, const StepLayout& layout, boo
     }
     machine.args_count = args - machine.args_begin;
     machine.queue_begin = queued;
+    if (queued + controller.queue_size() > shape.queue) return false;
     for (std::size_t i = 0; i < controller.queue_size(); ++i) {
       queue[queued++] = controller.queued_state(i);
     }
@@ -325,24 +427,102 @@ bool StepSnapshot::capture(const Manager& manager, const StepLayout& layout, boo
     machine.events_begin = event_index;
     for (std::size_t e = 0; e < controller.event_count(); ++e) {
       Controller::Event event = controller.events()[e];
+      if (event_index == shape.events || event_arg + event.args_count > shape.event_args) {
+        return false;
+      }
       const auto* first = controller.event_args(event);
       event.args_begin = event_arg;
       for (std::uint32_t i = 0; i < event.args_count; ++i) event_args[event_arg++] = first[i];
       events[event_index++] = event;
     }
     machine.events_count = event_index - machine.events_begin;
+    machines[c] = machine;
   }
-  report_count = manager.event_count();
-  texts.clear();
+  const auto report_count = std::min(manager.event_count(), Manager::kEventsPerStep);
+  auto* reports = part_of<SnapshotShape::Report>(into.extras, shape.reports_at);
+  auto* texts = part_of<char>(into.extras, shape.texts_at);
+  std::uint32_t text_size = 0;
   for (std::size_t e = 0; e < report_count; ++e) {
     const auto& event = manager.event(e);
     const auto size = std::strlen(event.text);
-    if (!grow && texts.size() + size > texts.capacity()) return false;
-    reports[e] = {event.source, static_cast<std::uint32_t>(texts.size()),
-                  static_cast<std::uint32_t>(size)};
-    texts.append(event.text, size);
+    if (text_size + size > shape.text_bytes) return false;
+    reports[e] = {event.source, text_size, static_cast<std::uint32_t>(size)};
+    std::memcpy(texts + text_size, event.text, size);
+    text_size += static_cast<std::uint32_t>(size);
   }
+  header.report_count = static_cast<std::uint32_t>(report_count);
+  header.text_size = text_size;
   return true;
+}
+
+StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)
+    : shape(&s), block(from.main) {
+  const std::byte* b = from.main;
+  const std::byte* extras = from.extras;
+  const auto& header = *part_of<SnapshotHeader>(b, 0);
+  step = header.step;
+  safe = header.safe;
+  timed = header.timed;
+  t = header.t;
+  duration = header.duration;
+  requested = {part_of<double>(b, s.tracked_at[SnapshotShape::kRequested]), s.behaviours};
+  activation = {part_of<double>(b, s.tracked_at[SnapshotShape::kActivation]), s.behaviours};
+  active = {part_of<char>(b, s.tracked_at[SnapshotShape::kActive]), s.behaviours};
+  written = {part_of<bool>(b, s.tracked_at[SnapshotShape::kWritten]), s.actuators};
+  values = b + s.tracked_at[SnapshotShape::kValues];
+  machines = {part_of<Machine>(b, s.machines_at), s.machines};
+  current_args = {part_of<SnapshotShape::Arg>(b, s.args_at), s.args};
+  queue = {part_of<std::uint32_t>(b, s.queue_at), s.queue};
+  events = {part_of<Controller::Event>(extras, s.events_at), s.events};
+  event_args = {part_of<Controller::EventArg>(extras, s.event_args_at), s.event_args};
+  reports = {part_of<Report>(extras, s.reports_at), header.report_count};
+  texts = std::string_view(part_of<char>(extras, s.texts_at), header.text_size);
+}
+
+void StepSnapshot::apply(StepImage& image) {
+  const auto& s = *shape;
+  const auto& header = *part_of<SnapshotHeader>(block, 0);
+  image.bytes.resize(s.image_bytes);
+  const std::size_t tracked = s.plain_values ? SnapshotShape::kTracked : SnapshotShape::kValues;
+  for (std::size_t part = 0; part < tracked; ++part) {
+    const std::byte* from = block + s.tracked_at[part];
+    std::byte* to = image.bytes.data() + s.image_at[part];
+    const auto bytes = s.tracked_bytes[part];
+    if (header.full || bytes <= SnapshotShape::kWhole) {
+      std::copy(from, from + bytes, to);
+      continue;
+    }
+    const auto* changed = part_of<std::uint32_t>(block, s.changed_at[part]);
+    for (std::uint32_t i = 0; i < header.changed_count[part]; ++i) {
+      const auto at = changed[i] * SnapshotShape::kChunk;
+      const auto size = std::min(SnapshotShape::kChunk, bytes - at);
+      std::copy(from + at, from + at + size, to + at);
+    }
+  }
+  const std::byte* from = image.bytes.data();
+  requested = {part_of<double>(from, s.image_at[SnapshotShape::kRequested]), s.behaviours};
+  activation = {part_of<double>(from, s.image_at[SnapshotShape::kActivation]), s.behaviours};
+  active = {part_of<char>(from, s.image_at[SnapshotShape::kActive]), s.behaviours};
+  written = {part_of<bool>(from, s.image_at[SnapshotShape::kWritten]), s.actuators};
+  if (s.plain_values) values = from + s.image_at[SnapshotShape::kValues];
+}
+
+StepSnapshot capture_growing(const Manager& manager, const StepLayout& layout,
+                             SnapshotBlocks& storage) {
+  constexpr std::size_t kTextBytes = 1024;
+  std::size_t text = 0;
+  for (std::size_t e = 0; e < manager.event_count(); ++e)
+    text += std::strlen(manager.event(e).text);
+  if (storage.size() == 0 || storage.shape().text_bytes < text) {
+    storage.reset(layout, std::max({kTextBytes, text, 2 * storage.shape().text_bytes}), 1);
+  }
+  if (!capture_step(manager, layout, storage.shape(), storage[0], true)) {
+    // Every part is sized for the program and the text for this step: only a state-machine
+    // argument of a kind Plan cannot give gets here.
+    throw std::logic_error(
+        fmt::format("step {}: a value the step record cannot hold", manager.steps()));
+  }
+  return StepSnapshot(storage.shape(), storage[0]);
 }
 
 void append_step_record(const StepLayout& layout, const StepSnapshot& step, std::string& out) {
@@ -388,7 +568,7 @@ void append_step_record(const StepLayout& layout, const StepSnapshot& step, std:
     append_name(layout.actuators[a].name, out);
     out += R"(: {"value": )";
     layout.actuators[a].type->append_json(step.value(layout, a), out);
-    out += step.written[a] != 0 ? R"(, "written": true})" : R"(, "written": false})";
+    out += step.written[a] ? R"(, "written": true})" : R"(, "written": false})";
   }
   out += R"(}, "controllers": {)";
   std::vector<std::pair<std::uint32_t, ArgValue>> args;
@@ -457,15 +637,15 @@ void append_step_record(const StepLayout& layout, const StepSnapshot& step, std:
   // What behaviour and interface code reported (StepContext::report): only in steps that have
   // some, so that traces of graphs that report nothing keep the exact shape of docs/semantics.md,
   // "The trace".
-  if (step.report_count > 0) {
+  if (step.reports.size() > 0) {
     out += R"(, "reported": [)";
-    for (std::size_t e = 0; e < step.report_count; ++e) {
+    for (std::size_t e = 0; e < step.reports.size(); ++e) {
       const auto& report = step.reports[e];
       if (e > 0) out += ", ";
       out += R"({"by": )";
       append_name(source_name(layout, report.source), out);
       out += R"(, "text": )";
-      append_json_string(step.texts.substr(report.text_begin, report.text_size), out);
+      append_json_string(std::string(step.texts.substr(report.text_begin, report.text_size)), out);
       out += "}";
     }
     out += "]";
@@ -484,7 +664,7 @@ void append_inputs_record(const StepLayout& layout, const StepSnapshot& step, st
       append_name(layout.actuators[a].name, out);
       out += R"(: {"value": )";
       layout.actuators[a].type->append_json(step.value(layout, a), out);
-      out += step.written[a] != 0 ? R"(, "written": true})" : R"(, "written": false})";
+      out += step.written[a] ? R"(, "written": true})" : R"(, "written": false})";
     }
   }
   out += "}";
@@ -492,7 +672,7 @@ void append_inputs_record(const StepLayout& layout, const StepSnapshot& step, st
   // from the layer that reported it.
   bool reported = false;
   const auto behaviours = layout.behaviours.size();
-  for (std::size_t e = 0; e < step.report_count; ++e) {
+  for (std::size_t e = 0; e < step.reports.size(); ++e) {
     const auto& report = step.reports[e];
     if (report.source < behaviours || report.source - behaviours >= layout.layers.size() ||
         !layout.layers[report.source - behaviours].interface) {
@@ -503,7 +683,7 @@ void append_inputs_record(const StepLayout& layout, const StepSnapshot& step, st
     out += R"({"by": )";
     append_name(layout.layers[report.source - behaviours].name, out);
     out += R"(, "text": )";
-    append_json_string(step.texts.substr(report.text_begin, report.text_size), out);
+    append_json_string(std::string(step.texts.substr(report.text_begin, report.text_size)), out);
     out += "}";
   }
   if (reported) out += "]";

@@ -1,6 +1,6 @@
 #pragma once
 // The step record of the trace (docs/semantics.md, "The trace") and of recordings, in two halves:
-// StepSnapshot::capture() copies a step's values out of the manager into storage sized when the
+// capture_step() copies a step's values out of the manager into a block laid out when the
 // program was loaded (no allocation: a recorder does it on the stepping thread), and
 // append_step_record() formats a snapshot, wherever and whenever it runs (a recorder's writer
 // thread). Both the trace writer and the recorder go through them, so their records are the same
@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "arbiter/controller.hpp"
@@ -57,51 +58,49 @@ struct StepLayout {
   std::vector<Machine> machines;
 };
 
-/// One step's values, as append_step_record() prints them. Sized for a layout by size_for();
-/// capture() then allocates nothing (unless told it may grow).
-class StepSnapshot {
- public:
-  StepSnapshot() = default;
-  ~StepSnapshot();
-  StepSnapshot(const StepSnapshot&) = delete;
-  StepSnapshot& operator=(const StepSnapshot&) = delete;
+/// The scalars at the start of a snapshot's block.
+struct SnapshotHeader {
+  std::uint64_t step = 0;
+  double t = 0.0;
+  double duration = 0.0;
+  std::uint32_t report_count = 0;
+  std::uint32_t text_size = 0;
+  /// False: the tracked parts hold only the chunks listed as changed (see SnapshotShape).
+  bool full = true;
+  bool safe = false;
+  bool timed = false;
+  std::uint32_t changed_count[5] = {};  // per SnapshotShape::Tracked
+};
 
-  /// Storage for every value of `layout`'s program, and `text_bytes` of reported text.
-  void size_for(const StepLayout& layout, std::size_t text_bytes);
-  /// The behaviours' levels and active flags, the bulk of a big graph's step.
-  struct Levels {
-    std::vector<double> requested;
-    std::vector<double> activation;
-    std::vector<char> active;
-  };
-  /// Behaviours per block of levels that a chained capture copies or skips as one.
-  static constexpr std::size_t kLevelBlock = 8;
+/// Where a step's values lie in a snapshot's block of bytes, laid out once for a layout. A
+/// capture computes every address from it and only writes the block, never reads it: a
+/// recorder's ring cycles through many blocks, each cold when its turn comes, and a store to a
+/// cold line costs the stepping thread little, a load from one a wait.
+///
+/// The tracked parts, the bulk of a big graph's step, are copied whole or, by a chained capture,
+/// only by the chunks (cache lines) that changed since the capture before: each part starts a
+/// line, so a changed chunk is one line to write. What most steps write comes first; reports and
+/// state-machine events, seldom written, last.
+struct SnapshotShape {
+  SnapshotShape() = default;
+  SnapshotShape(const StepLayout& layout, std::size_t text_bytes);
 
-  /// Copies the manager's last step (or safe pass). False when something does not fit the
-  /// storage (reported text, a string value longer than its reserve) and `grow` is false: the
-  /// snapshot is then incomplete and must not be formatted. With `grow`, it makes room.
-  /// With `last` (the levels as the previous snapshot left them, kept up to date here) and
-  /// `chained` (that snapshot will be formatted just before this one), only the blocks of levels
-  /// that changed are copied (levels_full false): a reader brings its own levels up to date
-  /// with apply_levels(), in order.
-  bool capture(const Manager& manager, const StepLayout& layout, bool grow = false,
-               Levels* last = nullptr, bool chained = false);
-  /// Brings `current` (a reader's levels, of the snapshots before this one) up to this one's.
-  void apply_levels(Levels& current) const;
-  /// Exchanges the snapshot's levels with `levels`: after apply_levels(), so that the snapshot
-  /// holds all of them to be formatted; again after, to give them back.
-  void swap_levels(Levels& levels) {
-    requested.swap(levels.requested);
-    activation.swap(levels.activation);
-    active.swap(levels.active);
-  }
+  /// The behaviours' requested and activation levels and active flags, the actuators' written
+  /// flags and values (values only when they are plain bytes: a string is copied as a string).
+  enum Tracked : std::size_t { kRequested, kActivation, kActive, kWritten, kValues, kTracked };
+  static constexpr std::size_t kChunk = 64;
+  /// A part this small is copied whole at every capture: comparing it would cost more.
+  static constexpr std::size_t kWhole = 4 * kChunk;
+  /// What a string value may hold in a block: a capture that may not allocate fails on a longer
+  /// one (a recorder drops that step).
+  static constexpr std::size_t kStringBytes = 256;
 
   struct Machine {
     std::uint64_t cycle = 0;
     ControllerStatus status = ControllerStatus::kRunning;
     std::uint32_t current = kNoState;  // state index
     const std::vector<Param>* planned = nullptr;
-    std::uint32_t args_begin = 0, args_count = 0;  // into current_args
+    std::uint32_t args_begin = 0, args_count = 0;  // into the args
     std::uint32_t queue_begin = 0, queue_count = 0;
     std::uint32_t events_begin = 0, events_count = 0;
   };
@@ -109,39 +108,138 @@ class StepSnapshot {
     std::uint32_t source = 0;
     std::uint32_t text_begin = 0, text_size = 0;
   };
+  using Arg = std::pair<std::uint32_t, ArgValue>;
 
+  std::size_t behaviours = 0, actuators = 0, machines = 0;
+  std::size_t args = 0, queue = 0, events = 0, event_args = 0, text_bytes = 0;
+  /// Every value is plain bytes: the values are tracked.
+  bool plain_values = true;
+  /// Per tracked part: its bytes, where it starts in a block and in a StepImage, and where the
+  /// list of its changed chunks starts in a block.
+  std::size_t tracked_bytes[kTracked] = {};
+  std::size_t tracked_at[kTracked] = {};
+  std::size_t image_at[kTracked] = {};
+  std::size_t changed_at[kTracked] = {};
+  std::size_t image_bytes = 0;
+  /// Where the other parts start in a block (the header at 0).
+  std::size_t machines_at = 0, args_at = 0, queue_at = 0;
+  std::size_t bytes = 0;  ///< a block's: whole cache lines, so that blocks share none
+  /// Where the seldom written parts start in a block's extras, and their bytes.
+  std::size_t reports_at = 0, texts_at = 0, events_at = 0, event_args_at = 0;
+  std::size_t extra_bytes = 0;
+};
+
+/// Where one snapshot is: its block, and the block's extras (SnapshotShape).
+struct SnapshotBlock {
+  std::byte* main = nullptr;
+  std::byte* extras = nullptr;
+};
+
+static_assert(sizeof(SnapshotHeader::changed_count) / sizeof(std::uint32_t) ==
+              SnapshotShape::kTracked);
+
+/// The tracked parts of a step in full, laid out by a shape: the stepping side's, as its last
+/// capture left them, or a reader's, brought up to date by the snapshots in order.
+struct StepImage {
+  std::vector<std::byte> bytes;
+};
+
+/// Blocks of one shape, one after another: one for a trace writer, a ring of them for a
+/// recorder. Each is ready to capture into; the values of types that own memory (strings) are
+/// constructed in every block, with their reserve, and destroyed here.
+class SnapshotBlocks {
+ public:
+  SnapshotBlocks() = default;
+  ~SnapshotBlocks();
+  SnapshotBlocks(const SnapshotBlocks&) = delete;
+  SnapshotBlocks& operator=(const SnapshotBlocks&) = delete;
+
+  /// `count` blocks for `layout`'s program, each with room for `text_bytes` of reported text.
+  void reset(const StepLayout& layout, std::size_t text_bytes, std::size_t count);
+  const SnapshotShape& shape() const { return shape_; }
+  std::size_t size() const { return count_; }
+  SnapshotBlock operator[](std::size_t index) const {
+    return {data_ + index * shape_.bytes,
+            data_ + count_ * shape_.bytes + index * shape_.extra_bytes};
+  }
+
+ private:
+  void release();
+  SnapshotShape shape_;
+  std::size_t count_ = 0;
+  std::byte* data_ = nullptr;
+  // The values that are not plain bytes: constructed per type at these offsets of each block.
+  std::vector<std::pair<const ValueType*, std::size_t>> constructed_;
+};
+
+/// Copies the manager's last step (or safe pass) into `block`, of `shape`. False when something
+/// does not fit (more reported text than the block holds; without `may_allocate`, a string value
+/// longer than its reserve): the block is then incomplete and must not be read.
+/// With `last` (the tracked parts as the capture before left them, kept up to date here) and
+/// `chained` (that capture will be read just before this one), only the chunks that changed are
+/// copied: a reader brings its own image up to date with StepSnapshot::apply(), in order.
+bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
+                  SnapshotBlock block, bool may_allocate = false, StepImage* last = nullptr,
+                  bool chained = false);
+
+/// A contiguous run of T in a block, as a reader sees it.
+template <typename T>
+class Span {
+ public:
+  Span() = default;
+  Span(const T* data, std::size_t size) : data_(data), size_(size) {}
+  const T* data() const { return data_; }
+  std::size_t size() const { return size_; }
+  const T* begin() const { return data_; }
+  const T* end() const { return data_ + size_; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+
+ private:
+  const T* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+/// One step's values, as append_step_record() prints them: a reader's view of a captured block.
+struct StepSnapshot {
+  StepSnapshot(const SnapshotShape& shape, SnapshotBlock block);
+
+  /// Brings `image` (a reader's, of the snapshots before this one) up to this one, and reads
+  /// the tracked parts from it from now on: the block holds only those that changed when the
+  /// capture was chained.
+  void apply(StepImage& image);
+
+  using Machine = SnapshotShape::Machine;
+  using Report = SnapshotShape::Report;
+
+  const SnapshotShape* shape = nullptr;
+  const std::byte* block = nullptr;
   std::uint64_t step = 0;
   bool safe = false;
   bool timed = false;
   double t = 0.0;
   double duration = 0.0;
-  std::vector<double> requested;
-  std::vector<double> activation;
-  std::vector<char> active;
-  /// False: requested, activation and active hold only the blocks in changed_blocks.
-  bool levels_full = true;
-  std::vector<std::uint32_t> changed_blocks;
-  std::size_t changed_count = 0;
-  std::vector<char> written;
-  std::vector<Machine> machines;
-  std::vector<std::pair<std::uint32_t, ArgValue>> current_args;
-  std::vector<std::uint32_t> queue;
-  std::vector<Controller::Event> events;  // args_begin rebased into event_args
-  std::vector<Controller::EventArg> event_args;
-  std::size_t report_count = 0;
-  std::vector<Report> reports;
-  std::string texts;
+  Span<double> requested;
+  Span<double> activation;
+  Span<char> active;
+  Span<bool> written;
+  const std::byte* values = nullptr;
+  Span<Machine> machines;
+  Span<SnapshotShape::Arg> current_args;
+  Span<std::uint32_t> queue;
+  Span<Controller::Event> events;  // args_begin rebased into event_args
+  Span<Controller::EventArg> event_args;
+  Span<Report> reports;
+  std::string_view texts;
 
   const void* value(const StepLayout& layout, std::uint32_t actuator) const {
-    return values_.get() + layout.actuators[actuator].offset;
+    return values + layout.actuators[actuator].offset;
   }
-
- private:
-  void release();
-  std::unique_ptr<std::byte[]> values_;
-  // What values_ holds when the values are not plain: constructed per type, destroyed here.
-  std::vector<std::pair<const ValueType*, std::size_t>> constructed_;
 };
+
+/// A snapshot of the manager's last step in `storage` (one block, made over for `layout` when it
+/// is not yet, and grown until the step's reported text fits): for those that may allocate.
+StepSnapshot capture_growing(const Manager& manager, const StepLayout& layout,
+                             SnapshotBlocks& storage);
 
 /// The step record of a snapshot, without the newline.
 void append_step_record(const StepLayout& layout, const StepSnapshot& step, std::string& out);

@@ -138,16 +138,14 @@ std::string trace_header(const Program& program) {
 
 void append_step_record(const Manager& manager, std::string& out) {
   const detail::StepLayout layout(manager.program());
-  detail::StepSnapshot step;
-  step.size_for(layout, 0);
-  step.capture(manager, layout, true);
-  detail::append_step_record(layout, step, out);
+  detail::SnapshotBlocks storage;
+  detail::append_step_record(layout, detail::capture_growing(manager, layout, storage), out);
 }
 
 struct StepRecordFormatter::State {
-  explicit State(const Program& program) : layout(program) { snapshot.size_for(layout, 1024); }
+  explicit State(const Program& program) : layout(program) {}
   detail::StepLayout layout;
-  detail::StepSnapshot snapshot;
+  detail::SnapshotBlocks storage;
 };
 
 StepRecordFormatter::StepRecordFormatter() = default;
@@ -159,8 +157,8 @@ void StepRecordFormatter::reset(const Program& program) {
 
 void StepRecordFormatter::append(const Manager& manager, std::string& out) {
   if (!state_) reset(manager.program());
-  state_->snapshot.capture(manager, state_->layout, true);
-  detail::append_step_record(state_->layout, state_->snapshot, out);
+  detail::append_step_record(
+      state_->layout, detail::capture_growing(manager, state_->layout, state_->storage), out);
 }
 
 void TraceWriter::on_start(const Manager& manager) {

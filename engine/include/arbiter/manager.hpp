@@ -137,6 +137,8 @@ class Manager {
   bool actuator_written(std::uint32_t actuator) const {
     return run_.actuator_written[actuator] != 0;
   }
+  /// The same of every actuator, by index, for observers that copy them whole.
+  const bool* actuator_written_flags() const { return run_.actuator_written.get(); }
   /// Events that behaviour and interface code reported in the last step (StepContext::report).
   std::size_t event_count() const { return std::min(data_.event_count, data_.event_capacity); }
   const detail::StepData::Event& event(std::size_t index) const { return events_[index]; }

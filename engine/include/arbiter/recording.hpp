@@ -21,7 +21,7 @@ namespace arbiter {
 
 namespace detail {
 struct StepLayout;
-class StepSnapshot;
+struct SnapshotBlock;
 }  // namespace detail
 
 /// What a recording keeps besides the steps, for replaying the run.
@@ -68,6 +68,9 @@ class Recorder : public Observer {
 
  private:
   struct Slot;
+  /// The slot after `index`: a compare, not a modulo, whose division would cost the stepping
+  /// thread more than the rest of publishing a step.
+  std::size_t after(std::size_t index) const { return index + 1 == ring_size_ ? 0 : index + 1; }
   Slot* claim();
   /// claim(), waiting for the writer to free a slot: for what must never be dropped.
   Slot* claim_waiting();
@@ -78,8 +81,10 @@ class Recorder : public Observer {
   void size_ring(const Manager& manager);
   void publish();
   void write_loop();
+  /// Where the step values of `slot` are.
+  detail::SnapshotBlock block(const Slot* slot) const;
   /// The writer's: a slot's step record (and inputs message), its levels brought up to date.
-  void format_step(detail::StepSnapshot& snapshot, std::string& record, std::string* inputs);
+  void format_step(const Slot& slot, std::string& record, std::string* inputs);
 
   std::FILE* file_ = nullptr;
   RecordingInfo info_;
