@@ -327,9 +327,12 @@ int run(const Options& options) {
   }
   std::unique_ptr<arbiter::Recorder> recorder;  // --record
   if (!options.record_path.empty()) {
+    // Paced, a step the writer has no room for is dropped rather than the pace lost; flat out,
+    // the run waits for the writer and the recording loses nothing.
     recorder = std::make_unique<arbiter::Recorder>(
         options.record_path,
-        arbiter::cli::recording_info(options.file, registry, load_options_of(options), kVersion));
+        arbiter::cli::recording_info(options.file, registry, load_options_of(options), kVersion),
+        256, options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
     if (!recorder->ok()) {
       std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);
       return kExitUsage;
@@ -408,8 +411,8 @@ int run(const Options& options) {
   manager.finish();  // outputs the safe values, whatever ended the run
   if (recorder && recorder->dropped() > 0) {
     std::cerr << fmt::format(
-        "arbiter run: the recording dropped {} steps (the disk kept up too "
-        "slowly); each gap is recorded\n",
+        "arbiter run: the recording dropped {} steps (its writer fell behind the paced "
+        "steps); each gap is recorded\n",
         recorder->dropped());
   }
   if (!options.quiet) {
@@ -589,7 +592,9 @@ int main(int argc, char** argv) {
   run_cmd
       ->add_option("--record", options.record_path,
                    "record the run as MCAP (steps, interface inputs, the config) for "
-                   "'arbiter replay', 'arbiter diff' and Foxglove")
+                   "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
+                   "for the recording's writer; paced (--realtime, --serve), a step it has no "
+                   "room for is dropped and the gap recorded")
       ->type_name("RUN.mcap");
   run_cmd->add_flag("--quiet,-q", options.quiet, "print nothing but errors");
   run_cmd->add_flag("--realtime", options.realtime,

@@ -154,9 +154,10 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   std::unique_ptr<Recorder> recorder;
   if (!options.record.empty()) {
     recorder = std::make_unique<Recorder>(
-        options.record, options.config.empty()
-                            ? run->info
-                            : recording_info(config, registry, options.load, options.version));
+        options.record,
+        options.config.empty() ? run->info
+                               : recording_info(config, registry, options.load, options.version),
+        256, RingFull::kWaitForWriter);  // a replay keeps no pace: it loses nothing
     if (!recorder->ok()) {
       err << fmt::format("arbiter replay: cannot write '{}'\n", options.record);
       return 2;

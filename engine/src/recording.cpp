@@ -106,11 +106,13 @@ struct Recorder::Output {
   } blocks;
 };
 
-Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots)
+Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots,
+                   RingFull ring_full)
     : file_(std::fopen(path.c_str(), "wb")),
       info_(std::move(info)),
       ring_(std::make_unique<Slot[]>(slots + 1)),
-      ring_size_(slots + 1) {
+      ring_size_(slots + 1),
+      ring_full_(ring_full) {
   if (file_ != nullptr) out_ = std::make_unique<Output>(file_);
 }
 
@@ -192,7 +194,7 @@ void Recorder::size_ring(const Manager& manager) {
 
 void Recorder::on_step(const Manager& manager) {
   if (!started_) return;
-  Slot* slot = claim();
+  Slot* slot = ring_full_ == RingFull::kWaitForWriter ? claim_waiting() : claim();
   if (slot == nullptr ||
       !detail::capture_step(manager, *layout_, out_->blocks.of.shape(), block(slot), false,
                             &out_->stepping.last, out_->stepping.chained)) {

@@ -32,13 +32,22 @@ struct RecordingInfo {
   std::string version;  ///< Arbiter's
 };
 
+/// What a recorder does with a step when every slot of its ring still waits for the writer.
+enum class RingFull {
+  /// Drops the step (dropped() counts it, the file records the gap): a paced run keeps its pace.
+  kDropStep,
+  /// Waits for the writer to free a slot: a run that is not paced loses nothing.
+  kWaitForWriter,
+};
+
 /// Records a run into an MCAP file. The stepping thread only copies the step into a ring of
 /// slots allocated when the run starts; a writer thread compresses and writes them. When the
-/// writer falls behind, whole steps are dropped (dropped() counts them, the file records each gap).
+/// writer falls behind, whole steps are dropped or waited for (RingFull).
 class Recorder : public Observer {
  public:
   /// `slots` steps may wait for the writer. Open fails (ok() false) when `path` cannot be written.
-  Recorder(const std::string& path, RecordingInfo info, std::size_t slots = 256);
+  Recorder(const std::string& path, RecordingInfo info, std::size_t slots = 256,
+           RingFull ring_full = RingFull::kDropStep);
   ~Recorder() override;
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
@@ -104,6 +113,7 @@ class Recorder : public Observer {
   std::thread writer_;
   struct Output;
   std::unique_ptr<Output> out_;
+  RingFull ring_full_ = RingFull::kDropStep;
   std::uint64_t wall_start_ns_ = 0;
   bool started_ = false;
   bool finished_ = false;
