@@ -7,6 +7,7 @@
 #include <memory>
 #include <new>
 #include <stdexcept>
+#include <type_traits>
 #include <typeinfo>
 
 namespace arbiter::detail {
@@ -295,6 +296,29 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
 
 namespace {
 
+// Fixed-size moves the compiler inlines: a small graph's parts are a few dozen bytes each, and a
+// call to memcpy for each would cost the step more than the copying. Up to 64 bytes, two moves
+// that may overlap cover any size.
+void copy_bytes(std::byte* to, const std::byte* from, std::size_t bytes) {
+  const auto two = [&](auto size) {
+    std::memcpy(to, from, size);
+    std::memcpy(to + bytes - size, from + bytes - size, size);
+  };
+  if (bytes > 64) {
+    std::memcpy(to, from, bytes);
+  } else if (bytes >= 32) {
+    two(std::integral_constant<std::size_t, 32>());
+  } else if (bytes >= 16) {
+    two(std::integral_constant<std::size_t, 16>());
+  } else if (bytes >= 8) {
+    two(std::integral_constant<std::size_t, 8>());
+  } else if (bytes >= 4) {
+    two(std::integral_constant<std::size_t, 4>());
+  } else {
+    for (std::size_t at = 0; at < bytes; ++at) to[at] = from[at];
+  }
+}
+
 bool same_chunk(const std::byte* a, const std::byte* b, std::size_t bytes) {
   if (bytes != SnapshotShape::kChunk) return std::memcmp(a, b, bytes) == 0;
   // Inline, whole words: a call to memcmp per line would cost more than the compare.
@@ -355,7 +379,7 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
     if (bytes == 0) continue;
     std::byte* to = block + shape.tracked_at[part];
     if (bytes <= SnapshotShape::kWhole) {
-      std::memcpy(to, now[part], bytes);  // whole at every capture: `last` has no use for it
+      copy_bytes(to, now[part], bytes);  // whole at every capture: `last` has no use for it
     } else if (header.full) {
       std::memcpy(to, now[part], bytes);
       if (last != nullptr) std::memcpy(last->bytes.data() + shape.image_at[part], now[part], bytes);
