@@ -5,6 +5,8 @@
 #include <spdlog/sinks/null_sink.h>
 #include <spdlog/spdlog.h>
 
+#include <pthread.h>
+#include <sched.h>
 #include <time.h>
 
 #include <algorithm>
@@ -70,6 +72,30 @@ void step(benchmark::State& state, Graph graph, const std::string& behaviour_cla
       static_cast<double>(manager.program().inhibitions.recipes().terms.size());
 }
 
+/// Keeps the calling thread on `cpu` until destroyed (where the machine has it): threads it starts
+/// meanwhile start there too.
+class PinnedTo {
+ public:
+  explicit PinnedTo(int cpu) {
+    pinned_ = pthread_getaffinity_np(pthread_self(), sizeof before_, &before_) == 0 &&
+              CPU_COUNT(&before_) > 1 && CPU_ISSET(cpu, &before_);
+    if (!pinned_) return;
+    cpu_set_t only;
+    CPU_ZERO(&only);
+    CPU_SET(cpu, &only);
+    pthread_setaffinity_np(pthread_self(), sizeof only, &only);
+  }
+  ~PinnedTo() {
+    if (pinned_) pthread_setaffinity_np(pthread_self(), sizeof before_, &before_);
+  }
+  PinnedTo(const PinnedTo&) = delete;
+  PinnedTo& operator=(const PinnedTo&) = delete;
+
+ private:
+  cpu_set_t before_{};
+  bool pinned_ = false;
+};
+
 /// The step with a Recorder attached, against the same graph without (the stepping thread's CPU
 /// time only: the writer thread compresses on another core). `soccer`: the soccer demo (its
 /// plugin built beside), else the generated `graph` of N behaviours.
@@ -106,20 +132,28 @@ void record(benchmark::State& state, Graph graph, bool soccer) {
   {
     constexpr std::size_t kRecordSlots = 1024;
     constexpr std::size_t kBatch = kRecordSlots / 4;
+    // The stepping thread on one CPU and the writer on another, as a robot would pin them: left
+    // to the scheduler, either moved now and then, and each move cost one kind of batch more
+    // than the other. The writer starts on the first recorded step, where its creator is.
+    std::optional<PinnedTo> stepping_cpu;
     Recorder recorder(path.string(), info, kRecordSlots);
     recorded.add_observer(recorder);
     plain.step();
-    recorded.step();
+    {
+      PinnedTo writer_cpu(1);
+      recorded.step();
+    }
+    stepping_cpu.emplace(0);
     double plain_total = 0.0;
     double recorded_total = 0.0;
     // Steps are timed in batches: the clock is a system call here, dearer than a small step.
-    // Before each batch the writer catches up, untimed: stepping as fast as it can, the
-    // stepping thread outruns it (formatting and compressing a step cost more than the step),
-    // and every timed step must find a free slot, as a dropped step would cost nothing. So the
-    // plain batch runs with the writer idle and the recorded one beside it, as recording runs;
-    // both start after the same pause, in alternating order, so neither finds the caches warmer.
+    // Before each batch the writer is woken and catches up, untimed: stepping as fast as it can,
+    // the stepping thread outruns it (formatting and compressing a step cost more than the
+    // step), and every timed step must find a free slot, as a dropped step would cost nothing.
+    // During a batch the writer keeps to its period, as in a paced run. Both batches start after
+    // the same pause, in alternating order, so neither finds the caches warmer.
     const auto batch = [&](Manager& manager, double& total) {
-      while (recorder.backlog() > 0) std::this_thread::sleep_for(std::chrono::microseconds(50));
+      recorder.drain();
       std::this_thread::sleep_for(std::chrono::microseconds(200));
       const double start = cpu_seconds();
       for (std::size_t i = 0; i < kBatch; ++i) manager.step();

@@ -207,7 +207,7 @@ void check_recording_matches_trace(const fs::path& config, const std::string& or
         REQUIRE(reloader.reload(manager).staged);
       }
       manager.step();
-      if (i % 7 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(2));  // catch up
+      if (i % 7 == 0) recorder.drain();
     }
     manager.finish();
     dropped = recorder.dropped();

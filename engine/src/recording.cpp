@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 
 #include "arbiter/trace.hpp"
@@ -73,8 +74,11 @@ void append_inputs_record(const Manager& manager, std::string& out) {
 // Cache-line aligned: the stepping thread fills one slot while the writer reads an earlier one.
 // A step's values are in the slot's block (Output::Blocks), of the same index.
 struct alignas(64) Recorder::Slot {
-  enum class Kind { kStep, kSafe, kHeader, kEnd };
-  Kind kind = Kind::kStep;
+  // A step or a safe pass is in the slot's block, which says which, and its step and time: the
+  // stepping thread writes nothing here for it. Only a reload header or the end is marked here,
+  // and the writer marks the slot back once it has written them.
+  enum class Kind { kSnapshot, kHeader, kEnd };
+  Kind kind = Kind::kSnapshot;
   std::uint64_t step = 0;
   std::uint64_t log_time = 0;
   std::string header;                                      // kHeader
@@ -121,6 +125,7 @@ Recorder::~Recorder() {
     Slot* slot = claim_waiting();
     slot->kind = Slot::Kind::kEnd;
     publish();
+    wake_writer();
   }
   if (writer_.joinable()) writer_.join();
   if (file_ != nullptr) std::fclose(file_);
@@ -177,9 +182,8 @@ void Recorder::on_start(const Manager& manager) {
   writer_ = std::thread([this] { write_loop(); });
 }
 
-inline std::uint64_t Recorder::log_time(const Manager& manager) const {
-  const double since_start = manager.timed() ? manager.step_time() : 0.0;
-  return wall_start_ns_ + static_cast<std::uint64_t>(since_start * 1e9);
+std::uint64_t Recorder::log_time(bool timed, double step_time) const {
+  return wall_start_ns_ + (timed ? static_cast<std::uint64_t>(step_time * 1e9) : 0);
 }
 
 // Reported text a slot holds; a step that reported more is dropped.
@@ -190,6 +194,15 @@ void Recorder::size_ring(const Manager& manager) {
   out_->blocks.of.reset(*layout_, kReportTextBytes, ring_size_);
   out_->stepping.last.bytes.assign(out_->blocks.of.shape().image_bytes, std::byte{0});
   out_->stepping.chained = false;
+  // The writer wakes a few times in the while the ring takes to fill at the config's rate: a
+  // robot's CPU has better to do than wake it every millisecond, and its bursts of formatting
+  // and compressing then seldom meet a step. Flat out, where the stepping thread waits for it,
+  // it wakes every millisecond.
+  constexpr double kFewest = 1e-3, kMost = 50e-3;  // seconds
+  const double fill = static_cast<double>(ring_size_ - 1) / manager.program().rate_hz;
+  const double period =
+      ring_full_ == RingFull::kWaitForWriter ? kFewest : std::clamp(fill / 4, kFewest, kMost);
+  writer_period_us_.store(static_cast<std::int64_t>(period * 1e6));
 }
 
 void Recorder::on_step(const Manager& manager) {
@@ -203,16 +216,29 @@ void Recorder::on_step(const Manager& manager) {
     return;
   }
   out_->stepping.chained = true;
-  slot->kind = Slot::Kind::kStep;
-  slot->step = manager.steps();
-  slot->log_time = log_time(manager);
   publish();
 }
 
 Recorder::Slot* Recorder::claim_waiting() {
-  Slot* slot = nullptr;
+  Slot* slot = claim();
+  if (slot != nullptr) return slot;
+  wake_writer();
   while ((slot = claim()) == nullptr) std::this_thread::yield();
   return slot;
+}
+
+void Recorder::wake_writer() {
+  {
+    std::lock_guard<std::mutex> lock(wake_mutex_);
+    wake_requested_ = true;
+  }
+  wake_.notify_one();
+}
+
+void Recorder::drain() {
+  if (!started_ || finished_) return;
+  wake_writer();
+  while (backlog() > 0) std::this_thread::sleep_for(std::chrono::microseconds(50));
 }
 
 void Recorder::on_safe(const Manager& manager) {
@@ -225,9 +251,6 @@ void Recorder::on_safe(const Manager& manager) {
     out_->stepping.chained = false;
     return;
   }
-  slot->kind = Slot::Kind::kSafe;
-  slot->step = manager.steps();
-  slot->log_time = log_time(manager);
   out_->stepping.chained = true;
   publish();
 }
@@ -243,6 +266,7 @@ void Recorder::on_reload(const Manager& manager) {
   // them all before the layout and the slots are made over for the new one. (Their state
   // machines' config params point into the replaced program: the Manager frees it only after
   // every observer's on_reload() returned.)
+  wake_writer();
   while (tail_.load(std::memory_order_acquire) != head_.load(std::memory_order_relaxed)) {
     std::this_thread::yield();
   }
@@ -251,7 +275,7 @@ void Recorder::on_reload(const Manager& manager) {
   Slot* slot = claim_waiting();
   slot->kind = Slot::Kind::kHeader;
   slot->step = manager.steps();
-  slot->log_time = log_time(manager);
+  slot->log_time = log_time(manager.timed(), manager.step_time());
   slot->header = reload_header(manager);
   {
     std::lock_guard<std::mutex> lock(staged_mutex_);
@@ -267,17 +291,9 @@ void Recorder::on_finish(const Manager&) {
   Slot* slot = claim_waiting();
   slot->kind = Slot::Kind::kEnd;
   publish();
+  wake_writer();
   writer_.join();
   finished_ = true;
-}
-
-void Recorder::format_step(const Slot& slot, std::string& record, std::string* inputs) {
-  // The writer only reads the block: a line it wrote would have to come back to the stepping
-  // thread's core before that could fill the slot again.
-  detail::StepSnapshot step(out_->blocks.of.shape(), block(&slot));
-  step.apply(out_->image);
-  detail::append_step_record(*layout_, step, record);
-  if (inputs != nullptr) detail::append_inputs_record(*layout_, step, *inputs);
 }
 
 void Recorder::write_loop() {
@@ -288,7 +304,10 @@ void Recorder::write_loop() {
     if (tail == head_seen) {
       head_seen = head_.load(std::memory_order_acquire);
       if (tail == head_seen) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        std::unique_lock<std::mutex> lock(wake_mutex_);
+        wake_.wait_for(lock, std::chrono::microseconds(writer_period_us_.load()),
+                       [this] { return wake_requested_; });
+        wake_requested_ = false;
         continue;
       }
     }
@@ -305,23 +324,30 @@ void Recorder::write_loop() {
       out.writer.metadata("arbiter.reload", reload);
       out.writer.message(out.header, slot.log_time, slot.header);
       out.last_step = slot.step;
-    } else if (slot.kind == Slot::Kind::kSafe) {
-      out.record.clear();
-      format_step(slot, out.record, nullptr);
-      out.writer.message(out.step, slot.log_time, out.record);  // no inputs: nothing was read
+      slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
     } else {
-      if (slot.step > out.last_step + 1) {
-        const auto gap = slot.step - out.last_step - 1;
-        out.dropped += gap;
-        out.writer.metadata("arbiter.gap", {{"after_step", std::to_string(out.last_step)},
-                                            {"dropped", std::to_string(gap)}});
-      }
-      out.last_step = slot.step;
+      // The writer only reads the block: a line it wrote would have to come back to the
+      // stepping thread's core before that could fill the slot again.
+      detail::StepSnapshot step(out_->blocks.of.shape(), block(&slot));
+      step.apply(out.image);
+      const auto time = log_time(step.timed, step.t);
       out.record.clear();
-      out.inputs_record.clear();
-      format_step(slot, out.record, &out.inputs_record);
-      out.writer.message(out.step, slot.log_time, out.record);
-      out.writer.message(out.inputs, slot.log_time, out.inputs_record);
+      detail::append_step_record(*layout_, step, out.record);
+      if (step.safe) {
+        out.writer.message(out.step, time, out.record);  // no inputs: nothing was read
+      } else {
+        if (step.step > out.last_step + 1) {
+          const auto gap = step.step - out.last_step - 1;
+          out.dropped += gap;
+          out.writer.metadata("arbiter.gap", {{"after_step", std::to_string(out.last_step)},
+                                              {"dropped", std::to_string(gap)}});
+        }
+        out.last_step = step.step;
+        out.inputs_record.clear();
+        detail::append_inputs_record(*layout_, step, out.inputs_record);
+        out.writer.message(out.step, time, out.record);
+        out.writer.message(out.inputs, time, out.inputs_record);
+      }
     }
     tail_.store(after(tail), std::memory_order_release);
   }

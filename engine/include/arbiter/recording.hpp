@@ -4,6 +4,7 @@
 // docs/replay.md describes the file.
 
 #include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -62,6 +63,9 @@ class Recorder : public Observer {
   void on_finish(const Manager& manager) override;
 
   std::uint64_t dropped() const { return dropped_total_.load(); }
+  /// Wakes the writer and waits until it has written every step copied so far. Not from the
+  /// stepping thread while the manager steps: it makes system calls.
+  void drain();
   /// Steps copied and not yet written (any thread).
   std::size_t backlog() const {
     const auto head = head_.load(std::memory_order_acquire);
@@ -83,17 +87,18 @@ class Recorder : public Observer {
   Slot* claim();
   /// claim(), waiting for the writer to free a slot: for what must never be dropped.
   Slot* claim_waiting();
+  /// Wakes the writer before its period is up: a system call, never made in a step that finds
+  /// room.
+  void wake_writer();
   /// A message's log time: the wall clock at the run's start plus the step's "t" (the manager's
   /// clock; a manager without one logs every step at the start).
-  std::uint64_t log_time(const Manager& manager) const;
+  std::uint64_t log_time(bool timed, double step_time) const;
   /// Lays the ring out for the manager's program: what a step copies is sized here.
   void size_ring(const Manager& manager);
   void publish();
   void write_loop();
   /// Where the step values of `slot` are.
   detail::SnapshotBlock block(const Slot* slot) const;
-  /// The writer's: a slot's step record (and inputs message), its levels brought up to date.
-  void format_step(const Slot& slot, std::string& record, std::string* inputs);
 
   std::FILE* file_ = nullptr;
   RecordingInfo info_;
@@ -110,6 +115,11 @@ class Recorder : public Observer {
   std::unique_ptr<detail::StepLayout> layout_;
   std::mutex staged_mutex_;
   std::optional<std::vector<std::pair<std::string, std::string>>> staged_files_;
+  // The writer sleeps this long whenever it has caught up, unless woken (wake_writer()).
+  std::atomic<std::int64_t> writer_period_us_{1000};
+  std::mutex wake_mutex_;
+  std::condition_variable wake_;
+  bool wake_requested_ = false;  // by wake_mutex_
   std::thread writer_;
   struct Output;
   std::unique_ptr<Output> out_;
