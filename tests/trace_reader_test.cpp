@@ -247,3 +247,34 @@ TEST_CASE("a recording's step records are the trace's lines of the same run, byt
     check_recording_matches_trace(dir.path() / "wide.yaml", wide_config(true), false);
   }
 }
+
+TEST_CASE("a recorder asked for no slots keeps one, and records a run it is drained in",
+          "[trace_reader][record]") {
+  // Without a slot every step would drop, and the end of the recording would wait for room
+  // forever.
+  TempDir dir;
+  Registry registry = make_test_registry();
+  Diagnostics diagnostics;
+  auto program = load(std::string(ARBITER_SOURCE_DIR) + "/configs/paper/goalie_plan.yaml", registry,
+                      diagnostics);
+  INFO(format(diagnostics));
+  REQUIRE(program);
+  Manager manager(std::move(*program));
+  const auto path = dir / "run.mcap";
+  {
+    Recorder recorder(path.string(), RecordingInfo{{}, {}, "test"}, 0);
+    REQUIRE(recorder.ok());
+    manager.add_observer(recorder);
+    for (int i = 0; i < 30; ++i) {
+      manager.step();
+      recorder.drain();
+    }
+    manager.finish();
+    CHECK(recorder.dropped() == 0);
+  }
+  Diagnostic error;
+  const auto recorded = read_trace(path.string(), error);
+  INFO(format(error));
+  REQUIRE(recorded);
+  CHECK(recorded->steps.size() == 30);
+}

@@ -114,8 +114,10 @@ Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slot
                    RingFull ring_full)
     : file_(std::fopen(path.c_str(), "wb")),
       info_(std::move(info)),
-      ring_(std::make_unique<Slot[]>(slots + 1)),
-      ring_size_(slots + 1),
+      // One slot is always left empty, to tell a full ring from an empty one; at least one
+      // step may wait, or every step would drop and the end could never be written.
+      ring_(std::make_unique<Slot[]>(std::max<std::size_t>(slots, 1) + 1)),
+      ring_size_(std::max<std::size_t>(slots, 1) + 1),
       ring_full_(ring_full) {
   if (file_ != nullptr) out_ = std::make_unique<Output>(file_);
 }

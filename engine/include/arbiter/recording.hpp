@@ -46,7 +46,8 @@ enum class RingFull {
 /// writer falls behind, whole steps are dropped or waited for (RingFull).
 class Recorder : public Observer {
  public:
-  /// `slots` steps may wait for the writer. Open fails (ok() false) when `path` cannot be written.
+  /// `slots` steps (at least 1) may wait for the writer. Open fails (ok() false) when `path`
+  /// cannot be written.
   Recorder(const std::string& path, RecordingInfo info, std::size_t slots = 256,
            RingFull ring_full = RingFull::kDropStep);
   ~Recorder() override;
