@@ -78,9 +78,10 @@ struct SnapshotHeader {
 /// cold line costs the stepping thread little, a load from one a wait.
 ///
 /// The tracked parts, the bulk of a big graph's step, are copied whole or, by a chained capture,
-/// only by the chunks (cache lines) that changed since the capture before: each part starts a
-/// line, so a changed chunk is one line to write. What most steps write comes first; reports and
-/// state-machine events, seldom written, last.
+/// only by the 64-byte chunks that changed since the capture before (a part of kWhole bytes or
+/// less always whole). What every step writes is packed at the start of the block, so that it
+/// touches few lines; reports and state-machine events, seldom written, are in the block's
+/// extras, apart.
 struct SnapshotShape {
   SnapshotShape() = default;
   SnapshotShape(const StepLayout& layout, std::size_t text_bytes);
