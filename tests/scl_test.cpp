@@ -261,20 +261,7 @@ TEST_CASE("misuse is an error naming the controller and the state", "[scl][error
                               Catch::Matchers::Contains("state 'a'") &&
                               Catch::Matchers::Contains("capacity of 3"));
   }
-  SECTION("a run-time plan without a required param") {
-    Manager manager(test::compile_text(
-        machine("      a: {type: test.Planner, params: {op: clear}}\n      p: test.Pose\n", "[a]",
-                "    preempt: []\n"),
-        registry()));
-    manager.step();
-    Controller& m = *manager.program().find_controller("m");
-    Plan plan(m);
-    const PlannedState p = test::planned(m, "p");
-    CHECK_FALSE(plan.append(p));
-    CHECK_THAT(manager.program().find_controller("m")->error(),
-               Catch::Matchers::Contains("required param 'x'"));
-  }
-  SECTION("a planned state built by hand, its params not resolved at load") {
+  SECTION("planning a state whose param 'x' is required") {
     Manager manager(test::compile_text(
         machine("      a: {type: test.Planner, params: {op: clear}}\n      p: test.Pose\n", "[a]",
                 "    preempt: []\n"),
@@ -283,10 +270,16 @@ TEST_CASE("misuse is an error naming the controller and the state", "[scl][error
     Controller& m = *manager.program().find_controller("m");
     Plan plan(m);
     PlannedState p = test::planned(m, "p");
-    p.params.push_back(Param{"x", ParamValue(1.0), SourceLocation{}, false});
-    CHECK_FALSE(plan.append(p));
-    CHECK_THAT(m.error(), Catch::Matchers::Contains("state 'p'") &&
-                              Catch::Matchers::Contains("not resolved at load"));
+    SECTION("a run-time plan without the param") {
+      CHECK_FALSE(plan.append(p));
+      CHECK_THAT(m.error(), Catch::Matchers::Contains("required param 'x'"));
+    }
+    SECTION("a planned state built by hand, its params not resolved at load") {
+      p.params.push_back(Param{"x", ParamValue(1.0), SourceLocation{}, false});
+      CHECK_FALSE(plan.append(p));
+      CHECK_THAT(m.error(), Catch::Matchers::Contains("state 'p'") &&
+                                Catch::Matchers::Contains("not resolved at load"));
+    }
   }
   SECTION("stepping a controller from its own callback") {
     struct Reenter : ControllerHooks {
