@@ -214,7 +214,7 @@ void Recorder::on_step(const Manager& manager) {
       !detail::capture_step(manager, *layout_, out_->blocks.of.shape(), block(slot), false,
                             &out_->stepping.last, out_->stepping.chained)) {
     dropped_total_.fetch_add(1, std::memory_order_relaxed);
-    out_->stepping.chained = false;  // the next slot copies every level
+    out_->stepping.chained = false;  // the next slot copies every tracked part whole
     return;
   }
   out_->stepping.chained = true;

@@ -206,8 +206,7 @@ SnapshotShape::SnapshotShape(const StepLayout& layout, std::size_t text_bytes_)
   // What a step writes, packed: the fewer lines a capture touches, the fewer it waits for.
   std::size_t at = sizeof(SnapshotHeader);
   for (std::size_t part = 0; part < kTracked; ++part) {
-    if (tracked_bytes[part] <= kWhole) continue;  // copied whole: no list of changes
-    changed_at[part] = place<std::uint32_t>(at, (tracked_bytes[part] + kChunk - 1) / kChunk);
+    if (chunked(part)) changed_at[part] = place<std::uint32_t>(at, chunks(part));
   }
   for (std::size_t part = 0; part < kTracked; ++part) {
     // The values keep the alignment the program's offsets assume.
@@ -259,10 +258,7 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
     std::byte* extras = (*this)[i].extras;
     construct_part<SnapshotHeader>(block, 0, 1);
     for (std::size_t part = 0; part < SnapshotShape::kTracked; ++part) {
-      if (s.tracked_bytes[part] <= SnapshotShape::kWhole) continue;
-      const auto chunks =
-          (s.tracked_bytes[part] + SnapshotShape::kChunk - 1) / SnapshotShape::kChunk;
-      construct_part<std::uint32_t>(block, s.changed_at[part], chunks);
+      if (s.chunked(part)) construct_part<std::uint32_t>(block, s.changed_at[part], s.chunks(part));
     }
     construct_part<double>(block, s.tracked_at[SnapshotShape::kRequested], s.behaviours);
     construct_part<double>(block, s.tracked_at[SnapshotShape::kActivation], s.behaviours);
@@ -371,14 +367,12 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
       reinterpret_cast<const std::byte*>(manager.activation_levels()),
       reinterpret_cast<const std::byte*>(manager.active_flags()),
       reinterpret_cast<const std::byte*>(manager.actuator_written_flags()), values_now};
-  // Values that are not plain bytes are assigned below, in full, at every capture.
-  const std::size_t tracked = shape.plain_values ? SnapshotShape::kTracked : SnapshotShape::kValues;
   header.full = last == nullptr || !chained;
-  for (std::size_t part = 0; part < tracked; ++part) {
+  for (std::size_t part = 0; part < shape.tracked_parts(); ++part) {
     const auto bytes = shape.tracked_bytes[part];
     if (bytes == 0) continue;
     std::byte* to = block + shape.tracked_at[part];
-    if (bytes <= SnapshotShape::kWhole) {
+    if (!shape.chunked(part)) {
       copy_bytes(to, now[part], bytes);  // whole at every capture: `last` has no use for it
     } else if (header.full) {
       std::memcpy(to, now[part], bytes);
@@ -507,12 +501,11 @@ void StepSnapshot::apply(StepImage& image) {
   const auto& s = *shape;
   const auto& header = *part_of<SnapshotHeader>(block, 0);
   image.bytes.resize(s.image_bytes);
-  const std::size_t tracked = s.plain_values ? SnapshotShape::kTracked : SnapshotShape::kValues;
-  for (std::size_t part = 0; part < tracked; ++part) {
+  for (std::size_t part = 0; part < s.tracked_parts(); ++part) {
     const std::byte* from = block + s.tracked_at[part];
     std::byte* to = image.bytes.data() + s.image_at[part];
     const auto bytes = s.tracked_bytes[part];
-    if (header.full || bytes <= SnapshotShape::kWhole) {
+    if (header.full || !s.chunked(part)) {
       std::copy(from, from + bytes, to);
       continue;
     }

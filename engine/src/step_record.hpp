@@ -122,6 +122,13 @@ struct SnapshotShape {
   std::size_t image_at[kTracked] = {};
   std::size_t changed_at[kTracked] = {};
   std::size_t image_bytes = 0;
+  /// The parts a capture tracks: all of them, or all but the values when those are not plain
+  /// bytes (then assigned value by value at every capture).
+  std::size_t tracked_parts() const { return plain_values ? kTracked : kValues; }
+  /// Whether a chained capture copies `part` by the chunks that changed; if not, whole at every
+  /// capture, without a list of changes.
+  bool chunked(std::size_t part) const { return tracked_bytes[part] > kWhole; }
+  std::size_t chunks(std::size_t part) const { return (tracked_bytes[part] + kChunk - 1) / kChunk; }
   /// Where the other parts start in a block (the header at 0).
   std::size_t machines_at = 0, args_at = 0, queue_at = 0;
   std::size_t bytes = 0;  ///< a block's: whole cache lines, so that blocks share none
