@@ -97,9 +97,6 @@ class PinnedTo {
   bool pinned_ = false;
 };
 
-/// The step with a Recorder attached, against the same graph without (the stepping thread's CPU
-/// time only: the writer thread compresses on another core). `soccer`: the soccer demo (its
-/// plugin built beside), else the generated `graph` of N behaviours.
 /// Two copies of the program a recording benchmark steps: the soccer demo (its plugin built
 /// beside, its classes and value types in `soccer_registry`, which must outlive them), else the
 /// generated `graph` of state.range(0) behaviours. False, the benchmark skipped, when the demo
@@ -127,6 +124,22 @@ bool load_twice(benchmark::State& state, Graph graph, bool soccer, Registry& soc
   return true;
 }
 
+/// Steps both managers once, the recorded one with its writer started on CPU 1, and then keeps
+/// the stepping thread on CPU 0 while `stepping_cpu` lives: as a robot would pin them. Left to
+/// the scheduler, either moved now and then, and each move cost one kind of batch more than the
+/// other. The writer starts on the first recorded step, where its creator is.
+void start_pinned(Manager& plain, Manager& recorded, std::optional<PinnedTo>& stepping_cpu) {
+  plain.step();
+  {
+    PinnedTo writer_cpu(1);
+    recorded.step();
+  }
+  stepping_cpu.emplace(0);
+}
+
+/// The step with a Recorder attached, against the same graph without (the stepping thread's CPU
+/// time only: the writer thread compresses on another core). `soccer`: the soccer demo (its
+/// plugin built beside), else the generated `graph` of N behaviours.
 void record(benchmark::State& state, Graph graph, bool soccer) {
   std::optional<Program> programs[2];
   Registry soccer_registry = make_registry();
@@ -143,18 +156,10 @@ void record(benchmark::State& state, Graph graph, bool soccer) {
   {
     constexpr std::size_t kRecordSlots = 1024;
     constexpr std::size_t kBatch = kRecordSlots / 4;
-    // The stepping thread on one CPU and the writer on another, as a robot would pin them: left
-    // to the scheduler, either moved now and then, and each move cost one kind of batch more
-    // than the other. The writer starts on the first recorded step, where its creator is.
     std::optional<PinnedTo> stepping_cpu;
     Recorder recorder(path.string(), info, kRecordSlots);
     recorded.add_observer(recorder);
-    plain.step();
-    {
-      PinnedTo writer_cpu(1);
-      recorded.step();
-    }
-    stepping_cpu.emplace(0);
+    start_pinned(plain, recorded, stepping_cpu);
     double plain_total = 0.0;
     double recorded_total = 0.0;
     // Steps are timed in batches: the clock is a system call here, dearer than a small step.
@@ -218,12 +223,7 @@ void record_paced(benchmark::State& state) {
     std::optional<PinnedTo> stepping_cpu;
     Recorder recorder(path.string(), info);
     recorded.add_observer(recorder);
-    plain.step();
-    {
-      PinnedTo writer_cpu(1);
-      recorded.step();
-    }
-    stepping_cpu.emplace(0);
+    start_pinned(plain, recorded, stepping_cpu);
     using Clock = std::chrono::steady_clock;
     auto next = Clock::now();
     const auto timed_step = [&](Manager& manager, std::vector<double>& ns) {
