@@ -332,7 +332,8 @@ int run(const Options& options) {
     recorder = std::make_unique<arbiter::Recorder>(
         options.record_path,
         arbiter::cli::recording_info(options.file, registry, load_options_of(options), kVersion),
-        256, options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
+        arbiter::Recorder::kSlots,
+        options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
     if (!recorder->ok()) {
       std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);
       return kExitUsage;

@@ -157,7 +157,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
         options.record,
         options.config.empty() ? run->info
                                : recording_info(config, registry, options.load, options.version),
-        256, RingFull::kWaitForWriter);  // a replay keeps no pace: it loses nothing
+        Recorder::kSlots, RingFull::kWaitForWriter);  // a replay keeps no pace: it loses nothing
     if (!recorder->ok()) {
       err << fmt::format("arbiter replay: cannot write '{}'\n", options.record);
       return 2;

@@ -46,9 +46,11 @@ enum class RingFull {
 /// writer falls behind, whole steps are dropped or waited for (RingFull).
 class Recorder : public Observer {
  public:
+  /// The steps that may wait for the writer unless told otherwise.
+  static constexpr std::size_t kSlots = 256;
   /// `slots` steps (at least 1) may wait for the writer. Open fails (ok() false) when `path`
   /// cannot be written.
-  Recorder(const std::string& path, RecordingInfo info, std::size_t slots = 256,
+  Recorder(const std::string& path, RecordingInfo info, std::size_t slots = kSlots,
            RingFull ring_full = RingFull::kDropStep);
   ~Recorder() override;
   Recorder(const Recorder&) = delete;
