@@ -148,9 +148,9 @@ void Manager::swap_in(Staged& staged) noexcept {
 }
 
 void Manager::point_step_data() noexcept {
-  data_.values = run_.values.data();
+  data_.values = run_.values;
   data_.actuator_offset = program_.actuator_offsets.data();
-  data_.actuator_written = run_.actuator_written.get();
+  data_.actuator_written = run_.actuator_written;
   data_.slot_offset = program_.slot_offsets.data();
   data_.slot_type = program_.slot_types.data();
   data_.slot_written = run_.slot_written.get();
@@ -291,9 +291,8 @@ void Manager::carry_values(const Staged& staged) {
   for (std::uint32_t a = 0; a < program_.actuators.size(); ++a) {
     const std::uint32_t from = staged.carryover.actuator_from[a];
     if (from == detail::kNoMatch) continue;
-    program_.actuators[a].type->assign(
-        run_.values.at(program_.actuators[a].offset),
-        staged.state.values.at(staged.program.actuators[from].offset));
+    program_.actuators[a].type->assign(run_.values + program_.actuators[a].offset,
+                                       staged.state.values + staged.program.actuators[from].offset);
     run_.actuator_written[a] = staged.state.actuator_written[from];
   }
 }
@@ -327,7 +326,7 @@ void Manager::safe_pass() {
   for (std::uint32_t a = 0; a < program_.actuators.size(); ++a) {
     const bool safe = run_.safe_values[a].data() != nullptr;
     if (safe) {
-      program_.actuators[a].type->assign(run_.values.at(program_.actuators[a].offset),
+      program_.actuators[a].type->assign(run_.values + program_.actuators[a].offset,
                                          run_.safe_values[a].data());
     }
     run_.actuator_written[a] = safe;
@@ -642,7 +641,7 @@ void Manager::resolve_actuators(const CompiledLayer& layer) {
       static_cast<std::uint32_t>(program_.behaviours.size() + (&layer - program_.layers.data()));
   for (std::uint32_t a = layer.actuator_begin; a < layer.actuator_end; ++a) {
     const CompiledActuator& actuator = program_.actuators[a];
-    void* value = run_.values.at(actuator.offset);
+    void* value = run_.values + actuator.offset;
     std::size_t count = 0;
     double best = 0.0;
     std::uint32_t winner = kNoBehaviour;
@@ -655,11 +654,11 @@ void Manager::resolve_actuators(const CompiledLayer& layer) {
       // Writes of a writer that threw this step, and non-finite numbers, are ignored too.
       if (run_.faulted_step[owner == kNoBehaviour ? interface : owner] == data_.step) continue;
       if (run_.finite_components[slot] != 0 &&
-          !is_finite(run_.values.at(program_.slot_offsets[slot]), run_.finite_components[slot])) {
+          !is_finite(run_.values + program_.slot_offsets[slot], run_.finite_components[slot])) {
         report_non_finite_write(slot);
         continue;
       }
-      run_.mean_values[count] = run_.values.at(program_.slot_offsets[slot]);
+      run_.mean_values[count] = run_.values + program_.slot_offsets[slot];
       run_.mean_weights[count] = weight;
       ++count;
       if (weight > best) {  // strictly greater: on a tie the earlier writer wins
@@ -672,7 +671,7 @@ void Manager::resolve_actuators(const CompiledLayer& layer) {
     if (actuator.aggregate) {
       actuator.type->mean(value, run_.mean_values.data(), run_.mean_weights.data(), count);
     } else {
-      actuator.type->assign(value, run_.values.at(program_.slot_offsets[winner]));
+      actuator.type->assign(value, run_.values + program_.slot_offsets[winner]);
     }
   }
 }

@@ -194,7 +194,7 @@ constexpr std::size_t kReportTextBytes = 4096;
 void Recorder::size_ring(const Manager& manager) {
   layout_ = std::make_unique<detail::StepLayout>(manager.program());
   out_->blocks.of.reset(*layout_, kReportTextBytes, ring_size_);
-  out_->stepping.last.bytes.assign(out_->blocks.of.shape().image_bytes, std::byte{0});
+  out_->stepping.last.bytes.assign(out_->blocks.of.shape().tracked.total, std::byte{0});
   out_->stepping.chained = false;
   // The writer wakes a few times in the while the ring takes to fill at the config's rate: a
   // robot's CPU has better to do than wake it every millisecond, and its bursts of formatting

@@ -17,7 +17,27 @@ std::uint8_t finite_components(const ValueType& type) {
   return 0;
 }
 
+std::size_t round_up(std::size_t n, std::size_t to) {
+  return (n + to - 1) / to * to;
+}
+
 }  // namespace
+
+TrackedLayout::TrackedLayout(std::size_t behaviours, std::size_t actuators,
+                             std::size_t value_bytes) {
+  bytes[kRequested] = behaviours * sizeof(double);
+  bytes[kActivation] = behaviours * sizeof(double);
+  bytes[kActive] = behaviours * sizeof(char);
+  bytes[kWritten] = actuators * sizeof(bool);
+  bytes[kValues] = value_bytes;
+  std::size_t end = 0;
+  for (std::size_t part = 0; part < kParts; ++part) {
+    // The values keep the alignment the program's offsets assume.
+    at[part] = round_up(end, part == kValues ? kAlignment : alignof(double));
+    end = at[part] + bytes[part];
+  }
+  total = end;
+}
 
 ValueBuffer::ValueBuffer(std::size_t bytes)
     : bytes_(std::make_unique<std::byte[]>(std::max<std::size_t>(bytes, 1))) {}
@@ -35,19 +55,24 @@ void ValueBuffer::construct(const ValueType& type, std::uint32_t offset) {
   constructed_.emplace_back(&type, offset);
 }
 
-RunState::RunState(const Program& program) : values(program.value_bytes) {
+RunState::RunState(const Program& program)
+    : tracked_layout(program.behaviours.size(), program.actuators.size(), program.value_bytes),
+      tracked(tracked_layout.total) {
   const std::size_t behaviours = program.behaviours.size();
   const std::size_t actuators = program.actuators.size();
   const std::size_t slots = program.slots.size();
   const std::size_t callers = behaviours + program.layers.size();
-  actuator_written = std::make_unique<bool[]>(std::max<std::size_t>(actuators, 1));
+  const auto part = [&](TrackedLayout::Part p) { return tracked.at(tracked_layout.at[p]); };
+  // Zeroed: the levels start at 0.0, the flags false, padding as the snapshots copy it.
+  requested = reinterpret_cast<double*>(part(TrackedLayout::kRequested));
+  activation = reinterpret_cast<double*>(part(TrackedLayout::kActivation));
+  active = reinterpret_cast<char*>(part(TrackedLayout::kActive));
+  actuator_written = reinterpret_cast<bool*>(part(TrackedLayout::kWritten));
+  values = part(TrackedLayout::kValues);
   slot_written = std::make_unique<bool[]>(std::max<std::size_t>(slots, 1));
-  requested.assign(behaviours, 0.0);
-  activation.assign(behaviours, 0.0);
   factors.assign(2 * behaviours, 1.0);
   instances.reserve(behaviours);
   for (const auto& behaviour : program.behaviours) instances.push_back(behaviour.instance.get());
-  active.assign(behaviours, 0);
   nan_reported.assign(behaviours, 0);
   exception_reported.assign(callers, 0);
   faulted_step.assign(callers, 0);
@@ -60,15 +85,16 @@ RunState::RunState(const Program& program) : values(program.value_bytes) {
   non_finite_reported.assign(slots, 0);
   mean_values.assign(program.max_writers, nullptr);
   mean_weights.assign(program.max_writers, 0.0);
+  const auto values_at = static_cast<std::uint32_t>(tracked_layout.at[TrackedLayout::kValues]);
   for (const auto& actuator : program.actuators) {
-    values.construct(*actuator.type, actuator.offset);
+    tracked.construct(*actuator.type, values_at + actuator.offset);
     if (actuator.default_value) {
       std::string expected;  // validated at load
-      actuator.type->from_node(*actuator.default_value, values.at(actuator.offset), expected);
+      actuator.type->from_node(*actuator.default_value, values + actuator.offset, expected);
     }
   }
   for (std::size_t s = 0; s < slots; ++s) {
-    values.construct(*program.slot_types[s], program.slot_offsets[s]);
+    tracked.construct(*program.slot_types[s], values_at + program.slot_offsets[s]);
   }
   safe_values.resize(actuators);
   for (std::size_t a = 0; a < actuators; ++a) {

@@ -198,24 +198,19 @@ SnapshotShape::SnapshotShape(const StepLayout& layout, std::size_t text_bytes_)
     queue += machine.capacity;
     event_args += Controller::kMaxEventsPerStep * machine.most_params;
   }
-  tracked_bytes[kRequested] = behaviours * sizeof(double);
-  tracked_bytes[kActivation] = behaviours * sizeof(double);
-  tracked_bytes[kActive] = behaviours;
-  tracked_bytes[kWritten] = actuators * sizeof(bool);
-  tracked_bytes[kValues] = layout.value_bytes;
-  // What a step writes, packed: the fewer lines a capture touches, the fewer it waits for.
+  // The chunked parts' lists of changes first, then the tracked parts as the manager has them.
   std::size_t at = sizeof(SnapshotHeader);
-  for (std::size_t part = 0; part < kTracked; ++part) {
-    if (chunked(part)) changed_at[part] = place<std::uint32_t>(at, chunks(part));
+  tracked = TrackedLayout(behaviours, actuators, layout.value_bytes);
+  for (std::size_t part = 0; part < tracked_parts(); ++part) {
+    if (!chunked(part)) continue;
+    any_chunked = true;
+    changed_at[part] = place<std::uint32_t>(at, chunks(part));
   }
-  for (std::size_t part = 0; part < kTracked; ++part) {
-    // The values keep the alignment the program's offsets assume.
-    const std::size_t alignment = part == kValues ? alignof(std::max_align_t) : sizeof(double);
-    tracked_at[part] = round_up(at, alignment);
-    at = tracked_at[part] + tracked_bytes[part];
-    image_at[part] = round_up(image_bytes, alignment);
-    image_bytes = image_at[part] + tracked_bytes[part];
+  const std::size_t tracked_begin = round_up(at, TrackedLayout::kAlignment);
+  for (std::size_t part = 0; part < TrackedLayout::kParts; ++part) {
+    tracked_at[part] = tracked_begin + tracked.at[part];
   }
+  at = tracked_begin + tracked.total;
   machines_at = place<Machine>(at, machines);
   args_at = place<Arg>(at, args);
   queue_at = place<std::uint32_t>(at, queue);
@@ -257,15 +252,11 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
     std::byte* block = (*this)[i].main;
     std::byte* extras = (*this)[i].extras;
     construct_part<SnapshotHeader>(block, 0, 1);
-    for (std::size_t part = 0; part < SnapshotShape::kTracked; ++part) {
+    for (std::size_t part = 0; part < s.tracked_parts(); ++part) {
       if (s.chunked(part)) construct_part<std::uint32_t>(block, s.changed_at[part], s.chunks(part));
     }
-    construct_part<double>(block, s.tracked_at[SnapshotShape::kRequested], s.behaviours);
-    construct_part<double>(block, s.tracked_at[SnapshotShape::kActivation], s.behaviours);
-    construct_part<char>(block, s.tracked_at[SnapshotShape::kActive], s.behaviours);
-    construct_part<bool>(block, s.tracked_at[SnapshotShape::kWritten], s.actuators);
-    construct_part<std::byte>(block, s.tracked_at[SnapshotShape::kValues],
-                              s.tracked_bytes[SnapshotShape::kValues]);
+    // Bytes throughout, padding included: a capture may copy it all in one move.
+    construct_part<std::byte>(block, s.tracked_at[0], s.tracked.total);
     construct_part<SnapshotShape::Machine>(block, s.machines_at, s.machines);
     construct_part<SnapshotShape::Arg>(block, s.args_at, s.args);
     construct_part<std::uint32_t>(block, s.queue_at, s.queue);
@@ -276,7 +267,7 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
   }
   if (!s.plain_values) {
     for (const auto& actuator : layout.actuators) {
-      const auto offset = s.tracked_at[SnapshotShape::kValues] + actuator.offset;
+      const auto offset = s.tracked_at[TrackedLayout::kValues] + actuator.offset;
       constructed_.emplace_back(actuator.type, offset);
       for (std::size_t i = 0; i < count; ++i) {
         std::byte* value = (*this)[i].main + offset;
@@ -292,18 +283,21 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
 
 namespace {
 
-// Fixed-size moves the compiler inlines: a small graph's parts are a few dozen bytes each, and a
-// call to memcpy for each would cost the step more than the copying. Up to 64 bytes, two moves
-// that may overlap cover any size.
+// Fixed-size moves the compiler inlines: a small graph's tracked parts are a few hundred bytes,
+// and a call to memcpy would cost the step more than the copying. From 32 bytes on, 32-byte
+// moves, the last overlapping the one before; below, two moves that may overlap.
 void copy_bytes(std::byte* to, const std::byte* from, std::size_t bytes) {
   const auto two = [&](auto size) {
     std::memcpy(to, from, size);
     std::memcpy(to + bytes - size, from + bytes - size, size);
   };
-  if (bytes > 64) {
+  if (bytes > SnapshotShape::kWhole) {
     std::memcpy(to, from, bytes);
   } else if (bytes >= 32) {
-    two(std::integral_constant<std::size_t, 32>());
+    constexpr std::size_t kMove = 32;
+    for (std::size_t at = 0; at + kMove < bytes; at += kMove)
+      std::memcpy(to + at, from + at, kMove);
+    std::memcpy(to + bytes - kMove, from + bytes - kMove, kMove);
   } else if (bytes >= 16) {
     two(std::integral_constant<std::size_t, 16>());
   } else if (bytes >= 8) {
@@ -358,35 +352,32 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   header.t = manager.step_time();
   header.duration = manager.step_duration();
   const std::size_t actuators = shape.actuators;
-  const std::byte* values_now =
-      actuators == 0
-          ? nullptr
-          : static_cast<const std::byte*>(manager.actuator_value(0)) - layout.actuators[0].offset;
-  const std::byte* now[SnapshotShape::kTracked] = {
-      reinterpret_cast<const std::byte*>(manager.requested_levels()),
-      reinterpret_cast<const std::byte*>(manager.activation_levels()),
-      reinterpret_cast<const std::byte*>(manager.active_flags()),
-      reinterpret_cast<const std::byte*>(manager.actuator_written_flags()), values_now};
+  const std::byte* now = manager.tracked_parts();
   header.full = last == nullptr || !chained;
-  for (std::size_t part = 0; part < shape.tracked_parts(); ++part) {
-    const auto bytes = shape.tracked_bytes[part];
-    if (bytes == 0) continue;
-    std::byte* to = block + shape.tracked_at[part];
-    if (!shape.chunked(part)) {
-      copy_bytes(to, now[part], bytes);  // whole at every capture: `last` has no use for it
-    } else if (header.full) {
-      std::memcpy(to, now[part], bytes);
-      if (last != nullptr) std::memcpy(last->bytes.data() + shape.image_at[part], now[part], bytes);
-    } else {
-      // Compared where they are hot (the manager's and `last`), written to the block, which is
-      // cold, only by the chunk that changed.
-      header.changed_count[part] =
-          copy_changed(now[part], last->bytes.data() + shape.image_at[part], to, bytes,
-                       part_of<std::uint32_t>(block, shape.changed_at[part]));
+  const std::size_t parts = shape.tracked_parts();
+  if (header.full || !shape.any_chunked) {
+    // Laid out as in the manager: a small graph's step is one move.
+    const std::size_t bytes = shape.tracked.end_of(parts);
+    copy_bytes(block + shape.tracked_at[0], now, bytes);
+    if (last != nullptr && shape.any_chunked) std::memcpy(last->bytes.data(), now, bytes);
+  } else {
+    for (std::size_t part = 0; part < parts; ++part) {
+      const auto bytes = shape.tracked.bytes[part];
+      const std::byte* from = now + shape.tracked.at[part];
+      std::byte* to = block + shape.tracked_at[part];
+      if (!shape.chunked(part)) {
+        copy_bytes(to, from, bytes);  // whole at every capture: `last` has no use for it
+      } else {
+        // Compared where they are hot (the manager's and `last`), written to the block, which
+        // is cold, only by the chunk that changed.
+        header.changed_count[part] =
+            copy_changed(from, last->bytes.data() + shape.tracked.at[part], to, bytes,
+                         part_of<std::uint32_t>(block, shape.changed_at[part]));
+      }
     }
   }
   if (!shape.plain_values) {
-    std::byte* values = block + shape.tracked_at[SnapshotShape::kValues];
+    std::byte* values = block + shape.tracked_at[TrackedLayout::kValues];
     for (std::uint32_t a = 0; a < actuators; ++a) {
       const auto& actuator = layout.actuators[a];
       void* to = values + actuator.offset;
@@ -483,11 +474,11 @@ StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)
   timed = header.timed;
   t = header.t;
   duration = header.duration;
-  requested = {part_of<double>(b, s.tracked_at[SnapshotShape::kRequested]), s.behaviours};
-  activation = {part_of<double>(b, s.tracked_at[SnapshotShape::kActivation]), s.behaviours};
-  active = {part_of<char>(b, s.tracked_at[SnapshotShape::kActive]), s.behaviours};
-  written = {part_of<bool>(b, s.tracked_at[SnapshotShape::kWritten]), s.actuators};
-  values = b + s.tracked_at[SnapshotShape::kValues];
+  requested = {part_of<double>(b, s.tracked_at[TrackedLayout::kRequested]), s.behaviours};
+  activation = {part_of<double>(b, s.tracked_at[TrackedLayout::kActivation]), s.behaviours};
+  active = {part_of<char>(b, s.tracked_at[TrackedLayout::kActive]), s.behaviours};
+  written = {part_of<bool>(b, s.tracked_at[TrackedLayout::kWritten]), s.actuators};
+  values = b + s.tracked_at[TrackedLayout::kValues];
   machines = {part_of<Machine>(b, s.machines_at), s.machines};
   current_args = {part_of<SnapshotShape::Arg>(b, s.args_at), s.args};
   queue = {part_of<std::uint32_t>(b, s.queue_at), s.queue};
@@ -500,11 +491,11 @@ StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)
 void StepSnapshot::apply(StepImage& image) {
   const auto& s = *shape;
   const auto& header = *part_of<SnapshotHeader>(block, 0);
-  image.bytes.resize(s.image_bytes);
+  image.bytes.resize(s.tracked.total);
   for (std::size_t part = 0; part < s.tracked_parts(); ++part) {
     const std::byte* from = block + s.tracked_at[part];
-    std::byte* to = image.bytes.data() + s.image_at[part];
-    const auto bytes = s.tracked_bytes[part];
+    std::byte* to = image.bytes.data() + s.tracked.at[part];
+    const auto bytes = s.tracked.bytes[part];
     if (header.full || !s.chunked(part)) {
       std::copy(from, from + bytes, to);
       continue;
@@ -517,11 +508,11 @@ void StepSnapshot::apply(StepImage& image) {
     }
   }
   const std::byte* from = image.bytes.data();
-  requested = {part_of<double>(from, s.image_at[SnapshotShape::kRequested]), s.behaviours};
-  activation = {part_of<double>(from, s.image_at[SnapshotShape::kActivation]), s.behaviours};
-  active = {part_of<char>(from, s.image_at[SnapshotShape::kActive]), s.behaviours};
-  written = {part_of<bool>(from, s.image_at[SnapshotShape::kWritten]), s.actuators};
-  if (s.plain_values) values = from + s.image_at[SnapshotShape::kValues];
+  requested = {part_of<double>(from, s.tracked.at[TrackedLayout::kRequested]), s.behaviours};
+  activation = {part_of<double>(from, s.tracked.at[TrackedLayout::kActivation]), s.behaviours};
+  active = {part_of<char>(from, s.tracked.at[TrackedLayout::kActive]), s.behaviours};
+  written = {part_of<bool>(from, s.tracked.at[TrackedLayout::kWritten]), s.actuators};
+  if (s.plain_values) values = from + s.tracked.at[TrackedLayout::kValues];
 }
 
 StepSnapshot capture_growing(const Manager& manager, const StepLayout& layout,

@@ -69,7 +69,7 @@ struct SnapshotHeader {
   bool full = true;
   bool safe = false;
   bool timed = false;
-  std::uint32_t changed_count[5] = {};  // per SnapshotShape::Tracked
+  std::uint32_t changed_count[TrackedLayout::kParts] = {};  // per tracked part
 };
 
 /// Where a step's values lie in a snapshot's block of bytes, laid out once for a layout. A
@@ -77,18 +77,16 @@ struct SnapshotHeader {
 /// recorder's ring cycles through many blocks, each cold when its turn comes, and a store to a
 /// cold line costs the stepping thread little, a load from one a wait.
 ///
-/// The tracked parts, the bulk of a big graph's step, are copied whole or, by a chained capture,
-/// only by the 64-byte chunks that changed since the capture before (a part of kWhole bytes or
-/// less always whole). What every step writes is packed at the start of the block, so that it
+/// The tracked parts (TrackedLayout: levels, flags, values), the bulk of a big graph's step, lie
+/// in a block as in the manager, so that a small graph's are copied in one move; a chained
+/// capture copies a part of more than kWhole bytes only by the 64-byte chunks that changed since
+/// the capture before. What every step writes is packed at the start of the block, so that it
 /// touches few lines; reports and state-machine events, seldom written, are in the block's
 /// extras, apart.
 struct SnapshotShape {
   SnapshotShape() = default;
   SnapshotShape(const StepLayout& layout, std::size_t text_bytes);
 
-  /// The behaviours' requested and activation levels and active flags, the actuators' written
-  /// flags and values (values only when they are plain bytes: a string is copied as a string).
-  enum Tracked : std::size_t { kRequested, kActivation, kActive, kWritten, kValues, kTracked };
   static constexpr std::size_t kChunk = 64;
   /// A part this small is copied whole at every capture: comparing it would cost more.
   static constexpr std::size_t kWhole = 4 * kChunk;
@@ -115,20 +113,23 @@ struct SnapshotShape {
   std::size_t args = 0, queue = 0, events = 0, event_args = 0, text_bytes = 0;
   /// Every value is plain bytes: the values are tracked.
   bool plain_values = true;
-  /// Per tracked part: its bytes, where it starts in a block and in a StepImage, and where the
-  /// list of its changed chunks starts in a block.
-  std::size_t tracked_bytes[kTracked] = {};
-  std::size_t tracked_at[kTracked] = {};
-  std::size_t image_at[kTracked] = {};
-  std::size_t changed_at[kTracked] = {};
-  std::size_t image_bytes = 0;
+  /// The tracked parts as the manager lays them out, and so a StepImage.
+  TrackedLayout tracked;
+  /// Per tracked part: where it starts in a block (the manager's layout, moved), and where the
+  /// list of its changed chunks starts.
+  std::size_t tracked_at[TrackedLayout::kParts] = {};
+  std::size_t changed_at[TrackedLayout::kParts] = {};
   /// The parts a capture tracks: all of them, or all but the values when those are not plain
   /// bytes (then assigned value by value at every capture).
-  std::size_t tracked_parts() const { return plain_values ? kTracked : kValues; }
+  std::size_t tracked_parts() const {
+    return plain_values ? TrackedLayout::kParts : TrackedLayout::kValues;
+  }
   /// Whether a chained capture copies `part` by the chunks that changed; if not, whole at every
   /// capture, without a list of changes.
-  bool chunked(std::size_t part) const { return tracked_bytes[part] > kWhole; }
-  std::size_t chunks(std::size_t part) const { return (tracked_bytes[part] + kChunk - 1) / kChunk; }
+  bool chunked(std::size_t part) const { return tracked.bytes[part] > kWhole; }
+  std::size_t chunks(std::size_t part) const { return (tracked.bytes[part] + kChunk - 1) / kChunk; }
+  /// Some tracked part is chunked: else a capture copies all of them in one move.
+  bool any_chunked = false;
   /// Where the other parts start in a block (the header at 0).
   std::size_t machines_at = 0, args_at = 0, queue_at = 0;
   std::size_t bytes = 0;  ///< a block's: whole cache lines, so that blocks share none
@@ -143,11 +144,8 @@ struct SnapshotBlock {
   std::byte* extras = nullptr;
 };
 
-static_assert(sizeof(SnapshotHeader::changed_count) / sizeof(std::uint32_t) ==
-              SnapshotShape::kTracked);
-
-/// The tracked parts of a step in full, laid out by a shape: the stepping side's, as its last
-/// capture left them, or a reader's, brought up to date by the snapshots in order.
+/// The tracked parts of a step in full, laid out by a shape's `tracked`: the stepping side's, as
+/// its last capture left them, or a reader's, brought up to date by the snapshots in order.
 struct StepImage {
   std::vector<std::byte> bytes;
 };

@@ -127,18 +127,22 @@ class Manager {
   bool active(std::uint32_t behaviour) const { return run_.active[behaviour] != 0; }
   /// The same of every behaviour, by index (active: non-zero), for observers that copy them
   /// whole.
-  const double* requested_levels() const { return run_.requested.data(); }
-  const double* activation_levels() const { return run_.activation.data(); }
-  const char* active_flags() const { return run_.active.data(); }
+  const double* requested_levels() const { return run_.requested; }
+  const double* activation_levels() const { return run_.activation; }
+  const char* active_flags() const { return run_.active; }
   /// The actuator's current value (of its ValueType) and whether it was written this step.
   const void* actuator_value(std::uint32_t actuator) const {
-    return run_.values.at(program_.actuator_offsets[actuator]);
+    return run_.values + program_.actuator_offsets[actuator];
   }
   bool actuator_written(std::uint32_t actuator) const {
     return run_.actuator_written[actuator] != 0;
   }
   /// The same of every actuator, by index, for observers that copy them whole.
-  const bool* actuator_written_flags() const { return run_.actuator_written.get(); }
+  const bool* actuator_written_flags() const { return run_.actuator_written; }
+  /// All of the above in one run of bytes, laid out by tracked_layout(), for observers that copy
+  /// them at every step.
+  const std::byte* tracked_parts() const { return run_.tracked.data(); }
+  const TrackedLayout& tracked_layout() const { return run_.tracked_layout; }
   /// Events that behaviour and interface code reported in the last step (StepContext::report).
   std::size_t event_count() const { return std::min(data_.event_count, data_.event_capacity); }
   const detail::StepData::Event& event(std::size_t index) const { return events_[index]; }

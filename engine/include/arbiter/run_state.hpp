@@ -15,6 +15,27 @@
 
 namespace arbiter {
 
+/// Where RunState keeps what observers copy at every step, in one allocation and in this order:
+/// each behaviour's requested and activation level and active flag, each actuator's written
+/// flag, and the values (actuators, then writer slots, at the program's offsets). A recorder
+/// copies a small graph's in one move, and lays its snapshots out by the same offsets.
+struct TrackedLayout {
+  enum Part : std::size_t { kRequested, kActivation, kActive, kWritten, kValues, kParts };
+  /// What the allocation, and so the values' offsets, are aligned to.
+  static constexpr std::size_t kAlignment = alignof(std::max_align_t);
+
+  TrackedLayout() = default;
+  TrackedLayout(std::size_t behaviours, std::size_t actuators, std::size_t value_bytes);
+
+  std::size_t at[kParts] = {};
+  std::size_t bytes[kParts] = {};
+  std::size_t total = 0;  ///< where the last part ends
+  /// Where the first `parts` parts end: the bytes a copy of them takes.
+  std::size_t end_of(std::size_t parts) const {
+    return parts == 0 ? 0 : at[parts - 1] + bytes[parts - 1];
+  }
+};
+
 /// Bytes holding values of several types at given offsets; destroys what it constructed.
 class ValueBuffer {
  public:
@@ -36,6 +57,7 @@ class ValueBuffer {
   std::byte* at(std::uint32_t offset) { return bytes_.get() + offset; }
   const std::byte* at(std::uint32_t offset) const { return bytes_.get() + offset; }
   std::byte* data() { return bytes_.get(); }
+  const std::byte* data() const { return bytes_.get(); }
 
  private:
   void swap(ValueBuffer& other) noexcept {
@@ -54,17 +76,21 @@ struct RunState {
   /// type's zero value. Allocates; the steps that use it do not.
   explicit RunState(const Program& program);
 
+  TrackedLayout tracked_layout;
+  /// The tracked parts, laid out by tracked_layout; the pointers below point into it. (A move
+  /// takes the bytes and copies the pointers along: a reload's swap exchanges the two whole.)
+  ValueBuffer tracked;
+  double* requested = nullptr;   // per behaviour
+  double* activation = nullptr;  // per behaviour
+  char* active = nullptr;        // per behaviour: non-zero when active
+  bool* actuator_written = nullptr;
   /// Actuators and writer slots (ports), at the program's offsets.
-  ValueBuffer values;
+  std::byte* values = nullptr;
   // bool vectors are bit-packed; the contexts need addressable flags.
-  std::unique_ptr<bool[]> actuator_written;
   std::unique_ptr<bool[]> slot_written;
   // Per behaviour.
-  std::vector<double> requested;
-  std::vector<double> activation;
   std::vector<double> factors;        // two per behaviour: see Inhibitions::recipes()
   std::vector<Behaviour*> instances;  // the behaviours' objects, contiguous for the passes
-  std::vector<char> active;
   std::vector<char> nan_reported;
   // Faults (docs/robustness.md), per behaviour and then per layer: a behaviour whose code threw is
   // replaced in `instances` by an inert one for the step (`suspended`) or for good (`disabled`,
