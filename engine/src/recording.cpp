@@ -124,6 +124,7 @@ Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slot
 
 Recorder::~Recorder() {
   if (started_ && !finished_) {
+    settle();
     Slot* slot = claim_waiting();
     slot->kind = Slot::Kind::kEnd;
     publish();
@@ -149,6 +150,13 @@ inline Recorder::Slot* Recorder::claim() {
 
 inline void Recorder::publish() {
   head_.store(after(head_.load(std::memory_order_relaxed)), std::memory_order_release);
+}
+
+inline void Recorder::settle() {
+  if (!unpublished_) return;
+  detail::fence_streamed_stores();
+  publish();
+  unpublished_ = false;
 }
 
 inline detail::SnapshotBlock Recorder::block(const Slot* slot) const {
@@ -209,6 +217,7 @@ void Recorder::size_ring(const Manager& manager) {
 
 void Recorder::on_step(const Manager& manager) {
   if (!started_) return;
+  settle();
   Slot* slot = ring_full_ == RingFull::kWaitForWriter ? claim_waiting() : claim();
   if (slot == nullptr ||
       !detail::capture_step(manager, *layout_, out_->blocks.of.shape(), block(slot), false,
@@ -218,7 +227,7 @@ void Recorder::on_step(const Manager& manager) {
     return;
   }
   out_->stepping.chained = true;
-  publish();
+  unpublished_ = true;
 }
 
 Recorder::Slot* Recorder::claim_waiting() {
@@ -239,12 +248,14 @@ void Recorder::wake_writer() {
 
 void Recorder::drain() {
   if (!started_ || finished_) return;
+  settle();
   wake_writer();
   while (backlog() > 0) std::this_thread::sleep_for(std::chrono::microseconds(50));
 }
 
 void Recorder::on_safe(const Manager& manager) {
   if (!started_) return;
+  settle();
   Slot* slot = claim_waiting();  // the last values a stopping robot was given: not dropped for room
   if (!detail::capture_step(manager, *layout_, out_->blocks.of.shape(), block(slot), true,
                             &out_->stepping.last, out_->stepping.chained)) {
@@ -254,7 +265,7 @@ void Recorder::on_safe(const Manager& manager) {
     return;
   }
   out_->stepping.chained = true;
-  publish();
+  unpublished_ = true;
 }
 
 void Recorder::stage_files(std::vector<std::pair<std::string, std::string>> files) {
@@ -268,6 +279,7 @@ void Recorder::on_reload(const Manager& manager) {
   // them all before the layout and the slots are made over for the new one. (Their state
   // machines' config params point into the replaced program: the Manager frees it only after
   // every observer's on_reload() returned.)
+  settle();
   wake_writer();
   while (tail_.load(std::memory_order_acquire) != head_.load(std::memory_order_relaxed)) {
     std::this_thread::yield();
@@ -290,6 +302,7 @@ void Recorder::on_reload(const Manager& manager) {
 
 void Recorder::on_finish(const Manager&) {
   if (!started_ || finished_) return;
+  settle();
   Slot* slot = claim_waiting();
   slot->kind = Slot::Kind::kEnd;
   publish();

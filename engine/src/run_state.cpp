@@ -37,6 +37,7 @@ TrackedLayout::TrackedLayout(std::size_t behaviours, std::size_t actuators,
     end = at[part] + bytes[part];
   }
   total = end;
+  allocated = round_up(total, kLine);
 }
 
 ValueBuffer::ValueBuffer(std::size_t bytes)
@@ -57,7 +58,7 @@ void ValueBuffer::construct(const ValueType& type, std::uint32_t offset) {
 
 RunState::RunState(const Program& program)
     : tracked_layout(program.behaviours.size(), program.actuators.size(), program.value_bytes),
-      tracked(tracked_layout.total) {
+      tracked(tracked_layout.allocated) {
   const std::size_t behaviours = program.behaviours.size();
   const std::size_t actuators = program.actuators.size();
   const std::size_t slots = program.slots.size();

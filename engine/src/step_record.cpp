@@ -1,6 +1,9 @@
 #include "step_record.hpp"
 
 #include <fmt/format.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <algorithm>
 #include <cstring>
@@ -206,11 +209,12 @@ SnapshotShape::SnapshotShape(const StepLayout& layout, std::size_t text_bytes_)
     any_chunked = true;
     changed_at[part] = place<std::uint32_t>(at, chunks(part));
   }
+  streamed = !any_chunked && plain_values;
   const std::size_t tracked_begin = round_up(at, TrackedLayout::kAlignment);
   for (std::size_t part = 0; part < TrackedLayout::kParts; ++part) {
     tracked_at[part] = tracked_begin + tracked.at[part];
   }
-  at = tracked_begin + tracked.total;
+  at = tracked_begin + (streamed ? tracked.allocated : tracked.total);
   machines_at = place<Machine>(at, machines);
   args_at = place<Arg>(at, args);
   queue_at = place<std::uint32_t>(at, queue);
@@ -256,7 +260,8 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
       if (s.chunked(part)) construct_part<std::uint32_t>(block, s.changed_at[part], s.chunks(part));
     }
     // Bytes throughout, padding included: a capture may copy it all in one move.
-    construct_part<std::byte>(block, s.tracked_at[0], s.tracked.total);
+    construct_part<std::byte>(block, s.tracked_at[0],
+                              s.streamed ? s.tracked.allocated : s.tracked.total);
     construct_part<SnapshotShape::Machine>(block, s.machines_at, s.machines);
     construct_part<SnapshotShape::Arg>(block, s.args_at, s.args);
     construct_part<std::uint32_t>(block, s.queue_at, s.queue);
@@ -309,6 +314,19 @@ void copy_bytes(std::byte* to, const std::byte* from, std::size_t bytes) {
   }
 }
 
+// Whole cache lines from `from` to `to` (line-aligned), past the caches (SnapshotShape::streamed)
+// where the CPU can; else an ordinary copy.
+void stream_lines(std::byte* to, const std::byte* from, std::size_t bytes) {
+#if defined(__SSE2__)
+  for (std::size_t at = 0; at < bytes; at += 16) {
+    _mm_stream_si128(reinterpret_cast<__m128i*>(to + at),
+                     _mm_loadu_si128(reinterpret_cast<const __m128i*>(from + at)));
+  }
+#else
+  std::memcpy(to, from, bytes);
+#endif
+}
+
 bool same_chunk(const std::byte* a, const std::byte* b, std::size_t bytes) {
   if (bytes != SnapshotShape::kChunk) return std::memcmp(a, b, bytes) == 0;
   // Inline, whole words: a call to memcmp per line would cost more than the compare.
@@ -344,8 +362,8 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
                   SnapshotBlock into, bool may_allocate, StepImage* last, bool chained) {
   const Program& program = manager.program();
   std::byte* block = into.main;
-  // Written in place, never read here: the block is cold.
-  SnapshotHeader& header = *part_of<SnapshotHeader>(block, 0);
+  // Written to the block last, whole: the block is cold, and never read here.
+  SnapshotHeader header;
   header.step = manager.steps();
   header.safe = manager.in_safe_pass();
   header.timed = manager.timed();
@@ -358,7 +376,11 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   if (header.full || !shape.any_chunked) {
     // Laid out as in the manager: a small graph's step is one move.
     const std::size_t bytes = shape.tracked.end_of(parts);
-    copy_bytes(block + shape.tracked_at[0], now, bytes);
+    if (shape.streamed) {
+      stream_lines(block + shape.tracked_at[0], now, shape.tracked.allocated);
+    } else {
+      copy_bytes(block + shape.tracked_at[0], now, bytes);
+    }
     if (last != nullptr && shape.any_chunked) std::memcpy(last->bytes.data(), now, bytes);
   } else {
     for (std::size_t part = 0; part < parts; ++part) {
@@ -461,7 +483,18 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   }
   header.report_count = static_cast<std::uint32_t>(report_count);
   header.text_size = text_size;
+  if (shape.streamed) {
+    stream_lines(block, reinterpret_cast<const std::byte*>(&header), sizeof header);
+  } else {
+    std::memcpy(block, &header, sizeof header);
+  }
   return true;
+}
+
+void fence_streamed_stores() {
+#if defined(__SSE2__)
+  _mm_sfence();
+#endif
 }
 
 StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)

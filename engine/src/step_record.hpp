@@ -58,8 +58,9 @@ struct StepLayout {
   std::vector<Machine> machines;
 };
 
-/// The scalars at the start of a snapshot's block.
-struct SnapshotHeader {
+/// The scalars at the start of a snapshot's block: a cache line, which a streamed capture
+/// writes whole.
+struct alignas(64) SnapshotHeader {
   std::uint64_t step = 0;
   double t = 0.0;
   double duration = 0.0;
@@ -130,6 +131,12 @@ struct SnapshotShape {
   std::size_t chunks(std::size_t part) const { return (tracked.bytes[part] + kChunk - 1) / kChunk; }
   /// Some tracked part is chunked: else a capture copies all of them in one move.
   bool any_chunked = false;
+  /// A capture writes the header and the tracked parts, whole cache lines, with streaming stores,
+  /// which bypass the caches: a ring's block is cold, and an ordinary store would first fetch
+  /// each line for writing. When no part is chunked and the values are plain bytes (a small
+  /// graph's); the tracked parts then take whole lines (`tracked.allocated` bytes). The slot
+  /// must be published after fence_streamed_stores().
+  bool streamed = false;
   /// Where the other parts start in a block (the header at 0).
   std::size_t machines_at = 0, args_at = 0, queue_at = 0;
   std::size_t bytes = 0;  ///< a block's: whole cache lines, so that blocks share none
@@ -187,6 +194,12 @@ class SnapshotBlocks {
 bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
                   SnapshotBlock block, bool may_allocate = false, StepImage* last = nullptr,
                   bool chained = false);
+
+/// Makes the streaming stores of the captures before (SnapshotShape::streamed) visible to
+/// other threads before the stores after it: a recorder calls it before it publishes a slot. Its
+/// cost is waiting for those stores to leave the core, so a recorder publishes a step's slot
+/// only at the next step, when they long have.
+void fence_streamed_stores();
 
 /// A contiguous run of T in a block, as a reader sees it.
 template <typename T>

@@ -66,10 +66,11 @@ class Recorder : public Observer {
   void on_finish(const Manager& manager) override;
 
   std::uint64_t dropped() const { return dropped_total_.load(); }
-  /// Wakes the writer and waits until it has written every step copied so far. Not from the
-  /// stepping thread while the manager steps: it makes system calls.
+  /// Wakes the writer and waits until it has written every step copied so far. Between steps,
+  /// not while the manager steps: it makes system calls, and publishes the last step's slot.
   void drain();
-  /// Steps copied and not yet written (any thread).
+  /// Steps handed to the writer and not yet written (any thread); the last step's slot is
+  /// handed over at the next call (drain() does it).
   std::size_t backlog() const {
     const auto head = head_.load(std::memory_order_acquire);
     const auto tail = tail_.load(std::memory_order_acquire);
@@ -99,6 +100,8 @@ class Recorder : public Observer {
   /// Lays the ring out for the manager's program: what a step copies is sized here.
   void size_ring(const Manager& manager);
   void publish();
+  /// Publishes the last step's slot, if it waits (see `unpublished_`).
+  void settle();
   void write_loop();
   /// Where the step values of `slot` are.
   detail::SnapshotBlock block(const Slot* slot) const;
@@ -111,6 +114,9 @@ class Recorder : public Observer {
   // other at every step; the stepping thread reads tail_ only when the ring looks full.
   alignas(64) std::atomic<std::size_t> head_{0};  // next slot the stepping thread fills
   std::size_t tail_seen_ = 0;                     // tail_ as the stepping thread last read it
+  // A step's slot is published at the next call from the stepping thread, not at once: its
+  // streamed stores must be fenced first, and by then the fence finds them done.
+  bool unpublished_ = false;
   alignas(64) std::atomic<std::size_t> tail_{0};  // next slot the writer reads
   alignas(64) std::atomic<std::uint64_t> dropped_total_{0};
   // The names a slot's values are formatted with. Replaced only by on_reload(), once the writer

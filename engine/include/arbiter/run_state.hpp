@@ -30,6 +30,9 @@ struct TrackedLayout {
   std::size_t at[kParts] = {};
   std::size_t bytes[kParts] = {};
   std::size_t total = 0;  ///< where the last part ends
+  /// The allocation's bytes: `total` in whole cache lines, so that a copy may read it by lines.
+  std::size_t allocated = 0;
+  static constexpr std::size_t kLine = 64;
   /// Where the first `parts` parts end: the bytes a copy of them takes.
   std::size_t end_of(std::size_t parts) const {
     return parts == 0 ? 0 : at[parts - 1] + bytes[parts - 1];
