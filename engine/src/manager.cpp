@@ -333,6 +333,7 @@ void Manager::safe_pass() {
   }
   data_.event_count = 0;
   data_.sequence = 0;
+  input_pass_events_ = 0;  // the safe pass has only an output pass
   for (const auto& controller : program_.controllers) controller->clear_events();
   for (const auto& layer : program_.layers) {
     if (!layer.is_interface()) continue;
@@ -506,6 +507,7 @@ void Manager::step() {
     }
     resolve_actuators(layer);
   }
+  input_pass_events_ = event_count();
 
   for (const auto& layer : program_.layers) {
     if (!layer.is_interface()) run_layer(layer);

@@ -24,11 +24,12 @@ class Replayed : public Interface {
   void init(InitContext& ctx) override {
     // Resolved here, so that the output pass compares no names.
     const bool unattributed = inputs_.claim_unattributed();
-    reports_.resize(inputs_.steps());
+    for (auto& pass : reports_) pass.resize(inputs_.steps());
     for (std::uint64_t step = 1; step <= inputs_.steps(); ++step) {
       for (const auto& report : inputs_.reported(step)) {
         if (report.layer == ctx.name() || (report.layer.empty() && unattributed)) {
-          reports_[step - 1].push_back(report.text.c_str());
+          reports_[report.input_pass ? kInputPass : kOutputPass][step - 1].push_back(
+              report.text.c_str());
         }
       }
     }
@@ -64,16 +65,19 @@ class Replayed : public Interface {
     }
   }
 
-  // Reported again in the output pass, where interfaces that advance a world report, by the
-  // layer that reported it.
+  // Reported again by the layer that reported it, in the pass it reported in, so that the
+  // step's reports come in the recorded order.
   void output(const StepContext& ctx) override {
     const auto index = ctx.step() - 1;
-    if (index >= reports_.size()) return;
-    for (const char* text : reports_[index]) ctx.report(text);
+    if (index >= reports_[kOutputPass].size()) return;
+    for (const char* text : reports_[kOutputPass][index]) ctx.report(text);
   }
 
   void input(WriteContext& ctx) override {
     const auto index = ctx.step() - 1;
+    if (index < reports_[kInputPass].size()) {
+      for (const char* text : reports_[kInputPass][index]) ctx.report(text);
+    }
     for (auto& feed : feeds_) {
       if (index < feed.values.size() && feed.written[index]) {
         ctx.write(feed.output, feed.values[index]);
@@ -89,7 +93,8 @@ class Replayed : public Interface {
   };
   const RecordedInputs& inputs_;
   std::vector<Feed> feeds_;
-  std::vector<std::vector<const char*>> reports_;  // this layer's, per step - 1
+  enum Pass { kInputPass, kOutputPass };
+  std::vector<std::vector<const char*>> reports_[2];  // this layer's, per pass, per step - 1
 };
 
 }  // namespace
@@ -105,8 +110,11 @@ RecordedInputs::RecordedInputs(const std::vector<std::pair<std::uint64_t, std::s
         // Older recordings list the texts only.
         if (item.is_string()) reported_[step - 1].push_back({"", item.get<std::string>()});
         if (item.is_object() && item.value("text", nlohmann::ordered_json()).is_string()) {
-          reported_[step - 1].push_back(
-              {item.value("by", std::string()), item["text"].get<std::string>()});
+          const auto by = item.value("by", nlohmann::ordered_json());
+          const auto pass = item.value("pass", nlohmann::ordered_json());
+          reported_[step - 1].push_back({by.is_string() ? by.get<std::string>() : std::string(),
+                                         item["text"].get<std::string>(),
+                                         pass.is_string() && pass.get<std::string>() == "input"});
         }
       }
     }

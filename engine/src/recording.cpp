@@ -52,7 +52,8 @@ constexpr const char* kInputsSchema = R"({"$schema": "https://json-schema.org/dr
   "inputs": {"type": "object", "additionalProperties": {"type": "object",
     "properties": {"value": {}, "written": {"type": "boolean"}}}},
   "reported": {"type": "array", "items": {"type": "object",
-    "properties": {"by": {"type": "string"}, "text": {"type": "string"}}}}},
+    "properties": {"by": {"type": "string"}, "text": {"type": "string"},
+                   "pass": {"enum": ["input", "output"]}}}}},
  "required": ["step", "inputs"]})";
 
 constexpr const char* kHeaderSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",

@@ -482,6 +482,8 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
     text_size += static_cast<std::uint32_t>(size);
   }
   header.report_count = static_cast<std::uint32_t>(report_count);
+  header.input_reports =
+      static_cast<std::uint32_t>(std::min(manager.input_pass_events(), report_count));
   header.text_size = text_size;
   if (shape.streamed) {
     stream_lines(block, reinterpret_cast<const std::byte*>(&header), sizeof header);
@@ -518,6 +520,7 @@ StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)
   events = {part_of<Controller::Event>(extras, s.events_at), s.events};
   event_args = {part_of<Controller::EventArg>(extras, s.event_args_at), s.event_args};
   reports = {part_of<Report>(extras, s.reports_at), header.report_count};
+  input_reports = header.input_reports;
   texts = std::string_view(part_of<char>(extras, s.texts_at), header.text_size);
 }
 
@@ -709,8 +712,8 @@ void append_inputs_record(const StepLayout& layout, const StepSnapshot& step, st
     }
   }
   out += "}";
-  // What interface code reported is an input too: replay reports it again, in the output pass,
-  // from the layer that reported it.
+  // What interface code reported is an input too: replay reports it again, from the layer that
+  // reported it, in the pass it was reported in.
   bool reported = false;
   const auto behaviours = layout.behaviours.size();
   for (std::size_t e = 0; e < step.reports.size(); ++e) {
@@ -725,7 +728,7 @@ void append_inputs_record(const StepLayout& layout, const StepSnapshot& step, st
     append_name(layout.layers[report.source - behaviours].name, out);
     out += R"(, "text": )";
     append_json_string(std::string(step.texts.substr(report.text_begin, report.text_size)), out);
-    out += "}";
+    out += e < step.input_reports ? R"(, "pass": "input"})" : R"(, "pass": "output"})";
   }
   if (reported) out += "]";
   out += "}";

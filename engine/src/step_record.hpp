@@ -65,6 +65,7 @@ struct alignas(64) SnapshotHeader {
   double t = 0.0;
   double duration = 0.0;
   std::uint32_t report_count = 0;
+  std::uint32_t input_reports = 0;  ///< the first reports: made in the input pass
   std::uint32_t text_size = 0;
   /// False: the tracked parts hold only the chunks listed as changed (see SnapshotShape).
   bool full = true;
@@ -248,6 +249,7 @@ struct StepSnapshot {
   Span<Controller::Event> events;  // args_begin rebased into event_args
   Span<Controller::EventArg> event_args;
   Span<Report> reports;
+  std::uint32_t input_reports = 0;  ///< how many of the reports the input pass made
   std::string_view texts;
 
   const void* value(const StepLayout& layout, std::uint32_t actuator) const {

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Recordings end to end on the soccer demo: record, replay (the run repeats itself), what-if
+# Recordings end to end on the soccer demos: record, replay (the run repeats itself), what-if
 # replays with an edited graph and what `arbiter diff` says of them, a behaviour that is not
 # deterministic caught by replay, a recording cut off by kill -9, and the tools that read traces
 # reading recordings.
@@ -34,6 +34,14 @@ expect_exit 0 "$cli" diff "$work/run.mcap" "$work/replay.mcap" --format json
 [[ $(cat "$work/out.txt") == '{"identical":true,"steps":[220,220],"first_divergence":null,"behaviours":{},"actuators":{},"machines":{}}' ]] ||
   fail "diff of a replay"
 expect_exit 0 "$cli" diff "$work/run.jsonl" "$work/replay.mcap"
+
+# The goalie demo: its world reports the shot in the input pass (step 201), the goalie its dive
+# in the same step; replay reports the shot again in that pass, before the dive, as recorded.
+goalie=$source_dir/configs/soccer/goalie.yaml
+expect_exit 0 "$cli" run "$goalie" -q --record "$work/goalie.mcap"
+expect_exit 0 "$cli" replay "$work/goalie.mcap"
+grep -qx "replayed 240 steps of $work/goalie.mcap: identical to the recording" "$work/out.txt" ||
+  fail "the goalie demo does not replay identically"
 
 # Flat out, the run outpaces the recording's writer many times over and waits for it: every
 # step is in the recording, and replaying it (flat out too) records every step again.

@@ -145,6 +145,9 @@ class Manager {
   const TrackedLayout& tracked_layout() const { return run_.tracked_layout; }
   /// Events that behaviour and interface code reported in the last step (StepContext::report).
   std::size_t event_count() const { return std::min(data_.event_count, data_.event_capacity); }
+  /// How many of those were reported in the input pass (the first ones): a replay reports
+  /// an interface's again in the same pass.
+  std::size_t input_pass_events() const { return input_pass_events_; }
   const detail::StepData::Event& event(std::size_t index) const { return events_[index]; }
   /// Who reported an event: a behaviour's or an interface layer's name.
   const std::string& event_source(const detail::StepData::Event& event) const;
@@ -192,6 +195,7 @@ class Manager {
   StepClock* clock_ = nullptr;
   double step_time_ = 0.0;
   double step_duration_ = 0.0;
+  std::size_t input_pass_events_ = 0;
   std::vector<Observer*> observers_;
   std::vector<detail::StepData::Event> events_;
   detail::StepData data_;

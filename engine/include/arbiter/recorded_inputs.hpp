@@ -69,11 +69,13 @@ class RecordedInputs {
   };
   const Column* find(const std::string& name) const;
 
-  /// What interface code reported in a step, and which interface layer reported it ("" in
-  /// recordings that did not say: the first interface layer reports those again).
+  /// What interface code reported in a step, which interface layer reported it ("" in
+  /// recordings that did not say: the first interface layer reports those again), and whether
+  /// in the input pass (else the output pass, as recordings that did not say are replayed).
   struct Report {
     std::string layer;
     std::string text;
+    bool input_pass = false;
   };
   /// What was reported in `step` (empty when nothing).
   const std::vector<Report>& reported(std::uint64_t step) const;
