@@ -14,8 +14,10 @@
 #include <unistd.h>
 
 #include "../engine/src/carryover.hpp"  // internal: one test stages a carry-over by hand
+#include "arbiter/recording.hpp"
 #include "arbiter/reload.hpp"
 #include "arbiter/trace.hpp"
+#include "arbiter/trace_reader.hpp"
 #include "counting_new.hpp"
 #include "test_support.hpp"
 
@@ -327,8 +329,9 @@ TEST_CASE("what a swap replaced outlives the observers' on_reload()", "[reload]"
   CHECK(manager.reloads() == 1);
 }
 
-TEST_CASE("the swap inside step() allocates nothing", "[reload][alloc]") {
-  const std::string before = R"(arbiter: 1
+namespace {
+
+const char* const kSwap = R"(arbiter: 1
 name: swap
 layers:
   - name: control
@@ -345,16 +348,25 @@ state_machines:
       wait: {type: scripted, params: {hold: 100}}
     queue: [wait]
 )";
-  ConfigFile config(before);
-  Reloader reloader(registry());
-  Manager manager(load(reloader, config.path()));
-  for (int i = 0; i < 3; ++i) manager.step();
-  std::string after = before;
+
+/// kSwap with its inhibitions flipped, a state's param changed and a behaviour added.
+std::string edited_swap() {
+  std::string after = kSwap;
   after.replace(after.find("[a => b, b -> c]"), 16, "[b => a, c -> b]");
   after.replace(after.find("hold: 100"), 9, "hold: 7");
   after.replace(after.find("      c: {"), 0,
                 "      d: {type: test.Probe, params: {record: false}}\n");
-  config.write(after);
+  return after;
+}
+
+}  // namespace
+
+TEST_CASE("the swap inside step() allocates nothing", "[reload][alloc]") {
+  ConfigFile config(kSwap);
+  Reloader reloader(registry());
+  Manager manager(load(reloader, config.path()));
+  for (int i = 0; i < 3; ++i) manager.step();
+  config.write(edited_swap());
   REQUIRE(reloader.reload(manager).staged);
   allocations = 0;
   counting = true;
@@ -362,6 +374,44 @@ state_machines:
   counting = false;
   CHECK(manager.reloads() == 1);
   CHECK(allocations.load() == 0);
+}
+
+TEST_CASE("a recorded swap allocates nothing on the stepping thread", "[reload][alloc][record]") {
+  // The recorder lays its ring out for the staged program on the staging thread
+  // (Observer::on_staged()), and the writer frees the replaced layout: the step that swaps
+  // neither allocates nor waits for the writer.
+  ConfigFile config(kSwap);
+  Reloader reloader(registry());
+  Manager manager(load(reloader, config.path()));
+  const auto path = std::filesystem::temp_directory_path() / "arbiter_reload_recorded.mcap";
+  {
+    RecordingInfo info;
+    info.version = "test";
+    Recorder recorder(path.string(), info);
+    REQUIRE(recorder.ok());
+    manager.add_observer(recorder);
+    for (int i = 0; i < 3; ++i) manager.step();
+    config.write(edited_swap());
+    REQUIRE(reloader.reload(manager).staged);
+    allocations = 0;
+    test::only_thread = std::this_thread::get_id();  // not the writer's
+    counting = true;
+    manager.step();
+    counting = false;
+    test::only_thread = std::thread::id();
+    CHECK(manager.reloads() == 1);
+    CHECK(allocations.load() == 0);
+    manager.finish();
+    CHECK(recorder.dropped() == 0);
+  }
+  Diagnostic error;
+  const auto recorded = read_trace(path.string(), error);
+  INFO(format(error));
+  REQUIRE(recorded);
+  CHECK(recorded->steps.size() == 4);
+  REQUIRE(recorded->reloads.size() == 1);
+  CHECK(recorded->reloads[0].before == 3);
+  std::filesystem::remove(path);
 }
 
 TEST_CASE("reloads from another thread while a control loop steps", "[reload]") {

@@ -77,6 +77,7 @@ bool is_finite(const void* value, std::uint8_t components) {
 // What stage() prepares for a swap: the program, its run state and the carry-over from the
 // running program. After the swap it holds what was replaced.
 struct Manager::Staged {
+  std::uint64_t stage = 0;  // Observer::on_staged()'s number
   Program program;
   RunState state;
   detail::Carryover carryover;
@@ -95,6 +96,7 @@ struct Manager::Reloading {
   std::unique_ptr<Staged> pending;
   std::unique_ptr<Staged> retired;
   std::atomic<std::uint64_t> reloads{0};
+  std::uint64_t stages = 0;  // by the staging thread
   /// False from a swap until the observers' on_reload() returned: until then they may still read
   /// what the swap replaced (a recorder formats the replaced program's last steps then), so
   /// `retired` is not freed.
@@ -174,6 +176,8 @@ void Manager::stage(Program program, detail::Carryover carryover) {
         "Manager::stage: the carry-over does not fit the programs (build it with Reloader)");
   }
   auto staged = prepare(std::move(program), std::move(carryover));
+  staged->stage = ++reloading_->stages;
+  for (Observer* observer : observers_) observer->on_staged(staged->program, staged->stage);
   std::unique_ptr<Staged> dropped;
   std::unique_ptr<Staged> retired;
   {
@@ -183,7 +187,13 @@ void Manager::stage(Program program, detail::Carryover carryover) {
     reloading_->pending = std::move(staged);
     reloading_->has_pending.store(true, std::memory_order_release);
   }
+  retire(retired.get());
   // Destroyed here, outside the lock and off the step path.
+}
+
+void Manager::retire(const Staged* retired) const {
+  if (retired == nullptr) return;
+  for (Observer* observer : observers_) observer->on_retiring(retired->program);
 }
 
 bool Manager::withdraw() {
@@ -195,6 +205,7 @@ bool Manager::withdraw() {
     retired = std::move(reloading_->retired);
     reloading_->has_pending.store(false, std::memory_order_relaxed);
   }
+  retire(retired.get());
   return dropped != nullptr;
 }
 
@@ -473,6 +484,7 @@ void Manager::step() {
       apply(*staged);
       // stage() and withdraw() empty `retired` before a program can be pending, so nothing is
       // destroyed here: the replaced program waits for them.
+      stage_number_ = staged->stage;
       reloading.retired = std::move(staged);
       reloading.reloads.fetch_add(1, std::memory_order_relaxed);
       reloading.observed.store(false, std::memory_order_relaxed);

@@ -72,6 +72,26 @@ void append_inputs_record(const Manager& manager, std::string& out) {
   detail::append_inputs_record(layout, detail::capture_growing(manager, layout, storage), out);
 }
 
+// Reported text a slot holds; a step that reported more is dropped.
+constexpr std::size_t kReportTextBytes = 4096;
+
+// The ring laid out for one program: made on the thread that stages it where it can be, so that
+// a hot reload neither allocates on the stepping thread nor waits there for the writer.
+struct Recorder::Generation {
+  Generation(const Program& program, std::uint64_t stage_, std::size_t slots)
+      : stage(stage_), layout(program), header(trace_header(program)) {
+    blocks.reset(layout, kReportTextBytes, slots);
+    last.bytes.assign(blocks.shape().tracked.total, std::byte{0});
+  }
+  std::uint64_t stage = 0;  // Manager::stage_number()
+  detail::StepLayout layout;
+  detail::SnapshotBlocks blocks;
+  // The stepping thread's: the tracked parts as the last slot published left them.
+  detail::StepImage last;
+  std::string header;  // the program's trace header, without the reload's number and step
+  std::vector<std::pair<std::string, std::string>> files;  // the reloaded config's
+};
+
 // Cache-line aligned: the stepping thread fills one slot while the writer reads an earlier one.
 // A step's values are in the slot's block (Output::Blocks), of the same index.
 struct alignas(64) Recorder::Slot {
@@ -82,8 +102,8 @@ struct alignas(64) Recorder::Slot {
   Kind kind = Kind::kSnapshot;
   std::uint64_t step = 0;
   std::uint64_t log_time = 0;
-  std::string header;                                      // kHeader
-  std::vector<std::pair<std::string, std::string>> files;  // kHeader: the reloaded config's
+  std::uint64_t reload = 0;          // kHeader: Manager::reloads()
+  std::unique_ptr<Generation> next;  // kHeader: the slots after it are laid out by it
 };
 
 struct Recorder::Output {
@@ -97,18 +117,10 @@ struct Recorder::Output {
   std::string record;  // reused between messages
   std::string inputs_record;
   detail::StepImage image;  // the writer's, as of the last slot it formatted
-  // The stepping thread's: the tracked parts as the last slot published left them, and whether that
-  // slot is the one before the next (no step dropped since), so the next copies what changed.
-  // On cache lines of their own: the writer writes the members above at every message, and a
-  // line shared with them would move between the cores at every step.
-  struct alignas(64) Stepping {
-    detail::StepImage last;
-    bool chained = false;
-  } stepping;
-  // The slots' blocks: both threads read where they are, neither writes that in a run.
-  struct alignas(64) Blocks {
-    detail::SnapshotBlocks of;
-  } blocks;
+  // The stepping thread's: whether the last slot published is the one before the next (no step
+  // dropped since), so that the next copies what changed. On a cache line of its own: the
+  // writer writes the members above at every message.
+  alignas(64) bool chained = false;
 };
 
 Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots,
@@ -160,8 +172,8 @@ inline void Recorder::settle() {
   unpublished_ = false;
 }
 
-inline detail::SnapshotBlock Recorder::block(const Slot* slot) const {
-  return out_->blocks.of[static_cast<std::size_t>(slot - ring_.get())];
+inline detail::SnapshotBlock Recorder::block(const Generation& generation, const Slot* slot) const {
+  return generation.blocks[static_cast<std::size_t>(slot - ring_.get())];
 }
 
 void Recorder::on_start(const Manager& manager) {
@@ -188,7 +200,9 @@ void Recorder::on_start(const Manager& manager) {
   for (const auto& [file, text] : info_.files) config.emplace_back("file:" + file, text);
   writer.metadata("arbiter.config", config);
   writer.message(out_->header, wall_start_ns_, trace_header(manager.program()));
-  size_ring(manager);
+  written_ = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
+  stepping_ = written_.get();
+  set_writer_period(manager.program());
   started_ = true;
   writer_ = std::thread([this] { write_loop(); });
 }
@@ -197,20 +211,13 @@ std::uint64_t Recorder::log_time(bool timed, double step_time) const {
   return wall_start_ns_ + (timed ? static_cast<std::uint64_t>(step_time * 1e9) : 0);
 }
 
-// Reported text a slot holds; a step that reported more is dropped.
-constexpr std::size_t kReportTextBytes = 4096;
-
-void Recorder::size_ring(const Manager& manager) {
-  layout_ = std::make_unique<detail::StepLayout>(manager.program());
-  out_->blocks.of.reset(*layout_, kReportTextBytes, ring_size_);
-  out_->stepping.last.bytes.assign(out_->blocks.of.shape().tracked.total, std::byte{0});
-  out_->stepping.chained = false;
+void Recorder::set_writer_period(const Program& program) {
   // The writer wakes a few times in the while the ring takes to fill at the config's rate: a
   // robot's CPU has better to do than wake it every millisecond, and its bursts of formatting
   // and compressing then seldom meet a step. Flat out, where the stepping thread waits for it,
   // it wakes every millisecond.
   constexpr double kFewest = 1e-3, kMost = 50e-3;  // seconds
-  const double fill = static_cast<double>(ring_size_ - 1) / manager.program().rate_hz;
+  const double fill = static_cast<double>(ring_size_ - 1) / program.rate_hz;
   const double period =
       ring_full_ == RingFull::kWaitForWriter ? kFewest : std::clamp(fill / 4, kFewest, kMost);
   writer_period_us_.store(static_cast<std::int64_t>(period * 1e6));
@@ -221,13 +228,13 @@ void Recorder::on_step(const Manager& manager) {
   settle();
   Slot* slot = ring_full_ == RingFull::kWaitForWriter ? claim_waiting() : claim();
   if (slot == nullptr ||
-      !detail::capture_step(manager, *layout_, out_->blocks.of.shape(), block(slot), false,
-                            &out_->stepping.last, out_->stepping.chained)) {
+      !detail::capture_step(manager, stepping_->layout, stepping_->blocks.shape(),
+                            block(*stepping_, slot), false, &stepping_->last, out_->chained)) {
     dropped_total_.fetch_add(1, std::memory_order_relaxed);
-    out_->stepping.chained = false;  // the next slot copies every tracked part whole
+    out_->chained = false;  // the next slot copies every tracked part whole
     return;
   }
-  out_->stepping.chained = true;
+  out_->chained = true;
   unpublished_ = true;
 }
 
@@ -258,14 +265,14 @@ void Recorder::on_safe(const Manager& manager) {
   if (!started_) return;
   settle();
   Slot* slot = claim_waiting();  // the last values a stopping robot was given: not dropped for room
-  if (!detail::capture_step(manager, *layout_, out_->blocks.of.shape(), block(slot), true,
-                            &out_->stepping.last, out_->stepping.chained)) {
+  if (!detail::capture_step(manager, stepping_->layout, stepping_->blocks.shape(),
+                            block(*stepping_, slot), true, &stepping_->last, out_->chained)) {
     // More reported text than a slot holds: the gap is recorded like a dropped step's.
     dropped_total_.fetch_add(1, std::memory_order_relaxed);
-    out_->stepping.chained = false;
+    out_->chained = false;
     return;
   }
-  out_->stepping.chained = true;
+  out_->chained = true;
   unpublished_ = true;
 }
 
@@ -274,31 +281,61 @@ void Recorder::stage_files(std::vector<std::pair<std::string, std::string>> file
   staged_files_ = std::move(files);
 }
 
+void Recorder::on_staged(const Program& next, std::uint64_t stage) {
+  if (!out_) return;
+  auto generation = std::make_unique<Generation>(next, stage, ring_size_);
+  {
+    std::lock_guard<std::mutex> lock(staged_mutex_);
+    if (staged_files_) generation->files = std::move(*staged_files_);
+    staged_files_.reset();
+    std::swap(staged_, generation);
+  }
+  // A generation staged before and never swapped in is freed here, outside the lock.
+}
+
 void Recorder::on_reload(const Manager& manager) {
   if (!started_) return;
-  // The slots still waiting were taken with the replaced program's layout: the writer formats
-  // them all before the layout and the slots are made over for the new one. (Their state
-  // machines' config params point into the replaced program: the Manager frees it only after
-  // every observer's on_reload() returned.)
   settle();
-  wake_writer();
-  while (tail_.load(std::memory_order_acquire) != head_.load(std::memory_order_relaxed)) {
-    std::this_thread::yield();
+  // The slots still waiting for the writer keep the replaced program's generation (and their
+  // state machines' config params point into that program: Manager waits in on_retiring()
+  // before freeing it). The steps from here on go into the next one's blocks.
+  std::unique_ptr<Generation> next;
+  {
+    // Never waits: the staging thread holds the lock only to hand a generation over.
+    std::unique_lock<std::mutex> lock(staged_mutex_, std::try_to_lock);
+    if (lock.owns_lock() && staged_ && staged_->stage == manager.stage_number()) {
+      next = std::move(staged_);
+    }
   }
-  size_ring(manager);
+  if (!next) {
+    // Staged without on_staged(), or raced by a later stage(): laid out here, allocating.
+    next = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
+    std::lock_guard<std::mutex> lock(staged_mutex_);
+    if (staged_files_) next->files = std::move(*staged_files_);
+    staged_files_.reset();
+  }
+  set_writer_period(manager.program());
   // A reload header is never dropped: without it the steps after it could not be read.
   Slot* slot = claim_waiting();
   slot->kind = Slot::Kind::kHeader;
   slot->step = manager.steps();
+  slot->reload = manager.reloads();
   slot->log_time = log_time(manager.timed(), manager.step_time());
-  slot->header = reload_header(manager);
-  {
-    std::lock_guard<std::mutex> lock(staged_mutex_);
-    slot->files = staged_files_ ? std::move(*staged_files_)
-                                : std::vector<std::pair<std::string, std::string>>{};
-    staged_files_.reset();
-  }
+  stepping_ = next.get();
+  slot->next = std::move(next);
+  out_->chained = false;  // the next step copies every tracked part whole, into the new blocks
+  headers_published_.fetch_add(1, std::memory_order_release);
   publish();
+}
+
+void Recorder::on_retiring(const Program&) {
+  if (!started_) return;
+  const auto published = headers_published_.load(std::memory_order_acquire);
+  if (headers_written_.load(std::memory_order_acquire) >= published) return;
+  wake_writer();
+  while (headers_written_.load(std::memory_order_acquire) < published && !finished_) {
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+  }
 }
 
 void Recorder::on_finish(const Manager&) {
@@ -333,22 +370,28 @@ void Recorder::write_loop() {
       break;
     }
     if (slot.kind == Slot::Kind::kHeader) {
+      // Every slot of the generation before has been written: it goes, the next one comes.
+      written_ = std::move(slot.next);
+      const auto header = reload_header(written_->header, slot.reload, slot.step);
       std::vector<std::pair<std::string, std::string>> reload{
-          {"after_step", std::to_string(slot.step)}, {"header", slot.header}};
-      for (auto& [file, text] : slot.files) reload.emplace_back("file:" + file, std::move(text));
-      slot.files.clear();
+          {"after_step", std::to_string(slot.step)}, {"header", header}};
+      for (auto& [file, text] : written_->files) {
+        reload.emplace_back("file:" + file, std::move(text));
+      }
+      written_->files.clear();
       out.writer.metadata("arbiter.reload", reload);
-      out.writer.message(out.header, slot.log_time, slot.header);
+      out.writer.message(out.header, slot.log_time, header);
       out.last_step = slot.step;
       slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
+      headers_written_.fetch_add(1, std::memory_order_release);
     } else {
       // The writer only reads the block: a line it wrote would have to come back to the
       // stepping thread's core before that could fill the slot again.
-      detail::StepSnapshot step(out_->blocks.of.shape(), block(&slot));
+      detail::StepSnapshot step(written_->blocks.shape(), block(*written_, &slot));
       step.apply(out.image);
       const auto time = log_time(step.timed, step.t);
       out.record.clear();
-      detail::append_step_record(*layout_, step, out.record);
+      detail::append_step_record(written_->layout, step, out.record);
       if (step.safe) {
         out.writer.message(out.step, time, out.record);  // no inputs: nothing was read
       } else {
@@ -360,7 +403,7 @@ void Recorder::write_loop() {
         }
         out.last_step = step.step;
         out.inputs_record.clear();
-        detail::append_inputs_record(*layout_, step, out.inputs_record);
+        detail::append_inputs_record(written_->layout, step, out.inputs_record);
         out.writer.message(out.step, time, out.record);
         out.writer.message(out.inputs, time, out.inputs_record);
       }

@@ -178,11 +178,15 @@ void TraceWriter::on_step(const Manager& manager) {
 }
 
 std::string reload_header(const Manager& manager) {
-  std::string out = trace_header(manager.program());
+  return reload_header(trace_header(manager.program()), manager.reloads(), manager.steps());
+}
+
+std::string reload_header(std::string trace_header, std::uint64_t reload,
+                          std::uint64_t after_step) {
   constexpr std::string_view kVersion = R"({"arbiter_trace": 1)";
-  out.insert(kVersion.size(), fmt::format(R"(, "reload": {}, "after_step": {})", manager.reloads(),
-                                          manager.steps()));
-  return out;
+  trace_header.insert(kVersion.size(),
+                      fmt::format(R"(, "reload": {}, "after_step": {})", reload, after_step));
+  return trace_header;
 }
 
 void TraceWriter::on_reload(const Manager& manager) {

@@ -31,6 +31,15 @@ class Observer {
   /// behaviour, actuator and controller indices may all have changed, so anything an observer
   /// keyed by index must be rebuilt from manager.program().
   virtual void on_reload(const Manager& /*manager*/) {}
+  /// On the thread that stages a hot reload (Manager::stage()), with the staged program, before
+  /// a step can swap it in: what on_reload() will need can be prepared here, off the stepping
+  /// thread. A later stage() may replace it before it is swapped in: `stage` numbers them, and
+  /// Manager::stage_number() tells which one runs.
+  virtual void on_staged(const Program& /*next*/, std::uint64_t /*stage*/) {}
+  /// On the staging thread (Manager::stage() or withdraw()), before the program that the last
+  /// swap replaced is freed: an observer that still reads it (a recorder's writer formatting its
+  /// last steps) returns once it no longer does.
+  virtual void on_retiring(const Program& /*replaced*/) {}
   virtual void on_finish(const Manager& /*manager*/) {}
   /// After the safe-value pass (Manager::safe_pass()): the actuators hold what it output; the
   /// step counter is that of the last step.
@@ -94,7 +103,8 @@ class Manager {
   double step_time() const { return step_time_; }
   double step_duration() const { return step_duration_; }
 
-  /// Observers are not owned; they must outlive the manager or be removed.
+  /// Observers are not owned; they must outlive the manager or be removed. Add and remove them
+  /// while no other thread stages a program: stage() and withdraw() call them too.
   void add_observer(Observer& observer);
   void remove_observer(Observer& observer);
   /// Tells the observers that the run is over (e.g. to close a trace).
@@ -116,6 +126,9 @@ class Manager {
   bool withdraw();
   /// How many staged programs step() has swapped in.
   std::uint64_t reloads() const;
+  /// Which stage() the running program came from, as Observer::on_staged() numbered it (0: the
+  /// program the manager was made with).
+  std::uint64_t stage_number() const { return stage_number_; }
 
   /// The running program. Another thread may read it only between withdraw() and stage().
   const Program& program() const { return program_; }
@@ -180,6 +193,8 @@ class Manager {
   void point_step_data() noexcept;
   void apply(Staged& staged);
   void end_replaced(Staged& staged);
+  /// Observer::on_retiring() for what a swap replaced, before it is freed.
+  void retire(const Staged* retired) const;
   void carry_values(const Staged& staged);
 
   Program program_;
@@ -196,6 +211,7 @@ class Manager {
   double step_time_ = 0.0;
   double step_duration_ = 0.0;
   std::size_t input_pass_events_ = 0;
+  std::uint64_t stage_number_ = 0;
   std::vector<Observer*> observers_;
   std::vector<detail::StepData::Event> events_;
   detail::StepData data_;

@@ -21,7 +21,6 @@
 namespace arbiter {
 
 namespace detail {
-struct StepLayout;
 struct SnapshotBlock;
 }  // namespace detail
 
@@ -60,7 +59,13 @@ class Recorder : public Observer {
 
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
+  /// Hands the writer the layout prepared by on_staged() for the program swapped in: neither
+  /// waits for the writer nor allocates (unless the program was staged without on_staged()).
   void on_reload(const Manager& manager) override;
+  /// Lays the ring out for `next`, on the staging thread.
+  void on_staged(const Program& next, std::uint64_t stage) override;
+  /// Waits until the writer has written the steps of the replaced program (they point into it).
+  void on_retiring(const Program& replaced) override;
   /// The safe-value pass, as the trace has it, on `/arbiter/step`.
   void on_safe(const Manager& manager) override;
   void on_finish(const Manager& manager) override;
@@ -85,6 +90,7 @@ class Recorder : public Observer {
 
  private:
   struct Slot;
+  struct Generation;
   /// The slot after `index`: a compare, not a modulo, whose division would cost the stepping
   /// thread more than the rest of publishing a step.
   std::size_t after(std::size_t index) const { return index + 1 == ring_size_ ? 0 : index + 1; }
@@ -97,14 +103,14 @@ class Recorder : public Observer {
   /// A message's log time: the wall clock at the run's start plus the step's "t" (the manager's
   /// clock; a manager without one logs every step at the start).
   std::uint64_t log_time(bool timed, double step_time) const;
-  /// Lays the ring out for the manager's program: what a step copies is sized here.
-  void size_ring(const Manager& manager);
+  /// The writer's period for a program's rate.
+  void set_writer_period(const Program& program);
   void publish();
   /// Publishes the last step's slot, if it waits (see `unpublished_`).
   void settle();
   void write_loop();
-  /// Where the step values of `slot` are.
-  detail::SnapshotBlock block(const Slot* slot) const;
+  /// Where the step values of `slot` are, in `generation`'s blocks.
+  detail::SnapshotBlock block(const Generation& generation, const Slot* slot) const;
 
   std::FILE* file_ = nullptr;
   RecordingInfo info_;
@@ -119,10 +125,19 @@ class Recorder : public Observer {
   bool unpublished_ = false;
   alignas(64) std::atomic<std::size_t> tail_{0};  // next slot the writer reads
   alignas(64) std::atomic<std::uint64_t> dropped_total_{0};
-  // The names a slot's values are formatted with. Replaced only by on_reload(), once the writer
-  // has emptied the ring, so the writer reads it without a lock.
-  std::unique_ptr<detail::StepLayout> layout_;
+  // Reload headers handed to the writer (by the stepping thread) and written (by the writer):
+  // on_retiring() waits for the second to reach the first.
+  std::atomic<std::uint64_t> headers_published_{0};
+  alignas(64) std::atomic<std::uint64_t> headers_written_{0};
+  // The ring's layout, blocks and names for one program each: the stepping thread's is the
+  // running program's, the writer's that of the slots it reads. A reload header hands the next
+  // to the writer, which frees the one before: every slot of it has been written by then.
+  std::unique_ptr<Generation> written_;  // the writer's
+  Generation* stepping_ = nullptr;       // the stepping thread's
   std::mutex staged_mutex_;
+  // By staged_mutex_: the generation on_staged() prepared, and the files of the config staged
+  // next (stage_files()).
+  std::unique_ptr<Generation> staged_;
   std::optional<std::vector<std::pair<std::string, std::string>>> staged_files_;
   // The writer sleeps this long whenever it has caught up, unless woken (wake_writer()).
   std::atomic<std::int64_t> writer_period_us_{1000};
@@ -134,8 +149,9 @@ class Recorder : public Observer {
   std::unique_ptr<Output> out_;
   RingFull ring_full_ = RingFull::kDropStep;
   std::uint64_t wall_start_ns_ = 0;
-  bool started_ = false;
-  bool finished_ = false;
+  // Read by the staging thread too.
+  std::atomic<bool> started_{false};
+  std::atomic<bool> finished_{false};
 };
 
 /// The message on `/arbiter/inputs`: {"step": N, "inputs": {NAME: {"value": V, "written": B}}}

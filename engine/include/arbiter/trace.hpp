@@ -56,6 +56,8 @@ std::string trace_header(const Program& program);
 /// the version, so that a reader can tell it from the first header and re-key what it keeps
 /// by index. Without the newline.
 std::string reload_header(const Manager& manager);
+/// The same from the program's trace_header(), the reload's number and the step before it.
+std::string reload_header(std::string trace_header, std::uint64_t reload, std::uint64_t after_step);
 /// "activate walk_to_pose", as in the trace.
 std::string event_text(const Controller& controller, const Controller::Event& event);
 
