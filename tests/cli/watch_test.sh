@@ -72,8 +72,14 @@ grep -q '^  control/wave .*(removed by a reload)$' "$work/out.txt" || fail "no s
 ! grep -q $'\r' "$work/out.txt" "$work/err.txt" || fail "a carriage return outside a terminal"
 
 # In a terminal (a pty from script(1)): the status line, rewritten in place, names the config,
-# the step and the last reload; every other line starts on a cleared line.
-if command -v script >/dev/null; then
+# the step and the last reload; every other line starts on a cleared line. A machine without
+# pseudo-terminals (a chroot without /dev/pts) cannot show it: that part is skipped, and says so.
+terminal="the status line in a terminal: 1 passed, 0 failed"
+if ! command -v script >/dev/null; then
+  terminal="the status line in a terminal: skipped (no script(1))"
+elif ! script -qec true /dev/null >/dev/null 2>&1; then
+  terminal="the status line in a terminal: skipped (no pseudo-terminal here)"
+else
   cp "$config" "$work/tty.yaml"
   ARBITER_CLI="$cli" CONFIG="$work/tty.yaml" script -qfec \
     'timeout -s INT 3 "$ARBITER_CLI" run "$CONFIG" --watch --realtime' /dev/null \
@@ -92,4 +98,4 @@ if command -v script >/dev/null; then
   ! grep -aqP 'watching [^\r\n]*?(no reload yet|last reload at step \d+)[^\r\d]' "$work/tty.txt" ||
     fail "a line written over the status line"
 fi
-echo "watched: 3 edits swapped in, 1 broken edit rejected, the status line in a terminal: 1 passed, 0 failed"
+echo "watched: 3 edits swapped in, 1 broken edit rejected, $terminal"
