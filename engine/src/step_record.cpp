@@ -318,9 +318,15 @@ void copy_bytes(std::byte* to, const std::byte* from, std::size_t bytes) {
 // where the CPU can; else an ordinary copy.
 void stream_lines(std::byte* to, const std::byte* from, std::size_t bytes) {
 #if defined(__SSE2__)
-  for (std::size_t at = 0; at < bytes; at += 16) {
-    _mm_stream_si128(reinterpret_cast<__m128i*>(to + at),
-                     _mm_loadu_si128(reinterpret_cast<const __m128i*>(from + at)));
+  for (std::size_t line = 0; line < bytes; line += 64) {
+    const auto* in = reinterpret_cast<const __m128i*>(from + line);
+    auto* out = reinterpret_cast<__m128i*>(to + line);
+    const __m128i a = _mm_loadu_si128(in), b = _mm_loadu_si128(in + 1);
+    const __m128i c = _mm_loadu_si128(in + 2), d = _mm_loadu_si128(in + 3);
+    _mm_stream_si128(out, a);
+    _mm_stream_si128(out + 1, b);
+    _mm_stream_si128(out + 2, c);
+    _mm_stream_si128(out + 3, d);
   }
 #else
   std::memcpy(to, from, bytes);
