@@ -98,8 +98,7 @@ struct Manager::Reloading {
   std::atomic<std::uint64_t> reloads{0};
   std::uint64_t stages = 0;  // by the staging thread
   /// False from a swap until the observers' on_reload() returned: until then they may still read
-  /// what the swap replaced (a recorder formats the replaced program's last steps then), so
-  /// `retired` is not freed.
+  /// what the swap replaced, so `retired` is not freed (and after, not before on_retiring()).
   std::atomic<bool> observed{true};
 
   /// The lock, taken once the last swap's observers are done with the program it replaced.
@@ -126,6 +125,8 @@ Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
 }
 
 Manager::Manager(Manager&&) noexcept = default;
+// Observers are not called here (no on_retiring()): many are gone by now. A recorder is finished
+// before, its writer joined (Recorder), so none reads what a swap replaced.
 Manager::~Manager() = default;
 
 std::unique_ptr<Manager::Staged> Manager::prepare(Program program,

@@ -93,7 +93,7 @@ struct Recorder::Generation {
 };
 
 // Cache-line aligned: the stepping thread fills one slot while the writer reads an earlier one.
-// A step's values are in the slot's block (Output::Blocks), of the same index.
+// A step's values are in the block of the same index of the slot's generation (Generation).
 struct alignas(64) Recorder::Slot {
   // A step or a safe pass is in the slot's block, which says which, and its step and time: the
   // stepping thread writes nothing here for it. Only a reload header or the end is marked here,
@@ -301,11 +301,9 @@ void Recorder::on_reload(const Manager& manager) {
   // before freeing it). The steps from here on go into the next one's blocks.
   std::unique_ptr<Generation> next;
   {
-    // Never waits: the staging thread holds the lock only to hand a generation over.
-    std::unique_lock<std::mutex> lock(staged_mutex_, std::try_to_lock);
-    if (lock.owns_lock() && staged_ && staged_->stage == manager.stage_number()) {
-      next = std::move(staged_);
-    }
+    // The staging thread holds the lock only to move a pointer or two: never for long.
+    std::lock_guard<std::mutex> lock(staged_mutex_);
+    if (staged_ && staged_->stage == manager.stage_number()) next = std::move(staged_);
   }
   if (!next) {
     // Staged without on_staged(), or raced by a later stage(): laid out here, allocating.

@@ -382,11 +382,9 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   if (header.full || !shape.any_chunked) {
     // Laid out as in the manager: a small graph's step is one move.
     const std::size_t bytes = shape.tracked.end_of(parts);
-    if (shape.streamed) {
-      stream_lines(block + shape.tracked_at[0], now, shape.tracked.allocated);
-    } else {
-      copy_bytes(block + shape.tracked_at[0], now, bytes);
-    }
+    // Streamed at the end, once nothing can fail: a failed capture leaves no streaming store in
+    // flight to a block the writer may free.
+    if (!shape.streamed) copy_bytes(block + shape.tracked_at[0], now, bytes);
     if (last != nullptr && shape.any_chunked) std::memcpy(last->bytes.data(), now, bytes);
   } else {
     for (std::size_t part = 0; part < parts; ++part) {
@@ -492,6 +490,7 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
       static_cast<std::uint32_t>(std::min(manager.input_pass_events(), report_count));
   header.text_size = text_size;
   if (shape.streamed) {
+    stream_lines(block + shape.tracked_at[0], now, shape.tracked.allocated);
     stream_lines(block, reinterpret_cast<const std::byte*>(&header), sizeof header);
   } else {
     std::memcpy(block, &header, sizeof header);

@@ -20,8 +20,9 @@
 namespace arbiter::detail {
 
 /// What formatting needs of a program besides a step's values: names, ranges and closed
-/// inhibitions, copied, so that a snapshot can be formatted after a hot reload replaced (and
-/// freed) the program it was taken from.
+/// inhibitions, copied, so that a snapshot can be formatted after a hot reload replaced the
+/// program it was taken from. Not after that program is freed: a snapshot's state machines
+/// point to their config params in it (Observer::on_retiring() keeps it until then).
 struct StepLayout {
   explicit StepLayout(const Program& program);
 

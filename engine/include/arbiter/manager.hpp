@@ -120,9 +120,10 @@ class Manager {
   void stage(Program program, detail::Carryover carryover);
   /// Takes back a staged program not swapped in yet (returns true then) and frees what the last
   /// swap replaced (the old program and its instances). stage() frees that too. Both wait, when
-  /// they must, until the observers' on_reload() of that swap returned, as observers may read the
-  /// replaced program until then. Until the next stage(), program() then
-  /// stays as it is, so the staging thread may read it while another thread steps.
+  /// they must, until the observers' on_reload() of that swap returned, and then until their
+  /// on_retiring() returns (a recorder's writer may still be writing the replaced program's last
+  /// steps), as observers may read the replaced program until then. Until the next stage(),
+  /// program() then stays as it is, so the staging thread may read it while another thread steps.
   bool withdraw();
   /// How many staged programs step() has swapped in.
   std::uint64_t reloads() const;

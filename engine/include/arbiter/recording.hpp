@@ -41,8 +41,10 @@ enum class RingFull {
 };
 
 /// Records a run into an MCAP file. The stepping thread only copies the step into a ring of
-/// slots allocated when the run starts; a writer thread compresses and writes them. When the
-/// writer falls behind, whole steps are dropped or waited for (RingFull).
+/// slots allocated when the run starts (and again for each program staged by a hot reload, on
+/// the staging thread); a writer thread compresses and writes them. When the writer falls
+/// behind, whole steps are dropped or waited for (RingFull). Finish the run (Manager::finish())
+/// before removing a recorder from its manager.
 class Recorder : public Observer {
  public:
   /// The steps that may wait for the writer unless told otherwise.
@@ -60,7 +62,9 @@ class Recorder : public Observer {
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
   /// Hands the writer the layout prepared by on_staged() for the program swapped in: neither
-  /// waits for the writer nor allocates (unless the program was staged without on_staged()).
+  /// allocates nor waits for the writer to catch up. It waits only for a free slot when the ring
+  /// is full (a reload header is never dropped), and allocates only when the program was staged
+  /// without on_staged() or raced by a later stage().
   void on_reload(const Manager& manager) override;
   /// Lays the ring out for `next`, on the staging thread.
   void on_staged(const Program& next, std::uint64_t stage) override;
@@ -82,10 +86,9 @@ class Recorder : public Observer {
     return (head + ring_size_ - tail) % ring_size_;
   }
 
-  /// The files (path, text) of a config about to be staged for a hot reload: the recording's
-  /// reload record, written when the manager swaps it in (on_reload()), keeps them, so that a
-  /// replay can reload it too. Any thread; call it before Manager::stage() (Reloader's
-  /// on_staging does).
+  /// The files (path, text) of a config about to be staged for a hot reload: on_staged() takes
+  /// them, and the recording's reload record keeps them, so that a replay can reload it too.
+  /// Any thread; call it before Manager::stage() (Reloader's on_staging does).
   void stage_files(std::vector<std::pair<std::string, std::string>> files);
 
  private:
