@@ -361,6 +361,37 @@ std::string edited_swap() {
 
 }  // namespace
 
+TEST_CASE("a run state swapped or moved keeps its pointers into its own buffer", "[reload]") {
+  // The swap of a reload exchanges two run states whole; one moved from points nowhere.
+  ConfigFile config(kSwap);
+  Reloader reloader(registry());
+  const Program first = load(reloader, config.path());
+  config.write(edited_swap());
+  Diagnostics diagnostics;
+  const auto second = reloader.load(config.path(), diagnostics);
+  REQUIRE(second);
+  RunState a(first);
+  RunState b(*second);
+  const auto inside = [](const RunState& state, const void* pointer) {
+    const auto* at = static_cast<const std::byte*>(pointer);
+    return at >= state.tracked.data() && at < state.tracked.data() + state.tracked_layout.total;
+  };
+  const auto* a_bytes = a.tracked.data();
+  std::swap(a, b);
+  CHECK(b.tracked.data() == a_bytes);
+  for (const RunState* state : {&a, &b}) {
+    CHECK(inside(*state, state->requested));
+    CHECK(inside(*state, state->activation));
+    CHECK(inside(*state, state->active));
+    CHECK(inside(*state, state->actuator_written));
+    CHECK(inside(*state, state->values));
+  }
+  RunState moved(std::move(a));
+  CHECK(inside(moved, moved.requested));
+  CHECK(static_cast<double*>(a.requested) == nullptr);
+  CHECK(static_cast<std::byte*>(a.values) == nullptr);
+}
+
 TEST_CASE("the swap inside step() allocates nothing", "[reload][alloc]") {
   ConfigFile config(kSwap);
   Reloader reloader(registry());

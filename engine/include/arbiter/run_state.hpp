@@ -73,6 +73,27 @@ class ValueBuffer {
   std::vector<std::pair<const ValueType*, std::uint32_t>> constructed_;
 };
 
+/// A pointer into a buffer that the same object owns: it moves with the buffer, and leaves the
+/// object moved from null rather than pointing into what that gave away.
+template <typename T>
+class Into {
+ public:
+  Into() = default;
+  Into(Into&& other) noexcept : pointer_(std::exchange(other.pointer_, nullptr)) {}
+  Into& operator=(Into&& other) noexcept {
+    pointer_ = std::exchange(other.pointer_, nullptr);
+    return *this;
+  }
+  Into& operator=(T* pointer) {
+    pointer_ = pointer;
+    return *this;
+  }
+  operator T*() const { return pointer_; }
+
+ private:
+  T* pointer_ = nullptr;
+};
+
 struct RunState {
   RunState() = default;
   /// Every buffer sized for `program`, the actuators holding their defaults and the ports their
@@ -80,15 +101,15 @@ struct RunState {
   explicit RunState(const Program& program);
 
   TrackedLayout tracked_layout;
-  /// The tracked parts, laid out by tracked_layout; the pointers below point into it. (A move
-  /// takes the bytes and copies the pointers along: a reload's swap exchanges the two whole.)
+  /// The tracked parts, laid out by tracked_layout; the pointers below point into it and move
+  /// with it (a reload's swap exchanges two run states whole).
   ValueBuffer tracked;
-  double* requested = nullptr;   // per behaviour
-  double* activation = nullptr;  // per behaviour
-  char* active = nullptr;        // per behaviour: non-zero when active
-  bool* actuator_written = nullptr;
+  Into<double> requested;   // per behaviour
+  Into<double> activation;  // per behaviour
+  Into<char> active;        // per behaviour: non-zero when active
+  Into<bool> actuator_written;
   /// Actuators and writer slots (ports), at the program's offsets.
-  std::byte* values = nullptr;
+  Into<std::byte> values;
   // bool vectors are bit-packed; the contexts need addressable flags.
   std::unique_ptr<bool[]> slot_written;
   // Per behaviour.
