@@ -199,9 +199,9 @@ void Recorder::on_start(const Manager& manager) {
   config.emplace_back("plugins", plugins);
   for (const auto& [file, text] : info_.files) config.emplace_back("file:" + file, text);
   writer.metadata("arbiter.config", config);
-  writer.message(out_->header, wall_start_ns_, trace_header(manager.program()));
   written_ = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
   stepping_ = written_.get();
+  writer.message(out_->header, wall_start_ns_, written_->header);
   set_writer_period(manager.program());
   started_ = true;
   writer_ = std::thread([this] { write_loop(); });
@@ -223,19 +223,23 @@ void Recorder::set_writer_period(const Program& program) {
   writer_period_us_.store(static_cast<std::int64_t>(period * 1e6));
 }
 
-void Recorder::on_step(const Manager& manager) {
-  if (!started_) return;
-  settle();
-  Slot* slot = ring_full_ == RingFull::kWaitForWriter ? claim_waiting() : claim();
-  if (slot == nullptr ||
-      !detail::capture_step(manager, stepping_->layout, stepping_->blocks.shape(),
-                            block(*stepping_, slot), false, &stepping_->last, out_->chained)) {
+inline void Recorder::capture(const Manager& manager, Slot* slot, bool may_allocate) {
+  if (slot == nullptr || !detail::capture_step(manager, stepping_->layout,
+                                               stepping_->blocks.shape(), block(*stepping_, slot),
+                                               may_allocate, &stepping_->last, out_->chained)) {
+    // No room, or more than a slot holds: the gap is recorded.
     dropped_total_.fetch_add(1, std::memory_order_relaxed);
     out_->chained = false;  // the next slot copies every tracked part whole
     return;
   }
   out_->chained = true;
   unpublished_ = true;
+}
+
+void Recorder::on_step(const Manager& manager) {
+  if (!started_) return;
+  settle();
+  capture(manager, ring_full_ == RingFull::kWaitForWriter ? claim_waiting() : claim(), false);
 }
 
 Recorder::Slot* Recorder::claim_waiting() {
@@ -264,16 +268,8 @@ void Recorder::drain() {
 void Recorder::on_safe(const Manager& manager) {
   if (!started_) return;
   settle();
-  Slot* slot = claim_waiting();  // the last values a stopping robot was given: not dropped for room
-  if (!detail::capture_step(manager, stepping_->layout, stepping_->blocks.shape(),
-                            block(*stepping_, slot), true, &stepping_->last, out_->chained)) {
-    // More reported text than a slot holds: the gap is recorded like a dropped step's.
-    dropped_total_.fetch_add(1, std::memory_order_relaxed);
-    out_->chained = false;
-    return;
-  }
-  out_->chained = true;
-  unpublished_ = true;
+  // The last values a stopping robot was given: not dropped for room.
+  capture(manager, claim_waiting(), true);
 }
 
 void Recorder::stage_files(std::vector<std::pair<std::string, std::string>> files) {
@@ -281,13 +277,17 @@ void Recorder::stage_files(std::vector<std::pair<std::string, std::string>> file
   staged_files_ = std::move(files);
 }
 
+std::vector<std::pair<std::string, std::string>> Recorder::take_staged_files() {
+  std::lock_guard<std::mutex> lock(staged_mutex_);
+  return std::exchange(staged_files_, {});
+}
+
 void Recorder::on_staged(const Program& next, std::uint64_t stage) {
   if (!out_) return;
   auto generation = std::make_unique<Generation>(next, stage, ring_size_);
+  generation->files = take_staged_files();
   {
     std::lock_guard<std::mutex> lock(staged_mutex_);
-    if (staged_files_) generation->files = std::move(*staged_files_);
-    staged_files_.reset();
     std::swap(staged_, generation);
   }
   // A generation staged before and never swapped in is freed here, outside the lock.
@@ -308,9 +308,7 @@ void Recorder::on_reload(const Manager& manager) {
   if (!next) {
     // Staged without on_staged(), or raced by a later stage(): laid out here, allocating.
     next = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
-    std::lock_guard<std::mutex> lock(staged_mutex_);
-    if (staged_files_) next->files = std::move(*staged_files_);
-    staged_files_.reset();
+    next->files = take_staged_files();
   }
   set_writer_period(manager.program());
   // A reload header is never dropped: without it the steps after it could not be read.

@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <memory>
 #include <mutex>
-#include <optional>
 #include <string>
 #include <thread>
 #include <utility>
@@ -111,6 +110,11 @@ class Recorder : public Observer {
   void publish();
   /// Publishes the last step's slot, if it waits (see `unpublished_`).
   void settle();
+  /// Copies the manager's step (or safe pass) into `slot`, to be published at the next call; a
+  /// null slot, or a step the slot cannot hold, is dropped.
+  void capture(const Manager& manager, Slot* slot, bool may_allocate);
+  /// The files stage_files() left, taken.
+  std::vector<std::pair<std::string, std::string>> take_staged_files();
   void write_loop();
   /// Where the step values of `slot` are, in `generation`'s blocks.
   detail::SnapshotBlock block(const Generation& generation, const Slot* slot) const;
@@ -141,7 +145,7 @@ class Recorder : public Observer {
   // By staged_mutex_: the generation on_staged() prepared, and the files of the config staged
   // next (stage_files()).
   std::unique_ptr<Generation> staged_;
-  std::optional<std::vector<std::pair<std::string, std::string>>> staged_files_;
+  std::vector<std::pair<std::string, std::string>> staged_files_;
   // The writer sleeps this long whenever it has caught up, unless woken (wake_writer()).
   std::atomic<std::int64_t> writer_period_us_{1000};
   std::mutex wake_mutex_;
