@@ -444,10 +444,12 @@ int view(const Options& options) {
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
   std::string unused;  // the option's check has parsed it already
-  return arbiter::cli::view_trace(*program, options.trace_path,
-                                  arbiter::cli::ServeAddress::parse(options.view_serve, unused),
-                                  options.step > 0 ? std::optional(options.step) : std::nullopt,
-                                  interrupted, std::cout, std::cerr, options.diagnostic_format);
+  arbiter::cli::LiveAccess access;
+  access.token = options.serve_token;
+  return arbiter::cli::view_trace(
+      *program, options.trace_path, arbiter::cli::ServeAddress::parse(options.view_serve, unused),
+      access, options.step > 0 ? std::optional(options.step) : std::nullopt, interrupted, std::cout,
+      std::cerr, options.diagnostic_format);
 }
 
 int plot(const Options& options) {
@@ -769,6 +771,13 @@ int main(int argc, char** argv) {
       ->check(check_serve_address, "")
       ->type_name("[ADDR:]PORT")
       ->capture_default_str();
+  view_cmd
+      ->add_option("--serve-token", options.serve_token,
+                   "the token the page and every request must carry (default: a random one, "
+                   "printed in the URL; also ARBITER_SERVE_TOKEN)")
+      ->envname("ARBITER_SERVE_TOKEN")
+      ->type_name("TOKEN")
+      ->check(check_serve_token, "");
   view_cmd
       ->add_option("--step", options.step,
                    "the step the page opens at, counting from 1 (default: the last step)")

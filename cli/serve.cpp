@@ -132,9 +132,9 @@ std::string lowercase(std::string text) {
 }
 
 constexpr const char* kTokenNeeded =
-    "this live view needs its token: open the URL that `arbiter run --serve` printed "
+    "this view needs its token: open the URL that arbiter printed when it started serving "
     "(http://HOST:PORT/?token=...), or pass the token as ?token=, as the X-Arbiter-Token header "
-    "or with --serve-token / ARBITER_SERVE_TOKEN when you start the run\n";
+    "or with --serve-token / ARBITER_SERVE_TOKEN when you start it\n";
 
 }  // namespace
 
@@ -211,7 +211,10 @@ WebServer::~WebServer() {
   stop();
 }
 
-bool WebServer::start(const ServeAddress& address, std::string& error) {
+bool WebServer::start(const ServeAddress& address, const LiveAccess& given, std::string& error) {
+  LiveAccess access = given;
+  if (access.token.empty()) access.token = random_token();
+  token_ = access.token;
   errno = 0;
   int port = address.port;
   bool bound = false;
@@ -231,6 +234,7 @@ bool WebServer::start(const ServeAddress& address, std::string& error) {
   url_ = fmt::format(v6 ? "http://[{}]:{}/" : "http://{}:{}/", address.host, port);
   host_ = address.host;
   port_ = port;
+  guard(access);
   thread_ = std::thread([this] {
     server_->listen_after_bind();
     listen_ended_ = true;
@@ -349,16 +353,13 @@ std::string sse_frame(std::string_view event, std::uint64_t id, std::string_view
 }
 
 std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused,
-                                         const LiveAccess& given, std::ostream& out,
+                                         const LiveAccess& access, std::ostream& out,
                                          std::ostream& err) {
   std::string error;
   const auto address = ServeAddress::parse(text, error);
   auto live = std::make_unique<LiveView>();
-  LiveAccess access = given;
-  if (access.token.empty()) access.token = random_token();
   live->readonly_ = access.readonly;
-  live->server_.guard(access);
-  if (error.empty() && !live->server_.start(address, error)) {
+  if (error.empty() && !live->server_.start(address, access, error)) {
     err << fmt::format("arbiter run: --serve: {}\n", error);
     return nullptr;
   }
@@ -371,8 +372,8 @@ std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused,
                                                      "token)");
   live->paused_ = paused;
   live->out_ = &out;
-  out << fmt::format("serving the live view at {}?token={}{}{}\n", live->server_.url(),
-                     access.token, access.readonly ? " (read-only)" : "",
+  out << fmt::format("serving the live view at {}{}{}\n", live->server_.page_url(),
+                     access.readonly ? " (read-only)" : "",
                      paused ? " (paused: press Step or Resume on the page)" : "")
       << std::flush;
   return live;

@@ -40,7 +40,7 @@ struct ServeAddress {
   bool loopback() const;
 };
 
-/// Who may use the live server (docs/live_view.md): every request but the static page needs the
+/// Who may use a server (docs/live_view.md): every request but the static page needs the
 /// token, from the cookie the page gets when opened with `?token=`, the `token` parameter or an
 /// `X-Arbiter-Token` header; the Host must be the bound address or localhost (against DNS
 /// rebinding); a control request must come from the server's own origin, and none is served
@@ -64,22 +64,28 @@ class WebServer {
   WebServer& operator=(const WebServer&) = delete;
 
   httplib::Server& http() { return *server_; }
-  /// Binds and starts serving on a thread of its own; false (and `error` says why) when the
-  /// address cannot be bound. The URL is then url().
-  bool start(const ServeAddress& address, std::string& error);
+  /// Binds and starts serving on a thread of its own, letting in only what `access` allows: every
+  /// server Arbiter starts has this one door (docs/live_view.md). An empty token is replaced by a
+  /// random one. False (and `error` says why) when the address cannot be bound; the URL to
+  /// print is then page_url().
+  bool start(const ServeAddress& address, const LiveAccess& access, std::string& error);
   /// Stops accepting and closes every connection; streams notice through `stopping()`.
   void stop();
   bool stopping() const { return stopping_; }
   const std::string& url() const { return url_; }
-  /// Refuses, from now on, every request that `access` does not let in (before start()).
-  void guard(const LiveAccess& access);
+  /// url() with the token: what a user opens.
+  std::string page_url() const { return url_ + "?token=" + token_; }
 
  private:
+  /// Refuses, from now on, every request that `access` does not let in.
+  void guard(const LiveAccess& access);
+
   std::unique_ptr<httplib::Server> server_;
   std::string host_;  // the address bound
   int port_ = 0;
   std::thread thread_;
   std::string url_;
+  std::string token_;
   std::atomic<bool> stopping_{false};
   std::atomic<bool> listen_ended_{false};  // the listening thread returned
 };

@@ -40,8 +40,9 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
 }
 
 int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,
-               std::optional<std::uint64_t> open_step, const std::atomic<bool>& interrupted,
-               std::ostream& out, std::ostream& err, const FormatOptions& format_options) {
+               const LiveAccess& access, std::optional<std::uint64_t> open_step,
+               const std::atomic<bool>& interrupted, std::ostream& out, std::ostream& err,
+               const FormatOptions& format_options) {
   std::string error;
   const auto trace = read_trace_file(trace_path, error, format_options);
   if (!trace) {
@@ -122,13 +123,13 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     response.set_content(answer, "text/plain; charset=utf-8");
   });
 
-  if (!server.start(address, error)) {
+  if (!server.start(address, access, error)) {
     err << fmt::format("arbiter view: {}\n", error);
     return 2;
   }
-  err << exposure_warning(address, "read the trace");
+  err << exposure_warning(address, "read the trace (with its token)");
   out << fmt::format("viewing {} ({} steps of {}) at {}\nCtrl-C stops.\n", trace_path,
-                     trace->records.size(), program.name, server.url())
+                     trace->records.size(), program.name, server.page_url())
       << std::flush;
   while (!interrupted) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   server.stop();

@@ -39,8 +39,10 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
 /// Serves the page for `trace` (written by running `program`'s config) until `interrupted`;
 /// prints the URL to `out`. The page opens at `open_step` (a step of the trace), by default at
 /// the last step. Returns the exit code.
+/// Only what `access` lets in is served, as for the live view.
 int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,
-               std::optional<std::uint64_t> open_step, const std::atomic<bool>& interrupted,
-               std::ostream& out, std::ostream& err, const FormatOptions& format_options = {});
+               const LiveAccess& access, std::optional<std::uint64_t> open_step,
+               const std::atomic<bool>& interrupted, std::ostream& out, std::ostream& err,
+               const FormatOptions& format_options = {});
 
 }  // namespace arbiter::cli

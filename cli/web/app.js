@@ -598,15 +598,21 @@ async function startTrace(openStep) {
 async function start() {
   const reply = await fetch('info');
   if (reply.status === 403) {
-    // The live server lets in only the holder of its token (the URL `arbiter run` printed).
+    // The server lets in only the holder of its token (the URL arbiter printed).
     setStatus('token needed', 'lost');
     const note = document.getElementById('token-needed');
     note.textContent = await reply.text();
     note.hidden = false;
     return;
   }
-  // The server has put the token in a cookie: keep it out of the address bar and history.
-  if (new URLSearchParams(location.search).has('token')) history.replaceState(null, '', location.pathname);
+  // The server has put the token in a cookie: keep it out of the address bar and history, and keep
+  // the rest of the address (?step=N).
+  const params = new URLSearchParams(location.search);
+  if (params.has('token')) {
+    params.delete('token');
+    const rest = params.toString();
+    history.replaceState(null, '', location.pathname + (rest ? `?${rest}` : ''));
+  }
   const info = await reply.json();
   view.mode = info.mode;
   document.getElementById('mode').textContent = info.mode === 'live' ? 'live' : 'recorded';

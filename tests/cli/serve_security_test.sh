@@ -1,5 +1,5 @@
 #!/bin/bash
-# The live server of `arbiter run --serve` lets in only the holder of its token, from its own
+# The live server of `arbiter run --serve` (and `arbiter view`'s) lets in only the holder of its token, from its own
 # origin, under its own name (docs/live_view.md): every refused case over plain HTTP, then hostile
 # clients (100 idle connections, a 1 MiB header, 10 000 requests in a burst, on loopback only and
 # bounded in time) while the run goes on; the step timing during that load is printed.
@@ -138,6 +138,33 @@ status=0
 "$cli" run "$config" --serve 0 --serve-token 'a b' >/dev/null 2>"$work/bad.err" || status=$?
 check "a token with a space" 2 "$status"
 grep -q 'the token must be' "$work/bad.err" || { failed=$((failed + 1)); echo "FAIL: no reason for the bad token"; cat "$work/bad.err"; }
+
+# The trace view has the same door: its token, its Host check.
+"$cli" run "$config" --steps 20 --trace "$work/view.jsonl" -q
+"$cli" view "$config" --trace "$work/view.jsonl" --serve 127.0.0.1:0 >"$work/view.out" 2>"$work/view.err" &
+pids+=($!)
+vurl=
+for _ in $(seq 1 100); do
+  vurl=$(sed -nE 's/^viewing .* at (http[^ ]*)$/\1/p' "$work/view.out" | head -1)
+  [ -n "$vurl" ] && break
+  sleep 0.1
+done
+vbase=${vurl%%\?*}
+vtoken=${vurl#*token=}
+[ ${#vtoken} -eq 32 ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: view printed no URL with a token: $(cat "$work/view.out" "$work/view.err")"; }
+vhost=${vbase#http://}
+vhost=${vhost%/}
+check "view: the page without a token" 200 "$(code "$vbase")"
+check "view: the trace without a token" 403 "$(code "${vbase}trace")"
+check "view: the graph without a token" 403 "$(code "${vbase}graph")"
+check "view: explain without a token" 403 "$(code "${vbase}explain?step=1&target=kick_ball")"
+check "view: the trace with the token" 200 "$(code -H "X-Arbiter-Token: $vtoken" "${vbase}trace")"
+check "view: the opened URL's cookie" 200 "$(curl -s -o /dev/null -c "$work/vcookies" --max-time 10 "$vurl"; code -b "$work/vcookies" "${vbase}trace")"
+check "view: Host of another name" 403 "$(code -H "Host: evil.example:${vhost##*:}" -H "X-Arbiter-Token: $vtoken" "${vbase}trace")"
+ARBITER_SERVE_TOKEN=view-from-the-environment "$cli" view "$config" --trace "$work/view.jsonl" --serve 127.0.0.1:0 >"$work/view2.out" 2>&1 &
+pids+=($!)
+for _ in $(seq 1 100); do grep -q '^viewing' "$work/view2.out" && break; sleep 0.1; done
+grep -q '?token=view-from-the-environment$' "$work/view2.out" && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: view env token: $(cat "$work/view2.out")"; }
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

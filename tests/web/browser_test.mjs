@@ -361,8 +361,9 @@ test('the trace view opens at the last step, or at --step N, or at ?step=N', asy
 test('an actuator value nobody wrote is drawn as held, since the step after its last write', async () => {
   const trace = path.join(scratch, 'soccer-held.jsonl');
   execFileSync(arbiter, ['run', soccer, '--steps', '220', '--trace', trace, '-q'], {cwd: source});
-  const {base} = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
-  const page = await open(`${base}?step=200`);
+  // Opened with the token (and a step): later addresses of this page carry the token's cookie.
+  const {url, base} = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
+  const page = await open(`${url}&step=200`);
   const kick = page.locator('#graph .actuator[data-actuator="kick"]');
   // kick_ball writes kick = true in step 171 only; the value stays, unwritten.
   assert.equal(await stepShown(page), 200);
