@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds the dev preset and runs the whole test suite, then builds and runs it
-# again under AddressSanitizer and UndefinedBehaviorSanitizer (preset asan) when the compiler's
-# sanitizers work on this machine, and fuzzes the config loader for a short while when clang's
-# libFuzzer is installed (fuzz/, docs/robustness.md). Exits non-zero on any failure.
+# Installs what is missing, then builds and tests the project four ways; exits non-zero on any failure:
+#   plain  the build a packager runs (`cmake -S . -B build/plain -DCMAKE_BUILD_TYPE=Release`, no preset,
+#          no option, GCC): any compiler warning fails it; then the whole test suite;
+#   clang  the clang preset (Clang, Debug, warnings as errors) and the test suite;
+#   asan   the asan preset (AddressSanitizer and UndefinedBehaviorSanitizer) and the test suite, when
+#          the compiler's sanitizers work on this machine;
+#   fuzz   the libFuzzer targets for a short while (fuzz/, docs/robustness.md).
+# ccache is used when it is installed.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -14,28 +18,63 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
 
 summaries=()
 
-# Configures, builds and tests one preset; records ctest's counts as "preset: N passed, N failed".
-# Arguments after the preset go to ctest.
-run_preset() {
-  local preset=$1 log
+# A compiler cache, when there is one, shared by every build of this checkout (and of another
+# checkout at another path: the paths are hashed relative to the checkout).
+if command -v ccache >/dev/null; then
+  export CMAKE_CXX_COMPILER_LAUNCHER=ccache CCACHE_BASEDIR=$PWD CCACHE_NOHASHDIR=1
+fi
+
+# Runs ctest for build NAME with the remaining arguments; records its counts as
+# "NAME: N passed, N failed".
+run_tests() {
+  local name=$1 log status=0 counts
   shift
-  echo "== $preset: configure and build"
-  cmake --preset "$preset" --log-level=WARNING
-  cmake --build --preset "$preset" --parallel "$jobs"
-  echo "== $preset: test"
+  echo "== $name: test"
   log=$(mktemp)
-  local status=0
-  ctest --preset "$preset" --output-on-failure --parallel "$jobs" "$@" 2>&1 | tee "$log" || status=$?
-  local counts
+  ctest "$@" --output-on-failure --no-tests=error --parallel "$jobs" 2>&1 | tee "$log" || status=$?
   counts=$(sed -nE 's/.*tests passed, ([0-9]+) tests? failed out of ([0-9]+).*/\1 \2/p' "$log" | tail -1)
   rm -f "$log"
   if [[ -n $counts ]]; then
     local failed=${counts% *} total=${counts#* }
-    summaries+=("$preset: $((total - failed)) passed, $failed failed")
+    summaries+=("$name: $((total - failed)) passed, $failed failed")
   else
-    summaries+=("$preset: tests did not run")
+    summaries+=("$name: tests did not run")
   fi
   return "$status"
+}
+
+# Configures, builds and tests one preset. Arguments after the preset go to ctest.
+run_preset() {
+  local preset=$1
+  shift
+  echo "== $preset: configure and build"
+  cmake --preset "$preset" --log-level=WARNING
+  cmake --build --preset "$preset" --parallel "$jobs"
+  run_tests "$preset" --preset "$preset" "$@"
+}
+
+# The conventional build, exactly as a packager or a FetchContent user runs it: no preset, no
+# option, the default generator. Warnings are not errors there (a newer compiler's new warning must
+# not break someone's build), so this job counts them itself: GCC warns at -O2 where the Debug
+# presets see nothing (-Wmaybe-uninitialized).
+run_plain() {
+  local dir=build/plain log status=0 warnings
+  echo "== plain: cmake -S . -B $dir -DCMAKE_BUILD_TYPE=Release && cmake --build $dir"
+  cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Release --log-level=WARNING
+  log=$(mktemp)
+  cmake --build "$dir" --parallel "$jobs" 2>&1 | tee "$log" || status=$?
+  warnings=$(grep -c -E '(^|: )warning: ' "$log" || true)
+  rm -f "$log"
+  if [[ $status -ne 0 ]]; then
+    summaries+=("plain: the build failed")
+    return "$status"
+  fi
+  if [[ $warnings -ne 0 ]]; then
+    echo "== plain: the build printed $warnings compiler warning(s), above; fix them"
+    summaries+=("plain: $warnings compiler warning(s)")
+    return 1
+  fi
+  run_tests plain --test-dir "$dir"
 }
 
 # True when the C++ compiler CMake will pick builds and runs a program with both sanitizers.
@@ -68,6 +107,7 @@ run_fuzz_smoke() {
   echo "== fuzz: build (clang, libFuzzer + address + undefined)"
   CXX=clang++ cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DARBITER_BUILD_FUZZERS=ON -DARBITER_BUILD_TESTS=OFF -DARBITER_BUILD_BENCHMARKS=OFF \
+      -DARBITER_WARNINGS_AS_ERRORS=ON \
       --log-level=WARNING
   cmake --build "$dir" --target arbiter_fuzz_config arbiter_fuzz_trace --parallel "$jobs"
   # The config loader gets two thirds of the time, the trace reader the rest.
@@ -119,13 +159,21 @@ test_tools+=(libfastrtps-dev fastddsgen)
 command -v java >/dev/null || test_tools+=(default-jre-headless)
 # Neovim for the language server's editor test (tests/lsp/).
 command -v nvim >/dev/null || test_tools+=(neovim)
+# make for the plain build's default generator; Clang for the clang preset and, with its runtime
+# (libFuzzer, sanitizers), for the fuzz job.
+command -v make >/dev/null || test_tools+=(make)
+command -v clang++ >/dev/null || test_tools+=(clang)
+test_tools+=(libclang-rt-dev)
 scripts/install-deps.sh "${test_tools[@]}"
 
 status=0
-run_preset dev || status=$?
+run_plain || status=$?
+if [[ $status -eq 0 ]]; then
+  # The browser tests exercise the page, not the engine: once, in the plain build, is enough.
+  run_preset clang --label-exclude browser || status=$?
+fi
 if [[ $status -eq 0 ]]; then
   if sanitizers_work; then
-    # The browser tests exercise the page, not the engine: once, in the dev preset, is enough.
     run_preset asan --label-exclude browser || status=$?
   else
     echo "== asan: skipped, this compiler's address/undefined sanitizers do not run here"

@@ -243,7 +243,6 @@ class Controller {
   ControllerHooks* hooks_ = nullptr;
   spdlog::logger* logger_ = nullptr;
   std::string error_;
-  std::uint32_t failing_state_ = kNoState;
 };
 
 }  // namespace arbiter
