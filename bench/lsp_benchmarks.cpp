@@ -25,7 +25,7 @@ void change(benchmark::State& state) {
   const std::string uri = "file:///tmp/arbiter_bench_lsp/config.yaml";
   LoadOptions load;
   load.lint = lint;  // as `arbiter lsp` loads
-  lsp::Server server(make_registry(), load);
+  lsp::Server server(make_registry, load);
   server.handle(nlohmann::json{{"jsonrpc", "2.0"},
                                {"id", 1},
                                {"method", "initialize"},

@@ -243,7 +243,7 @@ int schema(const Options& options) {
 int lsp(const Options& options) {
   // stdout carries the protocol: nothing else may write to it.
   std::ios::sync_with_stdio(false);
-  return arbiter::lsp::run(std::cin, std::cout, make_registry(), load_options_of(options));
+  return arbiter::lsp::run(std::cin, std::cout, make_registry, load_options_of(options));
 }
 
 int explain(const Options& options) {

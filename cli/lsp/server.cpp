@@ -195,6 +195,8 @@ struct InhibitionSite {
 
 struct Analysis {
   std::string root;
+  // Before `loaded`, so destroyed after it: the program holds the registry's plugin code.
+  std::unique_ptr<Registry> registry;
   Loaded loaded;
   std::map<std::string, std::unique_ptr<Lines>> lines;  // by file
   std::vector<Occurrence> occurrences;
@@ -744,8 +746,8 @@ std::string class_markdown(const json& cls) {
 
 // ---- the server ----
 
-Server::Server(Registry registry, LoadOptions options)
-    : registry_(std::move(registry)), options_(std::move(options)) {
+Server::Server(std::function<Registry()> make_registry, LoadOptions options)
+    : make_registry_(std::move(make_registry)), options_(std::move(options)) {
   options_.source = &overlay_;
 }
 
@@ -822,9 +824,6 @@ std::vector<json> Server::handle(const json& message) {
 json Server::dispatch(const std::string& method, const json& params, std::vector<json>& out) {
   if (method == "initialize") {
     initialized_ = true;
-    catalog_ = json::parse(catalog_json(registry_));
-    schema_ = json::parse(config_schema(registry_));
-    catalogued_ = registry_.classes().size();
     return {{"capabilities",
              {{"textDocumentSync", {{"openClose", true}, {"change", 1}}},
               {"completionProvider",
@@ -907,7 +906,8 @@ void Server::changed(std::vector<json>& out) {
     if (next.count(open.path)) continue;
     auto analysis = std::make_shared<Analysis>();
     analysis->root = open.path;
-    analysis->loaded = load_config(open.path, registry_, options_);
+    analysis->registry = std::make_unique<Registry>(make_registry_());
+    analysis->loaded = load_config(open.path, *analysis->registry, options_);
     Indexer(*analysis).run();
     if (analysis->loaded.document()) good_[open.path] = analysis;
     if (analysis->loaded.program) compiled_[open.path] = analysis;
@@ -926,11 +926,6 @@ void Server::changed(std::vector<json>& out) {
     for (auto it = kept->begin(); it != kept->end();) {
       it = analyses_.count(it->first) ? std::next(it) : kept->erase(it);
     }
-  }
-  if (registry_.classes().size() != catalogued_) {  // a config's plugins were loaded
-    catalog_ = json::parse(catalog_json(registry_));
-    schema_ = json::parse(config_schema(registry_));
-    catalogued_ = registry_.classes().size();
   }
   publish(out);
 }
@@ -1008,6 +1003,25 @@ const std::string* Server::text_of(const std::string& path) const {
   return overlay_.find(path);
 }
 
+const Server::Catalog& Server::catalog_of(const Analysis* analysis) const {
+  std::unique_ptr<Registry> builtin;
+  const Registry* registry = analysis ? analysis->registry.get() : nullptr;
+  if (!registry) {
+    builtin = std::make_unique<Registry>(make_registry_());
+    registry = builtin.get();
+  }
+  std::string key;
+  for (const auto& [name, info] : registry->classes()) key += name.first + '\n';
+  auto found = catalogs_.find(key);
+  if (found == catalogs_.end()) {
+    found = catalogs_
+                .emplace(key, Catalog{json::parse(catalog_json(*registry)),
+                                      json::parse(config_schema(*registry))})
+                .first;
+  }
+  return found->second;
+}
+
 namespace {
 
 struct Cursor {
@@ -1042,6 +1056,7 @@ json Server::completion(const json& params) const {
   const std::size_t offset = lines.offset(params.at("position"));
   const Context context = context_at(lines, offset, format_of(path) == DocumentFormat::kJson);
   const Analysis* analysis = good_analysis_of(path);
+  const Catalog& catalog = catalog_of(analysis);
   json items = json::array();
   auto add = [&](const std::string& label, int kind, const std::string& detail,
                  const std::string& documentation = {}) {
@@ -1053,12 +1068,12 @@ json Server::completion(const json& params) const {
   };
   auto keys = [&](const json& definition) {
     std::vector<std::string> names;
-    schema_keys(schema_, definition, names);
+    schema_keys(catalog.schema, definition, names);
     for (const auto& name : names) add(name, 10, "key");
   };
-  auto definition = [&](const char* name) { return schema_["definitions"][name]; };
+  auto definition = [&](const char* name) { return catalog.schema["definitions"][name]; };
   auto classes = [&](const char* kind) {
-    for (const auto& cls : catalog_["classes"]) {
+    for (const auto& cls : catalog.classes["classes"]) {
       if (cls.value("kind", "") == kind)
         add(cls["name"], 7, cls.value("origin", ""), class_markdown(cls));
     }
@@ -1090,7 +1105,7 @@ json Server::completion(const json& params) const {
   using At = Context::At;
   if (context.at == At::kKey) {
     if (p.empty()) {
-      keys(schema_);
+      keys(catalog.schema);
     } else if (matches(p, {"layers", "*"})) {
       keys(definition("layer"));
     } else if (matches(p, {"layers", "*", "actuators", "*"})) {
@@ -1113,7 +1128,7 @@ json Server::completion(const json& params) const {
           if (item.definition && item.kind == kind && item.name == p[3]) type = item.detail;
         }
       }
-      for (const auto& cls : catalog_["classes"]) {
+      for (const auto& cls : catalog.classes["classes"]) {
         if (cls.value("name", "") != type) continue;
         for (const auto& param : cls["params"]) {
           add(param["name"], 5, param_summary(param), param.value("description", ""));
@@ -1125,7 +1140,7 @@ json Server::completion(const json& params) const {
     if (key == "type" && matches(p, {"layers", "*", "behaviours", "*"})) {
       classes("behaviour");
     } else if (key == "type" && matches(p, {"layers", "*", "actuators", "*"})) {
-      for (const auto& type : catalog_["value_types"])
+      for (const auto& type : catalog.classes["value_types"])
         add(type["name"], 22, type.value("origin", ""));
     } else if (key == "interface") {
       classes("interface");
@@ -1162,6 +1177,7 @@ json Server::completion(const json& params) const {
 json Server::hover(const json& params) const {
   const std::string path = uri_to_path(params.at("textDocument").at("uri"));
   const Analysis* analysis = good_analysis_of(path);
+  const Catalog& catalog = catalog_of(analysis);
   if (!analysis) return nullptr;
   const Cursor cursor = cursor_of(params, analysis);
   const Lines* lines = analysis->lines_of(path);
@@ -1175,7 +1191,7 @@ json Server::hover(const json& params) const {
     begin = item->begin;
     end = item->end;
     if (item->kind == Kind::kClass) {
-      for (const auto& cls : catalog_["classes"]) {
+      for (const auto& cls : catalog.classes["classes"]) {
         if (cls.value("name", "") == item->name) text = class_markdown(cls);
       }
       if (text.empty()) text = fmt::format("unknown class `{}`", item->name);
@@ -1479,8 +1495,9 @@ json Server::code_actions(const json& params) const {
   return actions;
 }
 
-int run(std::istream& in, std::ostream& out, Registry registry, LoadOptions options) {
-  Server server(std::move(registry), std::move(options));
+int run(std::istream& in, std::ostream& out, std::function<Registry()> make_registry,
+        LoadOptions options) {
+  Server server(std::move(make_registry), std::move(options));
   while (auto frame = read_frame(in)) {
     std::vector<json> replies;
     if (!frame->error.empty()) {

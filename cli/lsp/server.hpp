@@ -3,6 +3,7 @@
 // Server handles decoded messages and returns what to send, with no I/O of its own, so that
 // tests and benchmarks drive it directly; run() connects it to a framed stream (framing.hpp).
 
+#include <functional>
 #include <iosfwd>
 #include <map>
 #include <memory>
@@ -19,8 +20,9 @@ struct Analysis;
 
 class Server {
  public:
-  /// `registry` holds the built-in classes; the plugins a config names are loaded into it.
-  Server(Registry registry, LoadOptions options);
+  /// `make_registry` gives a registry of the built-in classes: each config is loaded into a
+  /// fresh one, so that the plugins one config names are unknown to every other.
+  Server(std::function<Registry()> make_registry, LoadOptions options);
   ~Server();
   Server(const Server&) = delete;
   Server& operator=(const Server&) = delete;
@@ -41,6 +43,11 @@ class Server {
     std::string text;
   };
   using json = nlohmann::json;
+  /// The classes a registry knows, as completion and hover read them.
+  struct Catalog {
+    json classes;  // catalog_json()
+    json schema;   // config_schema()
+  };
 
   json dispatch(const std::string& method, const json& params, std::vector<json>& out);
   void changed(std::vector<json>& out);
@@ -49,6 +56,7 @@ class Server {
   const Analysis* good_analysis_of(const std::string& path) const;
   const Program* program_of(const std::string& path) const;
   const std::string* text_of(const std::string& path) const;
+  const Catalog& catalog_of(const Analysis* analysis) const;
 
   json completion(const json& params) const;
   json hover(const json& params) const;
@@ -58,7 +66,7 @@ class Server {
   json symbols(const json& params) const;
   json code_actions(const json& params) const;
 
-  Registry registry_;
+  std::function<Registry()> make_registry_;
   LoadOptions options_;
   Overlay overlay_;
   std::map<std::string, Open> open_;                                 // by URI
@@ -66,15 +74,15 @@ class Server {
   std::map<std::string, std::shared_ptr<const Analysis>> good_;      // the last that parsed
   std::map<std::string, std::shared_ptr<const Analysis>> compiled_;  // the last that compiled
   std::map<std::string, std::string> published_;  // path -> URI of files with diagnostics
-  json catalog_;
-  json schema_;
-  std::size_t catalogued_ = 0;  // the registry's classes when catalog_ and schema_ were made
+  // By the names of the classes a registry knows: a config's plugins add classes.
+  mutable std::map<std::string, Catalog> catalogs_;
   bool initialized_ = false;
   bool shutdown_ = false;
   bool exited_ = false;
 };
 
 /// Serves `in` and `out` until `exit` or the end of the input; returns the exit status.
-int run(std::istream& in, std::ostream& out, Registry registry, LoadOptions options);
+int run(std::istream& in, std::ostream& out, std::function<Registry()> make_registry,
+        LoadOptions options);
 
 }  // namespace arbiter::lsp

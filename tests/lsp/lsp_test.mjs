@@ -3,7 +3,7 @@
 // text the test sends: 0-based lines, UTF-16 columns.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { spawn } from 'node:child_process';
+import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -111,6 +111,26 @@ async function withClient(body) {
 }
 
 const yaml = () => read('configs/soccer/walk_and_kick.yaml');
+
+// `arbiter validate`'s diagnostics of `file` as the server publishes them: code, severity and
+// start, in order.
+function validated(file, args = []) {
+  let output;
+  try {
+    output = execFileSync(arbiter, [...args, 'validate', '--format', 'json', file], { encoding: 'utf8' });
+  } catch (error) {
+    output = error.stdout;
+  }
+  return JSON.parse(output).map((d) => ({
+    code: d.code, severity: d.severity === 'error' ? 1 : 2,
+    start: { line: d.line - 1, character: d.column - 1 },
+  }));
+}
+const summary = (diagnostics) => diagnostics.map((d) => ({ code: d.code, severity: d.severity, start: d.range.start }));
+
+function tempDir() {
+  return fs.mkdtempSync(path.join(os.tmpdir(), 'arbiter-lsp-'));
+}
 const json = () => read('configs/paper/walk_and_kick.json');
 
 test('a valid config gets an empty list of diagnostics', async () => {
@@ -249,6 +269,33 @@ for (const [format, config] of [['YAML', yaml], ['JSON', json]]) {
     });
   });
 }
+
+test("a config's diagnostics equal validate's whatever else is open: another config's plugins stay its own", async () => {
+  const dir = tempDir();
+  try {
+    const { text } = yaml();
+    const withPlugin = path.join(dir, 'with_plugin.yaml');
+    const without = path.join(dir, 'without.yaml');
+    fs.writeFileSync(withPlugin, text);
+    fs.writeFileSync(without, text.replace('plugins: [soccer]\n', ''));
+    const expected = validated(without);
+    assert.equal(expected.filter((d) => d.code === 'unknown-class').length, 5);
+    await withClient(async (client) => {
+      // The config that names no plugin first, then the one that loads soccer: the first keeps
+      // its errors.
+      assert.deepEqual(summary(await client.open(uriOf(without), fs.readFileSync(without, 'utf8'))), expected);
+      assert.deepEqual(await client.open(uriOf(withPlugin), text), []);
+      assert.deepEqual(summary(client.diagnostics.get(uriOf(without))), expected);
+    });
+    await withClient(async (client) => {
+      // The other order: soccer loaded for one config is unknown to the next.
+      assert.deepEqual(await client.open(uriOf(withPlugin), text), []);
+      assert.deepEqual(summary(await client.open(uriOf(without), fs.readFileSync(without, 'utf8'))), expected);
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
 
 test('hover on an actuator lists its writers and readers; on a class, its params; a sensor goes to its actuator', async () => {
   await withClient(async (client) => {
