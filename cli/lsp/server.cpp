@@ -742,6 +742,92 @@ std::string class_markdown(const json& cls) {
   return text;
 }
 
+/// The top-level keys of a JSON document or a YAML flow mapping, read from its text alone so that
+/// a file that does not parse yet is recognised too: each string or name at depth 1 before a ':'.
+std::vector<std::pair<std::string, std::string>> flow_top_level(const std::string& text) {
+  std::vector<std::pair<std::string, std::string>> keys;  // key, the scalar after it
+  int depth = 0;
+  std::string last;
+  bool value = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"' || c == '\'') {
+      std::size_t j = i + 1;
+      std::string token;
+      while (j < text.size() && text[j] != c) {
+        if (text[j] == '\\' && c == '"' && j + 1 < text.size()) ++j;
+        token += text[j++];
+      }
+      i = j;
+      if (depth != 1) continue;
+      if (value && !keys.empty()) {
+        keys.back().second = token;
+        value = false;
+      } else {
+        last = token;
+      }
+    } else if (c == '{' || c == '[') {
+      ++depth;
+      value = false;
+    } else if (c == '}' || c == ']') {
+      --depth;
+    } else if (c == ':' && depth == 1) {
+      keys.emplace_back(last, std::string());
+      value = true;
+    } else if (c == ',') {
+      value = false;
+    } else if (depth == 1 && name_char(c) && !value) {
+      std::size_t j = i;
+      while (j < text.size() && name_char(text[j])) ++j;
+      last = text.substr(i, j - i);
+      i = j - 1;
+    }
+  }
+  return keys;
+}
+
+/// Whether a file is an Arbiter config (or a file a config includes) by its text: it has one of
+/// the top-level keys only an Arbiter config has (`arbiter`, `layers`, `state_machines`), or its
+/// `$schema` (a key, or a YAML language server comment) names a file called `arbiter...`. A
+/// package.json, a CI workflow or a docker-compose.yaml has none of these.
+bool is_config(const std::string& path, const std::string& text) {
+  static const std::set<std::string> markers = {"arbiter", "layers", "state_machines"};
+  auto arbiter_schema = [](std::string reference) {
+    const auto slash = reference.find_last_of("/\\");
+    if (slash != std::string::npos) reference = reference.substr(slash + 1);
+    return reference.rfind("arbiter", 0) == 0;
+  };
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  const bool flow = format_of(path) == DocumentFormat::kJson ||
+                    (first != std::string::npos && text[first] == '{');
+  if (flow) {
+    for (const auto& [key, value] : flow_top_level(text)) {
+      if (markers.count(key) || (key == "$schema" && arbiter_schema(value))) return true;
+    }
+    return false;
+  }
+  static const std::regex modeline(R"(^#\s*yaml-language-server:\s*\$schema=(\S+))");
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(start, end - start);
+    start = end + 1;
+    std::smatch match;
+    if (std::regex_search(line, match, modeline) && arbiter_schema(match[1].str())) return true;
+    const YamlLine parsed = parse_yaml_line(line);
+    if (parsed.blank || parsed.content != 0 || parsed.dash >= 0) continue;
+    if (markers.count(parsed.key)) return true;
+    if (parsed.key == "$schema") {
+      std::string value = line.substr(line.find(':') + 1);
+      value.erase(0, value.find_first_not_of(" \"'"));
+      value = value.substr(0, value.find_first_of(" \"'#\r"));
+      if (arbiter_schema(value)) return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 // ---- the server ----
@@ -903,7 +989,7 @@ void Server::changed(std::vector<json>& out) {
   std::map<std::string, std::shared_ptr<const Analysis>> next;
   for (const auto& [uri, open] : open_) {
     if (included.count(open.path) && analyses_.count(open.path) == 0) continue;
-    if (next.count(open.path)) continue;
+    if (next.count(open.path) || !is_config(open.path, open.text)) continue;
     auto analysis = std::make_shared<Analysis>();
     analysis->root = open.path;
     analysis->registry = std::make_unique<Registry>(make_registry_());
@@ -1051,7 +1137,8 @@ json location_json(const Analysis& analysis, const std::string& file, std::size_
 json Server::completion(const json& params) const {
   const std::string path = uri_to_path(params.at("textDocument").at("uri"));
   const std::string* text = text_of(path);
-  if (!text) return json::array();
+  // Nothing for the other YAML and JSON files an editor attaches the server to.
+  if (!text || (!is_config(path, *text) && !analysis_of(path))) return json::array();
   const Lines lines(*text);
   const std::size_t offset = lines.offset(params.at("position"));
   const Context context = context_at(lines, offset, format_of(path) == DocumentFormat::kJson);

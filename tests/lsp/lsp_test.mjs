@@ -297,6 +297,45 @@ test("a config's diagnostics equal validate's whatever else is open: another con
   }
 });
 
+test('files that are not Arbiter configs get no diagnostics and no completion; a config is known by its keys or its $schema', async () => {
+  const dir = tempDir();
+  try {
+    const others = {
+      'package.json': '{\n  "name": "web",\n  "version": "1.0.0",\n  "dependencies": {"arbiter": "^1.0.0", "layers": "2"}\n}\n',
+      'CMakePresets.json': '{\n  "version": 6,\n  "configurePresets": [{"name": "dev", "binaryDir": "build"}]\n}\n',
+      'ci.yml': 'name: CI\non: [push]\njobs:\n  build:\n    runs-on: ubuntu-latest\n    steps:\n      - run: make\n',
+      'docker-compose.yaml': 'services:\n  web:\n    image: nginx\n    layers: 3\n',
+    };
+    await withClient(async (client) => {
+      for (const [name, text] of Object.entries(others)) {
+        const uri = uriOf(path.join(dir, name));
+        await client.connection.sendNotification('textDocument/didOpen',
+          { textDocument: { uri, languageId: name.endsWith('.json') ? 'json' : 'yaml', version: 1, text } });
+        const completion = await client.request('textDocument/completion',
+          { textDocument: { uri }, position: { line: 1, character: 2 } });
+        assert.deepEqual(completion.items ?? completion, [], name);
+      }
+      // Configs, each recognised by one rule: a top-level `arbiter:`, a `layers:` (an included
+      // file), a `$schema` key, the YAML language server's comment. Each gets its diagnostics.
+      const configs = {
+        'a.yaml': 'arbiter: 1\nname: a\nlayers: 3\n',
+        'part.yaml': 'layers:\n  - name: x\n    behaviours: {b: {type: nope}}\n',
+        'b.json': '{"$schema": "../schema/arbiter.schema.json", "name": "b"}',
+        'c.yaml': '# yaml-language-server: $schema=https://example.org/arbiter.schema.json\nname: c\n',
+      };
+      for (const [name, text] of Object.entries(configs)) {
+        const diagnostics = await client.open(uriOf(path.join(dir, name)), text);
+        assert.ok(diagnostics.length > 0, name);
+      }
+      for (const name of Object.keys(others)) {
+        assert.deepEqual(client.diagnostics.get(uriOf(path.join(dir, name))) ?? [], [], name);
+      }
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('hover on an actuator lists its writers and readers; on a class, its params; a sensor goes to its actuator', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
