@@ -545,7 +545,6 @@ int main(int argc, char** argv) {
   app.add_option("--plugin-path", options.plugin_path,
                  "a directory to look for plugins in (repeatable); searched before "
                  "ARBITER_PLUGIN_PATH and the plugins that come with arbiter")
-      ->check(CLI::ExistingDirectory)
       ->type_name("DIR");
   app.add_option("--max-file-bytes", options.max_file_bytes,
                  "refuse config files (and included files) larger than this; default 16777216 "
@@ -912,6 +911,12 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
     if (run_cmd->parsed() && !options.serve.empty() && !options.full_speed) {
       options.realtime = true;
+    }
+    // Checked here rather than by the option, so that `lsp` can start and show it in the editor.
+    for (const auto& dir : options.plugin_path) {
+      if (!lsp_cmd->parsed() && !std::filesystem::is_directory(dir)) {
+        throw CLI::ValidationError("--plugin-path", "Directory does not exist: " + dir);
+      }
     }
   } catch (const CLI::ParseError& error) {
     // --help and --version exit 0 through app.exit; every real parse error is a usage error.

@@ -994,6 +994,7 @@ void Server::changed(std::vector<json>& out) {
     analysis->root = open.path;
     analysis->registry = std::make_unique<Registry>(make_registry_());
     analysis->loaded = load_config(open.path, *analysis->registry, options_);
+    report_plugin_path(*analysis);
     Indexer(*analysis).run();
     if (analysis->loaded.document()) good_[open.path] = analysis;
     if (analysis->loaded.program) compiled_[open.path] = analysis;
@@ -1014,6 +1015,21 @@ void Server::changed(std::vector<json>& out) {
     }
   }
   publish(out);
+}
+
+void Server::report_plugin_path(Analysis& analysis) const {
+  const Node* root = analysis.loaded.document();
+  const Node* plugins = root && root->is_mapping() ? root->find("plugins") : nullptr;
+  if (!plugins) return;
+  for (const auto& dir : options_.plugins.path) {
+    std::error_code error;
+    if (std::filesystem::is_directory(dir, error)) continue;
+    analysis.loaded.diagnostics
+        .warning(plugins->location(), "plugin-path-not-found",
+                 fmt::format("plugin directory '{}' (--plugin-path) does not exist", dir))
+        .notes.push_back("the server was started with it: correct the editor's arbiter command");
+  }
+  analysis.loaded.diagnostics.sort();
 }
 
 void Server::publish(std::vector<json>& out) {
@@ -1585,8 +1601,12 @@ json Server::code_actions(const json& params) const {
 int run(std::istream& in, std::ostream& out, std::function<Registry()> make_registry,
         LoadOptions options) {
   Server server(std::move(make_registry), std::move(options));
-  while (auto frame = read_frame(in)) {
+  std::string ended;
+  while (auto frame = read_frame(in, &ended)) {
     std::vector<json> replies;
+    if (!frame->skipped.empty()) {
+      std::cerr << "arbiter lsp: skipped bytes that are not a message: " << frame->skipped << "\n";
+    }
     if (!frame->error.empty()) {
       std::cerr << "arbiter lsp: " << frame->error << "\n";
       replies.push_back({{"jsonrpc", "2.0"},
@@ -1600,6 +1620,7 @@ int run(std::istream& in, std::ostream& out, std::function<Registry()> make_regi
     }
     if (server.exited()) return server.exit_code();
   }
+  if (!ended.empty()) std::cerr << "arbiter lsp: " << ended << "\n";
   return server.exited() ? server.exit_code() : 1;
 }
 

@@ -52,6 +52,8 @@ class Server {
   json dispatch(const std::string& method, const json& params, std::vector<json>& out);
   void changed(std::vector<json>& out);
   void publish(std::vector<json>& out);
+  /// A --plugin-path directory that does not exist, on each config that names plugins.
+  void report_plugin_path(Analysis& analysis) const;
   const Analysis* analysis_of(const std::string& path) const;
   const Analysis* good_analysis_of(const std::string& path) const;
   const Program* program_of(const std::string& path) const;

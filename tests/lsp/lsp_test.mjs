@@ -501,6 +501,43 @@ test('malformed messages get JSON-RPC errors and the server keeps serving', asyn
   assert.doesNotMatch(client.stderr, /terminate|Segmentation/);
 });
 
+test('after a malformed header or stray bytes between messages the server answers the next well-formed message', { timeout: 20000 }, async () => {
+  for (const noise of [
+    // a header without its colon, then the message's body
+    'Content-Length 59\r\n\r\n{"jsonrpc": "2.0", "id": 90, "method": "textDocument/hover"}',
+    // an invalid length, then the body
+    'Content-Length: 5x\r\n\r\n{"jsonrpc": "2.0", "id": 91, "method": "shutdown"}',
+    // bytes between two messages, with no line end
+    'garbage',
+    // a body longer than its Content-Length says
+    'Content-Length: 2\r\n\r\n{}}}}',
+  ]) {
+    const client = new Client();
+    await client.start();
+    client.process.stdin.write(noise);
+    const { uri, text } = yaml();
+    assert.deepEqual(await client.open(uri, text), [], JSON.stringify(noise));
+    assert.equal(await client.stop(), 0, JSON.stringify(noise));
+    assert.match(client.stderr, /arbiter lsp: /);
+  }
+});
+
+test('a --plugin-path that does not exist is a diagnostic on the configs that name plugins, not a failure to start', async () => {
+  const client = new Client(['--plugin-path', '/nonexistent/plugins']);
+  await client.start();
+  try {
+    const { uri, text } = yaml();
+    const [diagnostic, ...rest] = await client.open(uri, text);
+    assert.deepEqual(rest, []);
+    assert.equal(diagnostic.code, 'plugin-path-not-found');
+    assert.equal(diagnostic.severity, 2);
+    assert.match(diagnostic.message, /'\/nonexistent\/plugins'/);
+    assert.deepEqual(diagnostic.range.start, positionOf(text, '[soccer]'));
+  } finally {
+    assert.equal(await client.stop(), 0, client.stderr);
+  }
+});
+
 test('exit without shutdown ends with status 1', async () => {
   const client = new Client();
   await client.start();
