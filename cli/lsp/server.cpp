@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <regex>
 #include <set>
 
@@ -26,6 +28,11 @@ constexpr int kMethodNotFound = -32601;
 constexpr int kInvalidParams = -32602;
 constexpr int kServerNotInitialized = -32002;
 constexpr int kRequestFailed = -32803;
+
+// Bounds on the search for the config that includes an open file: the files looked at, and the
+// size of a file read to check it.
+constexpr std::size_t kMaxScanned = 20000;
+constexpr std::uintmax_t kMaxScannedBytes = 4u << 20;
 
 struct RequestError {
   int code;
@@ -786,46 +793,61 @@ std::vector<std::pair<std::string, std::string>> flow_top_level(const std::strin
   return keys;
 }
 
-/// Whether a file is an Arbiter config (or a file a config includes) by its text: it has one of
-/// the top-level keys only an Arbiter config has (`arbiter`, `layers`, `state_machines`), or its
+enum class ConfigText {
+  kNone,      ///< not an Arbiter config
+  kFragment,  ///< a config without a `name`: a file meant to be included
+  kConfig,    ///< a config with a `name`: a root
+};
+
+/// What a file is by its text: an Arbiter config (or a file a config includes) has one of the
+/// top-level keys only an Arbiter config has (`arbiter`, `layers`, `state_machines`), or its
 /// `$schema` (a key, or a YAML language server comment) names a file called `arbiter...`. A
 /// package.json, a CI workflow or a docker-compose.yaml has none of these.
-bool is_config(const std::string& path, const std::string& text) {
+ConfigText classify(const std::string& path, const std::string& text) {
   static const std::set<std::string> markers = {"arbiter", "layers", "state_machines"};
   auto arbiter_schema = [](std::string reference) {
     const auto slash = reference.find_last_of("/\\");
     if (slash != std::string::npos) reference = reference.substr(slash + 1);
     return reference.rfind("arbiter", 0) == 0;
   };
+  bool config = false;
+  bool named = false;
   const std::size_t first = text.find_first_not_of(" \t\r\n");
   const bool flow = format_of(path) == DocumentFormat::kJson ||
                     (first != std::string::npos && text[first] == '{');
   if (flow) {
     for (const auto& [key, value] : flow_top_level(text)) {
-      if (markers.count(key) || (key == "$schema" && arbiter_schema(value))) return true;
+      if (markers.count(key) || (key == "$schema" && arbiter_schema(value))) config = true;
+      if (key == "name") named = true;
     }
-    return false;
-  }
-  static const std::regex modeline(R"(^#\s*yaml-language-server:\s*\$schema=(\S+))");
-  std::size_t start = 0;
-  while (start < text.size()) {
-    std::size_t end = text.find('\n', start);
-    if (end == std::string::npos) end = text.size();
-    const std::string line = text.substr(start, end - start);
-    start = end + 1;
-    std::smatch match;
-    if (std::regex_search(line, match, modeline) && arbiter_schema(match[1].str())) return true;
-    const YamlLine parsed = parse_yaml_line(line);
-    if (parsed.blank || parsed.content != 0 || parsed.dash >= 0) continue;
-    if (markers.count(parsed.key)) return true;
-    if (parsed.key == "$schema") {
-      std::string value = line.substr(line.find(':') + 1);
-      value.erase(0, value.find_first_not_of(" \"'"));
-      value = value.substr(0, value.find_first_of(" \"'#\r"));
-      if (arbiter_schema(value)) return true;
+  } else {
+    static const std::regex modeline(R"(^#\s*yaml-language-server:\s*\$schema=(\S+))");
+    std::size_t start = 0;
+    while (start < text.size()) {
+      std::size_t end = text.find('\n', start);
+      if (end == std::string::npos) end = text.size();
+      const std::string line = text.substr(start, end - start);
+      start = end + 1;
+      std::smatch match;
+      if (std::regex_search(line, match, modeline) && arbiter_schema(match[1].str())) config = true;
+      const YamlLine parsed = parse_yaml_line(line);
+      if (parsed.blank || parsed.content != 0 || parsed.dash >= 0) continue;
+      if (markers.count(parsed.key)) config = true;
+      if (parsed.key == "name") named = true;
+      if (parsed.key == "$schema") {
+        std::string value = line.substr(line.find(':') + 1);
+        value.erase(0, value.find_first_not_of(" \"'"));
+        value = value.substr(0, value.find_first_of(" \"'#\r"));
+        if (arbiter_schema(value)) config = true;
+      }
     }
   }
-  return false;
+  if (!config) return ConfigText::kNone;
+  return named ? ConfigText::kConfig : ConfigText::kFragment;
+}
+
+bool is_config(const std::string& path, const std::string& text) {
+  return classify(path, text) != ConfigText::kNone;
 }
 
 }  // namespace
@@ -910,6 +932,16 @@ std::vector<json> Server::handle(const json& message) {
 json Server::dispatch(const std::string& method, const json& params, std::vector<json>& out) {
   if (method == "initialize") {
     initialized_ = true;
+    watch_ = params.value("capabilities", json::object())
+                 .value("workspace", json::object())
+                 .value("didChangeWatchedFiles", json::object())
+                 .value("dynamicRegistration", false);
+    for (const auto& folder : params.value("workspaceFolders", json())) {
+      if (folder.is_object() && folder.contains("uri") && folder["uri"].is_string())
+        workspace_.push_back(uri_to_path(folder["uri"]));
+    }
+    if (workspace_.empty() && params.contains("rootUri") && params["rootUri"].is_string())
+      workspace_.push_back(uri_to_path(params["rootUri"]));
     return {{"capabilities",
              {{"textDocumentSync", {{"openClose", true}, {"change", 1}}},
               {"completionProvider",
@@ -922,8 +954,33 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
               {"codeActionProvider", {{"codeActionKinds", json::array({"quickfix"})}}}}},
             {"serverInfo", {{"name", "arbiter"}}}};
   }
-  if (method == "initialized" || method == "$/cancelRequest" || method == "$/setTrace" ||
-      method == "textDocument/didSave" || method == "workspace/didChangeConfiguration") {
+  if (method == "initialized") {
+    // Included files and the configs that include an open file are read from the disk: a change
+    // there changes diagnostics.
+    if (watch_) {
+      const json registration = {
+          {"id", "arbiter-watch"},
+          {"method", "workspace/didChangeWatchedFiles"},
+          {"registerOptions",
+           {{"watchers", json::array({{{"globPattern", "**/*.{yaml,yml,json}"}}})}}}};
+      out.push_back({{"jsonrpc", "2.0"},
+                     {"id", "arbiter-watch"},
+                     {"method", "client/registerCapability"},
+                     {"params", {{"registrations", json::array({registration})}}}});
+    }
+    return nullptr;
+  }
+  if (method == "workspace/didChangeWatchedFiles") {
+    std::set<std::string> paths;
+    for (const auto& change : params.at("changes")) {
+      const std::string path = uri_to_path(change.at("uri"));
+      if (!overlay_.find(path)) paths.insert(path);  // an open buffer wins over the disk
+    }
+    if (!paths.empty()) update(paths, true, out);
+    return nullptr;
+  }
+  if (method == "$/cancelRequest" || method == "$/setTrace" || method == "textDocument/didSave" ||
+      method == "workspace/didChangeConfiguration") {
     return nullptr;
   }
   if (method == "shutdown") {
@@ -937,7 +994,7 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
     open.path = uri_to_path(uri);
     open.text = document.at("text");
     overlay_.set(open.path, open.text);
-    changed(out);
+    update({open.path}, false, out);
     return nullptr;
   }
   if (method == "textDocument/didChange") {
@@ -955,16 +1012,17 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
       }
     }
     overlay_.set(found->second.path, found->second.text);
-    changed(out);
+    update({found->second.path}, false, out);
     return nullptr;
   }
   if (method == "textDocument/didClose") {
     const std::string uri = params.at("textDocument").at("uri");
     auto found = open_.find(uri);
     if (found != open_.end()) {
-      overlay_.erase(found->second.path);
+      const std::string path = found->second.path;
+      overlay_.erase(path);
       open_.erase(found);
-      changed(out);
+      update({path}, false, out);
     }
     return nullptr;
   }
@@ -978,43 +1036,156 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
   return {{"__method_not_found", true}};
 }
 
-void Server::changed(std::vector<json>& out) {
-  // Each open file that no other open file includes is loaded as a config of its own.
-  std::set<std::string> included;
+bool Server::is_open(const std::string& path) const {
+  return overlay_.find(path) != nullptr;
+}
+
+std::string Server::text_on_disk_or_open(const std::string& path) const {
+  if (const std::string* text = overlay_.find(path)) return *text;
+  std::ifstream in(path, std::ios::binary);
+  std::string text;
+  if (in) text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  return text;
+}
+
+std::shared_ptr<const Analysis> Server::analyse(const std::string& root) const {
+  auto analysis = std::make_shared<Analysis>();
+  analysis->root = root;
+  analysis->registry = std::make_unique<Registry>(make_registry_());
+  analysis->loaded = load_config(root, *analysis->registry, options_);
+  report_plugin_path(*analysis);
+  Indexer(*analysis).run();
+  return analysis;
+}
+
+std::string Server::includer_of(const std::string& path, std::set<std::string>& visited) const {
+  namespace fs = std::filesystem;
+  // The innermost workspace folder that holds the file, else the folder above the file's own.
+  fs::path top = fs::path(path).parent_path().parent_path();
+  std::size_t best = 0;
+  for (const auto& folder : workspace_) {
+    if (path.rfind(folder + "/", 0) == 0 && folder.size() > best) {
+      top = folder;
+      best = folder.size();
+    }
+  }
+  const std::string name = fs::path(path).filename().string();
+  std::error_code error;
+  fs::recursive_directory_iterator it(top, fs::directory_options::skip_permission_denied, error);
+  std::size_t seen = 0;
+  std::string fragment;
+  for (; !error && it != fs::recursive_directory_iterator(); it.increment(error)) {
+    if (++seen > kMaxScanned) break;
+    const fs::path& entry = it->path();
+    const std::string leaf = entry.filename().string();
+    if (it->is_directory(error)) {
+      if (leaf.empty() || leaf[0] == '.' || leaf == "node_modules" || leaf.rfind("build", 0) == 0 ||
+          it.depth() >= 8)
+        it.disable_recursion_pending();
+      continue;
+    }
+    const std::string candidate = entry.lexically_normal().string();
+    const std::string extension = entry.extension().string();
+    if (candidate == path || visited.count(candidate) ||
+        !(extension == ".yaml" || extension == ".yml" || extension == ".json") ||
+        it->file_size(error) > kMaxScannedBytes)
+      continue;
+    const std::string text = text_on_disk_or_open(candidate);
+    if (text.find(name) == std::string::npos) continue;
+    const ConfigText kind = classify(candidate, text);
+    if (kind == ConfigText::kNone) continue;
+    Registry registry = make_registry_();
+    if (!load_config(candidate, registry, options_).files.find(path)) continue;
+    if (kind == ConfigText::kConfig) return candidate;
+    // A file that is itself included: the config above it, if there is one.
+    visited.insert(candidate);
+    const std::string above = includer_of(candidate, visited);
+    if (!above.empty() && classify(above, text_on_disk_or_open(above)) == ConfigText::kConfig)
+      return above;
+    if (fragment.empty()) fragment = above.empty() ? candidate : above;
+  }
+  return fragment;
+}
+
+void Server::update(const std::set<std::string>& paths, bool rescan, std::vector<json>& out) {
+  // Only the configs these files belong to are loaded again: the others' diagnostics stand.
+  std::set<std::string> reload;
   for (const auto& [root, analysis] : analyses_) {
-    for (const auto& file : analysis->loaded.files.files()) {
-      if (file->path != root) included.insert(file->path);
+    for (const auto& path : paths) {
+      if (root == path || analysis->loaded.files.find(path)) reload.insert(root);
     }
   }
-  std::map<std::string, std::shared_ptr<const Analysis>> next;
+  // A file on disk appeared, went or changed: the config that includes an open file may be
+  // another one now.
+  if (rescan) {
+    for (const auto& [root, analysis] : analyses_) {
+      if (is_open(root) && classify(root, *overlay_.find(root)) == ConfigText::kFragment)
+        owners_.erase(root);
+    }
+  }
+  std::set<std::string> touched;  // the roots loaded again
+  std::set<std::string> gone;     // files of configs no longer checked: their diagnostics go
+  auto drop = [&](const std::string& root) {
+    for (const auto& file : analyses_[root]->loaded.files.files()) gone.insert(file->path);
+    gone.insert(root);
+    analyses_.erase(root);
+    good_.erase(root);
+    compiled_.erase(root);
+    reload.erase(root);
+  };
+  auto load = [&](const std::string& root) {
+    auto analysis = analyse(root);
+    if (analysis->loaded.document()) good_[root] = analysis;
+    if (analysis->loaded.program) compiled_[root] = analysis;
+    analyses_[root] = std::move(analysis);
+    touched.insert(root);
+  };
+  for (const auto& root : std::set<std::string>(reload)) {
+    // A root is kept while it is open, or while an open file is checked through it.
+    bool needed = is_open(root) && is_config(root, *overlay_.find(root));
+    for (const auto& file : analyses_[root]->loaded.files.files()) {
+      if (file->path != root && is_open(file->path)) needed = true;
+    }
+    if (needed) {
+      load(root);
+    } else {
+      drop(root);
+    }
+  }
+  // Each open config not checked through another: a root of its own, or, for a file meant to be
+  // included, checked through the config that includes it on the disk (a file alone otherwise).
   for (const auto& [uri, open] : open_) {
-    if (included.count(open.path) && analyses_.count(open.path) == 0) continue;
-    if (next.count(open.path) || !is_config(open.path, open.text)) continue;
-    auto analysis = std::make_shared<Analysis>();
-    analysis->root = open.path;
-    analysis->registry = std::make_unique<Registry>(make_registry_());
-    analysis->loaded = load_config(open.path, *analysis->registry, options_);
-    report_plugin_path(*analysis);
-    Indexer(*analysis).run();
-    if (analysis->loaded.document()) good_[open.path] = analysis;
-    if (analysis->loaded.program) compiled_[open.path] = analysis;
-    next[open.path] = std::move(analysis);
+    const std::string& path = open.path;
+    if (analysis_of(path) || !is_config(path, open.text)) continue;
+    std::string root = path;
+    if (classify(path, open.text) == ConfigText::kFragment) {
+      auto owner = owners_.find(path);
+      if (owner == owners_.end()) {
+        std::set<std::string> visited{path};
+        owner = owners_.emplace(path, includer_of(path, visited)).first;
+      }
+      if (!owner->second.empty()) root = owner->second;
+    }
+    if (!analyses_.count(root)) load(root);
   }
-  // A root that another root includes is analysed through that one.
-  for (auto it = next.begin(); it != next.end();) {
+  // A root that another root includes is checked through that one (unless each includes the
+  // other: a cycle, checked from the root that came first).
+  for (auto it = analyses_.begin(); it != analyses_.end();) {
     bool inside = false;
-    for (const auto& [root, analysis] : next) {
-      if (root != it->first && analysis->loaded.files.find(it->first)) inside = true;
+    for (const auto& [root, analysis] : analyses_) {
+      if (root != it->first && analysis->loaded.files.find(it->first) &&
+          !it->second->loaded.files.find(root))
+        inside = true;
     }
-    it = inside ? next.erase(it) : std::next(it);
-  }
-  analyses_ = std::move(next);
-  for (auto* kept : {&good_, &compiled_}) {
-    for (auto it = kept->begin(); it != kept->end();) {
-      it = analyses_.count(it->first) ? std::next(it) : kept->erase(it);
+    if (inside) {
+      const std::string root = it->first;
+      ++it;
+      drop(root);
+    } else {
+      ++it;
     }
   }
-  publish(out);
+  publish(touched, gone, out);
 }
 
 void Server::report_plugin_path(Analysis& analysis) const {
@@ -1032,13 +1203,48 @@ void Server::report_plugin_path(Analysis& analysis) const {
   analysis.loaded.diagnostics.sort();
 }
 
-void Server::publish(std::vector<json>& out) {
+void Server::publish(const std::set<std::string>& touched, const std::set<std::string>& gone,
+                     std::vector<json>& out) {
+  std::set<std::string> files = gone;
+  for (const auto& root : touched) {
+    const auto found = analyses_.find(root);
+    if (found == analyses_.end()) continue;
+    files.insert(root);
+    for (const auto& file : found->second->loaded.files.files()) files.insert(file->path);
+  }
+  // Each file's diagnostics from every config that reaches it (a file two configs include
+  // gets its problems once).
   std::map<std::string, json> by_file;
+  std::set<std::string> seen;
+  auto add = [&](const std::string& file, json diagnostic) {
+    if (seen.insert(file + diagnostic.dump()).second)
+      by_file[file].push_back(std::move(diagnostic));
+  };
   for (const auto& [root, analysis] : analyses_) {
-    for (const auto& file : analysis->loaded.files.files())
-      by_file.emplace(file->path, json::array());
-    by_file.emplace(root, json::array());
-    for (const auto& item : analysis->loaded.diagnostics.items()) {
+    const auto& loaded = analysis->loaded;
+    bool relevant = touched.count(root) > 0;
+    for (const auto& file : loaded.files.files()) relevant = relevant || files.count(file->path);
+    if (!relevant) continue;
+    // The files each of the root's includes reaches, for problems in files that are not open.
+    std::map<std::string, std::vector<std::string>> includes;
+    for (const auto& item : analysis->occurrences) {
+      if (item.kind == Kind::kInclude) includes[item.file].push_back(item.name);
+    }
+    auto reaches = [&](const std::string& from, const std::string& to) {
+      std::set<std::string> visited{from};
+      std::vector<std::string> stack{from};
+      while (!stack.empty()) {
+        const std::string at = stack.back();
+        stack.pop_back();
+        if (at == to) return true;
+        for (const auto& next : includes[at]) {
+          if (visited.insert(next).second) stack.push_back(next);
+        }
+      }
+      return false;
+    };
+    for (const auto& item : loaded.diagnostics.items()) {
+      if (!files.count(item.location.file)) continue;
       json diagnostic = diagnostic_json(item, analysis->lines_of(item.location.file));
       json related = json::array();
       for (const auto& note : item.notes) {
@@ -1059,25 +1265,53 @@ void Server::publish(std::vector<json>& out) {
         related.push_back({{"location", location}, {"message", note}});
       }
       if (!related.empty()) diagnostic["relatedInformation"] = related;
-      by_file[item.location.file].push_back(std::move(diagnostic));
+      // An error in an included file that is not open shows on the root's include that leads
+      // to it, or an editor that shows open files only would show nothing wrong.
+      if (item.severity == Severity::kError && item.location.file != root &&
+          !is_open(item.location.file)) {
+        for (const auto& include : analysis->occurrences) {
+          if (include.kind != Kind::kInclude || include.file != root ||
+              !reaches(include.name, item.location.file))
+            continue;
+          json copy = diagnostic;
+          const Lines* lines = analysis->lines_of(root);
+          copy["range"] = lines ? lines->range(include.begin, include.end) : range_json(0, 0);
+          copy["message"] =
+              fmt::format("in included file {}: {}",
+                          std::filesystem::path(item.location.file)
+                              .lexically_relative(std::filesystem::path(root).parent_path())
+                              .string(),
+                          item.message);
+          copy["relatedInformation"] = json::array(
+              {{{"location",
+                 {{"uri", path_to_uri(item.location.file)}, {"range", diagnostic["range"]}}},
+                {"message", item.message}}});
+          add(root, std::move(copy));
+          break;
+        }
+      }
+      add(item.location.file, std::move(diagnostic));
     }
   }
-  std::map<std::string, std::string> now;
-  for (auto& [file, diagnostics] : by_file) {
-    // An open config gets its (empty) list too, so that an editor knows it was checked.
-    if (diagnostics.empty() && published_.count(file) == 0 && analyses_.count(file) == 0) continue;
+  for (const auto& file : files) {
+    auto found = by_file.find(file);
+    const bool any = found != by_file.end();
+    // A config, and an open file checked through one, get their (empty) list too, so that an
+    // editor knows they were checked.
+    if (!any && !published_.count(file) && !analyses_.count(file) &&
+        !(is_open(file) && analysis_of(file)))
+      continue;
     out.push_back({{"jsonrpc", "2.0"},
                    {"method", "textDocument/publishDiagnostics"},
-                   {"params", {{"uri", path_to_uri(file)}, {"diagnostics", diagnostics}}}});
-    if (!diagnostics.empty()) now[file] = path_to_uri(file);
+                   {"params",
+                    {{"uri", path_to_uri(file)},
+                     {"diagnostics", any ? std::move(found->second) : json::array()}}}});
+    if (any) {
+      published_.insert(file);
+    } else {
+      published_.erase(file);
+    }
   }
-  for (const auto& [file, uri] : published_) {
-    if (by_file.count(file)) continue;
-    out.push_back({{"jsonrpc", "2.0"},
-                   {"method", "textDocument/publishDiagnostics"},
-                   {"params", {{"uri", uri}, {"diagnostics", json::array()}}}});
-  }
-  published_ = std::move(now);
 }
 
 const Analysis* Server::analysis_of(const std::string& path) const {

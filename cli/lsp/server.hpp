@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -50,8 +51,18 @@ class Server {
   };
 
   json dispatch(const std::string& method, const json& params, std::vector<json>& out);
-  void changed(std::vector<json>& out);
-  void publish(std::vector<json>& out);
+  /// After `paths` changed (opened, edited, closed; on the disk when `rescan`): loads again the
+  /// configs they belong to, and no other, then publishes what changed.
+  void update(const std::set<std::string>& paths, bool rescan, std::vector<json>& out);
+  /// Publishes the diagnostics of the files of the `touched` roots and clears those of `gone`.
+  void publish(const std::set<std::string>& touched, const std::set<std::string>& gone,
+               std::vector<json>& out);
+  std::shared_ptr<const Analysis> analyse(const std::string& root) const;
+  /// The config on the disk (or open) that includes `path`, the topmost one that has a `name`;
+  /// empty when none is found in the workspace folder that holds it (else the folder above it).
+  std::string includer_of(const std::string& path, std::set<std::string>& visited) const;
+  bool is_open(const std::string& path) const;
+  std::string text_on_disk_or_open(const std::string& path) const;
   /// A --plugin-path directory that does not exist, on each config that names plugins.
   void report_plugin_path(Analysis& analysis) const;
   const Analysis* analysis_of(const std::string& path) const;
@@ -75,7 +86,10 @@ class Server {
   std::map<std::string, std::shared_ptr<const Analysis>> analyses_;  // by root path
   std::map<std::string, std::shared_ptr<const Analysis>> good_;      // the last that parsed
   std::map<std::string, std::shared_ptr<const Analysis>> compiled_;  // the last that compiled
-  std::map<std::string, std::string> published_;  // path -> URI of files with diagnostics
+  std::set<std::string> published_;                                  // files with diagnostics
+  std::map<std::string, std::string> owners_;  // an open included file -> the config checked
+  std::vector<std::string> workspace_;         // the client's workspace folders
+  bool watch_ = false;                         // the client registers file watchers when asked
   // By the names of the classes a registry knows: a config's plugins add classes.
   mutable std::map<std::string, Catalog> catalogs_;
   bool initialized_ = false;

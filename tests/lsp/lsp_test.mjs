@@ -471,6 +471,108 @@ test("an included file's diagnostics are published on that file, and its open bu
   }
 });
 
+// A config that includes parts/part.yaml, written to a temporary folder.
+function includeFixture() {
+  const dir = tempDir();
+  fs.mkdirSync(path.join(dir, 'parts'));
+  const main = path.join(dir, 'main.yaml');
+  const part = path.join(dir, 'parts', 'part.yaml');
+  const mainText = 'arbiter: 1\nname: m\ninclude: [parts/part.yaml]\nlayers:\n  - name: control\n    actuators:\n      speed: {type: double}\n    behaviours:\n      a: {type: scripted, params: {activation: 1}}\n';
+  const partText = 'layers:\n  - name: other\n    actuators:\n      size: {type: double}\n    behaviours:\n      b: {type: scripted, params: {activation: 1}}\n';
+  fs.writeFileSync(main, mainText);
+  fs.writeFileSync(part, partText);
+  return { dir, main, part, mainText, partText, partBroken: partText.replace('type: scripted', 'type: scriptd') };
+}
+
+test('an included file opened on its own is checked through the config that includes it on the disk', async () => {
+  const { dir, main, part, partText, partBroken } = includeFixture();
+  try {
+    await withClient(async (client) => {
+      assert.deepEqual(await client.open(uriOf(part), partText), []);
+      // Its real problem shows.
+      const [error, ...rest] = await client.change(uriOf(part), partBroken);
+      assert.deepEqual(rest, []);
+      assert.equal(error.code, 'unknown-class');
+      assert.deepEqual(error.range, rangeOf(partBroken, 'scriptd'));
+      fs.writeFileSync(part, partBroken);
+      assert.deepEqual(summary([error]), validated(main));
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test("closing the including file keeps the included file's real error", async () => {
+  const { dir, main, part, mainText, partBroken } = includeFixture();
+  try {
+    await withClient(async (client) => {
+      assert.deepEqual(await client.open(uriOf(main), mainText), []);
+      const [error] = await client.open(uriOf(part), partBroken);
+      assert.equal(error.code, 'unknown-class');
+      const published = client.published(uriOf(part));
+      await client.connection.sendNotification('textDocument/didClose', { textDocument: { uri: uriOf(main) } });
+      const [still, ...rest] = await published;
+      assert.deepEqual(rest, []);
+      assert.deepEqual(still, error);
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('an include cycle is an error on the root file, at the include that leads into it', async () => {
+  const dir = tempDir();
+  try {
+    const root = path.join(dir, 'root.yaml');
+    const rootText = 'arbiter: 1\nname: r\ninclude: [a.yaml]\nlayers:\n  - name: top\n';
+    fs.writeFileSync(root, rootText);
+    fs.writeFileSync(path.join(dir, 'a.yaml'), 'include: [b.yaml]\nlayers:\n  - name: from_a\n');
+    fs.writeFileSync(path.join(dir, 'b.yaml'), 'include: [root.yaml]\nlayers:\n  - name: from_b\n');
+    assert.deepEqual(validated(root).map((d) => d.code), ['include-cycle']);
+    await withClient(async (client) => {
+      const [cycle, ...rest] = await client.open(uriOf(root), rootText);
+      assert.deepEqual(rest, []);
+      assert.equal(cycle.code, 'include-cycle');
+      assert.equal(cycle.severity, 1);
+      assert.deepEqual(cycle.range, rangeOf(rootText, 'a.yaml'));
+      assert.match(cycle.message, /^in included file b\.yaml: include cycle: /);
+      assert.equal(cycle.relatedInformation[0].location.uri, uriOf(path.join(dir, 'b.yaml')));
+      assert.equal(client.diagnostics.get(uriOf(path.join(dir, 'b.yaml')))[0].code, 'include-cycle');
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('an included file changed on the disk is noticed through workspace/didChangeWatchedFiles, registered when the client can', { timeout: 20000 }, async () => {
+  const { dir, main, part, mainText, partBroken } = includeFixture();
+  const client = new Client();
+  const registered = new Promise((resolve) => client.connection.onRequest('client/registerCapability', (params) => {
+    resolve(params);
+    return null;
+  }));
+  try {
+    await client.connection.sendRequest('initialize', { processId: process.pid, rootUri: uriOf(dir),
+      capabilities: { workspace: { didChangeWatchedFiles: { dynamicRegistration: true } } } });
+    await client.connection.sendNotification('initialized', {});
+    const { registrations: [registration] } = await registered;
+    assert.equal(registration.method, 'workspace/didChangeWatchedFiles');
+    assert.ok(registration.registerOptions.watchers.some((w) => w.globPattern.includes('yaml')));
+    assert.deepEqual(await client.open(uriOf(main), mainText), []);
+    fs.writeFileSync(part, partBroken);
+    const published = [client.published(uriOf(main)), client.published(uriOf(part))];
+    await client.connection.sendNotification('workspace/didChangeWatchedFiles',
+      { changes: [{ uri: uriOf(part), type: 2 }] });
+    const [[onInclude], [onPart]] = await Promise.all(published);
+    assert.equal(onInclude.code, 'unknown-class');
+    assert.deepEqual(onInclude.range, rangeOf(mainText, 'parts/part.yaml'));
+    assert.equal(onPart.code, 'unknown-class');
+  } finally {
+    assert.equal(await client.stop(), 0, client.stderr);
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('a position after a non-ASCII character counts UTF-16 units', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
