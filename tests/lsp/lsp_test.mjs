@@ -49,9 +49,11 @@ class Client {
       new rpc.StreamMessageReader(this.process.stdout),
       new rpc.StreamMessageWriter(this.process.stdin));
     this.diagnostics = new Map();
+    this.publications = new Map();  // how many times each URI's diagnostics were published
     this.waiting = new Map();
     this.connection.onNotification('textDocument/publishDiagnostics', (params) => {
       this.diagnostics.set(params.uri, params.diagnostics);
+      this.publications.set(params.uri, (this.publications.get(params.uri) ?? 0) + 1);
       const waiter = this.waiting.get(params.uri);
       if (waiter) {
         this.waiting.delete(params.uri);
@@ -571,6 +573,22 @@ test('an included file changed on the disk is noticed through workspace/didChang
     assert.equal(await client.stop(), 0, client.stderr);
     fs.rmSync(dir, { recursive: true, force: true });
   }
+});
+
+test('an edit checks again only the configs the edited file belongs to', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    const other = json();
+    await client.open(uri, text);
+    await client.open(other.uri, other.text);
+    const broken = text.replace('kick_ball => go_behind_ball', 'kick_bal => go_behind_ball');
+    const before = client.publications.get(other.uri);
+    const diagnostics = await client.change(uri, broken);
+    // Every notification sent before the reply to a later request has arrived.
+    await client.request('textDocument/documentSymbol', { textDocument: { uri } });
+    assert.equal(client.publications.get(other.uri), before);
+    assert.equal(diagnostics.length, 1);
+  });
 });
 
 test('a position after a non-ASCII character counts UTF-16 units', async () => {
