@@ -80,6 +80,7 @@ void change_beside(benchmark::State& state) {
 
 void register_lsp_benchmarks() {
   benchmark::RegisterBenchmark("lsp/change", change)
+      ->Arg(20)
       ->Arg(200)
       ->Arg(1000)
       ->Unit(benchmark::kMillisecond);

@@ -904,7 +904,9 @@ int main(int argc, char** argv) {
       "Examples:\n"
       "  arbiter lsp\n"
       "  arbiter --plugin-path ~/robot/plugins lsp\n"
-      "  Neovim: vim.lsp.start({name = 'arbiter', cmd = {'arbiter', 'lsp'}})\n\n"
+      "  Neovim 0.7 and later, in a config's buffer (docs/editors.md has an init.lua set-up):\n"
+      "    :lua local c = {name = 'arbiter', cmd = {'arbiter', 'lsp'}} if vim.lsp.start then "
+      "vim.lsp.start(c) else vim.lsp.buf_attach_client(0, vim.lsp.start_client(c)) end\n\n"
       "Exit codes: 0 after 'shutdown' and 'exit', 1 when the input ends or 'exit' comes first.");
 
   try {
