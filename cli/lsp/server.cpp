@@ -1022,6 +1022,7 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
       const std::string path = found->second.path;
       overlay_.erase(path);
       open_.erase(found);
+      owners_.erase(path);
       update({path}, false, out);
     }
     return nullptr;
@@ -1117,12 +1118,7 @@ void Server::update(const std::set<std::string>& paths, bool rescan, std::vector
   }
   // A file on disk appeared, went or changed: the config that includes an open file may be
   // another one now.
-  if (rescan) {
-    for (const auto& [root, analysis] : analyses_) {
-      if (is_open(root) && classify(root, *overlay_.find(root)) == ConfigText::kFragment)
-        owners_.erase(root);
-    }
-  }
+  if (rescan) owners_.clear();
   std::set<std::string> touched;  // the roots loaded again
   std::set<std::string> gone;     // files of configs no longer checked: their diagnostics go
   auto drop = [&](const std::string& root) {
@@ -1140,13 +1136,16 @@ void Server::update(const std::set<std::string>& paths, bool rescan, std::vector
     analyses_[root] = std::move(analysis);
     touched.insert(root);
   };
-  for (const auto& root : std::set<std::string>(reload)) {
-    // A root is kept while it is open, or while an open file is checked through it.
-    bool needed = is_open(root) && is_config(root, *overlay_.find(root));
+  // A root is kept while it is an open config, or while an open file is checked through it.
+  auto needed = [&](const std::string& root) {
+    if (is_open(root) && is_config(root, *overlay_.find(root))) return true;
     for (const auto& file : analyses_[root]->loaded.files.files()) {
-      if (file->path != root && is_open(file->path)) needed = true;
+      if (file->path != root && is_open(file->path)) return true;
     }
-    if (needed) {
+    return false;
+  };
+  for (const auto& root : std::set<std::string>(reload)) {
+    if (needed(root)) {
       load(root);
     } else {
       drop(root);
@@ -1167,6 +1166,16 @@ void Server::update(const std::set<std::string>& paths, bool rescan, std::vector
       if (!owner->second.empty()) root = owner->second;
     }
     if (!analyses_.count(root)) load(root);
+    if (!analyses_[root]->loaded.files.find(path)) {  // that config no longer includes it
+      owners_.erase(path);
+      if (!needed(root)) drop(root);
+      if (!analyses_.count(path)) load(path);
+    }
+  }
+  for (auto it = analyses_.begin(); it != analyses_.end();) {
+    const std::string root = it->first;
+    ++it;
+    if (!needed(root)) drop(root);
   }
   // A root that another root includes is checked through that one (unless each includes the
   // other: a cycle, checked from the root that came first).

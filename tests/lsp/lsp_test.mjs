@@ -575,6 +575,25 @@ test('an included file changed on the disk is noticed through workspace/didChang
   }
 });
 
+test('an included file opened on its own is checked alone once the config on the disk stops including it', async () => {
+  const { dir, main, part, mainText, partText } = includeFixture();
+  try {
+    await withClient(async (client) => {
+      assert.deepEqual(await client.open(uriOf(part), partText), []);
+      fs.writeFileSync(main, mainText.replace('include: [parts/part.yaml]\n', ''));
+      const published = client.published(uriOf(part));
+      await client.connection.sendNotification('workspace/didChangeWatchedFiles',
+        { changes: [{ uri: uriOf(main), type: 2 }] });
+      // As `arbiter validate` sees it now: a config without its version and name.
+      assert.deepEqual(summary(await published), validated(part));
+      await client.request('textDocument/documentSymbol', { textDocument: { uri: uriOf(part) } });
+      assert.deepEqual(client.diagnostics.get(uriOf(main)) ?? [], []);
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('an edit checks again only the configs the edited file belongs to', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
