@@ -20,7 +20,9 @@ std::string lower(std::string text) {
 
 std::optional<Frame> read_frame(std::istream& in, std::string* ended) {
   static const std::string kHeader = "content-length:";
-  std::optional<std::size_t> length;
+  // Not an optional: GCC's -O3 takes its value for maybe uninitialised where it is read.
+  std::size_t length = 0;
+  bool has_length = false;
   std::string error;
   std::string skipped;
   std::string line;
@@ -40,14 +42,14 @@ std::optional<Frame> read_frame(std::istream& in, std::string* ended) {
     if (const auto at = lower(line).find(kHeader); at != std::string::npos && at > 0) {
       skip(line.substr(0, at));
       line.erase(0, at);
-      length.reset();
+      has_length = false;
       error.clear();
     }
     const auto colon = line.find(':');
     if (colon == std::string::npos) {
       // Not a header: stray bytes, or the body of a message whose header was malformed.
-      if (!length) skip(line);
-      if (!length && !any) continue;
+      if (!has_length) skip(line);
+      if (!has_length && !any) continue;
       error = "header line without ':': " + line.substr(0, 80);
       any = true;
       continue;
@@ -69,21 +71,22 @@ std::optional<Frame> read_frame(std::istream& in, std::string* ended) {
     }
     if (!valid || !digits || parsed > kMaxBody) {
       error = "invalid Content-Length:" + value.substr(0, 80);
-      length.reset();
+      has_length = false;
     } else {
       length = parsed;
+      has_length = true;
     }
   }
   if (!any) return std::nullopt;
-  if (!length) return Frame{{}, error.empty() ? "no Content-Length header" : error, skipped};
+  if (!has_length) return Frame{{}, error.empty() ? "no Content-Length header" : error, skipped};
   Frame frame;
   frame.skipped = std::move(skipped);
-  frame.body.resize(*length);
-  in.read(frame.body.data(), static_cast<std::streamsize>(*length));
-  if (static_cast<std::size_t>(in.gcount()) != *length) {
+  frame.body.resize(length);
+  in.read(frame.body.data(), static_cast<std::streamsize>(length));
+  if (static_cast<std::size_t>(in.gcount()) != length) {
     if (ended)
       *ended = "the input ended inside a message (" + std::to_string(in.gcount()) + " of " +
-               std::to_string(*length) + " bytes)";
+               std::to_string(length) + " bytes)";
     return std::nullopt;
   }
   return frame;

@@ -793,12 +793,6 @@ std::vector<std::pair<std::string, std::string>> flow_top_level(const std::strin
   return keys;
 }
 
-enum class ConfigText {
-  kNone,      ///< not an Arbiter config
-  kFragment,  ///< a config without a `name`: a file meant to be included
-  kConfig,    ///< a config with a `name`: a root
-};
-
 /// What a file is by its text: an Arbiter config (or a file a config includes) has one of the
 /// top-level keys only an Arbiter config has (`arbiter`, `layers`, `state_machines`), or its
 /// `$schema` (a key, or a YAML language server comment) names a file called `arbiter...`. A
@@ -829,7 +823,9 @@ ConfigText classify(const std::string& path, const std::string& text) {
       const std::string line = text.substr(start, end - start);
       start = end + 1;
       std::smatch match;
-      if (std::regex_search(line, match, modeline) && arbiter_schema(match[1].str())) config = true;
+      if (line.rfind('#', 0) == 0 && std::regex_search(line, match, modeline) &&
+          arbiter_schema(match[1].str()))
+        config = true;
       const YamlLine parsed = parse_yaml_line(line);
       if (parsed.blank || parsed.content != 0 || parsed.dash >= 0) continue;
       if (markers.count(parsed.key)) config = true;
@@ -844,10 +840,6 @@ ConfigText classify(const std::string& path, const std::string& text) {
   }
   if (!config) return ConfigText::kNone;
   return named ? ConfigText::kConfig : ConfigText::kFragment;
-}
-
-bool is_config(const std::string& path, const std::string& text) {
-  return classify(path, text) != ConfigText::kNone;
 }
 
 }  // namespace
@@ -994,6 +986,7 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
     open.path = uri_to_path(uri);
     open.text = document.at("text");
     overlay_.set(open.path, open.text);
+    kinds_[open.path] = classify(open.path, open.text);
     update({open.path}, false, out);
     return nullptr;
   }
@@ -1012,6 +1005,7 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
       }
     }
     overlay_.set(found->second.path, found->second.text);
+    kinds_[found->second.path] = classify(found->second.path, found->second.text);
     update({found->second.path}, false, out);
     return nullptr;
   }
@@ -1023,6 +1017,7 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
       overlay_.erase(path);
       open_.erase(found);
       owners_.erase(path);
+      kinds_.erase(path);
       update({path}, false, out);
     }
     return nullptr;
@@ -1039,6 +1034,11 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
 
 bool Server::is_open(const std::string& path) const {
   return overlay_.find(path) != nullptr;
+}
+
+ConfigText Server::kind_of(const std::string& path) const {
+  const auto found = kinds_.find(path);
+  return found == kinds_.end() ? ConfigText::kNone : found->second;
 }
 
 std::string Server::text_on_disk_or_open(const std::string& path) const {
@@ -1138,7 +1138,7 @@ void Server::update(const std::set<std::string>& paths, bool rescan, std::vector
   };
   // A root is kept while it is an open config, or while an open file is checked through it.
   auto needed = [&](const std::string& root) {
-    if (is_open(root) && is_config(root, *overlay_.find(root))) return true;
+    if (kind_of(root) != ConfigText::kNone) return true;
     for (const auto& file : analyses_[root]->loaded.files.files()) {
       if (file->path != root && is_open(file->path)) return true;
     }
@@ -1155,9 +1155,9 @@ void Server::update(const std::set<std::string>& paths, bool rescan, std::vector
   // included, checked through the config that includes it on the disk (a file alone otherwise).
   for (const auto& [uri, open] : open_) {
     const std::string& path = open.path;
-    if (analysis_of(path) || !is_config(path, open.text)) continue;
+    if (analysis_of(path) || kind_of(path) == ConfigText::kNone) continue;
     std::string root = path;
-    if (classify(path, open.text) == ConfigText::kFragment) {
+    if (kind_of(path) == ConfigText::kFragment) {
       auto owner = owners_.find(path);
       if (owner == owners_.end()) {
         std::set<std::string> visited{path};
@@ -1397,7 +1397,7 @@ json Server::completion(const json& params) const {
   const std::string path = uri_to_path(params.at("textDocument").at("uri"));
   const std::string* text = text_of(path);
   // Nothing for the other YAML and JSON files an editor attaches the server to.
-  if (!text || (!is_config(path, *text) && !analysis_of(path))) return json::array();
+  if (!text || (kind_of(path) == ConfigText::kNone && !analysis_of(path))) return json::array();
   const Lines lines(*text);
   const std::size_t offset = lines.offset(params.at("position"));
   const Context context = context_at(lines, offset, format_of(path) == DocumentFormat::kJson);

@@ -19,6 +19,13 @@ namespace arbiter::lsp {
 
 struct Analysis;
 
+/// What a file is by its text, as the server decides which files to check (docs/editors.md).
+enum class ConfigText {
+  kNone,      ///< not an Arbiter config
+  kFragment,  ///< a config without a `name`: a file meant to be included
+  kConfig,    ///< a config with a `name`: a root
+};
+
 class Server {
  public:
   /// `make_registry` gives a registry of the built-in classes: each config is loaded into a
@@ -62,6 +69,8 @@ class Server {
   /// empty when none is found in the workspace folder that holds it (else the folder above it).
   std::string includer_of(const std::string& path, std::set<std::string>& visited) const;
   bool is_open(const std::string& path) const;
+  /// What an open file is, by its text (kNone when it is not open).
+  ConfigText kind_of(const std::string& path) const;
   std::string text_on_disk_or_open(const std::string& path) const;
   /// A --plugin-path directory that does not exist, on each config that names plugins.
   void report_plugin_path(Analysis& analysis) const;
@@ -88,6 +97,7 @@ class Server {
   std::map<std::string, std::shared_ptr<const Analysis>> compiled_;  // the last that compiled
   std::set<std::string> published_;                                  // files with diagnostics
   std::map<std::string, std::string> owners_;  // an open included file -> the config checked
+  std::map<std::string, ConfigText> kinds_;    // what each open file is, by path
   std::vector<std::string> workspace_;         // the client's workspace folders
   bool watch_ = false;                         // the client registers file watchers when asked
   // By the names of the classes a registry knows: a config's plugins add classes.
