@@ -86,4 +86,15 @@ for _, buffer in ipairs(others) do
     fail(vim.api.nvim_buf_get_name(buffer) .. ' is not a config but got diagnostics')
   end
 end
+
+-- Opening, then closing, the config that includes it leaves the included file's error alone.
+local main = open('main.yaml')
+wait_for(main, 0, 'main.yaml')
+vim.cmd('bwipeout ' .. main)
+vim.wait(500)
+expect_one(part, 'parts/part.yaml', 'unknown-class', 'scriptd')
+
+-- An include cycle is an error on the root file, at the include that leads into it.
+local root = open('cycle/root.yaml')
+expect_one(root, 'cycle/root.yaml', 'include-cycle', 'a.yaml')
 os.exit(0)

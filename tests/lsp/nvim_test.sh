@@ -20,6 +20,10 @@ printf 'arbiter: 1\nname: m\ninclude: [parts/part.yaml]\nlayers:\n  - name: cont
   >"$project/main.yaml"
 printf 'layers:\n  - name: other\n    behaviours:\n      b: {type: scriptd}\n' \
   >"$project/parts/part.yaml"
+mkdir "$project/cycle"
+printf 'arbiter: 1\nname: r\ninclude: [a.yaml]\nlayers:\n  - name: top\n' >"$project/cycle/root.yaml"
+printf 'include: [b.yaml]\nlayers:\n  - name: from_a\n' >"$project/cycle/a.yaml"
+printf 'include: [root.yaml]\nlayers:\n  - name: from_b\n' >"$project/cycle/b.yaml"
 # The first ```lua block of the Neovim section.
 awk '/^## Neovim/ {section = 1} section && /^```lua/ {code = 1; next}
      code && /^```/ {exit} code {print}' "$source/docs/editors.md" >"$dir/init.lua"
