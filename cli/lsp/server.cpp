@@ -1079,7 +1079,8 @@ std::string Server::includer_of(const std::string& path, std::set<std::string>& 
     if (++seen > kMaxScanned) break;
     const fs::path& entry = it->path();
     const std::string leaf = entry.filename().string();
-    if (it->is_directory(error)) {
+    std::error_code ignored;  // an entry that cannot be read is skipped, not the search
+    if (it->is_directory(ignored)) {
       if (leaf.empty() || leaf[0] == '.' || leaf == "node_modules" || leaf.rfind("build", 0) == 0 ||
           it.depth() >= 8)
         it.disable_recursion_pending();
@@ -1089,7 +1090,7 @@ std::string Server::includer_of(const std::string& path, std::set<std::string>& 
     const std::string extension = entry.extension().string();
     if (candidate == path || visited.count(candidate) ||
         !(extension == ".yaml" || extension == ".yml" || extension == ".json") ||
-        it->file_size(error) > kMaxScannedBytes)
+        it->file_size(ignored) > kMaxScannedBytes)
       continue;
     const std::string text = text_on_disk_or_open(candidate);
     if (text.find(name) == std::string::npos) continue;
