@@ -100,7 +100,7 @@ class Server {
   std::map<std::string, ConfigText> kinds_;    // what each open file is, by path
   std::vector<std::string> workspace_;         // the client's workspace folders
   bool watch_ = false;                         // the client registers file watchers when asked
-  // By the names of the classes a registry knows: a config's plugins add classes.
+  // By the classes a registry knows, with their origins: a config's plugins add classes.
   mutable std::map<std::string, Catalog> catalogs_;
   bool initialized_ = false;
   bool shutdown_ = false;

@@ -288,6 +288,17 @@ test("a config's diagnostics equal validate's whatever else is open: another con
       assert.deepEqual(summary(await client.open(uriOf(without), fs.readFileSync(without, 'utf8'))), expected);
       assert.deepEqual(await client.open(uriOf(withPlugin), text), []);
       assert.deepEqual(summary(client.diagnostics.get(uriOf(without))), expected);
+      // Nor does completion offer it soccer's classes.
+      const withoutText = fs.readFileSync(without, 'utf8');
+      const classes = async (uri, edited) => {
+        await client.change(uri, edited);
+        const result = await client.request('textDocument/completion',
+          { textDocument: { uri }, position: positionOf(edited, 'type: soc', { skip: 9 }) });
+        return result.items.map((i) => i.label);
+      };
+      const edit = (t) => t.replace('head_control: {type: soccer.HeadControl}', 'head_control:\n        type: soc');
+      assert.ok((await classes(uriOf(withPlugin), edit(text))).includes('soccer.KickBall'));
+      assert.ok(!(await classes(uriOf(without), edit(withoutText))).includes('soccer.KickBall'));
     });
     await withClient(async (client) => {
       // The other order: soccer loaded for one config is unknown to the next.
