@@ -2,6 +2,8 @@
 // dag graph, 3N inhibitions): the server's didChange handler, which loads the edited text through
 // the whole pipeline and returns the publishDiagnostics notifications. Driven through
 // Server::handle, without stdio.
+// lsp/change_beside/<N>: the same for a small config (20 behaviours) while a config of N
+// behaviours is open too, which an edit of the small one must not check again.
 #include <benchmark/benchmark.h>
 
 #include <string>
@@ -16,27 +18,36 @@ namespace arbiter::bench {
 
 namespace {
 
-void change(benchmark::State& state) {
+nlohmann::json opened(const std::string& uri, const std::string& text) {
+  return {
+      {"jsonrpc", "2.0"},
+      {"method", "textDocument/didOpen"},
+      {"params",
+       {{"textDocument", {{"uri", uri}, {"languageId", "yaml"}, {"version", 1}, {"text", text}}}}}};
+}
+
+// Edits the config at `uri` (alternating between two texts, so that every change is a real edit)
+// with `beside` behaviours in another open config: each edit publishes the edited one's
+// diagnostics, once.
+void edit(benchmark::State& state, std::size_t behaviours, std::size_t beside) {
   GeneratorOptions options;
   options.graph = Graph::kDag;
-  options.behaviours = static_cast<std::size_t>(state.range(0));
+  options.behaviours = behaviours;
   const std::string text = generate_config(options);
-  // A file that need not exist: the editor's buffer is what is loaded.
+  // Files that need not exist: the editor's buffers are what is loaded.
   const std::string uri = "file:///tmp/arbiter_bench_lsp/config.yaml";
   LoadOptions load;
   load.lint = lint;  // as `arbiter lsp` loads
-  lsp::Server server(make_registry(), load);
+  lsp::Server server(make_registry, load);
   server.handle(nlohmann::json{{"jsonrpc", "2.0"},
                                {"id", 1},
                                {"method", "initialize"},
                                {"params", nlohmann::json::object()}});
-  server.handle(
-      nlohmann::json{{"jsonrpc", "2.0"},
-                     {"method", "textDocument/didOpen"},
-                     {"params",
-                      {{"textDocument",
-                        {{"uri", uri}, {"languageId", "yaml"}, {"version", 1}, {"text", text}}}}}});
-  // Each change alternates between two texts, so that every one is a real edit.
+  server.handle(opened(uri, text));
+  if (beside > 0) {
+    options.behaviours = beside;
+    server.handle(opened("file:///tmp/arbiter_bench_lsp/beside.yaml", generate_config(options)));
+  }
   const std::string texts[] = {text + "# edited\n", text};
   std::size_t published = 0;
   int version = 2;
@@ -53,15 +64,27 @@ void change(benchmark::State& state) {
     benchmark::DoNotOptimize(out);
   }
   if (published != static_cast<std::size_t>(state.iterations())) {
-    state.SkipWithError("a change did not publish diagnostics once");
+    state.SkipWithError("a change did not publish the edited config's diagnostics once");
   }
+}
+
+void change(benchmark::State& state) {
+  edit(state, static_cast<std::size_t>(state.range(0)), 0);
+}
+
+void change_beside(benchmark::State& state) {
+  edit(state, 20, static_cast<std::size_t>(state.range(0)));
 }
 
 }  // namespace
 
 void register_lsp_benchmarks() {
   benchmark::RegisterBenchmark("lsp/change", change)
+      ->Arg(20)
       ->Arg(200)
+      ->Arg(1000)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("lsp/change_beside", change_beside)
       ->Arg(1000)
       ->Unit(benchmark::kMillisecond);
 }

@@ -243,7 +243,7 @@ int schema(const Options& options) {
 int lsp(const Options& options) {
   // stdout carries the protocol: nothing else may write to it.
   std::ios::sync_with_stdio(false);
-  return arbiter::lsp::run(std::cin, std::cout, make_registry(), load_options_of(options));
+  return arbiter::lsp::run(std::cin, std::cout, make_registry, load_options_of(options));
 }
 
 int explain(const Options& options) {
@@ -547,7 +547,6 @@ int main(int argc, char** argv) {
   app.add_option("--plugin-path", options.plugin_path,
                  "a directory to look for plugins in (repeatable); searched before "
                  "ARBITER_PLUGIN_PATH and the plugins that come with arbiter")
-      ->check(CLI::ExistingDirectory)
       ->type_name("DIR");
   app.add_option("--max-file-bytes", options.max_file_bytes,
                  "refuse config files (and included files) larger than this; default 16777216 "
@@ -914,13 +913,21 @@ int main(int argc, char** argv) {
       "Examples:\n"
       "  arbiter lsp\n"
       "  arbiter --plugin-path ~/robot/plugins lsp\n"
-      "  Neovim: vim.lsp.start({name = 'arbiter', cmd = {'arbiter', 'lsp'}})\n\n"
+      "  Neovim 0.7 and later, in a config's buffer (docs/editors.md has an init.lua set-up):\n"
+      "    :lua local c = {name = 'arbiter', cmd = {'arbiter', 'lsp'}} if vim.lsp.start then "
+      "vim.lsp.start(c) else vim.lsp.buf_attach_client(0, vim.lsp.start_client(c)) end\n\n"
       "Exit codes: 0 after 'shutdown' and 'exit', 1 when the input ends or 'exit' comes first.");
 
   try {
     app.parse(argc, argv);
     if (run_cmd->parsed() && !options.serve.empty() && !options.full_speed) {
       options.realtime = true;
+    }
+    // Checked here rather than by the option, so that `lsp` can start and show it in the editor.
+    for (const auto& dir : options.plugin_path) {
+      if (!lsp_cmd->parsed() && !std::filesystem::is_directory(dir)) {
+        throw CLI::ValidationError("--plugin-path", "Directory does not exist: " + dir);
+      }
     }
   } catch (const CLI::ParseError& error) {
     // --help and --version exit 0 through app.exit; every real parse error is a usage error.

@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <regex>
 #include <set>
 
@@ -26,6 +28,11 @@ constexpr int kMethodNotFound = -32601;
 constexpr int kInvalidParams = -32602;
 constexpr int kServerNotInitialized = -32002;
 constexpr int kRequestFailed = -32803;
+
+// Bounds on the search for the config that includes an open file: the files looked at, and the
+// size of a file read to check it.
+constexpr std::size_t kMaxScanned = 20000;
+constexpr std::uintmax_t kMaxScannedBytes = 4u << 20;
 
 struct RequestError {
   int code;
@@ -195,6 +202,8 @@ struct InhibitionSite {
 
 struct Analysis {
   std::string root;
+  // Before `loaded`, so destroyed after it: the program holds the registry's plugin code.
+  std::unique_ptr<Registry> registry;
   Loaded loaded;
   std::map<std::string, std::unique_ptr<Lines>> lines;  // by file
   std::vector<Occurrence> occurrences;
@@ -740,12 +749,105 @@ std::string class_markdown(const json& cls) {
   return text;
 }
 
+/// The top-level keys of a JSON document or a YAML flow mapping, read from its text alone so that
+/// a file that does not parse yet is recognised too: each string or name at depth 1 before a ':'.
+std::vector<std::pair<std::string, std::string>> flow_top_level(const std::string& text) {
+  std::vector<std::pair<std::string, std::string>> keys;  // key, the scalar after it
+  int depth = 0;
+  std::string last;
+  bool value = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"' || c == '\'') {
+      std::size_t j = i + 1;
+      std::string token;
+      while (j < text.size() && text[j] != c) {
+        if (text[j] == '\\' && c == '"' && j + 1 < text.size()) ++j;
+        token += text[j++];
+      }
+      i = j;
+      if (depth != 1) continue;
+      if (value && !keys.empty()) {
+        keys.back().second = token;
+        value = false;
+      } else {
+        last = token;
+      }
+    } else if (c == '{' || c == '[') {
+      ++depth;
+      value = false;
+    } else if (c == '}' || c == ']') {
+      --depth;
+    } else if (c == ':' && depth == 1) {
+      keys.emplace_back(last, std::string());
+      value = true;
+    } else if (c == ',') {
+      value = false;
+    } else if (depth == 1 && name_char(c) && !value) {
+      std::size_t j = i;
+      while (j < text.size() && name_char(text[j])) ++j;
+      last = text.substr(i, j - i);
+      i = j - 1;
+    }
+  }
+  return keys;
+}
+
+/// What a file is by its text: an Arbiter config (or a file a config includes) has one of the
+/// top-level keys only an Arbiter config has (`arbiter`, `layers`, `state_machines`), or its
+/// `$schema` (a key, or a YAML language server comment) names a file called `arbiter...`. A
+/// package.json, a CI workflow or a docker-compose.yaml has none of these.
+ConfigText classify(const std::string& path, const std::string& text) {
+  static const std::set<std::string> markers = {"arbiter", "layers", "state_machines"};
+  auto arbiter_schema = [](std::string reference) {
+    const auto slash = reference.find_last_of("/\\");
+    if (slash != std::string::npos) reference = reference.substr(slash + 1);
+    return reference.rfind("arbiter", 0) == 0;
+  };
+  bool config = false;
+  bool named = false;
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  const bool flow = format_of(path) == DocumentFormat::kJson ||
+                    (first != std::string::npos && text[first] == '{');
+  if (flow) {
+    for (const auto& [key, value] : flow_top_level(text)) {
+      if (markers.count(key) || (key == "$schema" && arbiter_schema(value))) config = true;
+      if (key == "name") named = true;
+    }
+  } else {
+    static const std::regex modeline(R"(^#\s*yaml-language-server:\s*\$schema=(\S+))");
+    std::size_t start = 0;
+    while (start < text.size()) {
+      std::size_t end = text.find('\n', start);
+      if (end == std::string::npos) end = text.size();
+      const std::string line = text.substr(start, end - start);
+      start = end + 1;
+      std::smatch match;
+      if (line.rfind('#', 0) == 0 && std::regex_search(line, match, modeline) &&
+          arbiter_schema(match[1].str()))
+        config = true;
+      const YamlLine parsed = parse_yaml_line(line);
+      if (parsed.blank || parsed.content != 0 || parsed.dash >= 0) continue;
+      if (markers.count(parsed.key)) config = true;
+      if (parsed.key == "name") named = true;
+      if (parsed.key == "$schema") {
+        std::string value = line.substr(line.find(':') + 1);
+        value.erase(0, value.find_first_not_of(" \"'"));
+        value = value.substr(0, value.find_first_of(" \"'#\r"));
+        if (arbiter_schema(value)) config = true;
+      }
+    }
+  }
+  if (!config) return ConfigText::kNone;
+  return named ? ConfigText::kConfig : ConfigText::kFragment;
+}
+
 }  // namespace
 
 // ---- the server ----
 
-Server::Server(Registry registry, LoadOptions options)
-    : registry_(std::move(registry)), options_(std::move(options)) {
+Server::Server(std::function<Registry()> make_registry, LoadOptions options)
+    : make_registry_(std::move(make_registry)), options_(std::move(options)) {
   options_.source = &overlay_;
 }
 
@@ -822,9 +924,16 @@ std::vector<json> Server::handle(const json& message) {
 json Server::dispatch(const std::string& method, const json& params, std::vector<json>& out) {
   if (method == "initialize") {
     initialized_ = true;
-    catalog_ = json::parse(catalog_json(registry_));
-    schema_ = json::parse(config_schema(registry_));
-    catalogued_ = registry_.classes().size();
+    watch_ = params.value("capabilities", json::object())
+                 .value("workspace", json::object())
+                 .value("didChangeWatchedFiles", json::object())
+                 .value("dynamicRegistration", false);
+    for (const auto& folder : params.value("workspaceFolders", json())) {
+      if (folder.is_object() && folder.contains("uri") && folder["uri"].is_string())
+        workspace_.push_back(uri_to_path(folder["uri"]));
+    }
+    if (workspace_.empty() && params.contains("rootUri") && params["rootUri"].is_string())
+      workspace_.push_back(uri_to_path(params["rootUri"]));
     return {{"capabilities",
              {{"textDocumentSync", {{"openClose", true}, {"change", 1}}},
               {"completionProvider",
@@ -837,8 +946,33 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
               {"codeActionProvider", {{"codeActionKinds", json::array({"quickfix"})}}}}},
             {"serverInfo", {{"name", "arbiter"}}}};
   }
-  if (method == "initialized" || method == "$/cancelRequest" || method == "$/setTrace" ||
-      method == "textDocument/didSave" || method == "workspace/didChangeConfiguration") {
+  if (method == "initialized") {
+    // Included files and the configs that include an open file are read from the disk: a change
+    // there changes diagnostics.
+    if (watch_) {
+      const json registration = {
+          {"id", "arbiter-watch"},
+          {"method", "workspace/didChangeWatchedFiles"},
+          {"registerOptions",
+           {{"watchers", json::array({{{"globPattern", "**/*.{yaml,yml,json}"}}})}}}};
+      out.push_back({{"jsonrpc", "2.0"},
+                     {"id", "arbiter-watch"},
+                     {"method", "client/registerCapability"},
+                     {"params", {{"registrations", json::array({registration})}}}});
+    }
+    return nullptr;
+  }
+  if (method == "workspace/didChangeWatchedFiles") {
+    std::set<std::string> paths;
+    for (const auto& change : params.at("changes")) {
+      const std::string path = uri_to_path(change.at("uri"));
+      if (!overlay_.find(path)) paths.insert(path);  // an open buffer wins over the disk
+    }
+    if (!paths.empty()) update(paths, true, out);
+    return nullptr;
+  }
+  if (method == "$/cancelRequest" || method == "$/setTrace" || method == "textDocument/didSave" ||
+      method == "workspace/didChangeConfiguration") {
     return nullptr;
   }
   if (method == "shutdown") {
@@ -852,7 +986,8 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
     open.path = uri_to_path(uri);
     open.text = document.at("text");
     overlay_.set(open.path, open.text);
-    changed(out);
+    kinds_[open.path] = classify(open.path, open.text);
+    update({open.path}, false, out);
     return nullptr;
   }
   if (method == "textDocument/didChange") {
@@ -870,16 +1005,20 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
       }
     }
     overlay_.set(found->second.path, found->second.text);
-    changed(out);
+    kinds_[found->second.path] = classify(found->second.path, found->second.text);
+    update({found->second.path}, false, out);
     return nullptr;
   }
   if (method == "textDocument/didClose") {
     const std::string uri = params.at("textDocument").at("uri");
     auto found = open_.find(uri);
     if (found != open_.end()) {
-      overlay_.erase(found->second.path);
+      const std::string path = found->second.path;
+      overlay_.erase(path);
       open_.erase(found);
-      changed(out);
+      owners_.erase(path);
+      kinds_.erase(path);
+      update({path}, false, out);
     }
     return nullptr;
   }
@@ -893,55 +1032,229 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
   return {{"__method_not_found", true}};
 }
 
-void Server::changed(std::vector<json>& out) {
-  // Each open file that no other open file includes is loaded as a config of its own.
-  std::set<std::string> included;
-  for (const auto& [root, analysis] : analyses_) {
-    for (const auto& file : analysis->loaded.files.files()) {
-      if (file->path != root) included.insert(file->path);
-    }
-  }
-  std::map<std::string, std::shared_ptr<const Analysis>> next;
-  for (const auto& [uri, open] : open_) {
-    if (included.count(open.path) && analyses_.count(open.path) == 0) continue;
-    if (next.count(open.path)) continue;
-    auto analysis = std::make_shared<Analysis>();
-    analysis->root = open.path;
-    analysis->loaded = load_config(open.path, registry_, options_);
-    Indexer(*analysis).run();
-    if (analysis->loaded.document()) good_[open.path] = analysis;
-    if (analysis->loaded.program) compiled_[open.path] = analysis;
-    next[open.path] = std::move(analysis);
-  }
-  // A root that another root includes is analysed through that one.
-  for (auto it = next.begin(); it != next.end();) {
-    bool inside = false;
-    for (const auto& [root, analysis] : next) {
-      if (root != it->first && analysis->loaded.files.find(it->first)) inside = true;
-    }
-    it = inside ? next.erase(it) : std::next(it);
-  }
-  analyses_ = std::move(next);
-  for (auto* kept : {&good_, &compiled_}) {
-    for (auto it = kept->begin(); it != kept->end();) {
-      it = analyses_.count(it->first) ? std::next(it) : kept->erase(it);
-    }
-  }
-  if (registry_.classes().size() != catalogued_) {  // a config's plugins were loaded
-    catalog_ = json::parse(catalog_json(registry_));
-    schema_ = json::parse(config_schema(registry_));
-    catalogued_ = registry_.classes().size();
-  }
-  publish(out);
+bool Server::is_open(const std::string& path) const {
+  return overlay_.find(path) != nullptr;
 }
 
-void Server::publish(std::vector<json>& out) {
-  std::map<std::string, json> by_file;
+ConfigText Server::kind_of(const std::string& path) const {
+  const auto found = kinds_.find(path);
+  return found == kinds_.end() ? ConfigText::kNone : found->second;
+}
+
+std::string Server::text_on_disk_or_open(const std::string& path) const {
+  if (const std::string* text = overlay_.find(path)) return *text;
+  std::ifstream in(path, std::ios::binary);
+  std::string text;
+  if (in) text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  return text;
+}
+
+std::shared_ptr<const Analysis> Server::analyse(const std::string& root) const {
+  auto analysis = std::make_shared<Analysis>();
+  analysis->root = root;
+  analysis->registry = std::make_unique<Registry>(make_registry_());
+  analysis->loaded = load_config(root, *analysis->registry, options_);
+  report_plugin_path(*analysis);
+  Indexer(*analysis).run();
+  return analysis;
+}
+
+std::string Server::includer_of(const std::string& path, std::set<std::string>& visited) const {
+  namespace fs = std::filesystem;
+  // The innermost workspace folder that holds the file, else the folder above the file's own.
+  fs::path top = fs::path(path).parent_path().parent_path();
+  std::size_t best = 0;
+  for (const auto& folder : workspace_) {
+    if (path.rfind(folder + "/", 0) == 0 && folder.size() > best) {
+      top = folder;
+      best = folder.size();
+    }
+  }
+  const std::string name = fs::path(path).filename().string();
+  std::error_code error;
+  fs::recursive_directory_iterator it(top, fs::directory_options::skip_permission_denied, error);
+  std::size_t seen = 0;
+  std::string fragment;
+  for (; !error && it != fs::recursive_directory_iterator(); it.increment(error)) {
+    if (++seen > kMaxScanned) break;
+    const fs::path& entry = it->path();
+    const std::string leaf = entry.filename().string();
+    std::error_code ignored;  // an entry that cannot be read is skipped, not the search
+    if (it->is_directory(ignored)) {
+      if (leaf.empty() || leaf[0] == '.' || leaf == "node_modules" || leaf.rfind("build", 0) == 0 ||
+          it.depth() >= 8)
+        it.disable_recursion_pending();
+      continue;
+    }
+    const std::string candidate = entry.lexically_normal().string();
+    const std::string extension = entry.extension().string();
+    if (candidate == path || visited.count(candidate) ||
+        !(extension == ".yaml" || extension == ".yml" || extension == ".json") ||
+        it->file_size(ignored) > kMaxScannedBytes)
+      continue;
+    const std::string text = text_on_disk_or_open(candidate);
+    if (text.find(name) == std::string::npos) continue;
+    const ConfigText kind = classify(candidate, text);
+    if (kind == ConfigText::kNone) continue;
+    Registry registry = make_registry_();
+    if (!load_config(candidate, registry, options_).files.find(path)) continue;
+    if (kind == ConfigText::kConfig) return candidate;
+    // A file that is itself included: the config above it, if there is one.
+    visited.insert(candidate);
+    const std::string above = includer_of(candidate, visited);
+    if (!above.empty() && classify(above, text_on_disk_or_open(above)) == ConfigText::kConfig)
+      return above;
+    if (fragment.empty()) fragment = above.empty() ? candidate : above;
+  }
+  return fragment;
+}
+
+void Server::update(const std::set<std::string>& paths, bool rescan, std::vector<json>& out) {
+  // Only the configs these files belong to are loaded again: the others' diagnostics stand.
+  std::set<std::string> reload;
   for (const auto& [root, analysis] : analyses_) {
-    for (const auto& file : analysis->loaded.files.files())
-      by_file.emplace(file->path, json::array());
-    by_file.emplace(root, json::array());
-    for (const auto& item : analysis->loaded.diagnostics.items()) {
+    for (const auto& path : paths) {
+      if (root == path || analysis->loaded.files.find(path)) reload.insert(root);
+    }
+  }
+  // A file on disk appeared, went or changed: the config that includes an open file may be
+  // another one now.
+  if (rescan) owners_.clear();
+  std::set<std::string> touched;  // the roots loaded again
+  std::set<std::string> gone;     // files of configs no longer checked: their diagnostics go
+  auto drop = [&](const std::string& root) {
+    for (const auto& file : analyses_[root]->loaded.files.files()) gone.insert(file->path);
+    gone.insert(root);
+    analyses_.erase(root);
+    good_.erase(root);
+    compiled_.erase(root);
+    reload.erase(root);
+  };
+  auto load = [&](const std::string& root) {
+    auto analysis = analyse(root);
+    if (analysis->loaded.document()) good_[root] = analysis;
+    if (analysis->loaded.program) compiled_[root] = analysis;
+    analyses_[root] = std::move(analysis);
+    touched.insert(root);
+  };
+  // A root is kept while it is an open config, or while an open file is checked through it.
+  auto needed = [&](const std::string& root) {
+    if (kind_of(root) != ConfigText::kNone) return true;
+    for (const auto& file : analyses_[root]->loaded.files.files()) {
+      if (file->path != root && is_open(file->path)) return true;
+    }
+    return false;
+  };
+  for (const auto& root : std::set<std::string>(reload)) {
+    if (needed(root)) {
+      load(root);
+    } else {
+      drop(root);
+    }
+  }
+  // Each open config not checked through another: a root of its own, or, for a file meant to be
+  // included, checked through the config that includes it on the disk (a file alone otherwise).
+  for (const auto& [uri, open] : open_) {
+    const std::string& path = open.path;
+    if (analysis_of(path) || kind_of(path) == ConfigText::kNone) continue;
+    std::string root = path;
+    if (kind_of(path) == ConfigText::kFragment) {
+      auto owner = owners_.find(path);
+      if (owner == owners_.end()) {
+        std::set<std::string> visited{path};
+        owner = owners_.emplace(path, includer_of(path, visited)).first;
+      }
+      if (!owner->second.empty()) root = owner->second;
+    }
+    if (!analyses_.count(root)) load(root);
+    if (!analyses_[root]->loaded.files.find(path)) {  // that config no longer includes it
+      owners_.erase(path);
+      if (!needed(root)) drop(root);
+      if (!analyses_.count(path)) load(path);
+    }
+  }
+  for (auto it = analyses_.begin(); it != analyses_.end();) {
+    const std::string root = it->first;
+    ++it;
+    if (!needed(root)) drop(root);
+  }
+  // A root that another root includes is checked through that one (unless each includes the
+  // other: a cycle, checked from the root that came first).
+  for (auto it = analyses_.begin(); it != analyses_.end();) {
+    bool inside = false;
+    for (const auto& [root, analysis] : analyses_) {
+      if (root != it->first && analysis->loaded.files.find(it->first) &&
+          !it->second->loaded.files.find(root))
+        inside = true;
+    }
+    if (inside) {
+      const std::string root = it->first;
+      ++it;
+      drop(root);
+    } else {
+      ++it;
+    }
+  }
+  publish(touched, gone, out);
+}
+
+void Server::report_plugin_path(Analysis& analysis) const {
+  const Node* root = analysis.loaded.document();
+  const Node* plugins = root && root->is_mapping() ? root->find("plugins") : nullptr;
+  if (!plugins) return;
+  for (const auto& dir : options_.plugins.path) {
+    std::error_code error;
+    if (std::filesystem::is_directory(dir, error)) continue;
+    analysis.loaded.diagnostics
+        .warning(plugins->location(), "plugin-path-not-found",
+                 fmt::format("plugin directory '{}' (--plugin-path) does not exist", dir))
+        .notes.push_back("the server was started with it: correct the editor's arbiter command");
+  }
+  analysis.loaded.diagnostics.sort();
+}
+
+void Server::publish(const std::set<std::string>& touched, const std::set<std::string>& gone,
+                     std::vector<json>& out) {
+  std::set<std::string> files = gone;
+  for (const auto& root : touched) {
+    const auto found = analyses_.find(root);
+    if (found == analyses_.end()) continue;
+    files.insert(root);
+    for (const auto& file : found->second->loaded.files.files()) files.insert(file->path);
+  }
+  // Each file's diagnostics from every config that reaches it (a file two configs include
+  // gets its problems once).
+  std::map<std::string, json> by_file;
+  std::set<std::string> seen;
+  auto add = [&](const std::string& file, json diagnostic) {
+    if (seen.insert(file + diagnostic.dump()).second)
+      by_file[file].push_back(std::move(diagnostic));
+  };
+  for (const auto& [root, analysis] : analyses_) {
+    const auto& loaded = analysis->loaded;
+    bool relevant = touched.count(root) > 0;
+    for (const auto& file : loaded.files.files()) relevant = relevant || files.count(file->path);
+    if (!relevant) continue;
+    // The files each of the root's includes reaches, for problems in files that are not open.
+    std::map<std::string, std::vector<std::string>> includes;
+    for (const auto& item : analysis->occurrences) {
+      if (item.kind == Kind::kInclude) includes[item.file].push_back(item.name);
+    }
+    auto reaches = [&](const std::string& from, const std::string& to) {
+      std::set<std::string> visited{from};
+      std::vector<std::string> stack{from};
+      while (!stack.empty()) {
+        const std::string at = stack.back();
+        stack.pop_back();
+        if (at == to) return true;
+        for (const auto& next : includes[at]) {
+          if (visited.insert(next).second) stack.push_back(next);
+        }
+      }
+      return false;
+    };
+    for (const auto& item : loaded.diagnostics.items()) {
+      if (!files.count(item.location.file)) continue;
       json diagnostic = diagnostic_json(item, analysis->lines_of(item.location.file));
       json related = json::array();
       for (const auto& note : item.notes) {
@@ -962,25 +1275,53 @@ void Server::publish(std::vector<json>& out) {
         related.push_back({{"location", location}, {"message", note}});
       }
       if (!related.empty()) diagnostic["relatedInformation"] = related;
-      by_file[item.location.file].push_back(std::move(diagnostic));
+      // An error in an included file that is not open shows on the root's include that leads
+      // to it, or an editor that shows open files only would show nothing wrong.
+      if (item.severity == Severity::kError && item.location.file != root &&
+          !is_open(item.location.file)) {
+        for (const auto& include : analysis->occurrences) {
+          if (include.kind != Kind::kInclude || include.file != root ||
+              !reaches(include.name, item.location.file))
+            continue;
+          json copy = diagnostic;
+          const Lines* lines = analysis->lines_of(root);
+          copy["range"] = lines ? lines->range(include.begin, include.end) : range_json(0, 0);
+          copy["message"] =
+              fmt::format("in included file {}: {}",
+                          std::filesystem::path(item.location.file)
+                              .lexically_relative(std::filesystem::path(root).parent_path())
+                              .string(),
+                          item.message);
+          copy["relatedInformation"] = json::array(
+              {{{"location",
+                 {{"uri", path_to_uri(item.location.file)}, {"range", diagnostic["range"]}}},
+                {"message", item.message}}});
+          add(root, std::move(copy));
+          break;
+        }
+      }
+      add(item.location.file, std::move(diagnostic));
     }
   }
-  std::map<std::string, std::string> now;
-  for (auto& [file, diagnostics] : by_file) {
-    // An open config gets its (empty) list too, so that an editor knows it was checked.
-    if (diagnostics.empty() && published_.count(file) == 0 && analyses_.count(file) == 0) continue;
+  for (const auto& file : files) {
+    auto found = by_file.find(file);
+    const bool any = found != by_file.end();
+    // A config, and an open file checked through one, get their (empty) list too, so that an
+    // editor knows they were checked.
+    if (!any && !published_.count(file) && !analyses_.count(file) &&
+        !(is_open(file) && analysis_of(file)))
+      continue;
     out.push_back({{"jsonrpc", "2.0"},
                    {"method", "textDocument/publishDiagnostics"},
-                   {"params", {{"uri", path_to_uri(file)}, {"diagnostics", diagnostics}}}});
-    if (!diagnostics.empty()) now[file] = path_to_uri(file);
+                   {"params",
+                    {{"uri", path_to_uri(file)},
+                     {"diagnostics", any ? std::move(found->second) : json::array()}}}});
+    if (any) {
+      published_.insert(file);
+    } else {
+      published_.erase(file);
+    }
   }
-  for (const auto& [file, uri] : published_) {
-    if (by_file.count(file)) continue;
-    out.push_back({{"jsonrpc", "2.0"},
-                   {"method", "textDocument/publishDiagnostics"},
-                   {"params", {{"uri", uri}, {"diagnostics", json::array()}}}});
-  }
-  published_ = std::move(now);
 }
 
 const Analysis* Server::analysis_of(const std::string& path) const {
@@ -1006,6 +1347,25 @@ const Program* Server::program_of(const std::string& path) const {
 
 const std::string* Server::text_of(const std::string& path) const {
   return overlay_.find(path);
+}
+
+const Server::Catalog& Server::catalog_of(const Analysis* analysis) const {
+  std::unique_ptr<Registry> builtin;
+  const Registry* registry = analysis ? analysis->registry.get() : nullptr;
+  if (!registry) {
+    builtin = std::make_unique<Registry>(make_registry_());
+    registry = builtin.get();
+  }
+  std::string key;
+  for (const auto& [name, info] : registry->classes()) key += name.first + ' ' + info.origin + '\n';
+  auto found = catalogs_.find(key);
+  if (found == catalogs_.end()) {
+    found = catalogs_
+                .emplace(key, Catalog{json::parse(catalog_json(*registry)),
+                                      json::parse(config_schema(*registry))})
+                .first;
+  }
+  return found->second;
 }
 
 namespace {
@@ -1037,11 +1397,13 @@ json location_json(const Analysis& analysis, const std::string& file, std::size_
 json Server::completion(const json& params) const {
   const std::string path = uri_to_path(params.at("textDocument").at("uri"));
   const std::string* text = text_of(path);
-  if (!text) return json::array();
+  // Nothing for the other YAML and JSON files an editor attaches the server to.
+  if (!text || (kind_of(path) == ConfigText::kNone && !analysis_of(path))) return json::array();
   const Lines lines(*text);
   const std::size_t offset = lines.offset(params.at("position"));
   const Context context = context_at(lines, offset, format_of(path) == DocumentFormat::kJson);
   const Analysis* analysis = good_analysis_of(path);
+  const Catalog& catalog = catalog_of(analysis);
   json items = json::array();
   auto add = [&](const std::string& label, int kind, const std::string& detail,
                  const std::string& documentation = {}) {
@@ -1053,12 +1415,12 @@ json Server::completion(const json& params) const {
   };
   auto keys = [&](const json& definition) {
     std::vector<std::string> names;
-    schema_keys(schema_, definition, names);
+    schema_keys(catalog.schema, definition, names);
     for (const auto& name : names) add(name, 10, "key");
   };
-  auto definition = [&](const char* name) { return schema_["definitions"][name]; };
+  auto definition = [&](const char* name) { return catalog.schema["definitions"][name]; };
   auto classes = [&](const char* kind) {
-    for (const auto& cls : catalog_["classes"]) {
+    for (const auto& cls : catalog.classes["classes"]) {
       if (cls.value("kind", "") == kind)
         add(cls["name"], 7, cls.value("origin", ""), class_markdown(cls));
     }
@@ -1090,7 +1452,7 @@ json Server::completion(const json& params) const {
   using At = Context::At;
   if (context.at == At::kKey) {
     if (p.empty()) {
-      keys(schema_);
+      keys(catalog.schema);
     } else if (matches(p, {"layers", "*"})) {
       keys(definition("layer"));
     } else if (matches(p, {"layers", "*", "actuators", "*"})) {
@@ -1113,7 +1475,7 @@ json Server::completion(const json& params) const {
           if (item.definition && item.kind == kind && item.name == p[3]) type = item.detail;
         }
       }
-      for (const auto& cls : catalog_["classes"]) {
+      for (const auto& cls : catalog.classes["classes"]) {
         if (cls.value("name", "") != type) continue;
         for (const auto& param : cls["params"]) {
           add(param["name"], 5, param_summary(param), param.value("description", ""));
@@ -1125,7 +1487,7 @@ json Server::completion(const json& params) const {
     if (key == "type" && matches(p, {"layers", "*", "behaviours", "*"})) {
       classes("behaviour");
     } else if (key == "type" && matches(p, {"layers", "*", "actuators", "*"})) {
-      for (const auto& type : catalog_["value_types"])
+      for (const auto& type : catalog.classes["value_types"])
         add(type["name"], 22, type.value("origin", ""));
     } else if (key == "interface") {
       classes("interface");
@@ -1162,6 +1524,7 @@ json Server::completion(const json& params) const {
 json Server::hover(const json& params) const {
   const std::string path = uri_to_path(params.at("textDocument").at("uri"));
   const Analysis* analysis = good_analysis_of(path);
+  const Catalog& catalog = catalog_of(analysis);
   if (!analysis) return nullptr;
   const Cursor cursor = cursor_of(params, analysis);
   const Lines* lines = analysis->lines_of(path);
@@ -1175,7 +1538,7 @@ json Server::hover(const json& params) const {
     begin = item->begin;
     end = item->end;
     if (item->kind == Kind::kClass) {
-      for (const auto& cls : catalog_["classes"]) {
+      for (const auto& cls : catalog.classes["classes"]) {
         if (cls.value("name", "") == item->name) text = class_markdown(cls);
       }
       if (text.empty()) text = fmt::format("unknown class `{}`", item->name);
@@ -1479,10 +1842,15 @@ json Server::code_actions(const json& params) const {
   return actions;
 }
 
-int run(std::istream& in, std::ostream& out, Registry registry, LoadOptions options) {
-  Server server(std::move(registry), std::move(options));
-  while (auto frame = read_frame(in)) {
+int run(std::istream& in, std::ostream& out, std::function<Registry()> make_registry,
+        LoadOptions options) {
+  Server server(std::move(make_registry), std::move(options));
+  std::string ended;
+  while (auto frame = read_frame(in, &ended)) {
     std::vector<json> replies;
+    if (!frame->skipped.empty()) {
+      std::cerr << "arbiter lsp: skipped bytes that are not a message: " << frame->skipped << "\n";
+    }
     if (!frame->error.empty()) {
       std::cerr << "arbiter lsp: " << frame->error << "\n";
       replies.push_back({{"jsonrpc", "2.0"},
@@ -1496,6 +1864,7 @@ int run(std::istream& in, std::ostream& out, Registry registry, LoadOptions opti
     }
     if (server.exited()) return server.exit_code();
   }
+  if (!ended.empty()) std::cerr << "arbiter lsp: " << ended << "\n";
   return server.exited() ? server.exit_code() : 1;
 }
 

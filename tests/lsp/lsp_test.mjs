@@ -3,7 +3,7 @@
 // text the test sends: 0-based lines, UTF-16 columns.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { spawn } from 'node:child_process';
+import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -49,9 +49,11 @@ class Client {
       new rpc.StreamMessageReader(this.process.stdout),
       new rpc.StreamMessageWriter(this.process.stdin));
     this.diagnostics = new Map();
+    this.publications = new Map();  // how many times each URI's diagnostics were published
     this.waiting = new Map();
     this.connection.onNotification('textDocument/publishDiagnostics', (params) => {
       this.diagnostics.set(params.uri, params.diagnostics);
+      this.publications.set(params.uri, (this.publications.get(params.uri) ?? 0) + 1);
       const waiter = this.waiting.get(params.uri);
       if (waiter) {
         this.waiting.delete(params.uri);
@@ -111,6 +113,26 @@ async function withClient(body) {
 }
 
 const yaml = () => read('configs/soccer/walk_and_kick.yaml');
+
+// `arbiter validate`'s diagnostics of `file` as the server publishes them: code, severity and
+// start, in order.
+function validated(file, args = []) {
+  let output;
+  try {
+    output = execFileSync(arbiter, [...args, 'validate', '--format', 'json', file], { encoding: 'utf8' });
+  } catch (error) {
+    output = error.stdout;
+  }
+  return JSON.parse(output).map((d) => ({
+    code: d.code, severity: d.severity === 'error' ? 1 : 2,
+    start: { line: d.line - 1, character: d.column - 1 },
+  }));
+}
+const summary = (diagnostics) => diagnostics.map((d) => ({ code: d.code, severity: d.severity, start: d.range.start }));
+
+function tempDir() {
+  return fs.mkdtempSync(path.join(os.tmpdir(), 'arbiter-lsp-'));
+}
 const json = () => read('configs/paper/walk_and_kick.json');
 
 test('a valid config gets an empty list of diagnostics', async () => {
@@ -250,6 +272,83 @@ for (const [format, config] of [['YAML', yaml], ['JSON', json]]) {
   });
 }
 
+test("a config's diagnostics equal validate's whatever else is open: another config's plugins stay its own", async () => {
+  const dir = tempDir();
+  try {
+    const { text } = yaml();
+    const withPlugin = path.join(dir, 'with_plugin.yaml');
+    const without = path.join(dir, 'without.yaml');
+    fs.writeFileSync(withPlugin, text);
+    fs.writeFileSync(without, text.replace('plugins: [soccer]\n', ''));
+    const expected = validated(without);
+    assert.equal(expected.filter((d) => d.code === 'unknown-class').length, 5);
+    await withClient(async (client) => {
+      // The config that names no plugin first, then the one that loads soccer: the first keeps
+      // its errors.
+      assert.deepEqual(summary(await client.open(uriOf(without), fs.readFileSync(without, 'utf8'))), expected);
+      assert.deepEqual(await client.open(uriOf(withPlugin), text), []);
+      assert.deepEqual(summary(client.diagnostics.get(uriOf(without))), expected);
+      // Nor does completion offer it soccer's classes.
+      const withoutText = fs.readFileSync(without, 'utf8');
+      const classes = async (uri, edited) => {
+        await client.change(uri, edited);
+        const result = await client.request('textDocument/completion',
+          { textDocument: { uri }, position: positionOf(edited, 'type: soc', { skip: 9 }) });
+        return result.items.map((i) => i.label);
+      };
+      const edit = (t) => t.replace('head_control: {type: soccer.HeadControl}', 'head_control:\n        type: soc');
+      assert.ok((await classes(uriOf(withPlugin), edit(text))).includes('soccer.KickBall'));
+      assert.ok(!(await classes(uriOf(without), edit(withoutText))).includes('soccer.KickBall'));
+    });
+    await withClient(async (client) => {
+      // The other order: soccer loaded for one config is unknown to the next.
+      assert.deepEqual(await client.open(uriOf(withPlugin), text), []);
+      assert.deepEqual(summary(await client.open(uriOf(without), fs.readFileSync(without, 'utf8'))), expected);
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('files that are not Arbiter configs get no diagnostics and no completion; a config is known by its keys or its $schema', async () => {
+  const dir = tempDir();
+  try {
+    const others = {
+      'package.json': '{\n  "name": "web",\n  "version": "1.0.0",\n  "dependencies": {"arbiter": "^1.0.0", "layers": "2"}\n}\n',
+      'CMakePresets.json': '{\n  "version": 6,\n  "configurePresets": [{"name": "dev", "binaryDir": "build"}]\n}\n',
+      'ci.yml': 'name: CI\non: [push]\njobs:\n  build:\n    runs-on: ubuntu-latest\n    steps:\n      - run: make\n',
+      'docker-compose.yaml': 'services:\n  web:\n    image: nginx\n    layers: 3\n',
+    };
+    await withClient(async (client) => {
+      for (const [name, text] of Object.entries(others)) {
+        const uri = uriOf(path.join(dir, name));
+        await client.connection.sendNotification('textDocument/didOpen',
+          { textDocument: { uri, languageId: name.endsWith('.json') ? 'json' : 'yaml', version: 1, text } });
+        const completion = await client.request('textDocument/completion',
+          { textDocument: { uri }, position: { line: 1, character: 2 } });
+        assert.deepEqual(completion.items ?? completion, [], name);
+      }
+      // Configs, each recognised by one rule: a top-level `arbiter:`, a `layers:` (an included
+      // file), a `$schema` key, the YAML language server's comment. Each gets its diagnostics.
+      const configs = {
+        'a.yaml': 'arbiter: 1\nname: a\nlayers: 3\n',
+        'part.yaml': 'layers:\n  - name: x\n    behaviours: {b: {type: nope}}\n',
+        'b.json': '{"$schema": "../schema/arbiter.schema.json", "name": "b"}',
+        'c.yaml': '# yaml-language-server: $schema=https://example.org/arbiter.schema.json\nname: c\n',
+      };
+      for (const [name, text] of Object.entries(configs)) {
+        const diagnostics = await client.open(uriOf(path.join(dir, name)), text);
+        assert.ok(diagnostics.length > 0, name);
+      }
+      for (const name of Object.keys(others)) {
+        assert.deepEqual(client.diagnostics.get(uriOf(path.join(dir, name))) ?? [], [], name);
+      }
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('hover on an actuator lists its writers and readers; on a class, its params; a sensor goes to its actuator', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
@@ -385,6 +484,143 @@ test("an included file's diagnostics are published on that file, and its open bu
   }
 });
 
+// A config that includes parts/part.yaml, written to a temporary folder.
+function includeFixture() {
+  const dir = tempDir();
+  fs.mkdirSync(path.join(dir, 'parts'));
+  const main = path.join(dir, 'main.yaml');
+  const part = path.join(dir, 'parts', 'part.yaml');
+  const mainText = 'arbiter: 1\nname: m\ninclude: [parts/part.yaml]\nlayers:\n  - name: control\n    actuators:\n      speed: {type: double}\n    behaviours:\n      a: {type: scripted, params: {activation: 1}}\n';
+  const partText = 'layers:\n  - name: other\n    actuators:\n      size: {type: double}\n    behaviours:\n      b: {type: scripted, params: {activation: 1}}\n';
+  fs.writeFileSync(main, mainText);
+  fs.writeFileSync(part, partText);
+  return { dir, main, part, mainText, partText, partBroken: partText.replace('type: scripted', 'type: scriptd') };
+}
+
+test('an included file opened on its own is checked through the config that includes it on the disk', async () => {
+  const { dir, main, part, partText, partBroken } = includeFixture();
+  try {
+    await withClient(async (client) => {
+      assert.deepEqual(await client.open(uriOf(part), partText), []);
+      // Its real problem shows.
+      const [error, ...rest] = await client.change(uriOf(part), partBroken);
+      assert.deepEqual(rest, []);
+      assert.equal(error.code, 'unknown-class');
+      assert.deepEqual(error.range, rangeOf(partBroken, 'scriptd'));
+      fs.writeFileSync(part, partBroken);
+      assert.deepEqual(summary([error]), validated(main));
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test("closing the including file keeps the included file's real error", async () => {
+  const { dir, main, part, mainText, partBroken } = includeFixture();
+  try {
+    await withClient(async (client) => {
+      assert.deepEqual(await client.open(uriOf(main), mainText), []);
+      const [error] = await client.open(uriOf(part), partBroken);
+      assert.equal(error.code, 'unknown-class');
+      const published = client.published(uriOf(part));
+      await client.connection.sendNotification('textDocument/didClose', { textDocument: { uri: uriOf(main) } });
+      const [still, ...rest] = await published;
+      assert.deepEqual(rest, []);
+      assert.deepEqual(still, error);
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('an include cycle is an error on the root file, at the include that leads into it', async () => {
+  const dir = tempDir();
+  try {
+    const root = path.join(dir, 'root.yaml');
+    const rootText = 'arbiter: 1\nname: r\ninclude: [a.yaml]\nlayers:\n  - name: top\n';
+    fs.writeFileSync(root, rootText);
+    fs.writeFileSync(path.join(dir, 'a.yaml'), 'include: [b.yaml]\nlayers:\n  - name: from_a\n');
+    fs.writeFileSync(path.join(dir, 'b.yaml'), 'include: [root.yaml]\nlayers:\n  - name: from_b\n');
+    assert.deepEqual(validated(root).map((d) => d.code), ['include-cycle']);
+    await withClient(async (client) => {
+      const [cycle, ...rest] = await client.open(uriOf(root), rootText);
+      assert.deepEqual(rest, []);
+      assert.equal(cycle.code, 'include-cycle');
+      assert.equal(cycle.severity, 1);
+      assert.deepEqual(cycle.range, rangeOf(rootText, 'a.yaml'));
+      assert.match(cycle.message, /^in included file b\.yaml: include cycle: /);
+      assert.equal(cycle.relatedInformation[0].location.uri, uriOf(path.join(dir, 'b.yaml')));
+      assert.equal(client.diagnostics.get(uriOf(path.join(dir, 'b.yaml')))[0].code, 'include-cycle');
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('an included file changed on the disk is noticed through workspace/didChangeWatchedFiles, registered when the client can', { timeout: 20000 }, async () => {
+  const { dir, main, part, mainText, partBroken } = includeFixture();
+  const client = new Client();
+  const registered = new Promise((resolve) => client.connection.onRequest('client/registerCapability', (params) => {
+    resolve(params);
+    return null;
+  }));
+  try {
+    await client.connection.sendRequest('initialize', { processId: process.pid, rootUri: uriOf(dir),
+      capabilities: { workspace: { didChangeWatchedFiles: { dynamicRegistration: true } } } });
+    await client.connection.sendNotification('initialized', {});
+    const { registrations: [registration] } = await registered;
+    assert.equal(registration.method, 'workspace/didChangeWatchedFiles');
+    assert.ok(registration.registerOptions.watchers.some((w) => w.globPattern.includes('yaml')));
+    assert.deepEqual(await client.open(uriOf(main), mainText), []);
+    fs.writeFileSync(part, partBroken);
+    const published = [client.published(uriOf(main)), client.published(uriOf(part))];
+    await client.connection.sendNotification('workspace/didChangeWatchedFiles',
+      { changes: [{ uri: uriOf(part), type: 2 }] });
+    const [[onInclude], [onPart]] = await Promise.all(published);
+    assert.equal(onInclude.code, 'unknown-class');
+    assert.deepEqual(onInclude.range, rangeOf(mainText, 'parts/part.yaml'));
+    assert.equal(onPart.code, 'unknown-class');
+  } finally {
+    assert.equal(await client.stop(), 0, client.stderr);
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('an included file opened on its own is checked alone once the config on the disk stops including it', async () => {
+  const { dir, main, part, mainText, partText } = includeFixture();
+  try {
+    await withClient(async (client) => {
+      assert.deepEqual(await client.open(uriOf(part), partText), []);
+      fs.writeFileSync(main, mainText.replace('include: [parts/part.yaml]\n', ''));
+      const published = client.published(uriOf(part));
+      await client.connection.sendNotification('workspace/didChangeWatchedFiles',
+        { changes: [{ uri: uriOf(main), type: 2 }] });
+      // As `arbiter validate` sees it now: a config without its version and name.
+      assert.deepEqual(summary(await published), validated(part));
+      await client.request('textDocument/documentSymbol', { textDocument: { uri: uriOf(part) } });
+      assert.deepEqual(client.diagnostics.get(uriOf(main)) ?? [], []);
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test('an edit checks again only the configs the edited file belongs to', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    const other = json();
+    await client.open(uri, text);
+    await client.open(other.uri, other.text);
+    const broken = text.replace('kick_ball => go_behind_ball', 'kick_bal => go_behind_ball');
+    const before = client.publications.get(other.uri);
+    const diagnostics = await client.change(uri, broken);
+    // Every notification sent before the reply to a later request has arrived.
+    await client.request('textDocument/documentSymbol', { textDocument: { uri } });
+    assert.equal(client.publications.get(other.uri), before);
+    assert.equal(diagnostics.length, 1);
+  });
+});
+
 test('a position after a non-ASCII character counts UTF-16 units', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
@@ -413,6 +649,43 @@ test('malformed messages get JSON-RPC errors and the server keeps serving', asyn
   assert.deepEqual(await client.open(uri, text), []);
   assert.equal(await client.stop(), 0);
   assert.doesNotMatch(client.stderr, /terminate|Segmentation/);
+});
+
+test('after a malformed header or stray bytes between messages the server answers the next well-formed message', { timeout: 20000 }, async () => {
+  for (const noise of [
+    // a header without its colon, then the message's body
+    'Content-Length 59\r\n\r\n{"jsonrpc": "2.0", "id": 90, "method": "textDocument/hover"}',
+    // an invalid length, then the body
+    'Content-Length: 5x\r\n\r\n{"jsonrpc": "2.0", "id": 91, "method": "shutdown"}',
+    // bytes between two messages, with no line end
+    'garbage',
+    // a body longer than its Content-Length says
+    'Content-Length: 2\r\n\r\n{}}}}',
+  ]) {
+    const client = new Client();
+    await client.start();
+    client.process.stdin.write(noise);
+    const { uri, text } = yaml();
+    assert.deepEqual(await client.open(uri, text), [], JSON.stringify(noise));
+    assert.equal(await client.stop(), 0, JSON.stringify(noise));
+    assert.match(client.stderr, /arbiter lsp: /);
+  }
+});
+
+test('a --plugin-path that does not exist is a diagnostic on the configs that name plugins, not a failure to start', async () => {
+  const client = new Client(['--plugin-path', '/nonexistent/plugins']);
+  await client.start();
+  try {
+    const { uri, text } = yaml();
+    const [diagnostic, ...rest] = await client.open(uri, text);
+    assert.deepEqual(rest, []);
+    assert.equal(diagnostic.code, 'plugin-path-not-found');
+    assert.equal(diagnostic.severity, 2);
+    assert.match(diagnostic.message, /'\/nonexistent\/plugins'/);
+    assert.deepEqual(diagnostic.range.start, positionOf(text, '[soccer]'));
+  } finally {
+    assert.equal(await client.stop(), 0, client.stderr);
+  }
 });
 
 test('exit without shutdown ends with status 1', async () => {

@@ -1,33 +1,100 @@
--- Neovim's built-in LSP client starts `arbiter lsp` on a broken copy of the soccer config and
--- reads the diagnostic back. Run headless by nvim_test.sh, which passes ARBITER and CONFIG in the
--- environment. Exits 0 when the expected diagnostic arrived, 1 otherwise. Written for Debian's
--- Neovim 0.7 (vim.lsp.start_client; vim.lsp.start came in 0.8).
-local arbiter, config = os.getenv('ARBITER'), os.getenv('CONFIG')
+-- Neovim's built-in LSP client and `arbiter lsp`, run headless by nvim_test.sh in a project folder
+-- (PROJECT) of configs and other files. MODE=docs: the set-up of docs/editors.md was loaded
+-- before this file and attaches the server to every YAML and JSON buffer; MODE=help: the
+-- HELP_COMMAND of `arbiter lsp --help` is run in one config's buffer. Exits 0 when every
+-- expectation held, 1 otherwise. Runs on Debian's Neovim 0.7 as on later ones.
+local project, mode = os.getenv('PROJECT'), os.getenv('MODE')
 
 local function fail(message)
-  io.stderr:write('nvim_test: ' .. message .. '\n')
+  io.stderr:write('nvim_test (' .. mode .. '): ' .. message .. '\n')
   os.exit(1)
 end
 
-vim.cmd('edit ' .. vim.fn.fnameescape(config))
-local buffer = vim.api.nvim_get_current_buf()
-local client = vim.lsp.start_client({ name = 'arbiter', cmd = { arbiter, 'lsp' },
-  root_dir = vim.fn.fnamemodify(config, ':h') })
-if not client then fail('the client did not start') end
-vim.lsp.buf_attach_client(buffer, client)
+local function open(name)
+  vim.cmd('edit ' .. vim.fn.fnameescape(project .. '/' .. name))
+  return vim.api.nvim_get_current_buf()
+end
 
-local found = vim.wait(10000, function()
-  return #vim.diagnostic.get(buffer) > 0
-end, 50)
-if not found then fail('no diagnostic within 10 s') end
+local function wait_for(buffer, count, what)
+  local ok = vim.wait(15000, function()
+    return #vim.diagnostic.get(buffer) >= count
+  end, 50)
+  if not ok then
+    fail(string.format('%s: %d diagnostic(s) within 15 s, expected %d', what,
+      #vim.diagnostic.get(buffer), count))
+  end
+  return vim.diagnostic.get(buffer)
+end
 
-local diagnostic = vim.diagnostic.get(buffer)[1]
-local line = vim.api.nvim_buf_get_lines(buffer, diagnostic.lnum, diagnostic.lnum + 1, false)[1]
-local text = line:sub(diagnostic.col + 1, diagnostic.end_col)
-io.stdout:write(string.format('%s:%d:%d: %s [%s] %s\n', config, diagnostic.lnum + 1, diagnostic.col + 1,
-  diagnostic.message, diagnostic.code, text))
-if diagnostic.code ~= 'unknown-behaviour' then fail('unexpected code ' .. tostring(diagnostic.code)) end
-if text ~= 'kick_bal' then fail("the range covers '" .. text .. "', not 'kick_bal'") end
-if diagnostic.source ~= 'arbiter' then fail('unexpected source ' .. tostring(diagnostic.source)) end
-vim.lsp.stop_client(client)
+local function text_of(buffer, diagnostic)
+  local line = vim.api.nvim_buf_get_lines(buffer, diagnostic.lnum, diagnostic.lnum + 1, false)[1]
+  return line:sub(diagnostic.col + 1, diagnostic.end_col)
+end
+
+local function expect_one(buffer, what, code, text)
+  local diagnostics = wait_for(buffer, 1, what)
+  vim.wait(300)  -- a second list, if one were coming
+  diagnostics = vim.diagnostic.get(buffer)
+  for _, d in ipairs(diagnostics) do
+    io.stdout:write(string.format('%s:%d:%d: %s [%s] %s\n', what, d.lnum + 1, d.col + 1, d.message,
+      d.code, text_of(buffer, d)))
+  end
+  if #diagnostics ~= 1 then fail(what .. ': ' .. #diagnostics .. ' diagnostics, expected 1') end
+  local d = diagnostics[1]
+  if d.code ~= code then fail(what .. ': code ' .. tostring(d.code) .. ', expected ' .. code) end
+  if text_of(buffer, d) ~= text then
+    fail(what .. ": the range covers '" .. text_of(buffer, d) .. "', not '" .. text .. "'")
+  end
+  if d.source ~= 'arbiter' then fail(what .. ': source ' .. tostring(d.source)) end
+end
+
+if mode == 'help' then
+  local buffer = open('walk_and_kick.yaml')
+  vim.cmd(os.getenv('HELP_COMMAND'))
+  expect_one(buffer, 'walk_and_kick.yaml', 'unknown-behaviour', 'kick_bal')
+  os.exit(0)
+end
+
+-- A misspelt inhibitor, at its name.
+local broken = open('walk_and_kick.yaml')
+expect_one(broken, 'walk_and_kick.yaml', 'unknown-behaviour', 'kick_bal')
+
+-- A config without `plugins: [soccer]` does not know soccer's classes because another config
+-- loaded them, and opening it leaves the first config's error alone.
+local without = open('without_plugins.yaml')
+local unknown = wait_for(without, 5, 'without_plugins.yaml')
+for _, d in ipairs(unknown) do
+  if d.code ~= 'unknown-class' then fail('without_plugins.yaml: code ' .. tostring(d.code)) end
+end
+if #vim.diagnostic.get(broken) ~= 1 then
+  fail('walk_and_kick.yaml lost its error when another config was opened')
+end
+
+-- Files that are not Arbiter configs: the server is attached and says nothing.
+local others = { open('package.json'), open('docker-compose.yaml') }
+for _, buffer in ipairs(others) do
+  if #vim.lsp.buf_get_clients(buffer) == 0 then fail('the server was not attached to every file') end
+end
+
+-- An included file opened on its own: checked through main.yaml, which includes it, so only its
+-- real error shows (not the 'arbiter' and 'name' a root config would need).
+local part = open('parts/part.yaml')
+expect_one(part, 'parts/part.yaml', 'unknown-class', 'scriptd')
+
+for _, buffer in ipairs(others) do
+  if #vim.diagnostic.get(buffer) > 0 then
+    fail(vim.api.nvim_buf_get_name(buffer) .. ' is not a config but got diagnostics')
+  end
+end
+
+-- Opening, then closing, the config that includes it leaves the included file's error alone.
+local main = open('main.yaml')
+wait_for(main, 0, 'main.yaml')
+vim.cmd('bwipeout ' .. main)
+vim.wait(500)
+expect_one(part, 'parts/part.yaml', 'unknown-class', 'scriptd')
+
+-- An include cycle is an error on the root file, at the include that leads into it.
+local root = open('cycle/root.yaml')
+expect_one(root, 'cycle/root.yaml', 'include-cycle', 'a.yaml')
 os.exit(0)
