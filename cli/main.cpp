@@ -458,9 +458,7 @@ int plot(const Options& options) {
     std::cerr << error << "\n";
     return kExitInvalid;
   }
-  if (!trace->truncated.empty()) {
-    std::cerr << fmt::format("{}: warning: {}\n", options.trace_path, trace->truncated);
-  }
+  arbiter::cli::note_end(options.trace_path, trace->truncated, trace->damaged, std::cerr);
   arbiter::cli::PlotOptions plot_options;
   plot_options.actuators = options.actuators;
   std::optional<arbiter::cli::TraceFile> compare;  // --compare
@@ -470,6 +468,7 @@ int plot(const Options& options) {
       std::cerr << error << "\n";
       return kExitInvalid;
     }
+    arbiter::cli::note_end(options.compare_path, compare->truncated, compare->damaged, std::cerr);
     plot_options.compare = &*compare;
   }
   const std::string svg = arbiter::cli::plot_svg(*trace, plot_options);

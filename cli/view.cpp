@@ -36,7 +36,14 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
     trace.lines.push_back(std::move(step.text));
   }
   trace.truncated = std::move(read->truncated);
+  trace.damaged = std::move(read->damaged);
   return trace;
+}
+
+void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,
+              std::ostream& err) {
+  if (!truncated.empty()) err << fmt::format("{}: warning: {}\n", path, truncated);
+  if (!damaged.empty()) err << fmt::format("{}: warning: {}\n", path, damaged);
 }
 
 int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,
@@ -48,8 +55,7 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     err << error << "\n";
     return 1;
   }
-  if (!trace->truncated.empty())
-    err << fmt::format("{}: warning: {}\n", trace_path, trace->truncated);
+  note_end(trace_path, trace->truncated, trace->damaged, err);
   if (const auto header = check_trace_header(program, trace->header_line);
       header.status != Explanation::Status::kOk) {
     err << format(

@@ -29,7 +29,13 @@ struct TraceFile {
   std::vector<nlohmann::ordered_json> records;
   std::vector<Reload> reloads;
   std::string truncated;  ///< what a recording cut off while written lost (TraceSource)
+  std::string damaged;    ///< what is wrong past a recording's steps (TraceSource)
 };
+
+/// Warns of what a trace or recording read to its end lacks there (TraceSource::truncated() and
+/// damaged()): every tool that reads one says it the same way.
+void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,
+              std::ostream& err);
 
 /// Reads `path`; on failure nullopt, and `error` says where and what (`file:line:col: ...`),
 /// rendered as config errors are (with `format_options.source`, the trace's line underlined).
