@@ -18,7 +18,6 @@
 #include "arbiter/trace.hpp"
 #include "arbiter/trace_diff.hpp"
 #include "arbiter/trace_reader.hpp"
-#include "view.hpp"
 
 namespace arbiter::cli {
 
@@ -339,6 +338,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       "docs/plugins.md)\n",
       options.recording);
   return 1;
+}
+
+void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,
+              std::ostream& err) {
+  if (!truncated.empty()) err << fmt::format("{}: warning: {}\n", path, truncated);
+  if (!damaged.empty()) err << fmt::format("{}: warning: {}\n", path, damaged);
 }
 
 int diff(const std::string& a, const std::string& b, double tolerance, const std::string& format,

@@ -12,6 +12,7 @@
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/trace_reader.hpp"
+#include "record.hpp"
 
 namespace arbiter::cli {
 
@@ -38,12 +39,6 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
   trace.truncated = std::move(read->truncated);
   trace.damaged = std::move(read->damaged);
   return trace;
-}
-
-void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,
-              std::ostream& err) {
-  if (!truncated.empty()) err << fmt::format("{}: warning: {}\n", path, truncated);
-  if (!damaged.empty()) err << fmt::format("{}: warning: {}\n", path, damaged);
 }
 
 int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,

@@ -32,11 +32,6 @@ struct TraceFile {
   std::string damaged;    ///< what is wrong past a recording's steps (TraceSource)
 };
 
-/// Warns of what a trace or recording read to its end lacks there (TraceSource::truncated() and
-/// damaged()): every tool that reads one says it the same way.
-void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,
-              std::ostream& err);
-
 /// Reads `path`; on failure nullopt, and `error` says where and what (`file:line:col: ...`),
 /// rendered as config errors are (with `format_options.source`, the trace's line underlined).
 std::optional<TraceFile> read_trace_file(const std::string& path, std::string& error,
