@@ -105,16 +105,18 @@ std::string first_difference(const Json& a, const Json& b, const std::string& pa
   return path;
 }
 
-/// A step record after its timing, which the trace writer writes first ("t", "duration"): two
-/// records with the same rest are the same step to any comparison, read or not. Empty when the
-/// record is not laid out so.
+/// A step record after its number and timing, which the trace writer writes first: `{"step": N`,
+/// then `, "t": T, "duration": D` when the run was timed. Two records of a step with the same
+/// rest are the same to any comparison, read or not. Empty when the record is not laid out so.
 std::string_view after_timing(std::string_view record) {
-  constexpr std::string_view kDuration = R"(, "duration": )";
-  constexpr std::size_t kHead = 64;  // `{"step": N, "t": T` is shorter
-  const auto duration = record.substr(0, kHead).find(kDuration);
-  if (duration == std::string_view::npos) return {};
-  const auto rest = record.find(", ", duration + kDuration.size());
-  return rest == std::string_view::npos ? std::string_view() : record.substr(rest);
+  constexpr std::string_view kStep = R"({"step": )";
+  if (record.substr(0, kStep.size()) != kStep) return {};
+  auto at = record.find(", ", kStep.size());
+  for (const std::string_view key : {R"(, "t": )", R"(, "duration": )"}) {
+    if (at == std::string_view::npos || record.substr(at, key.size()) != key) continue;
+    at = record.find(", ", at + key.size());
+  }
+  return at == std::string_view::npos ? std::string_view() : record.substr(at);
 }
 
 bool next_step(TraceSource& source, TraceRecord& record) {
