@@ -822,7 +822,9 @@ int main(int argc, char** argv) {
       ->type_name("OUT.jsonl");
   replay_cmd->add_option("--record", options.record_path, "record the replay as MCAP")
       ->type_name("OUT.mcap");
-  replay_cmd->add_option("--steps", options.steps, "replay at most this many steps")
+  replay_cmd
+      ->add_option("--steps", options.steps,
+                   "replay at most this many steps (the recording is read that far only)")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40));
   replay_cmd->footer(
       "Examples:\n"
