@@ -114,8 +114,6 @@ class Reader {
   /// data section's CRC, the summary, the footer, the closing magic), as a sentence for a
   /// warning; empty when the end is whole. The records read are whole either way.
   const std::string& damaged_end() const { return damaged_end_; }
-  /// The bytes of the file read so far.
-  std::uint64_t bytes_read() const { return pos_; }
 
  private:
   bool fail(std::uint64_t at, std::string message);

@@ -9,9 +9,9 @@ cli=$1
 source_dir=$2
 export ARBITER_PLUGIN_PATH=$3
 config=$source_dir/tests/data/replay/counter.yaml
-steps=50000
+steps=40000
 # What replay and diff hold does not grow with the recording: about 20 MiB, for any length (a
-# whole read held 109 MiB and 61 MiB of this one).
+# whole read held 88 MiB and 52 MiB of this one).
 limit_kb=40960
 work=$(mktemp -d)
 pid=
