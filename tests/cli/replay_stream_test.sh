@@ -11,7 +11,7 @@ export ARBITER_PLUGIN_PATH=$3
 config=$source_dir/tests/data/replay/counter.yaml
 steps=40000
 # What replay and diff hold does not grow with the recording: about 20 MiB, for any length (a
-# whole read held 88 MiB and 52 MiB of this one).
+# whole read held 88 MiB for replay, 52 MiB for diff, 53 MiB for diff with the trace).
 limit_kb=40960
 work=$(mktemp -d)
 pid=
@@ -51,7 +51,8 @@ measure() {
 sanitized=0
 grep -qa __asan_init "$cli" && sanitized=1
 
-expect_exit 0 "$cli" run "$config" --steps $steps -q --record "$work/long.mcap"
+expect_exit 0 "$cli" run "$config" --steps $steps -q --record "$work/long.mcap" \
+  --trace "$work/long.jsonl"
 
 measure "$cli" replay "$work/long.mcap"
 grep -qx "replayed $steps steps of $work/long.mcap: identical to the recording" "$work/out.txt" ||
@@ -65,6 +66,12 @@ grep -q "identical: $steps steps" "$work/out.txt" || fail "diff of the long reco
 echo "diff: peak $peak_kb KB"
 [[ $sanitized -eq 1 || $peak_kb -le $limit_kb ]] ||
   fail "diff of $steps steps held $peak_kb KB; at most $limit_kb KB"
+
+measure "$cli" diff "$work/long.jsonl" "$work/long.mcap"
+grep -q "identical: $steps steps" "$work/out.txt" || fail "diff of the long trace and recording"
+echo "diff of the trace: peak $peak_kb KB"
+[[ $sanitized -eq 1 || $peak_kb -le $limit_kb ]] ||
+  fail "diff of a $steps-step trace held $peak_kb KB; at most $limit_kb KB"
 
 # Only the first chunks: replay --steps 10 never reads as far as the cut, so it has nothing to say.
 head -c 200000 "$work/long.mcap" >"$work/head.mcap"
