@@ -269,7 +269,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     }
     if (step > last || !have_event) break;
     if (event.step < step) {
-      // The inputs of a step before it, which the recording holds twice: ignored.
+      // Inputs of a step replayed already (no recorder writes a step's twice): ignored.
       have_event = run.next(event);
       continue;
     }
