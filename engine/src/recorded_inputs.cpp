@@ -256,10 +256,14 @@ RecordingReader::RecordingReader(const std::string& path)
     return;
   }
   reader_ = std::make_unique<mcap::Reader>(*in_);
-  // The config comes before the first step: read up to it, keeping what comes before it (no
-  // recording writes anything there that a replay needs, but a reader must not lose it).
+  // The recorder writes the config before the first step: read up to it, keeping what comes
+  // before it, but not past a step's inputs, so that a file without it is not read whole.
   Event event;
-  while (!config_ && read(event)) ahead_.push_back(std::move(event));
+  while (!config_ && read(event)) {
+    const bool step = event.kind == Event::Kind::kInputs;
+    ahead_.push_back(std::move(event));
+    if (step) break;
+  }
   if (error_) return;
   if (!config_ || info_.files.empty()) {
     fail(reader_->truncated()
