@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <istream>
 #include <map>
-#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -101,8 +100,6 @@ class Reader {
  public:
   /// Reads `in`, which must outlive the reader.
   explicit Reader(std::istream& in);
-  /// Reads a file held in memory.
-  explicit Reader(std::string bytes);
   /// The next message or metadata record; false at the end, on an error (error() non-empty,
   /// "at byte N: ...") or where the file was cut off (truncated()).
   bool next(Record& record);
@@ -125,7 +122,6 @@ class Reader {
   void check_end();
   void damaged(std::uint64_t at, const std::string& what);
 
-  std::unique_ptr<std::istream> owned_;
   std::istream* in_;
   std::uint64_t pos_ = 0;
   std::uint32_t data_crc_ = 0;  // of every byte before the data end record

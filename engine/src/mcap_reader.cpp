@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cstring>
-#include <sstream>
 
 #include "mcap.hpp"
 
@@ -57,9 +56,6 @@ struct Cursor {
 }  // namespace
 
 Reader::Reader(std::istream& in) : in_(&in) {}
-
-Reader::Reader(std::string bytes)
-    : owned_(std::make_unique<std::istringstream>(std::move(bytes))), in_(owned_.get()) {}
 
 std::string cut_before_header(std::uint64_t whole_until) {
   return fmt::format(
