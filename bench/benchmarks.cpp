@@ -16,14 +16,18 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <thread>
 #include <vector>
 
 #include "arbiter/lint.hpp"
 #include "arbiter/manager.hpp"
+#include "arbiter/recorded_inputs.hpp"
 #include "arbiter/recording.hpp"
+#include "arbiter/trace_reader.hpp"
 #include "benchmarks.hpp"
 #include "generator.hpp"
+#include "record.hpp"
 #include "support.hpp"
 
 namespace arbiter::bench {
@@ -255,6 +259,66 @@ void record_paced(benchmark::State& state) {
   state.counters["dropped"] = static_cast<double>(dropped);
 }
 
+/// `arbiter replay` of a recording of the soccer demo `state.range(0)` steps long, whole, in
+/// recorded steps per second (CPU time); and apart, the two reads of the recording a replay
+/// makes as it goes: its inputs (each step's message parsed and held) and its step records
+/// (each checked, as every trace reader does). What is left is stepping, tracing and comparing.
+enum class ReplayPart { kWhole, kInputs, kSteps };
+void replay(benchmark::State& state, ReplayPart part) {
+  Registry soccer_registry = make_registry();
+  LoadOptions options;
+  options.plugins.path = {ARBITER_BENCH_PLUGIN_DIR};
+  Diagnostics diagnostics;
+  auto program = load(ARBITER_BENCH_SOCCER, soccer_registry, diagnostics, options);
+  if (!program) {
+    state.SkipWithError("the soccer demo does not load (is its plugin built?)");
+    return;
+  }
+  const auto path = std::filesystem::temp_directory_path() / "arbiter_bench_replay.mcap";
+  const auto steps = static_cast<std::uint64_t>(state.range(0));
+  {
+    Manager manager(std::move(*program), quiet());
+    Recorder recorder(path.string(),
+                      cli::recording_info(ARBITER_BENCH_SOCCER, soccer_registry, options, "bench"),
+                      Recorder::kSlots, RingFull::kWaitForWriter);
+    manager.add_observer(recorder);
+    for (std::uint64_t i = 0; i < steps; ++i) manager.step();
+    manager.finish();
+  }
+  cli::ReplayOptions replay;
+  replay.recording = path.string();
+  replay.load = options;
+  replay.version = "bench";
+  for (auto _ : state) {
+    if (part == ReplayPart::kWhole) {
+      std::ostringstream out;
+      std::ostringstream err;
+      if (cli::replay(replay, soccer_registry, out, err) != 0) {
+        state.SkipWithError(err.str().c_str());
+        break;
+      }
+    } else if (part == ReplayPart::kInputs) {
+      RecordingReader reader(replay.recording);
+      RecordedInputs inputs;
+      RecordingReader::Event event;
+      Diagnostics unused;
+      while (reader.next(event)) {
+        if (event.kind == RecordingReader::Event::Kind::kInputs) {
+          inputs.load(event.step, event.text, unused);
+        }
+      }
+    } else {
+      const auto source = open_trace(replay.recording);
+      TraceRecord record;
+      while (source->next(record)) benchmark::DoNotOptimize(record.step);
+    }
+  }
+  state.counters["steps_per_second"] =
+      benchmark::Counter(static_cast<double>(steps) * static_cast<double>(state.iterations()),
+                         benchmark::Counter::kIsRate);
+  std::filesystem::remove(path);
+}
+
 const char* const kPlan = R"(arbiter: 1
 name: replan
 state_machines:
@@ -414,6 +478,16 @@ void register_benchmarks() {
       ->ComputeStatistics("min", fastest)
       ->Iterations(5)
       ->UseRealTime();
+  const std::pair<const char*, ReplayPart> replay_parts[] = {
+      {"replay/soccer", ReplayPart::kWhole},
+      {"replay/soccer/read_inputs", ReplayPart::kInputs},
+      {"replay/soccer/read_steps", ReplayPart::kSteps}};
+  for (const auto& [name, part] : replay_parts) {
+    benchmark::RegisterBenchmark(name, replay, part)
+        ->ComputeStatistics("min", fastest)
+        ->Arg(2000)
+        ->Unit(benchmark::kMillisecond);
+  }
   benchmark::RegisterBenchmark("scl/replan5", scl, std::string("bench.Proceed"))
       ->ComputeStatistics("min", fastest);
   benchmark::RegisterBenchmark("scl/replan5_scripted", scl, std::string("scripted"))

@@ -460,9 +460,7 @@ int plot(const Options& options) {
     std::cerr << error << "\n";
     return kExitInvalid;
   }
-  if (!trace->truncated.empty()) {
-    std::cerr << fmt::format("{}: warning: {}\n", options.trace_path, trace->truncated);
-  }
+  arbiter::cli::note_end(options.trace_path, trace->truncated, trace->damaged, std::cerr);
   arbiter::cli::PlotOptions plot_options;
   plot_options.actuators = options.actuators;
   std::optional<arbiter::cli::TraceFile> compare;  // --compare
@@ -472,6 +470,7 @@ int plot(const Options& options) {
       std::cerr << error << "\n";
       return kExitInvalid;
     }
+    arbiter::cli::note_end(options.compare_path, compare->truncated, compare->damaged, std::cerr);
     plot_options.compare = &*compare;
   }
   const std::string svg = arbiter::cli::plot_svg(*trace, plot_options);
@@ -831,7 +830,9 @@ int main(int argc, char** argv) {
       ->type_name("OUT.jsonl");
   replay_cmd->add_option("--record", options.record_path, "record the replay as MCAP")
       ->type_name("OUT.mcap");
-  replay_cmd->add_option("--steps", options.steps, "replay at most this many steps")
+  replay_cmd
+      ->add_option("--steps", options.steps,
+                   "replay at most this many steps (the recording is read that far only)")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40));
   replay_cmd->footer(
       "Examples:\n"

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <sstream>
 
 #include "arbiter/document.hpp"
@@ -62,11 +63,6 @@ class RecordedConfig {
   Overlay overlay_;
 };
 
-/// A recording cut off while written is read up to there: say so, once per file.
-void note_truncated(const std::string& path, const std::string& truncated, std::ostream& err) {
-  if (!truncated.empty()) err << fmt::format("{}: warning: {}\n", path, truncated);
-}
-
 }  // namespace
 
 RecordingInfo recording_info(const std::string& config, const Registry& registry,
@@ -83,27 +79,104 @@ RecordingInfo recording_info(const std::string& config, const Registry& registry
   return info;
 }
 
+namespace {
+
+/// The recorded run's step records, read as the replay needs them and compared with the
+/// replay's: both runs are held a step at a time.
+class RecordedSteps {
+ public:
+  explicit RecordedSteps(TraceSource& source) : source_(source) {}
+
+  /// The record of the first step after the header; false on an unreadable recording.
+  bool start() {
+    TraceRecord header;
+    if (!source_.next(header)) return false;
+    more_ = next();
+    return !source_.error();
+  }
+  /// Compares the replay's record of `step` with the recording's, if it has that step.
+  void compare(std::uint64_t step, const std::string& replayed, TraceDiffer& differ) {
+    ++replayed_;
+    while (more_ && record_.step < step) {
+      differ.unmatched(record_.step);  // a step the replay did not run
+      ++recorded_;
+      more_ = next();
+    }
+    if (more_ && record_.step == step) {
+      differ.compare(step, record_.text, replayed);
+      ++recorded_;
+      more_ = next();
+    } else {
+      differ.unmatched(step);
+    }
+  }
+  /// The result, counting the recorded steps up to `last` that the replay did not reach.
+  TraceDiff finish(std::uint64_t last, TraceDiffer& differ) {
+    const std::uint64_t first_extra = more_ && record_.step <= last ? record_.step : 0;
+    while (more_ && record_.step <= last) {
+      ++recorded_;
+      more_ = next();
+    }
+    return differ.finish(recorded_, replayed_, first_extra);
+  }
+  /// Reads the rest of the recording, for what its end holds.
+  void drain() {
+    while (more_) more_ = next();
+  }
+
+ private:
+  bool next() {
+    while (source_.next(record_)) {
+      if (record_.kind == TraceRecord::Kind::kStep) return true;
+    }
+    return false;
+  }
+  TraceSource& source_;
+  TraceRecord record_;
+  bool more_ = false;
+  std::uint64_t recorded_ = 0;
+  std::uint64_t replayed_ = 0;
+};
+
+}  // namespace
+
 int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err) {
-  Diagnostic error;
-  const auto run = read_recorded_run(options.recording, error);
-  if (!run) {
-    err << format(error);
+  // The recording is read as the replay goes, twice over (its inputs, and its steps to compare
+  // with), never whole: a replay's memory does not grow with the recording.
+  RecordingReader run(options.recording);
+  if (run.error()) {
+    err << format(*run.error());
     return 1;
   }
-  auto recorded = read_trace(options.recording, error);
-  if (!recorded) {
-    err << format(error);
+  const auto recorded_source = open_trace(options.recording);
+  RecordedSteps recorded(*recorded_source);
+  if (!recorded.start()) {
+    err << format(*recorded_source->error());
     return 1;
   }
-  note_truncated(options.recording, recorded->truncated, err);
 
   std::optional<RecordedConfig> written;
   std::string config = options.config;
   if (config.empty()) {
-    written.emplace(run->info);
+    written.emplace(run.info());
     config = written->root();
   }
-  const RecordedInputs inputs(run->inputs);
+  // The first step's inputs are held before the config compiles, so that its interface layers
+  // check them (and check_places() sees the recorded inputs' names).
+  RecordedInputs inputs;
+  RecordingReader::Event event;
+  bool have_event = run.next(event);
+  std::uint64_t last = options.steps > 0 ? options.steps : ~std::uint64_t{0};
+  bool noted_reloads = false;
+  std::uint64_t loaded = 0;  // the step whose inputs are held
+  Diagnostics diagnostics;
+  if (have_event && event.kind == RecordingReader::Event::Kind::kInputs) {
+    if (!inputs.load(event.step, event.text, diagnostics)) {
+      err << format(diagnostics);
+      return 1;
+    }
+    loaded = event.step;
+  }
   LoadOptions load = options.load;
   load.lint = nullptr;  // a replay reports whether the run repeats, not how the config reads
   if (written) load.source = &written->source();
@@ -113,49 +186,27 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   };
   // The recorded config reloads as the run did, at the same steps; an edited one runs alone.
   Reloader reloader(registry, load);
-  Diagnostics diagnostics;
   auto program = reloader.load(config, diagnostics);
   if (!diagnostics.empty()) err << format(diagnostics);
   if (!program) return 1;
 
-  std::uint64_t steps = inputs.steps();
-  std::size_t next_reload = 0;  // of run->reloads, applied when its step is done
-  if (!run->reloads.empty() && !written) {
-    err << fmt::format(
-        "{}: note: the config was reloaded after step {}; with --config the recorded reloads "
-        "are not applied\n",
-        options.recording, run->reloads.front().after_step);
-    next_reload = run->reloads.size();
-  }
-  for (std::size_t r = next_reload; r < run->reloads.size(); ++r) {
-    if (!run->reloads[r].files.empty()) continue;
-    // A recording that did not keep a reload's files: the replay ends where it cannot follow.
-    steps = std::min(steps, run->reloads[r].after_step);
-    err << fmt::format(
-        "{}: warning: the config was reloaded after step {} and the recording does not hold "
-        "its files; replay runs up to there\n",
-        options.recording, run->reloads[r].after_step);
-    break;
-  }
-  if (run->first_gap) {
-    // The inputs of dropped steps are lost: the run cannot be repeated past them.
-    steps = std::min(steps, *run->first_gap);
-    err << fmt::format(
-        "{}: warning: the recording dropped {} steps, the first after step {}; "
-        "replay runs up to there\n",
-        options.recording, run->dropped, *run->first_gap);
-  }
-  if (options.steps > 0) steps = std::min(steps, options.steps);
-
   Manager manager(std::move(*program), spdlog::default_logger());
-  std::ostringstream trace_text;
+  std::ostringstream trace_text;  // what the trace writer wrote in the last step, then emptied
   TraceWriter trace(trace_text);
   manager.add_observer(trace);
+  std::ofstream trace_file;
+  if (!options.trace.empty()) {
+    trace_file.open(options.trace, std::ios::binary | std::ios::trunc);
+    if (!trace_file) {
+      err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
+      return 2;
+    }
+  }
   std::unique_ptr<Recorder> recorder;
   if (!options.record.empty()) {
     recorder = std::make_unique<Recorder>(
         options.record,
-        options.config.empty() ? run->info
+        options.config.empty() ? run.info()
                                : recording_info(config, registry, options.load, options.version),
         Recorder::kSlots, RingFull::kWaitForWriter);  // a replay keeps no pace: it loses nothing
     if (!recorder->ok()) {
@@ -164,56 +215,115 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     }
     manager.add_observer(*recorder);
   }
+  const bool exact = options.config.empty();
+  // Determinism: every field of every record but the timing, bit for bit.
+  TraceDiffer differ(exact ? 0.0 : 1e-9, exact);
   SimulatedClock clock;
   manager.set_clock(&clock);
-  for (std::uint64_t i = 0; i < steps && !manager.stopped(); ++i) {
-    clock.t = static_cast<double>(i) / manager.program().rate_hz;
-    manager.step();
-    // Staged now, swapped in at the start of the next step, as in the recorded run.
-    while (next_reload < run->reloads.size() &&
-           run->reloads[next_reload].after_step == manager.steps()) {
-      written->set(run->reloads[next_reload].files);
-      if (recorder) recorder->stage_files(run->reloads[next_reload].files);
-      const auto reloaded = reloader.reload(manager);
-      if (!reloaded.diagnostics.empty()) err << format(reloaded.diagnostics);
-      if (!reloaded.staged) {
-        err << fmt::format("{}: error: the config reloaded after step {} does not load\n",
-                           options.recording, manager.steps());
+  const auto written_out = [&] {
+    const std::string text = trace_text.str();
+    trace_text.str(std::string());
+    if (trace_file.is_open()) trace_file << text;
+    return text;
+  };
+  while (!manager.stopped()) {
+    const std::uint64_t step = manager.steps() + 1;
+    // What the recording holds before this step's inputs: reloads, staged now to be swapped in
+    // at the start of this step as in the recorded run, and dropped steps.
+    while (have_event && step <= last && event.kind != RecordingReader::Event::Kind::kInputs) {
+      if (event.kind == RecordingReader::Event::Kind::kGap) {
+        // The inputs of dropped steps are lost: the run cannot be repeated past them.
+        last = std::min(last, event.step);
+        err << fmt::format(
+            "{}: warning: the recording dropped {} steps after step {}; replay runs up to "
+            "there\n",
+            options.recording, event.dropped, event.step);
+      } else if (!written) {
+        if (!noted_reloads) {
+          err << fmt::format(
+              "{}: note: the config was reloaded after step {}; with --config the recorded "
+              "reloads are not applied\n",
+              options.recording, event.step);
+        }
+        noted_reloads = true;
+      } else if (event.files.empty()) {
+        // A recording that did not keep a reload's files: the replay ends where it cannot
+        // follow.
+        last = std::min(last, event.step);
+        err << fmt::format(
+            "{}: warning: the config was reloaded after step {} and the recording does not hold "
+            "its files; replay runs up to there\n",
+            options.recording, event.step);
+      } else {
+        written->set(event.files);
+        if (recorder) recorder->stage_files(event.files);
+        const auto reloaded = reloader.reload(manager);
+        if (!reloaded.diagnostics.empty()) err << format(reloaded.diagnostics);
+        if (!reloaded.staged) {
+          err << fmt::format("{}: error: the config reloaded after step {} does not load\n",
+                             options.recording, manager.steps());
+          return 1;
+        }
+      }
+      have_event = run.next(event);
+    }
+    if (step > last || !have_event) break;
+    if (event.step < step) {
+      // Inputs of a step replayed already (no recorder writes a step's twice): ignored.
+      have_event = run.next(event);
+      continue;
+    }
+    const bool now = event.step == step;  // else the recording holds no inputs for the step
+    if (loaded != step) {
+      Diagnostics bad;
+      if (!inputs.load(step, now ? event.text : std::string(), bad)) {
+        err << format(bad);
         return 1;
       }
-      ++next_reload;
+      loaded = step;
     }
+    if (now) have_event = run.next(event);
+    clock.t = static_cast<double>(step - 1) / manager.program().rate_hz;
+    manager.step();
+    // The trace writer wrote the step's record last (after a reload's header, if any).
+    std::string text = written_out();
+    if (!text.empty() && text.back() == '\n') text.pop_back();
+    const auto end = text.rfind('\n');
+    recorded.compare(manager.steps(), end == std::string::npos ? text : text.substr(end + 1),
+                     differ);
   }
-  manager.finish();
-  if (!options.trace.empty()) {
-    std::ofstream file(options.trace, std::ios::binary | std::ios::trunc);
-    if (!(file << trace_text.str() << std::flush)) {
-      err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
-      return 2;
-    }
-  }
-
-  std::istringstream replayed_text(trace_text.str());
-  const auto source = jsonl_trace_source(replayed_text, "replay");
-  auto replayed = read_trace(*source, error);
-  if (!replayed) {
-    err << format(error);
+  if (run.error()) {
+    err << format(*run.error());
     return 1;
   }
-  while (!recorded->steps.empty() && recorded->steps.back().step > steps) {
-    recorded->steps.pop_back();
+  manager.finish();
+  written_out();
+  if (trace_file.is_open() && !(trace_file << std::flush)) {
+    err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
+    return 2;
+  }
+  const std::uint64_t steps = manager.steps();
+  // The recorded steps up to where the replay was to end count against it when it ended early;
+  // those the recording holds no inputs for (it was cut off between a step and its inputs)
+  // cannot be replayed.
+  const auto diff = recorded.finish(have_event ? last : steps, differ);
+  if (!have_event) recorded.drain();  // to its end, which may not be whole
+  if (recorded_source->error()) {
+    err << format(*recorded_source->error());
+    return 1;
+  }
+  if (!have_event) {
+    note_end(options.recording, recorded_source->truncated(), recorded_source->damaged(), err);
   }
   if (!options.config.empty()) {
-    out << fmt::format("replayed {} steps of {} with {}\n", replayed->steps.size(),
-                       options.recording, options.config);
-    out << format_text(diff_traces(*recorded, *replayed), "the recording", "the replay");
+    out << fmt::format("replayed {} steps of {} with {}\n", steps, options.recording,
+                       options.config);
+    out << format_text(diff, "the recording", "the replay");
     return 0;
   }
-  // Determinism: every field of every record but the timing, bit for bit.
-  const auto diff = diff_traces(*recorded, *replayed, 0.0, true);
   if (diff.identical) {
-    out << fmt::format("replayed {} steps of {}: identical to the recording\n",
-                       replayed->steps.size(), options.recording);
+    out << fmt::format("replayed {} steps of {}: identical to the recording\n", steps,
+                       options.recording);
     return 0;
   }
   const auto& first = *diff.first_divergence;
@@ -230,24 +340,26 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   return 1;
 }
 
+void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,
+              std::ostream& err) {
+  if (!truncated.empty()) err << fmt::format("{}: warning: {}\n", path, truncated);
+  if (!damaged.empty()) err << fmt::format("{}: warning: {}\n", path, damaged);
+}
+
 int diff(const std::string& a, const std::string& b, double tolerance, const std::string& format,
          std::ostream& out, std::ostream& err) {
+  const auto first = open_trace(a);
+  const auto second = open_trace(b);
   Diagnostic error;
-  const auto first = read_trace(a, error);
-  if (!first) {
+  const auto result = diff_traces(*first, *second, error, tolerance);
+  if (!result) {
     err << arbiter::format(error);
     return 2;
   }
-  const auto second = read_trace(b, error);
-  if (!second) {
-    err << arbiter::format(error);
-    return 2;
-  }
-  note_truncated(a, first->truncated, err);
-  note_truncated(b, second->truncated, err);
-  const auto result = diff_traces(*first, *second, tolerance);
-  out << (format == "json" ? format_json(result) : format_text(result, a, b));
-  return result.identical ? 0 : 1;
+  note_end(a, first->truncated(), first->damaged(), err);
+  note_end(b, second->truncated(), second->damaged(), err);
+  out << (format == "json" ? format_json(*result) : format_text(*result, a, b));
+  return result->identical ? 0 : 1;
 }
 
 }  // namespace arbiter::cli

@@ -30,6 +30,11 @@ struct ReplayOptions {
 /// Runs the recorded system again on its recorded inputs; returns the exit code.
 int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err);
 
+/// Warns of what a trace or recording read to its end lacks there (TraceSource::truncated() and
+/// damaged()): every tool that reads one says it the same way.
+void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,
+              std::ostream& err);
+
 /// Compares two traces or recordings; `format` is "text" or "json". Returns the exit code.
 int diff(const std::string& a, const std::string& b, double tolerance, const std::string& format,
          std::ostream& out, std::ostream& err);

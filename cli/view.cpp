@@ -12,6 +12,7 @@
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/trace_reader.hpp"
+#include "record.hpp"
 
 namespace arbiter::cli {
 
@@ -36,6 +37,7 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
     trace.lines.push_back(std::move(step.text));
   }
   trace.truncated = std::move(read->truncated);
+  trace.damaged = std::move(read->damaged);
   return trace;
 }
 
@@ -69,8 +71,7 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     err << error << "\n";
     return 1;
   }
-  if (!trace->truncated.empty())
-    err << fmt::format("{}: warning: {}\n", trace_path, trace->truncated);
+  note_end(trace_path, trace->truncated, trace->damaged, err);
   if (const auto header = check_trace_header(program, trace->header_line);
       header.status != Explanation::Status::kOk) {
     err << bad_trace(trace_path, 1, header.text, header.notes, format_options);

@@ -29,6 +29,7 @@ struct TraceFile {
   std::vector<nlohmann::ordered_json> records;
   std::vector<Reload> reloads;
   std::string truncated;  ///< what a recording cut off while written lost (TraceSource)
+  std::string damaged;    ///< what is wrong past a recording's steps (TraceSource)
 };
 
 /// Reads `path`; on failure nullopt, and `error` says where and what (`file:line:col: ...`),

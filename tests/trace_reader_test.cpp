@@ -145,6 +145,47 @@ TEST_CASE("a recording cut anywhere reads up to its last whole chunk and says it
   }
 }
 
+TEST_CASE("a recording whose end is not whole reads every step and says what is wrong there",
+          "[trace_reader]") {
+  const auto bytes =
+      read_text(fs::path(ARBITER_SOURCE_DIR) / "tests/data/traces/walk_and_kick.mcap");
+  Diagnostic error;
+  const auto whole = read_trace(*trace_source(bytes, "run.mcap"), error);
+  REQUIRE(whole);
+  CHECK(whole->damaged.empty());
+  // The footer: opcode, length, summary_start, summary_offset_start, summary_crc; then the magic.
+  const std::size_t footer = bytes.size() - 8 - 29;
+  std::uint64_t summary_start = 0;
+  for (int i = 7; i >= 0; --i) {
+    summary_start = summary_start << 8 | static_cast<unsigned char>(bytes[footer + 9 + i]);
+  }
+  REQUIRE(summary_start > 13);
+  const auto flipped = [&](std::size_t at) {
+    auto copy = bytes;
+    copy[at] = static_cast<char>(copy[at] ^ 0x5a);
+    return copy;
+  };
+  const std::pair<std::string, std::string> damages[] = {
+      {bytes.substr(0, bytes.size() - 8),
+       "the file does not end with MCAP's magic bytes after its footer"},
+      {flipped(bytes.size() - 1), "the file does not end with MCAP's magic bytes after its footer"},
+      {flipped(footer + 9 + 16), "the footer's summary CRC does not match the summary"},
+      {flipped(footer + 9), "the footer puts the summary at byte "},
+      {flipped(summary_start - 4), "the data end record's CRC does not match the data section"},
+      {bytes.substr(0, footer + 5), "the file ends in its summary, before its footer"},
+      {bytes.substr(0, summary_start + 20), "the file ends in its summary, before its footer"},
+  };
+  for (const auto& [damaged, what] : damages) {
+    INFO(what);
+    const auto trace = read_trace(*trace_source(damaged, "run.mcap"), error);
+    REQUIRE(trace);
+    CHECK(trace->steps.size() == whole->steps.size());
+    CHECK(trace->truncated.empty());
+    CHECK(trace->damaged.rfind("the end of the recording is not whole: at byte ", 0) == 0);
+    CHECK(trace->damaged.find(": " + what) != std::string::npos);
+  }
+}
+
 namespace {
 
 class ManualClock : public StepClock {

@@ -1,9 +1,11 @@
 #pragma once
 // The MCAP container (https://mcap.dev/spec, major version 0) as far as recordings use it: a
 // writer of chunked, zstd-compressed, indexed files with a summary, and a linear reader that
-// checks every record and stops cleanly where a file was cut off.
+// checks every record, stops cleanly where a file was cut off, and checks the file's end (the
+// data section's CRC, the summary, the footer and the closing magic).
 
 #include <cstdint>
+#include <istream>
 #include <map>
 #include <string>
 #include <string_view>
@@ -91,11 +93,13 @@ struct Record {
   std::uint64_t offset = 0;  ///< the byte of the file where the record (or its chunk) starts
 };
 
-/// Reads the records of a whole file held in memory, in file order. Part of the tools library
+/// Reads the records of a file in file order, one chunk at a time: what it holds at once is one
+/// record and one chunk's messages, however long the file. Part of the tools library
 /// (mcap_reader.cpp): a robot writes recordings, it does not read them.
 class Reader {
  public:
-  explicit Reader(std::string bytes);
+  /// Reads `in`, which must outlive the reader.
+  explicit Reader(std::istream& in);
   /// The next message or metadata record; false at the end, on an error (error() non-empty,
   /// "at byte N: ...") or where the file was cut off (truncated()).
   bool next(Record& record);
@@ -103,23 +107,40 @@ class Reader {
   bool truncated() const { return truncated_; }
   /// Where the last whole chunk (or record) ended, for a truncation message.
   std::uint64_t good_until() const { return good_until_; }
+  /// Once next() has returned false after a whole data section: what is wrong past it (the
+  /// data section's CRC, the summary, the footer, the closing magic), as a sentence for a
+  /// warning; empty when the end is whole. The records read are whole either way.
+  const std::string& damaged_end() const { return damaged_end_; }
 
  private:
   bool fail(std::uint64_t at, std::string message);
   bool read_chunk(std::uint64_t start, std::string_view content);
   bool inner(std::string_view records, std::uint64_t chunk_start);
+  /// Reads `size` more bytes of the file into `out` (replacing it); false where the file ends.
+  bool read(std::string& out, std::uint64_t size);
+  /// After the data end record: the summary, the footer and the closing magic.
+  void check_end();
+  void damaged(std::uint64_t at, const std::string& what);
 
-  std::string bytes_;
-  std::size_t pos_ = 0;
+  std::istream* in_;
+  std::uint64_t pos_ = 0;
+  std::uint32_t data_crc_ = 0;  // of every byte before the data end record
+  std::string head_;
+  std::string content_;
+  std::string plain_;  // the chunk being read, decompressed
   bool started_ = false;
   bool done_ = false;
   bool truncated_ = false;
   std::string error_;
+  std::string damaged_end_;
   std::uint64_t good_until_ = 0;
   std::map<std::uint16_t, std::string> topics_;
   std::map<std::uint16_t, bool> schemas_;
   std::vector<Record> pending_;  // the messages of the chunk being read
   std::size_t pending_next_ = 0;
 };
+
+/// The one message for a recording cut off before its trace header, whichever tool reads it.
+std::string cut_before_header(std::uint64_t whole_until);
 
 }  // namespace arbiter::mcap

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "mcap.hpp"
@@ -14,6 +15,11 @@ namespace {
 // Chunks larger than this when uncompressed are refused: no recording writes one, and a hostile
 // file must not make the reader allocate what it claims.
 constexpr std::uint64_t kMaxChunk = 256u << 20;
+// A chunk record holds a compressed chunk, which zstd may make a little larger than the chunk.
+constexpr std::uint64_t kMaxRecord = kMaxChunk + (1u << 20);
+// Read in pieces of this size, so that a record claiming more than the file holds costs no more
+// memory than the file has bytes.
+constexpr std::uint64_t kPiece = 1u << 20;
 
 /// Reads little-endian fields from a record's content, failing (not throwing) past its end.
 struct Cursor {
@@ -49,7 +55,95 @@ struct Cursor {
 
 }  // namespace
 
-Reader::Reader(std::string bytes) : bytes_(std::move(bytes)) {}
+Reader::Reader(std::istream& in) : in_(&in) {}
+
+std::string cut_before_header(std::uint64_t whole_until) {
+  return fmt::format(
+      "the recording was cut off while it was written, before its trace header: it holds no "
+      "step (it is whole up to byte {})",
+      whole_until);
+}
+
+bool Reader::read(std::string& out, std::uint64_t size) {
+  out.clear();
+  while (out.size() < size) {
+    const auto had = out.size();
+    const auto piece = std::min<std::uint64_t>(size - had, kPiece);
+    out.resize(had + piece);
+    in_->read(&out[had], static_cast<std::streamsize>(piece));
+    const auto got = static_cast<std::size_t>(in_->gcount());
+    out.resize(had + got);
+    pos_ += got;
+    if (got < piece) return false;
+  }
+  return true;
+}
+
+void Reader::damaged(std::uint64_t at, const std::string& what) {
+  if (!damaged_end_.empty()) return;
+  damaged_end_ = fmt::format(
+      "the end of the recording is not whole: at byte {}: {}; its steps are read in order, but "
+      "tools that read a recording's summary first (Foxglove, @mcap/core's indexed reader) may "
+      "refuse it",
+      at, what);
+}
+
+void Reader::check_end() {
+  const std::uint64_t summary_start = pos_;
+  bool summary = false;
+  std::uint64_t offsets_start = 0;
+  std::uint32_t summary_crc = 0;
+  while (true) {
+    const std::uint64_t start = pos_;
+    if (!read(head_, 9)) {
+      return damaged(start, "the file ends in its summary, before its footer");
+    }
+    Cursor head{head_};
+    const auto op = head.get<std::uint8_t>();
+    const auto length = head.get<std::uint64_t>();
+    if (op == kFooter) {
+      if (length != 20) {
+        return damaged(start, fmt::format("the footer record holds {} bytes, not 20", length));
+      }
+      if (!read(content_, length)) return damaged(start, "the footer is cut short");
+      Cursor footer{content_};
+      const auto footer_summary = footer.get<std::uint64_t>();
+      const auto footer_offsets = footer.get<std::uint64_t>();
+      const auto footer_crc = footer.get<std::uint32_t>();
+      summary_crc = crc(crc(summary_crc, head_), std::string_view(content_).substr(0, 16));
+      if (footer_summary != (summary ? summary_start : 0)) {
+        return damaged(start, fmt::format("the footer puts the summary at byte {}; it is at "
+                                          "byte {}",
+                                          footer_summary, summary ? summary_start : 0));
+      }
+      if (footer_offsets != offsets_start) {
+        return damaged(start, fmt::format("the footer puts the summary offsets at byte {}; they "
+                                          "are at byte {}",
+                                          footer_offsets, offsets_start));
+      }
+      if (footer_crc != 0 && footer_crc != summary_crc) {
+        return damaged(start, "the footer's summary CRC does not match the summary");
+      }
+      const std::uint64_t end = pos_;
+      if (!read(head_, kMagic.size()) || head_ != kMagic) {
+        return damaged(end, "the file does not end with MCAP's magic bytes after its footer");
+      }
+      return;
+    }
+    if (length > kMaxRecord) {
+      return damaged(start, fmt::format("a summary record claims {} bytes", length));
+    }
+    if (!read(content_, length)) {
+      return damaged(start, "the file ends in its summary, before its footer");
+    }
+    summary_crc = crc(crc(summary_crc, head_), content_);
+    if (op == kSummaryOffset) {
+      if (offsets_start == 0) offsets_start = start;
+    } else if (offsets_start == 0) {
+      summary = true;
+    }
+  }
+}
 
 bool Reader::fail(std::uint64_t at, std::string message) {
   if (error_.empty()) error_ = fmt::format("at byte {}: {}", at, message);
@@ -115,7 +209,7 @@ bool Reader::read_chunk(std::uint64_t start, std::string_view content) {
     return fail(start, fmt::format("the chunk claims {} bytes uncompressed; at most {} are read",
                                    size, kMaxChunk));
   }
-  std::string plain;
+  std::string& plain = plain_;
   if (compression == "zstd") {
     plain.resize(size);
     const auto got = ZSTD_decompress(plain.data(), plain.size(), records.data(), records.size());
@@ -131,7 +225,7 @@ bool Reader::read_chunk(std::uint64_t start, std::string_view content) {
       return fail(start, fmt::format("the chunk holds {} bytes, not the {} it claims",
                                      records.size(), size));
     }
-    plain = std::string(records);
+    plain.assign(records);
   } else {
     return fail(start, fmt::format("the chunk is compressed with '{}'; this reader knows zstd "
                                    "and none",
@@ -154,37 +248,41 @@ bool Reader::next(Record& record) {
     pending_next_ = 0;
     if (done_) return false;
     if (!started_) {
-      if (bytes_.size() < kMagic.size()) {
-        if (kMagic.substr(0, bytes_.size()) == bytes_ && !bytes_.empty()) {
+      started_ = true;
+      if (!read(head_, kMagic.size())) {
+        if (!head_.empty() && kMagic.substr(0, head_.size()) == head_) {
           truncated_ = done_ = true;
           return false;
         }
         return fail(0, "not an MCAP file (it does not start with MCAP's magic bytes)");
       }
-      if (std::string_view(bytes_).substr(0, kMagic.size()) != kMagic) {
+      if (head_ != kMagic) {
         return fail(0, "not an MCAP file (it does not start with MCAP's magic bytes)");
       }
-      pos_ = kMagic.size();
+      data_crc_ = crc(0, head_);
       good_until_ = pos_;
-      started_ = true;
     }
-    const std::size_t start = pos_;
-    if (bytes_.size() - pos_ < 9) {
+    const std::uint64_t start = pos_;
+    if (!read(head_, 9)) {
       truncated_ = done_ = true;
       return false;
     }
-    Cursor head{std::string_view(bytes_).substr(pos_, 9)};
+    Cursor head{head_};
     const auto op = head.get<std::uint8_t>();
     const auto length = head.get<std::uint64_t>();
-    if (length > bytes_.size() - pos_ - 9) {
+    if (length > kMaxRecord) {
+      return fail(start,
+                  fmt::format("a record claims {} bytes; at most {} are read", length, kMaxRecord));
+    }
+    if (!read(content_, length)) {
       truncated_ = done_ = true;
       return false;
     }
-    const std::string_view content = std::string_view(bytes_).substr(pos_ + 9, length);
-    pos_ += 9 + length;
     if (start == kMagic.size() && op != kHeader) {
       return fail(start, "the first record is not a header record (opcode 0x01)");
     }
+    if (op != kDataEnd) data_crc_ = crc(crc(data_crc_, head_), content_);
+    const std::string_view content = content_;
     Cursor c{content};
     switch (op) {
       case kSchema: {
@@ -204,7 +302,7 @@ bool Reader::next(Record& record) {
         break;
       }
       case kMessage:
-        if (!inner(std::string_view(bytes_).substr(start, 9 + length), start)) return false;
+        if (!inner(head_ + content_, start)) return false;
         break;
       case kChunk:
         if (!read_chunk(start, content)) return false;
@@ -225,14 +323,25 @@ bool Reader::next(Record& record) {
         good_until_ = pos_;
         return true;
       }
-      case kDataEnd:
+      case kDataEnd: {
+        done_ = true;
+        const auto data_crc = c.get<std::uint32_t>();  // 0: not computed
+        if (!c.ok) {
+          damaged(start, "the data end record is cut short");
+        } else if (data_crc != 0 && data_crc != data_crc_) {
+          damaged(start, "the data end record's CRC does not match the data section");
+        }
+        check_end();
+        break;
+      }
       case kFooter:
         done_ = true;
+        damaged(start, "the data section has no data end record");
         break;
       default:
         break;  // indexes and records this reader does not need (the spec: skip unknown ones)
     }
-    good_until_ = pos_;
+    if (!done_) good_until_ = pos_;
   }
 }
 

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "arbiter/behaviour.hpp"
@@ -14,25 +13,18 @@
 
 namespace arbiter {
 
-namespace {
-
 /// Writes its layer's actuators from the recording: what the recorded run's interface wrote.
-class Replayed : public Interface {
+/// Holds the steps RecordedInputs holds (all of them, or the one a streamed replay is at), their
+/// values converted to the actuators' types, so that the step loop parses and allocates nothing.
+class RecordedInputsLayer : public Interface {
  public:
-  explicit Replayed(const RecordedInputs& inputs) : inputs_(inputs) {}
+  explicit RecordedInputsLayer(const RecordedInputs& inputs) : inputs_(inputs) {}
+  ~RecordedInputsLayer() override { inputs_.forget(this); }
 
   void init(InitContext& ctx) override {
     // Resolved here, so that the output pass compares no names.
-    const bool unattributed = inputs_.claim_unattributed();
-    for (auto& pass : reports_) pass.resize(inputs_.steps());
-    for (std::uint64_t step = 1; step <= inputs_.steps(); ++step) {
-      for (const auto& report : inputs_.reported(step)) {
-        if (report.layer == ctx.name() || (report.layer.empty() && unattributed)) {
-          reports_[report.input_pass ? kInputPass : kOutputPass][step - 1].push_back(
-              report.text.c_str());
-        }
-      }
-    }
+    unattributed_ = inputs_.claim_unattributed();
+    name_ = ctx.name();
     for (const auto& actuator : ctx.layer_actuators()) {
       const auto* column = inputs_.find(actuator.name);
       if (column == nullptr) {
@@ -43,38 +35,68 @@ class Replayed : public Interface {
         continue;
       }
       Feed feed;
+      feed.name = actuator.name;
+      feed.type = actuator.type;
+      feed.location = actuator.location;
       feed.output = ctx.output_to_actuator(actuator.name, actuator.location);
-      for (std::size_t i = 0; i < column->values.size(); ++i) {
-        feed.values.emplace_back(*actuator.type);
-        feed.written.push_back(column->written[i]);
-        if (column->values[i].empty()) continue;
+      feeds_.push_back(std::move(feed));
+    }
+    std::string error;
+    SourceLocation where;
+    if (!take(error, where)) ctx.error(where, error);
+    inputs_.remember(this);
+  }
+
+  /// Takes the steps RecordedInputs holds now; false, with the error and where, when a value
+  /// does not fit its actuator's type.
+  bool take(std::string& error, SourceLocation& where) {
+    const auto held = inputs_.held();
+    for (auto& pass : reports_) {
+      pass.assign(held, {});
+    }
+    for (std::uint64_t i = 0; i < held; ++i) {
+      for (const auto& report : inputs_.reported(inputs_.first_held() + i)) {
+        if (report.layer == name_ || (report.layer.empty() && unattributed_)) {
+          reports_[report.input_pass ? kInputPass : kOutputPass][i].push_back(report.text.c_str());
+        }
+      }
+    }
+    for (auto& feed : feeds_) {
+      const auto* column = inputs_.find(feed.name);
+      feed.values.clear();
+      feed.written.clear();
+      for (std::size_t i = 0; i < held; ++i) {
+        feed.values.emplace_back(*feed.type);
+        feed.written.push_back(column != nullptr && column->written[i]);
+        if (column == nullptr || column->values[i].empty()) continue;
         Diagnostics parsed;
         const auto node =
             parse_document(column->values[i], "recording", DocumentFormat::kJson, parsed);
         std::string expected;
-        if (!node || !actuator.type->from_node(*node, feed.values.back().data(), expected)) {
-          ctx.error(
-              actuator.location,
-              fmt::format("recorded input '{}' at step {} is {}, not {} (a {}): the edited "
-                          "config must keep the recorded inputs' types",
-                          actuator.name, i + 1, column->values[i], expected, actuator.type->name));
-          break;
+        if (!node || !feed.type->from_node(*node, feed.values.back().data(), expected)) {
+          where = feed.location;
+          error = fmt::format(
+              "recorded input '{}' at step {} is {}, not {} (a {}): the edited config must keep "
+              "the recorded inputs' types",
+              feed.name, inputs_.first_held() + i, column->values[i], expected, feed.type->name);
+          return false;
         }
       }
-      feeds_.push_back(std::move(feed));
     }
+    return true;
   }
 
   // Reported again by the layer that reported it, in the pass it reported in, so that the
   // step's reports come in the recorded order.
   void output(const StepContext& ctx) override {
-    const auto index = ctx.step() - 1;
-    if (index >= reports_[kOutputPass].size()) return;
+    const auto index = ctx.step() - inputs_.first_held();
+    if (ctx.step() < inputs_.first_held() || index >= reports_[kOutputPass].size()) return;
     for (const char* text : reports_[kOutputPass][index]) ctx.report(text);
   }
 
   void input(WriteContext& ctx) override {
-    const auto index = ctx.step() - 1;
+    if (ctx.step() < inputs_.first_held()) return;
+    const auto index = ctx.step() - inputs_.first_held();
     if (index < reports_[kInputPass].size()) {
       for (const char* text : reports_[kInputPass][index]) ctx.report(text);
     }
@@ -87,58 +109,100 @@ class Replayed : public Interface {
 
  private:
   struct Feed {
+    std::string name;
+    const ValueType* type = nullptr;
+    SourceLocation location;
     AnyOutput output;
     std::vector<ValueBox> values;
     std::vector<char> written;
   };
   const RecordedInputs& inputs_;
+  std::string name_;
+  bool unattributed_ = false;
   std::vector<Feed> feeds_;
   enum Pass { kInputPass, kOutputPass };
-  std::vector<std::vector<const char*>> reports_[2];  // this layer's, per pass, per step - 1
+  std::vector<std::vector<const char*>> reports_[2];  // this layer's, per pass, per held step
 };
 
-}  // namespace
-
-RecordedInputs::RecordedInputs(const std::vector<std::pair<std::uint64_t, std::string>>& messages) {
+RecordedInputs::RecordedInputs(const std::vector<std::pair<std::uint64_t, std::string>>& messages)
+    : RecordedInputs() {
   for (const auto& [step, text] : messages) steps_ = std::max(steps_, step);
-  for (const auto& [step, text] : messages) {
-    const auto json = nlohmann::ordered_json::parse(text, nullptr, false);
-    if (step == 0 || !json.is_object() || !json.contains("inputs")) continue;
-    if (json.contains("reported") && json["reported"].is_array()) {
-      reported_.resize(steps_);
-      for (const auto& item : json["reported"]) {
-        // Older recordings list the texts only.
-        if (item.is_string()) reported_[step - 1].push_back({"", item.get<std::string>()});
-        if (item.is_object() && item.value("text", nlohmann::ordered_json()).is_string()) {
-          const auto by = item.value("by", nlohmann::ordered_json());
-          const auto pass = item.value("pass", nlohmann::ordered_json());
-          reported_[step - 1].push_back({by.is_string() ? by.get<std::string>() : std::string(),
-                                         item["text"].get<std::string>(),
-                                         pass.is_string() && pass.get<std::string>() == "input"});
-        }
-      }
-    }
-    for (const auto& [name, entry] : json["inputs"].items()) {
-      auto* column = const_cast<Column*>(find(name));
-      if (column == nullptr) {
-        column = &columns_.emplace_back();
-        column->name = name;
-        column->values.resize(steps_);
-        column->written.resize(steps_);
-      }
-      column->values[step - 1] = entry.value("value", nlohmann::ordered_json()).dump();
-      column->written[step - 1] = entry.value("written", false) ? 1 : 0;
-    }
-  }
+  reported_.resize(steps_);
+  for (const auto& [step, text] : messages) add(step, text);
+}
+
+RecordedInputs::RecordedInputs() {
   class_.name = "arbiter.RecordedInputs";
   class_.kind = ClassKind::kInterface;
   class_.origin = "replay";
-  class_.make_interface = [this] { return std::make_unique<Replayed>(*this); };
+  class_.make_interface = [this] { return std::make_unique<RecordedInputsLayer>(*this); };
+}
+
+void RecordedInputs::add(std::uint64_t step, const std::string& text) {
+  const auto json = nlohmann::ordered_json::parse(text, nullptr, false);
+  if (step < first_ || step - first_ >= reported_.size() || !json.is_object() ||
+      !json.contains("inputs")) {
+    return;
+  }
+  const auto index = step - first_;
+  if (json.contains("reported") && json["reported"].is_array()) {
+    for (const auto& item : json["reported"]) {
+      // Older recordings list the texts only.
+      if (item.is_string()) reported_[index].push_back({"", item.get<std::string>()});
+      if (item.is_object() && item.value("text", nlohmann::ordered_json()).is_string()) {
+        const auto by = item.value("by", nlohmann::ordered_json());
+        const auto pass = item.value("pass", nlohmann::ordered_json());
+        reported_[index].push_back({by.is_string() ? by.get<std::string>() : std::string(),
+                                    item["text"].get<std::string>(),
+                                    pass.is_string() && pass.get<std::string>() == "input"});
+      }
+    }
+  }
+  for (const auto& [name, entry] : json["inputs"].items()) {
+    auto* column = const_cast<Column*>(find(name));
+    if (column == nullptr) {
+      column = &columns_.emplace_back();
+      column->name = name;
+      column->values.resize(reported_.size());
+      column->written.resize(reported_.size());
+    }
+    column->values[index] = entry.value("value", nlohmann::ordered_json()).dump();
+    column->written[index] = entry.value("written", false) ? 1 : 0;
+  }
+}
+
+bool RecordedInputs::load(std::uint64_t step, const std::string& message,
+                          Diagnostics& diagnostics) {
+  first_ = step;
+  steps_ = step;
+  reported_.assign(1, {});
+  for (auto& column : columns_) {
+    column.values.assign(1, std::string());
+    column.written.assign(1, 0);
+  }
+  if (!message.empty()) add(step, message);
+  std::string error;
+  SourceLocation where;
+  for (auto* layer : layers_) {
+    if (!layer->take(error, where)) {
+      diagnostics.error(where, "replay-input", error);
+      return false;
+    }
+  }
+  return true;
+}
+
+void RecordedInputs::remember(RecordedInputsLayer* layer) const {
+  layers_.push_back(layer);
+}
+
+void RecordedInputs::forget(RecordedInputsLayer* layer) const {
+  layers_.erase(std::remove(layers_.begin(), layers_.end(), layer), layers_.end());
 }
 
 const std::vector<RecordedInputs::Report>& RecordedInputs::reported(std::uint64_t step) const {
   static const std::vector<Report> kNone;
-  return step >= 1 && step <= reported_.size() ? reported_[step - 1] : kNone;
+  return step >= first_ && step - first_ < reported_.size() ? reported_[step - first_] : kNone;
 }
 
 bool RecordedInputs::claim_unattributed() const {
@@ -183,66 +247,119 @@ void RecordedInputs::check_places(const Model& model, const SourceLocation& wher
   }
 }
 
-std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error) {
-  const auto fail = [&](std::string message) {
-    error = Diagnostic{{path, 0, 0}, Severity::kError, "bad-recording", std::move(message), {}};
-    return std::nullopt;
-  };
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail("cannot read the recording");
-  mcap::Reader reader(
-      std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()));
-  RecordedRun run;
-  bool config = false;
-  mcap::Record record;
-  while (reader.next(record)) {
-    if (record.kind == mcap::Record::Kind::kMetadata) {
-      if (record.name == "arbiter.config") {
-        config = true;
-        for (auto& [key, value] : record.metadata) {
+RecordingReader::RecordingReader(const std::string& path)
+    : path_(path),
+      in_(std::make_unique<std::ifstream>(path, std::ios::binary)),
+      record_(std::make_unique<mcap::Record>()) {
+  if (!*in_) {
+    fail("cannot read the recording");
+    return;
+  }
+  reader_ = std::make_unique<mcap::Reader>(*in_);
+  // The recorder writes the config before the first step: read up to it, keeping what comes
+  // before it, but not past a step's inputs, so that a file without it is not read whole.
+  Event event;
+  while (!config_ && read(event)) {
+    const bool step = event.kind == Event::Kind::kInputs;
+    ahead_.push_back(std::move(event));
+    if (step) break;
+  }
+  if (error_) return;
+  if (!config_ || info_.files.empty()) {
+    fail(reader_->truncated()
+             ? mcap::cut_before_header(reader_->good_until())
+             : "the recording has no 'arbiter.config' metadata with the config's files; record "
+               "one with 'arbiter run CONFIG --record RUN.mcap'");
+  }
+}
+
+RecordingReader::~RecordingReader() = default;
+
+void RecordingReader::fail(std::string message) {
+  error_ = Diagnostic{{path_, 0, 0}, Severity::kError, "bad-recording", std::move(message), {}};
+}
+
+bool RecordingReader::next(Event& event) {
+  if (error_) return false;
+  if (!ahead_.empty()) {
+    event = std::move(ahead_.front());
+    ahead_.erase(ahead_.begin());
+    return true;
+  }
+  return read(event);
+}
+
+bool RecordingReader::read(Event& event) {
+  event = Event();
+  while (reader_->next(*record_)) {
+    if (record_->kind == mcap::Record::Kind::kMetadata) {
+      if (record_->name == "arbiter.config") {
+        config_ = true;
+        for (auto& [key, value] : record_->metadata) {
           if (key.rfind("file:", 0) == 0) {
-            run.info.files.emplace_back(key.substr(5), std::move(value));
+            info_.files.emplace_back(key.substr(5), std::move(value));
           } else if (key == "version") {
-            run.info.version = value;
+            info_.version = value;
           } else if (key == "plugins" && !value.empty()) {
             std::size_t start = 0;
             while (start <= value.size()) {
               const auto end = std::min(value.find('\n', start), value.size());
-              run.info.plugins.push_back(value.substr(start, end - start));
+              info_.plugins.push_back(value.substr(start, end - start));
               start = end + 1;
             }
           }
         }
-      } else if (record.name == "arbiter.reload") {
-        RecordedRun::Reload reload;
-        for (auto& [key, value] : record.metadata) {
-          if (key == "after_step") reload.after_step = std::strtoull(value.c_str(), nullptr, 10);
-          if (key.rfind("file:", 0) == 0)
-            reload.files.emplace_back(key.substr(5), std::move(value));
-        }
-        run.reloads.push_back(std::move(reload));
-      } else if (record.name == "arbiter.gap") {
-        for (const auto& [key, value] : record.metadata) {
-          if (key == "dropped") run.dropped += std::strtoull(value.c_str(), nullptr, 10);
-          if (key == "after_step" && !run.first_gap) {
-            run.first_gap = std::strtoull(value.c_str(), nullptr, 10);
-          }
-        }
+        continue;
       }
-    } else if (record.topic == "/arbiter/inputs") {
-      const auto key = record.data.find("\"step\": ");
-      const auto step =
-          key == std::string::npos ? 0 : std::strtoull(record.data.c_str() + key + 8, nullptr, 10);
-      run.inputs.emplace_back(step, std::move(record.data));
+      if (record_->name == "arbiter.reload") {
+        event.kind = Event::Kind::kReload;
+        for (auto& [key, value] : record_->metadata) {
+          if (key == "after_step") event.step = std::strtoull(value.c_str(), nullptr, 10);
+          if (key.rfind("file:", 0) == 0) event.files.emplace_back(key.substr(5), std::move(value));
+        }
+        return true;
+      }
+      if (record_->name == "arbiter.gap") {
+        event.kind = Event::Kind::kGap;
+        for (const auto& [key, value] : record_->metadata) {
+          if (key == "dropped") event.dropped = std::strtoull(value.c_str(), nullptr, 10);
+          if (key == "after_step") event.step = std::strtoull(value.c_str(), nullptr, 10);
+        }
+        return true;
+      }
+    } else if (record_->topic == "/arbiter/inputs") {
+      event.kind = Event::Kind::kInputs;
+      const auto key = record_->data.find("\"step\": ");
+      event.step = key == std::string::npos
+                       ? 0
+                       : std::strtoull(record_->data.c_str() + key + 8, nullptr, 10);
+      event.text = std::move(record_->data);
+      return true;
     }
-    record = mcap::Record();
   }
-  if (!reader.error().empty()) return fail(reader.error());
-  if (!config || run.info.files.empty()) {
-    return fail(
-        "the recording has no 'arbiter.config' metadata with the config's files; record "
-        "one with 'arbiter run CONFIG --record RUN.mcap'");
+  if (!reader_->error().empty()) fail(reader_->error());
+  return false;
+}
+
+std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error) {
+  RecordingReader reader(path);
+  RecordedRun run;
+  RecordingReader::Event event;
+  while (reader.next(event)) {
+    if (event.kind == RecordingReader::Event::Kind::kInputs) {
+      run.inputs.emplace_back(event.step, std::move(event.text));
+    } else if (event.kind == RecordingReader::Event::Kind::kReload) {
+      run.reloads.push_back({event.step, std::move(event.files)});
+    } else if (event.kind == RecordingReader::Event::Kind::kGap) {
+      run.dropped += event.dropped;
+      if (!run.first_gap) run.first_gap = event.step;
+    }
   }
+  if (reader.error()) {
+    error = *reader.error();
+    return std::nullopt;
+  }
+  run.info = reader.info();
   return run;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <string_view>
 
 namespace arbiter {
 
@@ -104,6 +105,27 @@ std::string first_difference(const Json& a, const Json& b, const std::string& pa
   return path;
 }
 
+/// A step record after its number and timing, which the trace writer writes first: `{"step": N`,
+/// then `, "t": T, "duration": D` when the run was timed. Two records of a step with the same
+/// rest are the same to any comparison, read or not. Empty when the record is not laid out so.
+std::string_view after_timing(std::string_view record) {
+  constexpr std::string_view kStep = R"({"step": )";
+  if (record.substr(0, kStep.size()) != kStep) return {};
+  auto at = record.find(", ", kStep.size());
+  for (const std::string_view key : {R"(, "t": )", R"(, "duration": )"}) {
+    if (at == std::string_view::npos || record.substr(at, key.size()) != key) continue;
+    at = record.find(", ", at + key.size());
+  }
+  return at == std::string_view::npos ? std::string_view() : record.substr(at);
+}
+
+bool next_step(TraceSource& source, TraceRecord& record) {
+  while (source.next(record)) {
+    if (record.kind == TraceRecord::Kind::kStep) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 TraceDiffer::TraceDiffer(double tolerance, bool exact) : tolerance_(tolerance), exact_(exact) {}
@@ -113,6 +135,8 @@ void TraceDiffer::unmatched(std::uint64_t step) {
 }
 
 void TraceDiffer::compare(std::uint64_t step, const std::string& a, const std::string& b) {
+  // Most steps of two runs compared are the same: those are told apart without parsing.
+  if (const auto rest = after_timing(a); !rest.empty() && rest == after_timing(b)) return;
   const Json x = Json::parse(a);
   const Json y = Json::parse(b);
   std::vector<std::string> what;
@@ -186,6 +210,46 @@ TraceDiff diff_traces(const Trace& a, const Trace& b, double tolerance, bool exa
   const std::uint64_t first_extra =
       std::min(i, j) < longer.size() ? longer[std::min(i, j)].step : 0;
   return differ.finish(a.steps.size(), b.steps.size(), first_extra);
+}
+
+std::optional<TraceDiff> diff_traces(TraceSource& a, TraceSource& b, Diagnostic& error,
+                                     double tolerance, bool exact) {
+  TraceDiffer differ(tolerance, exact);
+  TraceRecord x;
+  TraceRecord y;
+  bool more_a = next_step(a, x);
+  bool more_b = next_step(b, y);
+  std::uint64_t steps_a = 0;
+  std::uint64_t steps_b = 0;
+  while (more_a && more_b) {
+    if (x.step != y.step) {
+      // A step one run has and the other lacks (dropped while recording): nothing to align.
+      differ.unmatched(std::min(x.step, y.step));
+      if (x.step < y.step) {
+        ++steps_a;
+        more_a = next_step(a, x);
+      } else {
+        ++steps_b;
+        more_b = next_step(b, y);
+      }
+      continue;
+    }
+    differ.compare(x.step, x.text, y.text);
+    ++steps_a;
+    ++steps_b;
+    more_a = next_step(a, x);
+    more_b = next_step(b, y);
+  }
+  const std::uint64_t first_extra = more_a ? x.step : more_b ? y.step : 0;
+  for (; more_a; more_a = next_step(a, x)) ++steps_a;
+  for (; more_b; more_b = next_step(b, y)) ++steps_b;
+  for (const auto* source : {&a, &b}) {
+    if (source->error()) {
+      error = *source->error();
+      return std::nullopt;
+    }
+  }
+  return differ.finish(steps_a, steps_b, first_extra);
 }
 
 std::string format_json(const TraceDiff& diff) {

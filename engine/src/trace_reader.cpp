@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -79,34 +78,32 @@ class JsonlSource : public TraceSource {
   std::size_t line_ = 0;
 };
 
-/// A JSON-lines trace held in memory.
-class JsonlTextSource : public JsonlSource {
+/// A JSON-lines trace read from a stream the source owns (a file, or bytes in memory).
+class OwnedJsonlSource : public JsonlSource {
  public:
-  JsonlTextSource(std::string text, std::string file)
-      : JsonlTextSource(std::make_unique<std::istringstream>(std::move(text)), std::move(file)) {}
+  OwnedJsonlSource(std::unique_ptr<std::istream> in, std::string file)
+      : JsonlSource(*in, std::move(file)), owned_(std::move(in)) {}
 
  private:
-  JsonlTextSource(std::unique_ptr<std::istringstream> in, std::string file)
-      : JsonlSource(*in, std::move(file)), owned_(std::move(in)) {}
-  std::unique_ptr<std::istringstream> owned_;
+  std::unique_ptr<std::istream> owned_;
 };
 
-/// A recording: its header messages (the first and each reload's) and step messages, in order.
+/// A recording: its header messages (the first and each reload's) and step messages, in order,
+/// read one chunk at a time.
 class McapSource : public TraceSource {
  public:
-  McapSource(std::string bytes, std::string file)
-      : reader_(std::move(bytes)), file_(std::move(file)) {}
+  McapSource(std::unique_ptr<std::istream> in, std::string file)
+      : in_(std::move(in)), reader_(*in_), file_(std::move(file)) {}
 
   bool next(TraceRecord& record) override {
     if (error()) return false;
-    mcap::Record message;
-    while (reader_.next(message)) {
-      if (message.kind != mcap::Record::Kind::kMessage) continue;
-      if (message.topic != "/arbiter/header" && message.topic != "/arbiter/step") continue;
-      record.text = std::move(message.data);
+    while (reader_.next(message_)) {
+      if (message_.kind != mcap::Record::Kind::kMessage) continue;
+      if (message_.topic != "/arbiter/header" && message_.topic != "/arbiter/step") continue;
+      record.text = std::move(message_.data);
       record.location = {file_, 0, 0};
       if (!accept(record)) {
-        fail_at(message.offset);
+        fail_at(message_.offset);
         return false;
       }
       last_step_ = record.kind == TraceRecord::Kind::kStep ? record.step : last_step_;
@@ -118,10 +115,7 @@ class McapSource : public TraceSource {
     }
     if (reader_.truncated() && !header_seen()) {
       // Not an empty recording: one that was cut off before anything could be read.
-      fail({file_, 0, 0},
-           fmt::format("the recording was cut off while it was written, before its trace header: "
-                       "it holds no step (it is whole up to byte {})",
-                       reader_.good_until()));
+      fail({file_, 0, 0}, mcap::cut_before_header(reader_.good_until()));
       return false;
     }
     if (reader_.truncated()) {
@@ -130,6 +124,7 @@ class McapSource : public TraceSource {
           "what the run did after that is lost",
           last_step_, reader_.good_until()));
     }
+    set_damaged(reader_.damaged_end());
     return end({file_, 0, 0});
   }
 
@@ -141,10 +136,20 @@ class McapSource : public TraceSource {
     fail(problem.location, fmt::format("at byte {}: {}", offset, problem.message), problem.notes);
   }
 
+  std::unique_ptr<std::istream> in_;
   mcap::Reader reader_;
+  mcap::Record message_;
   std::string file_;
   std::uint64_t last_step_ = 0;
 };
+
+/// Whether a file starting with `start` (its first bytes, up to MCAP's magic's length) is a
+/// recording: it starts with MCAP's magic, or is a piece of it (a recording cut off at once).
+bool is_mcap(std::string_view start) {
+  return start.size() >= mcap::kMagic.size()
+             ? start.substr(0, mcap::kMagic.size()) == mcap::kMagic
+             : !start.empty() && mcap::kMagic.substr(0, start.size()) == start;
+}
 
 class UnreadableSource : public TraceSource {
  public:
@@ -231,20 +236,23 @@ std::unique_ptr<TraceSource> jsonl_trace_source(std::istream& in, std::string fi
 }
 
 std::unique_ptr<TraceSource> trace_source(std::string bytes, std::string file) {
-  if (bytes.size() >= mcap::kMagic.size()
-          ? std::string_view(bytes).substr(0, mcap::kMagic.size()) == mcap::kMagic
-          : !bytes.empty() && mcap::kMagic.substr(0, bytes.size()) == bytes) {
-    return std::make_unique<McapSource>(std::move(bytes), std::move(file));
-  }
-  return std::make_unique<JsonlTextSource>(std::move(bytes), std::move(file));
+  const bool mcap = is_mcap(bytes);
+  auto in = std::make_unique<std::istringstream>(std::move(bytes));
+  if (mcap) return std::make_unique<McapSource>(std::move(in), std::move(file));
+  return std::make_unique<OwnedJsonlSource>(std::move(in), std::move(file));
 }
 
 std::unique_ptr<TraceSource> open_trace(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return std::make_unique<UnreadableSource>(path);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return std::make_unique<UnreadableSource>(path);
-  return trace_source(std::move(bytes), path);
+  auto in = std::make_unique<std::ifstream>(path, std::ios::binary);
+  if (!*in) return std::make_unique<UnreadableSource>(path);
+  char start[mcap::kMagic.size()];
+  in->read(start, sizeof start);
+  const auto got = static_cast<std::size_t>(in->gcount());
+  in->clear();
+  if (in->bad() || !in->seekg(0)) return std::make_unique<UnreadableSource>(path);
+  if (is_mcap(std::string_view(start, got)))
+    return std::make_unique<McapSource>(std::move(in), path);
+  return std::make_unique<OwnedJsonlSource>(std::move(in), path);
 }
 
 std::optional<Trace> read_trace(TraceSource& source, Diagnostic& error) {
@@ -269,6 +277,7 @@ std::optional<Trace> read_trace(TraceSource& source, Diagnostic& error) {
     return std::nullopt;
   }
   trace.truncated = source.truncated();
+  trace.damaged = source.damaged();
   return trace;
 }
 

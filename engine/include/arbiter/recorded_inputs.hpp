@@ -5,6 +5,8 @@
 // `arbiter replay` and the scenario tests that replay a recording (`replay:`, scenario.hpp).
 
 #include <cstdint>
+#include <istream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -16,6 +18,12 @@
 #include "arbiter/registry.hpp"
 
 namespace arbiter {
+
+namespace mcap {
+class Reader;
+struct Record;
+}  // namespace mcap
+class RecordedInputsLayer;
 
 /// What replay needs of a recording besides its steps (read those with open_trace()).
 struct RecordedRun {
@@ -33,15 +41,60 @@ struct RecordedRun {
   std::optional<std::uint64_t> first_gap;  ///< the last step before the first dropped one
 };
 
-/// Reads the config, inputs and reloads of the recording at `path`; nullopt with `error` set when
-/// it is not a readable recording. A recording cut off while written gives what it holds.
+/// Reads the config, inputs and reloads of the recording at `path`, whole; nullopt with `error`
+/// set when it is not a readable recording. A recording cut off while written gives what it
+/// holds.
 std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error);
+
+/// What replay needs of a recording besides its steps, read in file order as a replay goes, never
+/// whole: the config first, then each step's inputs, and the reloads and dropped steps between
+/// them where they happened.
+class RecordingReader {
+ public:
+  /// Opens the recording and reads it up to its config; check error().
+  explicit RecordingReader(const std::string& path);
+  ~RecordingReader();
+  RecordingReader(const RecordingReader&) = delete;
+  RecordingReader& operator=(const RecordingReader&) = delete;
+
+  const std::optional<Diagnostic>& error() const { return error_; }
+  const RecordingInfo& info() const { return info_; }
+
+  struct Event {
+    enum class Kind { kInputs, kReload, kGap };
+    Kind kind = Kind::kInputs;
+    /// kInputs: the step; kReload, kGap: the last step before it
+    std::uint64_t step = 0;
+    std::string text;  ///< kInputs: the step's `/arbiter/inputs` message
+    std::vector<std::pair<std::string, std::string>> files;  ///< kReload: as RecordedRun::Reload
+    std::uint64_t dropped = 0;                               ///< kGap: how many steps
+  };
+  /// The next event; false at the end of the recording or on an error (error()). A recording cut
+  /// off while written ends where it was cut (its steps say so: open_trace()).
+  bool next(Event& event);
+
+ private:
+  void fail(std::string message);
+  bool read(Event& event);
+
+  std::string path_;
+  std::unique_ptr<std::istream> in_;
+  std::unique_ptr<mcap::Reader> reader_;
+  std::unique_ptr<mcap::Record> record_;
+  std::optional<Diagnostic> error_;
+  RecordingInfo info_;
+  bool config_ = false;
+  std::vector<Event> ahead_;
+};
 
 /// The recorded inputs of a run, by actuator name and step.
 class RecordedInputs {
  public:
-  /// `messages`: each step's `/arbiter/inputs` message (RecordedRun::inputs).
+  /// All the inputs of a run: each step's `/arbiter/inputs` message (RecordedRun::inputs).
   explicit RecordedInputs(const std::vector<std::pair<std::uint64_t, std::string>>& messages);
+  /// The inputs of one step at a time, each given by load() before it is stepped: a replay that
+  /// streams its recording (RecordingReader).
+  RecordedInputs();
   RecordedInputs(const RecordedInputs&) = delete;
   RecordedInputs& operator=(const RecordedInputs&) = delete;
 
@@ -61,9 +114,19 @@ class RecordedInputs {
   /// The step numbers recorded.
   std::uint64_t steps() const { return steps_; }
 
+  /// In place of the step held: the inputs of `step`, its `/arbiter/inputs` message (empty when
+  /// the step has none), taken at once by every interface layer bound to interface_class().
+  /// False, with the error in `diagnostics`, when a value does not fit its actuator's type.
+  /// Call it between steps: it parses and allocates, so that the step itself does neither.
+  bool load(std::uint64_t step, const std::string& message, Diagnostics& diagnostics);
+  /// The steps held: first_held() and the held() - 1 after it.
+  std::uint64_t first_held() const { return first_; }
+  std::uint64_t held() const { return reported_.size(); }
+
   struct Column {
     std::string name;
-    /// Per step (index step - 1): the value as JSON ("" where the step was not recorded).
+    /// Per held step (index step - first_held()): the value as JSON ("" where the step was not
+    /// recorded).
     std::vector<std::string> values;
     std::vector<char> written;
   };
@@ -81,11 +144,18 @@ class RecordedInputs {
   const std::vector<Report>& reported(std::uint64_t step) const;
   /// True for the first caller only: the layer that reports what a recording did not attribute.
   bool claim_unattributed() const;
+  /// The layers that load() gives each step to.
+  void remember(RecordedInputsLayer* layer) const;
+  void forget(RecordedInputsLayer* layer) const;
 
  private:
+  void add(std::uint64_t step, const std::string& message);
+
   std::vector<Column> columns_;
-  std::vector<std::vector<Report>> reported_;  // per step - 1
+  std::vector<std::vector<Report>> reported_;  // per held step
+  std::uint64_t first_ = 1;
   std::uint64_t steps_ = 0;
+  mutable std::vector<RecordedInputsLayer*> layers_;
   ClassInfo class_;
   mutable bool unattributed_claimed_ = false;
 };

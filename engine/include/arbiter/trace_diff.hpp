@@ -61,6 +61,10 @@ class TraceDiffer {
 /// equal; "t" and "duration" (timing, not behaviour) are never compared. With `exact`, a step
 /// also differs when anything else in its record does (e.g. requested levels, queues).
 TraceDiff diff_traces(const Trace& a, const Trace& b, double tolerance = 1e-9, bool exact = false);
+/// The same, reading both runs to their ends a step at a time, never whole; nullopt with `error`
+/// when either is not readable (then neither's warnings are read).
+std::optional<TraceDiff> diff_traces(TraceSource& a, TraceSource& b, Diagnostic& error,
+                                     double tolerance = 1e-9, bool exact = false);
 
 /// `{"identical": ..., "steps": [na, nb], "first_divergence": ..., "behaviours": ...}`.
 std::string format_json(const TraceDiff& diff);

@@ -43,6 +43,10 @@ class TraceSource {
   /// Set when the file ends in the middle of a record that cannot be read (a recording cut off
   /// while it was written): what was read up to there is whole, and this says what was lost.
   const std::string& truncated() const { return truncated_; }
+  /// Set, once next() has returned false, when a recording's steps are whole but what follows
+  /// them is not (MCAP's data end CRC, summary, footer or closing magic): a warning, since other
+  /// tools may refuse the file.
+  const std::string& damaged() const { return damaged_; }
 
  protected:
   /// Checks `record` (its kind still unknown) against the records before it; false, with
@@ -52,12 +56,14 @@ class TraceSource {
   /// At the end of the input: false, with error() set when there was no header at all.
   bool end(SourceLocation where);
   void set_truncated(std::string what) { truncated_ = std::move(what); }
+  void set_damaged(std::string what) { damaged_ = std::move(what); }
   bool header_seen() const { return header_seen_; }
   void reset_error() { error_.reset(); }
 
  private:
   std::optional<Diagnostic> error_;
   std::string truncated_;
+  std::string damaged_;
   bool header_seen_ = false;
   std::uint64_t last_step_ = 0;
 };
@@ -70,8 +76,8 @@ std::unique_ptr<TraceSource> jsonl_trace_source(std::istream& in, std::string fi
 std::unique_ptr<TraceSource> trace_source(std::string bytes, std::string file);
 
 /// The trace or recording at `path`, by its content: an MCAP recording starts with MCAP's magic,
-/// anything else is read as JSON lines. A file that cannot be opened gives a source whose first
-/// next() fails with the reason.
+/// anything else is read as JSON lines. The file is read as next() needs it, never whole. A file
+/// that cannot be opened gives a source whose first next() fails with the reason.
 std::unique_ptr<TraceSource> open_trace(const std::string& path);
 
 /// A run read whole.
@@ -87,6 +93,7 @@ struct Trace {
   /// The safe-value passes, apart from the steps: they output values but step nothing.
   std::vector<TraceRecord> safe_passes;
   std::string truncated;  ///< as TraceSource::truncated()
+  std::string damaged;    ///< as TraceSource::damaged()
 };
 
 /// Reads all of `source`; nullopt with `error` set when it is malformed or has no header.
