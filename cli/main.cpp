@@ -74,10 +74,11 @@ struct Options {
   int rt_priority = 0;             ///< `run --rt-priority`; 0: normal scheduling
   std::string serve_token;  ///< `run --serve-token` (or ARBITER_SERVE_TOKEN); empty: a random one
   bool serve_readonly = false;
-  std::string record_path;  ///< `run --record`, `replay --record`
-  std::string config;       ///< `replay --config`
-  std::string recording;    ///< `replay RUN.mcap`
-  std::string diff_a;       ///< `diff A B`
+  std::string record_path;                                  ///< `run --record`, `replay --record`
+  double record_flush = arbiter::Recorder::kFlushInterval;  ///< `--record-flush` (seconds)
+  std::string config;                                       ///< `replay --config`
+  std::string recording;                                    ///< `replay RUN.mcap`
+  std::string diff_a;                                       ///< `diff A B`
   std::string diff_b;
   double tolerance = 1e-9;     ///< `diff --tolerance`
   std::string compare_path;    ///< `plot --compare`
@@ -338,6 +339,7 @@ int run(const Options& options) {
       std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);
       return kExitUsage;
     }
+    recorder->set_flush_interval(options.record_flush);
     manager.add_observer(*recorder);
     // A reload's files go into the recording, for replay to reload them too.
     reloader.set_on_staging(
@@ -427,6 +429,12 @@ int run(const Options& options) {
   if (live) live->serve_until(manager, interrupted);
   if (trace_file.is_open() && !trace_file) {
     std::cerr << fmt::format("arbiter run: writing trace '{}' failed\n", options.trace_path);
+    return kExitInvalid;
+  }
+  if (recorder && recorder->failed()) {
+    std::cerr << fmt::format(
+        "arbiter run: writing recording '{}' failed: {}; it holds the steps written before\n",
+        options.record_path, recorder->error());
     return kExitInvalid;
   }
   if (manager.stopped()) {
@@ -595,8 +603,18 @@ int main(int argc, char** argv) {
                    "record the run as MCAP (steps, interface inputs, the config) for "
                    "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
                    "for the recording's writer; paced (--realtime, --serve), a step it has no "
-                   "room for is dropped and the gap recorded")
+                   "room for is dropped and the gap recorded. A write that fails (a full disk) "
+                   "is reported at once and ends the recording, not the run, which then exits 1")
       ->type_name("RUN.mcap");
+  run_cmd
+      ->add_option("--record-flush", options.record_flush,
+                   "with --record: write the recording out to the disk at least every SECONDS, "
+                   "so that a crash or a power cut loses at most about that much; 0: only every "
+                   "256 KiB of steps (smaller files)")
+      ->check(CLI::NonNegativeNumber)
+      ->type_name("SECONDS")
+      ->capture_default_str()
+      ->needs("--record");
   run_cmd->add_flag("--quiet,-q", options.quiet, "print nothing but errors");
   run_cmd->add_flag("--realtime", options.realtime,
                     "pace the steps at the config's rate_hz instead of running flat out");
@@ -821,8 +839,19 @@ int main(int argc, char** argv) {
       ->type_name("FILE");
   replay_cmd->add_option("--trace", options.trace_path, "write the replay's JSON-lines trace")
       ->type_name("OUT.jsonl");
-  replay_cmd->add_option("--record", options.record_path, "record the replay as MCAP")
+  replay_cmd
+      ->add_option("--record", options.record_path,
+                   "record the replay as MCAP; a write that fails is reported at once and ends "
+                   "the recording, not the replay, which then exits 2")
       ->type_name("OUT.mcap");
+  replay_cmd
+      ->add_option("--record-flush", options.record_flush,
+                   "with --record: write the recording out to the disk at least every SECONDS; "
+                   "0: only every 256 KiB of steps")
+      ->check(CLI::NonNegativeNumber)
+      ->type_name("SECONDS")
+      ->capture_default_str()
+      ->needs("--record");
   replay_cmd->add_option("--steps", options.steps, "replay at most this many steps")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40));
   replay_cmd->footer(
@@ -923,6 +952,9 @@ int main(int argc, char** argv) {
     logger->set_pattern("%^%l%$: %v");
     logger->set_level(spdlog::level::from_str(options.log_level));
     spdlog::set_default_logger(logger);
+    // Past a file size limit (RLIMIT_FSIZE) a write then fails with EFBIG, which the command
+    // reports, instead of killing the process: a robot's run goes on without its recording.
+    std::signal(SIGXFSZ, SIG_IGN);
     options.diagnostic_format = arbiter::FormatOptions::readable(use_color(options.color));
     if (validate_cmd->parsed()) return validate(options);
     if (run_cmd->parsed()) {
@@ -942,6 +974,7 @@ int main(int argc, char** argv) {
       replay.config = options.config;
       replay.trace = options.trace_path;
       replay.record = options.record_path;
+      replay.record_flush = options.record_flush;
       replay.steps = replay_cmd->count("--steps") > 0 ? options.steps : 0;
       replay.load = load_options_of(options);
       replay.version = kVersion;

@@ -162,6 +162,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       err << fmt::format("arbiter replay: cannot write '{}'\n", options.record);
       return 2;
     }
+    recorder->set_flush_interval(options.record_flush);
     manager.add_observer(*recorder);
   }
   SimulatedClock clock;
@@ -185,6 +186,15 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     }
   }
   manager.finish();
+  // A recording that failed was reported at once and ended there: the replay's verdict still
+  // follows, and the exit status says that an output was not written.
+  const auto outputs_written = [&](int code) {
+    if (!recorder || !recorder->failed()) return code;
+    err << fmt::format(
+        "arbiter replay: writing recording '{}' failed: {}; it holds the steps written before\n",
+        options.record, recorder->error());
+    return 2;
+  };
   if (!options.trace.empty()) {
     std::ofstream file(options.trace, std::ios::binary | std::ios::trunc);
     if (!(file << trace_text.str() << std::flush)) {
@@ -198,7 +208,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   auto replayed = read_trace(*source, error);
   if (!replayed) {
     err << format(error);
-    return 1;
+    return outputs_written(1);
   }
   while (!recorded->steps.empty() && recorded->steps.back().step > steps) {
     recorded->steps.pop_back();
@@ -207,14 +217,14 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     out << fmt::format("replayed {} steps of {} with {}\n", replayed->steps.size(),
                        options.recording, options.config);
     out << format_text(diff_traces(*recorded, *replayed), "the recording", "the replay");
-    return 0;
+    return outputs_written(0);
   }
   // Determinism: every field of every record but the timing, bit for bit.
   const auto diff = diff_traces(*recorded, *replayed, 0.0, true);
   if (diff.identical) {
     out << fmt::format("replayed {} steps of {}: identical to the recording\n",
                        replayed->steps.size(), options.recording);
-    return 0;
+    return outputs_written(0);
   }
   const auto& first = *diff.first_divergence;
   std::string what;
@@ -227,7 +237,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       "state or plugin is not deterministic (a wall clock, unseeded randomness: "
       "docs/plugins.md)\n",
       options.recording);
-  return 1;
+  return outputs_written(1);
 }
 
 int diff(const std::string& a, const std::string& b, double tolerance, const std::string& format,
