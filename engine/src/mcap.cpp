@@ -53,11 +53,6 @@ void Writer::write(std::string_view bytes) {
   }
 }
 
-void Writer::sync() {
-  // EINVAL: a pipe or a device, which keep nothing to sync.
-  if (error_ == 0 && ::fdatasync(fd_) != 0 && errno != EINVAL) error_ = errno;
-}
-
 void Writer::header(std::string_view profile, std::string_view library) {
   write(kMagic);
   std::string content;

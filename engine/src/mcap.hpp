@@ -56,9 +56,6 @@ class Writer {
   void close_chunk();
   bool chunk_open() const { return !chunk_.empty(); }
   bool chunk_full() const { return chunk_.size() >= chunk_size_; }
-  /// Asks the system to put what was written on the storage device (fdatasync): a power cut
-  /// loses nothing written before. A file that cannot be synced (a pipe, a device) is not.
-  void sync();
   /// Closes the open chunk and writes the data end, the summary and the footer.
   void finish();
   /// False once a write to the file failed; error() is then its errno.

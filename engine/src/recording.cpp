@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <system_error>
 
@@ -162,9 +163,10 @@ void Recorder::check_written(std::uint64_t step) {
   fail(out_->writer.error(), step);
 }
 
-void Recorder::fail(int error, std::uint64_t step) {
+void Recorder::fail(int error, std::uint64_t step, const char* doing) {
+  if (failing_.exchange(true)) return;
   error_ = std::generic_category().message(error);
-  error_ += step == 0 ? std::string(" (at the start)") : fmt::format(" (writing step {})", step);
+  error_ += step == 0 ? std::string(" (at the start)") : fmt::format(" ({} step {})", doing, step);
   failed_.store(true, std::memory_order_release);
   if (logger_) {
     logger_->error(
@@ -382,10 +384,11 @@ void Recorder::write_loop() {
   const auto flush_when_due = [&](Clock::time_point now) {
     if (!unsynced || now - unsynced_since < flush_interval) return;
     out.writer.close_chunk();
-    out.writer.sync();
-    unsynced = false;
     check_written(out.last_step);
+    request_sync(out.last_step);
+    unsynced = false;
   };
+  if (flushes) syncer_ = std::thread([this] { sync_loop(); });
   std::size_t head_seen = 0;  // head_ is read again only once the writer has caught up with it
   while (true) {
     const auto tail = tail_.load(std::memory_order_relaxed);
@@ -466,8 +469,16 @@ void Recorder::write_loop() {
     out.writer.metadata("arbiter.summary", {{"steps", std::to_string(out.last_step)},
                                             {"dropped", std::to_string(out.dropped)}});
     out.writer.finish();
-    if (flushes) out.writer.sync();
     check_written(out.last_step);
+    if (flushes) request_sync(out.last_step);  // the run is over: it may wait for this one
+  }
+  if (syncer_.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(sync_mutex_);
+      sync_stop_ = true;
+    }
+    sync_wake_.notify_one();
+    syncer_.join();
   }
   // Closed here, not by the destructor: a file system that reports a failed write only at the
   // close (NFS) is reported with the others, before on_finish() returns.
@@ -475,6 +486,30 @@ void Recorder::write_loop() {
   const int error = errno;
   fd_ = -1;
   if (closed != 0 && error != EINTR && !failed()) fail(error, out.last_step);
+}
+
+void Recorder::request_sync(std::uint64_t step) {
+  {
+    std::lock_guard<std::mutex> lock(sync_mutex_);
+    sync_requested_ = true;
+    sync_step_ = step;
+  }
+  sync_wake_.notify_one();
+}
+
+void Recorder::sync_loop() {
+  std::unique_lock<std::mutex> lock(sync_mutex_);
+  while (true) {
+    sync_wake_.wait(lock, [this] { return sync_requested_ || sync_stop_; });
+    if (!sync_requested_) return;  // stopped, with nothing left to sync
+    sync_requested_ = false;
+    const auto step = sync_step_;
+    lock.unlock();
+    // EINVAL: a pipe or a device, which keep nothing to sync. Requests made meanwhile are
+    // served by the next sync, which covers them all.
+    if (::fdatasync(fd_) != 0 && errno != EINVAL) fail(errno, step, "syncing");
+    lock.lock();
+  }
 }
 
 }  // namespace arbiter

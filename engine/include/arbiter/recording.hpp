@@ -63,10 +63,11 @@ class Recorder : public Observer {
 
   /// The file is open and no write to it has failed.
   bool ok() const;
-  /// The writer closes its open chunk, and has the system put the file on its storage
-  /// (fdatasync), once the oldest step in it has waited `seconds` (on the steady clock): a
-  /// crash or a power cut loses about that much at most. 0: a chunk is closed only when 256 KiB
-  /// of records fill it, and the file is left to the system to sync. Before the run starts.
+  /// The writer closes its open chunk once the oldest step in it has waited `seconds` (on the
+  /// steady clock), and a thread of its own then has the system put the file on its storage
+  /// (fdatasync): a crash or a power cut loses about that much at most. 0: a chunk is closed only
+  /// when 256 KiB of records fill it, and the file is left to the system to sync. Before the run
+  /// starts.
   void set_flush_interval(double seconds) { flush_interval_ = seconds; }
   /// Where a failed write is reported (default: spdlog's default logger). Before the run starts.
   void set_logger(std::shared_ptr<spdlog::logger> logger) { logger_ = std::move(logger); }
@@ -135,8 +136,13 @@ class Recorder : public Observer {
   void write_loop();
   /// Ends the recording if a write of the writer failed.
   void check_written(std::uint64_t step);
-  /// Ends the recording: keeps the failure (an errno), logs it, and writes nothing more.
-  void fail(int error, std::uint64_t step);
+  /// Ends the recording: keeps the failure (an errno), logs it, and writes nothing more. The
+  /// first call of any thread wins.
+  void fail(int error, std::uint64_t step, const char* doing = "writing");
+  /// Asks the sync thread to sync the file, without waiting for it.
+  void request_sync(std::uint64_t step);
+  /// The sync thread: fdatasync, whenever asked, until told to stop.
+  void sync_loop();
   /// Where the step values of `slot` are, in `generation`'s blocks.
   detail::SnapshotBlock block(const Generation& generation, const Slot* slot) const;
 
@@ -180,9 +186,18 @@ class Recorder : public Observer {
   std::uint64_t wall_start_ns_ = 0;
   double flush_interval_ = kFlushInterval;
   std::shared_ptr<spdlog::logger> logger_;
-  // Set by the thread that writes (the stepping thread in on_start(), then the writer), once.
+  // Set once, by the first thread that fails (fail()), before failed_.
   std::string error_;
+  std::atomic<bool> failing_{false};
   std::atomic<bool> failed_{false};
+  // The sync thread, which waits for the storage so that the writer never does: a sync can take
+  // longer than the ring takes to fill at a high rate.
+  std::thread syncer_;
+  std::mutex sync_mutex_;
+  std::condition_variable sync_wake_;
+  bool sync_requested_ = false;  // by sync_mutex_
+  bool sync_stop_ = false;       // by sync_mutex_
+  std::uint64_t sync_step_ = 0;  // by sync_mutex_: the last step written when it was asked
   // Read by the staging thread too.
   std::atomic<bool> started_{false};
   std::atomic<bool> finished_{false};
