@@ -505,6 +505,18 @@ std::string check_serve_address(const std::string& text) {
   return error;
 }
 
+/// CLI11 check of `--record-flush SECONDS`.
+std::string check_record_flush(const std::string& text) {
+  char* end = nullptr;
+  const double seconds = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() && *end == '\0' && seconds >= 0.0 &&
+      seconds <= arbiter::Recorder::kMaxFlushInterval) {
+    return {};
+  }
+  return fmt::format("must be a number of seconds from 0 to {:g}, found '{}'",
+                     arbiter::Recorder::kMaxFlushInterval, text);
+}
+
 constexpr const char* kExitCodes =
     "Exit codes: 0 ok, 1 invalid config (or failed run), 2 usage error.";
 constexpr const char* kExitCodesTrace =
@@ -611,7 +623,7 @@ int main(int argc, char** argv) {
                    "with --record: write the recording out to the disk at least every SECONDS, "
                    "so that a crash or a power cut loses at most about that much; 0: only every "
                    "256 KiB of steps (smaller files)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(check_record_flush, "")
       ->type_name("SECONDS")
       ->capture_default_str()
       ->needs("--record");
@@ -848,7 +860,7 @@ int main(int argc, char** argv) {
       ->add_option("--record-flush", options.record_flush,
                    "with --record: write the recording out to the disk at least every SECONDS; "
                    "0: only every 256 KiB of steps")
-      ->check(CLI::NonNegativeNumber)
+      ->check(check_record_flush, "")
       ->type_name("SECONDS")
       ->capture_default_str()
       ->needs("--record");

@@ -376,9 +376,10 @@ void Recorder::write_loop() {
   auto& out = *out_;
   // Nothing waits in the open chunk, or on its way to the storage, for longer than this: what a
   // crash or a power cut loses.
-  const bool flushes = flush_interval_ > 0.0;
+  const bool flushes = !(flush_interval_ <= 0.0);
   const auto flush_interval =
-      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(flush_interval_));
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+          flush_interval_ < kMaxFlushInterval ? flush_interval_ : kMaxFlushInterval));
   bool unsynced = false;  // something was written, or put in the open chunk, since the last sync
   Clock::time_point unsynced_since;
   const auto flush_when_due = [&](Clock::time_point now) {

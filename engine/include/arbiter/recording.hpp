@@ -53,6 +53,8 @@ class Recorder : public Observer {
   static constexpr std::size_t kSlots = 256;
   /// Seconds a step may wait in the writer's open chunk unless told otherwise.
   static constexpr double kFlushInterval = 1.0;
+  /// The longest flush interval: a day.
+  static constexpr double kMaxFlushInterval = 86400.0;
   /// `slots` steps (at least 1) may wait for the writer. Open fails (ok() false) when `path`
   /// cannot be opened for writing.
   Recorder(const std::string& path, RecordingInfo info, std::size_t slots = kSlots,
@@ -66,8 +68,8 @@ class Recorder : public Observer {
   /// The writer closes its open chunk once the oldest step in it has waited `seconds` (on the
   /// steady clock), and a thread of its own then has the system put the file on its storage
   /// (fdatasync): a crash or a power cut loses about that much at most. 0: a chunk is closed only
-  /// when 256 KiB of records fill it, and the file is left to the system to sync. Before the run
-  /// starts.
+  /// when 256 KiB of records fill it, and the file is left to the system to sync. At most
+  /// kMaxFlushInterval (more, or NaN, is taken as that). Before the run starts.
   void set_flush_interval(double seconds) { flush_interval_ = seconds; }
   /// Where a failed write is reported (default: spdlog's default logger). Before the run starts.
   void set_logger(std::shared_ptr<spdlog::logger> logger) { logger_ = std::move(logger); }
