@@ -74,10 +74,11 @@ struct Options {
   int rt_priority = 0;             ///< `run --rt-priority`; 0: normal scheduling
   std::string serve_token;  ///< `run --serve-token` (or ARBITER_SERVE_TOKEN); empty: a random one
   bool serve_readonly = false;
-  std::string record_path;  ///< `run --record`, `replay --record`
-  std::string config;       ///< `replay --config`
-  std::string recording;    ///< `replay RUN.mcap`
-  std::string diff_a;       ///< `diff A B`
+  std::string record_path;                                  ///< `run --record`, `replay --record`
+  double record_flush = arbiter::Recorder::kFlushInterval;  ///< `--record-flush` (seconds)
+  std::string config;                                       ///< `replay --config`
+  std::string recording;                                    ///< `replay RUN.mcap`
+  std::string diff_a;                                       ///< `diff A B`
   std::string diff_b;
   double tolerance = 1e-9;     ///< `diff --tolerance`
   std::string compare_path;    ///< `plot --compare`
@@ -338,6 +339,7 @@ int run(const Options& options) {
       std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);
       return kExitUsage;
     }
+    recorder->set_flush_interval(options.record_flush);
     manager.add_observer(*recorder);
     // A reload's files go into the recording, for replay to reload them too.
     reloader.set_on_staging(
@@ -429,6 +431,12 @@ int run(const Options& options) {
     std::cerr << fmt::format("arbiter run: writing trace '{}' failed\n", options.trace_path);
     return kExitInvalid;
   }
+  if (recorder && recorder->failed()) {
+    std::cerr << fmt::format(
+        "arbiter run: writing recording '{}' failed: {}; it holds the steps written before\n",
+        options.record_path, recorder->error());
+    return kExitInvalid;
+  }
   if (manager.stopped()) {
     std::cerr << fmt::format("arbiter run: stopped after step {}: {}\n", manager.steps(),
                              manager.stop_reason());
@@ -496,6 +504,18 @@ std::string check_serve_address(const std::string& text) {
   std::string error;
   arbiter::cli::ServeAddress::parse(text, error);
   return error;
+}
+
+/// CLI11 check of `--record-flush SECONDS`.
+std::string check_record_flush(const std::string& text) {
+  char* end = nullptr;
+  const double seconds = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() && *end == '\0' && seconds >= 0.0 &&
+      seconds <= arbiter::Recorder::kMaxFlushInterval) {
+    return {};
+  }
+  return fmt::format("must be a number of seconds from 0 to {:g}, found '{}'",
+                     arbiter::Recorder::kMaxFlushInterval, text);
 }
 
 constexpr const char* kExitCodes =
@@ -595,8 +615,18 @@ int main(int argc, char** argv) {
                    "record the run as MCAP (steps, interface inputs, the config) for "
                    "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
                    "for the recording's writer; paced (--realtime, --serve), a step it has no "
-                   "room for is dropped and the gap recorded")
+                   "room for is dropped and the gap recorded. A write that fails (a full disk) "
+                   "is reported at once and ends the recording, not the run, which then exits 1")
       ->type_name("RUN.mcap");
+  run_cmd
+      ->add_option("--record-flush", options.record_flush,
+                   "with --record: write the recording out to the disk at least every SECONDS, "
+                   "so that a crash or a power cut loses at most about that much; 0: only every "
+                   "256 KiB of steps (smaller files)")
+      ->check(check_record_flush, "")
+      ->type_name("SECONDS")
+      ->capture_default_str()
+      ->needs("--record");
   run_cmd->add_flag("--quiet,-q", options.quiet, "print nothing but errors");
   run_cmd->add_flag("--realtime", options.realtime,
                     "pace the steps at the config's rate_hz instead of running flat out");
@@ -828,8 +858,19 @@ int main(int argc, char** argv) {
       ->type_name("FILE");
   replay_cmd->add_option("--trace", options.trace_path, "write the replay's JSON-lines trace")
       ->type_name("OUT.jsonl");
-  replay_cmd->add_option("--record", options.record_path, "record the replay as MCAP")
+  replay_cmd
+      ->add_option("--record", options.record_path,
+                   "record the replay as MCAP; a write that fails is reported at once and ends "
+                   "the recording, not the replay, which then exits 2")
       ->type_name("OUT.mcap");
+  replay_cmd
+      ->add_option("--record-flush", options.record_flush,
+                   "with --record: write the recording out to the disk at least every SECONDS; "
+                   "0: only every 256 KiB of steps")
+      ->check(check_record_flush, "")
+      ->type_name("SECONDS")
+      ->capture_default_str()
+      ->needs("--record");
   replay_cmd
       ->add_option("--steps", options.steps,
                    "replay at most this many steps (the recording is read that far only)")
@@ -841,7 +882,8 @@ int main(int argc, char** argv) {
       "  arbiter replay run.mcap --config edited.yaml --record what_if.mcap\n"
       "  arbiter diff run.mcap what_if.mcap\n\n"
       "Exit codes: 0 ok (the replay matched, or the what-if ran), 1 the replay differs from the "
-      "recording or a config or recording is invalid, 2 usage error.");
+      "recording or a config or recording is invalid, 2 usage error or an output (--trace, "
+      "--record) could not be written.");
 
   auto* diff_cmd = app.add_subcommand(
       "diff",
@@ -940,6 +982,9 @@ int main(int argc, char** argv) {
     logger->set_pattern("%^%l%$: %v");
     logger->set_level(spdlog::level::from_str(options.log_level));
     spdlog::set_default_logger(logger);
+    // Past a file size limit (RLIMIT_FSIZE) a write then fails with EFBIG, which the command
+    // reports, instead of killing the process: a robot's run goes on without its recording.
+    std::signal(SIGXFSZ, SIG_IGN);
     options.diagnostic_format = arbiter::FormatOptions::readable(use_color(options.color));
     if (validate_cmd->parsed()) return validate(options);
     if (run_cmd->parsed()) {
@@ -959,6 +1004,7 @@ int main(int argc, char** argv) {
       replay.config = options.config;
       replay.trace = options.trace_path;
       replay.record = options.record_path;
+      replay.record_flush = options.record_flush;
       replay.steps = replay_cmd->count("--steps") > 0 ? options.steps : 0;
       replay.load = load_options_of(options);
       replay.version = kVersion;

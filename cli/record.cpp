@@ -213,6 +213,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       err << fmt::format("arbiter replay: cannot write '{}'\n", options.record);
       return 2;
     }
+    recorder->set_flush_interval(options.record_flush);
     manager.add_observer(*recorder);
   }
   const bool exact = options.config.empty();
@@ -292,9 +293,18 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     recorded.compare(manager.steps(), end == std::string::npos ? text : text.substr(end + 1),
                      differ);
   }
+  // A recording that failed was reported at once and ended there: the replay's verdict still
+  // follows, and the exit status says that an output was not written.
+  const auto outputs_written = [&](int code) {
+    if (!recorder || !recorder->failed()) return code;
+    err << fmt::format(
+        "arbiter replay: writing recording '{}' failed: {}; it holds the steps written before\n",
+        options.record, recorder->error());
+    return 2;
+  };
   if (run.error()) {
     err << format(*run.error());
-    return 1;
+    return outputs_written(1);
   }
   manager.finish();
   written_out();
@@ -310,7 +320,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   if (!have_event) recorded.drain();  // to its end, which may not be whole
   if (recorded_source->error()) {
     err << format(*recorded_source->error());
-    return 1;
+    return outputs_written(1);
   }
   if (!have_event) {
     note_end(options.recording, recorded_source->truncated(), recorded_source->damaged(), err);
@@ -319,12 +329,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     out << fmt::format("replayed {} steps of {} with {}\n", steps, options.recording,
                        options.config);
     out << format_text(diff, "the recording", "the replay");
-    return 0;
+    return outputs_written(0);
   }
   if (diff.identical) {
     out << fmt::format("replayed {} steps of {}: identical to the recording\n", steps,
                        options.recording);
-    return 0;
+    return outputs_written(0);
   }
   const auto& first = *diff.first_divergence;
   std::string what;
@@ -337,7 +347,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       "state or plugin is not deterministic (a wall clock, unseeded randomness: "
       "docs/plugins.md)\n",
       options.recording);
-  return 1;
+  return outputs_written(1);
 }
 
 void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,

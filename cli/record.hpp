@@ -22,7 +22,8 @@ struct ReplayOptions {
   std::string config;  ///< empty: the recorded config
   std::string trace;
   std::string record;
-  std::uint64_t steps = 0;  ///< 0: all recorded
+  double record_flush = Recorder::kFlushInterval;  ///< Recorder::set_flush_interval()
+  std::uint64_t steps = 0;                         ///< 0: all recorded
   LoadOptions load;
   std::string version;
 };

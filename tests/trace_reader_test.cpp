@@ -1,4 +1,7 @@
 #include <fmt/format.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
@@ -327,4 +330,36 @@ TEST_CASE("a recorder asked for no slots keeps one, and records a run it is drai
   INFO(format(error));
   REQUIRE(recorded);
   CHECK(recorded->steps.size() == 30);
+}
+
+TEST_CASE("a recording that cannot be written ends, not the run, and says why once",
+          "[trace_reader][record]") {
+  if (!fs::exists("/dev/full")) {
+    WARN("no /dev/full here: skipped");
+    return;
+  }
+  Registry registry = make_test_registry();
+  Diagnostics diagnostics;
+  auto program = load(std::string(ARBITER_SOURCE_DIR) + "/configs/paper/goalie_plan.yaml", registry,
+                      diagnostics);
+  INFO(format(diagnostics));
+  REQUIRE(program);
+  Manager manager(std::move(*program));
+  std::ostringstream log;
+  auto logger = std::make_shared<spdlog::logger>(
+      "recording", std::make_shared<spdlog::sinks::ostream_sink_st>(log));
+  logger->set_pattern("%l: %v");
+  Recorder recorder("/dev/full", RecordingInfo{{}, {}, "test"}, 4, RingFull::kWaitForWriter);
+  REQUIRE(recorder.ok());  // it opens: the disk is found full at the first write
+  recorder.set_logger(logger);
+  manager.add_observer(recorder);
+  for (int i = 0; i < 30; ++i) manager.step();
+  manager.finish();
+  CHECK(manager.steps() == 30);
+  CHECK(recorder.failed());
+  CHECK_FALSE(recorder.ok());
+  CHECK(recorder.error() == "No space left on device (at the start)");
+  CHECK(log.str() ==
+        "error: recording '/dev/full': a write failed: No space left on device (at the start); "
+        "the run goes on unrecorded, the file keeps what was written before\n");
 }

@@ -1,8 +1,9 @@
 #include <fmt/format.h>
+#include <unistd.h>
 #include <zlib.h>
 #include <zstd.h>
 
-#include <cstdio>
+#include <cerrno>
 #include <cstring>
 
 #include "mcap.hpp"
@@ -36,17 +37,24 @@ void put_record(std::string& out, Op op, std::string_view content) {
 
 }  // namespace
 
-Writer::Writer(std::FILE* file, std::size_t chunk_size) : file_(file), chunk_size_(chunk_size) {
-  write(kMagic);
-}
+Writer::Writer(int fd, std::size_t chunk_size) : fd_(fd), chunk_size_(chunk_size) {}
 
 void Writer::write(std::string_view bytes) {
-  if (ok_ && std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) ok_ = false;
-  offset_ += bytes.size();
-  data_crc_ = crc(data_crc_, bytes);
+  while (error_ == 0 && !bytes.empty()) {
+    const auto written = ::write(fd_, bytes.data(), bytes.size());
+    if (written < 0) {
+      if (errno != EINTR) error_ = errno;
+      continue;
+    }
+    // A short write stops at a limit (a file size limit, a full disk): the next one says which.
+    offset_ += static_cast<std::uint64_t>(written);
+    data_crc_ = crc(data_crc_, bytes.substr(0, static_cast<std::size_t>(written)));
+    bytes.remove_prefix(static_cast<std::size_t>(written));
+  }
 }
 
 void Writer::header(std::string_view profile, std::string_view library) {
+  write(kMagic);
   std::string content;
   put_string(content, profile);
   put_string(content, library);
@@ -107,17 +115,18 @@ void Writer::message(std::uint16_t channel, std::uint64_t log_time, std::string_
   put<std::uint64_t>(chunk_, log_time);
   put<std::uint64_t>(chunk_, log_time);
   chunk_ += data;
-  if (chunk_.size() >= chunk_size_) flush_chunk();
 }
 
-void Writer::flush_chunk() {
+void Writer::close_chunk() {
   if (chunk_.empty()) return;
   compressed_.resize(ZSTD_compressBound(chunk_.size()));
   const std::size_t size =
       ZSTD_compress(compressed_.data(), compressed_.size(), chunk_.data(), chunk_.size(), 3);
   if (ZSTD_isError(size)) {
-    ok_ = false;
+    // Only for want of memory: the chunk is lost, as a write of it that failed would lose it.
+    if (error_ == 0) error_ = ENOMEM;
     chunk_.clear();
+    index_.clear();
     return;
   }
   std::string content;
@@ -164,12 +173,11 @@ void Writer::flush_chunk() {
   ++chunk_count_;
   chunk_.clear();
   index_.clear();
-  std::fflush(file_);
 }
 
 void Writer::metadata(std::string_view name,
                       const std::vector<std::pair<std::string, std::string>>& map) {
-  flush_chunk();
+  close_chunk();
   std::string entries;
   for (const auto& [key, value] : map) {
     put_string(entries, key);
@@ -187,11 +195,10 @@ void Writer::metadata(std::string_view name,
   put_record(metadata_indexes_, kMetadataIndex, index);
   ++metadata_count_;
   write(record);
-  std::fflush(file_);
 }
 
 void Writer::finish() {
-  flush_chunk();
+  close_chunk();
   std::string data_end;
   put<std::uint32_t>(data_end, data_crc_);
   std::string record;
@@ -244,7 +251,6 @@ void Writer::finish() {
   write(offsets);
   write(footer);
   write(kMagic);
-  std::fflush(file_);
 }
 
 }  // namespace arbiter::mcap

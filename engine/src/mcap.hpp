@@ -35,30 +35,41 @@ enum Op : std::uint8_t {
 /// zlib's CRC-32 of `bytes`, continuing `running`: every CRC in a file is this one.
 std::uint32_t crc(std::uint32_t running, std::string_view bytes);
 
-/// Writes one MCAP file into a byte sink. Not thread-safe: one writer thread owns it.
+/// Writes one MCAP file. Not thread-safe: one thread at a time owns it.
+///
+/// Every record goes to the file at once (a chunk when it is closed), with no buffer of its own
+/// in between, so that after a failed write the file ends where the failure left it: whole
+/// records up to there, then part of one at most, which a reader takes for a file cut off. After
+/// a failed write nothing more is written.
 class Writer {
  public:
-  /// `sink(bytes)` appends to the file; the writer keeps offsets itself.
-  explicit Writer(std::FILE* file, std::size_t chunk_size = 256 * 1024);
+  /// Writes to the open file descriptor `fd` (not owned), from its current offset.
+  explicit Writer(int fd, std::size_t chunk_size = 256 * 1024);
+  /// The magic and the header record: first of all.
   void header(std::string_view profile, std::string_view library);
   std::uint16_t schema(std::string_view name, std::string_view encoding, std::string_view data);
   std::uint16_t channel(std::uint16_t schema, std::string_view topic, std::string_view encoding);
-  /// A message into the current chunk, written out when the chunk is full.
+  /// A message into the open chunk. The owner closes the chunk once chunk_full(), between
+  /// messages that belong together: a file cut off after a chunk then holds all of them or none.
   void message(std::uint16_t channel, std::uint64_t log_time, std::string_view data);
-  /// A metadata record (outside chunks, so the current chunk is written first).
+  /// A metadata record (outside chunks, so the open chunk is closed first).
   void metadata(std::string_view name, const std::vector<std::pair<std::string, std::string>>& map);
-  /// Writes the open chunk, the data end, the summary and the footer.
+  /// Writes the open chunk (if a message is in it) and its message indexes.
+  void close_chunk();
+  bool chunk_open() const { return !chunk_.empty(); }
+  bool chunk_full() const { return chunk_.size() >= chunk_size_; }
+  /// Closes the open chunk and writes the data end, the summary and the footer.
   void finish();
-  /// False once a write to the file failed.
-  bool ok() const { return ok_; }
+  /// False once a write to the file failed; error() is then its errno.
+  bool ok() const { return error_ == 0; }
+  int error() const { return error_; }
 
  private:
   void write(std::string_view bytes);
-  void flush_chunk();
 
-  std::FILE* file_;
+  int fd_;
   std::size_t chunk_size_;
-  bool ok_ = true;
+  int error_ = 0;
   std::uint64_t offset_ = 0;
   std::uint32_t data_crc_ = 0;
   std::string schemas_;  // the schema and channel records again, for the summary

@@ -1,9 +1,14 @@
 #include "arbiter/recording.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <system_error>
 
 #include "arbiter/trace.hpp"
 #include "mcap.hpp"
@@ -107,7 +112,7 @@ struct alignas(64) Recorder::Slot {
 };
 
 struct Recorder::Output {
-  explicit Output(std::FILE* file) : writer(file) {}
+  explicit Output(int fd) : writer(fd) {}
   mcap::Writer writer;
   std::uint16_t header = 0;
   std::uint16_t step = 0;
@@ -125,14 +130,16 @@ struct Recorder::Output {
 
 Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots,
                    RingFull ring_full)
-    : file_(std::fopen(path.c_str(), "wb")),
+    : path_(path),
+      fd_(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)),
       info_(std::move(info)),
       // One slot is always left empty, to tell a full ring from an empty one; at least one
       // step may wait, or every step would drop and the end could never be written.
       ring_(std::make_unique<Slot[]>(std::max<std::size_t>(slots, 1) + 1)),
       ring_size_(std::max<std::size_t>(slots, 1) + 1),
-      ring_full_(ring_full) {
-  if (file_ != nullptr) out_ = std::make_unique<Output>(file_);
+      ring_full_(ring_full),
+      logger_(spdlog::default_logger()) {
+  if (fd_ >= 0) out_ = std::make_unique<Output>(fd_);
 }
 
 Recorder::~Recorder() {
@@ -144,11 +151,29 @@ Recorder::~Recorder() {
     wake_writer();
   }
   if (writer_.joinable()) writer_.join();
-  if (file_ != nullptr) std::fclose(file_);
+  if (fd_ >= 0) ::close(fd_);
 }
 
 bool Recorder::ok() const {
-  return file_ != nullptr && out_ && out_->writer.ok();
+  return out_ != nullptr && !failed();  // out_ exists once the file is open
+}
+
+void Recorder::check_written(std::uint64_t step) {
+  if (out_->writer.ok() || failed_.load(std::memory_order_relaxed)) return;
+  fail(out_->writer.error(), step);
+}
+
+void Recorder::fail(int error, std::uint64_t step, const char* doing) {
+  if (failing_.exchange(true)) return;
+  error_ = std::generic_category().message(error);
+  error_ += step == 0 ? std::string(" (at the start)") : fmt::format(" ({} step {})", doing, step);
+  failed_.store(true, std::memory_order_release);
+  if (logger_) {
+    logger_->error(
+        "recording '{}': a write failed: {}; the run goes on unrecorded, the file keeps what was "
+        "written before",
+        path_, error_);
+  }
 }
 
 inline Recorder::Slot* Recorder::claim() {
@@ -202,6 +227,7 @@ void Recorder::on_start(const Manager& manager) {
   written_ = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
   stepping_ = written_.get();
   writer.message(out_->header, wall_start_ns_, written_->header);
+  check_written(0);
   set_writer_period(manager.program());
   started_ = true;
   writer_ = std::thread([this] { write_loop(); });
@@ -346,13 +372,31 @@ void Recorder::on_finish(const Manager&) {
 }
 
 void Recorder::write_loop() {
+  using Clock = std::chrono::steady_clock;
   auto& out = *out_;
+  // Nothing waits in the open chunk, or on its way to the storage, for longer than this: what a
+  // crash or a power cut loses.
+  const bool flushes = !(flush_interval_ <= 0.0);
+  const auto flush_interval =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+          flush_interval_ < kMaxFlushInterval ? flush_interval_ : kMaxFlushInterval));
+  bool unsynced = false;  // something was written, or put in the open chunk, since the last sync
+  Clock::time_point unsynced_since;
+  const auto flush_when_due = [&](Clock::time_point now) {
+    if (!unsynced || now - unsynced_since < flush_interval) return;
+    out.writer.close_chunk();
+    check_written(out.last_step);
+    request_sync(out.last_step);
+    unsynced = false;
+  };
+  if (flushes) syncer_ = std::thread([this] { sync_loop(); });
   std::size_t head_seen = 0;  // head_ is read again only once the writer has caught up with it
   while (true) {
     const auto tail = tail_.load(std::memory_order_relaxed);
     if (tail == head_seen) {
       head_seen = head_.load(std::memory_order_acquire);
       if (tail == head_seen) {
+        if (flushes && !failed()) flush_when_due(Clock::now());
         std::unique_lock<std::mutex> lock(wake_mutex_);
         wake_.wait_for(lock, std::chrono::microseconds(writer_period_us_.load()),
                        [this] { return wake_requested_; });
@@ -375,12 +419,14 @@ void Recorder::write_loop() {
         reload.emplace_back("file:" + file, std::move(text));
       }
       written_->files.clear();
-      out.writer.metadata("arbiter.reload", reload);
-      out.writer.message(out.header, slot.log_time, header);
+      if (!failed()) {
+        out.writer.metadata("arbiter.reload", reload);
+        out.writer.message(out.header, slot.log_time, header);
+      }
       out.last_step = slot.step;
       slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
       headers_written_.fetch_add(1, std::memory_order_release);
-    } else {
+    } else if (!failed()) {
       // The writer only reads the block: a line it wrote would have to come back to the
       // stepping thread's core before that could fill the slot again.
       detail::StepSnapshot step(written_->blocks.shape(), block(*written_, &slot));
@@ -404,11 +450,67 @@ void Recorder::write_loop() {
         out.writer.message(out.inputs, time, out.inputs_record);
       }
     }
+    // After a failed write the writer only frees the slots: the run goes on, unrecorded.
+    if (!failed()) {
+      // A step's record and its inputs go into one chunk: a file cut off has both or neither.
+      if (out.writer.chunk_full()) out.writer.close_chunk();
+      check_written(out.last_step);
+      if (flushes) {
+        const auto now = Clock::now();
+        if (!unsynced) {
+          unsynced = true;
+          unsynced_since = now;
+        }
+        flush_when_due(now);
+      }
+    }
     tail_.store(after(tail), std::memory_order_release);
   }
-  out.writer.metadata("arbiter.summary", {{"steps", std::to_string(out.last_step)},
-                                          {"dropped", std::to_string(out.dropped)}});
-  out.writer.finish();
+  if (!failed()) {
+    out.writer.metadata("arbiter.summary", {{"steps", std::to_string(out.last_step)},
+                                            {"dropped", std::to_string(out.dropped)}});
+    out.writer.finish();
+    check_written(out.last_step);
+    if (flushes) request_sync(out.last_step);  // the run is over: it may wait for this one
+  }
+  if (syncer_.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(sync_mutex_);
+      sync_stop_ = true;
+    }
+    sync_wake_.notify_one();
+    syncer_.join();
+  }
+  // Closed here, not by the destructor: a file system that reports a failed write only at the
+  // close (NFS) is reported with the others, before on_finish() returns.
+  const int closed = ::close(fd_);
+  const int error = errno;
+  fd_ = -1;
+  if (closed != 0 && error != EINTR && !failed()) fail(error, out.last_step);
+}
+
+void Recorder::request_sync(std::uint64_t step) {
+  {
+    std::lock_guard<std::mutex> lock(sync_mutex_);
+    sync_requested_ = true;
+    sync_step_ = step;
+  }
+  sync_wake_.notify_one();
+}
+
+void Recorder::sync_loop() {
+  std::unique_lock<std::mutex> lock(sync_mutex_);
+  while (true) {
+    sync_wake_.wait(lock, [this] { return sync_requested_ || sync_stop_; });
+    if (!sync_requested_) return;  // stopped, with nothing left to sync
+    sync_requested_ = false;
+    const auto step = sync_step_;
+    lock.unlock();
+    // EINVAL: a pipe or a device, which keep nothing to sync. Requests made meanwhile are
+    // served by the next sync, which covers them all.
+    if (::fdatasync(fd_) != 0 && errno != EINVAL) fail(errno, step, "syncing");
+    lock.lock();
+  }
 }
 
 }  // namespace arbiter

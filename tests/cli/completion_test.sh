@@ -67,6 +67,8 @@ expect "view" "x.yaml" "--t" -- --trace
 expect "plot" "--a" -- --actuators
 expect "plot" "x.jsonl" "-o" "docs/walk_and_k" -- docs/walk_and_kick.svg
 expect "run" "x.yaml" "--w" -- --watch
+expect "run" "x.yaml" "--rec" -- --record --record-flush
+expect "replay" "x.mcap" "--record-flush" "" --
 expect "test" "--j" -- --junit
 expect "test" "tests/scenarios/soccer/goalie_d" -- tests/scenarios/soccer/goalie_dives_at_the_shot.test.yaml
 expect "ls" -- lsp

@@ -44,19 +44,39 @@ enum class RingFull {
 /// the staging thread); a writer thread compresses and writes them. When the writer falls
 /// behind, whole steps are dropped or waited for (RingFull). Finish the run (Manager::finish())
 /// before removing a recorder from its manager.
+///
+/// A write that fails (a full disk, a file size limit) ends the recording, never the run: it is
+/// logged at once, failed() and error() tell it, and the file keeps what was written before.
 class Recorder : public Observer {
  public:
   /// The steps that may wait for the writer unless told otherwise.
   static constexpr std::size_t kSlots = 256;
+  /// Seconds a step may wait in the writer's open chunk unless told otherwise.
+  static constexpr double kFlushInterval = 1.0;
+  /// The longest flush interval: a day.
+  static constexpr double kMaxFlushInterval = 86400.0;
   /// `slots` steps (at least 1) may wait for the writer. Open fails (ok() false) when `path`
-  /// cannot be written.
+  /// cannot be opened for writing.
   Recorder(const std::string& path, RecordingInfo info, std::size_t slots = kSlots,
            RingFull ring_full = RingFull::kDropStep);
   ~Recorder() override;
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
+  /// The file is open and no write to it has failed.
   bool ok() const;
+  /// The writer closes its open chunk once the oldest step in it has waited `seconds` (on the
+  /// steady clock), and a thread of its own then has the system put the file on its storage
+  /// (fdatasync): a crash or a power cut loses about that much at most. 0: a chunk is closed only
+  /// when 256 KiB of records fill it, and the file is left to the system to sync. At most
+  /// kMaxFlushInterval (more, or NaN, is taken as that). Before the run starts.
+  void set_flush_interval(double seconds) { flush_interval_ = seconds; }
+  /// Where a failed write is reported (default: spdlog's default logger). Before the run starts.
+  void set_logger(std::shared_ptr<spdlog::logger> logger) { logger_ = std::move(logger); }
+  /// True once a write to the file failed (any thread).
+  bool failed() const { return failed_.load(std::memory_order_acquire); }
+  /// Why, and at which step: "No space left on device (writing step 605)"; "" until failed().
+  std::string error() const { return failed() ? error_ : std::string(); }
 
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
@@ -116,10 +136,20 @@ class Recorder : public Observer {
   /// The files stage_files() left, taken.
   std::vector<std::pair<std::string, std::string>> take_staged_files();
   void write_loop();
+  /// Ends the recording if a write of the writer failed.
+  void check_written(std::uint64_t step);
+  /// Ends the recording: keeps the failure (an errno), logs it, and writes nothing more. The
+  /// first call of any thread wins.
+  void fail(int error, std::uint64_t step, const char* doing = "writing");
+  /// Asks the sync thread to sync the file, without waiting for it.
+  void request_sync(std::uint64_t step);
+  /// The sync thread: fdatasync, whenever asked, until told to stop.
+  void sync_loop();
   /// Where the step values of `slot` are, in `generation`'s blocks.
   detail::SnapshotBlock block(const Generation& generation, const Slot* slot) const;
 
-  std::FILE* file_ = nullptr;
+  std::string path_;
+  int fd_ = -1;
   RecordingInfo info_;
   std::unique_ptr<Slot[]> ring_;
   std::size_t ring_size_ = 0;
@@ -156,6 +186,20 @@ class Recorder : public Observer {
   std::unique_ptr<Output> out_;
   RingFull ring_full_ = RingFull::kDropStep;
   std::uint64_t wall_start_ns_ = 0;
+  double flush_interval_ = kFlushInterval;
+  std::shared_ptr<spdlog::logger> logger_;
+  // Set once, by the first thread that fails (fail()), before failed_.
+  std::string error_;
+  std::atomic<bool> failing_{false};
+  std::atomic<bool> failed_{false};
+  // The sync thread, which waits for the storage so that the writer never does: a sync can take
+  // longer than the ring takes to fill at a high rate.
+  std::thread syncer_;
+  std::mutex sync_mutex_;
+  std::condition_variable sync_wake_;
+  bool sync_requested_ = false;  // by sync_mutex_
+  bool sync_stop_ = false;       // by sync_mutex_
+  std::uint64_t sync_step_ = 0;  // by sync_mutex_: the last step written when it was asked
   // Read by the staging thread too.
   std::atomic<bool> started_{false};
   std::atomic<bool> finished_{false};
