@@ -968,8 +968,15 @@ int main(int argc, char** argv) {
     }
     // Checked here rather than by the option, so that `lsp` can start and show it in the editor.
     for (const auto& dir : options.plugin_path) {
-      if (!lsp_cmd->parsed() && !std::filesystem::is_directory(dir)) {
-        throw CLI::ValidationError("--plugin-path", "Directory does not exist: " + dir);
+      if (lsp_cmd->parsed()) continue;
+      // The overload that reports, not throws: a path that cannot be looked at (no permission,
+      // too long, a link loop) is a usage error as a missing one is.
+      std::error_code looked;
+      if (!std::filesystem::is_directory(dir, looked)) {
+        throw CLI::ValidationError(
+            "--plugin-path", looked && looked != std::errc::no_such_file_or_directory
+                                 ? fmt::format("cannot look at '{}': {}", dir, looked.message())
+                                 : "Directory does not exist: " + dir);
       }
     }
   } catch (const CLI::ParseError& error) {

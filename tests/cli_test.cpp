@@ -224,6 +224,17 @@ TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage 
   SECTION("a missing command is a usage error") {
     CHECK(run_cli("").exit_code == 2);
   }
+  SECTION("a --plugin-path that is missing, or cannot be looked at, is a usage error") {
+    const auto valid = quoted(kDataDir / "valid" / "twin.yaml");
+    const auto missing = run_cli("--plugin-path /no/such/folder validate " + valid);
+    CHECK(missing.exit_code == 2);
+    CHECK(missing.err.find("Directory does not exist: /no/such/folder") != std::string::npos);
+    // A name longer than a path may be: the check cannot look, and says why (it threw before).
+    const auto too_long =
+        run_cli("--plugin-path /tmp/" + std::string(5000, 'a') + " validate " + valid);
+    CHECK(too_long.exit_code == 2);
+    CHECK(too_long.err.find("File name too long") != std::string::npos);
+  }
 }
 
 TEST_CASE("arbiter validate colours its diagnostics only when asked or in a terminal", "[cli]") {
