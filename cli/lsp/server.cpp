@@ -1152,6 +1152,22 @@ void Server::update(const std::set<std::string>& paths, bool rescan, std::vector
       drop(root);
     }
   }
+  // An open included file checked on its own, or through a config that is not open, was found
+  // on the disk: a config created or edited there may include it now. When the search finds
+  // another one, the file moves there (the files checked through the same root are looked for
+  // again below, the root being gone).
+  if (rescan) {
+    for (const auto& [uri, open] : open_) {
+      const std::string& path = open.path;
+      const Analysis* current = analysis_of(path);
+      if (kind_of(path) != ConfigText::kFragment || !current ||
+          kind_of(current->root) == ConfigText::kConfig)
+        continue;
+      std::set<std::string> visited{path};
+      const std::string owner = owners_.emplace(path, includer_of(path, visited)).first->second;
+      if (!owner.empty() && owner != current->root) drop(std::string(current->root));
+    }
+  }
   // Each open config not checked through another: a root of its own, or, for a file meant to be
   // included, checked through the config that includes it on the disk (a file alone otherwise).
   for (const auto& [uri, open] : open_) {
