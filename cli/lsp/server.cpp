@@ -33,6 +33,7 @@ constexpr int kRequestFailed = -32803;
 // size of a file read to check it.
 constexpr std::size_t kMaxScanned = 20000;
 constexpr std::uintmax_t kMaxScannedBytes = 4u << 20;
+constexpr std::size_t kMaxScannedDepth = 8;  // folders below the one searched
 
 struct RequestError {
   int code;
@@ -1071,26 +1072,37 @@ std::string Server::includer_of(const std::string& path, std::set<std::string>& 
     }
   }
   const std::string name = fs::path(path).filename().string();
-  std::error_code error;
-  fs::recursive_directory_iterator it(top, fs::directory_options::skip_permission_denied, error);
+  // The folders are walked one at a time, not with a recursive_directory_iterator: that one ends
+  // at its first error (libstdc++ leaves it at its end), so a folder removed during the scan would
+  // end the search. Here an error ends only the folder it happened in.
+  constexpr auto options = fs::directory_options::skip_permission_denied;
+  std::error_code error;  // an entry or folder that cannot be read is skipped, not the search
+  std::vector<fs::directory_iterator> folders;
+  folders.emplace_back(top, options, error);
   std::size_t seen = 0;
   std::string fragment;
-  for (; !error && it != fs::recursive_directory_iterator(); it.increment(error)) {
+  while (!folders.empty()) {
+    if (folders.back() == fs::directory_iterator()) {
+      folders.pop_back();
+      continue;
+    }
+    const fs::directory_entry item = *folders.back();
+    folders.back().increment(error);  // on an error, at the folder's end
     if (++seen > kMaxScanned) break;
-    const fs::path& entry = it->path();
+    const fs::path& entry = item.path();
     const std::string leaf = entry.filename().string();
-    std::error_code ignored;  // an entry that cannot be read is skipped, not the search
-    if (it->is_directory(ignored)) {
-      if (leaf.empty() || leaf[0] == '.' || leaf == "node_modules" || leaf.rfind("build", 0) == 0 ||
-          it.depth() >= 8)
-        it.disable_recursion_pending();
+    if (item.is_directory(error)) {
+      if (!(leaf.empty() || leaf[0] == '.' || leaf == "node_modules" ||
+            leaf.rfind("build", 0) == 0 || folders.size() > kMaxScannedDepth ||
+            item.is_symlink(error)))
+        folders.emplace_back(entry, options, error);  // one that cannot be opened is at its end
       continue;
     }
     const std::string candidate = entry.lexically_normal().string();
     const std::string extension = entry.extension().string();
     if (candidate == path || visited.count(candidate) ||
         !(extension == ".yaml" || extension == ".yml" || extension == ".json") ||
-        it->file_size(ignored) > kMaxScannedBytes)
+        item.file_size(error) > kMaxScannedBytes)
       continue;
     const std::string text = text_on_disk_or_open(candidate);
     if (text.find(name) == std::string::npos) continue;
@@ -1150,6 +1162,22 @@ void Server::update(const std::set<std::string>& paths, bool rescan, std::vector
       load(root);
     } else {
       drop(root);
+    }
+  }
+  // An open included file checked on its own, or through a config that is not open, was found
+  // on the disk: a config created or edited there may include it now. When the search finds
+  // another one, the file moves there (the files checked through the same root are looked for
+  // again below, the root being gone).
+  if (rescan) {
+    for (const auto& [uri, open] : open_) {
+      const std::string& path = open.path;
+      const Analysis* current = analysis_of(path);
+      if (kind_of(path) != ConfigText::kFragment || !current ||
+          kind_of(current->root) == ConfigText::kConfig)
+        continue;
+      std::set<std::string> visited{path};
+      const std::string owner = owners_.emplace(path, includer_of(path, visited)).first->second;
+      if (!owner.empty() && owner != current->root) drop(std::string(current->root));
     }
   }
   // Each open config not checked through another: a root of its own, or, for a file meant to be

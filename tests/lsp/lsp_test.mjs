@@ -605,6 +605,28 @@ test('an included file opened on its own is checked alone once the config on the
   }
 });
 
+test('an included file opened on its own is checked through a config that includes it created on the disk later', async () => {
+  const { dir, main, part, mainText, partText } = includeFixture();
+  try {
+    fs.rmSync(main);
+    await withClient(async (client) => {
+      // Alone, it is a config without its version and name.
+      const alone = await client.open(uriOf(part), partText);
+      assert.deepEqual(summary(alone), validated(part));
+      assert.notDeepEqual(alone, []);
+      fs.writeFileSync(main, mainText);
+      await client.connection.sendNotification('workspace/didChangeWatchedFiles',
+        { changes: [{ uri: uriOf(main), type: 1 }] });
+      // Every notification sent before the reply to a later request has arrived.
+      await client.request('textDocument/documentSymbol', { textDocument: { uri: uriOf(part) } });
+      assert.deepEqual(client.diagnostics.get(uriOf(part)), []);
+      assert.deepEqual(client.diagnostics.get(uriOf(main)) ?? [], []);
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test('an edit checks again only the configs the edited file belongs to', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();

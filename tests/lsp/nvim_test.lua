@@ -26,15 +26,27 @@ local function wait_for(buffer, count, what)
   return vim.diagnostic.get(buffer)
 end
 
+-- The server answers requests in order and publishes as it goes, and the client handles its
+-- messages in the order they came: once the answer to a request is in, every list published
+-- for what was sent before it has been taken in. (A wait of a fixed time proves nothing on a
+-- loaded machine.)
+local function settle(buffer, what)
+  local params = { textDocument = vim.lsp.util.make_text_document_params(buffer) }
+  local answers = vim.lsp.buf_request_sync(buffer, 'textDocument/documentSymbol', params, 15000)
+  if not answers or vim.tbl_isempty(answers) then
+    fail(what .. ': no answer to a request within 15 s')
+  end
+end
+
 local function text_of(buffer, diagnostic)
   local line = vim.api.nvim_buf_get_lines(buffer, diagnostic.lnum, diagnostic.lnum + 1, false)[1]
   return line:sub(diagnostic.col + 1, diagnostic.end_col)
 end
 
 local function expect_one(buffer, what, code, text)
-  local diagnostics = wait_for(buffer, 1, what)
-  vim.wait(300)  -- a second list, if one were coming
-  diagnostics = vim.diagnostic.get(buffer)
+  wait_for(buffer, 1, what)
+  settle(buffer, what)
+  local diagnostics = vim.diagnostic.get(buffer)
   for _, d in ipairs(diagnostics) do
     io.stdout:write(string.format('%s:%d:%d: %s [%s] %s\n', what, d.lnum + 1, d.col + 1, d.message,
       d.code, text_of(buffer, d)))
@@ -62,7 +74,9 @@ expect_one(broken, 'walk_and_kick.yaml', 'unknown-behaviour', 'kick_bal')
 -- A config without `plugins: [soccer]` does not know soccer's classes because another config
 -- loaded them, and opening it leaves the first config's error alone.
 local without = open('without_plugins.yaml')
-local unknown = wait_for(without, 5, 'without_plugins.yaml')
+wait_for(without, 5, 'without_plugins.yaml')
+settle(without, 'without_plugins.yaml')
+local unknown = vim.diagnostic.get(without)
 for _, d in ipairs(unknown) do
   if d.code ~= 'unknown-class' then fail('without_plugins.yaml: code ' .. tostring(d.code)) end
 end
@@ -89,9 +103,11 @@ end
 
 -- Opening, then closing, the config that includes it leaves the included file's error alone.
 local main = open('main.yaml')
-wait_for(main, 0, 'main.yaml')
+settle(main, 'main.yaml')
+if #vim.diagnostic.get(main) ~= 0 then fail('main.yaml got the error of the open parts/part.yaml') end
+expect_one(part, 'parts/part.yaml', 'unknown-class', 'scriptd')
 vim.cmd('bwipeout ' .. main)
-vim.wait(500)
+settle(part, 'parts/part.yaml')
 expect_one(part, 'parts/part.yaml', 'unknown-class', 'scriptd')
 
 -- An include cycle is an error on the root file, at the include that leads into it.
