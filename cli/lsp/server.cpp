@@ -752,6 +752,15 @@ Server::Server(Registry registry, LoadOptions options)
 Server::~Server() = default;
 
 std::vector<json> Server::handle(const std::string& text) {
+  // Before the parse: the message's tree is copied and compared recursively.
+  if (const auto deep = find_too_deep_json(text, options_.limits.max_depth)) {
+    return {{{"jsonrpc", "2.0"},
+             {"id", nullptr},
+             {"error",
+              {{"code", kParseError},
+               {"message", fmt::format("parse error: nesting deeper than {} levels at byte {}",
+                                       options_.limits.max_depth, *deep)}}}}};
+  }
   json message;
   try {
     message = json::parse(text);

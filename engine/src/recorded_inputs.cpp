@@ -230,6 +230,13 @@ std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic
         }
       }
     } else if (record.topic == "/arbiter/inputs") {
+      // Checked here, before RecordedInputs copies its values out of a parsed tree.
+      if (const auto deep = find_too_deep_json(record.data)) {
+        return fail(fmt::format(
+            "at byte {}: an inputs message nests deeper than {} levels (at byte {} of the "
+            "message)",
+            record.offset, ReadLimits().max_depth, *deep));
+      }
       const auto key = record.data.find("\"step\": ");
       const auto step =
           key == std::string::npos ? 0 : std::strtoull(record.data.c_str() + key + 8, nullptr, 10);
