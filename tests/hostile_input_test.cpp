@@ -237,3 +237,91 @@ TEST_CASE("a language server message nested 100 000 levels deep is a parse error
   CHECK(result.out.find("\"message\":\"parse error: nesting deeper than 200 levels at byte ") !=
         std::string::npos);
 }
+
+namespace {
+
+/// Whether `text` holds a byte a terminal could act on or garble: a control character other than
+/// the line feed (the CLI prints no colours to a file), or a byte that is not ASCII and not part of
+/// "é" (the one non-ASCII character these tests write).
+bool raw_bytes_in(const std::string& text) {
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\n') continue;
+    if (c < 0x20 || c == 0x7f) return true;
+    if (c >= 0x80) {
+      if (text.compare(i, 2, "é") != 0) return true;
+      ++i;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("a malformed trace line is printed escaped, its valid UTF-8 kept", "[hostile]") {
+  TempDir dir;
+  record_run(dir / "run.jsonl", dir / "run.mcap");
+  const auto lines = lines_of(read_text(dir / "run.jsonl"));
+  const auto write = [&](const std::string& bad) {
+    return dir.write("bad.jsonl", lines[0] + "\n" + lines[1] + "\n" + bad + "\n");
+  };
+  const std::map<std::string, std::string> commands = {
+      {"plot", "plot " + arg(dir / "bad.jsonl") + " -o " + arg(dir / "bad.svg")},
+      {"explain",
+       "explain " + arg(kConfig) + " --trace " + arg(dir / "bad.jsonl") + " --step 2 kick_ball"}};
+  for (const auto& [name, command] : commands) {
+    DYNAMIC_SECTION(name << ": escape and bell characters (terminal escape injection)") {
+      write("\x1b]0;owned\x07{\"step\": 2, \"x\": \"\x1b[31mré\"}");
+      const auto result = run_cli(command);
+      CHECK(result.exit_code == 1);
+      CHECK(result.err.find("bad.jsonl:3:1: error[bad-trace]: not JSON: ") != std::string::npos);
+      CHECK(result.err.find("\n3 | \\x1b]0;owned\\x07{\"step\": 2, \"x\": \"\\x1b[31mré\"}\n"
+                            "  | ^~~~\n") != std::string::npos);
+      CHECK_FALSE(raw_bytes_in(result.err));
+    }
+    DYNAMIC_SECTION(name << ": invalid UTF-8") {
+      write("{\"step\": 2, \"x\": caf\xe9 \xff\xfe}");
+      const auto result = run_cli(command);
+      CHECK(result.exit_code == 1);
+      // The plain scalar from the column on is underlined, escapes and all.
+      CHECK(result.err.find("bad.jsonl:3:18: error[bad-trace]: not JSON: ") != std::string::npos);
+      CHECK(result.err.find("\n3 | {\"step\": 2, \"x\": caf\\xe9 \\xff\\xfe}\n  | " +
+                            std::string(17, ' ') + "^" + std::string(15, '~') + "\n") !=
+            std::string::npos);
+      CHECK_FALSE(raw_bytes_in(result.err));
+    }
+  }
+}
+
+TEST_CASE("a config excerpt with control characters is printed escaped", "[hostile]") {
+  TempDir dir;
+  const auto config =
+      dir.write("control.yaml",
+                "arbiter: 1\nname: x\nlayers:\n  - name: l\n    behaviours:\n"
+                "      a: {type: scripted, \"b\x1b[2J\x07\xc2\x9b\": 1, \"é\": 2}\n");
+  const auto result = run_cli("validate " + arg(config));
+  CHECK(result.exit_code == 1);
+  INFO(result.err);
+  // The underlines span the escapes: the first marks the key, the second is shifted by them.
+  const std::string excerpt =
+      "\n6 |       a: {type: scripted, \"b\\x1b[2J\\x07\\u009b\": 1, \"é\": 2}\n  | ";
+  CHECK(result.err.find(":6:27: error[unknown-key]: unknown key 'b\\x1b[2J\\x07\\u009b' in "
+                        "behaviour 'a'" +
+                        excerpt + std::string(26, ' ') + "^" + std::string(19, '~') + "\n") !=
+        std::string::npos);
+  CHECK(result.err.find(":6:41: error[unknown-key]: unknown key 'é' in behaviour 'a'" + excerpt +
+                        std::string(51, ' ') + "^~~\n") != std::string::npos);
+  CHECK_FALSE(raw_bytes_in(result.err));
+}
+
+TEST_CASE("printable() escapes control characters and invalid UTF-8 and nothing else",
+          "[hostile]") {
+  CHECK(printable("plain é, ü and 😀\tkept") == "plain é, ü and 😀\tkept");
+  CHECK(printable("\x1b[31m\x07\x7f\r") == "\\x1b[31m\\x07\\x7f\\x0d");
+  CHECK(printable("a\nb") == "a\\x0ab");
+  CHECK(printable("a\nb", true) == "a\nb");
+  CHECK(printable("\xc2\x85 \xc2\x9b") == "\\u0085 \\u009b");
+  // A lone continuation byte, Latin-1, an overlong '/', an encoded surrogate, a cut sequence.
+  CHECK(printable("\x80 caf\xe9 \xc0\xaf \xed\xa0\x80 \xe2\x82") ==
+        "\\x80 caf\\xe9 \\xc0\\xaf \\xed\\xa0\\x80 \\xe2\\x82");
+}

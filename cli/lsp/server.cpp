@@ -822,7 +822,7 @@ std::vector<json> Server::handle(const json& message) {
   } catch (const json::exception& failure) {
     if (request) error(id, kInvalidParams, std::string("invalid params: ") + failure.what());
   } catch (const std::exception& failure) {
-    std::cerr << "arbiter lsp: " << method << ": " << failure.what() << "\n";
+    std::cerr << "arbiter lsp: " << printable(method) << ": " << printable(failure.what()) << "\n";
     if (request) error(id, kRequestFailed, failure.what());
   }
   return out;
@@ -1493,7 +1493,7 @@ int run(std::istream& in, std::ostream& out, Registry registry, LoadOptions opti
   while (auto frame = read_frame(in)) {
     std::vector<json> replies;
     if (!frame->error.empty()) {
-      std::cerr << "arbiter lsp: " << frame->error << "\n";
+      std::cerr << "arbiter lsp: " << printable(frame->error) << "\n";
       replies.push_back({{"jsonrpc", "2.0"},
                          {"id", nullptr},
                          {"error", {{"code", kInvalidRequest}, {"message", frame->error}}}});
