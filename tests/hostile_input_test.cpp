@@ -203,6 +203,28 @@ TEST_CASE("a recording with a message nested 100 000 levels deep is an error, no
   }
 }
 
+TEST_CASE("a recording's inputs for a step far beyond its steps are an error, not an allocation",
+          "[hostile]") {
+  TempDir dir;
+  record_run(dir / "run.jsonl", dir / "run.mcap");
+  rewrite_recording(dir / "run.mcap", dir / "far.mcap",
+                    [](const std::string& topic, int count, std::string& data) {
+                      if (topic == "/arbiter/inputs" && count == 3) {
+                        data =
+                            "{\"step\": 3000000000000, \"inputs\": {\"x\": {\"value\": 1, "
+                            "\"written\": true}}}";
+                      }
+                    });
+  const auto result = run_cli("replay " + arg(dir / "far.mcap"));
+  CHECK_FALSE(result.signalled);
+  CHECK(result.exit_code == 1);
+  INFO(result.err);
+  CHECK(result.err.find("far.mcap: error: at byte ") != std::string::npos);
+  CHECK(result.err.find(": an inputs message for step 3000000000000, after the inputs of 2 steps "
+                        "(and 0 dropped); each step's inputs follow those of the step before "
+                        "it\n") != std::string::npos);
+}
+
 TEST_CASE("a scenario file nested 100 000 levels deep is an error at its place, no crash",
           "[hostile]") {
   TempDir dir;

@@ -240,6 +240,15 @@ std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic
       const auto key = record.data.find("\"step\": ");
       const auto step =
           key == std::string::npos ? 0 : std::strtoull(record.data.c_str() + key + 8, nullptr, 10);
+      // The inputs are kept per step up to the last step: a step beyond those the recording
+      // holds (or says it dropped) is not a recorded run's, and would size that for nothing.
+      const std::uint64_t held = run.inputs.size() + run.dropped;
+      if (step > held + 1) {
+        return fail(fmt::format(
+            "at byte {}: an inputs message for step {}, after the inputs of {} steps (and {} "
+            "dropped); each step's inputs follow those of the step before it",
+            record.offset, step, run.inputs.size(), run.dropped));
+      }
       run.inputs.emplace_back(step, std::move(record.data));
     }
     record = mcap::Record();
