@@ -336,6 +336,15 @@ TEST_CASE("a config excerpt with control characters is printed escaped", "[hosti
   CHECK_FALSE(raw_bytes_in(result.err));
 }
 
+TEST_CASE("diagnostics as JSON stay JSON when a file name is not UTF-8", "[hostile]") {
+  TempDir dir;
+  const auto result = run_cli("validate --format json " + arg(dir / "bad\xff\x1b.yaml"));
+  CHECK(result.exit_code == 1);
+  INFO(result.out << result.err);
+  CHECK(result.out.find("bad\xef\xbf\xbd\\u001b.yaml\",") != std::string::npos);
+  CHECK(result.out.find_first_of("\xff\x1b") == std::string::npos);
+}
+
 TEST_CASE("printable() escapes control characters and invalid UTF-8 and nothing else",
           "[hostile]") {
   CHECK(printable("plain é, ü and 😀\tkept") == "plain é, ü and 😀\tkept");

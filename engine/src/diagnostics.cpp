@@ -285,7 +285,9 @@ std::string format_json(const Diagnostics& diagnostics) {
                      {"message", item.message},
                      {"notes", item.notes}});
   }
-  return array.dump(2) + "\n";
+  // JSON escapes control characters itself; a byte that is not UTF-8 (in a file name given on the
+  // command line, say) becomes U+FFFD, where dump() would throw.
+  return array.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 namespace {
