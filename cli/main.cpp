@@ -258,7 +258,8 @@ int explain(const Options& options) {
   const auto trace = arbiter::open_trace(options.trace_path);
   const auto explanation = arbiter::explain(*program, *trace, options.step, options.target);
   if (explanation.status == arbiter::Explanation::Status::kOk) {
-    std::cout << explanation.text;
+    // Its states, events and values are the trace's: escaped like every quote of input.
+    std::cout << arbiter::printable(explanation.text, true);
     return kExitOk;
   }
   if (explanation.where) {
@@ -268,8 +269,10 @@ int explain(const Options& options) {
         options.diagnostic_format);
     return kExitInvalid;
   }
-  std::cerr << fmt::format("arbiter explain: {}\n", explanation.text);
-  for (const auto& note : explanation.notes) std::cerr << fmt::format("  note: {}\n", note);
+  std::cerr << fmt::format("arbiter explain: {}\n", arbiter::printable(explanation.text));
+  for (const auto& note : explanation.notes) {
+    std::cerr << fmt::format("  note: {}\n", arbiter::printable(note));
+  }
   return explanation.status == arbiter::Explanation::Status::kNotFound ? kExitUsage : kExitInvalid;
 }
 
@@ -1025,7 +1028,7 @@ int main(int argc, char** argv) {
     if (schema_cmd->parsed()) return schema(options);
     if (lsp_cmd->parsed()) return lsp(options);
   } catch (const std::exception& error) {
-    std::cerr << fmt::format("arbiter: {}\n", error.what());
+    std::cerr << fmt::format("arbiter: {}\n", arbiter::printable(error.what()));
     return kExitInvalid;
   }
   return kExitUsage;

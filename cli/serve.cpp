@@ -48,7 +48,7 @@ std::optional<std::uint64_t> parse_step(const std::string& text) {
 
 void reply_text(httplib::Response& response, int status, const std::string& text) {
   response.status = status;
-  response.set_content(text, "text/plain; charset=utf-8");
+  response.set_content(printable(text, true), "text/plain; charset=utf-8");
 }
 
 /// httplib's thread pool with a bounded queue: enqueue() (on the listening thread) waits while
@@ -323,10 +323,11 @@ void WebServer::guard(const LiveAccess& access) {
 
 std::pair<int, std::string> explanation_reply(const Explanation& explanation) {
   using Status = Explanation::Status;
-  if (explanation.status == Status::kOk) return {200, explanation.text};
+  // Its names and the behaviour asked about are the client's and the trace's.
+  if (explanation.status == Status::kOk) return {200, printable(explanation.text, true)};
   std::string text = explanation.text + "\n";
   for (const auto& note : explanation.notes) text += "note: " + note + "\n";
-  return {explanation.status == Status::kNotFound ? 404 : 422, text};
+  return {explanation.status == Status::kNotFound ? 404 : 422, printable(text, true)};
 }
 
 std::string exposure_warning(const ServeAddress& address, std::string_view what) {

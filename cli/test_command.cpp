@@ -122,21 +122,21 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
     switch (result.status) {
       case ScenarioResult::Status::kPassed:
         ++passed;
-        out << fmt::format("PASS {} ({} expectations, {} steps)\n", file, result.expectations,
-                           result.steps);
+        out << fmt::format("PASS {} ({} expectations, {} steps)\n", printable(file),
+                           result.expectations, result.steps);
         break;
       case ScenarioResult::Status::kFailed:
         ++failed;
-        out << fmt::format("FAIL {} ({} of {} expectations failed)\n", file, result.failures.size(),
-                           result.expectations);
+        out << fmt::format("FAIL {} ({} of {} expectations failed)\n", printable(file),
+                           result.failures.size(), result.expectations);
         for (const auto& failure : result.failures) {
           out << format(failure.diagnostic);
-          out << indented(failure.explanation);
+          out << indented(printable(failure.explanation, true));
         }
         break;
       case ScenarioResult::Status::kInvalid:
         ++invalid;
-        out << fmt::format("INVALID {}\n", file);
+        out << fmt::format("INVALID {}\n", printable(file));
         break;
     }
     // Load warnings and the reasons a test could not run, as `arbiter validate` prints them.

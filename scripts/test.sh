@@ -109,15 +109,19 @@ run_fuzz_smoke() {
       -DARBITER_BUILD_FUZZERS=ON -DARBITER_BUILD_TESTS=OFF -DARBITER_BUILD_BENCHMARKS=OFF \
       -DARBITER_WARNINGS_AS_ERRORS=ON \
       --log-level=WARNING
-  cmake --build "$dir" --target arbiter_fuzz_config arbiter_fuzz_trace --parallel "$jobs"
-  # The config loader gets two thirds of the time, the trace reader the rest.
-  local config_seconds=$((seconds * 2 / 3))
-  local trace_seconds=$((seconds - config_seconds))
-  echo "== fuzz: ${config_seconds} s config, ${trace_seconds} s trace"
+  cmake --build "$dir" --target arbiter_fuzz_config arbiter_fuzz_trace arbiter_fuzz_replay \
+      --parallel "$jobs"
+  # The config loader gets half of the time, the trace reader and replay a quarter each.
+  local config_seconds=$((seconds / 2))
+  local trace_seconds=$((seconds / 4))
+  local replay_seconds=$((seconds - config_seconds - trace_seconds))
+  echo "== fuzz: ${config_seconds} s config, ${trace_seconds} s trace, ${replay_seconds} s replay"
   work=$(mktemp -d)
   fuzz/make_seeds.sh "$work/seeds" >/dev/null
   fuzz/make_seeds.sh "$work/trace_seeds" trace >/dev/null
-  mkdir -p "$work/corpus" "$work/trace_corpus"
+  # Recordings made by the arbiter the plain job built.
+  fuzz/make_seeds.sh "$work/replay_seeds" replay build/plain/cli/arbiter >/dev/null
+  mkdir -p "$work/corpus" "$work/trace_corpus" "$work/replay_corpus"
   "$dir/fuzz/arbiter_fuzz_config" -dict=fuzz/config.dict -max_total_time="$config_seconds" \
       -timeout=5 -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/" \
       "$work/corpus" "$work/seeds" </dev/null >"$work/fuzz.log" 2>&1 || status=$?
@@ -125,6 +129,11 @@ run_fuzz_smoke() {
     "$dir/fuzz/arbiter_fuzz_trace" -max_total_time="$trace_seconds" -timeout=5 \
         -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/" \
         "$work/trace_corpus" "$work/trace_seeds" </dev/null >>"$work/fuzz.log" 2>&1 || status=$?
+  fi
+  if [[ $status -eq 0 ]]; then
+    "$dir/fuzz/arbiter_fuzz_replay" -max_total_time="$replay_seconds" -timeout=5 \
+        -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/" \
+        "$work/replay_corpus" "$work/replay_seeds" </dev/null >>"$work/fuzz.log" 2>&1 || status=$?
   fi
   grep -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|Done)' "$work/fuzz.log" || true
   if [[ $status -eq 0 ]]; then

@@ -855,6 +855,15 @@ Server::Server(std::function<Registry()> make_registry, LoadOptions options)
 Server::~Server() = default;
 
 std::vector<json> Server::handle(const std::string& text) {
+  // Before the parse: the message's tree is copied and compared recursively.
+  if (const auto deep = find_too_deep_json(text, options_.limits.max_depth)) {
+    return {{{"jsonrpc", "2.0"},
+             {"id", nullptr},
+             {"error",
+              {{"code", kParseError},
+               {"message", fmt::format("parse error: nesting deeper than {} levels at byte {}",
+                                       options_.limits.max_depth, *deep)}}}}};
+  }
   json message;
   try {
     message = json::parse(text);
@@ -916,7 +925,7 @@ std::vector<json> Server::handle(const json& message) {
   } catch (const json::exception& failure) {
     if (request) error(id, kInvalidParams, std::string("invalid params: ") + failure.what());
   } catch (const std::exception& failure) {
-    std::cerr << "arbiter lsp: " << method << ": " << failure.what() << "\n";
+    std::cerr << "arbiter lsp: " << printable(method) << ": " << printable(failure.what()) << "\n";
     if (request) error(id, kRequestFailed, failure.what());
   }
   return out;
@@ -1880,7 +1889,7 @@ int run(std::istream& in, std::ostream& out, std::function<Registry()> make_regi
       std::cerr << "arbiter lsp: skipped bytes that are not a message: " << frame->skipped << "\n";
     }
     if (!frame->error.empty()) {
-      std::cerr << "arbiter lsp: " << frame->error << "\n";
+      std::cerr << "arbiter lsp: " << printable(frame->error) << "\n";
       replies.push_back({{"jsonrpc", "2.0"},
                          {"id", nullptr},
                          {"error", {{"code", kInvalidRequest}, {"message", frame->error}}}});

@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "utf8.hpp"
+
 namespace arbiter {
 
 Diagnostic& Diagnostics::error(const SourceLocation& where, std::string code, std::string message) {
@@ -38,6 +40,28 @@ void Diagnostics::sort() {
 }
 
 namespace {}  // namespace
+
+std::string printable(std::string_view text, bool lines) {
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = detail::utf8_char(text, i);
+    if (c.length == 0) {
+      out += fmt::format("\\x{:02x}", static_cast<unsigned char>(text[i]));
+      ++i;
+      continue;
+    }
+    if ((c.code < 0x20 && c.code != '\t' && !(lines && c.code == '\n')) || c.code == 0x7F) {
+      out += fmt::format("\\x{:02x}", c.code);
+    } else if (c.code >= 0x80 && c.code <= 0x9F) {
+      out += fmt::format("\\u{:04x}", c.code);
+    } else {
+      out.append(text, i, c.length);
+    }
+    i += c.length;
+  }
+  return out;
+}
 
 std::string to_string(const SourceLocation& where) {
   if (where.line <= 0) return where.file;
@@ -108,12 +132,17 @@ bool is_continuation_byte(char c) {
   return (static_cast<unsigned char>(c) & 0xC0) == 0x80;
 }
 
+/// The bytes of the character at `i`: a byte that is not valid UTF-8 is a character of its own,
+/// as printable() shows it.
+std::size_t character_bytes(std::string_view line, std::size_t i) {
+  return std::max<std::size_t>(1, detail::utf8_char(line, i).length);
+}
+
 /// The byte offset of the 1-based character column `column` in `line` (columns count
 /// characters, as the Document's locations do); the line's size when past its end.
 std::size_t byte_of_column(std::string_view line, int column) {
   int seen = 1;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    if (is_continuation_byte(line[i])) continue;
+  for (std::size_t i = 0; i < line.size(); i += character_bytes(line, i)) {
     if (seen == column) return i;
     ++seen;
   }
@@ -160,11 +189,8 @@ std::size_t token_bytes(std::string_view line, std::size_t start) {
 /// The bytes that `count` characters from `start` take, up to the line's end; at least 1.
 std::size_t bytes_of_characters(std::string_view line, std::size_t start, int count) {
   std::size_t end = start;
-  for (int seen = 0; end < line.size(); ++end) {
-    if (is_continuation_byte(line[end])) continue;
-    if (seen++ == count) break;
-  }
-  return std::max<std::size_t>(1, end - std::min(start, end));
+  for (int seen = 0; end < line.size() && seen < count; ++seen) end += character_bytes(line, end);
+  return std::max<std::size_t>(1, std::min(end, line.size()) - std::min(start, end));
 }
 
 /// Characters, not bytes: what the underline spans on screen.
@@ -194,37 +220,42 @@ std::string source_excerpt(std::string_view line, const SourceLocation& where, P
     length =
         std::min(length, std::max<std::size_t>(1, shown.size() - std::min(start, shown.size())));
   }
+  // Escaped in three parts, so that the underline spans the escapes of what it marks.
+  start = std::min(start, shown.size());
+  const std::size_t end = start + std::min(length, shown.size() - start);
+  const std::string lead = printable(shown.substr(0, start));
+  const std::string marked = printable(shown.substr(start, end - start));
   // The underline keeps the line's tabs so that it lines up wherever the terminal's tab stops are.
   std::string pad = before.empty() ? "" : "   ";
-  for (std::size_t i = 0; i < start && i < shown.size(); ++i) {
-    if (is_continuation_byte(shown[i])) continue;
-    pad += shown[i] == '\t' ? '\t' : ' ';
+  for (const char c : lead) {
+    if (is_continuation_byte(c)) continue;
+    pad += c == '\t' ? '\t' : ' ';
   }
-  const std::size_t width =
-      std::max<std::size_t>(1, characters(shown.substr(std::min(start, shown.size()), length)));
+  const std::size_t width = std::max<std::size_t>(1, characters(marked));
   const std::string number = std::to_string(where.line);
   const std::string gutter(number.size(), ' ');
-  return fmt::format("{} {} {}{}{}\n{} {} {}{}\n", paint(kBlue, number), paint(kBlue, "|"), before,
-                     shown, after, gutter, paint(kBlue, "|"), pad,
-                     paint(kGreen, "^" + std::string(width - 1, '~')));
+  return fmt::format("{} {} {}{}{}{}{}\n{} {} {}{}\n", paint(kBlue, number), paint(kBlue, "|"),
+                     before, lead, marked, printable(shown.substr(end)), after, gutter,
+                     paint(kBlue, "|"), pad, paint(kGreen, "^" + std::string(width - 1, '~')));
 }
 
 std::string format_one(const Diagnostic& diagnostic, const FormatOptions& options,
                        SourceLines& sources) {
   const Paint paint{options.color};
-  const std::string where = to_string(diagnostic.location);
+  // Every part may quote input: a file name, a key, a trace line.
+  const std::string where = printable(to_string(diagnostic.location));
   std::string label = severity_name(diagnostic.severity);
   if (options.codes && !diagnostic.code.empty()) label += fmt::format("[{}]", diagnostic.code);
   const char* colour = diagnostic.severity == Severity::kError ? kRed : kMagenta;
   std::string out = fmt::format("{}: {}: {}\n", paint(kBold, where), paint(colour, label),
-                                paint(kBold, diagnostic.message));
+                                paint(kBold, printable(diagnostic.message)));
   if (options.source && diagnostic.location.line > 0) {
     if (const auto line = sources.line(diagnostic.location.file, diagnostic.location.line)) {
       out += source_excerpt(*line, diagnostic.location, paint);
     }
   }
   for (const auto& note : diagnostic.notes) {
-    out += fmt::format("{}: {} {}\n", paint(kBold, where), paint(kCyan, "note:"), note);
+    out += fmt::format("{}: {} {}\n", paint(kBold, where), paint(kCyan, "note:"), printable(note));
   }
   return out;
 }
@@ -254,7 +285,9 @@ std::string format_json(const Diagnostics& diagnostics) {
                      {"message", item.message},
                      {"notes", item.notes}});
   }
-  return array.dump(2) + "\n";
+  // JSON escapes control characters itself; a byte that is not UTF-8 (in a file name given on the
+  // command line, say) becomes U+FFFD, where dump() would throw.
+  return array.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 namespace {

@@ -58,12 +58,11 @@ struct JsonToken {
 /// A minimal JSON tokenizer, enough to name the token nlohmann stopped at and the brackets that
 /// were open there (nlohmann reports only how many bytes it had read).
 struct JsonScan {
-  std::optional<JsonToken> token;       // the token containing `stop`, or the last one before it
-  std::optional<JsonToken> previous;    // the token before that
-  std::vector<std::size_t> open;        // offsets of the brackets still open before `token`
-  std::optional<std::size_t> too_deep;  // the first bracket nested deeper than the limit
+  std::optional<JsonToken> token;     // the token containing `stop`, or the last one before it
+  std::optional<JsonToken> previous;  // the token before that
+  std::vector<std::size_t> open;      // offsets of the brackets still open before `token`
 
-  JsonScan(std::string_view text, std::size_t stop, std::size_t max_depth) {
+  JsonScan(std::string_view text, std::size_t stop) {
     std::size_t i = 0;
     while (i < text.size()) {
       if (is_blank(text[i])) {
@@ -91,7 +90,6 @@ struct JsonScan {
       if (begin == stop) break;  // the offending token: `open` stays as it was before it
       if (c == '{' || c == '[') {
         open.push_back(begin);
-        if (open.size() > max_depth && !too_deep) too_deep = begin;
       } else if ((c == '}' || c == ']') && !open.empty()) {
         open.pop_back();
       }
@@ -129,14 +127,13 @@ bool check_json(const SourceText& source, Diagnostics& diagnostics, const ReadLi
   JsonChecker checker(limits.max_depth);
   if (nlohmann::json::sax_parse(text, &checker)) return true;
   if (checker.too_deep) {
-    const JsonScan scan(text, text.size(), limits.max_depth);
-    diagnostics.error(source.location(scan.too_deep.value_or(0)), "too-deep",
-                      fmt::format("nesting deeper than {} levels", limits.max_depth));
+    diagnostics.error(source.location(find_too_deep_json(text, limits.max_depth).value_or(0)),
+                      "too-deep", fmt::format("nesting deeper than {} levels", limits.max_depth));
     return false;
   }
   // nlohmann reports how many bytes it had read; the offending token contains the last of them.
   const std::size_t stop = checker.error_position > 0 ? checker.error_position - 1 : 0;
-  const JsonScan scan(text, stop, limits.max_depth);
+  const JsonScan scan(text, stop);
   const std::string message = plain_json_message(checker.error_message);
   std::size_t at = scan.token ? scan.token->begin : stop;
   const std::string_view token =
@@ -181,3 +178,29 @@ bool check_json(const SourceText& source, Diagnostics& diagnostics, const ReadLi
 }
 
 }  // namespace arbiter::detail
+
+namespace arbiter {
+
+std::optional<std::size_t> find_too_deep_json(std::string_view text, std::size_t max_depth) {
+  std::size_t depth = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth) return i;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace arbiter

@@ -325,14 +325,33 @@ bool RecordingReader::read(Event& event) {
           if (key == "dropped") event.dropped = std::strtoull(value.c_str(), nullptr, 10);
           if (key == "after_step") event.step = std::strtoull(value.c_str(), nullptr, 10);
         }
+        dropped_ += event.dropped;
         return true;
       }
     } else if (record_->topic == "/arbiter/inputs") {
+      // Checked here, before RecordedInputs copies its values out of a parsed tree.
+      if (const auto deep = find_too_deep_json(record_->data)) {
+        fail(fmt::format(
+            "at byte {}: an inputs message nests deeper than {} levels (at byte {} of the message)",
+            record_->offset, ReadLimits().max_depth, *deep));
+        return false;
+      }
       event.kind = Event::Kind::kInputs;
       const auto key = record_->data.find("\"step\": ");
       event.step = key == std::string::npos
                        ? 0
                        : std::strtoull(record_->data.c_str() + key + 8, nullptr, 10);
+      // Each step's inputs follow those of the step before it: a step beyond those the recording
+      // holds (or says it dropped) is not a recorded run's, and a reader that keeps the inputs
+      // per step would size that for nothing.
+      if (event.step > inputs_ + dropped_ + 1) {
+        fail(fmt::format(
+            "at byte {}: an inputs message for step {}, after the inputs of {} steps (and {} "
+            "dropped); each step's inputs follow those of the step before it",
+            record_->offset, event.step, inputs_, dropped_));
+        return false;
+      }
+      ++inputs_;
       event.text = std::move(record_->data);
       return true;
     }

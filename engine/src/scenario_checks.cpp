@@ -310,9 +310,12 @@ bool TraceChecks::resolve(const Scenario& scenario, const Trace* recorded, std::
       Diagnostic error;
       auto trace = read_trace(expectation.path, error);
       if (!trace) {
-        diagnostics.error(expectation.file.location, "unreadable-trace",
-                          fmt::format("cannot compare with trace '{}': {}", expectation.file.text,
-                                      error.message));
+        auto& reported = diagnostics.error(expectation.file.location, "unreadable-trace",
+                                           fmt::format("cannot compare with trace '{}': {}",
+                                                       expectation.file.text, error.message));
+        if (error.location.line > 0) {
+          reported.notes.push_back("in the trace at " + to_string(error.location));
+        }
         continue;
       }
       if (!trace->truncated.empty()) {

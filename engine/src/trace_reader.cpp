@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "arbiter/document.hpp"
 #include "mcap.hpp"
 
 namespace arbiter {
@@ -173,6 +174,19 @@ bool TraceSource::end(SourceLocation where) {
 }
 
 bool TraceSource::accept(TraceRecord& record) {
+  // Before the parse: every tool copies, compares or prints what it reads, recursively.
+  const std::size_t max_depth = ReadLimits().max_depth;
+  if (const auto deep = find_too_deep_json(record.text, max_depth)) {
+    auto where = record.location;
+    std::string message = fmt::format("nesting deeper than {} levels", max_depth);
+    if (where.line > 0) {
+      where.column = static_cast<int>(*deep) + 1;
+    } else {
+      message += fmt::format(" (at byte {} of the record)", *deep);
+    }
+    fail(std::move(where), std::move(message));
+    return false;
+  }
   Json parsed;
   try {
     parsed = Json::parse(record.text);

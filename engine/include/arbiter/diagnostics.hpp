@@ -86,6 +86,14 @@ struct FormatOptions {
 std::string format(const Diagnostic& diagnostic, const FormatOptions& options = {});
 std::string format(const Diagnostics& diagnostics, const FormatOptions& options = {});
 
+/// `text` made safe to print on a terminal, for every message that quotes input (format() does
+/// this to what it prints): a control character (U+0000 to U+001F but the tab, U+007F) is written
+/// `\x1b`, a C1 control (U+0080 to U+009F) `\u009b`, and each byte that is not part of valid UTF-8
+/// `\xff`; everything else, valid UTF-8 such as "é" included, is kept. With `lines`, line feeds
+/// are kept too (a text of several lines); otherwise they are `\x0a`, so that quoted input cannot
+/// start a line of its own.
+std::string printable(std::string_view text, bool lines = false);
+
 /// A JSON array of {file, line, column, severity, code, message, notes}.
 std::string format_json(const Diagnostics& diagnostics);
 

@@ -104,9 +104,19 @@ struct Node::Entry {
 /// Bounds that keep hostile files from exhausting time or memory.
 struct ReadLimits {
   std::size_t max_file_bytes = 16u << 20;
+  /// Levels of nested mappings and lists (JSON objects and arrays). The one nesting limit of every
+  /// reader: configs, scenario files, traces, recordings and the language server's messages.
   std::size_t max_depth = 200;
   std::size_t max_nodes = 1u << 20;  ///< after alias expansion
 };
+
+/// The byte offset of the first `[` or `{` of the JSON `text` that opens a level deeper than
+/// `max_depth`, or nullopt. A linear scan that builds nothing, for the readers to call before
+/// they build a tree: copying, comparing and printing a JSON tree recurse once per level, so a
+/// record nested 100 000 deep would overflow the stack. Text that is not JSON is scanned all the
+/// same; its syntax is the parser's business.
+std::optional<std::size_t> find_too_deep_json(std::string_view text,
+                                              std::size_t max_depth = ReadLimits().max_depth);
 
 enum class DocumentFormat { kYaml, kJson };
 

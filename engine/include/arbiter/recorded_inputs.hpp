@@ -85,6 +85,8 @@ class RecordingReader {
   RecordingInfo info_;
   bool config_ = false;
   std::vector<Event> ahead_;
+  std::uint64_t inputs_ = 0;   // inputs messages read
+  std::uint64_t dropped_ = 0;  // steps the gaps read say were dropped
 };
 
 /// The recorded inputs of a run, by actuator name and step.
