@@ -12,20 +12,8 @@ soccer=$source_dir/configs/soccer/walk_and_kick.yaml
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-fail() {
-  echo "FAIL: $*"
-  for f in "$work"/*.txt; do echo "--- $f"; cat "$f"; done
-  exit 1
-}
-expect_exit() {  # CODE COMMAND...
-  local code=$1
-  shift
-  set +e
-  "$@" >"$work/out.txt" 2>"$work/err.txt"
-  local got=$?
-  set -e
-  [[ $got -eq $code ]] || fail "exit $got, not $code: $*"
-}
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 # The step a recording ends after, from replay's warning that it was cut off.
 cut_after() {
   sed -nE 's/.*: warning: the recording was cut off while it was written: it ends after step ([0-9]+) .*/\1/p' \

@@ -11,20 +11,8 @@ config=$source_dir/configs/soccer/walk_and_kick.yaml
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-fail() {
-  echo "FAIL: $*"
-  for f in "$work"/*.txt; do echo "--- $f"; cat "$f"; done
-  exit 1
-}
-expect_exit() {  # CODE COMMAND...
-  local code=$1
-  shift
-  set +e
-  "$@" >"$work/out.txt" 2>"$work/err.txt"
-  local got=$?
-  set -e
-  [[ $got -eq $code ]] || fail "exit $got, not $code: $*"
-}
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 
 expect_exit 0 "$cli" run "$config" --steps 220 -q --record "$work/run.mcap" --trace "$work/run.jsonl"
 expect_exit 0 "$cli" replay "$work/run.mcap" --trace "$work/replay.jsonl" --record "$work/replay.mcap"

@@ -17,20 +17,8 @@ work=$(mktemp -d)
 pid=
 trap '[ -n "$pid" ] && kill "$pid" 2>/dev/null; rm -rf "$work"' EXIT
 
-fail() {
-  echo "FAIL: $*"
-  for f in "$work"/*.txt; do echo "--- $f"; cat "$f"; done
-  exit 1
-}
-expect_exit() {  # CODE COMMAND...
-  local code=$1
-  shift
-  set +e
-  "$@" >"$work/out.txt" 2>"$work/err.txt"
-  local got=$?
-  set -e
-  [[ $got -eq $code ]] || fail "exit $got, not $code: $*"
-}
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 # Runs COMMAND... as expect_exit 0 does, and sets `peak_kb` to its peak resident memory
 # (VmHWM, read until it exits: it only grows).
 peak_kb=0
