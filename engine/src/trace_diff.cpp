@@ -241,8 +241,9 @@ std::optional<TraceDiff> diff_traces(TraceSource& a, TraceSource& b, Diagnostic&
     more_b = next_step(b, y);
   }
   const std::uint64_t first_extra = more_a ? x.step : more_b ? y.step : 0;
-  for (; more_a; more_a = next_step(a, x)) ++steps_a;
-  for (; more_b; more_b = next_step(b, y)) ++steps_b;
+  // A source that failed stops the diff at once: the other is not read on to its end first.
+  for (; more_a && !b.error(); more_a = next_step(a, x)) ++steps_a;
+  for (; more_b && !a.error(); more_b = next_step(b, y)) ++steps_b;
   for (const auto* source : {&a, &b}) {
     if (source->error()) {
       error = *source->error();
