@@ -63,6 +63,44 @@ class RecordedConfig {
   Overlay overlay_;
 };
 
+/// A file written under a temporary name beside its path and renamed over it once whole, so that
+/// a replay that fails leaves the file as it was, as when it wrote its trace only at its end.
+class PendingFile {
+ public:
+  explicit PendingFile(std::string path)
+      : path_(std::move(path)), temp_(fmt::format("{}.{}.partial", path_, ::getpid())) {}
+  PendingFile(const PendingFile&) = delete;
+  PendingFile& operator=(const PendingFile&) = delete;
+  ~PendingFile() {
+    if (!out_.is_open()) return;
+    out_.close();
+    std::error_code ignored;
+    fs::remove(temp_, ignored);
+  }
+  bool open() {
+    out_.open(temp_, std::ios::binary | std::ios::trunc);
+    return out_.is_open();
+  }
+  bool is_open() const { return out_.is_open(); }
+  std::ostream& stream() { return out_; }
+  /// Puts the file in place; false (the file left as it was) when it could not be written.
+  bool commit() {
+    out_.close();
+    std::error_code error;
+    if (!out_.fail()) fs::rename(temp_, path_, error);
+    if (out_.fail() || error) {
+      fs::remove(temp_, error);
+      return false;
+    }
+    return true;
+  }
+
+ private:
+  std::string path_;
+  std::string temp_;
+  std::ofstream out_;
+};
+
 }  // namespace
 
 RecordingInfo recording_info(const std::string& config, const Registry& registry,
@@ -194,10 +232,10 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   std::ostringstream trace_text;  // what the trace writer wrote in the last step, then emptied
   TraceWriter trace(trace_text);
   manager.add_observer(trace);
-  std::ofstream trace_file;
+  std::optional<PendingFile> trace_file;
   if (!options.trace.empty()) {
-    trace_file.open(options.trace, std::ios::binary | std::ios::trunc);
-    if (!trace_file) {
+    trace_file.emplace(options.trace);
+    if (!trace_file->open()) {
       err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
       return 2;
     }
@@ -223,7 +261,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   const auto written_out = [&] {
     const std::string text = trace_text.str();
     trace_text.str(std::string());
-    if (trace_file.is_open()) trace_file << text;
+    if (trace_file) trace_file->stream() << text;
     return text;
   };
   while (!manager.stopped()) {
@@ -298,7 +336,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   }
   manager.finish();
   written_out();
-  if (trace_file.is_open() && !(trace_file << std::flush)) {
+  if (trace_file && !trace_file->commit()) {
     err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
     return 2;
   }
