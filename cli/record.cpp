@@ -229,6 +229,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   if (!program) return 1;
 
   Manager manager(std::move(*program), spdlog::default_logger());
+  manager.add_observer(inputs);   // for the recorded reloads: only the running layers are fed
   std::ostringstream trace_text;  // what the trace writer wrote in the last step, then emptied
   TraceWriter trace(trace_text);
   manager.add_observer(trace);
@@ -273,9 +274,8 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
         // The inputs of dropped steps are lost: the run cannot be repeated past them.
         last = std::min(last, event.step);
         err << fmt::format(
-            "{}: warning: the recording dropped {} steps after step {}; replay runs up to "
-            "there\n",
-            options.recording, event.dropped, event.step);
+            "{}: warning: {}\n", options.recording,
+            replay_cut(ReplayCut::kDropped, event.step, event.dropped, "the replay"));
       } else if (!written) {
         if (!noted_reloads) {
           err << fmt::format(
@@ -288,10 +288,8 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
         // A recording that did not keep a reload's files: the replay ends where it cannot
         // follow.
         last = std::min(last, event.step);
-        err << fmt::format(
-            "{}: warning: the config was reloaded after step {} and the recording does not hold "
-            "its files; replay runs up to there\n",
-            options.recording, event.step);
+        err << fmt::format("{}: warning: {}\n", options.recording,
+                           replay_cut(ReplayCut::kReloadNotKept, event.step, 0, "the replay"));
       } else {
         written->set(event.files);
         if (recorder) recorder->stage_files(event.files);
