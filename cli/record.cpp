@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -201,20 +202,34 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   }
   // The first step's inputs are held before the config compiles, so that its interface layers
   // check them (and check_places() sees the recorded inputs' names).
+  // A recording whose first steps were dropped holds a gap record before them: the first inputs
+  // are read on to all the same, and what comes before them is kept for the step loop.
   RecordedInputs inputs;
-  RecordingReader::Event event;
-  bool have_event = run.next(event);
-  std::uint64_t last = options.steps > 0 ? options.steps : ~std::uint64_t{0};
-  bool noted_reloads = false;
   std::uint64_t loaded = 0;  // the step whose inputs are held
   Diagnostics diagnostics;
-  if (have_event && event.kind == RecordingReader::Event::Kind::kInputs) {
-    if (!inputs.load(event.step, event.text, diagnostics)) {
-      err << format(diagnostics);
-      return 1;
+  std::deque<RecordingReader::Event> ahead;
+  for (RecordingReader::Event first; run.next(first);) {
+    const bool step_inputs = first.kind == RecordingReader::Event::Kind::kInputs;
+    if (step_inputs) {
+      if (!inputs.load(first.step, first.text, diagnostics)) {
+        err << format(diagnostics);
+        return 1;
+      }
+      loaded = first.step;
     }
-    loaded = event.step;
+    ahead.push_back(std::move(first));
+    if (step_inputs) break;
   }
+  const auto next_event = [&](RecordingReader::Event& event) {
+    if (ahead.empty()) return run.next(event);
+    event = std::move(ahead.front());
+    ahead.pop_front();
+    return true;
+  };
+  RecordingReader::Event event;
+  bool have_event = next_event(event);
+  std::uint64_t last = options.steps > 0 ? options.steps : ~std::uint64_t{0};
+  bool noted_reloads = false;
   LoadOptions load = options.load;
   load.lint = nullptr;  // a replay reports whether the run repeats, not how the config reads
   if (written) load.source = &written->source();
@@ -301,12 +316,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
           return 1;
         }
       }
-      have_event = run.next(event);
+      have_event = next_event(event);
     }
     if (step > last || !have_event) break;
     if (event.step < step) {
       // Inputs of a step replayed already (no recorder writes a step's twice): ignored.
-      have_event = run.next(event);
+      have_event = next_event(event);
       continue;
     }
     const bool now = event.step == step;  // else the recording holds no inputs for the step
@@ -318,7 +333,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       }
       loaded = step;
     }
-    if (now) have_event = run.next(event);
+    if (now) have_event = next_event(event);
     clock.t = static_cast<double>(step - 1) / manager.program().rate_hz;
     manager.step();
     // The trace writer wrote the step's record last (after a reload's header, if any).

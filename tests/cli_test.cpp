@@ -4,9 +4,13 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <cstdio>
+#include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include "arbiter/catalog.hpp"
+#include "mcap.hpp"
 #include "tooling_support.hpp"
 
 namespace fs = std::filesystem;
@@ -248,4 +252,53 @@ TEST_CASE("arbiter validate colours its diagnostics only when asked or in a term
   SECTION("anything else is a usage error") {
     CHECK(run_cli("--color sometimes validate " + config).exit_code == 2);
   }
+}
+
+TEST_CASE("a recording whose first step was dropped replays up to its gap", "[replay][cli]") {
+  const auto dir = fs::temp_directory_path() / ("arbiter_gap_first_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto whole = dir / "run.mcap";
+  const auto gap = dir / "gap.mcap";
+  // Its interface layer declares an actuator, whose recorded input must be there to compile.
+  const std::string plugins = std::string(" --plugin-path ") + ARBITER_TEST_PLUGIN_DIR;
+  REQUIRE(
+      run_cli("run tests/data/replay/counter.yaml --steps 5 -q --record " + quoted(whole) + plugins)
+          .exit_code == 0);
+  // The recording again, with step 1 dropped as a recorder whose writer fell behind drops it.
+  {
+    std::ifstream in(whole, std::ios::binary);
+    mcap::Reader reader(in);
+    std::FILE* file = std::fopen(gap.string().c_str(), "wb");
+    REQUIRE(file != nullptr);
+    mcap::Writer writer(file);
+    writer.header("arbiter", "arbiter");
+    std::map<std::string, std::uint16_t> channels;
+    for (const char* topic : {"/arbiter/header", "/arbiter/step", "/arbiter/inputs"}) {
+      channels[topic] = writer.channel(writer.schema(topic, "jsonschema", "{}"), topic, "json");
+    }
+    mcap::Record record;
+    while (reader.next(record)) {
+      if (record.kind == mcap::Record::Kind::kMetadata) {
+        writer.metadata(record.name, record.metadata);
+      } else if (record.data.rfind("{\"step\": 1,", 0) == 0) {
+        if (record.topic == "/arbiter/step") {
+          writer.metadata("arbiter.gap", {{"after_step", "0"}, {"dropped", "1"}});
+        }
+      } else {
+        writer.message(channels.at(record.topic), record.log_time, record.data);
+      }
+    }
+    REQUIRE(reader.error().empty());
+    writer.finish();
+    REQUIRE(writer.ok());
+    std::fclose(file);
+  }
+  const auto replayed = run_cli("replay " + quoted(gap) + plugins);
+  INFO(replayed.err);
+  CHECK_FALSE(contains(replayed.err, "the recording has no input"));
+  CHECK(contains(replayed.err,
+                 "warning: the recording dropped 1 steps after step 0; the replay "
+                 "runs up to there"));
+  CHECK(contains(replayed.out, "replayed 0 steps"));
+  fs::remove_all(dir);
 }
