@@ -118,67 +118,6 @@ RecordingInfo recording_info(const std::string& config, const Registry& registry
   return info;
 }
 
-namespace {
-
-/// The recorded run's step records, read as the replay needs them and compared with the
-/// replay's: both runs are held a step at a time.
-class RecordedSteps {
- public:
-  explicit RecordedSteps(TraceSource& source) : source_(source) {}
-
-  /// The record of the first step after the header; false on an unreadable recording.
-  bool start() {
-    TraceRecord header;
-    if (!source_.next(header)) return false;
-    more_ = next();
-    return !source_.error();
-  }
-  /// Compares the replay's record of `step` with the recording's, if it has that step.
-  void compare(std::uint64_t step, const std::string& replayed, TraceDiffer& differ) {
-    ++replayed_;
-    while (more_ && record_.step < step) {
-      differ.unmatched(record_.step);  // a step the replay did not run
-      ++recorded_;
-      more_ = next();
-    }
-    if (more_ && record_.step == step) {
-      differ.compare(step, record_.text, replayed);
-      ++recorded_;
-      more_ = next();
-    } else {
-      differ.unmatched(step);
-    }
-  }
-  /// The result, counting the recorded steps up to `last` that the replay did not reach.
-  TraceDiff finish(std::uint64_t last, TraceDiffer& differ) {
-    const std::uint64_t first_extra = more_ && record_.step <= last ? record_.step : 0;
-    while (more_ && record_.step <= last) {
-      ++recorded_;
-      more_ = next();
-    }
-    return differ.finish(recorded_, replayed_, first_extra);
-  }
-  /// Reads the rest of the recording, for what its end holds.
-  void drain() {
-    while (more_) more_ = next();
-  }
-
- private:
-  bool next() {
-    while (source_.next(record_)) {
-      if (record_.kind == TraceRecord::Kind::kStep) return true;
-    }
-    return false;
-  }
-  TraceSource& source_;
-  TraceRecord record_;
-  bool more_ = false;
-  std::uint64_t recorded_ = 0;
-  std::uint64_t replayed_ = 0;
-};
-
-}  // namespace
-
 int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err) {
   // The recording is read as the replay goes, twice over (its inputs, and its steps to compare
   // with), never whole: a replay's memory does not grow with the recording.
@@ -188,7 +127,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     return 1;
   }
   const auto recorded_source = open_trace(options.recording);
-  RecordedSteps recorded(*recorded_source);
+  const bool exact = options.config.empty();
+  // Determinism: every field of every record but the timing, bit for bit.
+  TraceDiffer differ(exact ? 0.0 : 1e-9, exact);
+  // The recorded run's step records, read as the replay needs them and compared with the
+  // replay's: both runs are held a step at a time.
+  StepAligner recorded(*recorded_source, differ);
   if (!recorded.start()) {
     err << format(*recorded_source->error());
     return 1;
@@ -269,9 +213,6 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     }
     manager.add_observer(*recorder);
   }
-  const bool exact = options.config.empty();
-  // Determinism: every field of every record but the timing, bit for bit.
-  TraceDiffer differ(exact ? 0.0 : 1e-9, exact);
   SimulatedClock clock;
   manager.set_clock(&clock);
   const auto written_out = [&] {
@@ -340,8 +281,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     std::string text = written_out();
     if (!text.empty() && text.back() == '\n') text.pop_back();
     const auto end = text.rfind('\n');
-    recorded.compare(manager.steps(), end == std::string::npos ? text : text.substr(end + 1),
-                     differ);
+    recorded.compare(manager.steps(), end == std::string::npos ? text : text.substr(end + 1));
   }
   if (run.error()) {
     err << format(*run.error());
@@ -357,7 +297,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   // The recorded steps up to where the replay was to end count against it when it ended early;
   // those the recording holds no inputs for (it was cut off between a step and its inputs)
   // cannot be replayed.
-  const auto diff = recorded.finish(have_event ? last : steps, differ);
+  const auto diff = recorded.finish(have_event ? last : steps);
   if (!have_event) recorded.drain();  // to its end, which may not be whole
   if (recorded_source->error()) {
     err << format(*recorded_source->error());
