@@ -1,5 +1,4 @@
 #include <fmt/format.h>
-#include <unistd.h>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
@@ -105,7 +104,9 @@ class FailingBuffer : public std::stringbuf {
 
 TEST_CASE("a trace that cannot be read is an error, not an empty or shorter trace",
           "[trace_reader]") {
-  const auto dir = fs::temp_directory_path() / fmt::format("arbiter_dir_{}.jsonl", ::getpid());
+  const auto dir = fs::temp_directory_path() /
+                   fmt::format("arbiter_dir_{}.jsonl",
+                               std::chrono::steady_clock::now().time_since_epoch().count());
   fs::create_directories(dir);
   Diagnostic error;
   CHECK_FALSE(read_trace(dir.string(), error));
