@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -63,6 +64,44 @@ class RecordedConfig {
   Overlay overlay_;
 };
 
+/// A file written under a temporary name beside its path and renamed over it once whole, so that
+/// a replay that fails leaves the file as it was, as when it wrote its trace only at its end.
+class PendingFile {
+ public:
+  explicit PendingFile(std::string path)
+      : path_(std::move(path)), temp_(fmt::format("{}.{}.partial", path_, ::getpid())) {}
+  PendingFile(const PendingFile&) = delete;
+  PendingFile& operator=(const PendingFile&) = delete;
+  ~PendingFile() {
+    if (!out_.is_open()) return;
+    out_.close();
+    std::error_code ignored;
+    fs::remove(temp_, ignored);
+  }
+  bool open() {
+    out_.open(temp_, std::ios::binary | std::ios::trunc);
+    return out_.is_open();
+  }
+  bool is_open() const { return out_.is_open(); }
+  std::ostream& stream() { return out_; }
+  /// Puts the file in place; false (the file left as it was) when it could not be written.
+  bool commit() {
+    out_.close();
+    std::error_code error;
+    if (!out_.fail()) fs::rename(temp_, path_, error);
+    if (out_.fail() || error) {
+      fs::remove(temp_, error);
+      return false;
+    }
+    return true;
+  }
+
+ private:
+  std::string path_;
+  std::string temp_;
+  std::ofstream out_;
+};
+
 }  // namespace
 
 RecordingInfo recording_info(const std::string& config, const Registry& registry,
@@ -79,67 +118,6 @@ RecordingInfo recording_info(const std::string& config, const Registry& registry
   return info;
 }
 
-namespace {
-
-/// The recorded run's step records, read as the replay needs them and compared with the
-/// replay's: both runs are held a step at a time.
-class RecordedSteps {
- public:
-  explicit RecordedSteps(TraceSource& source) : source_(source) {}
-
-  /// The record of the first step after the header; false on an unreadable recording.
-  bool start() {
-    TraceRecord header;
-    if (!source_.next(header)) return false;
-    more_ = next();
-    return !source_.error();
-  }
-  /// Compares the replay's record of `step` with the recording's, if it has that step.
-  void compare(std::uint64_t step, const std::string& replayed, TraceDiffer& differ) {
-    ++replayed_;
-    while (more_ && record_.step < step) {
-      differ.unmatched(record_.step);  // a step the replay did not run
-      ++recorded_;
-      more_ = next();
-    }
-    if (more_ && record_.step == step) {
-      differ.compare(step, record_.text, replayed);
-      ++recorded_;
-      more_ = next();
-    } else {
-      differ.unmatched(step);
-    }
-  }
-  /// The result, counting the recorded steps up to `last` that the replay did not reach.
-  TraceDiff finish(std::uint64_t last, TraceDiffer& differ) {
-    const std::uint64_t first_extra = more_ && record_.step <= last ? record_.step : 0;
-    while (more_ && record_.step <= last) {
-      ++recorded_;
-      more_ = next();
-    }
-    return differ.finish(recorded_, replayed_, first_extra);
-  }
-  /// Reads the rest of the recording, for what its end holds.
-  void drain() {
-    while (more_) more_ = next();
-  }
-
- private:
-  bool next() {
-    while (source_.next(record_)) {
-      if (record_.kind == TraceRecord::Kind::kStep) return true;
-    }
-    return false;
-  }
-  TraceSource& source_;
-  TraceRecord record_;
-  bool more_ = false;
-  std::uint64_t recorded_ = 0;
-  std::uint64_t replayed_ = 0;
-};
-
-}  // namespace
-
 int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err) {
   // The recording is read as the replay goes, twice over (its inputs, and its steps to compare
   // with), never whole: a replay's memory does not grow with the recording.
@@ -149,7 +127,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     return 1;
   }
   const auto recorded_source = open_trace(options.recording);
-  RecordedSteps recorded(*recorded_source);
+  const bool exact = options.config.empty();
+  // Determinism: every field of every record but the timing, bit for bit.
+  TraceDiffer differ(exact ? 0.0 : 1e-9, exact);
+  // The recorded run's step records, read as the replay needs them and compared with the
+  // replay's: both runs are held a step at a time.
+  StepAligner recorded(*recorded_source, differ);
   if (!recorded.start()) {
     err << format(*recorded_source->error());
     return 1;
@@ -163,20 +146,34 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   }
   // The first step's inputs are held before the config compiles, so that its interface layers
   // check them (and check_places() sees the recorded inputs' names).
+  // A recording whose first steps were dropped holds a gap record before them: the first inputs
+  // are read on to all the same, and what comes before them is kept for the step loop.
   RecordedInputs inputs;
-  RecordingReader::Event event;
-  bool have_event = run.next(event);
-  std::uint64_t last = options.steps > 0 ? options.steps : ~std::uint64_t{0};
-  bool noted_reloads = false;
   std::uint64_t loaded = 0;  // the step whose inputs are held
   Diagnostics diagnostics;
-  if (have_event && event.kind == RecordingReader::Event::Kind::kInputs) {
-    if (!inputs.load(event.step, event.text, diagnostics)) {
-      err << format(diagnostics);
-      return 1;
+  std::deque<RecordingReader::Event> ahead;
+  for (RecordingReader::Event first; run.next(first);) {
+    const bool step_inputs = first.kind == RecordingReader::Event::Kind::kInputs;
+    if (step_inputs) {
+      if (!inputs.load(first.step, first.text, diagnostics)) {
+        err << format(diagnostics);
+        return 1;
+      }
+      loaded = first.step;
     }
-    loaded = event.step;
+    ahead.push_back(std::move(first));
+    if (step_inputs) break;
   }
+  const auto next_event = [&](RecordingReader::Event& event) {
+    if (ahead.empty()) return run.next(event);
+    event = std::move(ahead.front());
+    ahead.pop_front();
+    return true;
+  };
+  RecordingReader::Event event;
+  bool have_event = next_event(event);
+  std::uint64_t last = options.steps > 0 ? options.steps : ~std::uint64_t{0};
+  bool noted_reloads = false;
   LoadOptions load = options.load;
   load.lint = nullptr;  // a replay reports whether the run repeats, not how the config reads
   if (written) load.source = &written->source();
@@ -191,13 +188,14 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   if (!program) return 1;
 
   Manager manager(std::move(*program), spdlog::default_logger());
+  manager.add_observer(inputs);   // for the recorded reloads: only the running layers are fed
   std::ostringstream trace_text;  // what the trace writer wrote in the last step, then emptied
   TraceWriter trace(trace_text);
   manager.add_observer(trace);
-  std::ofstream trace_file;
+  std::optional<PendingFile> trace_file;
   if (!options.trace.empty()) {
-    trace_file.open(options.trace, std::ios::binary | std::ios::trunc);
-    if (!trace_file) {
+    trace_file.emplace(options.trace);
+    if (!trace_file->open()) {
       err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
       return 2;
     }
@@ -216,15 +214,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     recorder->set_flush_interval(options.record_flush);
     manager.add_observer(*recorder);
   }
-  const bool exact = options.config.empty();
-  // Determinism: every field of every record but the timing, bit for bit.
-  TraceDiffer differ(exact ? 0.0 : 1e-9, exact);
   SimulatedClock clock;
   manager.set_clock(&clock);
   const auto written_out = [&] {
     const std::string text = trace_text.str();
     trace_text.str(std::string());
-    if (trace_file.is_open()) trace_file << text;
+    if (trace_file) trace_file->stream() << text;
     return text;
   };
   while (!manager.stopped()) {
@@ -236,9 +231,8 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
         // The inputs of dropped steps are lost: the run cannot be repeated past them.
         last = std::min(last, event.step);
         err << fmt::format(
-            "{}: warning: the recording dropped {} steps after step {}; replay runs up to "
-            "there\n",
-            options.recording, event.dropped, event.step);
+            "{}: warning: {}\n", options.recording,
+            replay_cut(ReplayCut::kDropped, event.step, event.dropped, "the replay"));
       } else if (!written) {
         if (!noted_reloads) {
           err << fmt::format(
@@ -251,10 +245,8 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
         // A recording that did not keep a reload's files: the replay ends where it cannot
         // follow.
         last = std::min(last, event.step);
-        err << fmt::format(
-            "{}: warning: the config was reloaded after step {} and the recording does not hold "
-            "its files; replay runs up to there\n",
-            options.recording, event.step);
+        err << fmt::format("{}: warning: {}\n", options.recording,
+                           replay_cut(ReplayCut::kReloadNotKept, event.step, 0, "the replay"));
       } else {
         written->set(event.files);
         if (recorder) recorder->stage_files(event.files);
@@ -266,12 +258,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
           return 1;
         }
       }
-      have_event = run.next(event);
+      have_event = next_event(event);
     }
     if (step > last || !have_event) break;
     if (event.step < step) {
       // Inputs of a step replayed already (no recorder writes a step's twice): ignored.
-      have_event = run.next(event);
+      have_event = next_event(event);
       continue;
     }
     const bool now = event.step == step;  // else the recording holds no inputs for the step
@@ -283,15 +275,14 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       }
       loaded = step;
     }
-    if (now) have_event = run.next(event);
+    if (now) have_event = next_event(event);
     clock.t = static_cast<double>(step - 1) / manager.program().rate_hz;
     manager.step();
     // The trace writer wrote the step's record last (after a reload's header, if any).
     std::string text = written_out();
     if (!text.empty() && text.back() == '\n') text.pop_back();
     const auto end = text.rfind('\n');
-    recorded.compare(manager.steps(), end == std::string::npos ? text : text.substr(end + 1),
-                     differ);
+    recorded.compare(manager.steps(), end == std::string::npos ? text : text.substr(end + 1));
   }
   // A recording that failed was reported at once and ended there: the replay's verdict still
   // follows, and the exit status says that an output was not written.
@@ -308,7 +299,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   }
   manager.finish();
   written_out();
-  if (trace_file.is_open() && !(trace_file << std::flush)) {
+  if (trace_file && !trace_file->commit()) {
     err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
     return 2;
   }
@@ -316,7 +307,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   // The recorded steps up to where the replay was to end count against it when it ended early;
   // those the recording holds no inputs for (it was cut off between a step and its inputs)
   // cannot be replayed.
-  const auto diff = recorded.finish(have_event ? last : steps, differ);
+  const auto diff = recorded.finish(have_event ? last : steps);
   if (!have_event) recorded.drain();  // to its end, which may not be whole
   if (recorded_source->error()) {
     err << format(*recorded_source->error());

@@ -4,9 +4,12 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include "arbiter/catalog.hpp"
+#include "mcap.hpp"
 #include "tooling_support.hpp"
 
 namespace fs = std::filesystem;
@@ -259,4 +262,100 @@ TEST_CASE("arbiter validate colours its diagnostics only when asked or in a term
   SECTION("anything else is a usage error") {
     CHECK(run_cli("--color sometimes validate " + config).exit_code == 2);
   }
+}
+
+TEST_CASE("a recording whose first step was dropped replays up to its gap", "[replay][cli]") {
+  const auto dir = fs::temp_directory_path() / ("arbiter_gap_first_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto whole = dir / "run.mcap";
+  const auto gap = dir / "gap.mcap";
+  // Its interface layer declares an actuator, whose recorded input must be there to compile.
+  const std::string plugins = std::string(" --plugin-path ") + ARBITER_TEST_PLUGIN_DIR;
+  REQUIRE(
+      run_cli("run tests/data/replay/counter.yaml --steps 5 -q --record " + quoted(whole) + plugins)
+          .exit_code == 0);
+  // The recording again, with step 1 dropped as a recorder whose writer fell behind drops it.
+  {
+    std::ifstream in(whole, std::ios::binary);
+    mcap::Reader reader(in);
+    // Written by hand, records outside chunks, as MCAP allows (https://mcap.dev/spec).
+    std::string out(mcap::kMagic);
+    const auto number = [](std::string& to, std::uint64_t value, int bytes) {
+      for (int i = 0; i < bytes; ++i) to += static_cast<char>((value >> (8 * i)) & 0xff);
+    };
+    const auto text = [&](std::string& to, std::string_view value) {
+      number(to, value.size(), 4);
+      to += value;
+    };
+    const auto add = [&](std::uint8_t op, const std::string& content) {
+      out += static_cast<char>(op);
+      number(out, content.size(), 8);
+      out += content;
+    };
+    const auto metadata = [&](const std::string& name,
+                              const std::vector<std::pair<std::string, std::string>>& map) {
+      std::string content;
+      text(content, name);
+      std::string entries;
+      for (const auto& [key, value] : map) {
+        text(entries, key);
+        text(entries, value);
+      }
+      text(content, entries);
+      add(mcap::kMetadata, content);
+    };
+    std::string content;
+    text(content, "arbiter");
+    text(content, "arbiter");
+    add(mcap::kHeader, content);
+    std::map<std::string, std::uint16_t> channels;
+    for (const char* topic : {"/arbiter/header", "/arbiter/step", "/arbiter/inputs"}) {
+      const auto id = static_cast<std::uint16_t>(channels.size() + 1);
+      content.clear();
+      number(content, id, 2);
+      text(content, topic);
+      text(content, "jsonschema");
+      text(content, "{}");
+      add(mcap::kSchema, content);
+      content.clear();
+      number(content, id, 2);
+      number(content, id, 2);
+      text(content, topic);
+      text(content, "json");
+      number(content, 0, 4);  // no channel metadata
+      add(mcap::kChannel, content);
+      channels[topic] = id;
+    }
+    mcap::Record record;
+    while (reader.next(record)) {
+      if (record.kind == mcap::Record::Kind::kMetadata) {
+        metadata(record.name, record.metadata);
+      } else if (record.data.rfind("{\"step\": 1,", 0) == 0) {
+        if (record.topic == "/arbiter/step") {
+          metadata("arbiter.gap", {{"after_step", "0"}, {"dropped", "1"}});
+        }
+      } else {
+        content.clear();
+        number(content, channels.at(record.topic), 2);
+        number(content, 0, 4);  // sequence
+        number(content, record.log_time, 8);
+        number(content, record.log_time, 8);
+        content += record.data;
+        add(mcap::kMessage, content);
+      }
+    }
+    REQUIRE(reader.error().empty());
+    add(mcap::kDataEnd, std::string(4, '\0'));  // no CRC
+    add(mcap::kFooter, std::string(20, '\0'));  // no summary
+    out += mcap::kMagic;
+    std::ofstream(gap, std::ios::binary) << out;
+  }
+  const auto replayed = run_cli("replay " + quoted(gap) + plugins);
+  INFO(replayed.err);
+  CHECK_FALSE(contains(replayed.err, "the recording has no input"));
+  CHECK(contains(replayed.err,
+                 "warning: the recording dropped 1 steps after step 0; the replay "
+                 "runs up to there"));
+  CHECK(contains(replayed.out, "replayed 0 steps"));
+  fs::remove_all(dir);
 }

@@ -92,6 +92,59 @@ TEST_CASE("a record the reader rejects stops reading there with its location", "
         "last read: 'no'\n");
 }
 
+/// A stream that gives `text`, then fails to read, as a file does on a read error.
+class FailingBuffer : public std::stringbuf {
+ public:
+  explicit FailingBuffer(const std::string& text) : std::stringbuf(text) {}
+
+ protected:
+  int_type underflow() override {
+    const auto c = std::stringbuf::underflow();
+    if (traits_type::eq_int_type(c, traits_type::eof())) throw std::runtime_error("read error");
+    return c;
+  }
+};
+
+TEST_CASE("a trace that cannot be read is an error, not an empty or shorter trace",
+          "[trace_reader]") {
+  const auto dir = fs::temp_directory_path() /
+                   fmt::format("arbiter_dir_{}.jsonl",
+                               std::chrono::steady_clock::now().time_since_epoch().count());
+  fs::create_directories(dir);
+  Diagnostic error;
+  CHECK_FALSE(read_trace(dir.string(), error));
+  CHECK(error.message == "cannot read the trace");
+  fs::remove(dir);
+
+  FailingBuffer buffer(kHeader + "\n" + step_record(1) + "\n");
+  std::istream in(&buffer);
+  const auto source = jsonl_trace_source(in, "run.jsonl");
+  CHECK_FALSE(read_trace(*source, error));
+  CHECK(format(error) == "run.jsonl:3:1: error: cannot read the trace\n");
+}
+
+TEST_CASE("a diff stops where one trace fails, without reading the other to its end",
+          "[trace_reader]") {
+  std::istringstream bad(kHeader + "\n" + step_record(1) + "\nnonsense\n");
+  std::string long_run = kHeader + "\n";
+  for (int step = 1; step <= 1000; ++step) long_run += step_record(step) + "\n";
+  std::istringstream good(long_run);
+  for (const bool bad_first : {true, false}) {
+    bad.clear();
+    bad.seekg(0);
+    good.clear();
+    good.seekg(0);
+    const auto bad_source = jsonl_trace_source(bad, "bad.jsonl");
+    const auto good_source = jsonl_trace_source(good, "good.jsonl");
+    Diagnostic error;
+    const auto diff = bad_first ? diff_traces(*bad_source, *good_source, error)
+                                : diff_traces(*good_source, *bad_source, error);
+    CHECK_FALSE(diff);
+    CHECK(error.location.file == "bad.jsonl");
+    CHECK_FALSE(good.eof());  // the good trace was not read to its end
+  }
+}
+
 TEST_CASE("explain reports an unreadable record where the reader found it", "[trace_reader]") {
   Registry registry = make_test_registry();
   const Program program = compile_text(

@@ -74,6 +74,8 @@ bool Reader::read(std::string& out, std::uint64_t size) {
     const auto got = static_cast<std::size_t>(in_->gcount());
     out.resize(had + got);
     pos_ += got;
+    // A read error is no end of the file: told as an error, not as a recording cut off.
+    if (in_->bad()) return fail(pos_, "cannot read the recording");
     if (got < piece) return false;
   }
   return true;

@@ -41,9 +41,11 @@ class RecordedInputsLayer : public Interface {
       feed.output = ctx.output_to_actuator(actuator.name, actuator.location);
       feeds_.push_back(std::move(feed));
     }
+    // A layer compiled for a hot reload takes its first step at the next load(): the step held
+    // now is the last of the program it replaces, in that program's types.
     std::string error;
     SourceLocation where;
-    if (!take(error, where)) ctx.error(where, error);
+    if (!inputs_.running() && !take(error, where)) ctx.error(where, error);
     inputs_.remember(this);
   }
 
@@ -84,6 +86,15 @@ class RecordedInputsLayer : public Interface {
       }
     }
     return true;
+  }
+
+  /// Holds no step: what take() failed to convert is not written.
+  void drop() {
+    for (auto& pass : reports_) pass.clear();
+    for (auto& feed : feeds_) {
+      feed.values.clear();
+      feed.written.clear();
+    }
   }
 
   // Reported again by the layer that reported it, in the pass it reported in, so that the
@@ -184,12 +195,41 @@ bool RecordedInputs::load(std::uint64_t step, const std::string& message,
   std::string error;
   SourceLocation where;
   for (auto* layer : layers_) {
-    if (!layer->take(error, where)) {
-      diagnostics.error(where, "replay-input", error);
-      return false;
+    if (layer->take(error, where)) continue;
+    // A layer of the program a staged reload replaces, whose actuator the reload changed: it
+    // does not run this step (an interface kept across the reload keeps its actuators' types).
+    if (!staged_.empty() && std::find(staged_.begin(), staged_.end(), layer) == staged_.end()) {
+      layer->drop();
+      continue;
     }
+    diagnostics.error(where, "replay-input", error);
+    return false;
   }
   return true;
+}
+
+void RecordedInputs::on_start(const Manager&) {
+  running_ = true;
+}
+
+void RecordedInputs::on_staged(const Program& next, std::uint64_t) {
+  staged_.clear();
+  for (const auto& layer : next.layers) {
+    if (layer.interface) staged_.push_back(layer.interface.get());
+  }
+}
+
+void RecordedInputs::on_reload(const Manager& manager) {
+  staged_.clear();
+  const auto& running = manager.program().layers;
+  layers_.erase(std::remove_if(layers_.begin(), layers_.end(),
+                               [&](const RecordedInputsLayer* layer) {
+                                 return std::none_of(running.begin(), running.end(),
+                                                     [&](const CompiledLayer& compiled) {
+                                                       return compiled.interface.get() == layer;
+                                                     });
+                               }),
+                layers_.end());
 }
 
 void RecordedInputs::remember(RecordedInputsLayer* layer) const {
@@ -360,6 +400,24 @@ bool RecordingReader::read(Event& event) {
   return false;
 }
 
+std::string replay_cut(ReplayCut why, std::uint64_t after_step, std::uint64_t dropped,
+                       std::string_view replayer) {
+  switch (why) {
+    case ReplayCut::kDropped:
+      return fmt::format("the recording dropped {} steps after step {}; {} runs up to there",
+                         dropped, after_step, replayer);
+    case ReplayCut::kReloaded:
+      return fmt::format("the config was reloaded after step {}; {} runs up to there", after_step,
+                         replayer);
+    case ReplayCut::kReloadNotKept:
+      break;
+  }
+  return fmt::format(
+      "the config was reloaded after step {} and the recording does not hold its files; {} "
+      "runs up to there",
+      after_step, replayer);
+}
+
 std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error) {
   RecordingReader reader(path);
   RecordedRun run;
@@ -371,7 +429,10 @@ std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic
       run.reloads.push_back({event.step, std::move(event.files)});
     } else if (event.kind == RecordingReader::Event::Kind::kGap) {
       run.dropped += event.dropped;
-      if (!run.first_gap) run.first_gap = event.step;
+      if (!run.first_gap) {
+        run.first_gap = event.step;
+        run.first_gap_dropped = event.dropped;
+      }
     }
   }
   if (reader.error()) {

@@ -63,17 +63,15 @@ std::optional<Replayed> read_replayed(const Scenario& scenario, Diagnostics& dia
   // a dropped step's inputs are lost: what can be replayed ends before either.
   if (!run->reloads.empty() && run->reloads.front().after_step < replayed.steps) {
     replayed.steps = run->reloads.front().after_step;
-    diagnostics.warning(where, "replay-cut",
-                        fmt::format("the config was reloaded after step {}; the test replays up "
-                                    "to there",
-                                    run->reloads.front().after_step));
+    diagnostics.warning(
+        where, "replay-cut",
+        replay_cut(ReplayCut::kReloaded, run->reloads.front().after_step, 0, "the test"));
   }
   if (run->first_gap && *run->first_gap < replayed.steps) {
     replayed.steps = *run->first_gap;
-    diagnostics.warning(where, "replay-cut",
-                        fmt::format("the recording dropped {} steps, the first after step {}; "
-                                    "the test replays up to there",
-                                    run->dropped, *run->first_gap));
+    diagnostics.warning(
+        where, "replay-cut",
+        replay_cut(ReplayCut::kDropped, *run->first_gap, run->first_gap_dropped, "the test"));
   }
   if (scenario.steps > replayed.steps) {
     diagnostics.error(scenario.steps_location, "out-of-range",

@@ -212,44 +212,62 @@ TraceDiff diff_traces(const Trace& a, const Trace& b, double tolerance, bool exa
   return differ.finish(a.steps.size(), b.steps.size(), first_extra);
 }
 
+bool StepAligner::next() {
+  return next_step(a_, record_);
+}
+
+bool StepAligner::start() {
+  more_ = next();
+  return !a_.error();
+}
+
+void StepAligner::compare(std::uint64_t step, const std::string& b) {
+  ++steps_b_;
+  while (more_ && record_.step < step) {
+    // A step one run has and the other lacks (dropped while recording): nothing to align.
+    differ_.unmatched(record_.step);
+    ++steps_a_;
+    more_ = next();
+  }
+  if (more_ && record_.step == step) {
+    differ_.compare(step, record_.text, b);
+    ++steps_a_;
+    more_ = next();
+  } else {
+    differ_.unmatched(step);
+  }
+}
+
+TraceDiff StepAligner::finish(std::uint64_t last) {
+  const std::uint64_t first_extra = more_ && record_.step <= last ? record_.step : 0;
+  while (more_ && record_.step <= last) {
+    ++steps_a_;
+    more_ = next();
+  }
+  return differ_.finish(steps_a_, steps_b_, first_extra);
+}
+
+void StepAligner::drain() {
+  while (more_) more_ = next();
+}
+
 std::optional<TraceDiff> diff_traces(TraceSource& a, TraceSource& b, Diagnostic& error,
                                      double tolerance, bool exact) {
   TraceDiffer differ(tolerance, exact);
-  TraceRecord x;
+  StepAligner aligner(a, differ);
+  aligner.start();
+  // A source that failed stops the diff at once: the other is not read on to its end first.
   TraceRecord y;
-  bool more_a = next_step(a, x);
-  bool more_b = next_step(b, y);
-  std::uint64_t steps_a = 0;
-  std::uint64_t steps_b = 0;
-  while (more_a && more_b) {
-    if (x.step != y.step) {
-      // A step one run has and the other lacks (dropped while recording): nothing to align.
-      differ.unmatched(std::min(x.step, y.step));
-      if (x.step < y.step) {
-        ++steps_a;
-        more_a = next_step(a, x);
-      } else {
-        ++steps_b;
-        more_b = next_step(b, y);
-      }
-      continue;
-    }
-    differ.compare(x.step, x.text, y.text);
-    ++steps_a;
-    ++steps_b;
-    more_a = next_step(a, x);
-    more_b = next_step(b, y);
-  }
-  const std::uint64_t first_extra = more_a ? x.step : more_b ? y.step : 0;
-  for (; more_a; more_a = next_step(a, x)) ++steps_a;
-  for (; more_b; more_b = next_step(b, y)) ++steps_b;
+  while (!a.error() && next_step(b, y)) aligner.compare(y.step, y.text);
+  std::optional<TraceDiff> diff;
+  if (!a.error() && !b.error()) diff = aligner.finish();
   for (const auto* source : {&a, &b}) {
     if (source->error()) {
       error = *source->error();
       return std::nullopt;
     }
   }
-  return differ.finish(steps_a, steps_b, first_extra);
+  return diff;
 }
 
 std::string format_json(const TraceDiff& diff) {

@@ -70,6 +70,11 @@ class JsonlSource : public TraceSource {
       record.location = {file_, static_cast<int>(line_), 1};
       return accept(record);
     }
+    if (in_.bad()) {
+      // A read error is not the end of the run: what was read is not all of it.
+      fail({file_, static_cast<int>(line_ + 1), 1}, "cannot read the trace");
+      return false;
+    }
     return end({file_, 0, 0});
   }
 
@@ -151,6 +156,50 @@ bool is_mcap(std::string_view start) {
              ? start.substr(0, mcap::kMagic.size()) == mcap::kMagic
              : !start.empty() && mcap::kMagic.substr(0, start.size()) == start;
 }
+
+/// A file read through its first bytes again after they were read to tell what it holds: a pipe
+/// (`<(cat run.jsonl)`, /dev/stdin) cannot seek back to them. A read error of the file reaches
+/// the stream that reads this buffer as its bad().
+class PrefixedFile : public std::streambuf {
+ public:
+  /// False when the file cannot be opened or its first bytes cannot be read.
+  bool open(const std::string& path) {
+    if (file_.open(path, std::ios::binary | std::ios::in) == nullptr) return false;
+    try {
+      const auto got = file_.sgetn(buffer_, mcap::kMagic.size());
+      prefix_.assign(buffer_, static_cast<std::size_t>(std::max<std::streamsize>(got, 0)));
+    } catch (const std::exception&) {
+      return false;  // libstdc++ throws on a read error, such as reading a directory
+    }
+    setg(prefix_.data(), prefix_.data(), prefix_.data() + prefix_.size());
+    return true;
+  }
+  std::string_view prefix() const { return prefix_; }
+
+ protected:
+  int_type underflow() override {
+    if (gptr() < egptr()) return traits_type::to_int_type(*gptr());
+    const auto got = file_.sgetn(buffer_, sizeof buffer_);  // a throw sets the stream's bad()
+    if (got <= 0) return traits_type::eof();
+    setg(buffer_, buffer_, buffer_ + got);
+    return traits_type::to_int_type(*gptr());
+  }
+
+ private:
+  std::filebuf file_;
+  std::string prefix_;
+  char buffer_[1 << 16];
+};
+
+/// An istream over a PrefixedFile it owns.
+class PrefixedStream : public std::istream {
+ public:
+  PrefixedStream() : std::istream(nullptr) { rdbuf(&file_); }
+  PrefixedFile& file() { return file_; }
+
+ private:
+  PrefixedFile file_;
+};
 
 class UnreadableSource : public TraceSource {
  public:
@@ -257,15 +306,9 @@ std::unique_ptr<TraceSource> trace_source(std::string bytes, std::string file) {
 }
 
 std::unique_ptr<TraceSource> open_trace(const std::string& path) {
-  auto in = std::make_unique<std::ifstream>(path, std::ios::binary);
-  if (!*in) return std::make_unique<UnreadableSource>(path);
-  char start[mcap::kMagic.size()];
-  in->read(start, sizeof start);
-  const auto got = static_cast<std::size_t>(in->gcount());
-  in->clear();
-  if (in->bad() || !in->seekg(0)) return std::make_unique<UnreadableSource>(path);
-  if (is_mcap(std::string_view(start, got)))
-    return std::make_unique<McapSource>(std::move(in), path);
+  auto in = std::make_unique<PrefixedStream>();
+  if (!in->file().open(path)) return std::make_unique<UnreadableSource>(path);
+  if (is_mcap(in->file().prefix())) return std::make_unique<McapSource>(std::move(in), path);
   return std::make_unique<OwnedJsonlSource>(std::move(in), path);
 }
 

@@ -1,9 +1,10 @@
 // A behaviour that breaks the replay rule on purpose: test_unsteady.Dice requests a level drawn
 // from the operating system's entropy, so that no two runs agree. Replay must catch and name it.
-// test_unsteady.Counter, an interface class, writes the step number to every double actuator its
-// layer declares and reports "LAYER ticked" every other step: inputs for replay to record and feed
+// test_unsteady.Counter, an interface class, writes the step number to every actuator its layer
+// declares (each a double or an int) and reports "LAYER ticked" every other step: inputs for replay to record and feed
 // back, each layer its own.
 
+#include <cstdint>
 #include <random>
 #include <string>
 #include <vector>
@@ -32,9 +33,13 @@ class Counter final : public arbiter::Interface {
     }
   }
   void input(arbiter::WriteContext& ctx) override {
-    arbiter::ValueBox value(*outputs_.front().type);
     for (const auto& output : outputs_) {
-      *static_cast<double*>(value.data()) = static_cast<double>(ctx.step());
+      arbiter::ValueBox value(*output.type);
+      if (output.type->name == "int") {
+        *static_cast<std::int64_t*>(value.data()) = static_cast<std::int64_t>(ctx.step());
+      } else {
+        *static_cast<double*>(value.data()) = static_cast<double>(ctx.step());
+      }
       ctx.write(output, value);
     }
   }

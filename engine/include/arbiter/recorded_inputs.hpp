@@ -9,10 +9,12 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "arbiter/diagnostics.hpp"
+#include "arbiter/manager.hpp"
 #include "arbiter/model.hpp"
 #include "arbiter/recording.hpp"
 #include "arbiter/registry.hpp"
@@ -39,7 +41,20 @@ struct RecordedRun {
   std::vector<Reload> reloads;
   std::uint64_t dropped = 0;               ///< steps the recorder dropped (its gap records)
   std::optional<std::uint64_t> first_gap;  ///< the last step before the first dropped one
+  std::uint64_t first_gap_dropped = 0;     ///< the steps the first gap dropped
 };
+
+/// Why a replay of a recording ends before the recording does.
+enum class ReplayCut {
+  kDropped,        ///< the recorder dropped steps there: their inputs are lost
+  kReloaded,       ///< the config was reloaded there, and this replay does not apply reloads
+  kReloadNotKept,  ///< the config was reloaded there, and the recording does not hold its files
+};
+/// The warning for a replay that ends after `after_step`, worded alike by every tool that replays
+/// a recording: `dropped` is kDropped's count of steps, `replayer` who replays ("the replay",
+/// "the test").
+std::string replay_cut(ReplayCut why, std::uint64_t after_step, std::uint64_t dropped,
+                       std::string_view replayer);
 
 /// Reads the config, inputs and reloads of the recording at `path`, whole; nullopt with `error`
 /// set when it is not a readable recording. A recording cut off while written gives what it
@@ -89,8 +104,11 @@ class RecordingReader {
   std::uint64_t dropped_ = 0;  // steps the gaps read say were dropped
 };
 
-/// The recorded inputs of a run, by actuator name and step.
-class RecordedInputs {
+/// The recorded inputs of a run, by actuator name and step. A replay that applies hot reloads
+/// adds it to its manager as an observer, so that load() stops feeding the layers of a program a
+/// reload replaced (they would convert every step's inputs again, and fail on an actuator whose
+/// type the reload changed).
+class RecordedInputs : public Observer {
  public:
   /// All the inputs of a run: each step's `/arbiter/inputs` message (RecordedRun::inputs).
   explicit RecordedInputs(const std::vector<std::pair<std::uint64_t, std::string>>& messages);
@@ -150,6 +168,17 @@ class RecordedInputs {
   void remember(RecordedInputsLayer* layer) const;
   void forget(RecordedInputsLayer* layer) const;
 
+  /// Whether a manager runs the program compiled first: layers compiled from then on are for a
+  /// hot reload.
+  bool running() const { return running_; }
+  void on_start(const Manager& manager) override;
+  void on_step(const Manager&) override {}
+  /// The layers of `next` are fed from here on; those of the running program are fed until it is
+  /// replaced, but a value that does not fit them is no error, since they will not run it.
+  void on_staged(const Program& next, std::uint64_t stage) override;
+  /// Forgets the layers of the program replaced, which no step runs again.
+  void on_reload(const Manager& manager) override;
+
  private:
   void add(std::uint64_t step, const std::string& message);
 
@@ -158,6 +187,8 @@ class RecordedInputs {
   std::uint64_t first_ = 1;
   std::uint64_t steps_ = 0;
   mutable std::vector<RecordedInputsLayer*> layers_;
+  bool running_ = false;
+  std::vector<const Interface*> staged_;  // the interfaces of the program staged, until swapped in
   ClassInfo class_;
   mutable bool unattributed_claimed_ = false;
 };

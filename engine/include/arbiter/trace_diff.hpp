@@ -57,6 +57,32 @@ class TraceDiffer {
   TraceDiff diff_;
 };
 
+/// Aligns by step number the steps of a run `a`, read from its source as far as they are needed,
+/// with those of a run `b` given one at a time, in order: a step only one run has is unmatched.
+/// `arbiter diff` and replay's determinism check (which has `b` only as it steps) align so.
+class StepAligner {
+ public:
+  /// Both must outlive the aligner.
+  StepAligner(TraceSource& a, TraceDiffer& differ) : a_(a), differ_(differ) {}
+  /// Reads `a` up to its first step; false when it cannot be read (a.error()).
+  bool start();
+  /// Compares `b`'s record of `step` with `a`'s, if it has that step.
+  void compare(std::uint64_t step, const std::string& b);
+  /// The result, counting the steps of `a` up to `last` that `b` did not reach.
+  TraceDiff finish(std::uint64_t last = ~std::uint64_t{0});
+  /// Reads the rest of `a`, for what its end holds.
+  void drain();
+
+ private:
+  bool next();
+  TraceSource& a_;
+  TraceDiffer& differ_;
+  TraceRecord record_;
+  bool more_ = false;
+  std::uint64_t steps_a_ = 0;
+  std::uint64_t steps_b_ = 0;
+};
+
 /// Aligns the steps of `a` and `b` by number. Numbers differing by at most `tolerance` are
 /// equal; "t" and "duration" (timing, not behaviour) are never compared. With `exact`, a step
 /// also differs when anything else in its record does (e.g. requested levels, queues).
