@@ -8,20 +8,8 @@ config=$source_dir/tests/data/replay/counter.yaml
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-fail() {
-  echo "FAIL: $*"
-  for f in "$work"/*.txt; do echo "--- $f"; cat "$f"; done
-  exit 1
-}
-expect_exit() {  # CODE COMMAND...
-  local code=$1
-  shift
-  set +e
-  "$@" >"$work/out.txt" 2>"$work/err.txt"
-  local got=$?
-  set -e
-  [[ $got -eq $code ]] || fail "exit $got, not $code: $*"
-}
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 
 "$cli" run "$config" --steps 30 -q --trace "$work/run.jsonl" --record "$work/run.mcap" ||
   fail "the run failed"
