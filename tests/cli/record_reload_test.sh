@@ -10,19 +10,8 @@ pid=
 trap '[ -n "$pid" ] && kill "$pid" 2>/dev/null; rm -rf "$work"' EXIT
 cp "$config" "$work/robot.yaml"
 
-fail() {
-  echo "FAIL: $*"
-  for f in "$work"/*.txt; do echo "--- $f"; cat "$f"; done
-  exit 1
-}
-# Waits (bounded: 20 s) until `grep -q PATTERN FILE` succeeds.
-wait_for() {
-  for _ in $(seq 1 400); do
-    grep -q -- "$1" "$2" && return 0
-    sleep 0.05
-  done
-  fail "no '$1' in $2"
-}
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 
 "$cli" run "$work/robot.yaml" --watch --realtime --record "$work/run.mcap" \
   >"$work/out.txt" 2>"$work/err.txt" &
