@@ -435,9 +435,7 @@ int run(const Options& options) {
     return kExitInvalid;
   }
   if (recorder && recorder->failed()) {
-    std::cerr << fmt::format(
-        "arbiter run: writing recording '{}' failed: {}; it holds the steps written before\n",
-        options.record_path, recorder->error());
+    std::cerr << arbiter::cli::recording_failed("run", options.record_path, recorder->error());
     return kExitInvalid;
   }
   if (manager.stopped()) {

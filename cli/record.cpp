@@ -288,9 +288,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   // follows, and the exit status says that an output was not written.
   const auto outputs_written = [&](int code) {
     if (!recorder || !recorder->failed()) return code;
-    err << fmt::format(
-        "arbiter replay: writing recording '{}' failed: {}; it holds the steps written before\n",
-        options.record, recorder->error());
+    err << recording_failed("replay", options.record, recorder->error());
     return 2;
   };
   if (run.error()) {
@@ -339,6 +337,14 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       "docs/plugins.md)\n",
       options.recording);
   return outputs_written(1);
+}
+
+std::string recording_failed(std::string_view command, const std::string& path,
+                             const std::string& error) {
+  return fmt::format(
+      "arbiter {}: writing recording '{}' failed: {}; it holds the steps written "
+      "before\n",
+      command, path, error);
 }
 
 void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <ostream>
 #include <string>
+#include <string_view>
 
 #include "arbiter/load.hpp"
 #include "arbiter/program.hpp"
@@ -35,6 +36,11 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
 /// damaged()): every tool that reads one says it the same way.
 void note_end(const std::string& path, const std::string& truncated, const std::string& damaged,
               std::ostream& err);
+
+/// The end-of-run line of `command` (run, replay) for a recording to `path` that failed with
+/// `error`, ending in a newline: both commands say it the same way.
+std::string recording_failed(std::string_view command, const std::string& path,
+                             const std::string& error);
 
 /// Compares two traces or recordings; `format` is "text" or "json". Returns the exit code.
 int diff(const std::string& a, const std::string& b, double tolerance, const std::string& format,
