@@ -1,5 +1,5 @@
-// explain (engine/src/explain.cpp) from a trace, and why a state ended as the trace's `ended`,
-// run's report (cli/run_report.cpp) and explain tell it.
+// explain (engine/tools/explain/explain.cpp) from a trace, and why a state ended as the trace's `ended`,
+// run's report (cli/commands/run_report.cpp) and explain tell it.
 
 #include <unistd.h>
 
@@ -13,7 +13,7 @@
 #include "arbiter/explain.hpp"
 #include "arbiter/state.hpp"
 #include "arbiter/trace.hpp"
-#include "run_report.hpp"
+#include "commands/run_report.hpp"
 #include "tooling_support.hpp"
 
 namespace fs = std::filesystem;

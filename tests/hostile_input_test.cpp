@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "mcap.hpp"
+#include "core/record/mcap.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;

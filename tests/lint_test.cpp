@@ -1,4 +1,4 @@
-// The lints (engine/src/lint.cpp): located, silenced by code, none in the shipped configs, and
+// The lints (engine/tools/lint/lint.cpp): located, silenced by code, none in the shipped configs, and
 // in agreement with the reachability closure on random graphs.
 
 #include <catch2/catch.hpp>

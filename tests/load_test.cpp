@@ -1,4 +1,4 @@
-// The load pipeline (engine/src/load.cpp). Error messages are API: every config in
+// The load pipeline (engine/core/compile/load.cpp). Error messages are API: every config in
 // tests/data/invalid is loaded and its diagnostics are compared, as text, with the approved
 // `<case>.expected` beside it. Run with ARBITER_UPDATE_GOLDEN=1 to rewrite the expected files from
 // the current output (then review the diff by eye; never in CI).

@@ -13,7 +13,7 @@
 
 #include <unistd.h>
 
-#include "../engine/src/carryover.hpp"  // internal: one test stages a carry-over by hand
+#include "core/run/carryover.hpp"  // internal: one test stages a carry-over by hand
 #include "arbiter/recording.hpp"
 #include "arbiter/reload.hpp"
 #include "arbiter/trace.hpp"

@@ -10,7 +10,7 @@
 #include <iterator>
 #include <stdexcept>
 
-#include "../../engine/src/controller_builder.hpp"
+#include "core/compile/controller_builder.hpp"
 #include "arbiter/lint.hpp"
 #include "arbiter/trace.hpp"
 #include "builtins.hpp"

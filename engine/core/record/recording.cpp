@@ -1,0 +1,516 @@
+#include "arbiter/recording.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <system_error>
+
+#include "arbiter/trace.hpp"
+#include "core/record/mcap.hpp"
+#include "core/record/step_record.hpp"
+
+namespace arbiter {
+
+namespace {
+
+constexpr const char* kStepSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
+ "title": "arbiter step record",
+ "type": "object",
+ "properties": {
+  "step": {"type": "integer", "minimum": 1},
+  "t": {"type": "number", "description": "seconds since the run began, at the step's start"},
+  "duration": {"type": "number", "description": "seconds the step took"},
+  "safe": {"type": "boolean", "description": "the safe-value pass of a stopping or pausing engine"},
+  "layers": {"type": "object", "additionalProperties": {"type": "object",
+    "additionalProperties": {"type": "object", "properties": {
+      "requested": {"type": "number"}, "activation": {"type": "number"},
+      "active": {"type": "boolean"}, "inhibited_by": {"type": "array", "items": {"type": "string"}}}}}},
+  "actuators": {"type": "object", "additionalProperties": {"type": "object",
+    "properties": {"value": {}, "written": {"type": "boolean"}}}},
+  "controllers": {"type": "object", "additionalProperties": {"type": "object", "properties": {
+    "cycle": {"type": "integer"}, "state": {"type": ["string", "null"]},
+    "queue": {"type": "array", "items": {"type": "string"}},
+    "params": {"type": "object", "description": "the current state's per-instance params"},
+    "events": {"type": "array", "items": {"type": "string"}},
+    "ended": {"type": "array", "description": "why each state deactivated in the step ended, in order",
+      "items": {"type": "object", "properties": {
+        "state": {"type": "string"}, "params": {"type": "object"},
+        "cause": {"enum": ["proceeded", "queue_empty", "preempted", "go_to", "terminated", "error", "restarted", "reloaded"]},
+        "to": {"type": "string"}, "by": {"type": "string"},
+        "preempt": {"type": "integer", "minimum": 0}, "proceeded": {"type": "boolean"}},
+       "required": ["state", "cause"]}},
+    "status": {"type": "string"}}}},
+  "reported": {"type": "array", "items": {"type": "object",
+    "properties": {"by": {"type": "string"}, "text": {"type": "string"}}}}},
+ "required": ["step", "layers"]})";
+
+constexpr const char* kInputsSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
+ "title": "arbiter interface inputs",
+ "type": "object",
+ "properties": {
+  "step": {"type": "integer", "minimum": 1},
+  "inputs": {"type": "object", "additionalProperties": {"type": "object",
+    "properties": {"value": {}, "written": {"type": "boolean"}}}},
+  "reported": {"type": "array", "items": {"type": "object",
+    "properties": {"by": {"type": "string"}, "text": {"type": "string"},
+                   "pass": {"enum": ["input", "output"]}}}}},
+ "required": ["step", "inputs"]})";
+
+constexpr const char* kHeaderSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
+ "title": "arbiter trace header",
+ "type": "object",
+ "properties": {"arbiter_trace": {"const": 1}, "name": {"type": "string"},
+  "reload": {"type": "integer"}, "after_step": {"type": "integer"},
+  "layers": {"type": "array"}},
+ "required": ["arbiter_trace", "name", "layers"]})";
+
+}  // namespace
+
+void append_inputs_record(const Manager& manager, std::string& out) {
+  const detail::StepLayout layout(manager.program());
+  detail::SnapshotBlocks storage;
+  detail::append_inputs_record(layout, detail::capture_growing(manager, layout, storage), out);
+}
+
+// Reported text a slot holds; a step that reported more is dropped.
+constexpr std::size_t kReportTextBytes = 4096;
+
+// The ring laid out for one program: made on the thread that stages it where it can be, so that
+// a hot reload neither allocates on the stepping thread nor waits there for the writer.
+struct Recorder::Generation {
+  Generation(const Program& program, std::uint64_t stage_, std::size_t slots)
+      : stage(stage_), layout(program), header(trace_header(program)) {
+    blocks.reset(layout, kReportTextBytes, slots);
+    last.bytes.assign(blocks.shape().tracked.total, std::byte{0});
+  }
+  std::uint64_t stage = 0;  // Manager::stage_number()
+  detail::StepLayout layout;
+  detail::SnapshotBlocks blocks;
+  // The stepping thread's: the tracked parts as the last slot published left them.
+  detail::StepImage last;
+  std::string header;  // the program's trace header, without the reload's number and step
+  std::vector<std::pair<std::string, std::string>> files;  // the reloaded config's
+};
+
+// Cache-line aligned: the stepping thread fills one slot while the writer reads an earlier one.
+// A step's values are in the block of the same index of the slot's generation (Generation).
+struct alignas(64) Recorder::Slot {
+  // A step or a safe pass is in the slot's block, which says which, and its step and time: the
+  // stepping thread writes nothing here for it. Only a reload header or the end is marked here,
+  // and the writer marks the slot back once it has written them.
+  enum class Kind { kSnapshot, kHeader, kEnd };
+  Kind kind = Kind::kSnapshot;
+  std::uint64_t step = 0;
+  std::uint64_t log_time = 0;
+  std::uint64_t reload = 0;          // kHeader: Manager::reloads()
+  std::unique_ptr<Generation> next;  // kHeader: the slots after it are laid out by it
+};
+
+struct Recorder::Output {
+  explicit Output(int fd) : writer(fd) {}
+  mcap::Writer writer;
+  std::uint16_t header = 0;
+  std::uint16_t step = 0;
+  std::uint16_t inputs = 0;
+  std::uint64_t last_step = 0;
+  std::uint64_t dropped = 0;
+  std::string record;  // reused between messages
+  std::string inputs_record;
+  detail::StepImage image;  // the writer's, as of the last slot it formatted
+  // The stepping thread's: whether the last slot published is the one before the next (no step
+  // dropped since), so that the next copies what changed. On a cache line of its own: the
+  // writer writes the members above at every message.
+  alignas(64) bool chained = false;
+};
+
+Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots,
+                   RingFull ring_full)
+    : path_(path),
+      fd_(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)),
+      info_(std::move(info)),
+      // One slot is always left empty, to tell a full ring from an empty one; at least one
+      // step may wait, or every step would drop and the end could never be written.
+      ring_(std::make_unique<Slot[]>(std::max<std::size_t>(slots, 1) + 1)),
+      ring_size_(std::max<std::size_t>(slots, 1) + 1),
+      ring_full_(ring_full),
+      logger_(spdlog::default_logger()) {
+  if (fd_ >= 0) out_ = std::make_unique<Output>(fd_);
+}
+
+Recorder::~Recorder() {
+  if (started_ && !finished_) {
+    settle();
+    Slot* slot = claim_waiting();
+    slot->kind = Slot::Kind::kEnd;
+    publish();
+    wake_writer();
+  }
+  if (writer_.joinable()) writer_.join();
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool Recorder::ok() const {
+  return out_ != nullptr && !failed();  // out_ exists once the file is open
+}
+
+void Recorder::check_written(std::uint64_t step) {
+  if (out_->writer.ok() || failed_.load(std::memory_order_relaxed)) return;
+  fail(out_->writer.error(), step);
+}
+
+void Recorder::fail(int error, std::uint64_t step, const char* doing) {
+  if (failing_.exchange(true)) return;
+  error_ = std::generic_category().message(error);
+  error_ += step == 0 ? std::string(" (at the start)") : fmt::format(" ({} step {})", doing, step);
+  failed_.store(true, std::memory_order_release);
+  if (logger_) {
+    logger_->error(
+        "recording '{}': a write failed: {}; the run goes on unrecorded, the file keeps what was "
+        "written before",
+        path_, error_);
+  }
+}
+
+inline Recorder::Slot* Recorder::claim() {
+  const auto head = head_.load(std::memory_order_relaxed);
+  const auto next = after(head);
+  if (next == tail_seen_) {
+    tail_seen_ = tail_.load(std::memory_order_acquire);
+    if (next == tail_seen_) return nullptr;
+  }
+  return &ring_[head];
+}
+
+inline void Recorder::publish() {
+  head_.store(after(head_.load(std::memory_order_relaxed)), std::memory_order_release);
+}
+
+inline void Recorder::settle() {
+  if (!unpublished_) return;
+  detail::fence_streamed_stores();
+  publish();
+  unpublished_ = false;
+}
+
+inline detail::SnapshotBlock Recorder::block(const Generation& generation, const Slot* slot) const {
+  return generation.blocks[static_cast<std::size_t>(slot - ring_.get())];
+}
+
+void Recorder::on_start(const Manager& manager) {
+  if (!out_) return;
+  wall_start_ns_ =
+      static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                     std::chrono::system_clock::now().time_since_epoch())
+                                     .count());
+  auto& writer = out_->writer;
+  writer.header("arbiter", "arbiter " + info_.version);
+  out_->header = writer.channel(writer.schema("arbiter.Header", "jsonschema", kHeaderSchema),
+                                "/arbiter/header", "json");
+  out_->step = writer.channel(writer.schema("arbiter.Step", "jsonschema", kStepSchema),
+                              "/arbiter/step", "json");
+  out_->inputs = writer.channel(writer.schema("arbiter.Inputs", "jsonschema", kInputsSchema),
+                                "/arbiter/inputs", "json");
+  std::vector<std::pair<std::string, std::string>> config;
+  config.emplace_back("name", manager.program().name);
+  config.emplace_back("rate_hz", fmt::format("{}", manager.program().rate_hz));
+  config.emplace_back("version", info_.version);
+  std::string plugins;
+  for (const auto& plugin : info_.plugins) plugins += (plugins.empty() ? "" : "\n") + plugin;
+  config.emplace_back("plugins", plugins);
+  for (const auto& [file, text] : info_.files) config.emplace_back("file:" + file, text);
+  writer.metadata("arbiter.config", config);
+  written_ = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
+  stepping_ = written_.get();
+  writer.message(out_->header, wall_start_ns_, written_->header);
+  check_written(0);
+  set_writer_period(manager.program());
+  started_ = true;
+  writer_ = std::thread([this] { write_loop(); });
+}
+
+std::uint64_t Recorder::log_time(bool timed, double step_time) const {
+  return wall_start_ns_ + (timed ? static_cast<std::uint64_t>(step_time * 1e9) : 0);
+}
+
+void Recorder::set_writer_period(const Program& program) {
+  // The writer wakes a few times in the while the ring takes to fill at the config's rate: a
+  // robot's CPU has better to do than wake it every millisecond, and its bursts of formatting
+  // and compressing then seldom meet a step. Flat out, where the stepping thread waits for it,
+  // it wakes every millisecond.
+  constexpr double kFewest = 1e-3, kMost = 50e-3;  // seconds
+  const double fill = static_cast<double>(ring_size_ - 1) / program.rate_hz;
+  const double period =
+      ring_full_ == RingFull::kWaitForWriter ? kFewest : std::clamp(fill / 4, kFewest, kMost);
+  writer_period_us_.store(static_cast<std::int64_t>(period * 1e6));
+}
+
+inline void Recorder::capture(const Manager& manager, Slot* slot, bool may_allocate) {
+  if (slot == nullptr || !detail::capture_step(manager, stepping_->layout,
+                                               stepping_->blocks.shape(), block(*stepping_, slot),
+                                               may_allocate, &stepping_->last, out_->chained)) {
+    // No room, or more than a slot holds: the gap is recorded.
+    dropped_total_.fetch_add(1, std::memory_order_relaxed);
+    out_->chained = false;  // the next slot copies every tracked part whole
+    return;
+  }
+  out_->chained = true;
+  unpublished_ = true;
+}
+
+void Recorder::on_step(const Manager& manager) {
+  if (!started_) return;
+  settle();
+  capture(manager, ring_full_ == RingFull::kWaitForWriter ? claim_waiting() : claim(), false);
+}
+
+Recorder::Slot* Recorder::claim_waiting() {
+  Slot* slot = claim();
+  if (slot != nullptr) return slot;
+  wake_writer();
+  while ((slot = claim()) == nullptr) std::this_thread::yield();
+  return slot;
+}
+
+void Recorder::wake_writer() {
+  {
+    std::lock_guard<std::mutex> lock(wake_mutex_);
+    wake_requested_ = true;
+  }
+  wake_.notify_one();
+}
+
+void Recorder::drain() {
+  if (!started_ || finished_) return;
+  settle();
+  wake_writer();
+  while (backlog() > 0) std::this_thread::sleep_for(std::chrono::microseconds(50));
+}
+
+void Recorder::on_safe(const Manager& manager) {
+  if (!started_) return;
+  settle();
+  // The last values a stopping robot was given: not dropped for room.
+  capture(manager, claim_waiting(), true);
+}
+
+void Recorder::stage_files(std::vector<std::pair<std::string, std::string>> files) {
+  std::lock_guard<std::mutex> lock(staged_mutex_);
+  staged_files_ = std::move(files);
+}
+
+std::vector<std::pair<std::string, std::string>> Recorder::take_staged_files() {
+  std::lock_guard<std::mutex> lock(staged_mutex_);
+  return std::exchange(staged_files_, {});
+}
+
+void Recorder::on_staged(const Program& next, std::uint64_t stage) {
+  if (!out_) return;
+  auto generation = std::make_unique<Generation>(next, stage, ring_size_);
+  generation->files = take_staged_files();
+  {
+    std::lock_guard<std::mutex> lock(staged_mutex_);
+    std::swap(staged_, generation);
+  }
+  // A generation staged before and never swapped in is freed here, outside the lock.
+}
+
+void Recorder::on_reload(const Manager& manager) {
+  if (!started_) return;
+  settle();
+  // The slots still waiting for the writer keep the replaced program's generation (and their
+  // state machines' config params point into that program: Manager waits in on_retiring()
+  // before freeing it). The steps from here on go into the next one's blocks.
+  std::unique_ptr<Generation> next;
+  {
+    // The staging thread holds the lock only to move a pointer or two: never for long.
+    std::lock_guard<std::mutex> lock(staged_mutex_);
+    if (staged_ && staged_->stage == manager.stage_number()) next = std::move(staged_);
+  }
+  if (!next) {
+    // Staged without on_staged(), or raced by a later stage(): laid out here, allocating.
+    next = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
+    next->files = take_staged_files();
+  }
+  set_writer_period(manager.program());
+  // A reload header is never dropped: without it the steps after it could not be read.
+  Slot* slot = claim_waiting();
+  slot->kind = Slot::Kind::kHeader;
+  slot->step = manager.steps();
+  slot->reload = manager.reloads();
+  slot->log_time = log_time(manager.timed(), manager.step_time());
+  stepping_ = next.get();
+  slot->next = std::move(next);
+  out_->chained = false;  // the next step copies every tracked part whole, into the new blocks
+  headers_published_.fetch_add(1, std::memory_order_release);
+  publish();
+}
+
+void Recorder::on_retiring(const Program&) {
+  if (!started_) return;
+  const auto published = headers_published_.load(std::memory_order_acquire);
+  if (headers_written_.load(std::memory_order_acquire) >= published) return;
+  wake_writer();
+  while (headers_written_.load(std::memory_order_acquire) < published && !finished_) {
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+  }
+}
+
+void Recorder::on_finish(const Manager&) {
+  if (!started_ || finished_) return;
+  settle();
+  Slot* slot = claim_waiting();
+  slot->kind = Slot::Kind::kEnd;
+  publish();
+  wake_writer();
+  writer_.join();
+  finished_ = true;
+}
+
+void Recorder::write_loop() {
+  using Clock = std::chrono::steady_clock;
+  auto& out = *out_;
+  // Nothing waits in the open chunk, or on its way to the storage, for longer than this: what a
+  // crash or a power cut loses.
+  const bool flushes = !(flush_interval_ <= 0.0);
+  const auto flush_interval =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+          flush_interval_ < kMaxFlushInterval ? flush_interval_ : kMaxFlushInterval));
+  bool unsynced = false;  // something was written, or put in the open chunk, since the last sync
+  Clock::time_point unsynced_since;
+  const auto flush_when_due = [&](Clock::time_point now) {
+    if (!unsynced || now - unsynced_since < flush_interval) return;
+    out.writer.close_chunk();
+    check_written(out.last_step);
+    request_sync(out.last_step);
+    unsynced = false;
+  };
+  if (flushes) syncer_ = std::thread([this] { sync_loop(); });
+  std::size_t head_seen = 0;  // head_ is read again only once the writer has caught up with it
+  while (true) {
+    const auto tail = tail_.load(std::memory_order_relaxed);
+    if (tail == head_seen) {
+      head_seen = head_.load(std::memory_order_acquire);
+      if (tail == head_seen) {
+        if (flushes && !failed()) flush_when_due(Clock::now());
+        std::unique_lock<std::mutex> lock(wake_mutex_);
+        wake_.wait_for(lock, std::chrono::microseconds(writer_period_us_.load()),
+                       [this] { return wake_requested_; });
+        wake_requested_ = false;
+        continue;
+      }
+    }
+    Slot& slot = ring_[tail];
+    if (slot.kind == Slot::Kind::kEnd) {
+      tail_.store(after(tail), std::memory_order_release);
+      break;
+    }
+    if (slot.kind == Slot::Kind::kHeader) {
+      // Every slot of the generation before has been written: it goes, the next one comes.
+      written_ = std::move(slot.next);
+      const auto header = reload_header(written_->header, slot.reload, slot.step);
+      std::vector<std::pair<std::string, std::string>> reload{
+          {"after_step", std::to_string(slot.step)}, {"header", header}};
+      for (auto& [file, text] : written_->files) {
+        reload.emplace_back("file:" + file, std::move(text));
+      }
+      written_->files.clear();
+      if (!failed()) {
+        out.writer.metadata("arbiter.reload", reload);
+        out.writer.message(out.header, slot.log_time, header);
+      }
+      out.last_step = slot.step;
+      slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
+      headers_written_.fetch_add(1, std::memory_order_release);
+    } else if (!failed()) {
+      // The writer only reads the block: a line it wrote would have to come back to the
+      // stepping thread's core before that could fill the slot again.
+      detail::StepSnapshot step(written_->blocks.shape(), block(*written_, &slot));
+      step.apply(out.image);
+      const auto time = log_time(step.timed, step.t);
+      out.record.clear();
+      detail::append_step_record(written_->layout, step, out.record);
+      if (step.safe) {
+        out.writer.message(out.step, time, out.record);  // no inputs: nothing was read
+      } else {
+        if (step.step > out.last_step + 1) {
+          const auto gap = step.step - out.last_step - 1;
+          out.dropped += gap;
+          out.writer.metadata("arbiter.gap", {{"after_step", std::to_string(out.last_step)},
+                                              {"dropped", std::to_string(gap)}});
+        }
+        out.last_step = step.step;
+        out.inputs_record.clear();
+        detail::append_inputs_record(written_->layout, step, out.inputs_record);
+        out.writer.message(out.step, time, out.record);
+        out.writer.message(out.inputs, time, out.inputs_record);
+      }
+    }
+    // After a failed write the writer only frees the slots: the run goes on, unrecorded.
+    if (!failed()) {
+      // A step's record and its inputs go into one chunk: a file cut off has both or neither.
+      if (out.writer.chunk_full()) out.writer.close_chunk();
+      check_written(out.last_step);
+      if (flushes) {
+        const auto now = Clock::now();
+        if (!unsynced) {
+          unsynced = true;
+          unsynced_since = now;
+        }
+        flush_when_due(now);
+      }
+    }
+    tail_.store(after(tail), std::memory_order_release);
+  }
+  if (!failed()) {
+    out.writer.metadata("arbiter.summary", {{"steps", std::to_string(out.last_step)},
+                                            {"dropped", std::to_string(out.dropped)}});
+    out.writer.finish();
+    check_written(out.last_step);
+    if (flushes) request_sync(out.last_step);  // the run is over: it may wait for this one
+  }
+  if (syncer_.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(sync_mutex_);
+      sync_stop_ = true;
+    }
+    sync_wake_.notify_one();
+    syncer_.join();
+  }
+  // Closed here, not by the destructor: a file system that reports a failed write only at the
+  // close (NFS) is reported with the others, before on_finish() returns.
+  const int closed = ::close(fd_);
+  const int error = errno;
+  fd_ = -1;
+  if (closed != 0 && error != EINTR && !failed()) fail(error, out.last_step);
+}
+
+void Recorder::request_sync(std::uint64_t step) {
+  {
+    std::lock_guard<std::mutex> lock(sync_mutex_);
+    sync_requested_ = true;
+    sync_step_ = step;
+  }
+  sync_wake_.notify_one();
+}
+
+void Recorder::sync_loop() {
+  std::unique_lock<std::mutex> lock(sync_mutex_);
+  while (true) {
+    sync_wake_.wait(lock, [this] { return sync_requested_ || sync_stop_; });
+    if (!sync_requested_) return;  // stopped, with nothing left to sync
+    sync_requested_ = false;
+    const auto step = sync_step_;
+    lock.unlock();
+    // EINVAL: a pipe or a device, which keep nothing to sync. Requests made meanwhile are
+    // served by the next sync, which covers them all.
+    if (::fdatasync(fd_) != 0 && errno != EINVAL) fail(errno, step, "syncing");
+    lock.lock();
+  }
+}
+
+}  // namespace arbiter

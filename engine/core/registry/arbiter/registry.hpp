@@ -1,0 +1,276 @@
+#pragma once
+// engine/core/registry: C++ classes in (built in, or from plugins: plugin.hpp); a Registry out that
+// binds each class name to its params, ports and factory. The model checks configs against it.
+//
+// The registry maps type names to classes (behaviour, state, interface) and value types, each
+// with one declaration of params and ports that serves validation, compile and tooling alike.
+// It is a value: no global instance, nothing registered during static initialisation.
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <typeinfo>
+#include <variant>
+#include <vector>
+
+#include "arbiter/behaviour.hpp"
+#include "arbiter/diagnostics.hpp"
+#include "arbiter/document.hpp"
+#include "arbiter/value.hpp"
+
+namespace arbiter {
+
+class State;
+
+enum class ClassKind { kBehaviour, kState, kInterface };
+const char* to_string(ClassKind kind);
+
+enum class ParamKind {
+  kBool,
+  kInt,
+  kDouble,
+  kString,
+  kVec2,
+  kVec3,
+  kDoubleList,
+  kStringList,
+  kAny
+};
+const char* to_string(ParamKind kind);
+
+/// A param's value after validation. kAny params keep their document node for the class to read.
+using ParamValue = std::variant<bool, std::int64_t, double, std::string, Vec2, Vec3,
+                                std::vector<double>, std::vector<std::string>, Node>;
+
+/// The kind of params whose values have C++ type T (ParamValue's alternatives, in kind order).
+template <typename T>
+constexpr ParamKind param_kind_of() {
+  static_assert(std::variant_size_v<ParamValue> == static_cast<std::size_t>(ParamKind::kAny) + 1,
+                "ParamValue's alternatives follow ParamKind's order");
+  if constexpr (std::is_same_v<T, bool>) return ParamKind::kBool;
+  if constexpr (std::is_same_v<T, std::int64_t>) return ParamKind::kInt;
+  if constexpr (std::is_same_v<T, double>) return ParamKind::kDouble;
+  if constexpr (std::is_same_v<T, std::string>) return ParamKind::kString;
+  if constexpr (std::is_same_v<T, Vec2>) return ParamKind::kVec2;
+  if constexpr (std::is_same_v<T, Vec3>) return ParamKind::kVec3;
+  if constexpr (std::is_same_v<T, std::vector<double>>) return ParamKind::kDoubleList;
+  if constexpr (std::is_same_v<T, std::vector<std::string>>) return ParamKind::kStringList;
+  if constexpr (std::is_same_v<T, Node>) return ParamKind::kAny;
+  static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int64_t> ||
+                    std::is_same_v<T, double> || std::is_same_v<T, std::string> ||
+                    std::is_same_v<T, Vec2> || std::is_same_v<T, Vec3> ||
+                    std::is_same_v<T, std::vector<double>> ||
+                    std::is_same_v<T, std::vector<std::string>> || std::is_same_v<T, Node>,
+                "a param's C++ type is bool, std::int64_t, double, std::string, Vec2, Vec3, "
+                "std::vector<double>, std::vector<std::string> or Node");
+}
+
+/// A validated param of one instance.
+struct Param {
+  std::string name;
+  ParamValue value;
+  SourceLocation location;  ///< where it was written; the owner's location for a default
+  bool defaulted = false;
+};
+
+struct ParamSet {
+  std::vector<Param> items;  ///< in the class's declaration order, defaults filled in
+  const Param* find(std::string_view name) const;
+};
+
+struct ParamSpec {
+  std::string name;
+  ParamKind kind = ParamKind::kDouble;
+  std::optional<ParamValue> default_value;  ///< none: the param is required
+  std::optional<double> minimum;            ///< for numbers, and each element of a number list
+  std::optional<double> maximum;
+  std::vector<std::string> choices;  ///< for strings: the allowed values, if restricted
+  std::string description;
+  /// For states: false when the param may only be set on the state, not per planned instance.
+  bool per_instance = true;
+  /// The param's JSON Schema (draft-07, as JSON text) for `arbiter schema`, instead of the one
+  /// its kind gives: how a structured (kAny) param tells editors and CI its shape.
+  std::string json_schema;
+
+  /// The default, which makes the param optional. It has the kind's C++ type (an integer is
+  /// taken for a double); any other type is a mistake in the class's registration, which then
+  /// throws std::logic_error (reported against the plugin).
+  ParamSpec& defaults_to(ParamValue value);
+  ParamSpec& range(double low, double high) {
+    minimum = low;
+    maximum = high;
+    return *this;
+  }
+  ParamSpec& at_least(double low) {
+    minimum = low;
+    return *this;
+  }
+  ParamSpec& one_of(std::vector<std::string> allowed) {
+    choices = std::move(allowed);
+    return *this;
+  }
+  ParamSpec& describe(std::string text) {
+    description = std::move(text);
+    return *this;
+  }
+  ParamSpec& schema(std::string json_schema_text) {
+    json_schema = std::move(json_schema_text);
+    return *this;
+  }
+  ParamSpec& state_level() {
+    per_instance = false;
+    return *this;
+  }
+  bool required() const { return !default_value.has_value(); }
+};
+
+enum class PortDirection { kInput, kOutput };
+
+struct PortSpec {
+  std::string name;
+  PortDirection direction = PortDirection::kInput;
+  const std::type_info* cpp_type = nullptr;
+  bool optional = false;  ///< may stay unbound when nothing of its name exists
+  std::string description;
+
+  PortSpec& make_optional() {
+    optional = true;
+    return *this;
+  }
+  PortSpec& describe(std::string text) {
+    description = std::move(text);
+    return *this;
+  }
+};
+
+struct ClassInfo {
+  std::string name;
+  ClassKind kind = ClassKind::kBehaviour;
+  std::string origin = "built-in";
+  std::string description;
+  std::vector<ParamSpec> params;
+  std::vector<PortSpec> ports;
+  std::function<std::unique_ptr<Behaviour>()> make_behaviour;
+  std::function<std::unique_ptr<Interface>()> make_interface;
+  std::function<std::unique_ptr<State>()> make_state;
+
+  ParamSpec& param(std::string param_name, ParamKind param_kind) {
+    auto& spec = params.emplace_back();
+    spec.name = std::move(param_name);
+    spec.kind = param_kind;
+    return spec;
+  }
+  /// A param of the kind whose C++ type is T, the type `ctx.param<T>()` reads it as:
+  /// `info.param<double>("speed").defaults_to(0.5)`.
+  template <typename T>
+  ParamSpec& param(std::string param_name) {
+    return param(std::move(param_name), param_kind_of<T>());
+  }
+  template <typename T>
+  PortSpec& input(std::string port_name) {
+    return add_port(std::move(port_name), PortDirection::kInput, typeid(T));
+  }
+  template <typename T>
+  PortSpec& output(std::string port_name) {
+    return add_port(std::move(port_name), PortDirection::kOutput, typeid(T));
+  }
+  ClassInfo& describe(std::string text) {
+    description = std::move(text);
+    return *this;
+  }
+  const ParamSpec* find_param(std::string_view param_name) const;
+  const PortSpec* find_port(std::string_view port_name) const;
+
+ private:
+  PortSpec& add_port(std::string port_name, PortDirection direction, const std::type_info& type) {
+    auto& spec = ports.emplace_back();
+    spec.name = std::move(port_name);
+    spec.direction = direction;
+    spec.cpp_type = &type;
+    return spec;
+  }
+};
+
+class Registry {
+ public:
+  /// A registry that knows the built-in value types (bool, int, double, vec2, vec3, string) and
+  /// no classes.
+  Registry();
+
+  template <typename T>
+  ClassInfo& add_behaviour(std::string name) {
+    auto& info = add_class(std::move(name), ClassKind::kBehaviour);
+    info.make_behaviour = [] { return std::unique_ptr<Behaviour>(new T()); };
+    return info;
+  }
+  template <typename T>
+  ClassInfo& add_interface(std::string name) {
+    auto& info = add_class(std::move(name), ClassKind::kInterface);
+    info.make_interface = [] { return std::unique_ptr<Interface>(new T()); };
+    return info;
+  }
+  /// States are created through a factory so that the State header stays out of this one.
+  ClassInfo& add_state(std::string name, std::function<std::unique_ptr<State>()> factory) {
+    auto& info = add_class(std::move(name), ClassKind::kState);
+    info.make_state = std::move(factory);
+    return info;
+  }
+  template <typename T>
+  ValueType& add_value_type(std::string name) {
+    return add_value_type(make_value_type<T>(std::move(name)));
+  }
+  ValueType& add_value_type(ValueType type);
+
+  /// Throws std::logic_error when `name` is taken for that kind: registering twice is a
+  /// programming error. A behaviour and a state may share a name (`scripted`).
+  ClassInfo& add_class(std::string name, ClassKind kind);
+
+  const ClassInfo* find_class(ClassKind kind, std::string_view name) const;
+  /// A class of that name of any kind (for "is a state class, not a behaviour class").
+  const ClassInfo* find_any_class(std::string_view name) const;
+  const ValueType* find_value_type(std::string_view name) const;
+  const ValueType* value_type_of(const std::type_info& type) const;
+  /// "double" for a registered C++ type, else its mangled name (for messages).
+  std::string value_type_name(const std::type_info& type) const;
+
+  std::vector<std::string> class_names(ClassKind kind) const;
+  std::vector<std::string> value_type_names() const;
+  /// Every class, ordered by name, then kind.
+  const std::map<std::pair<std::string, ClassKind>, ClassInfo>& classes() const { return classes_; }
+  const std::vector<std::unique_ptr<ValueType>>& value_types() const { return value_types_; }
+
+  /// Sets the origin recorded for classes and value types added from now on.
+  void set_origin(std::string origin) { origin_ = std::move(origin); }
+
+  /// Keeps a plugin library loaded while this registry, or any program compiled from it, lives.
+  void keep_loaded(std::string path, std::shared_ptr<void> library) {
+    library_paths_.push_back(std::move(path));
+    libraries_.push_back(std::move(library));
+  }
+  bool has_library(std::string_view path) const {
+    for (const auto& loaded : library_paths_) {
+      if (loaded == path) return true;
+    }
+    return false;
+  }
+  const std::vector<std::shared_ptr<void>>& libraries() const { return libraries_; }
+
+  /// Moves every class and value type of `other` into this registry. A name both define is
+  /// reported at `where` with both origins and not merged.
+  void merge(Registry&& other, const SourceLocation& where, Diagnostics& diagnostics);
+
+ private:
+  // Declared first so that it is destroyed last: the classes and value types below hold code
+  // from these libraries.
+  std::vector<std::shared_ptr<void>> libraries_;
+  std::vector<std::string> library_paths_;
+  std::map<std::pair<std::string, ClassKind>, ClassInfo> classes_;
+  std::vector<std::unique_ptr<ValueType>> value_types_;  // stable addresses for handles
+  std::string origin_ = "built-in";
+};
+
+}  // namespace arbiter

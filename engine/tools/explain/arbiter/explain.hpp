@@ -1,0 +1,54 @@
+#pragma once
+// engine/tools/explain: a Program and a run's trace in; why a behaviour had its activation at a
+// step out, in words (`arbiter explain`, the views' explain panel).
+//
+// Why a behaviour had its activation level at one step of a run, told from the compiled program
+// (the closed inhibitor lists, the chains behind implicit inhibitions) and the run's trace
+// (docs/semantics.md, "The trace"). Also what a state machine did in that step.
+
+#include <cstdint>
+#include <istream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "arbiter/program.hpp"
+#include "arbiter/trace_reader.hpp"
+
+namespace arbiter {
+
+struct Explanation {
+  enum class Status {
+    kOk,
+    kNotFound,  ///< no such behaviour, state machine or step: the request is wrong
+    kBadTrace,  ///< the trace is malformed, or was written for another config
+  };
+  Status status = Status::kOk;
+  std::string text;                ///< the explanation, or what went wrong (one line)
+  std::vector<std::string> notes;  ///< with an error: suggestions
+  /// kBadTrace because a record could not be read: where it is (the trace reader's location).
+  std::optional<SourceLocation> where;
+};
+
+/// Explains `target` at step `step` (counting from 1) of `trace`, a trace written by running
+/// `program`'s config.
+///
+/// `target` names a behaviour (`name`, or `layer/name` when several layers have one of that
+/// name): the explanation gives its requested level, each inhibitor after closure with its
+/// refined level and factor (1 - a), the chain of chaining inhibitions behind an implicit one,
+/// the product, and the normalisation when the layer normalises. Or it names a state machine
+/// (`name`, or `state_machines/name`): which state ran, what was queued before and after, the
+/// events and what they mean. Levels are recomputed from the trace's requested levels and checked
+/// against its recorded activations.
+Explanation explain(const Program& program, TraceSource& trace, std::uint64_t step,
+                    std::string_view target);
+/// explain() of the JSON-lines trace in `trace`, named "trace" in errors.
+Explanation explain(const Program& program, std::istream& trace, std::uint64_t step,
+                    std::string_view target);
+
+/// Whether `header_line` (a trace's first line) was written by running `program`'s config,
+/// checked as explain() checks it: kOk, or kBadTrace saying what differs.
+Explanation check_trace_header(const Program& program, const std::string& header_line);
+
+}  // namespace arbiter

@@ -1,0 +1,346 @@
+#include "arbiter/trace_reader.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "arbiter/document.hpp"
+#include "core/record/mcap.hpp"
+
+namespace arbiter {
+
+namespace {
+
+using Json = nlohmann::json;
+
+/// nlohmann's message without its own prefix and position, which the location gives.
+std::string parse_message(const Json::parse_error& error) {
+  std::string text = error.what();
+  if (const auto column = text.find(", column "); column != std::string::npos) {
+    if (const auto colon = text.find(": ", column); colon != std::string::npos) {
+      return text.substr(colon + 2);
+    }
+  }
+  return text;
+}
+
+/// nlohmann's message without its "[json.exception.KIND.ID] " prefix.
+std::string without_prefix(const Json::exception& error) {
+  std::string text = error.what();
+  if (const auto end = text.find("] ");
+      text.rfind("[json.exception.", 0) == 0 && end != std::string::npos) {
+    return text.substr(end + 2);
+  }
+  return text;
+}
+
+/// Where a record's top-level `"key": value` is written, spanning both, for an error about its
+/// value; the record's own location when it cannot be found (or the record is not a line).
+SourceLocation field_location(const TraceRecord& record, const std::string& key) {
+  SourceLocation where = record.location;
+  if (where.line <= 0) return where;
+  const std::string quoted = "\"" + key + "\"";
+  const auto at = record.text.find(quoted);
+  if (at == std::string::npos) return where;
+  auto end = record.text.find_first_of(",}", at + quoted.size());
+  if (end == std::string::npos) end = record.text.size();
+  while (end > at && record.text[end - 1] == ' ') --end;
+  // Traces are ASCII outside their strings, so bytes are characters here.
+  where.column = static_cast<int>(at) + 1;
+  where.length = static_cast<int>(end - at);
+  return where;
+}
+
+bool is_header(const Json& json) {
+  return json.is_object() && json.value("arbiter_trace", Json()) == 1;
+}
+
+class JsonlSource : public TraceSource {
+ public:
+  JsonlSource(std::istream& in, std::string file) : in_(in), file_(std::move(file)) {}
+
+  bool next(TraceRecord& record) override {
+    if (error()) return false;
+    while (std::getline(in_, record.text)) {
+      ++line_;
+      if (record.text.empty()) continue;
+      record.location = {file_, static_cast<int>(line_), 1};
+      return accept(record);
+    }
+    if (in_.bad()) {
+      // A read error is not the end of the run: what was read is not all of it.
+      fail({file_, static_cast<int>(line_ + 1), 1}, "cannot read the trace");
+      return false;
+    }
+    return end({file_, 0, 0});
+  }
+
+ private:
+  std::istream& in_;
+  std::string file_;
+  std::size_t line_ = 0;
+};
+
+/// A JSON-lines trace read from a stream the source owns (a file, or bytes in memory).
+class OwnedJsonlSource : public JsonlSource {
+ public:
+  OwnedJsonlSource(std::unique_ptr<std::istream> in, std::string file)
+      : JsonlSource(*in, std::move(file)), owned_(std::move(in)) {}
+
+ private:
+  std::unique_ptr<std::istream> owned_;
+};
+
+/// A recording: its header messages (the first and each reload's) and step messages, in order,
+/// read one chunk at a time.
+class McapSource : public TraceSource {
+ public:
+  McapSource(std::unique_ptr<std::istream> in, std::string file)
+      : in_(std::move(in)), reader_(*in_), file_(std::move(file)) {}
+
+  bool next(TraceRecord& record) override {
+    if (error()) return false;
+    while (reader_.next(message_)) {
+      if (message_.kind != mcap::Record::Kind::kMessage) continue;
+      if (message_.topic != "/arbiter/header" && message_.topic != "/arbiter/step") continue;
+      record.text = std::move(message_.data);
+      record.location = {file_, 0, 0};
+      if (!accept(record)) {
+        fail_at(message_.offset);
+        return false;
+      }
+      last_step_ = record.kind == TraceRecord::Kind::kStep ? record.step : last_step_;
+      return true;
+    }
+    if (!reader_.error().empty()) {
+      fail({file_, 0, 0}, reader_.error());
+      return false;
+    }
+    if (reader_.truncated() && !header_seen()) {
+      // Not an empty recording: one that was cut off before anything could be read.
+      fail({file_, 0, 0}, mcap::cut_before_header(reader_.good_until()));
+      return false;
+    }
+    if (reader_.truncated()) {
+      set_truncated(fmt::format(
+          "the recording was cut off while it was written: it ends after step {} (byte {}); "
+          "what the run did after that is lost",
+          last_step_, reader_.good_until()));
+    }
+    set_damaged(reader_.damaged_end());
+    return end({file_, 0, 0});
+  }
+
+ private:
+  /// The record's own error, told with the byte of its chunk.
+  void fail_at(std::uint64_t offset) {
+    auto problem = *error();
+    reset_error();
+    fail(problem.location, fmt::format("at byte {}: {}", offset, problem.message), problem.notes);
+  }
+
+  std::unique_ptr<std::istream> in_;
+  mcap::Reader reader_;
+  mcap::Record message_;
+  std::string file_;
+  std::uint64_t last_step_ = 0;
+};
+
+/// Whether a file starting with `start` (its first bytes, up to MCAP's magic's length) is a
+/// recording: it starts with MCAP's magic, or is a piece of it (a recording cut off at once).
+bool is_mcap(std::string_view start) {
+  return start.size() >= mcap::kMagic.size()
+             ? start.substr(0, mcap::kMagic.size()) == mcap::kMagic
+             : !start.empty() && mcap::kMagic.substr(0, start.size()) == start;
+}
+
+/// A file read through its first bytes again after they were read to tell what it holds: a pipe
+/// (`<(cat run.jsonl)`, /dev/stdin) cannot seek back to them. A read error of the file reaches
+/// the stream that reads this buffer as its bad().
+class PrefixedFile : public std::streambuf {
+ public:
+  /// False when the file cannot be opened or its first bytes cannot be read.
+  bool open(const std::string& path) {
+    if (file_.open(path, std::ios::binary | std::ios::in) == nullptr) return false;
+    try {
+      const auto got = file_.sgetn(buffer_, mcap::kMagic.size());
+      prefix_.assign(buffer_, static_cast<std::size_t>(std::max<std::streamsize>(got, 0)));
+    } catch (const std::exception&) {
+      return false;  // libstdc++ throws on a read error, such as reading a directory
+    }
+    setg(prefix_.data(), prefix_.data(), prefix_.data() + prefix_.size());
+    return true;
+  }
+  std::string_view prefix() const { return prefix_; }
+
+ protected:
+  int_type underflow() override {
+    if (gptr() < egptr()) return traits_type::to_int_type(*gptr());
+    const auto got = file_.sgetn(buffer_, sizeof buffer_);  // a throw sets the stream's bad()
+    if (got <= 0) return traits_type::eof();
+    setg(buffer_, buffer_, buffer_ + got);
+    return traits_type::to_int_type(*gptr());
+  }
+
+ private:
+  std::filebuf file_;
+  std::string prefix_;
+  char buffer_[1 << 16];
+};
+
+/// An istream over a PrefixedFile it owns.
+class PrefixedStream : public std::istream {
+ public:
+  PrefixedStream() : std::istream(nullptr) { rdbuf(&file_); }
+  PrefixedFile& file() { return file_; }
+
+ private:
+  PrefixedFile file_;
+};
+
+class UnreadableSource : public TraceSource {
+ public:
+  explicit UnreadableSource(std::string file) {
+    fail({std::move(file), 0, 0}, "cannot read the trace");
+  }
+  bool next(TraceRecord&) override { return false; }
+};
+
+}  // namespace
+
+void TraceSource::fail(SourceLocation where, std::string message, std::vector<std::string> notes) {
+  if (error_) return;
+  error_ = Diagnostic{std::move(where), Severity::kError, "bad-trace", std::move(message),
+                      std::move(notes)};
+}
+
+bool TraceSource::end(SourceLocation where) {
+  if (!header_seen_ && !error_) fail(std::move(where), "the trace is empty");
+  return false;
+}
+
+bool TraceSource::accept(TraceRecord& record) {
+  // Before the parse: every tool copies, compares or prints what it reads, recursively.
+  const std::size_t max_depth = ReadLimits().max_depth;
+  if (const auto deep = find_too_deep_json(record.text, max_depth)) {
+    auto where = record.location;
+    std::string message = fmt::format("nesting deeper than {} levels", max_depth);
+    if (where.line > 0) {
+      where.column = static_cast<int>(*deep) + 1;
+    } else {
+      message += fmt::format(" (at byte {} of the record)", *deep);
+    }
+    fail(std::move(where), std::move(message));
+    return false;
+  }
+  Json parsed;
+  try {
+    parsed = Json::parse(record.text);
+  } catch (const Json::parse_error& bad) {
+    auto where = record.location;
+    if (where.line > 0) where.column = static_cast<int>(std::max<std::size_t>(bad.byte, 1));
+    fail(std::move(where), "not JSON: " + parse_message(bad));
+    return false;
+  } catch (const Json::exception& bad) {
+    // Valid syntax the parser still refuses, such as a number too large for a double.
+    fail(record.location, "not readable JSON: " + without_prefix(bad));
+    return false;
+  }
+  if (!header_seen_) {
+    if (!is_header(parsed) || !parsed.value("layers", Json()).is_array()) {
+      fail(record.location,
+           "a trace starts with a header {\"arbiter_trace\": 1, \"name\": ..., \"layers\": "
+           "[...]}; write one with 'arbiter run CONFIG --trace FILE.jsonl'");
+      return false;
+    }
+    header_seen_ = true;
+    record.kind = TraceRecord::Kind::kHeader;
+    record.step = 0;
+    return true;
+  }
+  if (is_header(parsed) && parsed.contains("reload")) {
+    const Json& after = parsed.value("after_step", Json());
+    if (!after.is_number_unsigned() || !parsed.value("layers", Json()).is_array()) {
+      fail(record.location,
+           "a reload header has \"after_step\" (the last step before it) and \"layers\"");
+      return false;
+    }
+    record.kind = TraceRecord::Kind::kReload;
+    record.step = after.get<std::uint64_t>();
+    return true;
+  }
+  if (!parsed.is_object() || !parsed.contains("step") || !parsed["step"].is_number_unsigned() ||
+      !parsed.contains("layers") || !parsed["layers"].is_object()) {
+    fail(record.location, "not a step record (an object with \"step\" and \"layers\")");
+    return false;
+  }
+  const auto step = parsed["step"].get<std::uint64_t>();
+  if (step == last_step_ && parsed.value("safe", false) == true) {
+    record.kind = TraceRecord::Kind::kSafe;
+    record.step = step;
+    return true;
+  }
+  if (step <= last_step_) {
+    fail(field_location(record, "step"),
+         fmt::format("step {} follows step {}; steps must increase", step, last_step_));
+    return false;
+  }
+  last_step_ = step;
+  record.kind = TraceRecord::Kind::kStep;
+  record.step = step;
+  return true;
+}
+
+std::unique_ptr<TraceSource> jsonl_trace_source(std::istream& in, std::string file) {
+  return std::make_unique<JsonlSource>(in, std::move(file));
+}
+
+std::unique_ptr<TraceSource> trace_source(std::string bytes, std::string file) {
+  const bool mcap = is_mcap(bytes);
+  auto in = std::make_unique<std::istringstream>(std::move(bytes));
+  if (mcap) return std::make_unique<McapSource>(std::move(in), std::move(file));
+  return std::make_unique<OwnedJsonlSource>(std::move(in), std::move(file));
+}
+
+std::unique_ptr<TraceSource> open_trace(const std::string& path) {
+  auto in = std::make_unique<PrefixedStream>();
+  if (!in->file().open(path)) return std::make_unique<UnreadableSource>(path);
+  if (is_mcap(in->file().prefix())) return std::make_unique<McapSource>(std::move(in), path);
+  return std::make_unique<OwnedJsonlSource>(std::move(in), path);
+}
+
+std::optional<Trace> read_trace(TraceSource& source, Diagnostic& error) {
+  Trace trace;
+  TraceRecord record;
+  bool first = true;
+  while (source.next(record)) {
+    if (first) {
+      trace.header = std::move(record);
+      first = false;
+    } else if (record.kind == TraceRecord::Kind::kReload) {
+      trace.reloads.push_back({std::move(record), trace.steps.size()});
+    } else if (record.kind == TraceRecord::Kind::kSafe) {
+      trace.safe_passes.push_back(std::move(record));
+    } else {
+      trace.steps.push_back(std::move(record));
+    }
+    record = TraceRecord();
+  }
+  if (source.error()) {
+    error = *source.error();
+    return std::nullopt;
+  }
+  trace.truncated = source.truncated();
+  trace.damaged = source.damaged();
+  return trace;
+}
+
+std::optional<Trace> read_trace(const std::string& path, Diagnostic& error) {
+  auto source = open_trace(path);
+  return read_trace(*source, error);
+}
+
+}  // namespace arbiter

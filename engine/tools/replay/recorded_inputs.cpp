@@ -1,0 +1,446 @@
+#include "arbiter/recorded_inputs.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "arbiter/behaviour.hpp"
+#include "arbiter/document.hpp"
+#include "arbiter/init_context.hpp"
+#include "core/record/mcap.hpp"
+
+namespace arbiter {
+
+/// Writes its layer's actuators from the recording: what the recorded run's interface wrote.
+/// Holds the steps RecordedInputs holds (all of them, or the one a streamed replay is at), their
+/// values converted to the actuators' types, so that the step loop parses and allocates nothing.
+class RecordedInputsLayer : public Interface {
+ public:
+  explicit RecordedInputsLayer(const RecordedInputs& inputs) : inputs_(inputs) {}
+  ~RecordedInputsLayer() override { inputs_.forget(this); }
+
+  void init(InitContext& ctx) override {
+    // Resolved here, so that the output pass compares no names.
+    unattributed_ = inputs_.claim_unattributed();
+    name_ = ctx.name();
+    for (const auto& actuator : ctx.layer_actuators()) {
+      const auto* column = inputs_.find(actuator.name);
+      if (column == nullptr) {
+        ctx.error(actuator.location,
+                  fmt::format("the recording has no input '{}': the recorded run's interface "
+                              "layers did not declare it",
+                              actuator.name));
+        continue;
+      }
+      Feed feed;
+      feed.name = actuator.name;
+      feed.type = actuator.type;
+      feed.location = actuator.location;
+      feed.output = ctx.output_to_actuator(actuator.name, actuator.location);
+      feeds_.push_back(std::move(feed));
+    }
+    // A layer compiled for a hot reload takes its first step at the next load(): the step held
+    // now is the last of the program it replaces, in that program's types.
+    std::string error;
+    SourceLocation where;
+    if (!inputs_.running() && !take(error, where)) ctx.error(where, error);
+    inputs_.remember(this);
+  }
+
+  /// Takes the steps RecordedInputs holds now; false, with the error and where, when a value
+  /// does not fit its actuator's type.
+  bool take(std::string& error, SourceLocation& where) {
+    const auto held = inputs_.held();
+    for (auto& pass : reports_) {
+      pass.assign(held, {});
+    }
+    for (std::uint64_t i = 0; i < held; ++i) {
+      for (const auto& report : inputs_.reported(inputs_.first_held() + i)) {
+        if (report.layer == name_ || (report.layer.empty() && unattributed_)) {
+          reports_[report.input_pass ? kInputPass : kOutputPass][i].push_back(report.text.c_str());
+        }
+      }
+    }
+    for (auto& feed : feeds_) {
+      const auto* column = inputs_.find(feed.name);
+      feed.values.clear();
+      feed.written.clear();
+      for (std::size_t i = 0; i < held; ++i) {
+        feed.values.emplace_back(*feed.type);
+        feed.written.push_back(column != nullptr && column->written[i]);
+        if (column == nullptr || column->values[i].empty()) continue;
+        Diagnostics parsed;
+        const auto node =
+            parse_document(column->values[i], "recording", DocumentFormat::kJson, parsed);
+        std::string expected;
+        if (!node || !feed.type->from_node(*node, feed.values.back().data(), expected)) {
+          where = feed.location;
+          error = fmt::format(
+              "recorded input '{}' at step {} is {}, not {} (a {}): the edited config must keep "
+              "the recorded inputs' types",
+              feed.name, inputs_.first_held() + i, column->values[i], expected, feed.type->name);
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+
+  /// Holds no step: what take() failed to convert is not written.
+  void drop() {
+    for (auto& pass : reports_) pass.clear();
+    for (auto& feed : feeds_) {
+      feed.values.clear();
+      feed.written.clear();
+    }
+  }
+
+  // Reported again by the layer that reported it, in the pass it reported in, so that the
+  // step's reports come in the recorded order.
+  void output(const StepContext& ctx) override {
+    const auto index = ctx.step() - inputs_.first_held();
+    if (ctx.step() < inputs_.first_held() || index >= reports_[kOutputPass].size()) return;
+    for (const char* text : reports_[kOutputPass][index]) ctx.report(text);
+  }
+
+  void input(WriteContext& ctx) override {
+    if (ctx.step() < inputs_.first_held()) return;
+    const auto index = ctx.step() - inputs_.first_held();
+    if (index < reports_[kInputPass].size()) {
+      for (const char* text : reports_[kInputPass][index]) ctx.report(text);
+    }
+    for (auto& feed : feeds_) {
+      if (index < feed.values.size() && feed.written[index]) {
+        ctx.write(feed.output, feed.values[index]);
+      }
+    }
+  }
+
+ private:
+  struct Feed {
+    std::string name;
+    const ValueType* type = nullptr;
+    SourceLocation location;
+    AnyOutput output;
+    std::vector<ValueBox> values;
+    std::vector<char> written;
+  };
+  const RecordedInputs& inputs_;
+  std::string name_;
+  bool unattributed_ = false;
+  std::vector<Feed> feeds_;
+  enum Pass { kInputPass, kOutputPass };
+  std::vector<std::vector<const char*>> reports_[2];  // this layer's, per pass, per held step
+};
+
+RecordedInputs::RecordedInputs(const std::vector<std::pair<std::uint64_t, std::string>>& messages)
+    : RecordedInputs() {
+  for (const auto& [step, text] : messages) steps_ = std::max(steps_, step);
+  reported_.resize(steps_);
+  for (const auto& [step, text] : messages) add(step, text);
+}
+
+RecordedInputs::RecordedInputs() {
+  class_.name = "arbiter.RecordedInputs";
+  class_.kind = ClassKind::kInterface;
+  class_.origin = "replay";
+  class_.make_interface = [this] { return std::make_unique<RecordedInputsLayer>(*this); };
+}
+
+void RecordedInputs::add(std::uint64_t step, const std::string& text) {
+  const auto json = nlohmann::ordered_json::parse(text, nullptr, false);
+  if (step < first_ || step - first_ >= reported_.size() || !json.is_object() ||
+      !json.contains("inputs")) {
+    return;
+  }
+  const auto index = step - first_;
+  if (json.contains("reported") && json["reported"].is_array()) {
+    for (const auto& item : json["reported"]) {
+      // Older recordings list the texts only.
+      if (item.is_string()) reported_[index].push_back({"", item.get<std::string>()});
+      if (item.is_object() && item.value("text", nlohmann::ordered_json()).is_string()) {
+        const auto by = item.value("by", nlohmann::ordered_json());
+        const auto pass = item.value("pass", nlohmann::ordered_json());
+        reported_[index].push_back({by.is_string() ? by.get<std::string>() : std::string(),
+                                    item["text"].get<std::string>(),
+                                    pass.is_string() && pass.get<std::string>() == "input"});
+      }
+    }
+  }
+  for (const auto& [name, entry] : json["inputs"].items()) {
+    auto* column = const_cast<Column*>(find(name));
+    if (column == nullptr) {
+      column = &columns_.emplace_back();
+      column->name = name;
+      column->values.resize(reported_.size());
+      column->written.resize(reported_.size());
+    }
+    column->values[index] = entry.value("value", nlohmann::ordered_json()).dump();
+    column->written[index] = entry.value("written", false) ? 1 : 0;
+  }
+}
+
+bool RecordedInputs::load(std::uint64_t step, const std::string& message,
+                          Diagnostics& diagnostics) {
+  first_ = step;
+  steps_ = step;
+  reported_.assign(1, {});
+  for (auto& column : columns_) {
+    column.values.assign(1, std::string());
+    column.written.assign(1, 0);
+  }
+  if (!message.empty()) add(step, message);
+  std::string error;
+  SourceLocation where;
+  for (auto* layer : layers_) {
+    if (layer->take(error, where)) continue;
+    // A layer of the program a staged reload replaces, whose actuator the reload changed: it
+    // does not run this step (an interface kept across the reload keeps its actuators' types).
+    if (!staged_.empty() && std::find(staged_.begin(), staged_.end(), layer) == staged_.end()) {
+      layer->drop();
+      continue;
+    }
+    diagnostics.error(where, "replay-input", error);
+    return false;
+  }
+  return true;
+}
+
+void RecordedInputs::on_start(const Manager&) {
+  running_ = true;
+}
+
+void RecordedInputs::on_staged(const Program& next, std::uint64_t) {
+  staged_.clear();
+  for (const auto& layer : next.layers) {
+    if (layer.interface) staged_.push_back(layer.interface.get());
+  }
+}
+
+void RecordedInputs::on_reload(const Manager& manager) {
+  staged_.clear();
+  const auto& running = manager.program().layers;
+  layers_.erase(std::remove_if(layers_.begin(), layers_.end(),
+                               [&](const RecordedInputsLayer* layer) {
+                                 return std::none_of(running.begin(), running.end(),
+                                                     [&](const CompiledLayer& compiled) {
+                                                       return compiled.interface.get() == layer;
+                                                     });
+                               }),
+                layers_.end());
+}
+
+void RecordedInputs::remember(RecordedInputsLayer* layer) const {
+  layers_.push_back(layer);
+}
+
+void RecordedInputs::forget(RecordedInputsLayer* layer) const {
+  layers_.erase(std::remove(layers_.begin(), layers_.end(), layer), layers_.end());
+}
+
+const std::vector<RecordedInputs::Report>& RecordedInputs::reported(std::uint64_t step) const {
+  static const std::vector<Report> kNone;
+  return step >= first_ && step - first_ < reported_.size() ? reported_[step - first_] : kNone;
+}
+
+bool RecordedInputs::claim_unattributed() const {
+  const bool first = !unattributed_claimed_;
+  unattributed_claimed_ = true;
+  return first;
+}
+
+const RecordedInputs::Column* RecordedInputs::find(const std::string& name) const {
+  for (const auto& column : columns_) {
+    if (column.name == name) return &column;
+  }
+  return nullptr;
+}
+
+void RecordedInputs::replace_interfaces(Model& model, Diagnostics& diagnostics) const {
+  for (auto& layer : model.layers) {
+    if (!layer.is_interface()) continue;
+    layer.interface = &class_;
+    layer.params = {};
+    layer.ports.clear();
+  }
+  check_places(model, model.location, diagnostics);
+}
+
+void RecordedInputs::check_places(const Model& model, const SourceLocation& where,
+                                  Diagnostics& diagnostics) const {
+  std::vector<std::string> declared;
+  for (const auto& layer : model.layers) {
+    if (layer.interface != &class_) continue;
+    for (const auto& actuator : layer.actuators) declared.push_back(actuator.name.text);
+  }
+  for (const auto& column : columns_) {
+    if (std::find(declared.begin(), declared.end(), column.name) != declared.end()) continue;
+    diagnostics
+        .error(where, "replay-input",
+               fmt::format("recorded input '{}' has no place in this config: no interface layer "
+                           "declares an actuator '{}'",
+                           column.name, column.name))
+        .unknown_name(column.name, declared, "the config has no interface layer",
+                      "interface actuators");
+  }
+}
+
+RecordingReader::RecordingReader(const std::string& path)
+    : path_(path),
+      in_(std::make_unique<std::ifstream>(path, std::ios::binary)),
+      record_(std::make_unique<mcap::Record>()) {
+  if (!*in_) {
+    fail("cannot read the recording");
+    return;
+  }
+  reader_ = std::make_unique<mcap::Reader>(*in_);
+  // The recorder writes the config before the first step: read up to it, keeping what comes
+  // before it, but not past a step's inputs, so that a file without it is not read whole.
+  Event event;
+  while (!config_ && read(event)) {
+    const bool step = event.kind == Event::Kind::kInputs;
+    ahead_.push_back(std::move(event));
+    if (step) break;
+  }
+  if (error_) return;
+  if (!config_ || info_.files.empty()) {
+    fail(reader_->truncated()
+             ? mcap::cut_before_header(reader_->good_until())
+             : "the recording has no 'arbiter.config' metadata with the config's files; record "
+               "one with 'arbiter run CONFIG --record RUN.mcap'");
+  }
+}
+
+RecordingReader::~RecordingReader() = default;
+
+void RecordingReader::fail(std::string message) {
+  error_ = Diagnostic{{path_, 0, 0}, Severity::kError, "bad-recording", std::move(message), {}};
+}
+
+bool RecordingReader::next(Event& event) {
+  if (error_) return false;
+  if (!ahead_.empty()) {
+    event = std::move(ahead_.front());
+    ahead_.erase(ahead_.begin());
+    return true;
+  }
+  return read(event);
+}
+
+bool RecordingReader::read(Event& event) {
+  event = Event();
+  while (reader_->next(*record_)) {
+    if (record_->kind == mcap::Record::Kind::kMetadata) {
+      if (record_->name == "arbiter.config") {
+        config_ = true;
+        for (auto& [key, value] : record_->metadata) {
+          if (key.rfind("file:", 0) == 0) {
+            info_.files.emplace_back(key.substr(5), std::move(value));
+          } else if (key == "version") {
+            info_.version = value;
+          } else if (key == "plugins" && !value.empty()) {
+            std::size_t start = 0;
+            while (start <= value.size()) {
+              const auto end = std::min(value.find('\n', start), value.size());
+              info_.plugins.push_back(value.substr(start, end - start));
+              start = end + 1;
+            }
+          }
+        }
+        continue;
+      }
+      if (record_->name == "arbiter.reload") {
+        event.kind = Event::Kind::kReload;
+        for (auto& [key, value] : record_->metadata) {
+          if (key == "after_step") event.step = std::strtoull(value.c_str(), nullptr, 10);
+          if (key.rfind("file:", 0) == 0) event.files.emplace_back(key.substr(5), std::move(value));
+        }
+        return true;
+      }
+      if (record_->name == "arbiter.gap") {
+        event.kind = Event::Kind::kGap;
+        for (const auto& [key, value] : record_->metadata) {
+          if (key == "dropped") event.dropped = std::strtoull(value.c_str(), nullptr, 10);
+          if (key == "after_step") event.step = std::strtoull(value.c_str(), nullptr, 10);
+        }
+        dropped_ += event.dropped;
+        return true;
+      }
+    } else if (record_->topic == "/arbiter/inputs") {
+      // Checked here, before RecordedInputs copies its values out of a parsed tree.
+      if (const auto deep = find_too_deep_json(record_->data)) {
+        fail(fmt::format(
+            "at byte {}: an inputs message nests deeper than {} levels (at byte {} of the message)",
+            record_->offset, ReadLimits().max_depth, *deep));
+        return false;
+      }
+      event.kind = Event::Kind::kInputs;
+      const auto key = record_->data.find("\"step\": ");
+      event.step = key == std::string::npos
+                       ? 0
+                       : std::strtoull(record_->data.c_str() + key + 8, nullptr, 10);
+      // Each step's inputs follow those of the step before it: a step beyond those the recording
+      // holds (or says it dropped) is not a recorded run's, and a reader that keeps the inputs
+      // per step would size that for nothing.
+      if (event.step > inputs_ + dropped_ + 1) {
+        fail(fmt::format(
+            "at byte {}: an inputs message for step {}, after the inputs of {} steps (and {} "
+            "dropped); each step's inputs follow those of the step before it",
+            record_->offset, event.step, inputs_, dropped_));
+        return false;
+      }
+      ++inputs_;
+      event.text = std::move(record_->data);
+      return true;
+    }
+  }
+  if (!reader_->error().empty()) fail(reader_->error());
+  return false;
+}
+
+std::string replay_cut(ReplayCut why, std::uint64_t after_step, std::uint64_t dropped,
+                       std::string_view replayer) {
+  switch (why) {
+    case ReplayCut::kDropped:
+      return fmt::format("the recording dropped {} steps after step {}; {} runs up to there",
+                         dropped, after_step, replayer);
+    case ReplayCut::kReloaded:
+      return fmt::format("the config was reloaded after step {}; {} runs up to there", after_step,
+                         replayer);
+    case ReplayCut::kReloadNotKept:
+      break;
+  }
+  return fmt::format(
+      "the config was reloaded after step {} and the recording does not hold its files; {} "
+      "runs up to there",
+      after_step, replayer);
+}
+
+std::optional<RecordedRun> read_recorded_run(const std::string& path, Diagnostic& error) {
+  RecordingReader reader(path);
+  RecordedRun run;
+  RecordingReader::Event event;
+  while (reader.next(event)) {
+    if (event.kind == RecordingReader::Event::Kind::kInputs) {
+      run.inputs.emplace_back(event.step, std::move(event.text));
+    } else if (event.kind == RecordingReader::Event::Kind::kReload) {
+      run.reloads.push_back({event.step, std::move(event.files)});
+    } else if (event.kind == RecordingReader::Event::Kind::kGap) {
+      run.dropped += event.dropped;
+      if (!run.first_gap) {
+        run.first_gap = event.step;
+        run.first_gap_dropped = event.dropped;
+      }
+    }
+  }
+  if (reader.error()) {
+    error = *reader.error();
+    return std::nullopt;
+  }
+  run.info = reader.info();
+  return run;
+}
+
+}  // namespace arbiter

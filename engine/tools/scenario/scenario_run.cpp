@@ -1,0 +1,242 @@
+#include "arbiter/scenario_run.hpp"
+
+#include <fmt/format.h>
+
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "arbiter/explain.hpp"
+#include "arbiter/load.hpp"
+#include "arbiter/manager.hpp"
+#include "arbiter/program.hpp"
+#include "arbiter/recorded_inputs.hpp"
+#include "arbiter/recording.hpp"
+#include "arbiter/substitute.hpp"
+#include "arbiter/trace.hpp"
+#include "tools/scenario/scenario_checks.hpp"
+#include "tools/scenario/scenario_inputs.hpp"
+
+namespace arbiter {
+namespace {
+
+std::string explain_at(const Program& program, const std::string& trace, std::uint64_t step,
+                       const std::vector<std::string>& targets) {
+  std::string out;
+  for (const auto& target : targets) {
+    std::istringstream in(trace);
+    const auto explanation = explain(program, in, step, target);
+    if (explanation.status == Explanation::Status::kOk) out += explanation.text;
+  }
+  return out;
+}
+
+// The recording a scenario replays: its inputs, its steps, and how many of them can be replayed.
+struct Replayed {
+  std::unique_ptr<RecordedInputs> inputs;
+  Trace trace;
+  std::uint64_t steps = 0;
+};
+
+std::optional<Replayed> read_replayed(const Scenario& scenario, Diagnostics& diagnostics) {
+  const auto& where = scenario.replay.location;
+  Diagnostic error;
+  auto run = read_recorded_run(scenario.replay_path, error);
+  std::optional<Trace> trace;
+  if (run) trace = read_trace(scenario.replay_path, error);
+  if (!run || !trace) {
+    diagnostics.error(where, "unreadable-recording",
+                      fmt::format("cannot replay '{}': {}", scenario.replay.text, error.message));
+    return std::nullopt;
+  }
+  if (!trace->truncated.empty()) {
+    diagnostics.error(where, "unreadable-recording",
+                      fmt::format("recording '{}' was cut off while it was written: {}",
+                                  scenario.replay.text, trace->truncated));
+    return std::nullopt;
+  }
+  Replayed replayed;
+  replayed.inputs = std::make_unique<RecordedInputs>(run->inputs);
+  replayed.trace = std::move(*trace);
+  replayed.steps = replayed.inputs->steps();
+  // A scenario test replays the first config only (`arbiter replay` applies recorded reloads);
+  // a dropped step's inputs are lost: what can be replayed ends before either.
+  if (!run->reloads.empty() && run->reloads.front().after_step < replayed.steps) {
+    replayed.steps = run->reloads.front().after_step;
+    diagnostics.warning(
+        where, "replay-cut",
+        replay_cut(ReplayCut::kReloaded, run->reloads.front().after_step, 0, "the test"));
+  }
+  if (run->first_gap && *run->first_gap < replayed.steps) {
+    replayed.steps = *run->first_gap;
+    diagnostics.warning(
+        where, "replay-cut",
+        replay_cut(ReplayCut::kDropped, *run->first_gap, run->first_gap_dropped, "the test"));
+  }
+  if (scenario.steps > replayed.steps) {
+    diagnostics.error(scenario.steps_location, "out-of-range",
+                      fmt::format("'steps' is {}, but the recording has {} steps to replay",
+                                  scenario.steps, replayed.steps));
+    return std::nullopt;
+  }
+  if (scenario.steps == 0) {
+    // The expectations' steps were checked against `steps:` when read; here, the recording's.
+    bool fits = true;
+    for (const auto& expectation : scenario.expectations) {
+      if (expectation.last_step <= replayed.steps) continue;
+      diagnostics.error(expectation.target.location, "out-of-range",
+                        fmt::format("step {} is after the last step the test replays ({}, the "
+                                    "recording's)",
+                                    expectation.last_step, replayed.steps));
+      fits = false;
+    }
+    if (!fits) return std::nullopt;
+  }
+  return replayed;
+}
+
+// Feeds every interface layer that the scenario leaves as the config has it from the recording,
+// then checks that every recorded input has its place.
+bool feed_from_recording(Model& model, const std::vector<const ClassInfo*>& before,
+                         const Scenario& scenario, const RecordedInputs& recorded,
+                         const Registry& registry, Diagnostics& diagnostics) {
+  std::vector<Substitution> substitutions;
+  for (std::size_t l = 0; l < model.layers.size(); ++l) {
+    const auto& layer = model.layers[l];
+    if (!layer.is_interface() || layer.interface != before[l]) continue;
+    Substitution substitution;
+    substitution.target = layer.name.text;
+    substitution.location = scenario.replay.location;
+    substitution.cls = &recorded.interface_class();
+    substitutions.push_back(std::move(substitution));
+  }
+  if (!substitute(model, substitutions, registry, diagnostics)) return false;
+  const std::size_t errors = diagnostics.error_count();
+  recorded.check_places(model, scenario.replay.location, diagnostics);
+  return diagnostics.error_count() == errors;
+}
+
+}  // namespace
+
+ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
+                            const ScenarioOptions& options) {
+  ScenarioResult result;
+  result.file = scenario.file;
+  result.name = scenario.name;
+  Diagnostics& diagnostics = result.diagnostics;
+
+  // The input sources and the checks are separate pieces: each source substitutes its own
+  // interface class, each kind of check compares its own things after each step.
+  std::optional<Replayed> replayed;
+  if (!scenario.replay.text.empty()) {
+    replayed = read_replayed(scenario, diagnostics);
+    if (!replayed) {
+      diagnostics.sort();
+      return result;
+    }
+  }
+  const std::uint64_t steps = replayed && scenario.steps == 0 ? replayed->steps : scenario.steps;
+  ScheduledInputs inputs;
+  std::vector<Substitution> substitutions;
+  for (const auto& item : scenario.substitutions) {
+    Substitution substitution;
+    substitution.target = item.target.text;
+    substitution.location = item.target.location;
+    substitution.declaration = item.declaration;
+    if (item.inputs) substitution.cls = &inputs.interface_class();
+    substitutions.push_back(std::move(substitution));
+  }
+  LoadOptions load;
+  load.limits = options.limits;
+  load.plugins = options.plugins;
+  // No lint step: a test reports what it tests; `arbiter validate` lints the config.
+  load.edit_model = [&](Model& model, Diagnostics& reported) {
+    std::vector<const ClassInfo*> before;
+    for (const auto& layer : model.layers) before.push_back(layer.interface);
+    return substitute(model, substitutions, registry, reported) &&
+           inputs.prepare(scenario, model, reported) &&
+           (!replayed ||
+            feed_from_recording(model, before, scenario, *replayed->inputs, registry, reported));
+  };
+  Loaded loaded = load_config(scenario.config_path, registry, load);
+  diagnostics = std::move(loaded.diagnostics);
+  auto& program = loaded.program;
+  ExpectationChecks checks;
+  TraceChecks traces;
+  if (!program || !checks.resolve(scenario, *program, diagnostics) ||
+      !traces.resolve(scenario, replayed ? &replayed->trace : nullptr, steps, diagnostics)) {
+    diagnostics.sort();
+    return result;
+  }
+  result.expectations = checks.size() + traces.size();
+
+  Manager manager(std::move(*program));
+  std::ostringstream trace;  // for explain(), when an expectation fails
+  TraceWriter writer(trace);
+  manager.add_observer(writer);
+  while (manager.steps() < steps && !manager.stopped()) {
+    manager.step();
+    checks.check(manager, options.tolerance);
+    traces.check(manager);
+  }
+  manager.finish();
+  manager.remove_observer(writer);
+  result.steps = manager.steps();
+  traces.finish(result.steps);
+
+  const std::string text = trace.str();
+  for (const auto& failed : checks.failures()) {
+    const Expectation& expectation = scenario.expectations[failed.expectation];
+    ScenarioFailure failure;
+    failure.diagnostic.location = expectation.target.location;
+    failure.diagnostic.code = "expectation";
+    failure.diagnostic.message = failed.message;
+    failure.step = failed.step;
+    failure.explanation = explain_at(manager.program(), text, failed.step, failed.explain);
+    if (failed.explain.empty()) {
+      failure.explanation = fmt::format("no behaviour that writes '{}' was active at step {}\n",
+                                        expectation.target.text, failed.step);
+    }
+    result.failures.push_back(std::move(failure));
+  }
+  for (const auto& failed : traces.failures()) {
+    const TraceExpectation& expectation = scenario.trace_expectations[failed.expectation];
+    ScenarioFailure failure;
+    failure.diagnostic.location = expectation.file.location;
+    failure.diagnostic.code = "expectation";
+    failure.diagnostic.message = failed.message;
+    failure.step = failed.step;
+    failure.explanation = failed.summary;
+    result.failures.push_back(std::move(failure));
+  }
+  if (manager.stopped()) {
+    ScenarioFailure failure;
+    failure.diagnostic.location = scenario.config.location;
+    failure.diagnostic.code = "run-stopped";
+    failure.diagnostic.message =
+        fmt::format("expected {} steps, got a run that stopped at step {}: {}", steps,
+                    manager.steps(), manager.stop_reason());
+    failure.step = manager.steps();
+    result.failures.push_back(std::move(failure));
+  }
+  result.status =
+      result.failures.empty() ? ScenarioResult::Status::kPassed : ScenarioResult::Status::kFailed;
+  return result;
+}
+
+ScenarioResult run_scenario_file(const std::string& path, Registry& registry,
+                                 const ScenarioOptions& options) {
+  Diagnostics diagnostics;
+  auto scenario = read_scenario(path, diagnostics, options.limits);
+  if (!scenario) {
+    ScenarioResult result;
+    result.file = path;
+    result.name = path;
+    result.diagnostics = std::move(diagnostics);
+    result.diagnostics.sort();
+    return result;
+  }
+  return run_scenario(*scenario, registry, options);
+}
+
+}  // namespace arbiter
