@@ -27,7 +27,7 @@
 #include "arbiter/trace_reader.hpp"
 #include "benchmarks.hpp"
 #include "generator.hpp"
-#include "record.hpp"
+#include "commands/record.hpp"
 #include "support.hpp"
 
 namespace arbiter::bench {

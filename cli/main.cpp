@@ -1,509 +1,29 @@
-// The `arbiter` command: a thin client of the engine library.
+// The `arbiter` command: its subcommands and options, declared with CLI11; each subcommand's
+// work is a function in commands/ (commands/command.hpp).
 
 #include <fmt/format.h>
-#include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
-#include <unistd.h>
-#include <atomic>
-#include <chrono>
 #include <csignal>
-#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <optional>
-#include <set>
-#include <thread>
 
-#include "arbiter/catalog.hpp"
-#include "arbiter/dump.hpp"
-#include "arbiter/explain.hpp"
 #include "arbiter/lint.hpp"
-#include "arbiter/load.hpp"
-#include "arbiter/manager.hpp"
-#include "arbiter/program.hpp"
-#include "arbiter/schema.hpp"
-#include "arbiter/trace.hpp"
-#include "arbiter/trace_reader.hpp"
-#include "builtins.hpp"
-#include "lsp/server.hpp"
-#include "plot.hpp"
-#include "record.hpp"
-#include "run_report.hpp"
-#include "serve.hpp"
-#include "test_command.hpp"
-#include "timing.hpp"
-#include "view.hpp"
-#include "watch.hpp"
+#include "commands/command.hpp"
+#include "commands/record.hpp"
+#include "server/serve.hpp"
 
 namespace {
 
-constexpr int kExitOk = 0;
-constexpr int kExitInvalid = 1;
-constexpr int kExitUsage = 2;
-
-struct Options {
-  std::vector<std::string> files;
-  std::string file;
-  std::vector<std::string> plugin_path;
-  bool realtime = false;
-  bool full_speed = false;  ///< `run --full-speed`: unpaced even with --serve
-  std::string format = "text";
-  bool strict = false;
-  std::uint64_t steps = 100;
-  bool steps_given = false;  ///< `--steps` was on the command line: it overrides the config's
-  std::string trace_path;
-  std::string layer;
-  bool quiet = false;
-  std::string log_level = "warn";
-  std::optional<std::size_t> max_file_bytes;  ///< unset: the library's default
-  std::vector<std::string> load;  ///< plugins to list (`plugins`, `schema`); empty: all found
-  bool builtin_only = false;
-  std::uint64_t step = 0;
-  std::string target;
-  bool watch = false;                         ///< `run --watch`
-  std::string serve;                          ///< `run --serve`: [ADDR:]PORT
-  std::string view_serve = "127.0.0.1:8080";  ///< `view --serve`
-  std::string output;                         ///< `plot -o`
-  bool actuators = false;
-  bool paused = false;             ///< `run --paused`
-  arbiter::cli::TestCommand test;  ///< `test`
-  int rt_priority = 0;             ///< `run --rt-priority`; 0: normal scheduling
-  std::string serve_token;  ///< `run --serve-token` (or ARBITER_SERVE_TOKEN); empty: a random one
-  bool serve_readonly = false;
-  std::string record_path;                                  ///< `run --record`, `replay --record`
-  double record_flush = arbiter::Recorder::kFlushInterval;  ///< `--record-flush` (seconds)
-  std::string config;                                       ///< `replay --config`
-  std::string recording;                                    ///< `replay RUN.mcap`
-  std::string diff_a;                                       ///< `diff A B`
-  std::string diff_b;
-  double tolerance = 1e-9;     ///< `diff --tolerance`
-  std::string compare_path;    ///< `plot --compare`
-  std::string color = "auto";  ///< `--color`
-  arbiter::FormatOptions diagnostic_format = arbiter::FormatOptions::readable();
-};
-
-constexpr const char* kVersion = "0.1.0";
-
-/// `--color auto` colours diagnostics when stderr is a terminal (and NO_COLOR is not set).
-bool use_color(const std::string& choice) {
-  if (choice != "auto") return choice == "always";
-  const char* term = std::getenv("TERM");
-  return isatty(fileno(stderr)) != 0 && std::getenv("NO_COLOR") == nullptr && term != nullptr &&
-         std::string_view(term) != "dumb";
-}
-
-arbiter::Registry make_registry() {
-  arbiter::Registry registry;
-  arbiter::register_builtin_behaviours(registry);
-  return registry;
-}
-
-void print_diagnostics(const arbiter::Diagnostics& diagnostics, const Options& options) {
-  if (options.format == "json") {
-    std::cout << arbiter::format_json(diagnostics);
-  } else {
-    std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
-  }
-}
-
-arbiter::LoadOptions load_options_of(const Options& options) {
-  arbiter::LoadOptions load_options;
-  load_options.strict = options.strict;
-  load_options.lint = arbiter::lint;
-  load_options.plugins.path = options.plugin_path;
-  if (options.max_file_bytes) load_options.limits.max_file_bytes = *options.max_file_bytes;
-  return load_options;
-}
-
-std::optional<arbiter::Program> load_or_report(const std::string& path, arbiter::Registry& registry,
-                                               const Options& options) {
-  arbiter::Diagnostics diagnostics;
-  auto program = arbiter::load(path, registry, diagnostics, load_options_of(options));
-  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
-  return program;
-}
-
-int validate(const Options& options) {
-  auto registry = make_registry();
-  arbiter::Diagnostics all;
-  bool ok = true;
-  for (const auto& file : options.files) {
-    arbiter::Diagnostics diagnostics;
-    ok = arbiter::load(file, registry, diagnostics, load_options_of(options)).has_value() && ok;
-    for (const auto& item : diagnostics.items()) {
-      if (item.severity == arbiter::Severity::kError) {
-        all.error(item.location, item.code, item.message).notes = item.notes;
-      } else {
-        all.warning(item.location, item.code, item.message).notes = item.notes;
-      }
-    }
-    if (options.format == "text" && diagnostics.empty()) {
-      std::cerr << fmt::format("{}: ok\n", file);
-    }
-  }
-  print_diagnostics(all, options);
-  if (options.format == "text" && !all.empty()) {
-    std::cerr << fmt::format("{} error(s), {} warning(s)\n", all.error_count(),
-                             all.warning_count());
-  }
-  return ok ? kExitOk : kExitInvalid;
-}
-
-/// False (after telling why) when `--layer` names no layer of the program.
-bool check_layer(const arbiter::Program& program, const Options& options) {
-  if (options.layer.empty()) return true;
-  std::vector<std::string> names;
-  for (const auto& layer : program.layers) {
-    if (layer.name == options.layer) return true;
-    names.push_back(layer.name);
-  }
-  std::cerr << fmt::format("arbiter dump: no layer '{}' in {}; {}\n", options.layer, options.file,
-                           arbiter::suggest(options.layer, names));
-  return false;
-}
-
-int dump(const Options& options) {
-  auto registry = make_registry();
-  auto program = load_or_report(options.file, registry, options);
-  if (!program) return kExitInvalid;
-  if (!check_layer(*program, options)) return kExitUsage;
-  if (options.format == "dot") {
-    std::cout << arbiter::dump_dot(*program, options.layer);
-  } else if (options.format == "json") {
-    std::cout << arbiter::dump_json(*program, options.layer);
-  } else {
-    std::cout << arbiter::dump_text(*program, options.layer);
-  }
-  return kExitOk;
-}
-
-/// The names of the plugins on the search path (`arbiter_NAME.so`), each once: the first
-/// directory that has it wins, as when a config names it.
-std::vector<std::string> plugins_on_path(const arbiter::PluginOptions& plugin_options) {
-  namespace fs = std::filesystem;
-  std::vector<std::string> names;
-  std::set<std::string> seen;
-  for (const auto& dir : arbiter::plugin_search_path(plugin_options)) {
-    std::error_code error;
-    std::vector<std::string> here;
-    for (const auto& entry : fs::directory_iterator(dir, error)) {
-      const std::string file = entry.path().filename().string();
-      constexpr std::string_view kPrefix = "arbiter_";
-      constexpr std::string_view kSuffix = ".so";
-      if (!entry.is_regular_file(error) || file.size() <= kPrefix.size() + kSuffix.size() ||
-          file.compare(0, kPrefix.size(), kPrefix) != 0 ||
-          file.compare(file.size() - kSuffix.size(), kSuffix.size(), kSuffix) != 0) {
-        continue;
-      }
-      here.push_back(file.substr(kPrefix.size(), file.size() - kPrefix.size() - kSuffix.size()));
-    }
-    std::sort(here.begin(), here.end());
-    for (auto& name : here) {
-      if (seen.insert(name).second) names.push_back(std::move(name));
-    }
-  }
-  return names;
-}
-
-/// The built-ins, plus the plugins named with --load, or else every plugin on the path (none
-/// with --builtin). A plugin that fails to load is reported; false then.
-bool registry_for_listing(const Options& options, const char* command,
-                          arbiter::Registry& registry) {
-  if (options.builtin_only) return true;
-  const auto plugin_options = load_options_of(options).plugins;
-  const auto names = options.load.empty() ? plugins_on_path(plugin_options) : options.load;
-  arbiter::Diagnostics diagnostics;
-  const arbiter::SourceLocation where{fmt::format("arbiter {}", command), 0, 0};
-  bool ok = true;
-  for (const auto& name : names) {
-    ok = arbiter::load_plugin(name, where, "", plugin_options, registry, diagnostics) && ok;
-  }
-  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
-  return ok;
-}
-
-int plugins(const Options& options) {
-  auto registry = make_registry();
-  const bool ok = registry_for_listing(options, "plugins", registry);
-  std::cout << (options.format == "json" ? arbiter::catalog_json(registry)
-                                         : arbiter::catalog_text(registry));
-  return ok ? kExitOk : kExitInvalid;
-}
-
-int schema(const Options& options) {
-  auto registry = make_registry();
-  const bool ok = registry_for_listing(options, "schema", registry);
-  std::cout << arbiter::config_schema(registry);
-  return ok ? kExitOk : kExitInvalid;
-}
-
-int lsp(const Options& options) {
-  // stdout carries the protocol: nothing else may write to it.
-  std::ios::sync_with_stdio(false);
-  return arbiter::lsp::run(std::cin, std::cout, make_registry, load_options_of(options));
-}
-
-int explain(const Options& options) {
-  auto registry = make_registry();
-  auto program = load_or_report(options.file, registry, options);
-  if (!program) return kExitInvalid;
-  if (!std::ifstream(options.trace_path, std::ios::binary)) {
-    std::cerr << fmt::format("arbiter explain: cannot read trace '{}'\n", options.trace_path);
-    return kExitUsage;
-  }
-  const auto trace = arbiter::open_trace(options.trace_path);
-  const auto explanation = arbiter::explain(*program, *trace, options.step, options.target);
-  if (explanation.status == arbiter::Explanation::Status::kOk) {
-    // Its states, events and values are the trace's: escaped like every quote of input.
-    std::cout << arbiter::printable(explanation.text, true);
-    return kExitOk;
-  }
-  if (explanation.where) {
-    std::cerr << arbiter::format(
-        arbiter::Diagnostic{*explanation.where, arbiter::Severity::kError, "bad-trace",
-                            explanation.text, explanation.notes},
-        options.diagnostic_format);
-    return kExitInvalid;
-  }
-  std::cerr << fmt::format("arbiter explain: {}\n", arbiter::printable(explanation.text));
-  for (const auto& note : explanation.notes) {
-    std::cerr << fmt::format("  note: {}\n", arbiter::printable(note));
-  }
-  return explanation.status == arbiter::Explanation::Status::kNotFound ? kExitUsage : kExitInvalid;
-}
-
-int test(Options& options) {
-  auto registry = make_registry();
-  options.test.options.plugins = load_options_of(options).plugins;
-  options.test.options.limits = load_options_of(options).limits;
-  return arbiter::cli::run_tests(options.test, registry, std::cout, std::cerr);
-}
-
-std::atomic<bool> interrupted{false};
-
-extern "C" void on_interrupt(int) {
-  interrupted = true;
-}
-
-int run(const Options& options) {
-  auto registry = make_registry();
-  arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
-  auto program = options.watch ? arbiter::cli::load_watched(reloader, options.file, std::cerr,
-                                                            options.diagnostic_format)
-                               : load_or_report(options.file, registry, options);
-  if (!program) return kExitInvalid;
-  const double rate_hz = program->rate_hz;
-  const std::uint64_t steps =
-      options.steps_given || options.watch || program->steps == 0 ? options.steps : program->steps;
-
-  std::ofstream trace_file;
-  if (!options.trace_path.empty()) {
-    trace_file.open(options.trace_path, std::ios::binary | std::ios::trunc);
-    if (!trace_file) {
-      std::cerr << fmt::format("arbiter run: cannot write trace '{}'\n", options.trace_path);
-      return kExitUsage;
-    }
-  }
-  arbiter::Manager manager(std::move(*program), spdlog::default_logger());
-  arbiter::TraceWriter trace(trace_file);
-  if (trace_file.is_open()) manager.add_observer(trace);
-  arbiter::cli::RunReport report(std::cout, options.quiet);
-  manager.add_observer(report);
-  // In a terminal, a watched run keeps a status line on stderr: it shows an idle run is alive.
-  std::optional<arbiter::cli::StatusLine> status;
-  std::optional<arbiter::cli::StatusClearer> clear_out, clear_err;
-  if (options.watch && !options.quiet && ::isatty(STDERR_FILENO) == 1) {
-    status.emplace(STDERR_FILENO);
-    clear_out.emplace(std::cout, *status);
-    clear_err.emplace(std::cerr, *status);
-  }
-  // The log goes through std::cerr meanwhile, so that it too takes the status line away first.
-  std::vector<spdlog::sink_ptr> log_sinks;
-  if (status) {
-    auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(std::cerr, true);
-    sink->set_pattern("%l: %v");
-    log_sinks.swap(spdlog::default_logger()->sinks());
-    spdlog::default_logger()->sinks().push_back(std::move(sink));
-  }
-  std::unique_ptr<arbiter::Recorder> recorder;  // --record
-  if (!options.record_path.empty()) {
-    // Paced, a step the writer has no room for is dropped rather than the pace lost; flat out,
-    // the run waits for the writer and the recording loses nothing.
-    recorder = std::make_unique<arbiter::Recorder>(
-        options.record_path,
-        arbiter::cli::recording_info(options.file, registry, load_options_of(options), kVersion),
-        arbiter::Recorder::kSlots,
-        options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
-    if (!recorder->ok()) {
-      std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);
-      return kExitUsage;
-    }
-    recorder->set_flush_interval(options.record_flush);
-    manager.add_observer(*recorder);
-    // A reload's files go into the recording, for replay to reload them too.
-    reloader.set_on_staging(
-        [&recorder](const arbiter::Reloader::FileTexts& files) { recorder->stage_files(files); });
-  }
-  // After the recorder: a reload staged by the watcher is recorded with its files.
-  std::optional<arbiter::cli::Watcher> watcher;
-  if (options.watch)
-    watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
-                    options.diagnostic_format, status ? &*status : nullptr);
-  std::unique_ptr<arbiter::cli::LiveView> live;  // --serve
-  if (!options.serve.empty()) {
-    arbiter::cli::LiveAccess access;
-    access.token = options.serve_token;
-    access.readonly = options.serve_readonly;
-    live =
-        arbiter::cli::LiveView::open(options.serve, options.paused, access, std::cout, std::cerr);
-    if (!live) return kExitUsage;
-    manager.add_observer(*live);
-  }
-  arbiter::cli::SteadyStepClock clock;
-  manager.set_clock(&clock);
-  arbiter::cli::RunTiming timing(1.0 / rate_hz);
-  if (live) live->set_timing(&timing, options.realtime);
-  if (options.rt_priority > 0) {
-    std::string error;
-    if (!arbiter::cli::enter_realtime(options.rt_priority, error)) {
-      std::cerr << fmt::format("arbiter run: {}\n", error);
-      return kExitUsage;
-    }
-  }
-
-  // Ctrl-C ends the run between two steps, so the trace and the summary are still complete.
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
-  using Clock = std::chrono::steady_clock;
-  const auto period =
-      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate_hz));
-  const auto started = Clock::now();
-  // Absolute deadlines: step i starts at started + i periods. A step that overruns never brings
-  // a burst of catch-up steps: the next one waits for the next period boundary, and the periods
-  // skipped are counted.
-  auto next = started;
-  for (std::uint64_t i = 0; i < steps && !interrupted; ++i) {
-    if (live && live->will_hold()) manager.safe_pass();  // paused from the page: make it safe
-    if (live && live->hold(manager, interrupted)) {
-      if (interrupted) break;
-      next = Clock::now();
-    }
-    if (options.realtime) {
-      std::this_thread::sleep_until(next);
-      timing.record_lateness(std::chrono::duration<double>(Clock::now() - next).count());
-    }
-    manager.step();
-    if (watcher) watcher->set_step(manager.steps());
-    timing.record_step(manager.step_duration());
-    if (manager.stopped()) break;  // on_exception: stop — the run ends with this step
-    if (options.realtime) {
-      next += period;
-      if (const auto now = Clock::now(); now > next) {
-        const auto missed = (now - next) / period + 1;
-        next += missed * period;
-        timing.record_missed(static_cast<std::uint64_t>(missed));
-      }
-    }
-  }
-  watcher.reset();
-  if (status) spdlog::default_logger()->sinks().swap(log_sinks);
-  clear_err.reset();
-  clear_out.reset();
-  status.reset();
-  manager.finish();  // outputs the safe values, whatever ended the run
-  if (recorder && recorder->dropped() > 0) {
-    std::cerr << fmt::format(
-        "arbiter run: the recording dropped {} steps (its writer fell behind the paced "
-        "steps); each gap is recorded\n",
-        recorder->dropped());
-  }
-  if (!options.quiet) {
-    const double wall = std::chrono::duration<double>(Clock::now() - started).count();
-    std::cout << fmt::format("{}simulated {:.2f} s at {} Hz in {:.3f} s of wall time{}\n",
-                             interrupted ? "interrupted: " : "",
-                             static_cast<double>(manager.steps()) / rate_hz, rate_hz, wall,
-                             options.realtime ? " (real time)" : "");
-    std::cout << timing.text(options.realtime) << std::flush;
-  }
-  if (live) live->serve_until(manager, interrupted);
-  if (trace_file.is_open() && !trace_file) {
-    std::cerr << fmt::format("arbiter run: writing trace '{}' failed\n", options.trace_path);
-    return kExitInvalid;
-  }
-  if (recorder && recorder->failed()) {
-    std::cerr << arbiter::cli::recording_failed("run", options.record_path, recorder->error());
-    return kExitInvalid;
-  }
-  if (manager.stopped()) {
-    std::cerr << fmt::format("arbiter run: stopped after step {}: {}\n", manager.steps(),
-                             manager.stop_reason());
-    return kExitInvalid;
-  }
-  return kExitOk;
-}
-
-int view(const Options& options) {
-  auto registry = make_registry();
-  auto program = load_or_report(options.file, registry, options);
-  if (!program) return kExitInvalid;
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
-  std::string unused;  // the option's check has parsed it already
-  arbiter::cli::LiveAccess access;
-  access.token = options.serve_token;
-  return arbiter::cli::view_trace(
-      *program, options.trace_path, arbiter::cli::ServeAddress::parse(options.view_serve, unused),
-      access, options.step > 0 ? std::optional(options.step) : std::nullopt, interrupted, std::cout,
-      std::cerr, options.diagnostic_format);
-}
-
-int plot(const Options& options) {
-  std::string error;
-  const auto trace =
-      arbiter::cli::read_trace_file(options.trace_path, error, options.diagnostic_format);
-  if (!trace) {
-    std::cerr << error << "\n";
-    return kExitInvalid;
-  }
-  arbiter::cli::note_end(options.trace_path, trace->truncated, trace->damaged, std::cerr);
-  arbiter::cli::PlotOptions plot_options;
-  plot_options.actuators = options.actuators;
-  std::optional<arbiter::cli::TraceFile> compare;  // --compare
-  if (!options.compare_path.empty()) {
-    compare = arbiter::cli::read_trace_file(options.compare_path, error, options.diagnostic_format);
-    if (!compare) {
-      std::cerr << error << "\n";
-      return kExitInvalid;
-    }
-    arbiter::cli::note_end(options.compare_path, compare->truncated, compare->damaged, std::cerr);
-    plot_options.compare = &*compare;
-  }
-  const std::string svg = arbiter::cli::plot_svg(*trace, plot_options);
-  if (options.output.empty() || options.output == "-") {
-    std::cout << svg;
-    return kExitOk;
-  }
-  std::ofstream out(options.output, std::ios::binary | std::ios::trunc);
-  if (!(out << svg << std::flush)) {
-    std::cerr << fmt::format("arbiter plot: cannot write '{}'\n", options.output);
-    return kExitUsage;
-  }
-  return kExitOk;
-}
-
-/// CLI11 check of `--serve-token`: it travels in URLs and cookies.
-std::string check_serve_token(const std::string& text) {
-  return arbiter::cli::token_error(text);
-}
+using namespace arbiter::cli;
 
 /// CLI11 check of `--serve [ADDR:]PORT`.
 std::string check_serve_address(const std::string& text) {
   std::string error;
-  arbiter::cli::ServeAddress::parse(text, error);
+  ServeAddress::parse(text, error);
   return error;
 }
 
@@ -517,6 +37,25 @@ std::string check_record_flush(const std::string& text) {
   }
   return fmt::format("must be a number of seconds from 0 to {:g}, found '{}'",
                      arbiter::Recorder::kMaxFlushInterval, text);
+}
+
+/// `--serve-token TOKEN`, also ARBITER_SERVE_TOKEN; checked, as it travels in URLs and cookies.
+CLI::Option* add_serve_token_option(CLI::App& command, Options& options, const std::string& help) {
+  return command.add_option("--serve-token", options.serve_token, help)
+      ->envname("ARBITER_SERVE_TOKEN")
+      ->type_name("TOKEN")
+      ->check(token_error, "");
+}
+
+/// `--record FILE` and `--record-flush SECONDS` (which needs it), as run and replay share them.
+void add_record_options(CLI::App& command, Options& options, const std::string& record_help,
+                        const std::string& record_type, const std::string& flush_help) {
+  command.add_option("--record", options.record_path, record_help)->type_name(record_type);
+  command.add_option("--record-flush", options.record_flush, flush_help)
+      ->check(check_record_flush, "")
+      ->type_name("SECONDS")
+      ->capture_default_str()
+      ->needs("--record");
 }
 
 constexpr const char* kExitCodes =
@@ -537,6 +76,7 @@ std::string lint_list() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  using namespace arbiter::cli;
   CLI::App app{
       "arbiter: a data-driven behaviour engine for robots.\n"
       "Behaviour layers, inhibitions and state controllers are declared in YAML or JSON configs,\n"
@@ -611,23 +151,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   run_cmd->add_option("--trace", options.trace_path,
                       "write a JSON-lines trace of every step to this file");
-  run_cmd
-      ->add_option("--record", options.record_path,
-                   "record the run as MCAP (steps, interface inputs, the config) for "
-                   "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
-                   "for the recording's writer; paced (--realtime, --serve), a step it has no "
-                   "room for is dropped and the gap recorded. A write that fails (a full disk) "
-                   "is reported at once and ends the recording, not the run, which then exits 1")
-      ->type_name("RUN.mcap");
-  run_cmd
-      ->add_option("--record-flush", options.record_flush,
-                   "with --record: write the recording out to the disk at least every SECONDS, "
-                   "so that a crash or a power cut loses at most about that much; 0: only every "
-                   "256 KiB of steps (smaller files)")
-      ->check(check_record_flush, "")
-      ->type_name("SECONDS")
-      ->capture_default_str()
-      ->needs("--record");
+  add_record_options(*run_cmd, options,
+                     "record the run as MCAP (steps, interface inputs, the config) for "
+                     "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
+                     "for the recording's writer; paced (--realtime, --serve), a step it has no "
+                     "room for is dropped and the gap recorded. A write that fails (a full disk) "
+                     "is reported at once and ends the recording, not the run, which then exits 1",
+                     "RUN.mcap",
+                     "with --record: write the recording out to the disk at least every SECONDS, "
+                     "so that a crash or a power cut loses at most about that much; 0: only every "
+                     "256 KiB of steps (smaller files)");
   run_cmd->add_flag("--quiet,-q", options.quiet, "print nothing but errors");
   run_cmd->add_flag("--realtime", options.realtime,
                     "pace the steps at the config's rate_hz instead of running flat out");
@@ -652,13 +185,10 @@ int main(int argc, char** argv) {
       ->add_flag("--paused", options.paused,
                  "with --serve: wait for the page's Step or Resume before the first step")
       ->needs("--serve");
-  run_cmd
-      ->add_option("--serve-token", options.serve_token,
-                   "with --serve: the token the page and every request must carry (default: a "
-                   "random one per run, printed in the URL; also ARBITER_SERVE_TOKEN)")
-      ->envname("ARBITER_SERVE_TOKEN")
-      ->type_name("TOKEN")
-      ->check(check_serve_token, "");
+  add_serve_token_option(*run_cmd, options,
+                         "with --serve: the token the page and every request must carry "
+                         "(default: a random one per run, printed in the URL; also "
+                         "ARBITER_SERVE_TOKEN)");
   run_cmd
       ->add_flag("--serve-readonly", options.serve_readonly,
                  "with --serve: watch only; the page cannot pause, step or resume the run")
@@ -800,13 +330,9 @@ int main(int argc, char** argv) {
       ->check(check_serve_address, "")
       ->type_name("[ADDR:]PORT")
       ->capture_default_str();
-  view_cmd
-      ->add_option("--serve-token", options.serve_token,
-                   "the token the page and every request must carry (default: a random one, "
-                   "printed in the URL; also ARBITER_SERVE_TOKEN)")
-      ->envname("ARBITER_SERVE_TOKEN")
-      ->type_name("TOKEN")
-      ->check(check_serve_token, "");
+  add_serve_token_option(*view_cmd, options,
+                         "the token the page and every request must carry (default: a random "
+                         "one, printed in the URL; also ARBITER_SERVE_TOKEN)");
   view_cmd
       ->add_option("--step", options.step,
                    "the step the page opens at, counting from 1 (default: the last step)")
@@ -859,19 +385,12 @@ int main(int argc, char** argv) {
       ->type_name("FILE");
   replay_cmd->add_option("--trace", options.trace_path, "write the replay's JSON-lines trace")
       ->type_name("OUT.jsonl");
-  replay_cmd
-      ->add_option("--record", options.record_path,
-                   "record the replay as MCAP; a write that fails is reported at once and ends "
-                   "the recording, not the replay, which then exits 2")
-      ->type_name("OUT.mcap");
-  replay_cmd
-      ->add_option("--record-flush", options.record_flush,
-                   "with --record: write the recording out to the disk at least every SECONDS; "
-                   "0: only every 256 KiB of steps")
-      ->check(check_record_flush, "")
-      ->type_name("SECONDS")
-      ->capture_default_str()
-      ->needs("--record");
+  add_record_options(*replay_cmd, options,
+                     "record the replay as MCAP; a write that fails is reported at once and ends "
+                     "the recording, not the replay, which then exits 2",
+                     "OUT.mcap",
+                     "with --record: write the recording out to the disk at least every SECONDS; "
+                     "0: only every 256 KiB of steps");
   replay_cmd
       ->add_option("--steps", options.steps,
                    "replay at most this many steps (the recording is read that far only)")
@@ -994,20 +513,20 @@ int main(int argc, char** argv) {
     // reports, instead of killing the process: a robot's run goes on without its recording.
     std::signal(SIGXFSZ, SIG_IGN);
     options.diagnostic_format = arbiter::FormatOptions::readable(use_color(options.color));
-    if (validate_cmd->parsed()) return validate(options);
+    if (validate_cmd->parsed()) return validate_command(options);
     if (run_cmd->parsed()) {
       options.steps_given = run_cmd->count("--steps") > 0;
       if (options.watch && !options.steps_given) options.steps = std::uint64_t{1} << 40;
-      return run(options);
+      return run_command(options);
     }
-    if (dump_cmd->parsed()) return dump(options);
-    if (explain_cmd->parsed()) return explain(options);
-    if (test_cmd->parsed()) return test(options);
-    if (view_cmd->parsed()) return view(options);
-    if (plot_cmd->parsed()) return plot(options);
+    if (dump_cmd->parsed()) return dump_command(options);
+    if (explain_cmd->parsed()) return explain_command(options);
+    if (test_cmd->parsed()) return test_command(options);
+    if (view_cmd->parsed()) return view_command(options);
+    if (plot_cmd->parsed()) return plot_command(options);
     if (replay_cmd->parsed()) {
       auto registry = make_registry();
-      arbiter::cli::ReplayOptions replay;
+      ReplayOptions replay;
       replay.recording = options.recording;
       replay.config = options.config;
       replay.trace = options.trace_path;
@@ -1019,12 +538,12 @@ int main(int argc, char** argv) {
       return arbiter::cli::replay(replay, registry, std::cout, std::cerr);
     }
     if (diff_cmd->parsed()) {
-      return arbiter::cli::diff(options.diff_a, options.diff_b, options.tolerance, options.format,
-                                std::cout, std::cerr);
+      return diff(options.diff_a, options.diff_b, options.tolerance, options.format, std::cout,
+                  std::cerr);
     }
-    if (plugins_cmd->parsed()) return plugins(options);
-    if (schema_cmd->parsed()) return schema(options);
-    if (lsp_cmd->parsed()) return lsp(options);
+    if (plugins_cmd->parsed()) return plugins_command(options);
+    if (schema_cmd->parsed()) return schema_command(options);
+    if (lsp_cmd->parsed()) return lsp_command(options);
   } catch (const std::exception& error) {
     std::cerr << fmt::format("arbiter: {}\n", arbiter::printable(error.what()));
     return kExitInvalid;

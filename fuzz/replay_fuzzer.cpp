@@ -15,7 +15,7 @@
 #include <string>
 
 #include "builtins.hpp"
-#include "record.hpp"
+#include "commands/record.hpp"
 
 namespace {
 

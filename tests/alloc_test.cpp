@@ -19,7 +19,7 @@
 #include "arbiter/substitute.hpp"
 #include "counting_new.hpp"
 #include "test_support.hpp"
-#include "timing.hpp"
+#include "commands/timing.hpp"
 
 using arbiter::test::allocations;
 using arbiter::test::counting;

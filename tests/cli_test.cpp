@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include "arbiter/catalog.hpp"
-#include "mcap.hpp"
+#include "core/record/mcap.hpp"
 #include "tooling_support.hpp"
 
 namespace fs = std::filesystem;

@@ -1,12 +1,16 @@
-#include "plot.hpp"
+#include "commands/plot.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <iostream>
 #include <limits>
 
-#include "xml.hpp"
+#include "commands/command.hpp"
+#include "commands/record.hpp"
+#include "commands/xml.hpp"
 
 namespace arbiter::cli {
 
@@ -421,6 +425,39 @@ std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
                         trace.records.back()["step"].get<std::uint64_t>());
   plot.reloads();
   return plot.finish(title, subtitle);
+}
+
+int plot_command(const Options& options) {
+  std::string error;
+  const auto trace = read_trace_file(options.trace_path, error, options.diagnostic_format);
+  if (!trace) {
+    std::cerr << error << "\n";
+    return kExitInvalid;
+  }
+  note_end(options.trace_path, trace->truncated, trace->damaged, std::cerr);
+  PlotOptions plot_options;
+  plot_options.actuators = options.actuators;
+  std::optional<TraceFile> compare;  // --compare
+  if (!options.compare_path.empty()) {
+    compare = read_trace_file(options.compare_path, error, options.diagnostic_format);
+    if (!compare) {
+      std::cerr << error << "\n";
+      return kExitInvalid;
+    }
+    note_end(options.compare_path, compare->truncated, compare->damaged, std::cerr);
+    plot_options.compare = &*compare;
+  }
+  const std::string svg = plot_svg(*trace, plot_options);
+  if (options.output.empty() || options.output == "-") {
+    std::cout << svg;
+    return kExitOk;
+  }
+  std::ofstream out(options.output, std::ios::binary | std::ios::trunc);
+  if (!(out << svg << std::flush)) {
+    std::cerr << fmt::format("arbiter plot: cannot write '{}'\n", options.output);
+    return kExitUsage;
+  }
+  return kExitOk;
 }
 
 }  // namespace arbiter::cli

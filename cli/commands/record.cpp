@@ -1,4 +1,4 @@
-#include "record.hpp"
+#include "commands/record.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>

@@ -1,4 +1,4 @@
-#include "serve.hpp"
+#include "server/serve.hpp"
 
 #include <fmt/format.h>
 #include <httplib.h>
@@ -14,7 +14,7 @@
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/trace.hpp"
-#include "timing.hpp"
+#include "commands/timing.hpp"
 #include "web/assets.hpp"
 
 namespace arbiter::cli {

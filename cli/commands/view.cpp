@@ -1,4 +1,4 @@
-#include "view.hpp"
+#include "commands/view.hpp"
 
 #include <fmt/format.h>
 #include <httplib.h>
@@ -6,13 +6,15 @@
 #include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <thread>
 
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/trace_reader.hpp"
-#include "record.hpp"
+#include "commands/command.hpp"
+#include "commands/record.hpp"
 
 namespace arbiter::cli {
 
@@ -150,6 +152,19 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
   while (!interrupted) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   server.stop();
   return 0;
+}
+
+int view_command(const Options& options) {
+  auto registry = make_registry();
+  auto program = load_or_report(options.file, registry, options);
+  if (!program) return kExitInvalid;
+  install_interrupt_handlers();
+  std::string unused;  // the option's check has parsed it already
+  LiveAccess access;
+  access.token = options.serve_token;
+  return view_trace(*program, options.trace_path, ServeAddress::parse(options.view_serve, unused),
+                    access, options.step > 0 ? std::optional(options.step) : std::nullopt,
+                    interrupted, std::cout, std::cerr, options.diagnostic_format);
 }
 
 }  // namespace arbiter::cli

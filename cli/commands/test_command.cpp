@@ -1,19 +1,20 @@
-#include "test_command.hpp"
+#include "commands/test_command.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 
-#include "xml.hpp"
+#include "commands/command.hpp"
+#include "commands/xml.hpp"
 
 namespace arbiter::cli {
 namespace {
 
-constexpr int kExitOk = 0;
-constexpr int kExitFailed = 1;
-constexpr int kExitUsage = 2;
+// A test failed: the same code as an invalid config elsewhere.
+constexpr int kExitFailed = kExitInvalid;
 
 // The test files a path names: itself, or every test file under a directory, sorted.
 bool expand(const std::string& path, std::vector<std::string>& files, std::ostream& err) {
@@ -155,6 +156,13 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
   }
   if (invalid > 0) return kExitUsage;
   return failed > 0 ? kExitFailed : kExitOk;
+}
+
+int test_command(Options& options) {
+  auto registry = make_registry();
+  options.test.options.plugins = load_options_of(options).plugins;
+  options.test.options.limits = load_options_of(options).limits;
+  return run_tests(options.test, registry, std::cout, std::cerr);
 }
 
 }  // namespace arbiter::cli

@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "view.hpp"
+#include "commands/view.hpp"
 
 namespace arbiter::cli {
 

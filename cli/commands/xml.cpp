@@ -1,4 +1,4 @@
-#include "xml.hpp"
+#include "commands/xml.hpp"
 
 namespace arbiter::cli {
 

@@ -1,4 +1,4 @@
-#include "watch.hpp"
+#include "commands/watch.hpp"
 
 #include <fmt/format.h>
 #include <sys/stat.h>

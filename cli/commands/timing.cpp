@@ -1,4 +1,4 @@
-#include "timing.hpp"
+#include "commands/timing.hpp"
 
 #include <fmt/format.h>
 #include <pthread.h>

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "arbiter/program.hpp"
-#include "serve.hpp"
+#include "server/serve.hpp"
 
 namespace arbiter::cli {
 

@@ -1,0 +1,69 @@
+// What every subcommand shares: the registry, loading a config, reporting its diagnostics.
+
+#include "commands/command.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+#include "arbiter/lint.hpp"
+#include "builtins.hpp"
+
+namespace arbiter::cli {
+
+bool use_color(const std::string& choice) {
+  if (choice != "auto") return choice == "always";
+  const char* term = std::getenv("TERM");
+  return isatty(fileno(stderr)) != 0 && std::getenv("NO_COLOR") == nullptr && term != nullptr &&
+         std::string_view(term) != "dumb";
+}
+
+arbiter::Registry make_registry() {
+  arbiter::Registry registry;
+  arbiter::register_builtin_behaviours(registry);
+  return registry;
+}
+
+void print_diagnostics(const arbiter::Diagnostics& diagnostics, const Options& options) {
+  if (options.format == "json") {
+    std::cout << arbiter::format_json(diagnostics);
+  } else {
+    std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
+  }
+}
+
+arbiter::LoadOptions load_options_of(const Options& options) {
+  arbiter::LoadOptions load_options;
+  load_options.strict = options.strict;
+  load_options.lint = arbiter::lint;
+  load_options.plugins.path = options.plugin_path;
+  if (options.max_file_bytes) load_options.limits.max_file_bytes = *options.max_file_bytes;
+  return load_options;
+}
+
+std::optional<arbiter::Program> load_or_report(const std::string& path, arbiter::Registry& registry,
+                                               const Options& options) {
+  arbiter::Diagnostics diagnostics;
+  auto program = arbiter::load(path, registry, diagnostics, load_options_of(options));
+  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
+  return program;
+}
+
+std::atomic<bool> interrupted{false};
+
+namespace {
+extern "C" void on_interrupt(int) {
+  interrupted = true;
+}
+}  // namespace
+
+void install_interrupt_handlers() {
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+}
+
+}  // namespace arbiter::cli

@@ -1,0 +1,175 @@
+// The subcommands that read configs and print what they find (validate, dump, plugins, schema,
+// explain), and the language server, which does the same for an editor.
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <set>
+
+#include "arbiter/catalog.hpp"
+#include "arbiter/dump.hpp"
+#include "arbiter/explain.hpp"
+#include "arbiter/schema.hpp"
+#include "arbiter/trace_reader.hpp"
+#include "commands/command.hpp"
+#include "lsp/server.hpp"
+
+namespace arbiter::cli {
+
+namespace {
+
+/// False (after telling why) when `--layer` names no layer of the program.
+bool check_layer(const arbiter::Program& program, const Options& options) {
+  if (options.layer.empty()) return true;
+  std::vector<std::string> names;
+  for (const auto& layer : program.layers) {
+    if (layer.name == options.layer) return true;
+    names.push_back(layer.name);
+  }
+  std::cerr << fmt::format("arbiter dump: no layer '{}' in {}; {}\n", options.layer, options.file,
+                           arbiter::suggest(options.layer, names));
+  return false;
+}
+
+/// The names of the plugins on the search path (`arbiter_NAME.so`), each once: the first
+/// directory that has it wins, as when a config names it.
+std::vector<std::string> plugins_on_path(const arbiter::PluginOptions& plugin_options) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::set<std::string> seen;
+  for (const auto& dir : arbiter::plugin_search_path(plugin_options)) {
+    std::error_code error;
+    std::vector<std::string> here;
+    for (const auto& entry : fs::directory_iterator(dir, error)) {
+      const std::string file = entry.path().filename().string();
+      constexpr std::string_view kPrefix = "arbiter_";
+      constexpr std::string_view kSuffix = ".so";
+      if (!entry.is_regular_file(error) || file.size() <= kPrefix.size() + kSuffix.size() ||
+          file.compare(0, kPrefix.size(), kPrefix) != 0 ||
+          file.compare(file.size() - kSuffix.size(), kSuffix.size(), kSuffix) != 0) {
+        continue;
+      }
+      here.push_back(file.substr(kPrefix.size(), file.size() - kPrefix.size() - kSuffix.size()));
+    }
+    std::sort(here.begin(), here.end());
+    for (auto& name : here) {
+      if (seen.insert(name).second) names.push_back(std::move(name));
+    }
+  }
+  return names;
+}
+
+/// The built-ins, plus the plugins named with --load, or else every plugin on the path (none
+/// with --builtin). A plugin that fails to load is reported; false then.
+bool registry_for_listing(const Options& options, const char* command,
+                          arbiter::Registry& registry) {
+  if (options.builtin_only) return true;
+  const auto plugin_options = load_options_of(options).plugins;
+  const auto names = options.load.empty() ? plugins_on_path(plugin_options) : options.load;
+  arbiter::Diagnostics diagnostics;
+  const arbiter::SourceLocation where{fmt::format("arbiter {}", command), 0, 0};
+  bool ok = true;
+  for (const auto& name : names) {
+    ok = arbiter::load_plugin(name, where, "", plugin_options, registry, diagnostics) && ok;
+  }
+  if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
+  return ok;
+}
+
+}  // namespace
+
+int validate_command(const Options& options) {
+  auto registry = make_registry();
+  arbiter::Diagnostics all;
+  bool ok = true;
+  for (const auto& file : options.files) {
+    arbiter::Diagnostics diagnostics;
+    ok = arbiter::load(file, registry, diagnostics, load_options_of(options)).has_value() && ok;
+    for (const auto& item : diagnostics.items()) {
+      if (item.severity == arbiter::Severity::kError) {
+        all.error(item.location, item.code, item.message).notes = item.notes;
+      } else {
+        all.warning(item.location, item.code, item.message).notes = item.notes;
+      }
+    }
+    if (options.format == "text" && diagnostics.empty()) {
+      std::cerr << fmt::format("{}: ok\n", file);
+    }
+  }
+  print_diagnostics(all, options);
+  if (options.format == "text" && !all.empty()) {
+    std::cerr << fmt::format("{} error(s), {} warning(s)\n", all.error_count(),
+                             all.warning_count());
+  }
+  return ok ? kExitOk : kExitInvalid;
+}
+
+int dump_command(const Options& options) {
+  auto registry = make_registry();
+  auto program = load_or_report(options.file, registry, options);
+  if (!program) return kExitInvalid;
+  if (!check_layer(*program, options)) return kExitUsage;
+  if (options.format == "dot") {
+    std::cout << arbiter::dump_dot(*program, options.layer);
+  } else if (options.format == "json") {
+    std::cout << arbiter::dump_json(*program, options.layer);
+  } else {
+    std::cout << arbiter::dump_text(*program, options.layer);
+  }
+  return kExitOk;
+}
+
+int plugins_command(const Options& options) {
+  auto registry = make_registry();
+  const bool ok = registry_for_listing(options, "plugins", registry);
+  std::cout << (options.format == "json" ? arbiter::catalog_json(registry)
+                                         : arbiter::catalog_text(registry));
+  return ok ? kExitOk : kExitInvalid;
+}
+
+int schema_command(const Options& options) {
+  auto registry = make_registry();
+  const bool ok = registry_for_listing(options, "schema", registry);
+  std::cout << arbiter::config_schema(registry);
+  return ok ? kExitOk : kExitInvalid;
+}
+
+int explain_command(const Options& options) {
+  auto registry = make_registry();
+  auto program = load_or_report(options.file, registry, options);
+  if (!program) return kExitInvalid;
+  if (!std::ifstream(options.trace_path, std::ios::binary)) {
+    std::cerr << fmt::format("arbiter explain: cannot read trace '{}'\n", options.trace_path);
+    return kExitUsage;
+  }
+  const auto trace = arbiter::open_trace(options.trace_path);
+  const auto explanation = arbiter::explain(*program, *trace, options.step, options.target);
+  if (explanation.status == arbiter::Explanation::Status::kOk) {
+    // Its states, events and values are the trace's: escaped like every quote of input.
+    std::cout << arbiter::printable(explanation.text, true);
+    return kExitOk;
+  }
+  if (explanation.where) {
+    std::cerr << arbiter::format(
+        arbiter::Diagnostic{*explanation.where, arbiter::Severity::kError, "bad-trace",
+                            explanation.text, explanation.notes},
+        options.diagnostic_format);
+    return kExitInvalid;
+  }
+  std::cerr << fmt::format("arbiter explain: {}\n", arbiter::printable(explanation.text));
+  for (const auto& note : explanation.notes) {
+    std::cerr << fmt::format("  note: {}\n", arbiter::printable(note));
+  }
+  return explanation.status == arbiter::Explanation::Status::kNotFound ? kExitUsage : kExitInvalid;
+}
+
+int lsp_command(const Options& options) {
+  // stdout carries the protocol: nothing else may write to it.
+  std::ios::sync_with_stdio(false);
+  return arbiter::lsp::run(std::cin, std::cout, make_registry, load_options_of(options));
+}
+
+}  // namespace arbiter::cli

@@ -1,0 +1,183 @@
+// `arbiter run`: a config stepped, paced or flat out, with its trace, recording, report, watcher
+// and live view attached as observers of the manager.
+
+#include <fmt/format.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <thread>
+
+#include "arbiter/manager.hpp"
+#include "arbiter/reload.hpp"
+#include "arbiter/trace.hpp"
+#include "commands/command.hpp"
+#include "commands/record.hpp"
+#include "commands/run_report.hpp"
+#include "commands/timing.hpp"
+#include "commands/watch.hpp"
+#include "server/serve.hpp"
+
+namespace arbiter::cli {
+
+int run_command(const Options& options) {
+  auto registry = make_registry();
+  arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
+  auto program = options.watch
+                     ? load_watched(reloader, options.file, std::cerr, options.diagnostic_format)
+                     : load_or_report(options.file, registry, options);
+  if (!program) return kExitInvalid;
+  const double rate_hz = program->rate_hz;
+  const std::uint64_t steps =
+      options.steps_given || options.watch || program->steps == 0 ? options.steps : program->steps;
+
+  std::ofstream trace_file;
+  if (!options.trace_path.empty()) {
+    trace_file.open(options.trace_path, std::ios::binary | std::ios::trunc);
+    if (!trace_file) {
+      std::cerr << fmt::format("arbiter run: cannot write trace '{}'\n", options.trace_path);
+      return kExitUsage;
+    }
+  }
+  arbiter::Manager manager(std::move(*program), spdlog::default_logger());
+  arbiter::TraceWriter trace(trace_file);
+  if (trace_file.is_open()) manager.add_observer(trace);
+  RunReport report(std::cout, options.quiet);
+  manager.add_observer(report);
+  // In a terminal, a watched run keeps a status line on stderr: it shows an idle run is alive.
+  std::optional<StatusLine> status;
+  std::optional<StatusClearer> clear_out, clear_err;
+  if (options.watch && !options.quiet && ::isatty(STDERR_FILENO) == 1) {
+    status.emplace(STDERR_FILENO);
+    clear_out.emplace(std::cout, *status);
+    clear_err.emplace(std::cerr, *status);
+  }
+  // The log goes through std::cerr meanwhile, so that it too takes the status line away first.
+  std::vector<spdlog::sink_ptr> log_sinks;
+  if (status) {
+    auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(std::cerr, true);
+    sink->set_pattern("%l: %v");
+    log_sinks.swap(spdlog::default_logger()->sinks());
+    spdlog::default_logger()->sinks().push_back(std::move(sink));
+  }
+  std::unique_ptr<arbiter::Recorder> recorder;  // --record
+  if (!options.record_path.empty()) {
+    // Paced, a step the writer has no room for is dropped rather than the pace lost; flat out,
+    // the run waits for the writer and the recording loses nothing.
+    recorder = std::make_unique<arbiter::Recorder>(
+        options.record_path,
+        recording_info(options.file, registry, load_options_of(options), kVersion),
+        arbiter::Recorder::kSlots,
+        options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
+    if (!recorder->ok()) {
+      std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);
+      return kExitUsage;
+    }
+    recorder->set_flush_interval(options.record_flush);
+    manager.add_observer(*recorder);
+    // A reload's files go into the recording, for replay to reload them too.
+    reloader.set_on_staging(
+        [&recorder](const arbiter::Reloader::FileTexts& files) { recorder->stage_files(files); });
+  }
+  // After the recorder: a reload staged by the watcher is recorded with its files.
+  std::optional<Watcher> watcher;
+  if (options.watch)
+    watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
+                    options.diagnostic_format, status ? &*status : nullptr);
+  std::unique_ptr<LiveView> live;  // --serve
+  if (!options.serve.empty()) {
+    LiveAccess access;
+    access.token = options.serve_token;
+    access.readonly = options.serve_readonly;
+    live = LiveView::open(options.serve, options.paused, access, std::cout, std::cerr);
+    if (!live) return kExitUsage;
+    manager.add_observer(*live);
+  }
+  SteadyStepClock clock;
+  manager.set_clock(&clock);
+  RunTiming timing(1.0 / rate_hz);
+  if (live) live->set_timing(&timing, options.realtime);
+  if (options.rt_priority > 0) {
+    std::string error;
+    if (!enter_realtime(options.rt_priority, error)) {
+      std::cerr << fmt::format("arbiter run: {}\n", error);
+      return kExitUsage;
+    }
+  }
+
+  // Ctrl-C ends the run between two steps, so the trace and the summary are still complete.
+  install_interrupt_handlers();
+  using Clock = std::chrono::steady_clock;
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate_hz));
+  const auto started = Clock::now();
+  // Absolute deadlines: step i starts at started + i periods. A step that overruns never brings
+  // a burst of catch-up steps: the next one waits for the next period boundary, and the periods
+  // skipped are counted.
+  auto next = started;
+  for (std::uint64_t i = 0; i < steps && !interrupted; ++i) {
+    if (live && live->will_hold()) manager.safe_pass();  // paused from the page: make it safe
+    if (live && live->hold(manager, interrupted)) {
+      if (interrupted) break;
+      next = Clock::now();
+    }
+    if (options.realtime) {
+      std::this_thread::sleep_until(next);
+      timing.record_lateness(std::chrono::duration<double>(Clock::now() - next).count());
+    }
+    manager.step();
+    if (watcher) watcher->set_step(manager.steps());
+    timing.record_step(manager.step_duration());
+    if (manager.stopped()) break;  // on_exception: stop — the run ends with this step
+    if (options.realtime) {
+      next += period;
+      if (const auto now = Clock::now(); now > next) {
+        const auto missed = (now - next) / period + 1;
+        next += missed * period;
+        timing.record_missed(static_cast<std::uint64_t>(missed));
+      }
+    }
+  }
+  watcher.reset();
+  if (status) spdlog::default_logger()->sinks().swap(log_sinks);
+  clear_err.reset();
+  clear_out.reset();
+  status.reset();
+  manager.finish();  // outputs the safe values, whatever ended the run
+  if (recorder && recorder->dropped() > 0) {
+    std::cerr << fmt::format(
+        "arbiter run: the recording dropped {} steps (its writer fell behind the paced "
+        "steps); each gap is recorded\n",
+        recorder->dropped());
+  }
+  if (!options.quiet) {
+    const double wall = std::chrono::duration<double>(Clock::now() - started).count();
+    std::cout << fmt::format("{}simulated {:.2f} s at {} Hz in {:.3f} s of wall time{}\n",
+                             interrupted ? "interrupted: " : "",
+                             static_cast<double>(manager.steps()) / rate_hz, rate_hz, wall,
+                             options.realtime ? " (real time)" : "");
+    std::cout << timing.text(options.realtime) << std::flush;
+  }
+  if (live) live->serve_until(manager, interrupted);
+  if (trace_file.is_open() && !trace_file) {
+    std::cerr << fmt::format("arbiter run: writing trace '{}' failed\n", options.trace_path);
+    return kExitInvalid;
+  }
+  if (recorder && recorder->failed()) {
+    std::cerr << recording_failed("run", options.record_path, recorder->error());
+    return kExitInvalid;
+  }
+  if (manager.stopped()) {
+    std::cerr << fmt::format("arbiter run: stopped after step {}: {}\n", manager.steps(),
+                             manager.stop_reason());
+    return kExitInvalid;
+  }
+  return kExitOk;
+}
+
+}  // namespace arbiter::cli
