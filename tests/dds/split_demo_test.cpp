@@ -65,15 +65,11 @@ TEST_CASE("the split soccer demo kicks the ball and scores a goal", "[dds][proce
                dir.file("motion.out"));
   Child strategy(arbiter_run(dir.file("strategy.yaml"), 150, "", /*quiet=*/false),
                  dir.file("strategy.out"));
-  const auto motion_status = motion.wait(60s);
-  const auto strategy_status = strategy.wait(20s);
+  check_exit(motion, 60s);
+  check_exit(strategy, 20s);
   const std::string motion_output = motion.output();
   INFO(motion_output);
   INFO(strategy.output());
-  REQUIRE(motion_status);
-  REQUIRE(strategy_status);
-  CHECK(*motion_status == 0);
-  CHECK(*strategy_status == 0);
   CHECK(std::regex_search(motion_output, std::regex("world: ball kicked[\\s\\S]*world: goal!")));
   // The single-process demo's outcome: one kick, one goal.
   CHECK(motion_output.find("world: ball kicked (1 time)") != std::string::npos);
@@ -152,8 +148,7 @@ TEST_CASE("the motion process stands at once when the strategy process stops or 
                 dir.file("curl.out"));
     REQUIRE(pause.wait(10s) == 0);
     REQUIRE(motion.wait(20s) == 0);
-    strategy.signal(SIGTERM);
-    REQUIRE(strategy.wait(10s) == 0);
+    REQUIRE(strategy.stop(SIGTERM, 10s) == 0);
     const auto commands = received(dir.file("motion.jsonl"));
     INFO(strategy.output());
     REQUIRE(commands.size() >= 2);
