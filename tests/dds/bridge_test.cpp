@@ -19,37 +19,85 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// Publishes what probe.Stamp writes: one value of every type the bridge carries.
-constexpr const char* kSender = R"(
+// One value of every type the bridge carries.
+const Values kPorts = {{"flag", "bool"},  {"count", "int"},   {"level", "double"},
+                       {"point", "vec2"}, {"vector", "vec3"}, {"text", "string"}};
+
+const std::vector<std::string> kValues = [] {
+  std::vector<std::string> names;
+  for (const auto& port : kPorts) names.push_back(port.first);
+  return names;
+}();
+
+/// `{name: type, ...}` and `[name, ...]` of (name, type) pairs.
+std::pair<std::string, std::string> yaml_ports(const Values& ports) {
+  std::string map;
+  std::string list;
+  for (const auto& [name, type] : ports) {
+    map += (map.empty() ? "{" : ", ") + name + ": " + type;
+    list += (list.empty() ? "[" : ", ") + name;
+  }
+  return {map + "}", list + "]"};
+}
+
+/// A sender at 100 Hz: `stamp` (probe.Stamp) writes `ports` (names and types), which the bridge
+/// layer to_dds publishes; `params` are its params after the domain and loopback configuration,
+/// as lines indented by six.
+std::string sender_yaml(const Values& ports, const std::string& params = "",
+                        const std::string& stamp = "probe.Stamp") {
+  const auto [actuators, sensors] = yaml_ports(ports);
+  return fill(
+      R"(
 arbiter: 1
 name: sender
 rate_hz: 100
 layers:
   - name: source
-    actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string}
-    behaviours:
-      stamp: {type: probe.Stamp, params: {every: {every}}}
+    actuators: {actuators}
+    behaviours: {stamp: {behaviour}}
   - name: to_dds
     interface: dds.Bridge
-    params: {domain_id: {domain}, cyclone_config: {xml}, publish: {publish}}
-    sensors: [flag, count, level, point, vector, text]
-)";
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml}
+{params}    sensors: {sensors}
+)",
+      {{"actuators", actuators}, {"behaviour", stamp}, {"params", params}, {"sensors", sensors}});
+}
 
-constexpr const char* kReceiver = R"(
+/// A receiver at 100 Hz of `ports` from the bridge layer from_dds, as sender_yaml() sends them;
+/// `more` are layers after it.
+std::string receiver_yaml(const Values& ports, const std::string& params = "",
+                          const std::string& more = "") {
+  const auto actuators = yaml_ports(ports).first;
+  return fill(R"(
 arbiter: 1
 name: receiver
 rate_hz: 100
 layers:
   - name: from_dds
     interface: dds.Bridge
-    params: {domain_id: {domain}, cyclone_config: {xml}}
-    actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string}
-  - name: user
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml}
+{params}    actuators: {actuators}
+{more})",
+              {{"actuators", actuators}, {"params", params}, {"more", more}});
+}
+
+// Publishes what probe.Stamp writes, in steps {every} apart, as bridge option {publish} says.
+std::string every_type_sender() {
+  return sender_yaml(kPorts, "      publish: {publish}\n",
+                     "{type: probe.Stamp, params: {every: {every}}}");
+}
+
+// Receives them; a layer after the bridge reads one.
+std::string every_type_receiver() {
+  return receiver_yaml(kPorts, "", R"(  - name: user
     sensors: [count]
     actuators: {unused: double}
-)";
-
-const std::vector<std::string> kValues = {"flag", "count", "level", "point", "vector", "text"};
+)");
+}
 
 struct Pair : Setup {
   std::string sender_path;
@@ -57,10 +105,10 @@ struct Pair : Setup {
   std::unique_ptr<Manager> receiver;
 
   explicit Pair(int every = 1, const std::string& publish = "written") {
-    sender_path =
-        write("sender.yaml", kSender, {{"every", std::to_string(every)}, {"publish", publish}});
+    sender_path = write("sender.yaml", every_type_sender(),
+                        {{"every", std::to_string(every)}, {"publish", publish}});
     start_sender();
-    receiver = std::make_unique<Manager>(load("receiver.yaml", kReceiver));
+    receiver = std::make_unique<Manager>(load("receiver.yaml", every_type_receiver()));
     REQUIRE(bridge_of(*sender, "to_dds").wait_for_peers(10s));
     REQUIRE(bridge_of(*receiver, "from_dds").wait_for_peers(10s));
   }
@@ -76,58 +124,6 @@ struct Pair : Setup {
     receiver->step();
   }
 };
-
-/// `{name: type, ...}` and `[name, ...]` of (name, type) pairs.
-std::pair<std::string, std::string> yaml_ports(const Values& ports) {
-  std::string map;
-  std::string list;
-  for (const auto& [name, type] : ports) {
-    map += (map.empty() ? "{" : ", ") + name + ": " + type;
-    list += (list.empty() ? "[" : ", ") + name;
-  }
-  return {map + "}", list + "]"};
-}
-
-/// A sender at 100 Hz: probe.Stamp writes `ports` (names and types), which the bridge layer
-/// to_dds publishes; `params` are its params after the domain and loopback configuration, as
-/// lines indented by six.
-std::string sender_yaml(const Values& ports, const std::string& params = "") {
-  const auto [actuators, sensors] = yaml_ports(ports);
-  return fill(R"(
-arbiter: 1
-name: sender
-rate_hz: 100
-layers:
-  - name: source
-    actuators: {actuators}
-    behaviours: {stamp: probe.Stamp}
-  - name: to_dds
-    interface: dds.Bridge
-    params:
-      domain_id: {domain}
-      cyclone_config: {xml}
-{params}    sensors: {sensors}
-)",
-              {{"actuators", actuators}, {"params", params}, {"sensors", sensors}});
-}
-
-/// A receiver at 100 Hz of `ports` from the bridge layer from_dds, as sender_yaml() sends them.
-std::string receiver_yaml(const Values& ports, const std::string& params = "") {
-  const auto actuators = yaml_ports(ports).first;
-  return fill(R"(
-arbiter: 1
-name: receiver
-rate_hz: 100
-layers:
-  - name: from_dds
-    interface: dds.Bridge
-    params:
-      domain_id: {domain}
-      cyclone_config: {xml}
-{params}    actuators: {actuators}
-)",
-              {{"actuators", actuators}, {"params", params}});
-}
 
 /// In this step the receiver read no new value: each holds the last, probe.Stamp's of step
 /// `step`, unwritten.
@@ -286,12 +282,14 @@ void check_first_values_arrive(Manager& sender, const std::string& to_dds, Manag
 
 TEST_CASE("a program compiled from text in memory bridges its layers both ways", "[dds]") {
   Setup setup;
-  const auto text = [&](const char* config) {
+  const auto text = [&](const std::string& config) {
     return fill(fill(config, {{"every", "1"}, {"publish", "written"}}), setup.values());
   };
   // Named after files that do not exist: nothing may read the config again.
-  Manager sender(test::compile_text(text(kSender), setup.registry, "no/such/sender.yaml"));
-  Manager receiver(test::compile_text(text(kReceiver), setup.registry, "no/such/receiver.yaml"));
+  Manager sender(
+      test::compile_text(text(every_type_sender()), setup.registry, "no/such/sender.yaml"));
+  Manager receiver(
+      test::compile_text(text(every_type_receiver()), setup.registry, "no/such/receiver.yaml"));
   check_first_values_arrive(sender, "to_dds", receiver, "from_dds");
 }
 
