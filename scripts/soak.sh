@@ -14,15 +14,9 @@ steps=${2:-10000000}
 cli=$build/cli/arbiter
 [ -x "$cli" ] || { echo "soak: no $cli; build first" >&2; exit 2; }
 
-work=$(mktemp -d)
-client_pid=
-run_pid=
-cleanup() {
-  [ -n "$client_pid" ] && kill "$client_pid" 2>/dev/null || true
-  [ -n "$run_pid" ] && kill "$run_pid" 2>/dev/null || true
-  rm -rf "$work"
-}
-trap cleanup EXIT
+# The scratch folder `work`, and the processes in `pids` killed at exit.
+# shellcheck source=../tests/cli/expect.sh
+source tests/cli/expect.sh
 
 # A soccer step record is about 1 KB: make sure the trace fits, with room to spare.
 need_kb=$((steps * 11 / 10 + 1048576))
@@ -42,16 +36,12 @@ ARBITER_SERVE_TOKEN=$token "$cli" run "$config" --plugin-path "$build/plugins" -
   --full-speed --serve 127.0.0.1:0 --watch --trace "$work/trace.jsonl" --quiet \
   >"$work/out.txt" 2>"$work/err.txt" &
 run_pid=$!
+pids+=("$run_pid")
 
-url=
-for _ in $(seq 1 100); do
-  url=$(sed -nE 's/^serving the live view at (http[^ ?]*).*/\1/p' "$work/out.txt" | head -1)
-  [ -n "$url" ] && break
-  sleep 0.1
-done
+url=$(printed 's/^serving the live view at (http[^ ?]*).*/\1/p' "$work/out.txt")
 [ -n "$url" ] || { echo "soak: the live view did not start" >&2; cat "$work/err.txt" >&2; exit 1; }
 curl -sN -H "X-Arbiter-Token: $token" "${url}events" | wc -c >"$work/client_bytes" &
-client_pid=$!
+pids+=($!)
 
 rss_kb() { awk '/^VmRSS:/ {print $2}' "/proc/$run_pid/status" 2>/dev/null || true; }
 samples=$work/rss.txt
@@ -79,12 +69,11 @@ while kill -0 "$run_pid" 2>/dev/null; do
 done
 status=0
 wait "$run_pid" || status=$?
-run_pid=
 [ -n "$elapsed" ] || elapsed=$(($(date +%s) - started))
 # The server closes the stream when the run ends: the client must have held it until then.
 for _ in $(seq 1 50); do [ -s "$work/client_bytes" ] && break; sleep 0.1; done
 client_bytes=$(cat "$work/client_bytes" 2>/dev/null || echo 0)
-client_pid=
+pids=()
 
 fail=0
 report() { echo "soak: $*"; }

@@ -6,8 +6,8 @@ set -eu
 cli=$1
 config=$2
 signal=${3:-INT}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 
 "$cli" run "$config" --realtime --steps 1000000 --trace "$work/trace.jsonl" >"$work/out.txt" &
 pid=$!
@@ -19,8 +19,8 @@ done
 kill -"$signal" "$pid"
 status=0
 wait "$pid" || status=$?
+pid=
 
-fail() { echo "FAIL: $*"; cat "$work/out.txt"; exit 1; }
 [ "$status" -eq 0 ] || fail "exit status $status after SIG$signal"
 grep -q '^interrupted: simulated' "$work/out.txt" || fail "no summary after the interrupt"
 lines=$(wc -l <"$work/trace.jsonl")

@@ -5,9 +5,8 @@
 set -u
 cli=$1
 config=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail() { echo "FAIL: $*"; cat "$work/out.txt"; exit 1; }
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 
 sed -E 's/^rate_hz: .*/rate_hz: 50000/' "$config" >"$work/fast.yaml"
 grep -q '^rate_hz: 50000' "$work/fast.yaml" || fail "the config has no rate_hz line"

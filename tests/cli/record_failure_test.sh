@@ -9,9 +9,6 @@ set -eu
 cli=$1
 source_dir=$2
 soccer=$source_dir/configs/soccer/walk_and_kick.yaml
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-
 # shellcheck source=expect.sh
 source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 # The step a recording ends after, from replay's warning that it was cut off.
@@ -47,6 +44,7 @@ set +e
 wait "$pid"
 code=$?
 set -e
+pid=
 [[ $code -eq 1 ]] || fail "a run whose recording failed exits $code, not 1"
 grep -q "^step   80  clock: tick (cycle 80" "$work/full_out.txt" || fail "the run did not go on"
 grep -qx "arbiter run: writing recording '/dev/full' failed: No space left on device (at the start); it holds the steps written before" \
@@ -97,6 +95,7 @@ done
 sleep 3
 kill -9 "$pid"
 wait "$pid" 2>/dev/null || true
+pid=
 ran=$(sed -nE 's/^step +([0-9]+) .*/\1/p' "$work/killed_out.txt" | tail -1)
 expect_exit 0 "$cli" replay "$work/killed.mcap"
 kept=$(cut_after)

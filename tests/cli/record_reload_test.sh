@@ -5,34 +5,21 @@
 set -eu
 cli=$1
 config=$2
-work=$(mktemp -d)
-pid=
-trap '[ -n "$pid" ] && kill "$pid" 2>/dev/null; rm -rf "$work"' EXIT
-cp "$config" "$work/robot.yaml"
-
 # shellcheck source=expect.sh
 source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
+cp "$config" "$work/robot.yaml"
 
-"$cli" run "$work/robot.yaml" --watch --realtime --record "$work/run.mcap" \
-  >"$work/out.txt" 2>"$work/err.txt" &
-pid=$!
-wait_for 'control/head_control activated' "$work/out.txt"
-sed -i 's/^\(      head_control: .*\)$/\1\n      wave: {type: scripted, params: {activation: 1}}/' \
-  "$work/robot.yaml"
-wait_for 'control/wave activated' "$work/out.txt"
-sleep 0.3  # a few steps of the reloaded config
-kill -INT "$pid"
-wait "$pid" || fail "the recorded run failed"
-pid=
+record_reload 'control/head_control activated' \
+  's/^\(      head_control: .*\)$/\1\n      wave: {type: scripted, params: {activation: 1}}/' \
+  'control/wave activated'
 
 # The edit is gone from disk: replay must take the reloaded config from the recording.
 cp "$config" "$work/robot.yaml"
-"$cli" replay "$work/run.mcap" --trace "$work/replay.jsonl" >"$work/replay.txt" \
-  2>"$work/replay_err.txt" || fail "replay did not repeat the run"
-grep -q 'identical to the recording' "$work/replay.txt" || fail "replay is not identical"
+expect_exit 0 "$cli" replay "$work/run.mcap" --trace "$work/replay.jsonl"
+grep -q 'identical to the recording' "$work/out.txt" || fail "replay is not identical"
 grep -q '"reload": 1' "$work/replay.jsonl" || fail "the replay did not reload"
 grep -q '"wave"' "$work/replay.jsonl" || fail "the reloaded behaviour did not run in the replay"
-if grep -q 'warning' "$work/replay_err.txt"; then fail "replay warned"; fi
+if grep -q 'warning' "$work/err.txt"; then fail "replay warned"; fi
 
 # An edited graph runs alone, noted.
 "$cli" replay "$work/run.mcap" --config "$work/robot.yaml" >"$work/whatif.txt" \

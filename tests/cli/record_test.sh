@@ -8,9 +8,6 @@ cli=$1
 source_dir=$2
 test_plugins=$3
 config=$source_dir/configs/soccer/walk_and_kick.yaml
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-
 # shellcheck source=expect.sh
 source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 
@@ -97,6 +94,7 @@ for _ in $(seq 1 600); do  # up to 30 s on a busy machine
 done
 kill -9 "$pid"
 wait "$pid" 2>/dev/null || true
+pid=
 expect_exit 0 "$cli" replay "$work/cut.mcap"
 grep -q "cut.mcap: warning: the recording was cut off while it was written: it ends after step " \
   "$work/err.txt" || fail "replay of a cut recording"
@@ -106,15 +104,8 @@ grep -q "warning: the recording was cut off" "$work/err.txt" || fail "diff of a 
 expect_exit 0 "$cli" plot "$work/cut.mcap" -o "$work/cut.svg"
 grep -q "warning: the recording was cut off" "$work/err.txt" || fail "plot of a cut recording"
 # view serves until stopped: wait for its warning (a loaded machine may take a while), then stop it.
-"$cli" view "$config" --trace "$work/cut.mcap" --serve 0 >"$work/out.txt" 2>"$work/err.txt" &
-pid=$!
-for _ in $(seq 600); do
-  grep -q "warning: the recording was cut off" "$work/err.txt" && break
-  kill -0 "$pid" 2>/dev/null || break
-  sleep 0.1
-done
-kill "$pid" 2>/dev/null || true
-wait "$pid" 2>/dev/null || true
+serve_until "warning: the recording was cut off" "$cli" view "$config" --trace "$work/cut.mcap" \
+  --serve 0
 grep -q "warning: the recording was cut off" "$work/err.txt" || fail "view of a cut recording"
 
 # explain and plot read recordings as they read traces.

@@ -5,12 +5,11 @@ set -eu
 cli=$1
 dot=$2
 source_dir=$3
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 cd "$source_dir"
 
 passed=0
-fail() { echo "FAIL: $*"; exit 1; }
 render() {  # render NAME DOT-FILE
   "$dot" -Tsvg "$2" -o "$work/$1.svg" 2>"$work/$1.err" || fail "dot rejected $1: $(cat "$work/$1.err")"
   [ ! -s "$work/$1.err" ] || fail "dot warned about $1: $(cat "$work/$1.err")"

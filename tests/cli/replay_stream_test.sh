@@ -13,10 +13,6 @@ steps=40000
 # What replay and diff hold does not grow with the recording: about 20 MiB, for any length (a
 # whole read held 88 MiB for replay, 52 MiB for diff, 53 MiB for diff with the trace).
 limit_kb=40960
-work=$(mktemp -d)
-pid=
-trap '[ -n "$pid" ] && kill "$pid" 2>/dev/null; rm -rf "$work"' EXIT
-
 # shellcheck source=expect.sh
 source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 # Runs COMMAND... as expect_exit 0 does, and sets `peak_kb` to its peak resident memory
@@ -82,16 +78,7 @@ expect_exit 0 "$cli" plot "$work/no_magic.mcap" -o "$work/no_magic.svg"
 grep -q "$damaged" "$work/err.txt" || fail "plot does not warn of the missing magic"
 [[ -s "$work/no_magic.svg" ]] || fail "plot without the magic"
 # view serves until stopped: wait for its warning, then stop it.
-"$cli" view "$config" --trace "$work/no_magic.mcap" --serve 0 >"$work/out.txt" 2>"$work/err.txt" &
-pid=$!
-for _ in $(seq 600); do
-  grep -q "$damaged" "$work/err.txt" && break
-  kill -0 "$pid" 2>/dev/null || break
-  sleep 0.1
-done
-kill "$pid" 2>/dev/null || true
-wait "$pid" 2>/dev/null || true
-pid=
+serve_until "$damaged" "$cli" view "$config" --trace "$work/no_magic.mcap" --serve 0
 grep -q "$damaged" "$work/err.txt" || fail "view does not warn of the missing magic"
 
 # Cut off before its trace header: one message, whichever tool reads it.

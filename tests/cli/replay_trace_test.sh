@@ -7,14 +7,8 @@ cli=$1
 source_dir=$2
 export ARBITER_PLUGIN_PATH=$3
 config=$source_dir/tests/data/replay/counter.yaml
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-
-fail() {
-  echo "FAIL: $*"
-  for f in "$work"/*.txt; do echo "--- $f"; cat "$f"; done
-  exit 1
-}
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 
 "$cli" run "$config" --steps 3000 -q --record "$work/run.mcap" || fail "the run failed"
 "$cli" replay "$work/run.mcap" --trace "$work/replay.jsonl" >"$work/out.txt" 2>"$work/err.txt" ||
@@ -28,11 +22,7 @@ cp "$work/run.mcap" "$work/bad.mcap"
 head -c 30000 /dev/zero | tr '\0' '\377' |
   dd of="$work/bad.mcap" bs=1 seek=$((size / 3)) conv=notrunc 2>/dev/null
 echo previous >"$work/trace.jsonl"
-set +e
-"$cli" replay "$work/bad.mcap" --trace "$work/trace.jsonl" >"$work/out.txt" 2>"$work/err.txt"
-code=$?
-set -e
-[[ $code -eq 1 ]] || fail "the replay of the damaged recording exits $code, not 1"
+expect_exit 1 "$cli" replay "$work/bad.mcap" --trace "$work/trace.jsonl"
 grep -q "bad.mcap: error: at byte" "$work/err.txt" || fail "no error where the recording is damaged"
 [[ $(cat "$work/trace.jsonl") == previous ]] || fail "the failed replay changed the trace file"
 leftover=$(find "$work" -name '*.partial')

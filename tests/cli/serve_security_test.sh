@@ -6,9 +6,8 @@
 set -eu
 cli=$1
 config=$2
-work=$(mktemp -d)
-pids=()
-trap 'for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; rm -rf "$work"' EXIT
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 
 passed=0
 failed=0
@@ -27,12 +26,7 @@ start() {
   shift
   "$cli" run "$config" --serve 127.0.0.1:0 --steps 100000000 "$@" >"$work/$name.out" 2>"$work/$name.err" &
   pids+=($!)
-  url=
-  for _ in $(seq 1 100); do
-    url=$(sed -nE 's/^serving the live view at (http[^ ]*).*/\1/p' "$work/$name.out" | head -1)
-    [ -n "$url" ] && break
-    sleep 0.1
-  done
+  url=$(printed 's/^serving the live view at (http[^ ]*).*/\1/p' "$work/$name.out")
   [ -n "$url" ] || { echo "FAIL: $name did not serve"; cat "$work/$name.err"; exit 1; }
   base=${url%%\?*}
 }
@@ -143,12 +137,7 @@ grep -q 'the token must be' "$work/bad.err" || { failed=$((failed + 1)); echo "F
 "$cli" run "$config" --steps 20 --trace "$work/view.jsonl" -q
 "$cli" view "$config" --trace "$work/view.jsonl" --serve 127.0.0.1:0 >"$work/view.out" 2>"$work/view.err" &
 pids+=($!)
-vurl=
-for _ in $(seq 1 100); do
-  vurl=$(sed -nE 's/^viewing .* at (http[^ ]*)$/\1/p' "$work/view.out" | head -1)
-  [ -n "$vurl" ] && break
-  sleep 0.1
-done
+vurl=$(printed 's/^viewing .* at (http[^ ]*)$/\1/p' "$work/view.out")
 vbase=${vurl%%\?*}
 vtoken=${vurl#*token=}
 [ ${#vtoken} -eq 32 ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: view printed no URL with a token: $(cat "$work/view.out" "$work/view.err")"; }

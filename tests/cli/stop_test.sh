@@ -2,18 +2,16 @@
 # `arbiter run` under `on_exception: stop`: the run ends after the step in which a behaviour threw,
 # says who threw and where it was declared, and exits 1 (a failed run), even with --realtime and
 # many steps left.
-set -u
+set -eu
 cli=$1
 plugin_dir=$2
 config=$3
-out=$(mktemp) err=$(mktemp)
-trap 'rm -f "$out" "$err"' EXIT
-fail() { echo "FAIL: $*"; echo "--- stdout"; cat "$out"; echo "--- stderr"; cat "$err"; exit 1; }
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
+out=$work/out.txt
+err=$work/err.txt
 
-status=0
-timeout 20 "$cli" run "$config" --plugin-path "$plugin_dir" --steps 100000 --realtime \
-  >"$out" 2>"$err" || status=$?
-[[ $status -eq 1 ]] || fail "exit status $status, want 1"
+expect_exit 1 timeout 20 "$cli" run "$config" --plugin-path "$plugin_dir" --steps 100000 --realtime
 grep -q "^arbiter run: stopped after step 3: .*faulty_stop.yaml:13:7: behaviour 'flaky' (test_good.Faulty) threw from execute() in step 3: sensor cable unplugged" \
   "$err" || fail "no stop message naming the behaviour and its location"
 grep -q "simulated 0.20 s at 15 Hz" "$out" || fail "the run did not end with step 3"

@@ -5,9 +5,6 @@ cli=$1
 source_dir=$2
 export ARBITER_PLUGIN_PATH=$3
 config=$source_dir/tests/data/replay/counter.yaml
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-
 # shellcheck source=expect.sh
 source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 

@@ -6,28 +6,13 @@
 set -eu
 cli=$1
 config=$2
-work=$(mktemp -d)
-trap 'kill "$pid" 2>/dev/null || true; rm -rf "$work"' EXIT
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
 cp "$config" "$work/robot.yaml"
 
 "$cli" run "$work/robot.yaml" --watch --realtime --trace "$work/trace.jsonl" \
   >"$work/out.txt" 2>"$work/err.txt" &
 pid=$!
-
-fail() {
-  echo "FAIL: $*"
-  echo "--- stdout"; cat "$work/out.txt"
-  echo "--- stderr"; cat "$work/err.txt"
-  exit 1
-}
-# Waits (bounded: 10 s) until `grep -q PATTERN FILE` succeeds.
-wait_for() {
-  for _ in $(seq 1 200); do
-    grep -q -- "$1" "$2" && return 0
-    sleep 0.05
-  done
-  fail "no '$1' in $2"
-}
 
 wait_for 'control/head_control activated' "$work/out.txt"
 
@@ -61,6 +46,7 @@ wait_for 'reloaded walk_and_kick: 2 layers, 4 behaviours' "$work/out.txt"
 kill -INT "$pid"
 status=0
 wait "$pid" || status=$?
+pid=
 [ "$status" -eq 0 ] || fail "exit status $status after SIGINT"
 grep -q '^interrupted: simulated .* (real time)$' "$work/out.txt" || fail "no summary"
 grep -q '^  control/wave .*(removed by a reload)$' "$work/out.txt" || fail "no summary of wave"

@@ -70,34 +70,8 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// Publishes probe.Stamp's values of every type; receives the peer's.
-constexpr const char* kSide = R"(
-arbiter: 1
-name: {self}
-rate_hz: 100
-{plugins}
-layers:
-  - name: link
-    interface: dds.Bridge
-    params:
-      domain_id: {domain}
-      cyclone_config: {xml}
-      namespace: {self}
-      topics:
-        {other}_flag: /{other}/flag
-        {other}_count: /{other}/count
-        {other}_level: /{other}/level
-        {other}_point: /{other}/point
-        {other}_vector: /{other}/vector
-        {other}_text: /{other}/text
-    actuators:
-      {other}_flag: bool
-      {other}_count: int
-      {other}_level: double
-      {other}_point: vec2
-      {other}_vector: vec3
-      {other}_text: string
-    sensors: [flag, count, level, point, vector, text]
+// The layers of a side: publishes probe.Stamp's values of every type; receives the peer's.
+constexpr const char* kSide = R"({link}
   - name: source
     sensors: [{other}_vector]
     actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string,
@@ -111,19 +85,10 @@ layers:
 
 TEST_CASE("a step that publishes and receives over DDS allocates nothing with operator new",
           "[dds][alloc]") {
-  DomainLease domain;
-  TempDir dir;
-  const auto config = [&](const std::string& self, const std::string& other, bool cli) {
-    return dir.write(self + ".yaml",
-                     fill(kSide, {{"self", self},
-                                  {"other", other},
-                                  {"plugins", cli ? "plugins: [dds, dds_probe]" : ""},
-                                  {"domain", std::to_string(domain.id())},
-                                  {"xml", loopback_xml()}}));
-  };
-  Child peer(arbiter_run(config("peer", "host", true), 100000, ""), dir.file("peer.out"));
-  Registry registry = make_registry();
-  Manager host(load_file(config("host", "peer", false), registry));
+  Setup setup;
+  Child peer(arbiter_run(setup.side(kSide, "peer", "host", 100, true), 100000, ""),
+             setup.dir.file("peer.out"));
+  Manager host(load_file(setup.side(kSide, "host", "peer", 100, false), setup.registry));
   const auto& bridge = bridge_of(host, "link");
   REQUIRE(step_until(
       host, [&] { return written(host, "peer_text"); }, 20s));
@@ -162,6 +127,5 @@ TEST_CASE("a step that publishes and receives over DDS allocates nothing with op
                  << " per step; realloc " << step_reallocs.load()
                  << "), on Cyclone DDS's threads meanwhile " << other_mallocs.load());
   }
-  peer.signal(SIGTERM);
-  CHECK(peer.wait(20s));
+  CHECK(peer.stop(SIGTERM, 20s));
 }

@@ -92,9 +92,8 @@ std::string values_list(int count, const char* format) {
   return out;
 }
 
-std::string sender_config(const Scenario& scenario, int domain) {
-  return fmt::format(
-      R"(arbiter: 1
+// Filled in by scenario_values().
+constexpr const char* kSender = R"(arbiter: 1
 name: sender
 rate_hz: {rate}
 layers:
@@ -109,35 +108,32 @@ layers:
           writes:
 {writes}  - name: out
     interface: dds.Bridge
-    params: {{domain_id: {domain}, cyclone_config: {xml}}}
+    params: {domain_id: {domain}, cyclone_config: {xml}}
     sensors: [time{sensors}]
-)",
-      fmt::arg("rate", scenario.sender_hz > 0 ? scenario.sender_hz : 1000.0),
-      fmt::arg("actuators", values_list(scenario.values, "      v{}: double\n")),
-      fmt::arg("writes", values_list(scenario.values, "            v{}: 1.5\n")),
-      fmt::arg("domain", domain), fmt::arg("xml", loopback_xml()),
-      fmt::arg("sensors", values_list(scenario.values, ", v{}")));
-}
+)";
 
-std::string receiver_config(const Scenario& scenario, int domain) {
-  return fmt::format(
-      R"(arbiter: 1
+constexpr const char* kReceiver = R"(arbiter: 1
 name: receiver
 rate_hz: {rate}
 layers:
   - name: in
     interface: dds.Bridge
-    params: {{domain_id: {domain}, cyclone_config: {xml}}}
+    params: {domain_id: {domain}, cyclone_config: {xml}}
     actuators:
       time: double
 {actuators}  - name: measure
     sensors: [time]
-    actuators: {{unused: double}}
-    behaviours: {{latency: bench.Latency}}
-)",
-      fmt::arg("rate", scenario.receiver_hz > 0 ? scenario.receiver_hz : 1000.0),
-      fmt::arg("actuators", values_list(scenario.values, "      v{}: double\n")),
-      fmt::arg("domain", domain), fmt::arg("xml", loopback_xml()));
+    actuators: {unused: double}
+    behaviours: {latency: bench.Latency}
+)";
+
+/// A side's {rate} (`hz`, or as fast as 1 kHz when 0) and the scenario's extra values: their
+/// {actuators}, the {writes} that give them values, and their names as further {sensors}.
+Values scenario_values(const Scenario& scenario, double hz) {
+  return {{"rate", fmt::format("{}", hz > 0 ? hz : 1000.0)},
+          {"actuators", values_list(scenario.values, "      v{}: double\n")},
+          {"writes", values_list(scenario.values, "            v{}: 1.5\n")},
+          {"sensors", values_list(scenario.values, ", v{}")}};
 }
 
 /// Steps `manager` for `seconds` at `hz` (0: back to back); returns each step's duration (µs).
@@ -214,12 +210,11 @@ struct Row {
 };
 
 std::optional<Row> run_scenario(const Scenario& scenario, const std::string& self) {
-  DomainLease domain;
-  TempDir dir;
-  const std::string sender_file = dir.write("sender.yaml", sender_config(scenario, domain.id()));
-  Registry registry = bench_registry();
+  Setup setup(bench_registry());
+  const std::string sender_file =
+      setup.write("sender.yaml", kSender, scenario_values(scenario, scenario.sender_hz));
   Manager receiver(
-      load_file(dir.write("receiver.yaml", receiver_config(scenario, domain.id())), registry));
+      setup.load("receiver.yaml", kReceiver, scenario_values(scenario, scenario.receiver_hz)));
   auto& latency = test::instance<Latency>(receiver.program(), "measure", "latency");
   const auto& bridge = bridge_of(receiver, "in");
 
@@ -227,7 +222,7 @@ std::optional<Row> run_scenario(const Scenario& scenario, const std::string& sel
   const double sender_seconds = scenario.seconds + 0.6;
   Child sender({self, "--sender", sender_file, fmt::format("{}", sender_seconds),
                 scenario.sender_hz > 0 ? "paced" : "unpaced"},
-               dir.file("sender.out"));
+               setup.dir.file("sender.out"));
   // Step until the first value arrives, then measure.
   if (!step_until(
           receiver, [&] { return bridge.stats().values_written > 0; }, std::chrono::seconds(60))) {

@@ -19,56 +19,96 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// Publishes what probe.Stamp writes: one value of every type the bridge carries.
-constexpr const char* kSender = R"(
+// One value of every type the bridge carries.
+const Values kPorts = {{"flag", "bool"},  {"count", "int"},   {"level", "double"},
+                       {"point", "vec2"}, {"vector", "vec3"}, {"text", "string"}};
+
+const std::vector<std::string> kValues = [] {
+  std::vector<std::string> names;
+  for (const auto& port : kPorts) names.push_back(port.first);
+  return names;
+}();
+
+/// `{name: type, ...}` and `[name, ...]` of (name, type) pairs.
+std::pair<std::string, std::string> yaml_ports(const Values& ports) {
+  std::string map;
+  std::string list;
+  for (const auto& [name, type] : ports) {
+    map += (map.empty() ? "{" : ", ") + name + ": " + type;
+    list += (list.empty() ? "[" : ", ") + name;
+  }
+  return {map + "}", list + "]"};
+}
+
+/// A sender at 100 Hz: `stamp` (probe.Stamp) writes `ports` (names and types), which the bridge
+/// layer to_dds publishes; `params` are its params after the domain and loopback configuration,
+/// as lines indented by six.
+std::string sender_yaml(const Values& ports, const std::string& params = "",
+                        const std::string& stamp = "probe.Stamp") {
+  const auto [actuators, sensors] = yaml_ports(ports);
+  return fill(
+      R"(
 arbiter: 1
 name: sender
 rate_hz: 100
 layers:
   - name: source
-    actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string}
-    behaviours:
-      stamp: {type: probe.Stamp, params: {every: {every}}}
+    actuators: {actuators}
+    behaviours: {stamp: {behaviour}}
   - name: to_dds
     interface: dds.Bridge
-    params: {domain_id: {domain}, cyclone_config: {xml}, publish: {publish}}
-    sensors: [flag, count, level, point, vector, text]
-)";
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml}
+{params}    sensors: {sensors}
+)",
+      {{"actuators", actuators}, {"behaviour", stamp}, {"params", params}, {"sensors", sensors}});
+}
 
-constexpr const char* kReceiver = R"(
+/// A receiver at 100 Hz of `ports` from the bridge layer from_dds, as sender_yaml() sends them;
+/// `more` are layers after it.
+std::string receiver_yaml(const Values& ports, const std::string& params = "",
+                          const std::string& more = "") {
+  const auto actuators = yaml_ports(ports).first;
+  return fill(R"(
 arbiter: 1
 name: receiver
 rate_hz: 100
 layers:
   - name: from_dds
     interface: dds.Bridge
-    params: {domain_id: {domain}, cyclone_config: {xml}}
-    actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string}
-  - name: user
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml}
+{params}    actuators: {actuators}
+{more})",
+              {{"actuators", actuators}, {"params", params}, {"more", more}});
+}
+
+// Publishes what probe.Stamp writes, in steps {every} apart, as bridge option {publish} says.
+std::string every_type_sender() {
+  return sender_yaml(kPorts, "      publish: {publish}\n",
+                     "{type: probe.Stamp, params: {every: {every}}}");
+}
+
+// Receives them; a layer after the bridge reads one.
+std::string every_type_receiver() {
+  return receiver_yaml(kPorts, "", R"(  - name: user
     sensors: [count]
     actuators: {unused: double}
-)";
+)");
+}
 
-const std::vector<std::string> kValues = {"flag", "count", "level", "point", "vector", "text"};
-
-struct Pair {
-  DomainLease domain;
-  TempDir dir;
-  Registry registry = make_registry();
+struct Pair : Setup {
   std::string sender_path;
   std::unique_ptr<Manager> sender;
   std::unique_ptr<Manager> receiver;
 
   explicit Pair(int every = 1, const std::string& publish = "written") {
-    const std::vector<std::pair<std::string, std::string>> values = {
-        {"domain", std::to_string(domain.id())},
-        {"xml", loopback_xml()},
-        {"every", std::to_string(every)},
-        {"publish", publish}};
-    sender_path = dir.write("sender.yaml", fill(kSender, values));
+    sender_path = write("sender.yaml", every_type_sender(),
+                        {{"every", std::to_string(every)}, {"publish", publish}});
     start_sender();
-    receiver = std::make_unique<Manager>(
-        load_file(dir.write("receiver.yaml", fill(kReceiver, values)), registry));
+    receiver = std::make_unique<Manager>(load("receiver.yaml", every_type_receiver()));
     REQUIRE(bridge_of(*sender, "to_dds").wait_for_peers(10s));
     REQUIRE(bridge_of(*receiver, "from_dds").wait_for_peers(10s));
   }
@@ -84,6 +124,17 @@ struct Pair {
     receiver->step();
   }
 };
+
+/// In this step the receiver read no new value: each holds the last, probe.Stamp's of step
+/// `step`, unwritten.
+void check_stale(const Manager& receiver, int step) {
+  for (const auto& name : kValues) {
+    INFO(name);
+    CHECK_FALSE(written(receiver, name));
+  }
+  CHECK(value_of(receiver, "count") == step);
+  CHECK(value_of(receiver, "text") == "step " + std::to_string(step));
+}
 
 bool events_contain(const Manager& manager, const std::string& text) {
   for (std::size_t e = 0; e < manager.event_count(); ++e) {
@@ -118,12 +169,7 @@ TEST_CASE("a step without a delivery reads the last value, unwritten", "[dds]") 
   Pair pair;
   pair.send_and_receive();
   pair.receiver->step();
-  for (const auto& name : kValues) {
-    INFO(name);
-    CHECK_FALSE(written(*pair.receiver, name));
-  }
-  CHECK(value_of(*pair.receiver, "count") == 1);
-  CHECK(value_of(*pair.receiver, "text") == "step 1");
+  check_stale(*pair.receiver, 1);
 }
 
 TEST_CASE("of several values sent between two steps, the newest is the one read", "[dds]") {
@@ -169,12 +215,7 @@ TEST_CASE("a publisher that disappears leaves its values stale, not lost, until 
       10s));
   for (int i = 0; i < 3; ++i) {
     pair.receiver->step();
-    for (const auto& name : kValues) {
-      INFO(name);
-      CHECK_FALSE(written(*pair.receiver, name));
-    }
-    CHECK(value_of(*pair.receiver, "count") == 3);
-    CHECK(value_of(*pair.receiver, "text") == "step 3");
+    check_stale(*pair.receiver, 3);
   }
 
   pair.start_sender();
@@ -186,50 +227,19 @@ TEST_CASE("a publisher that disappears leaves its values stale, not lost, until 
 
 TEST_CASE("per-topic options: a late subscriber gets the last value, a vector travels as Vector3",
           "[dds]") {
-  DomainLease domain;
-  TempDir dir;
-  Registry registry = make_registry();
-  const std::vector<std::pair<std::string, std::string>> values = {
-      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
+  Setup setup;
   // The same options on both sides: a topic's type and QoS must agree to match.
-  constexpr const char* kTopics = R"(
-      topics:
+  const Values ports = {{"count", "int"}, {"point", "vec2"}};
+  constexpr const char* kTopics = R"(      topics:
         count: {topic: /probe/count, durability: transient_local}
         point: {topic: /probe/point, message: geometry_msgs/msg/Vector3, reliability: best_effort}
 )";
-  Manager sender(load_file(dir.write("sender.yaml", fill(std::string(R"(
-arbiter: 1
-name: sender
-layers:
-  - name: source
-    actuators: {count: int, point: vec2}
-    behaviours: {stamp: probe.Stamp}
-  - name: to_dds
-    interface: dds.Bridge
-    params:
-      domain_id: {domain}
-      cyclone_config: {xml})") + kTopics + R"(
-    sensors: [count, point]
-)",
-                                                         values)),
-                           registry));
+  Manager sender(setup.load("sender.yaml", sender_yaml(ports, kTopics)));
   sender.step();
   sender.step();
   CHECK(bridge_of(sender, "to_dds").topic_of("point") == "rt/probe/point");
 
-  Manager receiver(load_file(dir.write("receiver.yaml", fill(std::string(R"(
-arbiter: 1
-name: receiver
-layers:
-  - name: from_dds
-    interface: dds.Bridge
-    params:
-      domain_id: {domain}
-      cyclone_config: {xml})") + kTopics + R"(
-    actuators: {count: int, point: vec2}
-)",
-                                                             values)),
-                             registry));
+  Manager receiver(setup.load("receiver.yaml", receiver_yaml(ports, kTopics)));
   auto& from_dds = bridge_of(receiver, "from_dds");
   // The count was published before the receiver existed; transient_local keeps it for it.
   REQUIRE(step_until(
@@ -271,34 +281,30 @@ void check_first_values_arrive(Manager& sender, const std::string& to_dds, Manag
 }  // namespace
 
 TEST_CASE("a program compiled from text in memory bridges its layers both ways", "[dds]") {
-  DomainLease domain;
-  Registry registry = make_registry();
-  const std::vector<std::pair<std::string, std::string>> values = {
-      {"domain", std::to_string(domain.id())},
-      {"xml", loopback_xml()},
-      {"every", "1"},
-      {"publish", "written"}};
+  Setup setup;
+  const auto text = [&](const std::string& config) {
+    return fill(fill(config, {{"every", "1"}, {"publish", "written"}}), setup.values());
+  };
   // Named after files that do not exist: nothing may read the config again.
-  Manager sender(test::compile_text(fill(kSender, values), registry, "no/such/sender.yaml"));
-  Manager receiver(test::compile_text(fill(kReceiver, values), registry, "no/such/receiver.yaml"));
+  Manager sender(
+      test::compile_text(text(every_type_sender()), setup.registry, "no/such/sender.yaml"));
+  Manager receiver(
+      test::compile_text(text(every_type_receiver()), setup.registry, "no/such/receiver.yaml"));
   check_first_values_arrive(sender, "to_dds", receiver, "from_dds");
 }
 
 TEST_CASE("a bridge layer in an included file bridges what that layer names", "[dds]") {
-  DomainLease domain;
-  TempDir dir;
-  const std::vector<std::pair<std::string, std::string>> values = {
-      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
+  Setup setup;
   // The bridges' layers come after other layers' actuators, from included files of included
   // files, so that their actuators and sensors are not the program's first.
-  dir.write("source.yaml", R"(
+  setup.write("source.yaml", R"(
 arbiter: 1
 layers:
   - name: source
     actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string}
     behaviours: {stamp: probe.Stamp}
 )");
-  dir.write("to_dds.yaml", fill(R"(
+  setup.write("to_dds.yaml", R"(
 arbiter: 1
 include: [source.yaml]
 layers:
@@ -306,15 +312,14 @@ layers:
     interface: dds.Bridge
     params: {domain_id: {domain}, cyclone_config: {xml}}
     sensors: [text, vector, point, level, count, flag]
-)",
-                                values));
-  dir.write("spacer.yaml", R"(
+)");
+  setup.write("spacer.yaml", R"(
 arbiter: 1
 layers:
   - name: spacer
     actuators: {pad_text: string, pad_vector: vec3}
 )");
-  dir.write("from_dds.yaml", fill(R"(
+  setup.write("from_dds.yaml", R"(
 arbiter: 1
 include: [spacer.yaml]
 layers:
@@ -322,10 +327,8 @@ layers:
     interface: dds.Bridge
     params: {domain_id: {domain}, cyclone_config: {xml}}
     actuators: {text: string, flag: bool, count: int, level: double, point: vec2, vector: vec3}
-)",
-                                  values));
-  Registry registry = make_registry();
-  Manager sender(load_file(dir.write("sender.yaml", R"(
+)");
+  Manager sender(setup.load("sender.yaml", R"(
 arbiter: 1
 name: sender
 rate_hz: 100
@@ -333,9 +336,8 @@ include: [to_dds.yaml]
 layers:
   - name: after
     actuators: {late: double}
-)"),
-                           registry));
-  Manager receiver(load_file(dir.write("receiver.yaml", R"(
+)"));
+  Manager receiver(setup.load("receiver.yaml", R"(
 arbiter: 1
 name: receiver
 rate_hz: 100
@@ -344,8 +346,7 @@ layers:
   - name: user
     sensors: [count, pad_vector]
     actuators: {unused: double}
-)"),
-                             registry));
+)"));
   CHECK(bridge_of(sender, "to_dds").publication_count() == kValues.size());
   CHECK(bridge_of(receiver, "from_dds").subscription_count() == kValues.size());
   CHECK(bridge_of(receiver, "from_dds").topic_of("vector") == "rt/vector");
@@ -375,20 +376,17 @@ struct arbiter::ValueTraits<Colour> {
 };
 
 TEST_CASE("a sensor the bridge cannot carry is reported where its layer names it", "[dds]") {
-  DomainLease domain;
-  TempDir dir;
-  dir.write("link.yaml", fill(R"(
+  Setup setup;
+  setup.write("link.yaml", R"(
 arbiter: 1
 layers:
   - name: link
     interface: dds.Bridge
     params: {domain_id: {domain}, cyclone_config: {xml}}
     sensors: [beacon]
-)",
-                              {{"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}}));
-  Registry registry = make_registry();
-  registry.add_value_type<Colour>("test.Colour");
-  const std::string root = dir.write("root.yaml", R"(
+)");
+  setup.registry.add_value_type<Colour>("test.Colour");
+  const std::string root = setup.dir.write("root.yaml", R"(
 arbiter: 1
 name: root
 include: [link.yaml]
@@ -397,10 +395,10 @@ layers:
     actuators: {beacon: test.Colour}
 )");
   Diagnostics diagnostics;
-  CHECK_FALSE(load(root, registry, diagnostics));
+  CHECK_FALSE(load(root, setup.registry, diagnostics));
   REQUIRE(diagnostics.error_count() == 1);
   const Diagnostic& error = diagnostics.items().front();
-  CHECK(error.location.file == dir.file("link.yaml"));
+  CHECK(error.location.file == setup.dir.file("link.yaml"));
   CHECK(error.location.line == 7);
   CHECK(error.location.column == 15);
   CHECK_THAT(error.message, Catch::Contains("sensor 'beacon' has type 'test.Colour'"));
@@ -439,44 +437,14 @@ int count_containing(const std::map<std::string, int>& seen, const std::string& 
 
 TEST_CASE("a peer whose QoS cannot match is reported once per topic on both sides, with the fix",
           "[dds][qos]") {
-  DomainLease domain;
-  TempDir dir;
-  Registry registry = make_registry();
-  const std::vector<std::pair<std::string, std::string>> values = {
-      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
+  Setup setup;
   // ROS 2's sensor-data profile is best effort: against the default (reliable) reader, nothing
   // would ever arrive. The count's reliability is set back to reliable, so the count arrives.
-  Manager sender(load_file(dir.write("sender.yaml", fill(R"(
-arbiter: 1
-name: sender
-rate_hz: 100
-layers:
-  - name: source
-    actuators: {count: int, level: double}
-    behaviours: {stamp: probe.Stamp}
-  - name: to_dds
-    interface: dds.Bridge
-    params:
-      domain_id: {domain}
-      cyclone_config: {xml}
-      qos: sensor_data
+  const Values ports = {{"count", "int"}, {"level", "double"}};
+  Manager sender(setup.load("sender.yaml", sender_yaml(ports, R"(      qos: sensor_data
       topics: {count: {reliability: reliable}}
-    sensors: [count, level]
-)",
-                                                         values)),
-                           registry));
-  Manager receiver(load_file(dir.write("receiver.yaml", fill(R"(
-arbiter: 1
-name: receiver
-rate_hz: 100
-layers:
-  - name: from_dds
-    interface: dds.Bridge
-    params: {domain_id: {domain}, cyclone_config: {xml}}
-    actuators: {count: int, level: double}
-)",
-                                                             values)),
-                             registry));
+)")));
+  Manager receiver(setup.load("receiver.yaml", receiver_yaml(ports)));
   const auto seen = step_both_until(sender, receiver, [&] {
     return written(receiver, "count") &&
            bridge_of(receiver, "from_dds").stats().values_written >= 5;
@@ -500,49 +468,16 @@ layers:
 
 TEST_CASE("a profile per topic: sensor data matches sensor data, a late joiner gets the kept value",
           "[dds][qos]") {
-  DomainLease domain;
-  TempDir dir;
-  Registry registry = make_registry();
-  const std::vector<std::pair<std::string, std::string>> values = {
-      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
-  constexpr const char* kTopics = R"(
-      topics:
+  Setup setup;
+  const Values ports = {{"count", "int"}, {"level", "double"}};
+  constexpr const char* kTopics = R"(      topics:
         count: {qos: default, durability: transient_local}
         level: {qos: sensor_data}
 )";
-  Manager sender(load_file(dir.write("sender.yaml", fill(std::string(R"(
-arbiter: 1
-name: sender
-rate_hz: 100
-layers:
-  - name: source
-    actuators: {count: int, level: double}
-    behaviours: {stamp: probe.Stamp}
-  - name: to_dds
-    interface: dds.Bridge
-    params:
-      domain_id: {domain}
-      cyclone_config: {xml})") + kTopics + R"(
-    sensors: [count, level]
-)",
-                                                         values)),
-                           registry));
+  Manager sender(setup.load("sender.yaml", sender_yaml(ports, kTopics)));
   sender.step();
   // The receiver asks for what was published before it joined; the sender keeps it.
-  Manager receiver(load_file(dir.write("receiver.yaml", fill(std::string(R"(
-arbiter: 1
-name: receiver
-rate_hz: 100
-layers:
-  - name: from_dds
-    interface: dds.Bridge
-    params:
-      domain_id: {domain}
-      cyclone_config: {xml})") + kTopics + R"(
-    actuators: {count: int, level: double}
-)",
-                                                             values)),
-                             registry));
+  Manager receiver(setup.load("receiver.yaml", receiver_yaml(ports, kTopics)));
   const auto seen = step_both_until(
       sender, receiver, [&] { return written(receiver, "level") && written(receiver, "count"); });
   CHECK(written(receiver, "level"));
@@ -551,27 +486,9 @@ layers:
 
 TEST_CASE("without domain_id the bridge joins the domain ROS_DOMAIN_ID names, as ROS 2 nodes do",
           "[dds]") {
-  DomainLease domain;
-  TempDir dir;
-  Registry registry = make_registry();
-  const std::vector<std::pair<std::string, std::string>> values = {
-      {"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
-  Manager sender(load_file(dir.write("sender.yaml", fill(R"(
-arbiter: 1
-name: sender
-rate_hz: 100
-layers:
-  - name: source
-    actuators: {count: int}
-    behaviours: {stamp: probe.Stamp}
-  - name: to_dds
-    interface: dds.Bridge
-    params: {domain_id: {domain}, cyclone_config: {xml}}
-    sensors: [count]
-)",
-                                                         values)),
-                           registry));
-  const std::string receiver_path = dir.write("receiver.yaml", fill(R"(
+  Setup setup;
+  Manager sender(setup.load("sender.yaml", sender_yaml({{"count", "int"}})));
+  const std::string receiver_path = setup.write("receiver.yaml", R"(
 arbiter: 1
 name: receiver
 rate_hz: 100
@@ -580,11 +497,10 @@ layers:
     interface: dds.Bridge
     params: {cyclone_config: {xml}}
     actuators: {count: int}
-)",
-                                                                    values));
+)");
   SECTION("a domain id") {
-    ::setenv("ROS_DOMAIN_ID", std::to_string(domain.id()).c_str(), 1);
-    Manager receiver(load_file(receiver_path, registry));
+    ::setenv("ROS_DOMAIN_ID", std::to_string(setup.domain.id()).c_str(), 1);
+    Manager receiver(load_file(receiver_path, setup.registry));
     ::unsetenv("ROS_DOMAIN_ID");
     step_both_until(sender, receiver, [&] { return written(receiver, "count"); });
     CHECK(written(receiver, "count"));
@@ -592,7 +508,7 @@ layers:
   SECTION("anything else is an error at the layer, naming the variable") {
     ::setenv("ROS_DOMAIN_ID", "seven", 1);
     Diagnostics diagnostics;
-    CHECK_FALSE(load(receiver_path, registry, diagnostics));
+    CHECK_FALSE(load(receiver_path, setup.registry, diagnostics));
     ::unsetenv("ROS_DOMAIN_ID");
     REQUIRE(diagnostics.error_count() == 1);
     CHECK(diagnostics.items().front().location.line == 6);

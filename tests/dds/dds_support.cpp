@@ -53,7 +53,7 @@ std::string loopback_xml() {
   return ARBITER_SOURCE_DIR "/configs/soccer/split/cyclonedds-loopback.xml";
 }
 
-std::string fill(std::string text, const std::vector<std::pair<std::string, std::string>>& values) {
+std::string fill(std::string text, const Values& values) {
   for (const auto& [key, value] : values) {
     const std::string marker = "{" + key + "}";
     for (auto at = text.find(marker); at != std::string::npos; at = text.find(marker, at)) {
@@ -133,6 +133,11 @@ std::optional<int> Child::wait(std::chrono::milliseconds timeout) {
   return status_;
 }
 
+std::optional<int> Child::stop(int signal, std::chrono::milliseconds timeout) {
+  this->signal(signal);
+  return wait(timeout);
+}
+
 std::string Child::output() const {
   std::ifstream in(output_);
   std::stringstream text;
@@ -187,6 +192,51 @@ Registry make_registry() {
 Program load_file(const std::string& path, Registry& registry) {
   return load_program(path, registry);
 }
+
+Values Setup::values() const {
+  return {{"domain", std::to_string(domain.id())}, {"xml", loopback_xml()}};
+}
+
+std::string Setup::write(const std::string& name, const std::string& text, const Values& more) {
+  return dir.write(name, fill(fill(text, more), values()));
+}
+
+Program Setup::load(const std::string& name, const std::string& text, const Values& more) {
+  return load_file(write(name, text, more), registry);
+}
+
+std::string Setup::side(const std::string& layers, const std::string& self,
+                        const std::string& other, int rate, bool cli) {
+  return write(self + ".yaml",
+               "arbiter: 1\nname: {self}\nrate_hz: {rate}\n{plugins}\nlayers:\n" + layers,
+               {{"link", kSideLink},
+                {"self", self},
+                {"other", other},
+                {"rate", std::to_string(rate)},
+                {"plugins", cli ? "plugins: [dds, dds_probe]" : ""}});
+}
+
+const char* const kSideLink = R"(  - name: link
+    interface: dds.Bridge
+    params:
+      domain_id: {domain}
+      cyclone_config: {xml}
+      namespace: {self}
+      topics:
+        {other}_flag: /{other}/flag
+        {other}_count: /{other}/count
+        {other}_level: /{other}/level
+        {other}_point: /{other}/point
+        {other}_vector: /{other}/vector
+        {other}_text: /{other}/text
+    actuators:
+      {other}_flag: bool
+      {other}_count: int
+      {other}_level: double
+      {other}_point: vec2
+      {other}_vector: vec3
+      {other}_text: string
+    sensors: [flag, count, level, point, vector, text])";
 
 dds::Bridge& bridge_of(const Manager& manager, const std::string& layer) {
   for (const auto& compiled : manager.program().layers) {

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -82,18 +83,13 @@ double stamp_of(const json& value, const std::string& type) {
 /// what each side received.
 void check_round_trip(const std::string& message, const std::string& type, const std::string& port,
                       const std::string& received) {
-  DomainLease domain;
-  TempDir dir;
+  Setup setup;
   const std::string config =
-      dir.write("echo.yaml", fill(kEcho, {{"port", port},
-                                          {"type", type},
-                                          {"message", message},
-                                          {"domain", std::to_string(domain.id())},
-                                          {"xml", loopback_xml()}}));
-  Child peer({ARBITER_FASTDDS_PEER, "echo", message, std::to_string(domain.id()), "40"},
-             dir.file("peer.out"));
-  Child arbiter(arbiter_run(config, 2000, dir.file("echo.jsonl"), /*quiet=*/false),
-                dir.file("arbiter.out"));
+      setup.write("echo.yaml", kEcho, {{"port", port}, {"type", type}, {"message", message}});
+  Child peer({ARBITER_FASTDDS_PEER, "echo", message, std::to_string(setup.domain.id()), "40"},
+             setup.dir.file("peer.out"));
+  Child arbiter(arbiter_run(config, 2000, setup.dir.file("echo.jsonl"), /*quiet=*/false),
+                setup.dir.file("arbiter.out"));
   // The echoes count once both directions are matched: the peer has received a stamp (the
   // bridge's writer found its reader) and the bridge's reader has found the peer's writer, as
   // the bridge reports; from then on the peer's echoes, 50 ms apart, arrive.
@@ -101,21 +97,17 @@ void check_round_trip(const std::string& message, const std::string& type, const
                      arbiter.wait_for_output("link: back: publisher found", 30s);
   if (found) std::this_thread::sleep_for(1s);
   peer.signal(SIGINT);
-  const auto peer_status = peer.wait(30s);
+  check_exit(peer, 30s);
   arbiter.signal(SIGINT);
-  const auto arbiter_status = arbiter.wait(20s);
+  check_exit(arbiter, 20s);
   INFO(peer.output());
   INFO(arbiter.output());
   REQUIRE(found);
-  REQUIRE(peer_status);
-  REQUIRE(arbiter_status);
-  CHECK(*peer_status == 0);
-  CHECK(*arbiter_status == 0);
   // Arbiter → Fast DDS: the peer decoded the stamp's value.
   CHECK(std::regex_search(peer.output(), std::regex("received: " + received + "\n")));
   // Fast DDS → Arbiter: what came back is a value the stamp wrote in an earlier step.
   int written = 0;
-  for (const auto& step : read_trace(dir.file("echo.jsonl"))) {
+  for (const auto& step : read_trace(setup.dir.file("echo.jsonl"))) {
     const json& back = step.at("actuators").at("back");
     if (!back.at("written").get<bool>()) continue;
     ++written;
@@ -131,28 +123,19 @@ void check_round_trip(const std::string& message, const std::string& type, const
 
 }  // namespace
 
-TEST_CASE("a bool crosses to Fast DDS and back as std_msgs/msg/Bool", "[dds][fastdds]") {
-  check_round_trip("std_msgs/msg/Bool", "bool", "flag", "data=(true|false)");
-}
-
-TEST_CASE("an int crosses to Fast DDS and back as std_msgs/msg/Int64", "[dds][fastdds]") {
-  check_round_trip("std_msgs/msg/Int64", "int", "count", "data=[1-9][0-9]*");
-}
-
-TEST_CASE("a double crosses to Fast DDS and back as std_msgs/msg/Float64", "[dds][fastdds]") {
-  check_round_trip("std_msgs/msg/Float64", "double", "level", "data=[0-9]+(\\.5)?");
-}
-
-TEST_CASE("a string crosses to Fast DDS and back as std_msgs/msg/String", "[dds][fastdds]") {
-  check_round_trip("std_msgs/msg/String", "string", "text", "data=\"step [1-9][0-9]*\"");
-}
-
-TEST_CASE("a vec2 crosses to Fast DDS and back as geometry_msgs/msg/Point", "[dds][fastdds]") {
-  check_round_trip("geometry_msgs/msg/Point", "vec2", "point", "x=([1-9][0-9]*) y=-\\1 z=0");
-}
-
-TEST_CASE("a vec3 crosses to Fast DDS and back as geometry_msgs/msg/Vector3", "[dds][fastdds]") {
-  check_round_trip("geometry_msgs/msg/Vector3", "vec3", "vector", "x=[1-9][0-9]* y=[0-9]+ z=-0.5");
+TEST_CASE("a value of each type crosses to Fast DDS and back as its ROS 2 message",
+          "[dds][fastdds]") {
+  // {message, type, port, what the peer prints on receiving the stamp's value}
+  const auto trip = GENERATE(values<std::array<const char*, 4>>({
+      {"std_msgs/msg/Bool", "bool", "flag", "data=(true|false)"},
+      {"std_msgs/msg/Int64", "int", "count", "data=[1-9][0-9]*"},
+      {"std_msgs/msg/Float64", "double", "level", "data=[0-9]+(\\.5)?"},
+      {"std_msgs/msg/String", "string", "text", "data=\"step [1-9][0-9]*\""},
+      {"geometry_msgs/msg/Point", "vec2", "point", "x=([1-9][0-9]*) y=-\\1 z=0"},
+      {"geometry_msgs/msg/Vector3", "vec3", "vector", "x=[1-9][0-9]* y=[0-9]+ z=-0.5"},
+  }));
+  INFO(trip[0]);
+  check_round_trip(trip[0], trip[1], trip[2], trip[3]);
 }
 
 TEST_CASE("a Fast DDS node playing the strategy walks the split demo's robot to the ball and kicks",
@@ -174,15 +157,11 @@ TEST_CASE("a Fast DDS node playing the strategy walks the split demo's robot to 
   ::unsetenv("ROS_DOMAIN_ID");
   Child strategy({ARBITER_FASTDDS_PEER, "strategy", std::to_string(domain.id()), "10"},
                  dir.file("strategy.out"));
-  const auto strategy_status = strategy.wait(30s);
-  const auto motion_status = motion_process.wait(30s);
+  check_exit(strategy, 30s);
+  check_exit(motion_process, 30s);
   const std::string motion_output = motion_process.output();
   INFO(motion_output);
   INFO(strategy.output());
-  REQUIRE(strategy_status);
-  REQUIRE(motion_status);
-  CHECK(*strategy_status == 0);
-  CHECK(*motion_status == 0);
   // Fast DDS received what the motion process publishes ...
   const std::string strategy_output = strategy.output();
   std::smatch counts;

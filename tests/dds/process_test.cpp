@@ -21,58 +21,16 @@ using nlohmann::json;
 
 namespace {
 
-// One side: probe.Stamp's values published under the namespace {self}, the other side's received
-// as actuators {other}_flag, ... .
-constexpr const char* kSide = R"(
-arbiter: 1
-name: {self}
-rate_hz: {rate}
-{plugins}
-layers:
-  - name: source
+// The layers of a side: probe.Stamp writes the values its link layer publishes.
+constexpr const char* kSide = R"(  - name: source
     actuators: {flag: bool, count: int, level: double, point: vec2, vector: vec3, text: string}
     behaviours: {stamp: probe.Stamp}
-  - name: link
-    interface: dds.Bridge
-    params:
-      domain_id: {domain}
-      cyclone_config: {xml}
-      namespace: {self}
-      topics:
-        {other}_flag: /{other}/flag
-        {other}_count: /{other}/count
-        {other}_level: /{other}/level
-        {other}_point: /{other}/point
-        {other}_vector: /{other}/vector
-        {other}_text: /{other}/text
-    actuators:
-      {other}_flag: bool
-      {other}_count: int
-      {other}_level: double
-      {other}_point: vec2
-      {other}_vector: vec3
-      {other}_text: string
-    sensors: [flag, count, level, point, vector, text]
+{link}
 )";
 
 const char* const kNames[] = {"flag", "count", "level", "point", "vector", "text"};
 
-struct Sides {
-  DomainLease domain;
-  TempDir dir;
-  Registry registry = make_registry();
-
-  /// A side's config file; `cli` sides load the plugins themselves.
-  std::string config(const std::string& self, const std::string& other, int rate, bool cli) {
-    return dir.write(self + ".yaml",
-                     fill(kSide, {{"self", self},
-                                  {"other", other},
-                                  {"rate", std::to_string(rate)},
-                                  {"plugins", cli ? "plugins: [dds, dds_probe]" : ""},
-                                  {"domain", std::to_string(domain.id())},
-                                  {"xml", loopback_xml()}}));
-  }
-
+struct Sides : Setup {
   std::unique_ptr<Child> start(const std::string& config, const std::string& name,
                                std::uint64_t steps = 100000) {
     return std::make_unique<Child>(arbiter_run(config, steps, dir.file(name + ".jsonl")),
@@ -134,8 +92,8 @@ std::vector<std::pair<json, bool>> series(const std::vector<json>& trace, const 
 TEST_CASE("two processes at different rates exchange values of every type", "[dds][process]") {
   Sides sides;
   // The peer steps at 50 Hz, the test's manager at 20 Hz.
-  auto peer = sides.start(sides.config("peer", "host", 50, true), "peer");
-  Manager host(load_file(sides.config("host", "peer", 20, false), sides.registry));
+  auto peer = sides.start(sides.side(kSide, "peer", "host", 50, true), "peer");
+  Manager host(load_file(sides.side(kSide, "host", "peer", 20, false), sides.registry));
   REQUIRE(step_until(
       host, [&] { return all_written(host, "peer_"); }, 20s));
   check_host_view(host);
@@ -168,9 +126,7 @@ TEST_CASE("two processes at different rates exchange values of every type", "[dd
   CHECK(fresh * 2 >= static_cast<int>(counts.size()));
 
   peer->signal(SIGTERM);
-  const auto status = peer->wait(20s);
-  REQUIRE(status);
-  CHECK(*status == 0);
+  check_exit(*peer, 20s);
 
   // The peer's trace: the host's values, each at 20 Hz, so written in about 2 steps of 5.
   const auto trace = read_trace(sides.dir.file("peer.jsonl"));
@@ -200,9 +156,9 @@ TEST_CASE("two processes at different rates exchange values of every type", "[dd
 TEST_CASE("a killed peer leaves its values stale until its restart, and the other side runs on",
           "[dds][process]") {
   Sides sides;
-  const std::string peer_config = sides.config("peer", "host", 50, true);
+  const std::string peer_config = sides.side(kSide, "peer", "host", 50, true);
   auto peer = sides.start(peer_config, "peer");
-  Manager host(load_file(sides.config("host", "peer", 20, false), sides.registry));
+  Manager host(load_file(sides.side(kSide, "host", "peer", 20, false), sides.registry));
   // Long enough that the restarted peer's count starts below the killed one's.
   REQUIRE(step_until(
       host, [&] { return written(host, "peer_count") && value_of(host, "peer_count") >= 100; },
@@ -249,19 +205,17 @@ TEST_CASE(
   // The survivor, an `arbiter run` at 50 Hz for 7.5 s; the victim at 20 Hz, killed after 3 s
   // and started again 1.5 s later.
   constexpr std::size_t kSurvivorSteps = 375;
-  auto survivor = sides.start(sides.config("peer", "host", 50, true), "survivor", kSurvivorSteps);
-  const std::string victim_config = sides.config("host", "peer", 20, true);
+  auto survivor =
+      sides.start(sides.side(kSide, "peer", "host", 50, true), "survivor", kSurvivorSteps);
+  const std::string victim_config = sides.side(kSide, "host", "peer", 20, true);
   auto victim = sides.start(victim_config, "victim");
   std::this_thread::sleep_for(3s);
   victim->signal(SIGKILL);
   REQUIRE(victim->wait(10s));
   std::this_thread::sleep_for(1500ms);
   victim = sides.start(victim_config, "victim_again");
-  const auto status = survivor->wait(30s);
-  REQUIRE(status);
-  CHECK(*status == 0);
-  victim->signal(SIGTERM);
-  CHECK(victim->wait(20s));
+  check_exit(*survivor, 30s);
+  CHECK(victim->stop(SIGTERM, 20s));
 
   const auto trace = read_trace(sides.dir.file("survivor.jsonl"));
   CHECK(trace.size() == kSurvivorSteps);

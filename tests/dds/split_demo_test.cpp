@@ -65,15 +65,11 @@ TEST_CASE("the split soccer demo kicks the ball and scores a goal", "[dds][proce
                dir.file("motion.out"));
   Child strategy(arbiter_run(dir.file("strategy.yaml"), 150, "", /*quiet=*/false),
                  dir.file("strategy.out"));
-  const auto motion_status = motion.wait(60s);
-  const auto strategy_status = strategy.wait(20s);
+  check_exit(motion, 60s);
+  check_exit(strategy, 20s);
   const std::string motion_output = motion.output();
   INFO(motion_output);
   INFO(strategy.output());
-  REQUIRE(motion_status);
-  REQUIRE(strategy_status);
-  CHECK(*motion_status == 0);
-  CHECK(*strategy_status == 0);
   CHECK(std::regex_search(motion_output, std::regex("world: ball kicked[\\s\\S]*world: goal!")));
   // The single-process demo's outcome: one kick, one goal.
   CHECK(motion_output.find("world: ball kicked (1 time)") != std::string::npos);
@@ -94,14 +90,21 @@ TEST_CASE("the motion process stands at once when the strategy process stops or 
   std::filesystem::copy_file(kSplitDir + "cyclonedds-loopback.xml",
                              dir.file("cyclonedds-loopback.xml"));
   const auto zero = nlohmann::json::array({0.0, 0.0, 0.0});
-  // The walk commands the motion process received (written), from the strategy's first on.
-  const auto received = [&](const std::string& trace) {
+  // The walk commands the motion process received (written) in `trace`, from the strategy's
+  // first on: the last is the safe gait, the one before it made the robot walk, and the safe one
+  // arrived in the next motion step or so, not after the 0.3 s hold timeout (30 steps). Returns
+  // the step it arrived in.
+  const auto check_stood_at_once = [&](const std::string& trace) {
     std::vector<std::pair<std::uint64_t, nlohmann::json>> commands;
     for (const auto& record : read_trace(trace)) {
       const auto& command = record["actuators"]["walk_command"];
       if (command["written"] == true) commands.emplace_back(record["step"], command["value"]);
     }
-    return commands;
+    REQUIRE(commands.size() >= 2);
+    CHECK(commands.back().second == zero);
+    CHECK(commands[commands.size() - 2].second != zero);
+    CHECK(commands.back().first - commands[commands.size() - 2].first <= 15);
+    return commands.back().first;
   };
 
   SECTION("at the end of its steps") {
@@ -114,16 +117,10 @@ TEST_CASE("the motion process stands at once when the strategy process stops or 
     REQUIRE(motion.wait(20s) == 0);
     const auto strategy_trace = read_trace(dir.file("strategy.jsonl"));
     REQUIRE(strategy_trace.back()["safe"] == true);
-    const auto commands = received(dir.file("motion.jsonl"));
     INFO(motion.output());
-    REQUIRE(commands.size() >= 2);
-    // The last command is the safe gait; the one before it made the robot walk.
-    CHECK(commands.back().second == zero);
-    CHECK(commands[commands.size() - 2].second != zero);
-    // It arrives in the next motion step or so, not after the 0.3 s hold timeout (30 steps).
-    CHECK(commands.back().first - commands[commands.size() - 2].first <= 15);
+    const auto safe_step = check_stood_at_once(dir.file("motion.jsonl"));
     const auto motion_trace = read_trace(dir.file("motion.jsonl"));
-    const auto& at = motion_trace[commands.back().first - 1];
+    const auto& at = motion_trace[safe_step - 1];
     CHECK(at["actuators"]["gait_velocity"]["value"] == zero);
   }
 
@@ -152,14 +149,9 @@ TEST_CASE("the motion process stands at once when the strategy process stops or 
                 dir.file("curl.out"));
     REQUIRE(pause.wait(10s) == 0);
     REQUIRE(motion.wait(20s) == 0);
-    strategy.signal(SIGTERM);
-    REQUIRE(strategy.wait(10s) == 0);
-    const auto commands = received(dir.file("motion.jsonl"));
+    REQUIRE(strategy.stop(SIGTERM, 10s) == 0);
     INFO(strategy.output());
-    REQUIRE(commands.size() >= 2);
-    CHECK(commands.back().second == zero);
-    CHECK(commands[commands.size() - 2].second != zero);
-    CHECK(commands.back().first - commands[commands.size() - 2].first <= 15);
+    check_stood_at_once(dir.file("motion.jsonl"));
     CHECK(strategy.output().find("safe values output: gait_velocity = [0.0, 0.0, 0.0]") !=
           std::string::npos);
   }

@@ -116,6 +116,18 @@ bool feed_from_recording(Model& model, const std::vector<const ClassInfo*>& befo
   return diagnostics.error_count() == errors;
 }
 
+/// A failure in step `step`, reported at `location`.
+ScenarioFailure failure_at(const SourceLocation& location, std::string code, std::string message,
+                           std::uint64_t step, std::string explanation = {}) {
+  ScenarioFailure failure;
+  failure.diagnostic.location = location;
+  failure.diagnostic.code = std::move(code);
+  failure.diagnostic.message = std::move(message);
+  failure.step = step;
+  failure.explanation = std::move(explanation);
+  return failure;
+}
+
 }  // namespace
 
 ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
@@ -187,37 +199,24 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
   const std::string text = trace.str();
   for (const auto& failed : checks.failures()) {
     const Expectation& expectation = scenario.expectations[failed.expectation];
-    ScenarioFailure failure;
-    failure.diagnostic.location = expectation.target.location;
-    failure.diagnostic.code = "expectation";
-    failure.diagnostic.message = failed.message;
-    failure.step = failed.step;
-    failure.explanation = explain_at(manager.program(), text, failed.step, failed.explain);
-    if (failed.explain.empty()) {
-      failure.explanation = fmt::format("no behaviour that writes '{}' was active at step {}\n",
-                                        expectation.target.text, failed.step);
-    }
-    result.failures.push_back(std::move(failure));
+    result.failures.push_back(
+        failure_at(expectation.target.location, "expectation", failed.message, failed.step,
+                   failed.explain.empty()
+                       ? fmt::format("no behaviour that writes '{}' was active at step {}\n",
+                                     expectation.target.text, failed.step)
+                       : explain_at(manager.program(), text, failed.step, failed.explain)));
   }
   for (const auto& failed : traces.failures()) {
     const TraceExpectation& expectation = scenario.trace_expectations[failed.expectation];
-    ScenarioFailure failure;
-    failure.diagnostic.location = expectation.file.location;
-    failure.diagnostic.code = "expectation";
-    failure.diagnostic.message = failed.message;
-    failure.step = failed.step;
-    failure.explanation = failed.summary;
-    result.failures.push_back(std::move(failure));
+    result.failures.push_back(failure_at(expectation.file.location, "expectation", failed.message,
+                                         failed.step, failed.summary));
   }
   if (manager.stopped()) {
-    ScenarioFailure failure;
-    failure.diagnostic.location = scenario.config.location;
-    failure.diagnostic.code = "run-stopped";
-    failure.diagnostic.message =
-        fmt::format("expected {} steps, got a run that stopped at step {}: {}", steps,
-                    manager.steps(), manager.stop_reason());
-    failure.step = manager.steps();
-    result.failures.push_back(std::move(failure));
+    result.failures.push_back(
+        failure_at(scenario.config.location, "run-stopped",
+                   fmt::format("expected {} steps, got a run that stopped at step {}: {}", steps,
+                               manager.steps(), manager.stop_reason()),
+                   manager.steps()));
   }
   result.status =
       result.failures.empty() ? ScenarioResult::Status::kPassed : ScenarioResult::Status::kFailed;

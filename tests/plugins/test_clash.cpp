@@ -1,4 +1,4 @@
-// Registers clash.Same, as test_clash_b does too.
+// Registers clash.Same. Built twice, as test_clash_a and test_clash_b: two plugins that clash.
 
 #include "arbiter/plugin.hpp"
 
