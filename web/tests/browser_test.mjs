@@ -1,5 +1,5 @@
 // The web view in a real browser: headless Chromium driven by playwright-core.
-// Run through tests/web/run.sh (CTest label `browser`), which sets:
+// Run through web/tests/run.sh (CTest label `browser`), which sets:
 //   ARBITER         the arbiter binary
 //   ARBITER_SOURCE  the source tree (for the configs)
 //   CHROMIUM        the browser (Debian's /usr/bin/chromium)
@@ -307,7 +307,7 @@ async function overlapsAtEveryStep(page) {
 }
 
 for (const [config, what] of [[soccer, 'the soccer demo'], ['tests/data/valid/twin.yaml', 'a config of two behaviour layers'],
-                              [paper, 'the paper\'s config'], ['tests/web/crowded.yaml', 'a crowded config of long names and wide arcs']]) {
+                              [paper, 'the paper\'s config'], ['web/tests/crowded.yaml', 'a crowded config of long names and wide arcs']]) {
   test(`no label lies under an inhibition arc: ${what}`, async () => {
     const trace = path.join(scratch, `${path.basename(config)}.jsonl`);
     execFileSync(arbiter, ['run', config, '--steps', '40', '--trace', trace, '-q'], {cwd: source});
@@ -390,7 +390,7 @@ test('an actuator value nobody wrote is drawn as held, since the step after its 
 
 test('the live page marks held values, and says when it cannot know since when', async () => {
   // 500 steps at 250 Hz; target_position_... is written in steps 1 and 2 only, kick in step 3.
-  const crowded = 'tests/web/crowded.yaml';
+  const crowded = 'web/tests/crowded.yaml';
   const {url} = await serve(['run', crowded, '--serve', '0', '--steps', '500', '-q']);
   const page = await open(url);
   await page.waitForSelector('#status.finished');
@@ -401,7 +401,9 @@ test('the live page marks held values, and says when it cannot know since when',
   assert.equal(await speed.getAttribute('class'), 'port actuator written');
   // A page that has seen the run from step 1 knows; one that connected later, and was sent the
   // last 300 steps, does not.
-  const first = await page.evaluate(() => view.records[0].step);
+  // The first step the page has: its timelines start there.
+  const firstStep = async () => Number((await page.textContent('#timeline-range')).match(/^steps (\d+) to/)[1]);
+  const first = await firstStep();
   if (first === 1) {
     assert.equal(await target.getAttribute('data-held-since'), '3');
     assert.equal(await kick.getAttribute('data-held-since'), '4');
@@ -409,7 +411,7 @@ test('the live page marks held values, and says when it cannot know since when',
   await page.reload();
   await page.waitForSelector('body[data-ready="true"]');
   await waitForStep(page, 500);
-  assert.equal(await page.evaluate(() => view.records[0].step), 201);
+  assert.equal(await firstStep(), 201);
   assert.equal(await target.getAttribute('class'), 'port actuator held');
   assert.equal(await target.getAttribute('data-held-since'), '<201');
   assert.match(await target.locator('.value').textContent(), /held since before step 201$/);
