@@ -221,7 +221,8 @@ export class GraphView {
           const about = `${actuator.name}: ${actuator.type}${actuator.aggregate ? ', aggregate' : ''}; written by ${actuator.writers.join(', ') || 'the interface'}`;
           const title = el('title', {}, g);
           title.textContent = about;
-          actuatorAt.set(actuator.name, {x: x + 12 + size.actuatorW, y: y + (PORT_H - 4) / 2, layerIndex: index});
+          actuatorAt.set(actuator.name, {x: x + 12 + size.actuatorW, y: y + (PORT_H - 4) / 2, right: x + width,
+                                         layerIndex: index});
           this.ports.set(actuator.name, {group: g, value, title, about});
           y += PORT_H;
         }
@@ -239,8 +240,11 @@ export class GraphView {
       if (!source) continue;
       let d;
       if (source.layerIndex < sensor.layerIndex) {
-        const bend = Math.max(40, Math.abs(sensor.x - source.x) / 3);
-        d = `M${source.x},${source.y} C${source.x + bend},${source.y} ${sensor.x - bend},${sensor.y} ${sensor.x},${sensor.y}`;
+        // Straight out of its column (under the behaviours ELK may have put right of the
+        // actuators), then a curve to the sensor.
+        const bend = Math.max(40, Math.abs(sensor.x - source.right) / 3);
+        d = `M${source.x},${source.y} H${source.right} C${source.right + bend},${source.y} ` +
+            `${sensor.x - bend},${sensor.y} ${sensor.x},${sensor.y}`;
       } else {
         const lane = lanes++;
         const below = height + 4 + 7 * lane;
