@@ -5,8 +5,10 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <list>
 #include <sstream>
 #include <tuple>
@@ -196,18 +198,36 @@ WebServer::WebServer() : server_(std::make_unique<httplib::Server>()) {
   // Idle keep-alive connections hold a thread; a short timeout frees it (and speeds up stop()).
   server_->set_keep_alive_timeout(1);
   server_->set_read_timeout(kReadTimeoutSeconds);
+  // To develop the web app: its files from a directory, read at every request (docs/live_view.md).
+  const char* dir = std::getenv("ARBITER_WEB_DIR");
+  const std::string web_dir = dir != nullptr ? dir : "";
   for (std::size_t i = 0; i < web::kAssetCount; ++i) {
     const web::Asset& asset = web::kAssets[i];
-    server_->Get(asset.path, [&asset](const httplib::Request&, httplib::Response& response) {
-      response.set_header("Cache-Control", "no-cache");
-      // From a content provider, as it is: httplib would compress a body set whole, and its
-      // Brotli takes seconds for the bundle (ELK is 1.5 MB).
-      response.set_content_provider(
-          asset.size, asset.type,
-          [&asset](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
-            return sink.write(reinterpret_cast<const char*>(asset.data) + offset, length);
-          });
-    });
+    server_->Get(
+        asset.path, [&asset, web_dir](const httplib::Request&, httplib::Response& response) {
+          response.set_header("Cache-Control", "no-cache");
+          std::string_view body(reinterpret_cast<const char*>(asset.data), asset.size);
+          std::shared_ptr<std::string> file_body;
+          if (!web_dir.empty()) {
+            const std::string path =
+                web_dir + (std::string_view(asset.path) == "/" ? "/index.html" : asset.path);
+            std::ifstream file(path, std::ios::binary);
+            if (!file) {
+              reply_text(response, 404, fmt::format("ARBITER_WEB_DIR: cannot read {}\n", path));
+              return;
+            }
+            file_body = std::make_shared<std::string>(std::istreambuf_iterator<char>(file),
+                                                      std::istreambuf_iterator<char>());
+            body = *file_body;
+          }
+          // From a content provider, as it is: httplib would compress a body set whole, and its
+          // Brotli takes seconds for the bundle (ELK is 1.5 MB).
+          response.set_content_provider(
+              body.size(), asset.type,
+              [body, file_body](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                return sink.write(body.data() + offset, length);
+              });
+        });
   }
 }
 

@@ -1,10 +1,14 @@
 // The server of a binary built without the web app (-DARBITER_WEB=OFF, or no npm or esbuild, or
 // the npm registry out of reach): it serves a page that says why, and how to get the app, and
 // the CLI notes it. Linked with the assets web/bundle.cmake writes when the app is left out.
+// And ARBITER_WEB_DIR, which serves the app's files from a directory instead.
 
 #include <httplib.h>
+#include <stdlib.h>
 
 #include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "serve.hpp"
@@ -44,4 +48,27 @@ TEST_CASE("a build without the web app serves a page that says so, and why", "[w
   CHECK(web_app_note() ==
         "note: this arbiter was built without its web app (the build was configured with "
         "-DARBITER_WEB=OFF): the page says so, and docs/live_view.md tells how to build it\n");
+}
+
+TEST_CASE("ARBITER_WEB_DIR serves the web app's files from a directory, read at each request",
+          "[web]") {
+  const std::string dir = std::filesystem::temp_directory_path() / "arbiter-web-dir-test";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/index.html") << "<p>first</p>";
+  REQUIRE(setenv("ARBITER_WEB_DIR", dir.c_str(), 1) == 0);
+  WebServer server;
+  REQUIRE(unsetenv("ARBITER_WEB_DIR") == 0);
+  std::string error;
+  REQUIRE(server.start(ServeAddress{}, LiveAccess{"fallback-token", false}, error));
+  const std::string url = server.url();
+  httplib::Client client("127.0.0.1", std::stoi(url.substr(url.rfind(':') + 1)));
+  CHECK(client.Get("/")->body == "<p>first</p>");
+  // An edit (a bundler's watch mode writing the directory) shows at the next load.
+  std::ofstream(dir + "/index.html") << "<p>second</p>";
+  CHECK(client.Get("/")->body == "<p>second</p>");
+  std::filesystem::remove_all(dir);
+  const auto missing = client.Get("/");
+  CHECK(missing->status == 404);
+  CHECK(contains(missing->body, "ARBITER_WEB_DIR: cannot read " + dir + "/index.html"));
+  server.stop();
 }
