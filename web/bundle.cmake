@@ -7,7 +7,7 @@
 # When the app cannot be built (LEFT_OUT says why the configure step left it out, or npm ci
 # fails: no network, no registry), OUTPUT holds a page that says so instead, and the build goes
 # on. A failed npm ci leaves WORK_DIR/bundle.stamp unwritten, so that the next build tries again.
-cmake_minimum_required(VERSION 3.21)
+cmake_minimum_required(VERSION 3.25)
 
 # Writes OUTPUT: the files NAMES (paths on the server) from FILES, with their TYPES, and
 # `left_out` (empty when the app is built).

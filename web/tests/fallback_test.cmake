@@ -5,6 +5,7 @@
 # npm ci runs in an empty DIR against a registry at a closed port with an empty cache: the script
 # must warn, succeed, and write the page that says why, and leave no stamp so that the next build
 # tries again.
+cmake_minimum_required(VERSION 3.25)
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}/cache")
 execute_process(
