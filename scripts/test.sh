@@ -154,7 +154,7 @@ print_summary() {
 }
 
 # Tools only tests use: Chromium, Node.js and npm for the browser tests of the web view
-# (tests/web/) and the schema's ajv test (tests/schema/), xmllint for the plot test. Looked for by command, so that a Node.js installed
+# (web/tests/) and the schema's ajv test (tests/schema/), xmllint for the plot test. Looked for by command, so that a Node.js installed
 # some other way counts.
 test_tools=()
 command -v chromium >/dev/null || test_tools+=(chromium)

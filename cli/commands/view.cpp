@@ -145,6 +145,7 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     err << fmt::format("arbiter view: {}\n", error);
     return 2;
   }
+  err << web_app_note();
   err << exposure_warning(address, "read the trace (with its token)");
   out << fmt::format("viewing {} ({} steps of {}) at {}\nCtrl-C stops.\n", trace_path,
                      trace->records.size(), program.name, server.page_url())

@@ -5,8 +5,10 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <list>
 #include <sstream>
 #include <tuple>
@@ -15,7 +17,7 @@
 #include "arbiter/explain.hpp"
 #include "arbiter/trace.hpp"
 #include "commands/timing.hpp"
-#include "web/assets.hpp"
+#include "server/web_assets.hpp"
 
 namespace arbiter::cli {
 
@@ -196,15 +198,37 @@ WebServer::WebServer() : server_(std::make_unique<httplib::Server>()) {
   // Idle keep-alive connections hold a thread; a short timeout frees it (and speeds up stop()).
   server_->set_keep_alive_timeout(1);
   server_->set_read_timeout(kReadTimeoutSeconds);
-  const auto asset = [this](const char* path, const char* text, const char* type) {
-    server_->Get(path, [text, type](const httplib::Request&, httplib::Response& response) {
-      response.set_header("Cache-Control", "no-cache");
-      response.set_content(text, type);
-    });
-  };
-  asset("/", web::kIndexHtml, "text/html; charset=utf-8");
-  asset("/app.js", web::kAppJs, "text/javascript; charset=utf-8");
-  asset("/style.css", web::kStyleCss, "text/css; charset=utf-8");
+  // To develop the web app: its files from a directory, read at every request (docs/live_view.md).
+  const char* dir = std::getenv("ARBITER_WEB_DIR");
+  const std::string web_dir = dir != nullptr ? dir : "";
+  for (std::size_t i = 0; i < web::kAssetCount; ++i) {
+    const web::Asset& asset = web::kAssets[i];
+    server_->Get(
+        asset.path, [&asset, web_dir](const httplib::Request&, httplib::Response& response) {
+          response.set_header("Cache-Control", "no-cache");
+          std::string_view body(reinterpret_cast<const char*>(asset.data), asset.size);
+          std::shared_ptr<std::string> file_body;
+          if (!web_dir.empty()) {
+            const std::string path =
+                web_dir + (std::string_view(asset.path) == "/" ? "/index.html" : asset.path);
+            std::ifstream file(path, std::ios::binary);
+            if (!file) {
+              reply_text(response, 404, fmt::format("ARBITER_WEB_DIR: cannot read {}\n", path));
+              return;
+            }
+            file_body = std::make_shared<std::string>(std::istreambuf_iterator<char>(file),
+                                                      std::istreambuf_iterator<char>());
+            body = *file_body;
+          }
+          // From a content provider, as it is: httplib would compress a body set whole, and its
+          // Brotli takes seconds for the bundle (ELK is 1.5 MB).
+          response.set_content_provider(
+              body.size(), asset.type,
+              [body, file_body](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+                return sink.write(body.data() + offset, length);
+              });
+        });
+  }
 }
 
 WebServer::~WebServer() {
@@ -285,8 +309,10 @@ void WebServer::guard(const LiveAccess& access) {
     if (given.empty()) given = request.get_header_value("X-Arbiter-Token");
     if (given.empty()) given = cookie_value(request.get_header_value("Cookie"), cookie);
     const bool authorised = same_token(given, access.token);
-    const bool page =
-        request.path == "/" || request.path == "/app.js" || request.path == "/style.css";
+    bool page = false;
+    for (std::size_t i = 0; i < web::kAssetCount; ++i) {
+      page = page || request.path == web::kAssets[i].path;
+    }
     if (page) {
       // The page loads without the token (it then says that one is needed); opened with it, it
       // keeps it in a cookie that only this origin sends, and no script reads.
@@ -330,6 +356,14 @@ std::pair<int, std::string> explanation_reply(const Explanation& explanation) {
   return {explanation.status == Status::kNotFound ? 404 : 422, printable(text, true)};
 }
 
+std::string web_app_note() {
+  if (*web::kLeftOut == '\0') return "";
+  return fmt::format(
+      "note: this arbiter was built without its web app ({}): the page says so, and "
+      "docs/live_view.md tells how to build it\n",
+      web::kLeftOut);
+}
+
 std::string exposure_warning(const ServeAddress& address, std::string_view what) {
   if (address.loopback()) return "";
   return fmt::format("serving on {}, not only to this machine: anyone who can reach it can {}\n",
@@ -368,6 +402,7 @@ std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused,
     err << fmt::format("arbiter run: --serve: {}\n", error);
     return nullptr;
   }
+  err << web_app_note();
   err << exposure_warning(address, access.readonly ? "watch the run (with its token)"
                                                    : "watch, pause and step the run (with its "
                                                      "token)");

@@ -183,5 +183,8 @@ std::pair<int, std::string> explanation_reply(const Explanation& explanation);
 
 /// The warning for an address other machines can reach, or "" for a loopback one.
 std::string exposure_warning(const ServeAddress& address, std::string_view what);
+/// A note for the user when this binary was built without the web app (cli/server/web_assets.hpp),
+/// else "".
+std::string web_app_note();
 
 }  // namespace arbiter::cli

@@ -1,4 +1,4 @@
-# Sourced by the node-driven tests' run.sh scripts (tests/web, tests/lsp, tests/mcap, tests/schema).
+# Sourced by the node-driven tests' run.sh scripts (web/tests, tests/lsp, tests/mcap, tests/schema).
 # npm_ci_into PACKAGE_DIR WORK_DIR INSTALLED: installs PACKAGE_DIR's pinned packages into WORK_DIR
 # (under the build directory), which keeps node_modules between runs: `npm ci` runs only when
 # package-lock.json changed or INSTALLED (a path under WORK_DIR) is missing, so a second run

@@ -1,0 +1,44 @@
+// Arbiter's web app. The server's /info says which view to start; each view draws a run with the
+// shared graph, timeline and explain modules (run_page.js). A new view (an editor of configs, a
+// comparison of two runs) is a module in views/ and an entry in VIEWS, with the mode its server
+// reports in /info.
+import {setStatus} from './panels.js';
+import {live} from './views/live.js';
+import {trace} from './views/trace.js';
+
+const VIEWS = {
+  live: {badge: 'live', start: live},      // arbiter run --serve
+  trace: {badge: 'recorded', start: trace},  // arbiter view
+};
+
+async function start() {
+  const reply = await fetch('info');
+  if (reply.status === 403) {
+    // The server lets in only the holder of its token (the URL arbiter printed).
+    setStatus('token needed', 'lost');
+    const note = document.getElementById('token-needed');
+    note.textContent = await reply.text();
+    note.hidden = false;
+    return;
+  }
+  // The server has put the token in a cookie: keep it out of the address bar and history, and keep
+  // the rest of the address (?step=N).
+  const params = new URLSearchParams(location.search);
+  if (params.has('token')) {
+    params.delete('token');
+    const rest = params.toString();
+    history.replaceState(null, '', location.pathname + (rest ? `?${rest}` : ''));
+  }
+  const info = await reply.json();
+  const view = VIEWS[info.mode];
+  if (!view) {
+    setStatus(`this page cannot show a server in mode '${info.mode}'`, 'lost');
+    return;
+  }
+  document.getElementById('mode').textContent = view.badge;
+  document.body.dataset.mode = info.mode;
+  await view.start(info);
+  document.body.dataset.ready = 'true';
+}
+
+start();

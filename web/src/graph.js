@@ -1,0 +1,386 @@
+// The graph of a program (the JSON dump): a column per layer, in execution order, with its
+// sensors on top, its behaviours laid out by ELK's layered algorithm with the inhibitions as
+// edges (inhibitor above inhibited), and its actuators below; actuator -> sensor flows between
+// the columns. Boxes are sized to the text they hold, measured in the page's font, and ELK keeps
+// edges off the boxes, so no label lies under an edge.
+import ELK from 'elkjs/lib/elk.bundled.js';
+
+import {colour, el, formatValue, text} from './dom.js';
+import {levelsOf} from './records.js';
+
+const COLUMN = 270;   // the narrowest width of a layer's column
+const BOX_W = 168;    // the narrowest behaviour box
+const BOX_H = 40;
+const PORT_H = 22;
+const BAR = 5;        // half the inhibited end's bar, and how far before the box it is
+// Values as wide as most of each type's, to size actuator rows by.
+const TYPICAL_VALUE = {bool: 'false', int: '-12345', double: '-12.345', vec2: '[-1.234, -1.234]',
+                       vec3: '[-1.234, -1.234, -1.234]', string: '"a short text"', other: '{"a": 1, "b": 2}'};
+const INHIBITORS_ROOM = 260;  // a list of inhibitors wider than this is wrapped
+
+// ELK's own build without a web worker: layouts of a few dozen boxes take milliseconds.
+const elk = new ELK();
+const LAYOUT = {
+  'elk.algorithm': 'layered',
+  'elk.direction': 'DOWN',
+  'elk.edgeRouting': 'ORTHOGONAL',
+  // Behaviours that no inhibition orders stay in execution order, left to right.
+  'elk.layered.considerModelOrder.strategy': 'NODES_AND_EDGES',
+  'elk.spacing.nodeNode': '20',
+  'elk.layered.spacing.nodeNodeBetweenLayers': '34',
+  'elk.spacing.edgeNode': '14',
+  'elk.layered.spacing.edgeNodeBetweenLayers': '14',
+  'elk.spacing.edgeEdge': '10',
+  'elk.padding': '[top=0,left=0,bottom=0,right=0]',
+};
+
+// Widths of text as the page draws it: a hidden probe inside `svg` carries the classes the CSS
+// sizes text by (`.behaviour .name`, `.port text`, ...).
+function textMeasure(svg) {
+  const probe = el('g', {visibility: 'hidden'}, svg);
+  const measure = (content, groupClass, textClass) => {
+    const group = el('g', groupClass ? {class: groupClass} : {}, probe);
+    const node = text('text', textClass ? {class: textClass, x: 0, y: 0} : {x: 0, y: 0}, content, group);
+    const width = node.getComputedTextLength();
+    group.remove();
+    return width;
+  };
+  measure.done = () => probe.remove();
+  return measure;
+}
+
+// Wraps lists of inhibitors of a layer's behaviours ("⊣ a, b, c") into lines of at most `room`
+// pixels, by the widths of their names. A list that is a part of another, in the same order,
+// never takes more lines than it: so the lines a box has for all of its inhibitors are enough
+// for any of them.
+function inhibitorWrap(layer, measure) {
+  const widthOf = new Map(layer.behaviours.map((behaviour) => [behaviour.name, measure(behaviour.name, 'behaviour', 'level')]));
+  const x = measure('x', 'behaviour', 'level');
+  const separator = measure('x, x', 'behaviour', 'level') - 2 * x;
+  const indent = measure('⊣ x', 'behaviour', 'level') - x;
+  const slack = 2 + separator;  // for the comma that ends a line, and rounding
+  return {
+    indent,
+    width: (list) => indent + list.reduce((sum, name) => sum + widthOf.get(name), 0) + separator * (list.length - 1) + slack,
+    widest: (list) => indent + Math.max(...list.map((name) => widthOf.get(name))) + slack,
+    lines(list, room) {
+      const lines = [];
+      let width = 0;
+      for (const name of list) {
+        const w = widthOf.get(name);
+        if (lines.length && width + separator + w + slack <= room) {
+          lines[lines.length - 1].push(name);
+          width += separator + w;
+        } else {
+          lines.push([name]);
+          width = indent + w;
+        }
+      }
+      return lines;
+    },
+  };
+}
+
+// The sizes of a layer's boxes and rows, from the widths of what they will hold.
+function sizeLayer(layer, measure) {
+  // Each behaviour's possible inhibitors (declared and implied), in execution order.
+  const rowIndex = new Map(layer.behaviours.map((behaviour, row) => [behaviour.name, row]));
+  const inhibitorsOf = new Map(layer.behaviours.map((behaviour) => [behaviour.name, []]));
+  for (const inhibition of layer.inhibitions) inhibitorsOf.get(inhibition.inhibited)?.push(inhibition.inhibitor);
+  for (const list of inhibitorsOf.values()) list.sort((a, b) => rowIndex.get(a) - rowIndex.get(b));
+  let boxW = BOX_W;
+  for (const behaviour of layer.behaviours) {
+    boxW = Math.max(boxW, 34 + measure(behaviour.name, 'behaviour', 'name') + 10,
+                    34 + measure('activation 0.00 of 0.00', 'behaviour', 'level') + 10);
+  }
+  // The active inhibitors are listed under the levels, wrapped to the box: it is as wide as the
+  // longest list needs, up to INHIBITORS_ROOM, and has as many lines as the longest list takes at
+  // that width.
+  const wrap = inhibitorWrap(layer, measure);
+  let room = boxW - 44;
+  for (const list of inhibitorsOf.values()) {
+    if (list.length) room = Math.max(room, Math.min(INHIBITORS_ROOM, wrap.width(list)), wrap.widest(list));
+  }
+  boxW = room + 44;
+  let sensorW = boxW;
+  for (const sensor of layer.sensors) sensorW = Math.max(sensorW, 8 + measure(sensor.name, 'port') + 10);
+  // An actuator's row holds its name, its value (as wide as a typical one of its type) and, when
+  // the value is held, since when.
+  const heldW = measure('held since step 12345', 'port', 'held-note');
+  const actuatorW = Math.max(0, ...layer.actuators.map((actuator) =>
+      Math.max(COLUMN - 44, 8 + measure(actuator.name, 'port') + 10 +
+               measure(TYPICAL_VALUE[actuator.type] || TYPICAL_VALUE.other, 'port', 'value') + 8 + heldW + 8)));
+  const titleW = Math.max(measure(layer.name, null, 'layer-title'),
+                          measure(layer.interface ? `interface ${layer.interface}` : 'normalised', null, 'layer-class'));
+  const heights = new Map(layer.behaviours.map((behaviour) =>
+      [behaviour.name, BOX_H + 12 * wrap.lines(inhibitorsOf.get(behaviour.name), room).length]));
+  const nameW = new Map(layer.actuators.map((actuator) => [actuator.name, measure(actuator.name, 'port')]));
+  return {rowIndex, wrap, room, boxW, sensorW, actuatorW, titleW, heights, nameW};
+}
+
+// ELK's layout of a layer's behaviours and inhibitions, at (0, 0).
+function layoutLayer(layer, size) {
+  return elk.layout({
+    id: 'layer',
+    layoutOptions: LAYOUT,
+    children: layer.behaviours.map((behaviour) =>
+      ({id: `b:${behaviour.name}`, width: size.boxW, height: size.heights.get(behaviour.name)})),
+    edges: layer.inhibitions.map((inhibition, index) =>
+      ({id: `i:${index}`, sources: [`b:${inhibition.inhibitor}`], targets: [`b:${inhibition.inhibited}`]})),
+  });
+}
+
+// The points of an ELK edge, offset by (dx, dy).
+function edgePoints(edge, dx, dy) {
+  const points = [];
+  for (const section of edge.sections || []) {
+    for (const p of [section.startPoint, ...(section.bendPoints || []), section.endPoint]) {
+      points.push({x: p.x + dx, y: p.y + dy});
+    }
+  }
+  return points;
+}
+
+export class GraphView {
+  /**
+   * @param {SVGSVGElement} svg
+   * @param {(key: string | null) => void} onHover called with 'layer/name' or null
+   */
+  constructor(svg, onHover) {
+    this.svg = svg;
+    this.onHover = onHover;
+    this.behaviours = new Map();  // 'layer/name' -> {group, rect, level, mark, name, inhibitors, ...}
+    this.ports = new Map();       // actuator name -> {group, value, title, about}
+    this.drawing = 0;
+  }
+
+  /**
+   * Lays `graph` out and draws it in place of what the SVG showed. False when a later call
+   * replaced it before its layout was done (a reload that followed closely).
+   */
+  async draw(graph) {
+    const drawing = ++this.drawing;
+    const measure = textMeasure(this.svg);
+    const sizes = graph.layers.map((layer) => sizeLayer(layer, measure));
+    measure.done();
+    const layouts = await Promise.all(graph.layers.map((layer, index) => layoutLayer(layer, sizes[index])));
+    if (drawing !== this.drawing) return false;
+    this.build(graph, sizes, layouts);
+    return true;
+  }
+
+  build(graph, sizes, layouts) {
+    const svg = this.svg;
+    this.behaviours.clear();
+    this.ports.clear();
+    svg.replaceChildren();
+    const measure = textMeasure(svg);
+    const edges = el('g', {class: 'edges'});
+    const flows = el('g', {class: 'flows'});
+    const sensorAt = new Map();    // 'layer/actuator' -> {x, y, ...}
+    const actuatorAt = new Map();  // actuator -> {x, y, layerIndex}
+    let height = 0;
+    let x = 10;
+    graph.layers.forEach((layer, index) => {
+      const size = sizes[index];
+      const layout = layouts[index];
+      const inner = Math.max(size.sensorW, layout.width || 0, size.actuatorW + 16, size.titleW);
+      const width = Math.max(COLUMN - 20, 12 + inner + 12);
+      const column = el('g', {class: 'layer', 'data-layer': layer.name}, svg);
+      const box = el('rect', {class: 'layer-box', x, y: 4, width, rx: 8}, column);
+      text('text', {class: 'layer-title', x: x + 12, y: 24}, layer.name, column);
+      if (layer.interface) text('text', {class: 'layer-class', x: x + 12, y: 40}, `interface ${layer.interface}`, column);
+      else if (layer.normalise) text('text', {class: 'layer-class', x: x + 12, y: 40}, 'normalised', column);
+      let y = 50;
+      if (layer.sensors.length) {
+        text('text', {class: 'section-label', x: x + 12, y: y + 8}, 'sensors', column);
+        y += 14;
+        for (const sensor of layer.sensors) {
+          const g = el('g', {class: 'port sensor', 'data-sensor': `${layer.name}/${sensor.name}`}, column);
+          el('rect', {x: x + 12, y, width: size.sensorW, height: PORT_H - 4}, g);
+          text('text', {x: x + 20, y: y + 13}, sensor.name, g);
+          sensorAt.set(`${layer.name}/${sensor.name}`, {x: x + 12, y: y + (PORT_H - 4) / 2, lastStep: sensor.last_step,
+                                                        from: sensor.layer, layerIndex: index});
+          y += PORT_H;
+        }
+        y += 6;
+      }
+      if (layer.behaviours.length) {
+        y += 4;
+        this.buildBehaviours(layer, size, layout, x + 12, y, column, edges);
+        y += layout.height + 8;
+      }
+      if (layer.actuators.length) {
+        text('text', {class: 'section-label', x: x + 12, y: y + 8}, 'actuators', column);
+        y += 14;
+        for (const actuator of layer.actuators) {
+          const g = el('g', {class: 'port actuator', 'data-actuator': actuator.name}, column);
+          el('rect', {x: x + 12, y, width: size.actuatorW, height: PORT_H - 4}, g);
+          text('text', {x: x + 20, y: y + 13}, actuator.name, g);
+          const value = text('text', {class: 'value', x: x + 20 + size.nameW.get(actuator.name) + 10, y: y + 13}, '', g);
+          const about = `${actuator.name}: ${actuator.type}${actuator.aggregate ? ', aggregate' : ''}; written by ${actuator.writers.join(', ') || 'the interface'}`;
+          const title = el('title', {}, g);
+          title.textContent = about;
+          actuatorAt.set(actuator.name, {x: x + 12 + size.actuatorW, y: y + (PORT_H - 4) / 2, right: x + width,
+                                         layerIndex: index});
+          this.ports.set(actuator.name, {group: g, value, title, about});
+          y += PORT_H;
+        }
+      }
+      box.setAttribute('height', y + 8);
+      height = Math.max(height, y + 16);
+      x += width + 20;
+    });
+    measure.done();
+    // A flow to an earlier (or the same) layer runs back under the columns, each in a lane of its
+    // own, so that it does not cross the graph.
+    let lanes = 0;
+    for (const [key, sensor] of sensorAt) {
+      const source = actuatorAt.get(key.split('/')[1]);
+      if (!source) continue;
+      let d;
+      if (source.layerIndex < sensor.layerIndex) {
+        // Straight out of its column (under the behaviours ELK may have put right of the
+        // actuators), then a curve to the sensor.
+        const bend = Math.max(40, Math.abs(sensor.x - source.right) / 3);
+        d = `M${source.x},${source.y} H${source.right} C${source.right + bend},${source.y} ` +
+            `${sensor.x - bend},${sensor.y} ${sensor.x},${sensor.y}`;
+      } else {
+        const lane = lanes++;
+        const below = height + 4 + 7 * lane;
+        const out = source.x + 8 + 3 * lane;
+        const into = Math.max(2, sensor.x - 6 - 3 * lane);
+        d = `M${source.x},${source.y} H${out} V${below} H${into} V${sensor.y} H${sensor.x}`;
+      }
+      const path = el('path', {class: `flow${sensor.lastStep ? ' last-step' : ''}`, d, 'data-flow': key}, flows);
+      el('title', {}, path).textContent = `${sensor.from} → ${key}${sensor.lastStep ? ' (last step\'s value)' : ''}`;
+    }
+    height += 7 * lanes + 8;
+    svg.appendChild(edges);
+    svg.appendChild(flows);
+    svg.setAttribute('width', x);
+    svg.setAttribute('height', height);
+  }
+
+  // A layer's behaviours where ELK put them, offset by (left, top), and its inhibitions as ELK
+  // routed them, drawn as the Graphviz dump draws them: a double line for a chaining inhibition,
+  // a single one for a non-chaining one, dashed for one implied by chaining; a bar across the
+  // inhibited end, as in the paper's figures.
+  buildBehaviours(layer, size, layout, left, top, column, edges) {
+    const byId = new Map((layout.children || []).map((node) => [node.id, node]));
+    for (const behaviour of layer.behaviours) {
+      const key = `${layer.name}/${behaviour.name}`;
+      const node = byId.get(`b:${behaviour.name}`);
+      const bx = left + node.x;
+      const by = top + node.y;
+      const g = el('g', {class: 'behaviour', 'data-name': key, 'data-class': behaviour.class}, column);
+      const rect = el('rect', {x: bx, y: by, width: node.width, height: node.height, fill: colour(0)}, g);
+      const mark = text('text', {class: 'mark', x: bx + 8, y: by + 17}, '', g);
+      const name = text('text', {class: 'name', x: bx + 22, y: by + 17}, behaviour.name, g);
+      const level = text('text', {class: 'level', x: bx + 22, y: by + 32}, 'activation 0', g);
+      const lines = (node.height - BOX_H) / 12;
+      const inhibitors = lines ? text('text', {class: 'level inhibitors', x: bx + 22, y: by + 45}, '', g) : null;
+      el('title', {}, g).textContent = `${key} (${behaviour.class}), execution order ${behaviour.order}`;
+      g.addEventListener('mouseenter', () => this.onHover(key));
+      g.addEventListener('mouseleave', () => this.onHover(null));
+      this.behaviours.set(key, {group: g, rect, level, mark, name, inhibitors, order: size.rowIndex,
+                                wrap: (list) => size.wrap.lines(list, size.room), indent: size.wrap.indent});
+    }
+    const routed = new Map((layout.edges || []).map((edge) => [edge.id, edge]));
+    layer.inhibitions.forEach((inhibition, index) => {
+      const points = edgePoints(routed.get(`i:${index}`) || {}, left, top);
+      if (points.length < 2) return;
+      // The line stops at the bar, BAR before the box.
+      const end = points[points.length - 1];
+      const before = points[points.length - 2];
+      const length = Math.hypot(end.x - before.x, end.y - before.y) || 1;
+      const ux = (end.x - before.x) / length;
+      const uy = (end.y - before.y) / length;
+      end.x -= ux * BAR;
+      end.y -= uy * BAR;
+      const d = points.map((p, i) => `${i ? 'L' : 'M'}${p.x},${p.y}`).join(' ');
+      const kind = inhibition.implicit ? 'implicit' : inhibition.chaining ? 'chaining' : 'non-chaining';
+      const g = el('g', {class: `edge ${kind}`, 'data-kind': kind, 'data-layer': layer.name,
+                         'data-from': inhibition.inhibitor, 'data-to': inhibition.inhibited}, edges);
+      el('title', {}, g).textContent = inhibition.implicit
+          ? `implied by chaining ${inhibition.via.join(' => ')}`
+          : `${inhibition.inhibitor} ${inhibition.chaining ? '=>' : '->'} ${inhibition.inhibited}`;
+      if (kind === 'chaining') {
+        el('path', {class: 'edge-outer', d}, g);
+        el('path', {class: 'edge-inner', d}, g);
+      } else {
+        el('path', {class: `edge-line ${kind}`, d}, g);
+      }
+      el('line', {class: 'edge-line', x1: end.x - uy * BAR, y1: end.y + ux * BAR, x2: end.x + uy * BAR, y2: end.y - ux * BAR}, g);
+    });
+  }
+
+  /** Marks the hovered behaviour ('layer/name', or null). */
+  highlight(key) {
+    for (const [name, item] of this.behaviours) item.group.classList.toggle('hovered', name === key);
+  }
+
+  /** Shows `record` (one step): levels, activity, active inhibitors and actuator values. */
+  show(record) {
+    for (const [key, item] of this.behaviours) {
+      const levels = levelsOf(record, key) || {activation: 0, requested: 0, active: false, inhibited_by: []};
+      const activation = Number(levels.activation) || 0;
+      item.rect.setAttribute('fill', colour(activation));
+      item.group.setAttribute('data-activation', activation);
+      item.group.setAttribute('data-active', levels.active ? 'true' : 'false');
+      item.group.classList.toggle('active', !!levels.active);
+      item.group.classList.toggle('inhibited', !levels.active && levels.requested > 0);
+      item.mark.textContent = levels.active ? '●' : '';
+      const ink = activation > 0.55 ? '#fff' : '#1d2733';
+      item.name.setAttribute('fill', ink);
+      item.level.setAttribute('fill', ink);
+      item.level.textContent = `activation ${activation.toFixed(2)} of ${Number(levels.requested).toFixed(2)}`;
+      if (item.inhibitors) {
+        item.inhibitors.setAttribute('fill', ink);
+        item.inhibitors.replaceChildren();
+        const active = (levels.inhibited_by || []).filter((name) => item.order.has(name))
+            .sort((a, b) => item.order.get(a) - item.order.get(b));
+        item.wrap(active).forEach((line, index, lines) => {
+          const x = Number(item.inhibitors.getAttribute('x')) + (index ? item.indent : 0);
+          const words = (index ? '' : '⊣ ') + line.join(', ') + (index < lines.length - 1 ? ',' : '');
+          el('tspan', {x, dy: index ? 12 : 0}, item.inhibitors).textContent = words;
+        });
+      }
+    }
+    for (const [name, port] of this.ports) showActuator(port, record, name);
+  }
+}
+
+// An actuator nobody wrote in a step keeps its last value (docs/semantics.md, "Persistence"):
+// such a value is drawn dimmed, with the step since which it is held.
+function showActuator(port, record, name) {
+  const value = record.actuators ? record.actuators[name] : undefined;
+  const held = value && !value.written;
+  port.value.replaceChildren(value ? formatValue(value.value) : '');
+  port.group.classList.toggle('written', !!(value && value.written));
+  port.group.classList.toggle('held', !!held);
+  let about = port.about;
+  if (value && value.written) {
+    port.group.removeAttribute('data-held-since');
+    about += `\nwritten in step ${record.step}`;
+  } else if (held) {
+    const since = record.held && record.held[name];
+    let note;
+    if (since && since.writtenAt !== null) {
+      note = `held since step ${since.writtenAt + 1}`;
+      about += `\nheld since step ${since.writtenAt + 1}: last written in step ${since.writtenAt}`;
+      port.group.setAttribute('data-held-since', since.writtenAt + 1);
+    } else if (since && since.knownFrom <= 1) {
+      note = 'default, never written';
+      about += '\nits default: not written since the run started';
+      port.group.setAttribute('data-held-since', 1);
+    } else {
+      const from = since ? since.knownFrom : record.step;
+      note = `held since before step ${from}`;
+      about += `\nheld: not written in steps ${from} to ${record.step} (the steps this page has)`;
+      port.group.setAttribute('data-held-since', `<${from}`);
+    }
+    el('tspan', {class: 'held-note', dx: 8}, port.value).textContent = note;
+  }
+  port.title.textContent = about;
+}

@@ -1,0 +1,48 @@
+// The trace view: a recorded run (`arbiter view`), with a slider through its steps.
+import {setStatus} from '../panels.js';
+import {RunPage} from '../run_page.js';
+
+// The index of the record of `step`, or of the nearest step the trace has.
+function indexOfStep(records, step) {
+  let best = 0;
+  records.forEach((record, index) => {
+    if (Math.abs(record.step - step) < Math.abs(records[best].step - step)) best = index;
+  });
+  return best;
+}
+
+/** @param {{step: number}} info the server's /info: the step to open at */
+export async function trace(info) {
+  const page = new RunPage();
+  document.getElementById('trace-controls').hidden = false;
+  setStatus('trace', 'trace');
+  const [graph, text] = await Promise.all([fetch('graph').then((r) => r.json()),
+                                           fetch('trace').then((r) => r.text())]);
+  const lines = text.split('\n').filter((line) => line.trim());
+  for (const line of lines.slice(1)) page.add(JSON.parse(line));
+  await page.setGraph(graph);
+  const records = page.records;
+  const scrub = document.getElementById('scrub');
+  scrub.min = 0;
+  scrub.max = Math.max(0, records.length - 1);
+  scrub.value = 0;
+  const go = (index) => {
+    index = Math.max(0, Math.min(records.length - 1, index));
+    scrub.value = index;
+    page.show(records[index]);
+    // The address names the step shown: a reload or a copied link opens there again.
+    history.replaceState(null, '', `${location.pathname}?step=${records[index].step}`);
+  };
+  scrub.oninput = () => go(Number(scrub.value));
+  document.getElementById('previous').onclick = () => go(Number(scrub.value) - 1);
+  document.getElementById('next').onclick = () => go(Number(scrub.value) + 1);
+  document.addEventListener('keydown', (event) => {
+    if (event.target === scrub) return;  // the slider moves itself
+    if (event.key === 'ArrowLeft') go(Number(scrub.value) - 1);
+    if (event.key === 'ArrowRight') go(Number(scrub.value) + 1);
+  });
+  // At the step in the address, else where `arbiter view` says (--step, by default the last).
+  const asked = Number(new URLSearchParams(location.search).get('step')) || info.step;
+  if (records.length) go(indexOfStep(records, asked));
+  setStatus(`trace of ${records.length} steps`, 'trace');
+}
