@@ -271,7 +271,7 @@ int explain(const Options& options) {
   }
   std::cerr << fmt::format("arbiter explain: {}\n", arbiter::printable(explanation.text));
   for (const auto& note : explanation.notes) {
-    std::cerr << fmt::format("  note: {}\n", arbiter::printable(note));
+    std::cerr << fmt::format("  note: {}\n", arbiter::printable(note.text));
   }
   return explanation.status == arbiter::Explanation::Status::kNotFound ? kExitUsage : kExitInvalid;
 }
@@ -589,7 +589,8 @@ int main(int argc, char** argv) {
   validate_cmd
       ->add_option("--format", options.format,
                    "diagnostics as text (stderr) or json (stdout: an array of {file, line, "
-                   "column, severity, code, message, notes})")
+                   "column, severity, code, message, notes}, with note_locations where a note "
+                   "names a place)")
       ->check(CLI::IsMember({"text", "json"}))
       ->capture_default_str();
   validate_cmd->add_flag("--strict", options.strict, "treat warnings (and lints) as errors");

@@ -319,7 +319,7 @@ TEST_CASE("explain reports what it cannot explain", "[explain]") {
   auto result = explain_text(trace_text, 8, "search_for_bal");
   CHECK(result.status == Explanation::Status::kNotFound);
   REQUIRE(!result.notes.empty());
-  CHECK(contains(result.notes[0], "did you mean 'search_for_ball'?"));
+  CHECK(contains(result.notes[0].text, "did you mean 'search_for_ball'?"));
   result = explain_text(trace_text, 21, "search_for_ball");
   CHECK(result.status == Explanation::Status::kNotFound);
   CHECK(result.text == "the trace has steps 1 to 20, not step 21");

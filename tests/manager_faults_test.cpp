@@ -730,8 +730,9 @@ TEST_CASE("on_exception is checked like any other key", "[robustness][faults][co
   REQUIRE(diagnostics.items().size() == 1);
   CHECK(diagnostics.items()[0].message ==
         "'on_exception' must be inactive, disable or stop, found the string 'disabled'");
-  CHECK(diagnostics.items()[0].notes ==
-        std::vector<std::string>{"did you mean 'disable'? allowed: disable, inactive, stop"});
+  REQUIRE(diagnostics.items()[0].notes.size() == 1);
+  CHECK(diagnostics.items()[0].notes[0].text ==
+        "did you mean 'disable'? allowed: disable, inactive, stop");
   CHECK(codes("arbiter: 1\nname: t\non_exception: [stop]\n") ==
         std::vector<std::string>{"wrong-type"});
   CHECK(codes("arbiter: 1\nname: t\nlayers:\n  - name: l\n    behaviours:\n      b: {type: "

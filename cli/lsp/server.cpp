@@ -452,12 +452,6 @@ json diagnostic_json(const Diagnostic& item, const Lines* lines) {
   return result;
 }
 
-// `file:line:col` inside a note, as the engine writes places into its notes.
-const std::regex& place_pattern() {
-  static const std::regex pattern(R"(([^\s:'"]+):(\d+):(\d+))");
-  return pattern;
-}
-
 json range_json(int line, int character) {
   return {{"start", {{"line", line}, {"character", character}}},
           {"end", {{"line", line}, {"character", character}}}};
@@ -1295,21 +1289,21 @@ void Server::publish(const std::set<std::string>& touched, const std::set<std::s
       json diagnostic = diagnostic_json(item, analysis->lines_of(item.location.file));
       json related = json::array();
       for (const auto& note : item.notes) {
-        std::smatch match;
+        // A note without a place of its own is about the diagnostic's.
         json location = {{"uri", path_to_uri(item.location.file)}, {"range", diagnostic["range"]}};
-        if (std::regex_search(note, match, place_pattern())) {
-          const std::string file = match[1].str();
-          const int line = std::stoi(match[2].str());
-          const int column = std::stoi(match[3].str());
-          const std::string path = std::filesystem::path(file).lexically_normal().string();
+        if (note.location) {
+          const std::string path =
+              std::filesystem::path(note.location->file).lexically_normal().string();
+          const int line = std::max(1, note.location->line);
+          const int column = std::max(1, note.location->column);
           json range = range_json(line - 1, column - 1);
-          if (const Lines* lines = analysis->lines_of(path)) {
+          if (const Lines* lines = analysis->lines_of(path); lines && note.location->line > 0) {
             const std::size_t begin = lines->offset(line, column);
             range = lines->range(begin, lines->token_end(begin));
           }
           location = {{"uri", path_to_uri(path)}, {"range", range}};
         }
-        related.push_back({{"location", location}, {"message", note}});
+        related.push_back({{"location", location}, {"message", note.text}});
       }
       if (!related.empty()) diagnostic["relatedInformation"] = related;
       // An error in an included file that is not open shows on the root's include that leads
