@@ -14,22 +14,33 @@
 using namespace arbiter;
 using namespace arbiter::test;
 
-TEST_CASE("a throwing behaviour counts as inactive in that step and is reported once",
-          "[robustness][faults]") {
-  Log log;
-  auto manager = make(R"(arbiter: 1
-name: t
-layers:
-  - name: l
+namespace {
+
+/// One layer in which `broken` (robust.Faulty with the params `faulty`, writing 9) inhibits
+/// `fine` (a probe at level 0.5 writing 1), both writing the actuator `speed`. `keys` follow
+/// broken's ports; `top` are top-level keys, as one_layer() takes them.
+std::string broken_over_fine(const std::string& faulty, const std::string& keys = "",
+                             const std::string& top = "") {
+  return one_layer(R"(
     actuators:
       speed: {type: double}
     behaviours:
-      broken: {type: robust.Faulty, params: {callback: activation, from: 2, until: 3, value: 9},
-               ports: {out: speed}}
+      broken: {type: robust.Faulty, params: {)" +
+                       faulty + R"(, value: 9},
+               ports: {out: speed})" +
+                       keys + R"(}
       fine: {type: test.Probe, params: {levels: 0.5, value: 1}, ports: {out: speed}}
     inhibitions: [broken -> fine]
 )",
-                      log);
+                   top);
+}
+
+}  // namespace
+
+TEST_CASE("a throwing behaviour counts as inactive in that step and is reported once",
+          "[robustness][faults]") {
+  Log log;
+  auto manager = make(broken_over_fine("callback: activation, from: 2, until: 3"), log);
   std::vector<double> broken_levels;
   std::vector<double> fine_levels;
   std::vector<double> speeds;
@@ -53,10 +64,7 @@ layers:
 TEST_CASE("a throw from update() or execute() leaves no level and no write for that step",
           "[robustness][faults]") {
   Log log;
-  auto manager = make(R"(arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = make(test::one_layer(R"(
     actuators:
       speed: {type: double, aggregate: true}
     behaviours:
@@ -65,7 +73,7 @@ layers:
       in_execute: {type: robust.Faulty, params: {callback: execute, from: 3, until: 3, value: 7},
                    ports: {out: speed}}
       in_inhibited: {type: robust.Faulty, params: {callback: inhibited, level: 0}}
-)",
+)"),
                       log);
   auto& in_update = behaviour<Faulty>(manager, "l", "in_update");
   auto& in_inhibited = behaviour<Faulty>(manager, "l", "in_inhibited");
@@ -95,19 +103,8 @@ layers:
 TEST_CASE("on_exception: disable takes a behaviour out for the rest of the run",
           "[robustness][faults]") {
   Log log;
-  auto manager = make(R"(arbiter: 1
-name: t
-layers:
-  - name: l
-    actuators:
-      speed: {type: double}
-    behaviours:
-      broken: {type: robust.Faulty, params: {callback: execute, from: 2, until: 2, value: 9},
-               ports: {out: speed}, on_exception: disable}
-      fine: {type: test.Probe, params: {levels: 0.5, value: 1}, ports: {out: speed}}
-    inhibitions: [broken -> fine]
-)",
-                      log);
+  auto manager = make(
+      broken_over_fine("callback: execute, from: 2, until: 2", ", on_exception: disable"), log);
   auto& broken = behaviour<Faulty>(manager, "l", "broken");
   manager.step();
   CHECK(actuator(manager, "speed") == 9.0);
@@ -132,20 +129,8 @@ layers:
 
 TEST_CASE("on_exception: stop completes the step, then the manager stops", "[robustness][faults]") {
   Log log;
-  auto manager = make(R"(arbiter: 1
-name: t
-on_exception: stop
-layers:
-  - name: l
-    actuators:
-      speed: {type: double}
-    behaviours:
-      broken: {type: robust.Faulty, params: {callback: activation, from: 3, value: 9},
-               ports: {out: speed}}
-      fine: {type: test.Probe, params: {levels: 0.5, value: 1}, ports: {out: speed}}
-    inhibitions: [broken -> fine]
-)",
-                      log);
+  auto manager =
+      make(broken_over_fine("callback: activation, from: 3", "", "on_exception: stop\n"), log);
   JsonTrace trace(manager);
   for (int step = 0; step < 10 && !manager.stopped(); ++step) manager.step();
   CHECK(manager.stopped());
@@ -168,15 +153,12 @@ layers:
 
 TEST_CASE("a behaviour's on_exception overrides the config's", "[robustness][faults]") {
   Log log;
-  auto manager = make(R"(arbiter: 1
-name: t
-on_exception: stop
-layers:
-  - name: l
+  auto manager = make(test::one_layer(R"(
     behaviours:
       tolerated: {type: robust.Faulty, on_exception: inactive}
       fine: {type: test.Probe}
 )",
+                                      "on_exception: stop\n"),
                       log);
   for (int step = 0; step < 3; ++step) manager.step();
   CHECK_FALSE(manager.stopped());
@@ -324,16 +306,13 @@ TEST_CASE("on_exception is checked like any other key", "[robustness][faults][co
 TEST_CASE("a behaviour that fails every way at once leaves the others and the trace intact",
           "[robustness][faults]") {
   // The same config with and without the faulty behaviours gives the same records for the rest.
-  const std::string base = R"(arbiter: 1
-name: t
-layers:
-  - name: l
+  const std::string base = test::one_layer(R"(
     actuators:
       speed: {type: double, aggregate: true}
     behaviours:
       a: {type: test.Probe, params: {levels: [1, 0, 0.5], value: 1}, ports: {out: speed}}
       b: {type: test.Probe, params: {levels: 0.5, value: 3}, ports: {out: speed}}
-)";
+)");
   const std::string faulty =
       base + R"(      t1: {type: robust.Faulty, params: {callback: update, level: 0}}
       t2: {type: robust.Faulty, params: {callback: execute, level: 0.000001}, ports: {out: speed}}

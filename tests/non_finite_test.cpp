@@ -13,16 +13,13 @@ using namespace arbiter::test;
 TEST_CASE("non-finite activation levels count as 0 or 1 and are reported once",
           "[robustness][levels]") {
   Log log;
-  auto manager = make(R"(arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = make(test::one_layer(R"(
     behaviours:
       nan: {type: robust.Odd, params: {level: nan}}
       high: {type: robust.Odd, params: {level: inf}}
       low: {type: robust.Odd, params: {level: -inf}}
       fine: {type: test.Probe, params: {levels: 0.5}}
-)",
+)"),
                       log);
   for (int step = 0; step < 4; ++step) manager.step();
   CHECK(test::activation_of(manager, "l", "nan") == 0.0);
@@ -43,10 +40,7 @@ TEST_CASE("non-finite values written to actuators are ignored and reported once"
   for (const std::string value : {"nan", "inf", "-inf"}) {
     DYNAMIC_SECTION(value) {
       Log log;
-      auto manager = make(R"(arbiter: 1
-name: t
-layers:
-  - name: l
+      auto manager = make(test::one_layer(R"(
     actuators:
       speed: {type: double, default: 2}
       mean: {type: double, aggregate: true}
@@ -54,12 +48,12 @@ layers:
       turn: {type: vec3, aggregate: true}
     behaviours:
       odd: {type: robust.Odd, params: {value: )" +
-                              value + R"(, from: 2},
+                                          value + R"(, from: 2},
             ports: {out: speed, out2: walk, out3: turn}}
       odd_too: {type: robust.Odd, params: {value: )" +
-                              value + R"(}, ports: {out: mean}}
+                                          value + R"(}, ports: {out: mean}}
       fine: {type: test.Probe, params: {value: 4}, ports: {out: mean}}
-)",
+)"),
                           log);
       JsonTrace trace(manager);
       for (int step = 0; step < 3; ++step) manager.step();

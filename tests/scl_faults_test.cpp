@@ -52,11 +52,7 @@ state_machines:
 
 TEST_CASE("a state that throws from any callback stops its controller, reported once",
           "[robustness][faults][scl]") {
-  const std::string config = R"(arbiter: 1
-name: t
-on_exception: POLICY
-layers:
-  - name: l
+  const std::string config = test::one_layer(R"(
     behaviours:
       fine: test.Probe
 state_machines:
@@ -65,7 +61,8 @@ state_machines:
       boom: {type: robust.FaultyState, params: {callback: CALLBACK}}
       after: test.Planner
     queue: [boom, after]
-)";
+)",
+                                             "on_exception: POLICY\n");
   // The step in which each callback first runs: boom is activated and executed in step 1 and,
   // having asked to proceed, deactivated in step 2.
   const std::map<std::string, std::uint64_t> first_call = {
@@ -116,10 +113,7 @@ TEST_CASE("a controller hook that throws stops that controller only", "[robustne
     DYNAMIC_SECTION(hook) {
       FaultyHooks hooks(hook);  // outlives the manager, as set_hooks asks
       Log log;
-      auto manager = make(R"(arbiter: 1
-name: t
-layers:
-  - name: l
+      auto manager = make(test::one_layer(R"(
     behaviours:
       fine: test.Probe
 state_machines:
@@ -131,7 +125,7 @@ state_machines:
     states:
       again: {type: test.Planner, params: {hold: 100}}
     queue: [again]
-)",
+)"),
                           log);
       manager.program().controllers[0]->set_hooks(&hooks);
       for (int step = 0; step < 4; ++step) manager.step();
