@@ -129,7 +129,8 @@ int main(int argc, char** argv) {
   validate_cmd
       ->add_option("--format", options.format,
                    "diagnostics as text (stderr) or json (stdout: an array of {file, line, "
-                   "column, severity, code, message, notes})")
+                   "column, severity, code, message, notes}, with note_locations where a note "
+                   "names a place)")
       ->check(CLI::IsMember({"text", "json"}))
       ->capture_default_str();
   validate_cmd->add_flag("--strict", options.strict, "treat warnings (and lints) as errors");

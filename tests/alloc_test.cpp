@@ -52,6 +52,14 @@ std::size_t allocations_per_run(const std::string& text, int steps) {
   return allocations_in_steps(manager, steps);
 }
 
+/// A config named `name` of one state machine, `loop`: its `states` (the lines under `states:`)
+/// and its `queue` (a flow list).
+std::string one_machine(const std::string& name, const std::string& states,
+                        const std::string& queue) {
+  return "arbiter: 1\nname: " + name + "\nstate_machines:\n  loop:\n    states:" + states +
+         "    queue: " + queue + "\n";
+}
+
 /// Every config under configs/, sorted, relative to the source directory.
 std::vector<std::string> shipped_configs() {
   namespace fs = std::filesystem;
@@ -137,31 +145,21 @@ TEST_CASE("state controllers step, transition and re-plan without allocating", "
   // goalie_plan re-plans (append) every few cycles, prepends, and is pre-empted.
   CHECK(allocations_per_run(read_config("configs/paper/goalie_plan.yaml"), 60) == 0);
   CHECK(allocations_per_run(read_config("configs/paper/hierarchical.yaml"), 30) == 0);
-  CHECK(allocations_per_run(R"(
-arbiter: 1
-name: replanning
-state_machines:
-  loop:
-    states:
+  CHECK(allocations_per_run(one_machine("replanning", R"(
       a: {type: test.Planner, params: {op: append, target: p, x: 1.5}}
       p: {type: test.Planner, params: {op: insert_after, target: p}}
       again: {type: scripted, params: {append: [a], hold: 2}}
-    queue: [a, again]
 )",
+                                        "[a, again]"),
                             300) == 0);
   // Plan edits through handles with run-time params, and reads of them through param handles.
-  CHECK(allocations_per_run(R"(
-arbiter: 1
-name: handles
-state_machines:
-  loop:
-    states:
+  CHECK(allocations_per_run(one_machine("handles", R"(
       a: {type: test.Planner, params: {op: go_to, target: b, x: 1.5}}
       b: {type: test.Planner, params: {op: prepend, target: a, x: 2.5}}
       c: {type: test.Planner, params: {op: insert_before, target: p, x: 0.5}}
       p: test.Pose
-    queue: [c, a]
 )",
+                                        "[c, a]"),
                             300) == 0);
 }
 

@@ -97,6 +97,31 @@ TEST_CASE("arbiter validate --format json prints located diagnostics for machine
   }
 }
 
+TEST_CASE("arbiter validate --format json gives the place a note speaks of", "[validate][cli]") {
+  const auto result = run_cli("validate --format json tests/data/invalid/duplicate_layer.yaml");
+  CHECK(result.exit_code == 1);
+  const Json diagnostics = Json::parse(result.out);
+  REQUIRE(diagnostics.size() == 1);
+  const Json& duplicate = diagnostics[0];
+  CHECK(duplicate["notes"] ==
+        Json::array({"first declared at tests/data/invalid/duplicate_layer.yaml:4:11"}));
+  CHECK(duplicate["note_locations"] ==
+        Json::parse(R"([{"file": "tests/data/invalid/duplicate_layer.yaml", "line": 4,
+                         "column": 11}])"));
+  // A note that is only text has a null place; a diagnostic with no placed note, no field.
+  const std::string duplicates = "tests/data/invalid/warn_duplicate_inhibition.yaml";
+  const auto both = Json::parse(run_cli("validate --format json " + duplicates).out);
+  REQUIRE(both.size() == 3);
+  CHECK(both[1]["notes"].size() == 2);
+  CHECK(both[1]["note_locations"] ==
+        Json::array({{{"file", duplicates}, {"line", 11}, {"column", 9}}, nullptr}));
+  const auto typo =
+      Json::parse(run_cli("validate --format json tests/data/invalid/unknown_key.yaml").out);
+  REQUIRE(!typo.empty());
+  CHECK(!typo[0]["notes"].empty());
+  CHECK_FALSE(typo[0].contains("note_locations"));
+}
+
 TEST_CASE("a missing config is an error of its own and the other files are still checked",
           "[validate][cli]") {
   const auto result = run_cli(std::string("validate missing.yaml ") + kWalkAndKick +

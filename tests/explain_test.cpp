@@ -20,71 +20,73 @@ namespace fs = std::filesystem;
 using namespace arbiter;
 using namespace arbiter::test;
 using Json = nlohmann::json;
-TEST_CASE("explain tells why search_for_ball is inactive at step 8 of the paper example",
-          "[explain]") {
+
+namespace {
+
+/// A config of the source tree, loaded as the CLI loads it, and the trace of its first `steps`
+/// steps: what explain() is asked about.
+struct Explained {
+  Explained(const std::string& config, int steps)
+      : program(load_config(config, registry, diagnostics)), trace(trace_of(config, steps)) {}
+
+  Explanation at(std::uint64_t step, const std::string& target) const {
+    return on(trace, step, target);
+  }
+  /// The text of an explanation that is expected to succeed; one that does not fails the test.
+  std::string text_at(std::uint64_t step, const std::string& target) const {
+    const Explanation explanation = at(step, target);
+    INFO(explanation.text);
+    REQUIRE(explanation.status == Explanation::Status::kOk);
+    return explanation.text;
+  }
+  /// explain() on another trace than the run's own.
+  Explanation on(const std::string& trace_text, std::uint64_t step,
+                 const std::string& target) const {
+    std::istringstream in(trace_text);
+    return explain(program, in, step, target);
+  }
+
   Registry registry = tooling_registry();
   Diagnostics diagnostics;
-  const Program program = load_config(kWalkAndKick, registry, diagnostics);
-  std::istringstream trace(trace_of(kWalkAndKick, 20));
-  const auto explanation = explain(program, trace, 8, "search_for_ball");
-  REQUIRE(explanation.status == Explanation::Status::kOk);
-  check_golden("explain_search_for_ball.txt", explanation.text);
-  CHECK(contains(explanation.text, "at step 8: inactive, activation 0\n"));
-  CHECK(contains(explanation.text, "requested: 0.5\n"));
-  CHECK(contains(explanation.text,
-                 "implicit, from chaining kick_ball => go_behind_ball => "
-                 "search_for_ball"));
-  CHECK(contains(explanation.text, "inactive: go_behind_ball is fully active (factor 0)"));
+  const Program program;
+  const std::string trace;
+};
+
+}  // namespace
+
+TEST_CASE("explain tells why search_for_ball is inactive at step 8 of the paper example",
+          "[explain]") {
+  const std::string text = Explained(kWalkAndKick, 20).text_at(8, "search_for_ball");
+  check_golden("explain_search_for_ball.txt", text);
+  CHECK(contains(text, "at step 8: inactive, activation 0\n"));
+  CHECK(contains(text, "requested: 0.5\n"));
+  CHECK(contains(text, "implicit, from chaining kick_ball => go_behind_ball => search_for_ball"));
+  CHECK(contains(text, "inactive: go_behind_ball is fully active (factor 0)"));
 }
 
 TEST_CASE("explain gives the product of the factors and the normalisation", "[explain]") {
-  Registry registry = tooling_registry();
-  Diagnostics diagnostics;
-  const std::string config = "tests/data/golden/relay.yaml";
-  const Program program = load_config(config, registry, diagnostics);
-  const std::string trace_text = trace_of(config, 6);
-  std::istringstream trace(trace_text);
-  const auto explanation = explain(program, trace, 2, "planning/retreat");
-  REQUIRE(explanation.status == Explanation::Status::kOk);
+  const std::string text =
+      Explained("tests/data/golden/relay.yaml", 6).text_at(2, "planning/retreat");
   // approach 0.6 => retreat 0.3: refined 0.3 × 0.4 = 0.12; wait 0.5 × 0.4 × 0.88 = 0.176;
   // the layer's sum is 0.6 + 0.12 + 0.176 = 0.896.
-  CHECK(contains(explanation.text, "refined = 0.3 × 0.4 = 0.12\n"));
-  CHECK(contains(explanation.text,
-                 "0.12 / 0.896 (the sum of the layer's refined levels) = "
-                 "0.133929\n"));
-  CHECK_FALSE(contains(explanation.text, "note:"));
+  CHECK(contains(text, "refined = 0.3 × 0.4 = 0.12\n"));
+  CHECK(contains(text, "0.12 / 0.896 (the sum of the layer's refined levels) = 0.133929\n"));
+  CHECK_FALSE(contains(text, "note:"));
 }
 
 TEST_CASE("explain tells what a state machine did in a step", "[explain]") {
-  Registry registry = tooling_registry();
-  Diagnostics diagnostics;
-  const std::string config = "configs/paper/goalie_plan.yaml";
-  const Program program = load_config(config, registry, diagnostics);
-  const std::string trace_text = trace_of(config, 50);
-  {
-    std::istringstream trace(trace_text);
-    const auto explanation = explain(program, trace, 6, "goalie");
-    REQUIRE(explanation.status == Explanation::Status::kOk);
-    check_golden("explain_goalie.txt", explanation.text);
-    CHECK(contains(explanation.text,
-                   "events, in order: deactivate wait_for_button, "
-                   "activate walk_to_pose, execute walk_to_pose\n"));
-  }
-  {
-    std::istringstream trace(trace_text);
-    const auto explanation = explain(program, trace, 2, "state_machines/goalie");
-    REQUIRE(explanation.status == Explanation::Status::kOk);
-    CHECK(contains(explanation.text, "wait_for_button executed and held: it runs again at step 3"));
-  }
-  {
-    // The scripted button press: the actual cause, not a list of the possible ones.
-    std::istringstream trace(trace_text);
-    const auto explanation = explain(program, trace, 40, "goalie");
-    REQUIRE(explanation.status == Explanation::Status::kOk);
-    CHECK(contains(explanation.text,
-                   "    - monitor_ball was deactivated: pre-empted by wait_for_button (preempt: at "
-                   "cycle 40); it had asked to proceed\n"));
-  }
+  const Explained run("configs/paper/goalie_plan.yaml", 50);
+  const std::string at_6 = run.text_at(6, "goalie");
+  check_golden("explain_goalie.txt", at_6);
+  CHECK(contains(at_6,
+                 "events, in order: deactivate wait_for_button, activate walk_to_pose, execute "
+                 "walk_to_pose\n"));
+  CHECK(contains(run.text_at(2, "state_machines/goalie"),
+                 "wait_for_button executed and held: it runs again at step 3"));
+  // The scripted button press: the actual cause, not a list of the possible ones.
+  CHECK(contains(run.text_at(40, "goalie"),
+                 "    - monitor_ball was deactivated: pre-empted by wait_for_button (preempt: at "
+                 "cycle 40); it had asked to proceed\n"));
 }
 
 namespace {
@@ -258,12 +260,10 @@ TEST_CASE("a planned state shows its per-instance params", "[scl][explain][run]"
 }
 
 TEST_CASE("explain reads a trace of a run reloaded with --watch", "[explain][reload]") {
-  Registry registry = tooling_registry();
-  Diagnostics diagnostics;
-  const Program program = load_config(kWalkAndKick, registry, diagnostics);
+  const Explained run(kWalkAndKick, 10);
   std::vector<std::string> lines;
   {
-    std::istringstream in(trace_of(kWalkAndKick, 10));
+    std::istringstream in(run.trace);
     for (std::string line; std::getline(in, line);) lines.push_back(line);
   }
   REQUIRE(lines.size() == 11);
@@ -282,8 +282,7 @@ TEST_CASE("explain reads a trace of a run reloaded with --watch", "[explain][rel
     return text;
   };
   const auto explain_text = [&](const std::string& trace, std::uint64_t step) {
-    std::istringstream in(trace);
-    return explain(program, in, step, "search_for_ball");
+    return run.on(trace, step, "search_for_ball");
   };
   std::string other_header;
   std::getline(std::istringstream(trace_of("configs/paper/hierarchical.yaml", 1)) >> std::ws,
@@ -307,26 +306,18 @@ TEST_CASE("explain reads a trace of a run reloaded with --watch", "[explain][rel
 }
 
 TEST_CASE("explain reports what it cannot explain", "[explain]") {
-  Registry registry = tooling_registry();
-  Diagnostics diagnostics;
-  const Program program = load_config(kWalkAndKick, registry, diagnostics);
-  const std::string trace_text = trace_of(kWalkAndKick, 20);
-  const auto explain_text = [&](const std::string& trace, std::uint64_t step,
-                                const std::string& target) {
-    std::istringstream in(trace);
-    return explain(program, in, step, target);
-  };
-  auto result = explain_text(trace_text, 8, "search_for_bal");
+  const Explained run(kWalkAndKick, 20);
+  auto result = run.at(8, "search_for_bal");
   CHECK(result.status == Explanation::Status::kNotFound);
   REQUIRE(!result.notes.empty());
-  CHECK(contains(result.notes[0], "did you mean 'search_for_ball'?"));
-  result = explain_text(trace_text, 21, "search_for_ball");
+  CHECK(contains(result.notes[0].text, "did you mean 'search_for_ball'?"));
+  result = run.at(21, "search_for_ball");
   CHECK(result.status == Explanation::Status::kNotFound);
   CHECK(result.text == "the trace has steps 1 to 20, not step 21");
-  result = explain_text(trace_of("configs/paper/hierarchical.yaml", 3), 2, "kick_ball");
+  result = run.on(trace_of("configs/paper/hierarchical.yaml", 3), 2, "kick_ball");
   CHECK(result.status == Explanation::Status::kBadTrace);
   CHECK(result.text == "the trace was written for 'hierarchical', not for 'walk_and_kick'");
-  result = explain_text("{\"arbiter_trace\": 1, \"name\": \"walk_and_kick\"\n", 1, "kick_ball");
+  result = run.on("{\"arbiter_trace\": 1, \"name\": \"walk_and_kick\"\n", 1, "kick_ball");
   CHECK(result.status == Explanation::Status::kBadTrace);
 }
 

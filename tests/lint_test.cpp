@@ -15,6 +15,25 @@ namespace fs = std::filesystem;
 using namespace arbiter;
 using namespace arbiter::test;
 
+namespace {
+
+/// The diagnostics of the YAML config `config` (named `file`) through the stages validate runs,
+/// lints included; a config that does not compile fails the test with its diagnostics.
+Diagnostics linted(const std::string& config, const std::string& file, const Registry& registry) {
+  Diagnostics diagnostics;
+  auto document = parse_document(config, file, DocumentFormat::kYaml, diagnostics);
+  INFO(config << format(diagnostics));
+  REQUIRE(document.has_value());
+  const Model model = build_model(*document, registry, diagnostics);
+  REQUIRE_FALSE(diagnostics.has_errors());
+  auto program = compile(model, registry, diagnostics);
+  REQUIRE(program.has_value());
+  lint(model, *program, diagnostics);
+  return diagnostics;
+}
+
+}  // namespace
+
 TEST_CASE("each lint is reported once, located, with its code", "[lint]") {
   Registry registry = tooling_registry();
   Diagnostics diagnostics;
@@ -46,15 +65,7 @@ TEST_CASE("a load without the lint step, as on a robot, reports no lint", "[lint
 TEST_CASE("lints are silenced by code, for the config or for one layer", "[lint]") {
   const std::string text = read_text(kGoldenDir / "lints.yaml");
   const auto diagnose = [](const std::string& config) {
-    const Registry registry = tooling_registry();
-    Diagnostics diagnostics;
-    auto document = parse_document(config, "lints.yaml", DocumentFormat::kYaml, diagnostics);
-    REQUIRE(document.has_value());
-    const Model model = build_model(*document, registry, diagnostics);
-    REQUIRE_FALSE(diagnostics.has_errors());
-    auto program = compile(model, registry, diagnostics);
-    REQUIRE(program.has_value());
-    lint(model, *program, diagnostics);
+    const Diagnostics diagnostics = linted(config, "lints.yaml", tooling_registry());
     std::vector<std::string> codes;
     for (const auto& item : diagnostics.items()) codes.push_back(item.code);
     return codes;
@@ -113,13 +124,7 @@ layers:
       e: scripted
     inhibitions: [a => b, b => c, d -> e]
 )";
-  const Registry registry = builtin_registry();
-  Diagnostics diagnostics;
-  auto document = parse_document(config, "chain.yaml", DocumentFormat::kYaml, diagnostics);
-  const Model model = build_model(*document, registry, diagnostics);
-  auto program = compile(model, registry, diagnostics);
-  REQUIRE(program.has_value());
-  lint(model, *program, diagnostics);
+  const Diagnostics diagnostics = linted(config, "chain.yaml", builtin_registry());
   std::string text = format(diagnostics);
   CHECK(contains(text, "behaviour 'b' can never be active: 'a' inhibits it"));
   CHECK(contains(text, "behaviour 'c' can never be active: 'a' inhibits it"));
@@ -244,13 +249,7 @@ TEST_CASE("redundant inhibitions are found in layers larger than one block of re
     config += "      - b" + std::to_string(b) + " => b" + std::to_string(b + 1) + "\n";
   }
   config += "      - b0 -> b4999\n      - b10 => b4100\n      - b4097 -> b4099\n";
-  const Registry registry = builtin_registry();
-  Diagnostics diagnostics;
-  auto document = parse_document(config, "long.yaml", DocumentFormat::kYaml, diagnostics);
-  const Model model = build_model(*document, registry, diagnostics);
-  auto program = compile(model, registry, diagnostics);
-  REQUIRE(program.has_value());
-  lint(model, *program, diagnostics);
+  const Diagnostics diagnostics = linted(config, "long.yaml", builtin_registry());
   std::vector<std::string> messages;
   for (const auto& item : diagnostics.items()) messages.push_back(item.message);
   CHECK(messages ==

@@ -47,12 +47,7 @@ std::vector<std::string> inhibitors_of(const Program& program, const std::string
 
 std::string trace_of(const std::string& text, const std::string& file, int steps) {
   Manager manager(test::compile_text(text, registry(), file));
-  std::ostringstream out;
-  TraceWriter trace(out);
-  manager.add_observer(trace);
-  for (int i = 0; i < steps; ++i) manager.step();
-  manager.finish();
-  return out.str();
+  return test::run_traced(manager, steps);
 }
 
 }  // namespace
@@ -91,17 +86,13 @@ layers:
 TEST_CASE("refinement uses the inhibitors' refined levels in topological order",
           "[semantics][refinement]") {
   // c is declared first but runs last: a -> b -> c.
-  auto manager = run(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = run(test::one_layer(R"(
     behaviours:
       c: {type: test.Probe, params: {levels: 1.0}}
       b: {type: test.Probe, params: {levels: 0.5}}
       a: {type: test.Probe, params: {levels: 0.5}}
     inhibitions: [a -> b, b -> c]
-)",
+)"),
                      1);
   CHECK(order_of(manager.program(), "l") == std::vector<std::string>{"a", "b", "c"});
   CHECK_THAT(test::activation_of(manager, "l", "b"), WithinAbs(0.25, 1e-12));
@@ -109,11 +100,7 @@ layers:
 }
 
 TEST_CASE("topological order takes the ready behaviour declared first", "[semantics][order]") {
-  auto program = test::compile_text(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto program = test::compile_text(test::one_layer(R"(
     behaviours:
       e: test.Probe
       d: test.Probe
@@ -121,30 +108,22 @@ layers:
       b: test.Probe
       a: test.Probe
     inhibitions: [a -> d, b -> e]
-)",
+)"),
                                     registry());
   // Ready at first: c, a, b (in declaration order: c, b, a ... after e and d are blocked).
   CHECK(order_of(program, "l") == std::vector<std::string>{"c", "b", "e", "a", "d"});
 
   SECTION("with no inhibitions the order is the declaration order") {
-    auto plain = test::compile_text(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+    auto plain = test::compile_text(test::one_layer(R"(
     behaviours: {z: test.Probe, y: test.Probe, x: test.Probe}
-)",
+)"),
                                     registry());
     CHECK(order_of(plain, "l") == std::vector<std::string>{"z", "y", "x"});
   }
 }
 
 TEST_CASE("chaining closes over chaining edges only", "[semantics][closure]") {
-  auto program = test::compile_text(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto program = test::compile_text(test::one_layer(R"(
     behaviours:
       a: test.Probe
       b: test.Probe
@@ -164,7 +143,7 @@ layers:
       - q -> r
       - x -> y
       - y => z
-)",
+)"),
                                     registry());
   SECTION("a chain of chaining edges gives every implicit edge") {
     CHECK(inhibitors_of(program, "l", "c") == std::vector<std::string>{"a", "b"});
@@ -188,17 +167,13 @@ layers:
 
 TEST_CASE("an implicit inhibition takes part in refinement", "[semantics][closure]") {
   // a => b => c with b inactive: c is still inhibited by a through the chain.
-  auto manager = run(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = run(test::one_layer(R"(
     behaviours:
       a: {type: test.Probe, params: {levels: 0.5}}
       b: {type: test.Probe, params: {levels: 0.0}}
       c: {type: test.Probe, params: {levels: 1.0}}
     inhibitions: [a => b, b => c]
-)",
+)"),
                      1);
   CHECK_THAT(test::activation_of(manager, "l", "c"), WithinAbs(0.5, 1e-12));
 
@@ -212,14 +187,10 @@ layers:
 }
 
 TEST_CASE("a cycle created through the chaining closure is an error", "[semantics][closure]") {
-  const auto diagnostics = test::diagnose_text(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  const auto diagnostics = test::diagnose_text(test::one_layer(R"(
     behaviours: {a: test.Probe, b: test.Probe, c: test.Probe}
     inhibitions: [a => b, b => c, c -> a]
-)",
+)"),
                                                registry());
   REQUIRE(diagnostics.error_count() == 1);
   CHECK(diagnostics.items()[0].code == "inhibition-cycle");
@@ -229,16 +200,12 @@ layers:
 }
 
 TEST_CASE("requested levels are clamped and NaN counts as 0", "[semantics][levels]") {
-  auto manager = run(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = run(test::one_layer(R"(
     behaviours:
       high: {type: test.Probe, params: {levels: 3.5}}
       low: {type: test.Probe, params: {levels: -2}}
       nan: test.NanLevel
-)",
+)"),
                      2);
   CHECK(test::activation_of(manager, "l", "high") == 1.0);
   CHECK(test::activation_of(manager, "l", "low") == 0.0);
@@ -249,30 +216,22 @@ layers:
 
 TEST_CASE("a behaviour that throws counts as inactive and the others go on",
           "[semantics][levels]") {
-  auto manager = run(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = run(test::one_layer(R"(
     behaviours:
       broken: test.Thrower
       fine: {type: test.Probe, params: {levels: 0.5}}
     inhibitions: [broken -> fine]
-)",
+)"),
                      3);
   CHECK(test::activation_of(manager, "l", "broken") == 0.0);
   CHECK(test::activation_of(manager, "l", "fine") == 0.5);
 }
 
 TEST_CASE("active iff a > 0, with just-activated and just-deactivated", "[semantics][activity]") {
-  auto manager = run(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = run(test::one_layer(R"(
     behaviours:
       a: {type: test.Probe, params: {levels: [0, 0.1, 0.2, 0, 0]}}
-)",
+)"),
                      5);
   const auto& probe = test::instance<test::Probe>(manager.program(), "l", "a");
   CHECK(probe.events ==
@@ -282,18 +241,14 @@ layers:
 }
 
 TEST_CASE("aggregatable actuators take the activation-weighted mean", "[semantics][actuators]") {
-  auto manager = run(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = run(test::one_layer(R"(
     actuators:
       speed: {type: double, aggregate: true}
     behaviours:
       a: {type: test.Probe, params: {levels: 0.5, value: 1.0}, ports: {out: speed}}
       b: {type: test.Probe, params: {levels: 1.0, value: 4.0}, ports: {out: speed}}
       c: {type: test.Probe, params: {levels: 0.0, value: 100.0}, ports: {out: speed}}
-)",
+)"),
                      1);
   const auto speed = *manager.program().find_actuator("speed");
   // (0.5 * 1 + 1.0 * 4) / 1.5 = 3; the inactive c does not count.
@@ -303,17 +258,13 @@ layers:
 
 TEST_CASE("a non-aggregatable actuator takes the most active writer, ties to the earlier",
           "[semantics][actuators]") {
-  const std::string config = R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  const std::string config = test::one_layer(R"(
     actuators:
       speed: {type: double}
     behaviours:
       a: {type: test.Probe, params: {levels: LEVEL_A, value: 1.0}, ports: {out: speed}}
       b: {type: test.Probe, params: {levels: 0.6, value: 2.0}, ports: {out: speed}}
-)";
+)");
   auto with = [&](const std::string& level) {
     std::string text = config;
     text.replace(text.find("LEVEL_A"), 7, level);
@@ -326,17 +277,13 @@ layers:
 }
 
 TEST_CASE("written values persist and the written flag is per step", "[semantics][actuators]") {
-  auto manager = run(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = run(test::one_layer(R"(
     actuators:
       speed: {type: double, default: 7.5}
       idle: {type: double, default: 2.0}
     behaviours:
       a: {type: test.Probe, params: {levels: [1, 0, 0], value: 5.0}, ports: {out: speed}}
-)",
+)"),
                      0);
   const auto speed = *manager.program().find_actuator("speed");
   const auto idle = *manager.program().find_actuator("idle");
@@ -419,17 +366,13 @@ layers:
 }
 
 TEST_CASE("a behaviour's second write in one step replaces its first", "[semantics][actuators]") {
-  auto manager = run(R"(
-arbiter: 1
-name: t
-layers:
-  - name: l
+  auto manager = run(test::one_layer(R"(
     actuators:
       speed: {type: double, aggregate: true}
     behaviours:
       twice: {type: test.Probe, params: {levels: 1, value: 2.0, overwrite: true}, ports: {out: speed}}
       once: {type: test.Probe, params: {levels: 1, value: 4.0}, ports: {out: speed}}
-)",
+)"),
                      1);
   CHECK(manager.actuator<double>(*manager.program().find_actuator("speed")) == 3.0);
 }

@@ -40,6 +40,17 @@ class ConfigFile {
   test::TempDir dir_;
 };
 
+/// Writes `text` to `config` and reloads it into `manager`; a reload that is refused fails the
+/// test with its diagnostics.
+ReloadResult staged_reload(const ConfigFile& config, const std::string& text, Reloader& reloader,
+                           Manager& manager) {
+  config.write(text);
+  ReloadResult result = reloader.reload(manager);
+  INFO(format(result.diagnostics));
+  REQUIRE(result.staged);
+  return result;
+}
+
 /// A probe that keeps its run-time state (how often it executed) across a params change.
 class Counter : public Behaviour {
  public:
@@ -111,10 +122,7 @@ TEST_CASE("an edit that flips an inhibition changes the trace from the next step
   const auto* a = &test::instance<test::Probe>(manager.program(), "control", "a");
   const auto* b = &test::instance<test::Probe>(manager.program(), "control", "b");
 
-  config.write(flipped(kTwoProbes));
-  const ReloadResult result = reloader.reload(manager);
-  INFO(format(result.diagnostics));
-  REQUIRE(result.staged);
+  const ReloadResult result = staged_reload(config, flipped(kTwoProbes), reloader, manager);
   CHECK(format(result.diff) ==
         "  - inhibition control: a -> b\n"
         "  + inhibition control: b -> a\n");
@@ -172,6 +180,15 @@ TEST_CASE("a broken edit keeps the old graph and reports the error with its loca
   }
 }
 
+/// One state machine, `plan`, of two scripted states, the first holding for 100 steps.
+const char* const kPlanMachine = R"(state_machines:
+  plan:
+    states:
+      wait: {type: scripted, params: {hold: 100}}
+      go: scripted
+    queue: [wait, go]
+)";
+
 TEST_CASE("behaviours, actuators and controllers that match keep their state", "[reload]") {
   const std::string before = R"(arbiter: 1
 name: carry
@@ -185,13 +202,7 @@ layers:
       tuned: {type: test.Probe, params: {levels: 1, value: 5}, ports: {out: other}}
       counted: {type: test.Counter, params: {gain: 1}}
       dropped: {type: test.Probe, params: {levels: 1}}
-state_machines:
-  plan:
-    states:
-      wait: {type: scripted, params: {hold: 100}}
-      go: scripted
-    queue: [wait, go]
-)";
+)" + std::string(kPlanMachine);
   ConfigFile config(before);
   Reloader reloader(registry());
   Manager manager(load(reloader, config.path()));
@@ -209,10 +220,7 @@ state_machines:
   after.replace(after.find("      dropped: {type: test.Probe, params: {levels: 1}}\n"), 55, "");
   after.replace(after.find("other: {type: double}"), 21,
                 "other: {type: double}\n      added: {type: bool}");
-  config.write(after);
-  const ReloadResult result = reloader.reload(manager);
-  INFO(format(result.diagnostics));
-  REQUIRE(result.staged);
+  const ReloadResult result = staged_reload(config, after, reloader, manager);
   CHECK(format(result.diff) ==
         "  - behaviour control/dropped (test.Probe)\n"
         "  + actuator added (bool)\n"
@@ -264,16 +272,8 @@ state_machines:
   }
 }
 
-/// One state machine of two scripted states, the first holding for 100 steps.
-const char* const kPlans = R"(arbiter: 1
-name: plans
-state_machines:
-  plan:
-    states:
-      wait: {type: scripted, params: {hold: 100}}
-      go: scripted
-    queue: [wait, go]
-)";
+/// A config of just kPlanMachine.
+const std::string kPlans = "arbiter: 1\nname: plans\n" + std::string(kPlanMachine);
 
 TEST_CASE("a controller whose declaration changed restarts from its queue", "[reload]") {
   const std::string before = kPlans;
@@ -435,13 +435,10 @@ TEST_CASE("a recorded swap allocates nothing on the stepping thread", "[reload][
     manager.finish();
     CHECK(recorder.dropped() == 0);
   }
-  Diagnostic error;
-  const auto recorded = read_trace(path.string(), error);
-  INFO(format(error));
-  REQUIRE(recorded);
-  CHECK(recorded->steps.size() == 4);
-  REQUIRE(recorded->reloads.size() == 1);
-  CHECK(recorded->reloads[0].before == 3);
+  const Trace recorded = test::read_whole_trace(path.string());
+  CHECK(recorded.steps.size() == 4);
+  REQUIRE(recorded.reloads.size() == 1);
+  CHECK(recorded.reloads[0].before == 3);
   std::filesystem::remove(path);
 }
 
@@ -514,10 +511,8 @@ TEST_CASE("1000 reloads of the soccer demo keep resident memory flat", "[reload]
   Manager manager(load(reloader, config.path()));
   const auto reload = [&](int times) {
     for (int i = 0; i < times; ++i) {
-      config.write(i % 2 == 0 ? edit : demo);
-      const ReloadResult result = reloader.reload(manager);
-      INFO(format(result.diagnostics));
-      REQUIRE(result.staged);
+      const ReloadResult result =
+          staged_reload(config, i % 2 == 0 ? edit : demo, reloader, manager);
       for (int s = 0; s < 3; ++s) manager.step();
     }
   };
@@ -553,10 +548,7 @@ TEST_CASE("a reload's diff tells what changed in a state machine, old -> new", "
   after.replace(after.find("      go: scripted\n"), 19,
                 "      run: scripted\n      rest: scripted\n");
   after.replace(after.find("[wait, go]"), 10, "[wait, run, rest]");
-  config.write(after);
-  const ReloadResult result = reloader.reload(manager);
-  INFO(format(result.diagnostics));
-  REQUIRE(result.staged);
+  const ReloadResult result = staged_reload(config, after, reloader, manager);
   CHECK(format(result.diff) ==
         "  ~ controller plan: states added: run, rest; states removed: go; queue [wait, go] -> "
         "[wait, run, rest]\n");

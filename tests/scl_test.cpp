@@ -365,32 +365,32 @@ std::string load_errors(const std::string& mistake) {
 
 TEST_CASE("a wrong name or kind in a state's handles fails the load at the state",
           "[scl][errors]") {
-  // The state 'a' is declared at inline.yaml:6:7.
-  CHECK(load_errors("none").empty());
-  CHECK(load_errors("'param name'") ==
-        "inline.yaml:6:7: error: class test.Mistaken reads param 'speeed' that it "
-        "does not declare\ninline.yaml:6:7: note: did you mean 'speed'? known: mistake, speed\n");
-  CHECK(load_errors("'param kind'") ==
-        "inline.yaml:6:7: error: class test.Mistaken reads param 'speed' (double) "
-        "through a handle of kind int\n");
-  CHECK(load_errors("state") ==
-        "inline.yaml:6:7: error: state machine 'm' has no state 'pp'\n"
-        "inline.yaml:6:7: note: did you mean 'p'? known: a, p\n");
-  CHECK(load_errors("'slot name'") ==
-        "inline.yaml:6:7: error: class test.Mistaken plans state 'p' (test.Pose) "
-        "with param 'y', which its class does not declare\n"
-        "inline.yaml:6:7: note: did you mean 'x'? known: x\n"
-        "inline.yaml:6:7: error: class test.Mistaken plans state 'p' without its "
-        "required param 'x'; give it a slot or set it on the state\n");
-  CHECK(load_errors("'slot kind'") ==
-        "inline.yaml:6:7: error: class test.Mistaken plans param 'x' (double) of "
-        "state 'p' in a slot of kind int\n");
-  CHECK(load_errors("'slot twice'") ==
-        "inline.yaml:6:7: error: class test.Mistaken plans param 'x' of state 'p' "
-        "twice\n");
-  CHECK(load_errors("required") ==
-        "inline.yaml:6:7: error: class test.Mistaken plans state 'p' without its "
-        "required param 'x'; give it a slot or set it on the state\n");
+  // The state 'a' is declared at inline.yaml:6:7. Each mistake's reports, under its name.
+  std::string reports;
+  for (const char* mistake : {"none", "'param name'", "'param kind'", "state", "'slot name'",
+                              "'slot kind'", "'slot twice'", "required"}) {
+    reports += std::string("# ") + mistake + "\n" + load_errors(mistake);
+  }
+  CHECK(reports == R"(# none
+# 'param name'
+inline.yaml:6:7: error: class test.Mistaken reads param 'speeed' that it does not declare
+inline.yaml:6:7: note: did you mean 'speed'? known: mistake, speed
+# 'param kind'
+inline.yaml:6:7: error: class test.Mistaken reads param 'speed' (double) through a handle of kind int
+# state
+inline.yaml:6:7: error: state machine 'm' has no state 'pp'
+inline.yaml:6:7: note: did you mean 'p'? known: a, p
+# 'slot name'
+inline.yaml:6:7: error: class test.Mistaken plans state 'p' (test.Pose) with param 'y', which its class does not declare
+inline.yaml:6:7: note: did you mean 'x'? known: x
+inline.yaml:6:7: error: class test.Mistaken plans state 'p' without its required param 'x'; give it a slot or set it on the state
+# 'slot kind'
+inline.yaml:6:7: error: class test.Mistaken plans param 'x' (double) of state 'p' in a slot of kind int
+# 'slot twice'
+inline.yaml:6:7: error: class test.Mistaken plans param 'x' of state 'p' twice
+# required
+inline.yaml:6:7: error: class test.Mistaken plans state 'p' without its required param 'x'; give it a slot or set it on the state
+)");
 }
 
 TEST_CASE("a state name planned from a config param is checked at that param", "[scl][errors]") {

@@ -161,7 +161,7 @@ int explain_command(const Options& options) {
   }
   std::cerr << fmt::format("arbiter explain: {}\n", arbiter::printable(explanation.text));
   for (const auto& note : explanation.notes) {
-    std::cerr << fmt::format("  note: {}\n", arbiter::printable(note));
+    std::cerr << fmt::format("  note: {}\n", arbiter::printable(note.text));
   }
   return explanation.status == arbiter::Explanation::Status::kNotFound ? kExitUsage : kExitInvalid;
 }

@@ -49,8 +49,7 @@ namespace {
 /// braced Diagnostic temporaries inlined into view_trace() make GCC 12 at -O2 warn, falsely, that
 /// their location may be used uninitialised.
 [[gnu::noinline]] std::string bad_trace(const std::string& path, int line, std::string message,
-                                        std::vector<std::string> notes,
-                                        const FormatOptions& options) {
+                                        std::vector<Note> notes, const FormatOptions& options) {
   Diagnostic diagnostic;
   diagnostic.location.file = path;
   diagnostic.location.line = line;

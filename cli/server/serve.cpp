@@ -352,7 +352,7 @@ std::pair<int, std::string> explanation_reply(const Explanation& explanation) {
   // Its names and the behaviour asked about are the client's and the trace's.
   if (explanation.status == Status::kOk) return {200, printable(explanation.text, true)};
   std::string text = explanation.text + "\n";
-  for (const auto& note : explanation.notes) text += "note: " + note + "\n";
+  for (const auto& note : explanation.notes) text += "note: " + note.text + "\n";
   return {explanation.status == Status::kNotFound ? 404 : 422, printable(text, true)};
 }
 

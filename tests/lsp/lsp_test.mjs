@@ -272,6 +272,39 @@ for (const [format, config] of [['YAML', yaml], ['JSON', json]]) {
   });
 }
 
+test('a note that names a place links to that place in related information, however the note words it', async () => {
+  const dir = tempDir();
+  try {
+    await withClient(async (client) => {
+      // The note reads "line 6, column 5": no `file:line:column` in its text.
+      const unclosed = path.join(dir, 'unclosed.yaml');
+      const unclosedText = 'arbiter: 1\nname: t\nlayers:\n  - name: l\n    actuators: {a: {type: bool}\n' +
+        '    behaviours:\n      b: {type: scripted}\n';
+      fs.writeFileSync(unclosed, unclosedText);
+      const [syntax] = await client.open(uriOf(unclosed), unclosedText);
+      assert.equal(syntax.code, 'yaml-syntax');
+      assert.match(syntax.relatedInformation[0].message, /reached line 6, column 5/);
+      assert.deepEqual(syntax.relatedInformation[0].location,
+        { uri: uriOf(unclosed), range: rangeOf(unclosedText, 'behaviours') });
+
+      // A folder with a space in its name: the whole path is the place, not what follows the space.
+      fs.mkdirSync(path.join(dir, 'two words'));
+      const twice = path.join(dir, 'two words', 'twice.yaml');
+      const twiceText = 'arbiter: 1\nname: twice\nlayers:\n  - name: control\n  - name: control\n';
+      fs.writeFileSync(twice, twiceText);
+      const twiceUri = uriOf(twice).replace(/ /g, '%20');
+      const [duplicate] = await client.open(twiceUri, twiceText);
+      assert.equal(duplicate.code, 'duplicate-name');
+      assert.deepEqual(duplicate.range, rangeOf(twiceText, 'control', { nth: 1 }));
+      assert.equal(duplicate.relatedInformation[0].message, `first declared at ${twice}:4:11`);
+      assert.deepEqual(duplicate.relatedInformation[0].location,
+        { uri: twiceUri, range: rangeOf(twiceText, 'control') });
+    });
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test("a config's diagnostics equal validate's whatever else is open: another config's plugins stay its own", async () => {
   const dir = tempDir();
   try {

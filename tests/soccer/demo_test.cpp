@@ -11,9 +11,6 @@
 
 using arbiter::Manager;
 using arbiter::Registry;
-using arbiter::soccer::Point;
-using arbiter::soccer::Pose;
-using arbiter::soccer::World;
 using namespace arbiter::soccer::test;
 
 namespace {
@@ -34,7 +31,7 @@ Outcome play(Manager& manager, std::uint64_t max_steps) {
   const auto& program = manager.program();
   const auto kick_ball = *program.find_behaviour("control", "kick_ball");
   const auto go_behind_ball = *program.find_behaviour("control", "go_behind_ball");
-  const World& world = *world_link(manager).world();
+  const arbiter::soccer::World& world = *world_link(manager).world();
   Outcome outcome;
   while (manager.steps() < max_steps) {
     manager.step();
@@ -84,8 +81,8 @@ TEST_CASE("the same config and seed give the same game", "[soccer][demo]") {
 TEST_CASE("from varied starts the robot finds, approaches and kicks the ball", "[soccer][demo]") {
   struct Start {
     const char* what;
-    Pose robot;
-    Point ball;
+    arbiter::soccer::Pose robot;
+    arbiter::soccer::Point ball;
     int seed;
   };
   const Start start =

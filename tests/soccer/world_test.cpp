@@ -17,15 +17,25 @@ namespace {
 constexpr double kPi = arbiter::soccer::kPi;
 
 /// A world with the robot out of the ball's way, so that nothing but the ball moves.
-WorldConfig quiet_world() {
+/// The default world with the robot starting at `robot` and the ball at `ball`.
+WorldConfig starting_at(const Pose& robot, const Point& ball) {
   WorldConfig config;
-  config.robot_start = {-4.0, -2.5, 0.0};
-  config.ball_start = {0.0, 0.0};
+  config.robot_start = robot;
+  config.ball_start = ball;
   return config;
+}
+
+WorldConfig quiet_world() {
+  return starting_at({-4.0, -2.5, 0.0}, {0.0, 0.0});
 }
 
 void run(World& world, int steps, const Command& command = {}) {
   for (int i = 0; i < steps; ++i) world.step(command);
+}
+
+/// Steps `world` with no command until a goal is scored at x = +4.5, `most` steps at the most.
+void run_until_goal(World& world, int most) {
+  for (int i = 0; i < most && world.goals_at(1) == 0; ++i) world.step({});
 }
 
 }  // namespace
@@ -91,9 +101,7 @@ TEST_CASE("the head turns towards its target at a limited speed within its limit
 }
 
 TEST_CASE("the ball is measured relative to the robot with seeded noise", "[soccer][world]") {
-  WorldConfig config;
-  config.robot_start = {-1.0, 0.5, kPi / 2};
-  config.ball_start = {-1.0, 2.5};
+  WorldConfig config = starting_at({-1.0, 0.5, kPi / 2}, {-1.0, 2.5});
   config.noise = 0.1;
   config.seed = 3;
 
@@ -175,11 +183,7 @@ TEST_CASE("a goal is scored when the ball crosses a goal line between the posts"
   SECTION("into the goal at x = +4.5") {
     World world(quiet_world());
     world.place_ball({3.5, 1.0}, {3.0, 0.3});
-    int steps = 0;
-    while (world.goals_at(1) == 0 && steps < 30) {
-      world.step({});
-      ++steps;
-    }
+    run_until_goal(world, 30);
     CHECK(world.goals_at(1) == 1);
     CHECK(world.observe().goal == 1);
     CHECK(world.ball().x == 4.5);
@@ -213,11 +217,7 @@ TEST_CASE("after a goal the world kicks off again once kick_off_delay has passed
     World world(config);
     world.place_robot({1.0, 1.0, 2.0});
     world.place_ball({4.0, 0.0}, {3.0, 0.0});
-    int steps = 0;
-    while (world.goals_at(1) == 0 && steps < 30) {
-      world.step({});
-      ++steps;
-    }
+    run_until_goal(world, 30);
     REQUIRE(world.goals_at(1) == 1);
     run(world, 14);
     CHECK(world.ball().x == 4.5);
@@ -274,9 +274,7 @@ TEST_CASE("a ball lying on a line slides along it instead of leaving the field",
 }
 
 TEST_CASE("walking is limited in speed and acceleration", "[soccer][world]") {
-  WorldConfig config;
-  config.robot_start = {0.0, 0.0, 0.0};
-  config.ball_start = {0.0, 2.0};
+  const WorldConfig config = starting_at({0.0, 0.0, 0.0}, {0.0, 2.0});
   World world(config);
   Command command;
   command.walk = {1.0, 0.0, 0.0};
@@ -294,9 +292,7 @@ TEST_CASE("walking is limited in speed and acceleration", "[soccer][world]") {
 }
 
 TEST_CASE("a robot walking into the ball pushes it", "[soccer][world]") {
-  WorldConfig config;
-  config.robot_start = {0.0, 0.0, 0.0};
-  config.ball_start = {0.5, 0.0};
+  const WorldConfig config = starting_at({0.0, 0.0, 0.0}, {0.5, 0.0});
   World world(config);
   Command command;
   command.walk = {0.4, 0.0, 0.0};
@@ -344,9 +340,7 @@ TEST_CASE("a shot at the configured step rolls the ball towards its target", "[s
 
 TEST_CASE("a diving robot lies across the ball's path and stops a shot", "[soccer][world]") {
   // The shot passes 0.3 m to the robot's left: beside a standing robot, into the goal.
-  WorldConfig config;
-  config.robot_start = {-4.0, 0.0, 0.0};
-  config.ball_start = {-1.0, 0.3};
+  const WorldConfig config = starting_at({-4.0, 0.0, 0.0}, {-1.0, 0.3});
   // The ball needs about 15 steps to the goal line; the robot lies for 30.
   const auto shoot = [&](int dive) {
     World world(config);

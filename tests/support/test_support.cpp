@@ -4,10 +4,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/compile/controller_builder.hpp"
@@ -184,6 +186,12 @@ Registry make_test_registry() {
   return registry;
 }
 
+std::string one_layer(const std::string& layer, const std::string& top) {
+  const bool line_break = !layer.empty() && layer.front() == '\n';
+  return "arbiter: 1\nname: t\n" + top + "layers:\n  - name: l\n" +
+         layer.substr(line_break ? 1 : 0);
+}
+
 LoadOptions with_lints() {
   LoadOptions options;
   options.lint = lint;
@@ -287,6 +295,23 @@ Program compile_text(const std::string& text, const Registry& registry, const st
   auto program = compile(model, registry, diagnostics);
   if (!program) throw ConfigError(std::move(diagnostics));
   return std::move(*program);
+}
+
+Trace read_whole_trace(const std::string& path) {
+  Diagnostic error;
+  auto trace = read_trace(path, error);
+  INFO(format(error));
+  REQUIRE(trace);
+  return std::move(*trace);
+}
+
+std::string run_traced(Manager& manager, int steps) {
+  std::ostringstream out;
+  TraceWriter trace(out);
+  manager.add_observer(trace);
+  for (int i = 0; i < steps; ++i) manager.step();
+  manager.finish();
+  return out.str();
 }
 
 double activation_of(const Manager& manager, const std::string& layer, const std::string& name) {

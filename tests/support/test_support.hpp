@@ -13,6 +13,7 @@
 #include "arbiter/manager.hpp"
 #include "arbiter/program.hpp"
 #include "arbiter/registry.hpp"
+#include "arbiter/trace_reader.hpp"
 
 namespace arbiter::test {
 
@@ -175,6 +176,12 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+/// A config named `t` of one layer named `l`, whose keys (`actuators:`, `behaviours:`, ...,
+/// indented by four spaces) are `layer`, with the top-level keys `top` (each a line) before
+/// `layers:`. A line break that `layer` starts with is dropped, so that a raw string can start on
+/// the line after its `R"(`; the layer's first key is then on line 5 (more with `top`).
+std::string one_layer(const std::string& layer, const std::string& top = "");
+
 /// Load options with the lint step, as `arbiter validate` loads: for the tests of what a user sees.
 LoadOptions with_lints();
 
@@ -194,6 +201,13 @@ T& instance(const Program& program, const std::string& layer, const std::string&
   if (!index) throw std::runtime_error("no behaviour " + layer + "/" + name);
   return dynamic_cast<T&>(*program.behaviours[*index].instance);
 }
+
+/// The trace or recording at `path`, read whole; one that cannot be read fails the test with the
+/// reader's error.
+Trace read_whole_trace(const std::string& path);
+
+/// Steps `manager` `steps` times and finishes it; returns the trace it wrote (JSON lines).
+std::string run_traced(Manager& manager, int steps);
 
 /// The activation level of `layer/name` after the manager's last step.
 double activation_of(const Manager& manager, const std::string& layer, const std::string& name);

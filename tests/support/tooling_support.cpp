@@ -94,12 +94,7 @@ std::string trace_of(const std::string& relative, int steps) {
   Registry registry = tooling_registry();
   Diagnostics diagnostics;
   Manager manager(load_config(relative, registry, diagnostics));
-  std::ostringstream out;
-  TraceWriter trace(out);
-  manager.add_observer(trace);
-  for (int i = 0; i < steps; ++i) manager.step();
-  manager.finish();
-  return out.str();
+  return run_traced(manager, steps);
 }
 
 }  // namespace arbiter::test

@@ -70,7 +70,7 @@ void report_cycle(const LayerDecl& layer, const std::vector<Edge>& edges,
   }
   const auto& names = layer.behaviours;
   std::string text = names[best.front()].name.text;
-  std::vector<std::string> notes;
+  std::vector<Note> notes;
   const SourceLocation* report_at = nullptr;
   for (std::size_t i = 0; i < best.size(); ++i) {
     const auto from = best[i];
@@ -81,9 +81,10 @@ void report_cycle(const LayerDecl& layer, const std::vector<Edge>& edges,
     }
     if (declared != nullptr) {
       text += fmt::format(" {} {}", declared->chaining ? "=>" : "->", names[to].name.text);
-      notes.push_back(fmt::format("{} {} {} declared at {}", names[from].name.text,
-                                  declared->chaining ? "=>" : "->", names[to].name.text,
-                                  to_string(declared->location)));
+      notes.push_back({fmt::format("{} {} {} declared at {}", names[from].name.text,
+                                   declared->chaining ? "=>" : "->", names[to].name.text,
+                                   to_string(declared->location)),
+                       declared->location});
       if (report_at == nullptr || i + 1 == best.size()) report_at = &declared->location;
       continue;
     }
@@ -101,8 +102,10 @@ void report_cycle(const LayerDecl& layer, const std::vector<Edge>& edges,
       via += " => " + names[edge->to].name.text;
       declared_at += (declared_at.empty() ? "" : ", ") + to_string(edge->location);
     }
-    notes.push_back(fmt::format("{} => {} is implicit: chaining {} (declared at {})",
-                                names[from].name.text, names[to].name.text, via, declared_at));
+    // The chain's first link stands for it: a note links to one place.
+    notes.push_back({fmt::format("{} => {} is implicit: chaining {} (declared at {})",
+                                 names[from].name.text, names[to].name.text, via, declared_at),
+                     chain.front()->location});
   }
   auto& error =
       diagnostics.error(report_at != nullptr ? *report_at : layer.name.location, "inhibition-cycle",

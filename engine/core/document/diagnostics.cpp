@@ -39,8 +39,6 @@ void Diagnostics::sort() {
   });
 }
 
-namespace {}  // namespace
-
 std::string printable(std::string_view text, bool lines) {
   std::string out;
   out.reserve(text.size());
@@ -255,7 +253,8 @@ std::string format_one(const Diagnostic& diagnostic, const FormatOptions& option
     }
   }
   for (const auto& note : diagnostic.notes) {
-    out += fmt::format("{}: {} {}\n", paint(kBold, where), paint(kCyan, "note:"), printable(note));
+    out += fmt::format("{}: {} {}\n", paint(kBold, where), paint(kCyan, "note:"),
+                       printable(note.text));
   }
   return out;
 }
@@ -277,13 +276,30 @@ std::string format(const Diagnostics& diagnostics, const FormatOptions& options)
 std::string format_json(const Diagnostics& diagnostics) {
   auto array = nlohmann::ordered_json::array();
   for (const auto& item : diagnostics.items()) {
-    array.push_back({{"file", item.location.file},
-                     {"line", item.location.line},
-                     {"column", item.location.column},
-                     {"severity", severity_name(item.severity)},
-                     {"code", item.code},
-                     {"message", item.message},
-                     {"notes", item.notes}});
+    auto notes = nlohmann::ordered_json::array();
+    auto places = nlohmann::ordered_json::array();
+    bool placed = false;
+    for (const auto& note : item.notes) {
+      notes.push_back(note.text);
+      if (note.location) {
+        placed = true;
+        places.push_back({{"file", note.location->file},
+                          {"line", note.location->line},
+                          {"column", note.location->column}});
+      } else {
+        places.push_back(nullptr);
+      }
+    }
+    nlohmann::ordered_json entry = {{"file", item.location.file},
+                                    {"line", item.location.line},
+                                    {"column", item.location.column},
+                                    {"severity", severity_name(item.severity)},
+                                    {"code", item.code},
+                                    {"message", item.message},
+                                    {"notes", std::move(notes)}};
+    // Only where a note has a place, so that the common diagnostic stays as it always was.
+    if (placed) entry["note_locations"] = std::move(places);
+    array.push_back(std::move(entry));
   }
   // JSON escapes control characters itself; a byte that is not UTF-8 (in a file name given on the
   // command line, say) becomes U+FFFD, where dump() would throw.
@@ -410,7 +426,7 @@ Diagnostic& Diagnostic::unknown_name(std::string_view name, const std::vector<st
   if (!known.empty()) {
     notes.push_back(suggest(name, known, label));
   } else if (!none_known.empty()) {
-    notes.emplace_back(none_known);
+    notes.emplace_back(std::string(none_known));
   }
   return *this;
 }

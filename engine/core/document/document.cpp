@@ -220,7 +220,7 @@ void report_yaml_error(const SourceText& source, const YAML::Exception& error,
   const std::string& what = error.msg;
   const char here = at < text.size() ? text[at] : '\0';
   std::string message = "invalid YAML: " + what;
-  std::vector<std::string> notes;
+  std::vector<Note> notes;
   const bool structural = what == YAML::ErrorMsg::END_OF_MAP_FLOW ||
                           what == YAML::ErrorMsg::END_OF_SEQ_FLOW ||
                           what == YAML::ErrorMsg::BLOCK_ENTRY || what == YAML::ErrorMsg::MAP_KEY ||
@@ -232,8 +232,9 @@ void report_yaml_error(const SourceText& source, const YAML::Exception& error,
     diagnostics
         .error(source.location(*opener), "yaml-syntax",
                fmt::format("invalid YAML: '{}' is never closed", text[*opener]))
-        .notes.push_back(fmt::format("the parser reached {} without finding its '{}'",
-                                     source.describe(at), text[*opener] == '{' ? '}' : ']'));
+        .notes.push_back({fmt::format("the parser reached {} without finding its '{}'",
+                                      source.describe(at), text[*opener] == '{' ? '}' : ']'),
+                          source.location(at)});
     return;
   }
   // Where the line's indentation lines up with nothing above it, that is the mistake to name.
@@ -520,7 +521,8 @@ class TreeBuilder : public YAML::EventHandler {
       const auto& where = first->key_location;
       diagnostics_.error(location, "duplicate-key", fmt::format("duplicate key '{}'", key))
           .notes.push_back(
-              fmt::format("first defined at {}; the second is ignored", to_string(where.get())));
+              {fmt::format("first defined at {}; the second is ignored", to_string(where.get())),
+               where.get()});
       parent.drop_value = true;
       return;
     }

@@ -139,7 +139,7 @@ bool check_json(const SourceText& source, Diagnostics& diagnostics, const ReadLi
   const std::string_view token =
       scan.token ? text.substr(scan.token->begin, scan.token->end - scan.token->begin) : "";
   std::string explained;
-  std::vector<std::string> notes;
+  std::vector<Note> notes;
   const bool closer = token == "]" || token == "}";
   if (!token.empty() && (token[0] == '/' || token[0] == '#')) {
     explained = "comments are not allowed in JSON";
@@ -169,7 +169,8 @@ bool check_json(const SourceText& source, Diagnostics& diagnostics, const ReadLi
     if (closer && !scan.open.empty()) {
       const std::size_t opener = scan.open.back();
       notes.push_back(
-          fmt::format("the '{}' at {} is not closed", text[opener], source.describe(opener)));
+          {fmt::format("the '{}' at {} is not closed", text[opener], source.describe(opener)),
+           source.location(opener)});
     }
   }
   diagnostics.error(source.location(at), "json-syntax", "invalid JSON: " + explained).notes =

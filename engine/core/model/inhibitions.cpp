@@ -212,7 +212,8 @@ void ModelBuilder::add_inhibition(InhibitionDecl inhibition, LayerDecl& layer,
         inhibition.location, "duplicate-inhibition",
         fmt::format("duplicate inhibition {} {} {}: applied once", inhibition.inhibitor.text,
                     inhibition.chaining ? "=>" : "->", inhibition.inhibited.text));
-    warning.notes.push_back(fmt::format("first declared at {}", to_string(existing.location)));
+    warning.notes.push_back(
+        {fmt::format("first declared at {}", to_string(existing.location)), existing.location});
     if (inhibition.chaining != existing.chaining) {
       existing.chaining = true;
       warning.notes.push_back(

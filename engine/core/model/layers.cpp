@@ -29,7 +29,8 @@ void ModelBuilder::read_layer(const Node& node) {
       if (other.name.text == layer.name.text) {
         auto& error = diagnostics_.error(layer.name.location, "duplicate-name",
                                          fmt::format("duplicate layer '{}'", layer.name.text));
-        error.notes.push_back(fmt::format("first declared at {}", to_string(other.name.location)));
+        error.notes.push_back({fmt::format("first declared at {}", to_string(other.name.location)),
+                               other.name.location});
       }
     }
   }
@@ -155,8 +156,9 @@ void ModelBuilder::read_actuators(const Node& node, LayerDecl& layer) {
           fmt::format("duplicate actuator '{}': actuator names are unique in the manager",
                       entry.key));
       const auto& first = found->second;
-      error.notes.push_back(fmt::format("first declared in layer '{}' at {}", first.layer,
-                                        to_string(first.location)));
+      error.notes.push_back({fmt::format("first declared in layer '{}' at {}", first.layer,
+                                         to_string(first.location)),
+                             first.location});
       continue;
     }
     actuator_index_[entry.key] = {actuator.layer, entry.key_location, actuator.type};
@@ -195,7 +197,8 @@ void ModelBuilder::read_sensors(const Node& node, LayerDecl& layer, PendingLayer
         diagnostics_
             .error(where, "duplicate-name",
                    fmt::format("sensor '{}' listed twice in {}", name, layer_label(layer)))
-            .notes.push_back(fmt::format("first listed at {}", to_string(existing.location)));
+            .notes.push_back({fmt::format("first listed at {}", to_string(existing.location)),
+                              existing.location});
         return;
       }
     }
@@ -224,8 +227,9 @@ void ModelBuilder::read_sensors(const Node& node, LayerDecl& layer, PendingLayer
             .error(type->location(), "type-mismatch",
                    fmt::format("sensor '{}' expects type '{}' but actuator '{}' is '{}'", name,
                                *text, name, actuator.type->name))
-            .notes.push_back(fmt::format("'{}' is declared in layer '{}' at {}", name,
-                                         actuator.layer, to_string(actuator.location)));
+            .notes.push_back({fmt::format("'{}' is declared in layer '{}' at {}", name,
+                                          actuator.layer, to_string(actuator.location)),
+                              actuator.location});
       }
     }
     layer.sensors.push_back({name, where});

@@ -27,7 +27,8 @@ void ModelBuilder::read_state_machines(const Node& node) {
         diagnostics_
             .error(entry.key_location, "duplicate-name",
                    fmt::format("duplicate state machine '{}'", entry.key))
-            .notes.push_back(fmt::format("first declared at {}", to_string(other.location)));
+            .notes.push_back(
+                {fmt::format("first declared at {}", to_string(other.location)), other.location});
       }
     }
     StateMachineDecl machine;
@@ -105,7 +106,8 @@ void ModelBuilder::check_machine_ownership() {
                    fmt::format("state machine '{}' already has an owner; a controller is "
                                "stepped by one owner only",
                                child.text))
-            .notes.push_back(fmt::format("first claimed at {}", to_string(it->second->location)));
+            .notes.push_back({fmt::format("first claimed at {}", to_string(it->second->location)),
+                              it->second->location});
         continue;
       }
       children[machine.name.text].push_back(child.text);

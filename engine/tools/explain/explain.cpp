@@ -30,7 +30,7 @@ const Json& at(const Json& object, const std::string& key) {
   return found == object.end() ? kNull : *found;
 }
 
-Explanation failure(Status status, std::string text, std::vector<std::string> notes = {}) {
+Explanation failure(Status status, std::string text, std::vector<Note> notes = {}) {
   Explanation out;
   out.status = status;
   out.text = std::move(text);
@@ -69,7 +69,7 @@ std::optional<Target> resolve(const Program& program, std::string_view target, E
   }
   for (const auto& controller : program.controllers) known.push_back(controller->name());
   const auto not_found = [&](std::string text) {
-    std::vector<std::string> notes;
+    std::vector<Note> notes;
     if (auto hint = suggest(target, known); !hint.empty()) notes.push_back(std::move(hint));
     error = failure(Status::kNotFound, std::move(text), std::move(notes));
     return std::nullopt;
@@ -122,7 +122,7 @@ struct Records {
 };
 
 std::optional<Explanation> check_header(const Program& program, const Json& header) {
-  const auto bad = [](std::string text, std::vector<std::string> notes = {}) {
+  const auto bad = [](std::string text, std::vector<Note> notes = {}) {
     return failure(Status::kBadTrace, std::move(text), std::move(notes));
   };
   if (!header.is_object() || header.value("arbiter_trace", 0) != 1) {
@@ -134,7 +134,7 @@ std::optional<Explanation> check_header(const Program& program, const Json& head
     return bad(fmt::format("the trace was written for '{}', not for '{}'", name, program.name));
   }
   const Json& layers = at(header, "layers");
-  std::vector<std::string> differences;
+  std::vector<Note> differences;
   if (!layers.is_array() || layers.size() != program.layers.size()) {
     differences.push_back(fmt::format("the config has {} layers, the trace {}",
                                       program.layers.size(),

@@ -287,9 +287,10 @@ class Linter {
                          decl.inhibitor.text, arrow(decl.chaining), decl.inhibited.text, chain));
     if (warning == nullptr) return;
     for (const auto* link : links) {
-      warning->notes.push_back(fmt::format("{} => {} declared at {}", link->decl->inhibitor.text,
-                                           link->decl->inhibited.text,
-                                           to_string(link->decl->location)));
+      warning->notes.push_back(
+          {fmt::format("{} => {} declared at {}", link->decl->inhibitor.text,
+                       link->decl->inhibited.text, to_string(link->decl->location)),
+           link->decl->location});
     }
     warning->notes.push_back("remove it: the closure gives the same inhibition");
   }
@@ -370,14 +371,17 @@ class Linter {
                          inhibited.name, inhibitor));
     if (warning == nullptr) return;
     const Param* param = decls_[graph.base + cause]->params.find("activation");
-    warning->notes.push_back(fmt::format(
+    Note scripted(fmt::format(
         "'{}' is scripted to request 1 at every step ({}) and nothing can inhibit it", inhibitor,
         param->defaulted ? "its default activation"
                          : fmt::format("activation at {}", to_string(param->location))));
+    if (!param->defaulted) scripted.location = param->location;
+    warning->notes.push_back(std::move(scripted));
     if (const auto* direct = graph.declared(cause, b)) {
-      warning->notes.push_back(fmt::format("{} {} {} declared at {}", inhibitor,
-                                           arrow(direct->decl->chaining), inhibited.name,
-                                           to_string(direct->decl->location)));
+      warning->notes.push_back(
+          {fmt::format("{} {} {} declared at {}", inhibitor, arrow(direct->decl->chaining),
+                       inhibited.name, to_string(direct->decl->location)),
+           direct->decl->location});
       return;
     }
     // Back from b along the edges the cover came through, to the cover.
@@ -449,7 +453,8 @@ class Linter {
             "layers run in declaration order; a sensor sees this step's value only of an "
             "actuator of an earlier layer or of an interface layer");
         warning->notes.push_back(
-            fmt::format("'{}' is declared at {}", actuator.name, to_string(actuator.location)));
+            {fmt::format("'{}' is declared at {}", actuator.name, to_string(actuator.location)),
+             actuator.location});
       }
     }
   }

@@ -211,7 +211,7 @@ class UnreadableSource : public TraceSource {
 
 }  // namespace
 
-void TraceSource::fail(SourceLocation where, std::string message, std::vector<std::string> notes) {
+void TraceSource::fail(SourceLocation where, std::string message, std::vector<Note> notes) {
   if (error_) return;
   error_ = Diagnostic{std::move(where), Severity::kError, "bad-trace", std::move(message),
                       std::move(notes)};

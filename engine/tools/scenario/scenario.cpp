@@ -166,12 +166,12 @@ class ScenarioReader {
   void read_replay(const Node& node, const Node& root, Scenario& scenario) {
     read_file(node, "'replay'", "recording", scenario, scenario.replay, scenario.replay_path);
     if (root.find("inputs") != nullptr) {
+      const SourceLocation inputs = key_location(root, "inputs");
       diagnostics_
           .error(node.location(), "conflicting-keys",
                  "a test's inputs come from 'inputs:' or from a recording ('replay:'): give one "
                  "of the two")
-          .notes.push_back(
-              fmt::format("'inputs:' is at line {}", key_location(root, "inputs").line));
+          .notes.push_back({fmt::format("'inputs:' is at line {}", inputs.line), inputs});
     }
   }
 
@@ -227,7 +227,8 @@ class ScenarioReader {
           diagnostics_
               .error(step->location(), "duplicate-step",
                      fmt::format("two 'inputs' entries for step {}", input.step))
-              .notes.push_back(fmt::format("the other is at {}", to_string(other.location)));
+              .notes.push_back(
+                  {fmt::format("the other is at {}", to_string(other.location)), other.location});
         }
       }
       for (const auto& entry : item.entries()) {

@@ -314,7 +314,8 @@ bool TraceChecks::resolve(const Scenario& scenario, const Trace* recorded, std::
                                            fmt::format("cannot compare with trace '{}': {}",
                                                        expectation.file.text, error.message));
         if (error.location.line > 0) {
-          reported.notes.push_back("in the trace at " + to_string(error.location));
+          reported.notes.push_back(
+              {"in the trace at " + to_string(error.location), error.location});
         }
         continue;
       }

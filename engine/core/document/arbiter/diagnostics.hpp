@@ -27,12 +27,26 @@ std::string to_string(const SourceLocation& where);
 
 enum class Severity { kError, kWarning };
 
+/// A line under a diagnostic: a suggestion, or a place that bears on it ("first declared at
+/// ..."). The text is what is printed and names the place itself; `location` is that place for
+/// tools that link to it (the language server's related information, `--format json`).
+struct Note {
+  std::string text;
+  std::optional<SourceLocation> location;
+
+  // Implicit: most notes are text only.
+  Note(std::string text) : text(std::move(text)) {}
+  Note(const char* text) : text(text) {}
+  Note(std::string text, SourceLocation where)
+      : text(std::move(text)), location(std::move(where)) {}
+};
+
 struct Diagnostic {
   SourceLocation location;
   Severity severity = Severity::kError;
   std::string code;  ///< stable, kebab-case; listed in docs/diagnostics.md
   std::string message;
-  std::vector<std::string> notes;
+  std::vector<Note> notes;
 
   /// For a name that names nothing: the note offering the closest of `known` and listing them
   /// (suggest(name, known, label)), or `none_known` when `known` is empty (then no note if that
@@ -94,7 +108,8 @@ std::string format(const Diagnostics& diagnostics, const FormatOptions& options 
 /// start a line of its own.
 std::string printable(std::string_view text, bool lines = false);
 
-/// A JSON array of {file, line, column, severity, code, message, notes}.
+/// A JSON array of {file, line, column, severity, code, message, notes, note_locations}: `notes`
+/// holds each note's text, `note_locations` one entry per note, {file, line, column} or null.
 std::string format_json(const Diagnostics& diagnostics);
 
 /// "did you mean 'x'? known: a, b, c" for a misspelt name, or "known: ..." when nothing is close

@@ -25,8 +25,8 @@ struct Explanation {
     kBadTrace,  ///< the trace is malformed, or was written for another config
   };
   Status status = Status::kOk;
-  std::string text;                ///< the explanation, or what went wrong (one line)
-  std::vector<std::string> notes;  ///< with an error: suggestions
+  std::string text;         ///< the explanation, or what went wrong (one line)
+  std::vector<Note> notes;  ///< with an error: suggestions
   /// kBadTrace because a record could not be read: where it is (the trace reader's location).
   std::optional<SourceLocation> where;
 };

@@ -55,7 +55,7 @@ class TraceSource {
   /// Checks `record` (its kind still unknown) against the records before it; false, with
   /// error() set, when it is not a record of a run.
   bool accept(TraceRecord& record);
-  void fail(SourceLocation where, std::string message, std::vector<std::string> notes = {});
+  void fail(SourceLocation where, std::string message, std::vector<Note> notes = {});
   /// At the end of the input: false, with error() set when there was no header at all.
   bool end(SourceLocation where);
   void set_truncated(std::string what) { truncated_ = std::move(what); }

@@ -1,0 +1,243 @@
+// Diagnostics as the client sees them: each config's problems published per file (an included
+// file's errors also on the include that leads to them), and the quick fixes offered for them.
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <regex>
+#include <set>
+
+#include "lsp/analysis.hpp"
+#include "lsp/server.hpp"
+
+namespace arbiter::lsp {
+
+namespace {
+
+json diagnostic_json(const Diagnostic& item, const Lines* lines) {
+  json range = {{"start", {{"line", 0}, {"character", 0}}},
+                {"end", {{"line", 0}, {"character", 0}}}};
+  if (lines && item.location.line > 0) {
+    const std::size_t begin = lines->offset(item.location.line, std::max(1, item.location.column));
+    range = lines->range(begin, lines->token_end(begin));
+  }
+  json result = {{"range", range},
+                 {"severity", item.severity == Severity::kError ? 1 : 2},
+                 {"code", item.code},
+                 {"source", "arbiter"},
+                 {"message", item.message}};
+  return result;
+}
+
+std::optional<std::string> suggestion_of(const json& diagnostic) {
+  static const std::regex pattern(R"(did you mean '([^']+)'\?)");
+  std::smatch match;
+  const std::string message = diagnostic.value("message", "");
+  if (std::regex_search(message, match, pattern)) return match[1].str();
+  for (const auto& info : diagnostic.value("relatedInformation", json::array())) {
+    const std::string text = info.value("message", "");
+    if (std::regex_search(text, match, pattern)) return match[1].str();
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+void Server::report_plugin_path(Analysis& analysis) const {
+  const Node* root = analysis.loaded.document();
+  const Node* plugins = root && root->is_mapping() ? root->find("plugins") : nullptr;
+  if (!plugins) return;
+  for (const auto& dir : options_.plugins.path) {
+    std::error_code error;
+    if (std::filesystem::is_directory(dir, error)) continue;
+    analysis.loaded.diagnostics
+        .warning(plugins->location(), "plugin-path-not-found",
+                 fmt::format("plugin directory '{}' (--plugin-path) does not exist", dir))
+        .notes.push_back("the server was started with it: correct the editor's arbiter command");
+  }
+  analysis.loaded.diagnostics.sort();
+}
+
+void Server::publish(const std::set<std::string>& touched, const std::set<std::string>& gone,
+                     std::vector<json>& out) {
+  std::set<std::string> files = gone;
+  for (const auto& root : touched) {
+    const auto found = analyses_.find(root);
+    if (found == analyses_.end()) continue;
+    files.insert(root);
+    for (const auto& file : found->second->loaded.files.files()) files.insert(file->path);
+  }
+  // Each file's diagnostics from every config that reaches it (a file two configs include
+  // gets its problems once).
+  std::map<std::string, json> by_file;
+  std::set<std::string> seen;
+  auto add = [&](const std::string& file, json diagnostic) {
+    if (seen.insert(file + diagnostic.dump()).second)
+      by_file[file].push_back(std::move(diagnostic));
+  };
+  for (const auto& [root, analysis] : analyses_) {
+    const auto& loaded = analysis->loaded;
+    bool relevant = touched.count(root) > 0;
+    for (const auto& file : loaded.files.files()) relevant = relevant || files.count(file->path);
+    if (!relevant) continue;
+    // The files each of the root's includes reaches, for problems in files that are not open.
+    std::map<std::string, std::vector<std::string>> includes;
+    for (const auto& item : analysis->occurrences) {
+      if (item.kind == Kind::kInclude) includes[item.file].push_back(item.name);
+    }
+    auto reaches = [&](const std::string& from, const std::string& to) {
+      std::set<std::string> visited{from};
+      std::vector<std::string> stack{from};
+      while (!stack.empty()) {
+        const std::string at = stack.back();
+        stack.pop_back();
+        if (at == to) return true;
+        for (const auto& next : includes[at]) {
+          if (visited.insert(next).second) stack.push_back(next);
+        }
+      }
+      return false;
+    };
+    for (const auto& item : loaded.diagnostics.items()) {
+      if (!files.count(item.location.file)) continue;
+      json diagnostic = diagnostic_json(item, analysis->lines_of(item.location.file));
+      json related = json::array();
+      for (const auto& note : item.notes) {
+        // A note without a place of its own is about the diagnostic's.
+        json location = {{"uri", path_to_uri(item.location.file)}, {"range", diagnostic["range"]}};
+        if (note.location) {
+          const std::string path =
+              std::filesystem::path(note.location->file).lexically_normal().string();
+          const int line = std::max(1, note.location->line);
+          const int column = std::max(1, note.location->column);
+          json range = range_json(line - 1, column - 1);
+          if (const Lines* lines = analysis->lines_of(path); lines && note.location->line > 0) {
+            const std::size_t begin = lines->offset(line, column);
+            range = lines->range(begin, lines->token_end(begin));
+          }
+          location = {{"uri", path_to_uri(path)}, {"range", range}};
+        }
+        related.push_back({{"location", location}, {"message", note.text}});
+      }
+      if (!related.empty()) diagnostic["relatedInformation"] = related;
+      // An error in an included file that is not open shows on the root's include that leads
+      // to it, or an editor that shows open files only would show nothing wrong.
+      if (item.severity == Severity::kError && item.location.file != root &&
+          !is_open(item.location.file)) {
+        for (const auto& include : analysis->occurrences) {
+          if (include.kind != Kind::kInclude || include.file != root ||
+              !reaches(include.name, item.location.file))
+            continue;
+          json copy = diagnostic;
+          const Lines* lines = analysis->lines_of(root);
+          copy["range"] = lines ? lines->range(include.begin, include.end) : range_json(0, 0);
+          copy["message"] =
+              fmt::format("in included file {}: {}",
+                          std::filesystem::path(item.location.file)
+                              .lexically_relative(std::filesystem::path(root).parent_path())
+                              .string(),
+                          item.message);
+          copy["relatedInformation"] = json::array(
+              {{{"location",
+                 {{"uri", path_to_uri(item.location.file)}, {"range", diagnostic["range"]}}},
+                {"message", item.message}}});
+          add(root, std::move(copy));
+          break;
+        }
+      }
+      add(item.location.file, std::move(diagnostic));
+    }
+  }
+  for (const auto& file : files) {
+    auto found = by_file.find(file);
+    const bool any = found != by_file.end();
+    // A config, and an open file checked through one, get their (empty) list too, so that an
+    // editor knows they were checked.
+    if (!any && !published_.count(file) && !analyses_.count(file) &&
+        !(is_open(file) && analysis_of(file)))
+      continue;
+    out.push_back({{"jsonrpc", "2.0"},
+                   {"method", "textDocument/publishDiagnostics"},
+                   {"params",
+                    {{"uri", path_to_uri(file)},
+                     {"diagnostics", any ? std::move(found->second) : json::array()}}}});
+    if (any) {
+      published_.insert(file);
+    } else {
+      published_.erase(file);
+    }
+  }
+}
+
+json Server::code_actions(const json& params) const {
+  const std::string uri = params.at("textDocument").at("uri");
+  const std::string path = uri_to_path(uri);
+  const std::string* text = text_of(path);
+  json actions = json::array();
+  if (!text) return actions;
+  const Lines lines(*text);
+  for (const auto& diagnostic :
+       params.value("context", json::object()).value("diagnostics", json::array())) {
+    if (diagnostic.value("source", "") != "arbiter") continue;
+    if (auto name = suggestion_of(diagnostic)) {
+      actions.push_back(
+          {{"title", fmt::format("Change to '{}'", *name)},
+           {"kind", "quickfix"},
+           {"diagnostics", json::array({diagnostic})},
+           {"isPreferred", true},
+           {"edit",
+            {{"changes",
+              {{uri, json::array({{{"range", diagnostic["range"]}, {"newText", *name}}})}}}}}});
+    }
+    if (diagnostic.value("code", "") == "redundant-inhibition") {
+      const std::size_t begin = lines.offset(diagnostic["range"]["start"]);
+      std::size_t end = lines.token_end(begin);
+      const std::size_t line = lines.line_of(begin);
+      // The item's extent: to the end of the line in a block sequence, else the flow item.
+      std::size_t from = begin, to = end;
+      const std::string before =
+          text->substr(lines.line_start(line), begin - lines.line_start(line));
+      const bool block = before.find_first_not_of(' ') != std::string::npos &&
+                         before.substr(before.find_first_not_of(' ')).rfind("- ", 0) == 0 &&
+                         before.find_first_not_of(" -") == std::string::npos;
+      if (block) {
+        from = lines.line_start(line);
+        to = line + 1 < lines.line_count() ? lines.line_start(line + 1) : text->size();
+      } else {
+        if (!(text->at(begin) == '"' || text->at(begin) == '\'')) {
+          // an unquoted flow item runs to the next ',' or ']'
+          to = text->find_first_of(",]\n", begin);
+          while (to > begin && (*text)[to - 1] == ' ') --to;
+        }
+        // With the comma before it (or, for the first item, the one after it).
+        const auto space = [&](std::size_t at) {
+          return std::isspace(static_cast<unsigned char>((*text)[at])) != 0;
+        };
+        std::size_t back = from;
+        while (back > 0 && space(back - 1)) --back;
+        if (back > 0 && (*text)[back - 1] == ',') {
+          from = back - 1;
+        } else {
+          std::size_t after = to;
+          while (after < text->size() && space(after)) ++after;
+          if (after < text->size() && (*text)[after] == ',') {
+            to = after + 1;
+            while (to < text->size() && space(to)) ++to;
+          }
+        }
+      }
+      actions.push_back(
+          {{"title", "Remove the inhibition: chaining already implies it"},
+           {"kind", "quickfix"},
+           {"diagnostics", json::array({diagnostic})},
+           {"edit",
+            {{"changes",
+              {{uri, json::array({{{"range", lines.range(from, to)}, {"newText", ""}}})}}}}}});
+    }
+  }
+  return actions;
+}
+
+}  // namespace arbiter::lsp
