@@ -62,6 +62,7 @@ class Other final : public Behaviour {
  public:
   double activation(const StepContext&) override { return 0.0; }
   double level = 0.0;
+  StateParam<double> handle;
 };
 
 Registry make_registry() {
@@ -185,4 +186,10 @@ TEST_CASE("registration rejects a param or port name, or a member, bound twice",
   // Nothing of the rejected declarations was kept.
   CHECK(gain.params.size() == 1);
   CHECK(gain.ports.size() == 1);
+  // A handle is read per planned instance, which only a state has.
+  auto& other = registry.add_behaviour<Other>("test.Other");
+  CHECK_THROWS_WITH(other.param("level", &Other::handle),
+                    "behaviour class 'test.Other' binds param 'level' to a StateParam handle, "
+                    "which only a state reads; bind a member of the param's type");
+  CHECK(other.params.empty());
 }

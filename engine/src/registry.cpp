@@ -71,6 +71,13 @@ void ClassInfo::reject_foreign_member(const std::string& item) const {
           : fmt::format("class '{}' binds '{}' to a member of another class", name, item));
 }
 
+void ClassInfo::reject_handle(const std::string& param_name) const {
+  throw std::logic_error(
+      fmt::format("{} class '{}' binds param '{}' to a StateParam handle, which "
+                  "only a state reads; bind a member of the param's type",
+                  to_string(kind), name, param_name));
+}
+
 ParamSpec& ClassInfo::add_param(std::string param_name, ParamKind param_kind, MemberKey member,
                                 std::function<void(void*, const ParamValue&, std::uint32_t)> bind) {
   for (const auto& existing : params) {

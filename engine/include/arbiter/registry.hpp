@@ -241,14 +241,15 @@ struct ClassInfo {
   /// instance's member holds the validated value before init(). A state's params vary per planned
   /// instance, so a state binds a StateParam<T> handle, read in a step with `ctx.param(handle)`;
   /// only a state_level() param may bind a state's plain member (else the load fails). A name or
-  /// member that comes twice, or a member of another class, throws std::logic_error.
+  /// member that comes twice, a member of another class, or a StateParam member of a class that is
+  /// no state, throws std::logic_error.
   template <typename C, typename M>
   ParamSpec& param(std::string param_name, M C::*member) {
-    static_assert(std::is_base_of_v<State, C> || !detail::StateParamTraits<M>::value,
-                  "only a state's param binds to a StateParam<T> member");
     check_owner<C>(param_name);
     const auto cast = throw_instance;
     if constexpr (detail::StateParamTraits<M>::value) {
+      // Checked here rather than on C, which may be a base shared by states (a mixin).
+      if (kind != ClassKind::kState) reject_handle(param_name);
       ParamSpec& spec =
           add_param(std::move(param_name),
                     param_kind_of<typename detail::StateParamTraits<M>::type>(), MemberKey(member),
@@ -315,6 +316,7 @@ struct ClassInfo {
     reject_foreign_member(item);
   }
   [[noreturn]] void reject_foreign_member(const std::string& item) const;
+  [[noreturn]] void reject_handle(const std::string& param_name) const;
   ParamSpec& add_param(std::string param_name, ParamKind param_kind, MemberKey member,
                        std::function<void(void*, const ParamValue&, std::uint32_t)> bind);
   PortSpec& add_port(std::string port_name, PortDirection direction, const std::type_info& type,
