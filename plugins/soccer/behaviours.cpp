@@ -122,7 +122,7 @@ class SearchForBall final : public Behaviour, public BallMemory {
 /// Walks to the point `behind_distance` behind the ball on the line from the goal through the
 /// ball, facing the goal. A robot that is not yet behind the ball goes round it on its own side,
 /// so as not to push the ball towards the wrong goal.
-class GoBehindBall final : public WhileBallKnown {
+class GoBehindBall final : public WhileBallKnown, public WalkParams<double> {
  public:
   void execute(ExecuteContext& ctx) override {
     const Pose& robot = robot_pose();
@@ -141,8 +141,8 @@ class GoBehindBall final : public WhileBallKnown {
 
     // Close to the target, the robot turns to face the goal.
     const Point relative = to_robot(robot, target);
-    const WalkLimits limits{near_distance_, max_forward_, max_sideways_, max_turn_};
-    ctx.write(gait_velocity_, walk_towards(relative, gain_ * norm(relative), gain_,
+    const WalkLimits limits{near_distance_, max_forward, max_sideways, max_turn};
+    ctx.write(gait_velocity_, walk_towards(relative, gain * norm(relative), gain,
                                            wrap_angle(aim - robot.theta), limits));
   }
 
@@ -152,10 +152,6 @@ class GoBehindBall final : public WhileBallKnown {
   double behind_distance_ = 0.0;
   double clearance_ = 0.0;
   double near_distance_ = 0.0;
-  double gain_ = 0.0;
-  double max_forward_ = 0.0;
-  double max_sideways_ = 0.0;
-  double max_turn_ = 0.0;
   Output<Vec3> gait_velocity_;
 };
 
@@ -265,9 +261,7 @@ void register_go_behind_ball(Registry& registry) {
       .describe(
           "within this distance of the target the robot steps sideways and turns to face the "
           "goal; further away it walks forwards towards the target (m)");
-  declare_walk_limits(info, &GoBehindBall::gain_, &GoBehindBall::max_forward_,
-                      &GoBehindBall::max_sideways_, &GoBehindBall::max_turn_, 0.35,
-                      "the fastest forward speed requested (m/s)");
+  WalkParams<double>::declare(info, 0.35, "the fastest forward speed requested (m/s)");
   BallMemory::declare_ports(info);
   info.port("gait_velocity", &GoBehindBall::gait_velocity_)
       .describe("the walk command: forward, sideways, turn rate");

@@ -61,12 +61,12 @@ class WaitForButton final : public State {
 
 /// Walks to a field pose: far from it, forwards while turning towards it; close to it, stepping
 /// straight there while turning to the pose's heading. Proceeds once within the tolerances.
-class WalkToPose final : public State {
+class WalkToPose final : public State, public WalkParams<StateParam<double>> {
  public:
   void activate(StateContext& ctx) override {
     target_ = {ctx.param(x_), ctx.param(y_), ctx.param(theta_)};
-    limits_ = {ctx.param(near_distance_), ctx.param(max_forward_), ctx.param(max_sideways_),
-               ctx.param(max_turn_)};
+    limits_ = {ctx.param(near_distance_), ctx.param(max_forward), ctx.param(max_sideways),
+               ctx.param(max_turn)};
   }
 
   StateResult execute(StateContext& ctx) override {
@@ -81,7 +81,7 @@ class WalkToPose final : public State {
     }
     // Never faster than would cover the rest of the way in one step, whatever the gain.
     const double speed = std::min(
-        ctx.param(gain_) * distance,
+        ctx.param(gain) * distance,
         ctx.period() > 0.0 ? distance / ctx.period() : std::numeric_limits<double>::infinity());
     const double scale = distance > 1e-9 ? speed / distance : 0.0;
     ctx.write(gait_velocity_, walk_towards(relative, speed, scale, turn, limits_));
@@ -98,10 +98,6 @@ class WalkToPose final : public State {
   StateParam<double> position_tolerance_;
   StateParam<double> angle_tolerance_;
   StateParam<double> near_distance_;
-  StateParam<double> gain_;
-  StateParam<double> max_forward_;
-  StateParam<double> max_sideways_;
-  StateParam<double> max_turn_;
   Pose target_;
   WalkLimits limits_;
 };
@@ -422,9 +418,8 @@ void register_walk_to_pose(Registry& registry) {
       .defaults_to(0.7)
       .range(0.0, 10.0)
       .describe("within this distance of the target, step straight to it (m)");
-  declare_walk_limits(info, &WalkToPose::gain_, &WalkToPose::max_forward_,
-                      &WalkToPose::max_sideways_, &WalkToPose::max_turn_, 0.3,
-                      "the fastest forward (and backward) speed requested (m/s)");
+  WalkParams<StateParam<double>>::declare(
+      info, 0.3, "the fastest forward (and backward) speed requested (m/s)");
   info.port("robot_pose", &WalkToPose::pose_)
       .describe("the robot's pose on the field: x, y (m), heading (rad)");
   info.port("gait_velocity", &WalkToPose::gait_velocity_)

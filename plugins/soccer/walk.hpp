@@ -19,28 +19,35 @@ struct WalkLimits {
   double max_turn = 0.0;
 };
 
-/// Declares the params `gain`, `max_forward`, `max_sideways` and `max_turn`, bound to C's
-/// members: values, or a state's StateParam<double> handles.
-template <typename C, typename M>
-void declare_walk_limits(ClassInfo& info, M C::*gain, M C::*max_forward, M C::*max_sideways,
-                         M C::*max_turn, double forward_default, const char* forward_text) {
-  info.param("gain", gain)
-      .defaults_to(1.5)
-      .range(0.0, 10.0)
-      .describe("walking speed per metre of distance to the target (1/s)");
-  info.param("max_forward", max_forward)
-      .defaults_to(forward_default)
-      .range(0.0, 1.0)
-      .describe(forward_text);
-  info.param("max_sideways", max_sideways)
-      .defaults_to(0.2)
-      .range(0.0, 1.0)
-      .describe("the fastest sideways speed requested (m/s)");
-  info.param("max_turn", max_turn)
-      .defaults_to(1.0)
-      .range(0.0, 3.0)
-      .describe("the fastest turn rate requested (rad/s)");
-}
+/// The params that set the walk towards a target, as a base of the class that walks: values for
+/// a behaviour, StateParam<double> handles for a state (which reads them per planned instance).
+template <typename T>
+struct WalkParams {
+  T gain{};
+  T max_forward{};
+  T max_sideways{};
+  T max_turn{};
+
+  /// Declares `gain`, `max_forward`, `max_sideways` and `max_turn`, bound to these members.
+  static void declare(ClassInfo& info, double forward_default, const char* forward_text) {
+    info.param("gain", &WalkParams::gain)
+        .defaults_to(1.5)
+        .range(0.0, 10.0)
+        .describe("walking speed per metre of distance to the target (1/s)");
+    info.param("max_forward", &WalkParams::max_forward)
+        .defaults_to(forward_default)
+        .range(0.0, 1.0)
+        .describe(forward_text);
+    info.param("max_sideways", &WalkParams::max_sideways)
+        .defaults_to(0.2)
+        .range(0.0, 1.0)
+        .describe("the fastest sideways speed requested (m/s)");
+    info.param("max_turn", &WalkParams::max_turn)
+        .defaults_to(1.0)
+        .range(0.0, 3.0)
+        .describe("the fastest turn rate requested (rad/s)");
+  }
+};
 
 /// The walk command towards `relative`, the target in the robot frame. Far away: forwards at
 /// `speed`, slower while facing away from it, turning towards it. Close: stepping straight to it
