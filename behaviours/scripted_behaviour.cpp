@@ -14,8 +14,7 @@ namespace {
 class ScriptedBehaviour final : public Behaviour {
  public:
   void init(BehaviourInitContext& ctx) override {
-    levels_ = ctx.param<std::vector<double>>("activation");
-    const Node writes = ctx.param<Node>("writes");
+    const Node& writes = writes_node_;
     if (writes.reads_as_null()) return;
     if (!writes.is_mapping()) {
       ctx.error(writes.location(),
@@ -42,7 +41,9 @@ class ScriptedBehaviour final : public Behaviour {
   }
 
  private:
+  friend void arbiter::register_scripted_behaviour(Registry& registry);
   std::vector<double> levels_;
+  Node writes_node_;
   std::vector<std::pair<AnyOutput, ValueBox>> writes_;
 };
 
@@ -53,13 +54,13 @@ void register_scripted_behaviour(Registry& registry) {
                    .describe(
                        "Requests a scripted activation level each step and writes fixed values "
                        "while active.");
-  info.param<std::vector<double>>("activation")
+  info.param("activation", &ScriptedBehaviour::levels_)
       .defaults_to(std::vector<double>{1.0})
       .range(0.0, 1.0)
       .describe(
           "the requested level: a number, or a list with one level per step (the last is "
           "held)");
-  info.param<Node>("writes")
+  info.param("writes", &ScriptedBehaviour::writes_node_)
       .defaults_to(Node())
       .schema(R"({"type": ["object", "null"],
                   "propertyNames": {"$ref": "#/definitions/identifier"},

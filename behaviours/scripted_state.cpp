@@ -15,10 +15,8 @@ namespace {
 class ScriptedState final : public State {
  public:
   void init(StateInitContext& ctx) override {
-    read_list(ctx, "append", append_);
-    read_list(ctx, "prepend", prepend_);
-    hold_ = ctx.param_handle<std::int64_t>("hold");
-    terminate_ = ctx.param_handle<bool>("terminate");
+    read_list(ctx, append_list_, "append", append_);
+    read_list(ctx, prepend_list_, "prepend", prepend_);
   }
 
   StateResult execute(StateContext& ctx) override {
@@ -38,8 +36,9 @@ class ScriptedState final : public State {
   }
 
  private:
-  static void read_list(StateInitContext& ctx, const char* param, std::vector<PlannedState>& out) {
-    const Node list = ctx.param<Node>(param);
+  /// Plans the states of `list`, the param `param`.
+  static void read_list(StateInitContext& ctx, const Node& list, const char* param,
+                        std::vector<PlannedState>& out) {
     if (list.reads_as_null()) return;
     if (!list.is_sequence()) {
       ctx.error(list.location(), fmt::format("'{}' must be a list of states (a name, or "
@@ -64,6 +63,9 @@ class ScriptedState final : public State {
     }
   }
 
+  friend void arbiter::register_scripted_state(Registry& registry);
+  Node append_list_;
+  Node prepend_list_;
   std::vector<PlannedState> append_;
   std::vector<PlannedState> prepend_;
   StateParam<std::int64_t> hold_;
@@ -75,10 +77,8 @@ class ScriptedState final : public State {
 class StateMachineBehaviour final : public Behaviour {
  public:
   void init(BehaviourInitContext& ctx) override {
-    level_ = ctx.param<double>("activation");
-    restart_ = ctx.param<bool>("restart");
     controller_ =
-        ctx.claim_controller(ctx.param<std::string>("machine"), ctx.param_location("machine"));
+        ctx.claim_controller(machine_, ctx.param_location(&StateMachineBehaviour::machine_));
   }
 
   double activation(const StepContext&) override {
@@ -92,6 +92,8 @@ class StateMachineBehaviour final : public Behaviour {
   }
 
  private:
+  friend void arbiter::register_state_machine_behaviour(Registry& registry);
+  std::string machine_;
   Controller* controller_ = nullptr;
   double level_ = 1.0;
   bool restart_ = false;
@@ -106,22 +108,24 @@ void register_scripted_state(Registry& registry) {
               "Holds for a number of executions, then appends or prepends planned states, or "
               "terminates "
               "the controller, and proceeds. With a child machine, steps it until it finishes.");
-  info.param<std::int64_t>("hold").defaults_to(1).at_least(1).describe(
-      "executions before proceeding");
+  info.param("hold", &ScriptedState::hold_)
+      .defaults_to(1)
+      .at_least(1)
+      .describe("executions before proceeding");
   // The entries are written as the queue's (`arbiter schema` refers editors to its definition).
   const std::string planned_states =
       R"({"type": ["array", "null"], "items": {"$ref": "#/definitions/queue_entry"}})";
-  info.param<Node>("append")
+  info.param("append", &ScriptedState::append_list_)
       .defaults_to(Node())
       .schema(planned_states)
       .state_level()
       .describe("states to append to the queue when proceeding: names or {name: {params}}");
-  info.param<Node>("prepend")
+  info.param("prepend", &ScriptedState::prepend_list_)
       .defaults_to(Node())
       .schema(planned_states)
       .state_level()
       .describe("states to put at the head of the queue when proceeding, in this order");
-  info.param<bool>("terminate")
+  info.param("terminate", &ScriptedState::terminate_)
       .defaults_to(false)
       .describe("terminate the controller instead of proceeding");
 }
@@ -129,14 +133,16 @@ void register_scripted_state(Registry& registry) {
 void register_state_machine_behaviour(Registry& registry) {
   auto& info = registry.add_behaviour<StateMachineBehaviour>("state_machine")
                    .describe("Steps a state machine's controller while active.");
-  info.param<std::string>("machine").describe("the state machine to step");
-  info.param<double>("activation")
+  info.param("machine", &StateMachineBehaviour::machine_).describe("the state machine to step");
+  info.param("activation", &StateMachineBehaviour::level_)
       .defaults_to(1.0)
       .range(0.0, 1.0)
       .describe("the level requested while the controller is running");
-  info.param<bool>("restart").defaults_to(false).describe(
-      "start the controller again from its configured queue whenever the behaviour "
-      "is activated anew");
+  info.param("restart", &StateMachineBehaviour::restart_)
+      .defaults_to(false)
+      .describe(
+          "start the controller again from its configured queue whenever the behaviour "
+          "is activated anew");
 }
 
 }  // namespace arbiter

@@ -19,9 +19,9 @@ namespace {
 class Proceed final : public State {
  public:
   void init(StateInitContext& ctx) override {
-    for (const auto& state : ctx.param<std::vector<std::string>>("append")) {
+    for (const auto& state : append_names_) {
       PlannedState planned;
-      if (ctx.plan_state(state, nullptr, ctx.param_location("append"), planned)) {
+      if (ctx.plan_state(state, nullptr, ctx.param_location(&Proceed::append_names_), planned)) {
         append_.push_back(std::move(planned));
       }
     }
@@ -33,6 +33,8 @@ class Proceed final : public State {
   }
 
  private:
+  friend Registry arbiter::bench::make_registry();
+  std::vector<std::string> append_names_;
   std::vector<PlannedState> append_;
 };
 
@@ -40,15 +42,11 @@ class Proceed final : public State {
 /// ports are optional: unbound, they cost one branch.
 class Trivial final : public Behaviour {
  public:
-  void init(BehaviourInitContext& ctx) override {
-    level_ = ctx.param<double>("activation");
-    in_ = ctx.input<double>("in");
-    out_ = ctx.output<double>("out");
-  }
   double activation(const StepContext&) override { return level_; }
   void execute(ExecuteContext& ctx) override { ctx.write(out_, 0.5 * ctx.read(in_) + 1.0); }
 
  private:
+  friend Registry arbiter::bench::make_registry();
   double level_ = 0.0;
   Input<double> in_;
   Output<double> out_;
@@ -61,13 +59,14 @@ Registry make_registry() {
   register_builtin_behaviours(registry);
   auto& trivial = registry.add_behaviour<Trivial>("bench.Trivial")
                       .describe("Requests a fixed level; writes 0.5 * in + 1 to out while active.");
-  trivial.param<double>("activation").range(0.0, 1.0).describe("the requested level");
-  trivial.input<double>("in").make_optional().describe("read while active");
-  trivial.output<double>("out").make_optional().describe("written while active");
+  trivial.param("activation", &Trivial::level_).range(0.0, 1.0).describe("the requested level");
+  trivial.port("in", &Trivial::in_).make_optional().describe("read while active");
+  trivial.port("out", &Trivial::out_).make_optional().describe("written while active");
   add_state_class<Proceed>(registry, "bench.Proceed")
       .describe("Proceeds after every execution, appending `append` to the plan when it does.")
-      .param<std::vector<std::string>>("append")
+      .param("append", &Proceed::append_names_)
       .defaults_to(std::vector<std::string>{})
+      .state_level()
       .describe("states to append when proceeding");
   return registry;
 }

@@ -17,18 +17,19 @@ class Lister : public Interface {
   void init(InitContext& ctx) override {
     actuators = ctx.layer_actuators();
     sensors = ctx.layer_sensors();
-    const auto read = ctx.param<std::string>("read");
     if (read.empty()) return;
-    if (ctx.param<std::string>("as") == "bool") {
-      bound = ctx.sensor_input<bool>(read, ctx.param_location("read")).bound();
+    if (as == "bool") {
+      bound = ctx.sensor_input<bool>(read, ctx.param_location(&Lister::read)).bound();
     } else {
-      input = ctx.sensor_input<double>(read, ctx.param_location("read"));
+      input = ctx.sensor_input<double>(read, ctx.param_location(&Lister::read));
       bound = input.bound();
     }
   }
   void output(const StepContext& ctx) override {
     if (input.bound()) seen = ctx.read(input);
   }
+  std::string read;
+  std::string as;
   std::vector<LayerItem> actuators;
   std::vector<LayerItem> sensors;
   Input<double> input;
@@ -39,8 +40,8 @@ class Lister : public Interface {
 Registry make_registry() {
   Registry registry = test::make_test_registry();
   auto& lister = registry.add_interface<Lister>("test.Lister");
-  lister.param<std::string>("read").defaults_to(std::string());
-  lister.param<std::string>("as").defaults_to(std::string("double"));
+  lister.param("read", &Lister::read).defaults_to(std::string());
+  lister.param("as", &Lister::as).defaults_to(std::string("double"));
   return registry;
 }
 

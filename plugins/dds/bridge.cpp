@@ -30,15 +30,24 @@ struct TopicQos {
   bool transient_local = false;
 };
 
-struct Bridge::Subscription {
-  std::string name;   // the actuator
+/// What a subscription and a publication share: the value and topic they carry, their listener,
+/// and a peer's QoS that cannot match theirs.
+struct Endpoint {
+  std::string name;   // the actuator (subscribed) or sensor (published)
   std::string topic;  // the DDS topic name
   ValueKind kind = ValueKind::kDouble;
   Message message = Message::kFloat64;
+  dds_listener_t* listener = nullptr;
+  // Set by a listener when a peer's QoS cannot match this reader's or writer's; reported once.
+  std::atomic<std::int32_t> incompatible_policy{0};
+  bool incompatible_reported = false;
+  std::vector<std::string> incompatible_events;  // by QoS policy id
+};
+
+struct Bridge::Subscription : Endpoint {
   AnyOutput output;
   ValueBox staged;  // the newest sample taken, as an engine value
   dds_entity_t reader = 0;
-  dds_listener_t* listener = nullptr;
   std::vector<SampleStorage> samples;  // what dds_take fills, reused every step
   std::vector<void*> buffers;
   std::vector<dds_sample_info_t> infos;
@@ -48,27 +57,15 @@ struct Bridge::Subscription {
   std::int32_t reported_publishers = 0;
   std::string found_event;
   std::string lost_event;
-  // Set by a listener when a publisher's QoS cannot match this reader's; reported once.
-  std::atomic<std::int32_t> incompatible_policy{0};
-  bool incompatible_reported = false;
-  std::vector<std::string> incompatible_events;  // by QoS policy id
 };
 
-struct Bridge::Publication {
-  std::string name;  // the sensor
-  std::string topic;
-  ValueKind kind = ValueKind::kDouble;
-  Message message = Message::kFloat64;
+struct Bridge::Publication : Endpoint {
   std::uint32_t actuator = kUnbound;
   dds_entity_t writer = 0;
-  dds_listener_t* listener = nullptr;
   SampleStorage sample{};
   std::atomic<std::int32_t> subscribers{0};
   bool failing = false;
   std::string failed_event;
-  std::atomic<std::int32_t> incompatible_policy{0};
-  bool incompatible_reported = false;
-  std::vector<std::string> incompatible_events;  // by QoS policy id
 };
 
 namespace {
@@ -123,9 +120,10 @@ std::optional<TopicQos> qos_profile(const std::string& name) {
 
 const std::vector<std::string> kQosProfiles = {"default", "sensor_data", "system_default"};
 
-/// Whether the config wrote a param: a default is located at the instance.
-bool param_written(InitContext& ctx, std::string_view param) {
-  const SourceLocation at = ctx.param_location(param);
+/// Whether the config wrote the param bound to `member`: a default is located at the instance.
+template <typename M>
+bool param_written(InitContext& ctx, M BridgeParams::*member) {
+  const SourceLocation at = ctx.param_location(member);
   const SourceLocation& self = ctx.location();
   return at.file != self.file || at.line != self.line || at.column != self.column;
 }
@@ -215,19 +213,15 @@ struct TopicBinding {
 };
 
 /// The `qos` profile, then the policies the config writes beside it.
-TopicQos bridge_qos(InitContext& ctx) {
-  TopicQos qos = qos_profile(ctx.param<std::string>("qos")).value_or(TopicQos{});
-  if (param_written(ctx, "reliability")) {
-    qos.reliable = ctx.param<std::string>("reliability") == "reliable";
+TopicQos bridge_qos(InitContext& ctx, const BridgeParams& params) {
+  TopicQos qos = qos_profile(params.qos).value_or(TopicQos{});
+  if (param_written(ctx, &BridgeParams::reliability)) {
+    qos.reliable = params.reliability == "reliable";
   }
-  if (param_written(ctx, "history")) {
-    qos.keep_all = ctx.param<std::string>("history") == "keep_all";
-  }
-  if (param_written(ctx, "depth")) {
-    qos.depth = static_cast<std::int32_t>(ctx.param<std::int64_t>("depth"));
-  }
-  if (param_written(ctx, "durability")) {
-    qos.transient_local = ctx.param<std::string>("durability") == "transient_local";
+  if (param_written(ctx, &BridgeParams::history)) qos.keep_all = params.history == "keep_all";
+  if (param_written(ctx, &BridgeParams::depth)) qos.depth = static_cast<std::int32_t>(params.depth);
+  if (param_written(ctx, &BridgeParams::durability)) {
+    qos.transient_local = params.durability == "transient_local";
   }
   return qos;
 }
@@ -357,8 +351,8 @@ std::optional<std::string> read_cyclone_config(const std::string& value, const S
 }
 
 /// `domain_id`, or else ROS_DOMAIN_ID as a ROS 2 node reads it, or else 0.
-std::optional<std::int64_t> domain_id_of(InitContext& ctx) {
-  if (param_written(ctx, "domain_id")) return ctx.param<std::int64_t>("domain_id");
+std::optional<std::int64_t> domain_id_of(InitContext& ctx, const BridgeParams& params) {
+  if (param_written(ctx, &BridgeParams::domain_id)) return params.domain_id;
   const char* variable = std::getenv("ROS_DOMAIN_ID");
   if (variable == nullptr || *variable == '\0') return 0;
   char* end = nullptr;
@@ -423,9 +417,10 @@ std::uint32_t sensor_actuator(InitContext& ctx, const std::string& sensor, Value
 
 /// A binding for each actuator (subscribed) and sensor (published) of the layer, with the options
 /// `topics:` gives them.
-std::vector<TopicBinding> bind_topics(InitContext& ctx, const std::vector<LayerItem>& actuators,
+std::vector<TopicBinding> bind_topics(InitContext& ctx, const BridgeParams& params,
+                                      const std::vector<LayerItem>& actuators,
                                       const std::vector<LayerItem>& sensors) {
-  const TopicQos qos = bridge_qos(ctx);
+  const TopicQos qos = bridge_qos(ctx, params);
   std::vector<TopicBinding> bindings;
   const auto add = [&](const LayerItem& item, bool subscribe) {
     const auto kind = kind_of(item.type->name);
@@ -451,7 +446,7 @@ std::vector<TopicBinding> bind_topics(InitContext& ctx, const std::vector<LayerI
   for (const auto& item : actuators) add(item, true);
   for (const auto& item : sensors) add(item, false);
 
-  const Node topics = ctx.param<Node>("topics");
+  const Node& topics = params.topics;
   if (!topics.reads_as_null() && !topics.is_mapping()) {
     ctx.error(topics.location(),
               fmt::format("'topics' must map actuators and sensors of this layer to topic "
@@ -479,15 +474,41 @@ std::vector<TopicBinding> bind_topics(InitContext& ctx, const std::vector<LayerI
   return bindings;
 }
 
+/// Names `endpoint` after the binding it carries on `topic_name`, with the QoS warnings it may
+/// report.
+void name_endpoint(Endpoint& endpoint, const std::string& topic_name, const TopicBinding& binding,
+                   bool subscriber) {
+  endpoint.name = binding.name;
+  endpoint.topic = topic_name;
+  endpoint.kind = binding.kind;
+  endpoint.message = binding.message;
+  endpoint.incompatible_events =
+      incompatible_qos_events(binding.name, topic_name, binding.qos, subscriber);
+}
+
+/// Creates the reader (subscriber) or writer of `endpoint`, whose listener is set up, with the
+/// binding's QoS; reports at the binding's topic when DDS refuses.
+dds_entity_t open_endpoint(InitContext& ctx, dds_entity_t participant, dds_entity_t topic,
+                           const TopicBinding& binding, const Endpoint& endpoint, bool subscriber) {
+  dds_qos_t* qos = make_qos(binding.qos, !subscriber);
+  const dds_entity_t entity = subscriber
+                                  ? dds_create_reader(participant, topic, qos, endpoint.listener)
+                                  : dds_create_writer(participant, topic, qos, endpoint.listener);
+  dds_delete_qos(qos);
+  if (entity < 0) {
+    ctx.error(binding.topic_location,
+              fmt::format("cannot {} DDS topic '{}': {}", subscriber ? "subscribe to" : "publish",
+                          endpoint.topic, retcode_name(entity)));
+  }
+  return entity;
+}
+
 std::unique_ptr<Bridge::Subscription> subscribe(InitContext& ctx, dds_entity_t participant,
                                                 dds_entity_t topic, const std::string& topic_name,
                                                 const TopicBinding& binding) {
   auto subscription = std::make_unique<Bridge::Subscription>();
   Bridge::Subscription& in = *subscription;
-  in.name = binding.name;
-  in.topic = topic_name;
-  in.kind = binding.kind;
-  in.message = binding.message;
+  name_endpoint(in, topic_name, binding, true);
   in.output = ctx.output_to_actuator(binding.name, binding.location);
   if (in.output.type != nullptr) in.staged = ValueBox(*in.output.type);
   const std::size_t batch =
@@ -504,14 +525,7 @@ std::unique_ptr<Bridge::Subscription> subscribe(InitContext& ctx, dds_entity_t p
   dds_lset_data_available(in.listener, on_data_available);
   dds_lset_subscription_matched(in.listener, on_subscription_matched);
   dds_lset_requested_incompatible_qos(in.listener, on_requested_incompatible_qos);
-  in.incompatible_events = incompatible_qos_events(in.name, topic_name, binding.qos, true);
-  dds_qos_t* qos = make_qos(binding.qos, false);
-  in.reader = dds_create_reader(participant, topic, qos, in.listener);
-  dds_delete_qos(qos);
-  if (in.reader < 0) {
-    ctx.error(binding.topic_location, fmt::format("cannot subscribe to DDS topic '{}': {}",
-                                                  topic_name, retcode_name(in.reader)));
-  }
+  in.reader = open_endpoint(ctx, participant, topic, binding, in, true);
   return subscription;
 }
 
@@ -520,24 +534,14 @@ std::unique_ptr<Bridge::Publication> publish(InitContext& ctx, dds_entity_t part
                                              const TopicBinding& binding) {
   auto publication = std::make_unique<Bridge::Publication>();
   Bridge::Publication& out = *publication;
-  out.name = binding.name;
-  out.topic = topic_name;
-  out.kind = binding.kind;
-  out.message = binding.message;
+  name_endpoint(out, topic_name, binding, false);
   out.actuator = binding.actuator;
   out.failed_event =
       fmt::format("{}: publishing on {} failed; the history is full", out.name, topic_name);
   out.listener = dds_create_listener(&out);
   dds_lset_publication_matched(out.listener, on_publication_matched);
   dds_lset_offered_incompatible_qos(out.listener, on_offered_incompatible_qos);
-  out.incompatible_events = incompatible_qos_events(out.name, topic_name, binding.qos, false);
-  dds_qos_t* qos = make_qos(binding.qos, true);
-  out.writer = dds_create_writer(participant, topic, qos, out.listener);
-  dds_delete_qos(qos);
-  if (out.writer < 0) {
-    ctx.error(binding.topic_location, fmt::format("cannot publish DDS topic '{}': {}", topic_name,
-                                                  retcode_name(out.writer)));
-  }
+  out.writer = open_endpoint(ctx, participant, topic, binding, out, false);
   return publication;
 }
 
@@ -546,11 +550,11 @@ std::unique_ptr<Bridge::Publication> publish(InitContext& ctx, dds_entity_t part
 void Bridge::init(InitContext& ctx) {
   // Nothing joins the network while the config has an error: counted from here.
   const std::size_t errors_before = ctx.diagnostics().error_count();
-  publish_unwritten_ = ctx.param<std::string>("publish") == "every_step";
-  const std::string prefix = ctx.param<std::string>("topic_prefix");
-  std::string ns = ctx.param<std::string>("namespace");
+  publish_unwritten_ = publish_when == "every_step";
+  const std::string& prefix = topic_prefix;
+  std::string ns = BridgeParams::ns;
   if (!ns.empty()) {
-    check_topic(ctx, ns, ctx.param_location("namespace"), "namespace");
+    check_topic(ctx, ns, ctx.param_location(&BridgeParams::ns), "namespace");
     ns.erase(0, ns.find_first_not_of('/'));
   }
 
@@ -562,7 +566,7 @@ void Bridge::init(InitContext& ctx) {
                             "subscribes to a topic for each actuator and publishes each sensor",
                             ctx.name()));
   }
-  const std::vector<TopicBinding> bindings = bind_topics(ctx, actuators, sensors);
+  const std::vector<TopicBinding> bindings = bind_topics(ctx, *this, actuators, sensors);
   std::map<std::string, const TopicBinding*> published;
   for (const auto& binding : bindings) {
     if (binding.subscribe) continue;
@@ -578,17 +582,17 @@ void Bridge::init(InitContext& ctx) {
 
   std::string config_path;
   std::string config;
-  if (const auto value = ctx.param<std::string>("cyclone_config"); !value.empty()) {
+  if (!cyclone_config.empty()) {
     std::string problem;
-    const auto text =
-        read_cyclone_config(value, ctx.param_location("cyclone_config"), config_path, problem);
+    const SourceLocation at = ctx.param_location(&BridgeParams::cyclone_config);
+    const auto text = read_cyclone_config(cyclone_config, at, config_path, problem);
     if (text) {
       config = *text;
     } else {
-      ctx.error(ctx.param_location("cyclone_config"), problem);
+      ctx.error(at, problem);
     }
   }
-  const auto domain = domain_id_of(ctx);
+  const auto domain = domain_id_of(ctx, *this);
   if (ctx.diagnostics().error_count() > errors_before || !domain) return;
 
   const auto domain_id = static_cast<std::uint32_t>(*domain);
@@ -598,13 +602,14 @@ void Bridge::init(InitContext& ctx) {
                                              : fmt::format("the configuration '{}'", config_path),
                          problem);
   if (!domain_) {
-    ctx.error(ctx.param_location(config.empty() ? "domain_id" : "cyclone_config"),
+    ctx.error(config.empty() ? ctx.param_location(&BridgeParams::domain_id)
+                             : ctx.param_location(&BridgeParams::cyclone_config),
               fmt::format("cannot open DDS domain {}: {}", domain_id, problem));
     return;
   }
   participant_ = dds_create_participant(domain_id, nullptr, nullptr);
   if (participant_ < 0) {
-    ctx.error(ctx.param_location("domain_id"),
+    ctx.error(ctx.param_location(&BridgeParams::domain_id),
               fmt::format("cannot join DDS domain {}: {}", domain_id, retcode_name(participant_)));
     participant_ = 0;
     return;
@@ -629,7 +634,6 @@ void Bridge::init(InitContext& ctx) {
 namespace {
 
 /// Reports, once, that a peer's QoS cannot match this reader's or writer's.
-template <typename Endpoint>
 void report_incompatible(const StepContext& ctx, Endpoint& endpoint) {
   if (endpoint.incompatible_reported) return;
   const std::int32_t policy = endpoint.incompatible_policy.load(std::memory_order_acquire);
@@ -835,57 +839,57 @@ void register_bridge(Registry& registry) {
               "each sensor of its layer in the output pass, without waiting. Carries bool, int, "
               "double, vec2, vec3 and string values. Reports 'NAME: publisher found' and "
               "'NAME: publisher lost' events. See docs/dds.md.");
-  info.param<std::int64_t>("domain_id")
+  info.param("domain_id", &Bridge::domain_id)
       .defaults_to(0)
       .range(0.0, 232.0)
       .describe(
           "the DDS domain; when not set, the environment variable ROS_DOMAIN_ID, as for a ROS 2 "
           "node, or else 0");
-  info.param<std::string>("cyclone_config")
+  info.param("cyclone_config", &Bridge::cyclone_config)
       .defaults_to(std::string())
       .describe(
           "a Cyclone DDS XML configuration file, relative to this config file (or XML text "
           "starting with '<'); empty: Cyclone's defaults, or the file CYCLONEDDS_URI names");
-  info.param<std::string>("qos")
+  info.param("qos", &Bridge::qos)
       .defaults_to(std::string("default"))
       .one_of(kQosProfiles)
       .describe(
           "the ROS 2 QoS profile of every reader and writer: default (reliable, keep last 10, "
           "volatile), sensor_data (best effort, keep last 5, volatile) or system_default (the "
           "DDS implementation's); the params below change it, 'topics' per topic");
-  info.param<std::string>("reliability")
+  info.param("reliability", &Bridge::reliability)
       .defaults_to(std::string("reliable"))
       .one_of({"reliable", "best_effort"})
       .describe("reliability QoS of every reader and writer, instead of the profile's");
-  info.param<std::string>("history")
+  info.param("history", &Bridge::history)
       .defaults_to(std::string("keep_last"))
       .one_of({"keep_last", "keep_all"})
       .describe("history QoS of every reader and writer, instead of the profile's");
-  info.param<std::int64_t>("depth")
+  info.param("depth", &Bridge::depth)
       .defaults_to(10)
       .range(1.0, 10000.0)
       .describe(
           "the history depth for keep_last, instead of the profile's: how many samples a reader "
           "keeps between steps");
-  info.param<std::string>("durability")
+  info.param("durability", &Bridge::durability)
       .defaults_to(std::string("volatile"))
       .one_of({"volatile", "transient_local"})
       .describe(
           "durability QoS, instead of the profile's: transient_local lets a subscriber that "
           "joins late get the last value");
-  info.param<std::string>("topic_prefix")
+  info.param("topic_prefix", &Bridge::topic_prefix)
       .defaults_to(std::string("rt/"))
       .describe("prepended to every topic name: 'rt/' is ROS 2's prefix for topics");
-  info.param<std::string>("namespace")
+  info.param("namespace", &Bridge::ns)
       .defaults_to(std::string())
       .describe("a ROS 2 namespace for topic names that do not start with '/'");
-  info.param<Node>("topics")
+  info.param("topics", &Bridge::topics)
       .defaults_to(Node())
       .schema(topics_schema())
       .describe(
           "per actuator or sensor of the layer: its topic name (default: its own name), or "
           "{topic, message, qos, reliability, history, depth, durability}");
-  info.param<std::string>("publish")
+  info.param("publish", &Bridge::publish_when)
       .defaults_to(std::string("written"))
       .one_of({"written", "every_step"})
       .describe(

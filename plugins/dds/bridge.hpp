@@ -22,7 +22,22 @@ namespace arbiter::dds {
 
 class Domain;
 
-class Bridge final : public Interface {
+/// dds.Bridge's params, a base of the class so that the functions that read them may name them.
+struct BridgeParams {
+  std::int64_t domain_id = 0;
+  std::string cyclone_config;
+  std::string qos;
+  std::string reliability;
+  std::string history;
+  std::int64_t depth = 0;
+  std::string durability;
+  std::string topic_prefix;
+  std::string ns;  ///< `namespace`
+  Node topics;
+  std::string publish_when;  ///< `publish`
+};
+
+class Bridge final : public Interface, public BridgeParams {
  public:
   Bridge();
   ~Bridge() override;

@@ -14,13 +14,13 @@ namespace arbiter::dds {
 namespace {
 
 template <typename T>
+void register_hold(Registry& registry, const std::string& type);
+
+template <typename T>
 class Hold final : public Behaviour {
  public:
   void init(BehaviourInitContext& ctx) override {
-    from_ = ctx.input<T>("from");
-    to_ = ctx.output<T>("to");
-    level_ = ctx.param<double>("activation");
-    const double steps = std::ceil(ctx.param<double>("timeout") * ctx.rate_hz() - 1e-9);
+    const double steps = std::ceil(timeout_ * ctx.rate_hz() - 1e-9);
     timeout_steps_ = std::max<std::int64_t>(1, static_cast<std::int64_t>(steps));
   }
 
@@ -40,10 +40,12 @@ class Hold final : public Behaviour {
 
  private:
   static constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
+  friend void register_hold<T>(Registry& registry, const std::string& type);
 
   Input<T> from_;
   Output<T> to_;
   double level_ = 1.0;
+  double timeout_ = 0.0;  ///< seconds
   std::int64_t timeout_steps_ = 1;
   std::int64_t age_ = kNever;  // steps since `from` was last written
 };
@@ -57,18 +59,19 @@ void register_hold(Registry& registry, const std::string& type) {
               "from a step in which 'from' was written until 'timeout' seconds pass without "
               "another write; requests activation 0 after that. Bridges a command sent at a "
               "lower rate (through dds.Bridge) to a layer that needs it every step.");
-  info.param<double>("timeout")
+  info.param("timeout", &Hold<T>::timeout_)
       .defaults_to(0.25)
       .range(0.0, 3600.0)
       .describe(
           "seconds (steps at the config's rate_hz, at least one) that a value is held after "
           "it was last written");
-  info.param<double>("activation")
+  info.param("activation", &Hold<T>::level_)
       .defaults_to(1.0)
       .range(0.0, 1.0)
       .describe("the activation level requested while holding");
-  info.input<T>("from").describe("the received value, e.g. an actuator of a dds.Bridge layer");
-  info.output<T>("to").describe("the actuator written every step while holding");
+  info.port("from", &Hold<T>::from_)
+      .describe("the received value, e.g. an actuator of a dds.Bridge layer");
+  info.port("to", &Hold<T>::to_).describe("the actuator written every step while holding");
 }
 
 }  // namespace

@@ -6,7 +6,6 @@
 #include <limits>
 
 #include "arbiter/behaviour.hpp"
-#include "arbiter/init_context.hpp"
 #include "arbiter/registry.hpp"
 #include "geometry.hpp"
 
@@ -20,28 +19,25 @@ inline Point to_point(const Vec2& point) {
 }
 
 /// What one behaviour or state knows of the ball: where on the field it was last seen, and how
-/// many steps ago. Kept in the field frame so that it stays right while the robot walks. Every
-/// behaviour keeps its own, updated in update() whether or not the behaviour is active; a state
-/// instance keeps its own from activate() (reset()) on, updated in each execute().
+/// many steps ago. Kept in the field frame so that it stays right while the robot walks. A class
+/// that needs it derives from it (publicly: its ports are bound to these members) and declares
+/// its ports with declare_ports(). Every behaviour keeps its own, updated in update() whether or
+/// not the behaviour is active; a state instance keeps its own from activate()
+/// (forget_ball()) on, updated in each execute().
 class BallMemory {
  public:
   static constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
 
   static void declare_ports(ClassInfo& info) {
-    info.input<bool>("ball_visible").describe("whether the camera sees the ball this step");
-    info.input<Vec2>("ball_position")
+    info.port("ball_visible", &BallMemory::visible_)
+        .describe("whether the camera sees the ball this step");
+    info.port("ball_position", &BallMemory::position_)
         .describe("the measured ball position relative to the robot (m, x forward, y left)");
-    info.input<Vec3>("robot_pose")
+    info.port("robot_pose", &BallMemory::pose_)
         .describe("the robot's pose on the field: x, y (m) and heading (rad)");
   }
 
-  void init(InitContext& ctx) {
-    visible_ = ctx.input<bool>("ball_visible");
-    position_ = ctx.input<Vec2>("ball_position");
-    pose_ = ctx.input<Vec3>("robot_pose");
-  }
-
-  void update(const StepContext& ctx) {
+  void remember_ball(const StepContext& ctx) {
     robot_ = to_pose(ctx.read(pose_));
     if (ctx.read(visible_)) {
       field_ = to_field(robot_, to_point(ctx.read(position_)));
@@ -52,16 +48,16 @@ class BallMemory {
   }
 
   /// Forgets the ball, for a state instance taken from the pool.
-  void reset() { age_ = kNever; }
+  void forget_ball() { age_ = kNever; }
 
   /// Steps since the ball was last seen: 0 when it is seen now, kNever before it was ever seen.
-  std::int64_t age() const { return age_; }
-  bool seen_within(std::int64_t steps) const { return age_ <= steps; }
-  const Pose& robot() const { return robot_; }
+  std::int64_t ball_age() const { return age_; }
+  bool ball_seen_within(std::int64_t steps) const { return age_ <= steps; }
+  const Pose& robot_pose() const { return robot_; }
   /// Where the ball was last seen, on the field.
-  Point field() const { return field_; }
+  Point ball_field() const { return field_; }
   /// Where the ball was last seen, relative to the robot as it stands now.
-  Point relative() const { return to_robot(robot_, field_); }
+  Point ball_relative() const { return to_robot(robot_, field_); }
 
  private:
   Input<bool> visible_;

@@ -14,9 +14,16 @@
 #include "arbiter/state.hpp"
 #include "ball_memory.hpp"
 #include "geometry.hpp"
+#include "walk.hpp"
 
 namespace arbiter::soccer {
 namespace {
+
+void register_wait_for_button(Registry& registry);
+void register_walk_to_pose(Registry& registry);
+void register_monitor_ball(Registry& registry);
+void register_dive(Registry& registry);
+void register_goalie_behaviour(Registry& registry);
 
 constexpr double kHeadLimit = 1.5;
 
@@ -31,8 +38,9 @@ double out_of_goal(Point goal) {
   return norm(goal) > 1e-9 ? bearing(Point{-goal.x, -goal.y}) : 0.0;
 }
 
-ParamSpec& declare_own_goal(ClassInfo& info) {
-  return info.param<Vec2>("goal")
+template <typename C, typename M>
+ParamSpec& declare_own_goal(ClassInfo& info, M C::*goal) {
+  return info.param("goal", goal)
       .defaults_to(Vec2{-4.5, 0.0})
       .describe("the centre of the goal to keep (m, field frame), on its goal line");
 }
@@ -41,45 +49,24 @@ ParamSpec& declare_own_goal(ClassInfo& info) {
 /// is the press that sent the goalie back to waiting.
 class WaitForButton final : public State {
  public:
-  void init(StateInitContext& ctx) override { button_ = ctx.input<bool>("button"); }
-
   StateResult execute(StateContext& ctx) override {
     const bool pressed = ctx.written(button_) && ctx.read(button_);
     return pressed && ctx.executions() > 0 ? StateResult::kProceed : StateResult::kHold;
   }
 
  private:
+  friend void register_wait_for_button(Registry& registry);
   Input<bool> button_;
 };
 
 /// Walks to a field pose: far from it, forwards while turning towards it; close to it, stepping
 /// straight there while turning to the pose's heading. Proceeds once within the tolerances.
-class WalkToPose final : public State {
+class WalkToPose final : public State, public WalkParams<StateParam<double>> {
  public:
-  void init(StateInitContext& ctx) override {
-    pose_ = ctx.input<Vec3>("robot_pose");
-    gait_velocity_ = ctx.output<Vec3>("gait_velocity");
-    x_ = ctx.param_handle<double>("x");
-    y_ = ctx.param_handle<double>("y");
-    theta_ = ctx.param_handle<double>("theta");
-    position_tolerance_param_ = ctx.param_handle<double>("position_tolerance");
-    angle_tolerance_param_ = ctx.param_handle<double>("angle_tolerance");
-    near_distance_param_ = ctx.param_handle<double>("near_distance");
-    gain_param_ = ctx.param_handle<double>("gain");
-    max_forward_param_ = ctx.param_handle<double>("max_forward");
-    max_sideways_param_ = ctx.param_handle<double>("max_sideways");
-    max_turn_param_ = ctx.param_handle<double>("max_turn");
-  }
-
   void activate(StateContext& ctx) override {
     target_ = {ctx.param(x_), ctx.param(y_), ctx.param(theta_)};
-    position_tolerance_ = ctx.param(position_tolerance_param_);
-    angle_tolerance_ = ctx.param(angle_tolerance_param_);
-    near_distance_ = ctx.param(near_distance_param_);
-    gain_ = ctx.param(gain_param_);
-    max_forward_ = ctx.param(max_forward_param_);
-    max_sideways_ = ctx.param(max_sideways_param_);
-    max_turn_ = ctx.param(max_turn_param_);
+    limits_ = {ctx.param(near_distance_), ctx.param(max_forward), ctx.param(max_sideways),
+               ctx.param(max_turn)};
   }
 
   StateResult execute(StateContext& ctx) override {
@@ -87,50 +74,32 @@ class WalkToPose final : public State {
     const Point relative = to_robot(robot, target_.position());
     const double distance = norm(relative);
     const double turn = wrap_angle(target_.theta - robot.theta);
-    if (distance <= position_tolerance_ && std::abs(turn) <= angle_tolerance_) {
+    if (distance <= ctx.param(position_tolerance_) &&
+        std::abs(turn) <= ctx.param(angle_tolerance_)) {
       ctx.write(gait_velocity_, Vec3{});
       return StateResult::kProceed;
     }
     // Never faster than would cover the rest of the way in one step, whatever the gain.
-    const double speed =
-        std::min(gain_ * distance, ctx.period() > 0.0 ? distance / ctx.period()
-                                                      : std::numeric_limits<double>::infinity());
-    Vec3 walk;
-    if (distance > near_distance_) {
-      const double error = bearing(relative);
-      walk.x = std::min(max_forward_, speed) * std::max(0.0, std::cos(error));
-      walk.z = std::clamp(2.0 * error, -max_turn_, max_turn_);
-    } else {
-      const double scale = distance > 1e-9 ? speed / distance : 0.0;
-      walk.x = std::clamp(scale * relative.x, -max_forward_, max_forward_);
-      walk.y = std::clamp(scale * relative.y, -max_sideways_, max_sideways_);
-      walk.z = std::clamp(2.0 * turn, -max_turn_, max_turn_);
-    }
-    ctx.write(gait_velocity_, walk);
+    const double speed = std::min(
+        ctx.param(gain) * distance,
+        ctx.period() > 0.0 ? distance / ctx.period() : std::numeric_limits<double>::infinity());
+    const double scale = distance > 1e-9 ? speed / distance : 0.0;
+    ctx.write(gait_velocity_, walk_towards(relative, speed, scale, turn, limits_));
     return StateResult::kHold;
   }
 
  private:
+  friend void register_walk_to_pose(Registry& registry);
   Input<Vec3> pose_;
   Output<Vec3> gait_velocity_;
   StateParam<double> x_;
   StateParam<double> y_;
   StateParam<double> theta_;
-  StateParam<double> position_tolerance_param_;
-  StateParam<double> angle_tolerance_param_;
-  StateParam<double> near_distance_param_;
-  StateParam<double> gain_param_;
-  StateParam<double> max_forward_param_;
-  StateParam<double> max_sideways_param_;
-  StateParam<double> max_turn_param_;
+  StateParam<double> position_tolerance_;
+  StateParam<double> angle_tolerance_;
+  StateParam<double> near_distance_;
   Pose target_;
-  double position_tolerance_ = 0.0;
-  double angle_tolerance_ = 0.0;
-  double near_distance_ = 0.0;
-  double gain_ = 0.0;
-  double max_forward_ = 0.0;
-  double max_sideways_ = 0.0;
-  double max_turn_ = 0.0;
+  WalkLimits limits_;
 };
 
 /// Watches the ball with the head. The best goalkeeping pose lies on the line from the goal's
@@ -138,31 +107,18 @@ class WalkToPose final : public State {
 /// (without a ball, `distance` straight out, facing the field). When the robot stands too far
 /// from it, plans a walk there (`walk_state`) followed by another instance of itself, and
 /// proceeds.
-class MonitorBall final : public State {
+class MonitorBall final : public State, public BallMemory {
  public:
   void init(StateInitContext& ctx) override {
-    memory_.init(ctx);
-    head_angle_ = ctx.output<double>("head_angle");
     // Resolved here once, so that a re-plan looks up no name and a walk state the machine does
     // not declare fails the load.
-    walk_ = ctx.plan_state<double, double, double>(ctx.param<std::string>("walk_state"),
-                                                   {"x", "y", "theta"},
-                                                   ctx.param_location("walk_state"));
+    walk_ = ctx.plan_state<double, double, double>(walk_state_, {"x", "y", "theta"},
+                                                   ctx.param_location(&MonitorBall::walk_state_));
     again_ = ctx.plan_state<>(ctx.name());
-    goal_param_ = ctx.param_handle<Vec2>("goal");
-    distance_param_ = ctx.param_handle<double>("distance");
-    depth_param_ = ctx.param_handle<double>("depth");
-    half_width_param_ = ctx.param_handle<double>("half_width");
-    replan_distance_param_ = ctx.param_handle<double>("replan_distance");
-    replan_angle_param_ = ctx.param_handle<double>("replan_angle");
-    ball_timeout_ = ctx.param_handle<double>("ball_timeout");
-    search_time_ = ctx.param_handle<double>("search_time");
-    head_sweep_param_ = ctx.param_handle<double>("head_sweep");
-    sweep_time_ = ctx.param_handle<double>("sweep_time");
   }
 
   void activate(StateContext& ctx) override {
-    memory_.reset();
+    forget_ball();
     goal_ = to_point(ctx.param(goal_param_));
     out_ = out_of_goal(goal_);
     distance_ = ctx.param(distance_param_);
@@ -177,19 +133,19 @@ class MonitorBall final : public State {
   }
 
   StateResult execute(StateContext& ctx) override {
-    memory_.update(ctx);
-    const bool known = memory_.seen_within(timeout_steps_);
-    ctx.write(head_angle_, known ? std::clamp(bearing(memory_.relative()), -kHeadLimit, kHeadLimit)
+    remember_ball(ctx);
+    const bool known = ball_seen_within(timeout_steps_);
+    ctx.write(head_angle_, known ? std::clamp(bearing(ball_relative()), -kHeadLimit, kHeadLimit)
                                  : sweep_angle(ctx.executions()));
     Pose best;
     if (known) {
-      best = position_for(memory_.field());
+      best = position_for(ball_field());
     } else if (ctx.executions() + 1 >= static_cast<std::uint64_t>(search_steps_)) {
       best = {goal_.x + distance_ * std::cos(out_), goal_.y + distance_ * std::sin(out_), out_};
     } else {
       return StateResult::kHold;
     }
-    const Pose& robot = memory_.robot();
+    const Pose& robot = robot_pose();
     if (norm(best.position() - robot.position()) <= replan_distance_ &&
         std::abs(wrap_angle(best.theta - robot.theta)) <= replan_angle_) {
       return StateResult::kHold;
@@ -226,8 +182,9 @@ class MonitorBall final : public State {
     return head_sweep_ * triangle;
   }
 
-  BallMemory memory_;
+  friend void register_monitor_ball(Registry& registry);
   Output<double> head_angle_;
+  std::string walk_state_;
   PlannedStateRef<double, double, double> walk_;
   PlannedStateRef<> again_;
   StateParam<Vec2> goal_param_;
@@ -257,13 +214,6 @@ class MonitorBall final : public State {
 /// then lies there for `duration` before the plan continues.
 class Dive final : public State {
  public:
-  void init(StateInitContext& ctx) override {
-    position_ = ctx.input<Vec2>("ball_position");
-    velocity_ = ctx.input<Vec2>("ball_velocity");
-    dive_ = ctx.output<std::int64_t>("dive");
-    duration_ = ctx.param_handle<double>("duration");
-  }
-
   void activate(StateContext& ctx) override {
     hold_steps_ = steps_for(ctx.param(duration_), ctx.period());
   }
@@ -289,6 +239,7 @@ class Dive final : public State {
     return lateral >= 0.0 ? 1 : -1;
   }
 
+  friend void register_dive(Registry& registry);
   Input<Vec2> position_;
   Input<Vec2> velocity_;
   Output<std::int64_t> dive_;
@@ -302,24 +253,13 @@ class Dive final : public State {
 class Goalie final : public Behaviour, private ControllerHooks {
  public:
   void init(BehaviourInitContext& ctx) override {
-    button_ = ctx.input<bool>("button");
-    visible_ = ctx.input<bool>("ball_visible");
-    position_ = ctx.input<Vec2>("ball_position");
-    velocity_ = ctx.input<Vec2>("ball_velocity");
-    pose_ = ctx.input<Vec3>("robot_pose");
-    goal_ = to_point(ctx.param<Vec2>("goal"));
+    goal_ = to_point(goal_param_);
     out_ = out_of_goal(goal_);
-    goal_width_ = ctx.param<double>("goal_width");
-    shot_speed_ = ctx.param<double>("shot_speed");
-    reach_ = ctx.param<double>("reach");
-    warning_time_ = ctx.param<double>("warning_time");
-    deceleration_ = ctx.param<double>("ball_deceleration");
-
-    controller_ =
-        ctx.claim_controller(ctx.param<std::string>("machine"), ctx.param_location("machine"));
+    controller_ = ctx.claim_controller(machine_, ctx.param_location(&Goalie::machine_));
     if (controller_ == nullptr) return;
-    const bool found = resolve(ctx, "wait_state", wait_) && resolve(ctx, "dive_state", dive_) &&
-                       resolve(ctx, "monitor_state", monitor_);
+    const bool found = resolve(ctx, &Goalie::wait_state_, "wait_state", wait_) &&
+                       resolve(ctx, &Goalie::dive_state_, "dive_state", dive_) &&
+                       resolve(ctx, &Goalie::monitor_state_, "monitor_state", monitor_);
     if (found) controller_->set_hooks(this);
   }
 
@@ -338,16 +278,18 @@ class Goalie final : public Behaviour, private ControllerHooks {
   void execute(ExecuteContext& ctx) override { controller_->step(ctx, &ctx); }
 
  private:
-  /// Looks a state the hooks plan up once, so that a pre-emption looks up no name.
-  bool resolve(InitContext& ctx, const char* param, PlannedState& out) {
-    const std::string name = ctx.param<std::string>(param);
+  /// Looks a state the hooks plan up once, so that a pre-emption looks up no name. `param` names
+  /// the param bound to `member` in messages.
+  bool resolve(InitContext& ctx, std::string Goalie::*member, const char* param,
+               PlannedState& out) {
+    const std::string& name = this->*member;
     const auto& states = controller_->states();
     const auto found = std::find_if(states.begin(), states.end(),
                                     [&](const CompiledState& state) { return state.name == name; });
     if (found == states.end()) {
       std::vector<std::string> known;
       for (const auto& state : states) known.push_back(state.name);
-      ctx.error(ctx.param_location(param),
+      ctx.error(ctx.param_location(member),
                 fmt::format("the goalie plans state '{}' ({}), which state machine '{}' does not "
                             "declare",
                             name, param, controller_->name()))
@@ -359,7 +301,7 @@ class Goalie final : public Behaviour, private ControllerHooks {
       const bool given = std::any_of(state.params.begin(), state.params.end(),
                                      [&](const Param& p) { return p.name == spec.name; });
       if (spec.required() && !given) {
-        ctx.error(ctx.param_location(param),
+        ctx.error(ctx.param_location(member),
                   fmt::format("the goalie plans state '{}' ({}) without params, but its class {} "
                               "requires '{}'; set it on the state",
                               name, param, state.cls->name, spec.name));
@@ -418,6 +360,12 @@ class Goalie final : public Behaviour, private ControllerHooks {
     return (speed - std::sqrt(square)) / deceleration_;
   }
 
+  friend void register_goalie_behaviour(Registry& registry);
+  std::string machine_;
+  std::string wait_state_;
+  std::string dive_state_;
+  std::string monitor_state_;
+  Vec2 goal_param_;
   Controller* controller_ = nullptr;
   PlannedState wait_;
   PlannedState dive_;
@@ -444,7 +392,7 @@ void register_wait_for_button(Registry& registry) {
                        "Holds until the button is pressed, then proceeds. A press in the step the "
                        "state starts does not count: that is the press that sent the robot back "
                        "to waiting.");
-  info.input<bool>("button").describe("true in the step the button is pressed");
+  info.port("button", &WaitForButton::button_).describe("true in the step the button is pressed");
 }
 
 void register_walk_to_pose(Registry& registry) {
@@ -453,39 +401,29 @@ void register_walk_to_pose(Registry& registry) {
                        "Walks to a pose on the field: far from it, forwards while turning towards "
                        "it; within near_distance, stepping straight there while turning to its "
                        "heading. Proceeds once within both tolerances.");
-  info.param<double>("x").describe("the target's x on the field (m)");
-  info.param<double>("y").describe("the target's y on the field (m)");
-  info.param<double>("theta")
+  info.param("x", &WalkToPose::x_).describe("the target's x on the field (m)");
+  info.param("y", &WalkToPose::y_).describe("the target's y on the field (m)");
+  info.param("theta", &WalkToPose::theta_)
       .range(-2.0 * kPi, 2.0 * kPi)
       .describe("the target heading (rad, from the field's x axis)");
-  info.param<double>("position_tolerance")
+  info.param("position_tolerance", &WalkToPose::position_tolerance_)
       .defaults_to(0.1)
       .range(0.01, 2.0)
       .describe("arrived when this close to the target position (m)");
-  info.param<double>("angle_tolerance")
+  info.param("angle_tolerance", &WalkToPose::angle_tolerance_)
       .defaults_to(0.15)
       .range(0.01, 3.2)
       .describe("... and this close to the target heading (rad)");
-  info.param<double>("near_distance")
+  info.param("near_distance", &WalkToPose::near_distance_)
       .defaults_to(0.7)
       .range(0.0, 10.0)
       .describe("within this distance of the target, step straight to it (m)");
-  info.param<double>("gain").defaults_to(1.5).range(0.0, 10.0).describe(
-      "walking speed per metre of distance to the target (1/s)");
-  info.param<double>("max_forward")
-      .defaults_to(0.3)
-      .range(0.0, 1.0)
-      .describe("the fastest forward (and backward) speed requested (m/s)");
-  info.param<double>("max_sideways")
-      .defaults_to(0.2)
-      .range(0.0, 1.0)
-      .describe("the fastest sideways speed requested (m/s)");
-  info.param<double>("max_turn")
-      .defaults_to(1.0)
-      .range(0.0, 3.0)
-      .describe("the fastest turn rate requested (rad/s)");
-  info.input<Vec3>("robot_pose").describe("the robot's pose on the field: x, y (m), heading (rad)");
-  info.output<Vec3>("gait_velocity").describe("the walk command: forward, sideways, turn rate");
+  WalkParams<StateParam<double>>::declare(
+      info, 0.3, "the fastest forward (and backward) speed requested (m/s)");
+  info.port("robot_pose", &WalkToPose::pose_)
+      .describe("the robot's pose on the field: x, y (m), heading (rad)");
+  info.port("gait_velocity", &WalkToPose::gait_velocity_)
+      .describe("the walk command: forward, sideways, turn rate");
 }
 
 void register_monitor_ball(Registry& registry) {
@@ -496,49 +434,51 @@ void register_monitor_ball(Registry& registry) {
               "best goalkeeping pose (on the line from the goal's centre to the ball, distance "
               "out and inside the goal area, facing the ball) is too far from the robot's, plans "
               "walk_state to it followed by another instance of this state, and proceeds.");
-  declare_own_goal(info);
-  info.param<double>("distance")
+  declare_own_goal(info, &MonitorBall::goal_param_);
+  info.param("distance", &MonitorBall::distance_param_)
       .defaults_to(0.5)
       .range(0.0, 3.0)
       .describe("how far out from the goal's centre, towards the ball, to stand (m)");
-  info.param<double>("depth").defaults_to(1.0).range(0.05, 3.0).describe(
-      "the goal area's depth: never farther out from the goal line (m)");
-  info.param<double>("half_width")
+  info.param("depth", &MonitorBall::depth_param_)
+      .defaults_to(1.0)
+      .range(0.05, 3.0)
+      .describe("the goal area's depth: never farther out from the goal line (m)");
+  info.param("half_width", &MonitorBall::half_width_param_)
       .defaults_to(1.1)
       .range(0.0, 3.0)
       .describe("never farther to the side of the goal's centre (m)");
-  info.param<double>("replan_distance")
+  info.param("replan_distance", &MonitorBall::replan_distance_param_)
       .defaults_to(0.2)
       .range(0.0, 5.0)
       .describe("plan a walk when the best position is farther than this (m)");
-  info.param<double>("replan_angle")
+  info.param("replan_angle", &MonitorBall::replan_angle_param_)
       .defaults_to(0.35)
       .range(0.0, 3.2)
       .describe("... or the best heading differs by more than this (rad)");
-  info.param<double>("ball_timeout")
+  info.param("ball_timeout", &MonitorBall::ball_timeout_)
       .defaults_to(2.0)
       .range(0.0, 60.0)
       .describe("how long a ball seen by this instance counts as known (s)");
-  info.param<double>("search_time")
+  info.param("search_time", &MonitorBall::search_time_)
       .defaults_to(3.0)
       .range(0.0, 60.0)
       .describe("without a known ball after this long, take the position straight out (s)");
-  info.param<double>("head_sweep")
+  info.param("head_sweep", &MonitorBall::head_sweep_param_)
       .defaults_to(1.2)
       .range(0.0, kHeadLimit)
       .describe("amplitude of the head sweep while the ball is unknown (rad)");
-  info.param<double>("sweep_time")
+  info.param("sweep_time", &MonitorBall::sweep_time_)
       .defaults_to(3.0)
       .range(0.1, 60.0)
       .describe("duration of one full head sweep, left and right (s)");
-  info.param<std::string>("walk_state")
+  info.param("walk_state", &MonitorBall::walk_state_)
       .defaults_to(std::string("walk_to_pose"))
       .state_level()
       .describe(
           "the state planned to walk (with params x, y, theta); the state machine must declare "
           "it, else the load fails naming it");
   BallMemory::declare_ports(info);
-  info.output<double>("head_angle").describe("the head yaw target (rad)");
+  info.port("head_angle", &MonitorBall::head_angle_).describe("the head yaw target (rad)");
 }
 
 void register_dive(Registry& registry) {
@@ -546,18 +486,18 @@ void register_dive(Registry& registry) {
                    .describe(
                        "Dives to the side on which the ball will pass the robot, reports 'goalie "
                        "dives left' or 'goalie dives right', and proceeds after duration.");
-  info.param<double>("duration")
+  info.param("duration", &Dive::duration_)
       .defaults_to(2.0)
       .range(0.0, 60.0)
       .describe("how long the state lasts from the dive (s)");
-  info.input<Vec2>("ball_position")
+  info.port("ball_position", &Dive::position_)
       .describe("the last measured ball position relative to the robot (m, x forward, y left)");
-  info.input<Vec2>("ball_velocity")
+  info.port("ball_velocity", &Dive::velocity_)
       .make_optional()
       .describe(
           "the ball's velocity in the robot frame (m/s); without it, dives towards the side the "
           "ball lies on");
-  info.output<std::int64_t>("dive").describe("+1 dives to the left, -1 to the right");
+  info.port("dive", &Dive::dive_).describe("+1 dives to the left, -1 to the right");
 }
 
 void register_goalie_behaviour(Registry& registry) {
@@ -567,42 +507,46 @@ void register_goalie_behaviour(Registry& registry) {
                        "runs. Pre-empts its plan: a button press goes back to wait_state, a shot "
                        "on goal that will pass within reach goes to dive_state; monitor_state is "
                        "queued after either.");
-  info.param<std::string>("machine").describe("the state machine to own and step");
-  info.param<std::string>("wait_state")
+  info.param("machine", &Goalie::machine_).describe("the state machine to own and step");
+  info.param("wait_state", &Goalie::wait_state_)
       .defaults_to(std::string("wait_for_button"))
       .describe("the machine's state that waits for the button");
-  info.param<std::string>("dive_state")
+  info.param("dive_state", &Goalie::dive_state_)
       .defaults_to(std::string("dive"))
       .describe("the machine's state that dives");
-  info.param<std::string>("monitor_state")
+  info.param("monitor_state", &Goalie::monitor_state_)
       .defaults_to(std::string("monitor_ball"))
       .describe("the machine's state that watches the ball, queued after a pre-emption");
-  declare_own_goal(info);
-  info.param<double>("goal_width")
+  declare_own_goal(info, &Goalie::goal_param_);
+  info.param("goal_width", &Goalie::goal_width_)
       .defaults_to(2.6)
       .range(0.1, 10.0)
       .describe("the distance between the posts (m)");
-  info.param<double>("shot_speed")
+  info.param("shot_speed", &Goalie::shot_speed_)
       .defaults_to(1.0)
       .range(0.0, 20.0)
       .describe("a ball slower than this is no shot (m/s)");
-  info.param<double>("reach").defaults_to(0.85).range(0.0, 5.0).describe(
-      "dive only for a ball that will pass this close to the robot's centre (m)");
-  info.param<double>("warning_time")
+  info.param("reach", &Goalie::reach_)
+      .defaults_to(0.85)
+      .range(0.0, 5.0)
+      .describe("dive only for a ball that will pass this close to the robot's centre (m)");
+  info.param("warning_time", &Goalie::warning_time_)
       .defaults_to(1.0)
       .range(0.0, 10.0)
       .describe("dive when the ball will pass the robot within this time (s)");
-  info.param<double>("ball_deceleration")
+  info.param("ball_deceleration", &Goalie::deceleration_)
       .defaults_to(0.6)
       .range(0.0, 10.0)
       .describe("the rolling ball's loss of speed, for predicting where it stops (m/s²)");
-  info.input<bool>("button").describe("true in the step the button is pressed");
-  info.input<bool>("ball_visible").describe("whether the camera sees the ball this step");
-  info.input<Vec2>("ball_position")
+  info.port("button", &Goalie::button_).describe("true in the step the button is pressed");
+  info.port("ball_visible", &Goalie::visible_)
+      .describe("whether the camera sees the ball this step");
+  info.port("ball_position", &Goalie::position_)
       .describe("the measured ball position relative to the robot (m, x forward, y left)");
-  info.input<Vec2>("ball_velocity")
+  info.port("ball_velocity", &Goalie::velocity_)
       .describe("the ball's velocity over the ground in the robot frame (m/s)");
-  info.input<Vec3>("robot_pose").describe("the robot's pose on the field: x, y (m), heading (rad)");
+  info.port("robot_pose", &Goalie::pose_)
+      .describe("the robot's pose on the field: x, y (m), heading (rad)");
 }
 
 }  // namespace

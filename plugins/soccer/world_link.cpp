@@ -11,50 +11,36 @@ namespace arbiter::soccer {
 
 void WorldLink::init(InitContext& ctx) {
   WorldConfig config;
-  config.seed = static_cast<std::uint32_t>(ctx.param<std::int64_t>("seed"));
+  config.seed = static_cast<std::uint32_t>(seed_);
   // Unless told otherwise, simulated time runs at the config's nominal rate.
-  const double dt = ctx.param<double>("dt");
-  config.dt = dt > 0.0 ? dt : 1.0 / ctx.rate_hz();
-  const Vec3 robot = ctx.param<Vec3>("robot_start");
+  config.dt = dt_ > 0.0 ? dt_ : 1.0 / ctx.rate_hz();
+  const Vec3& robot = robot_start_;
   config.robot_start = {robot.x, robot.y, robot.z};
-  const Vec2 ball = ctx.param<Vec2>("ball_start");
+  const Vec2& ball = ball_start_;
   config.ball_start = {ball.x, ball.y};
-  config.noise = ctx.param<double>("noise");
-  config.button_step = ctx.param<std::int64_t>("button_step");
-  config.shot_step = ctx.param<std::int64_t>("shot_step");
-  const Vec2 shot_target = ctx.param<Vec2>("shot_target");
-  config.shot_target = {shot_target.x, shot_target.y};
-  config.shot_speed = ctx.param<double>("shot_speed");
-  config.kick_off_delay = ctx.param<double>("kick_off_delay");
+  config.noise = noise_;
+  config.button_step = button_step_;
+  config.shot_step = shot_step_;
+  config.shot_target = {shot_target_.x, shot_target_.y};
+  config.shot_speed = shot_speed_;
+  config.kick_off_delay = kick_off_delay_;
 
   // Vector params carry no range in the schema, so the field's bounds are checked here.
   const double half_length = 0.5 * config.field_length;
   const double half_width = 0.5 * config.field_width;
   if (std::abs(ball.x) > half_length || std::abs(ball.y) > half_width) {
-    ctx.error(ctx.param_location("ball_start"),
+    ctx.error(ctx.param_location(&WorldLink::ball_start_),
               fmt::format("ball_start [{}, {}] is off the field (|x| <= {}, |y| <= {})", ball.x,
                           ball.y, half_length, half_width));
   }
   const double x_limit = half_length + config.robot_margin;
   const double y_limit = half_width + config.robot_margin;
   if (std::abs(robot.x) > x_limit || std::abs(robot.y) > y_limit) {
-    ctx.error(ctx.param_location("robot_start"),
+    ctx.error(ctx.param_location(&WorldLink::robot_start_),
               fmt::format("robot_start [{}, {}, {}] is off the field (|x| <= {}, |y| <= {})",
                           robot.x, robot.y, robot.z, x_limit, y_limit));
   }
   world_ = std::make_unique<World>(config);
-
-  ball_visible_ = ctx.output<bool>("ball_visible");
-  ball_position_ = ctx.output<Vec2>("ball_position");
-  ball_velocity_ = ctx.output<Vec2>("ball_velocity");
-  robot_pose_ = ctx.output<Vec3>("robot_pose");
-  button_ = ctx.output<bool>("button");
-  ball_kicked_ = ctx.output<bool>("ball_kicked");
-  goal_scored_ = ctx.output<bool>("goal_scored");
-  gait_velocity_ = ctx.input<Vec3>("gait_velocity");
-  head_angle_ = ctx.input<double>("head_angle");
-  kick_ = ctx.input<bool>("kick");
-  dive_ = ctx.input<std::int64_t>("dive");
 }
 
 void WorldLink::input(WriteContext& ctx) {
@@ -105,79 +91,90 @@ void register_world_link(Registry& registry) {
               "dive commands and advances the world by dt. Reports the events 'button pressed', "
               "'shot on goal', 'ball kicked', 'ball saved', 'goal!' and 'kick-off' (after a "
               "goal: the ball back on the centre spot, the robot at robot_start).");
-  info.param<std::int64_t>("seed")
+  info.param("seed", &WorldLink::seed_)
       .defaults_to(0)
       .range(0.0, 4294967295.0)
       .describe("seed of the measurement noise");
-  info.param<double>("dt").defaults_to(0.0).range(0.0, 1.0).describe(
-      "simulated time per step in seconds; 0 (the default) takes the step period, "
-      "1 / rate_hz, so that simulated time runs at the nominal rate");
-  info.param<Vec3>("robot_start")
+  info.param("dt", &WorldLink::dt_)
+      .defaults_to(0.0)
+      .range(0.0, 1.0)
+      .describe(
+          "simulated time per step in seconds; 0 (the default) takes the step period, "
+          "1 / rate_hz, so that simulated time runs at the nominal rate");
+  info.param("robot_start", &WorldLink::robot_start_)
       .defaults_to(Vec3{-3.0, 0.0, 0.0})
       .describe("the robot's pose at the start: x, y (m, field frame) and heading (rad)");
-  info.param<Vec2>("ball_start")
+  info.param("ball_start", &WorldLink::ball_start_)
       .defaults_to(Vec2{0.0, 0.0})
       .describe("the ball's position at the start (m, field frame, origin at the centre spot)");
-  info.param<double>("noise").defaults_to(0.02).range(0.0, 1.0).describe(
-      "standard deviation of each axis of the ball measurement (m)");
-  info.param<std::int64_t>("button_step")
+  info.param("noise", &WorldLink::noise_)
+      .defaults_to(0.02)
+      .range(0.0, 1.0)
+      .describe("standard deviation of each axis of the ball measurement (m)");
+  info.param("button_step", &WorldLink::button_step_)
       .defaults_to(-1)
       .at_least(-1.0)
       .describe("the step (from 1) in which the button is pressed; -1 for never");
-  info.param<std::int64_t>("shot_step")
+  info.param("shot_step", &WorldLink::shot_step_)
       .defaults_to(-1)
       .at_least(-1.0)
       .describe(
           "the step (from 1) at the end of which an opponent shoots the ball from where it lies "
           "towards shot_target; -1 for never");
-  info.param<Vec2>("shot_target")
+  info.param("shot_target", &WorldLink::shot_target_)
       .defaults_to(Vec2{-4.5, 0.0})
       .describe(
           "where the shot is aimed (m, field frame); the default is the centre of the goal "
           "at x = -4.5");
-  info.param<double>("shot_speed")
+  info.param("shot_speed", &WorldLink::shot_speed_)
       .defaults_to(3.5)
       .range(0.1, 10.0)
       .describe("the ball's speed when shot (m/s); it then slows down at 0.6 m/s²");
-  info.param<double>("kick_off_delay")
+  info.param("kick_off_delay", &WorldLink::kick_off_delay_)
       .defaults_to(2.0)
       .range(-1.0, 60.0)
       .describe(
           "seconds from a goal to the kick-off that follows it (the ball back on the centre "
           "spot, the robot at robot_start, play goes on); negative for never");
 
-  info.output<bool>("ball_visible").describe("whether the head camera sees the ball");
-  info.output<Vec2>("ball_position")
+  info.port("ball_visible", &WorldLink::ball_visible_)
+      .describe("whether the head camera sees the ball");
+  info.port("ball_position", &WorldLink::ball_position_)
       .describe(
           "the measured ball position relative to the robot (m, x forward, y left); written "
           "only in steps where the ball is seen");
-  info.output<Vec2>("ball_velocity")
+  info.port("ball_velocity", &WorldLink::ball_velocity_)
       .make_optional()
       .describe(
           "the ball's velocity over the ground in the robot frame (m/s, x forward, y left), as a "
           "ball filter would estimate it; written only in steps where the ball is seen");
-  info.output<Vec3>("robot_pose")
+  info.port("robot_pose", &WorldLink::robot_pose_)
       .make_optional()
       .describe("the robot's pose on the field: x, y (m) and heading (rad)");
-  info.output<bool>("button").make_optional().describe("true in the step the button is pressed");
-  info.output<bool>("ball_kicked")
+  info.port("button", &WorldLink::button_)
+      .make_optional()
+      .describe("true in the step the button is pressed");
+  info.port("ball_kicked", &WorldLink::ball_kicked_)
       .make_optional()
       .describe("true in the step after a kick hit the ball");
-  info.output<bool>("goal_scored")
+  info.port("goal_scored", &WorldLink::goal_scored_)
       .make_optional()
       .describe("true in the step after the ball crossed a goal line between the posts");
-  info.input<Vec3>("gait_velocity")
+  info.port("gait_velocity", &WorldLink::gait_velocity_)
       .describe(
           "walk command: forward (m/s), sideways (m/s, left), turn rate (rad/s); stands still "
           "in a step where it was not written");
-  info.input<double>("head_angle")
+  info.port("head_angle", &WorldLink::head_angle_)
       .make_optional()
       .describe("head yaw target relative to the body (rad, limited to ±1.5)");
-  info.input<bool>("kick").make_optional().describe(
-      "kick in a step where it is written true and the ball is within reach");
-  info.input<std::int64_t>("dive").make_optional().describe(
-      "in a step where it is written +1 (left) or -1 (right), the robot dives to that side: it "
-      "lies across the ball's path, reaching 0.7 m, and cannot walk for 2 s");
+  info.port("kick", &WorldLink::kick_)
+      .make_optional()
+      .describe("kick in a step where it is written true and the ball is within reach");
+  info.port("dive", &WorldLink::dive_)
+      .make_optional()
+      .describe(
+          "in a step where it is written +1 (left) or -1 (right), the robot dives to that side: it "
+          "lies across the ball's path, reaching 0.7 m, and cannot walk for 2 s");
 }
 
 }  // namespace arbiter::soccer

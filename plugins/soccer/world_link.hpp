@@ -10,6 +10,8 @@
 
 namespace arbiter::soccer {
 
+void register_world_link(Registry& registry);
+
 class WorldLink final : public Interface {
  public:
   void init(InitContext& ctx) override;
@@ -21,7 +23,18 @@ class WorldLink final : public Interface {
   World* world() { return world_.get(); }
 
  private:
+  friend void register_world_link(Registry& registry);
   std::unique_ptr<World> world_;
+  std::int64_t seed_ = 0;
+  double dt_ = 0.0;
+  Vec3 robot_start_;
+  Vec2 ball_start_;
+  double noise_ = 0.0;
+  std::int64_t button_step_ = -1;
+  std::int64_t shot_step_ = -1;
+  Vec2 shot_target_;
+  double shot_speed_ = 0.0;
+  double kick_off_delay_ = 0.0;
   Output<bool> ball_visible_;
   Output<Vec2> ball_position_;
   Output<Vec2> ball_velocity_;
@@ -34,7 +47,5 @@ class WorldLink final : public Interface {
   Input<bool> kick_;
   Input<std::int64_t> dive_;
 };
-
-void register_world_link(Registry& registry);
 
 }  // namespace arbiter::soccer

@@ -12,10 +12,9 @@ namespace {
 /// again, at the head of the queue, with one round fewer.
 class Countdown final : public arbiter::State {
  public:
-  // Names are resolved here, once: a typo fails the load at the state's location.
+  // The planned state's params are named here, resolved once: a typo fails the load at the
+  // state's location.
   void init(arbiter::StateInitContext& ctx) override {
-    steps_ = ctx.param_handle<std::int64_t>("steps");
-    rounds_ = ctx.param_handle<std::int64_t>("rounds");
     again_ = ctx.plan_state<std::int64_t, std::int64_t>(ctx.name(), {"steps", "rounds"});
   }
 
@@ -29,6 +28,7 @@ class Countdown final : public arbiter::State {
   }
 
  private:
+  friend void patrol::register_countdown(arbiter::Registry& registry);
   arbiter::StateParam<std::int64_t> steps_;
   arbiter::StateParam<std::int64_t> rounds_;
   // This state again, with two run-time params.
@@ -41,10 +41,14 @@ class Countdown final : public arbiter::State {
 void register_countdown(arbiter::Registry& registry) {
   auto& info = arbiter::add_state_class<Countdown>(registry, "patrol.Countdown")
                    .describe("Waits a number of steps, a number of times in a row.");
-  info.param<std::int64_t>("steps").defaults_to(3).range(1, 1000).describe(
-      "executions before it proceeds");
-  info.param<std::int64_t>("rounds").defaults_to(1).range(1, 100).describe(
-      "how many times it runs in a row");
+  info.param("steps", &Countdown::steps_)
+      .defaults_to(3)
+      .range(1, 1000)
+      .describe("executions before it proceeds");
+  info.param("rounds", &Countdown::rounds_)
+      .defaults_to(1)
+      .range(1, 100)
+      .describe("how many times it runs in a row");
 }
 
 }  // namespace patrol

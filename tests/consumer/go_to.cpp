@@ -10,18 +10,10 @@ namespace {
 using arbiter::Vec2;
 
 /// Drives towards `target` (a proportional controller) and asks to be active until the robot
-/// is within `tolerance` of it. Flashes the beacon while it drives.
+/// is within `tolerance` of it. Flashes the beacon while it drives. Its params and ports are
+/// members that the engine fills before the first step, as register_go_to() binds them.
 class GoTo final : public arbiter::Behaviour {
  public:
-  void init(arbiter::BehaviourInitContext& ctx) override {
-    target_ = ctx.param<Vec2>("target");
-    gain_ = ctx.param<double>("gain");
-    tolerance_ = ctx.param<double>("tolerance");
-    position_ = ctx.input<Vec2>("position");
-    velocity_ = ctx.output<Vec2>("velocity");
-    beacon_ = ctx.output<Beacon>("beacon");
-  }
-
   double activation(const arbiter::StepContext& ctx) override {
     return distance(ctx) > tolerance_ ? 1.0 : 0.0;
   }
@@ -43,6 +35,7 @@ class GoTo final : public arbiter::Behaviour {
     return std::hypot(target_.x - here.x, target_.y - here.y);
   }
 
+  friend void patrol::register_go_to(arbiter::Registry& registry);
   Vec2 target_;
   double gain_ = 0.0;
   double tolerance_ = 0.0;
@@ -56,16 +49,18 @@ class GoTo final : public arbiter::Behaviour {
 void register_go_to(arbiter::Registry& registry) {
   auto& info = registry.add_behaviour<GoTo>("patrol.GoTo")
                    .describe("Drives to a point and is active until it is there.");
-  info.param<arbiter::Vec2>("target").describe("where to go: x, y (m)");
-  info.param<double>("gain").defaults_to(1.0).range(0.0, 10.0).describe(
-      "commanded speed per metre still to go (1/s)");
-  info.param<double>("tolerance")
+  info.param("target", &GoTo::target_).describe("where to go: x, y (m)");
+  info.param("gain", &GoTo::gain_)
+      .defaults_to(1.0)
+      .range(0.0, 10.0)
+      .describe("commanded speed per metre still to go (1/s)");
+  info.param("tolerance", &GoTo::tolerance_)
       .defaults_to(0.05)
       .range(0.001, 1.0)
       .describe("how close counts as there (m)");
-  info.input<Vec2>("position").describe("where the robot is: x, y (m)");
-  info.output<Vec2>("velocity").describe("the commanded velocity: x, y (m/s)");
-  info.output<Beacon>("beacon").make_optional().describe("flashes while driving");
+  info.port("position", &GoTo::position_).describe("where the robot is: x, y (m)");
+  info.port("velocity", &GoTo::velocity_).describe("the commanded velocity: x, y (m/s)");
+  info.port("beacon", &GoTo::beacon_).make_optional().describe("flashes while driving");
 }
 
 }  // namespace patrol

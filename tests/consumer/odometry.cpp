@@ -13,14 +13,6 @@ using arbiter::Vec2;
 /// drives at the commanded velocity (at most `max_speed`) for one step.
 class Odometry final : public arbiter::Interface {
  public:
-  void init(arbiter::InitContext& ctx) override {
-    here_ = ctx.param<Vec2>("start");
-    max_speed_ = ctx.param<double>("max_speed");
-    position_ = ctx.output<Vec2>("position");
-    velocity_ = ctx.input<Vec2>("velocity");
-    beacon_ = ctx.input<Beacon>("beacon");
-  }
-
   void input(arbiter::WriteContext& ctx) override { ctx.write(position_, here_); }
 
   void output(const arbiter::StepContext& ctx) override {
@@ -38,6 +30,7 @@ class Odometry final : public arbiter::Interface {
   }
 
  private:
+  friend void patrol::register_odometry(arbiter::Registry& registry);
   Vec2 here_;
   double max_speed_ = 0.0;
   bool flashing_ = false;
@@ -51,16 +44,16 @@ class Odometry final : public arbiter::Interface {
 void register_odometry(arbiter::Registry& registry) {
   auto& info = registry.add_interface<Odometry>("patrol.Odometry")
                    .describe("A simulated robot base that drives at the commanded velocity.");
-  info.param<arbiter::Vec2>("start")
+  info.param("start", &Odometry::here_)
       .defaults_to(Vec2{0.0, 0.0})
       .describe("where the robot starts: x, y (m)");
-  info.param<double>("max_speed")
+  info.param("max_speed", &Odometry::max_speed_)
       .defaults_to(0.5)
       .range(0.0, 2.0)
       .describe("the fastest the base drives (m/s)");
-  info.output<Vec2>("position").describe("where the robot is: x, y (m)");
-  info.input<Vec2>("velocity").describe("the commanded velocity: x, y (m/s)");
-  info.input<Beacon>("beacon").make_optional().describe("the beacon command");
+  info.port("position", &Odometry::position_).describe("where the robot is: x, y (m)");
+  info.port("velocity", &Odometry::velocity_).describe("the commanded velocity: x, y (m/s)");
+  info.port("beacon", &Odometry::beacon_).make_optional().describe("the beacon command");
 }
 
 }  // namespace patrol

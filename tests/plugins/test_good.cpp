@@ -12,15 +12,11 @@ namespace {
 
 class Constant final : public arbiter::Behaviour {
  public:
-  void init(arbiter::BehaviourInitContext& ctx) override {
-    level_ = ctx.param<double>("level");
-    value_ = ctx.param<double>("value");
-    out_ = ctx.output<double>("out");
-  }
   double activation(const arbiter::StepContext&) override { return level_; }
   void execute(arbiter::ExecuteContext& ctx) override { ctx.write(out_, value_); }
 
  private:
+  friend void register_classes(arbiter::Registry& registry);
   double level_ = 0.0;
   double value_ = 0.0;
   arbiter::Output<double> out_;
@@ -28,28 +24,30 @@ class Constant final : public arbiter::Behaviour {
 
 class Faulty final : public arbiter::Behaviour {
  public:
-  void init(arbiter::BehaviourInitContext& ctx) override {
-    throw_at_ = ctx.param<std::int64_t>("throw_at");
-  }
   double activation(const arbiter::StepContext&) override { return 1.0; }
   void execute(arbiter::ExecuteContext&) override {
     if (++executions_ == throw_at_) throw std::runtime_error("sensor cable unplugged");
   }
 
  private:
+  friend void register_classes(arbiter::Registry& registry);
   std::int64_t throw_at_ = 0;
   std::int64_t executions_ = 0;
 };
 
+void register_classes(arbiter::Registry& registry) {
+  auto& constant = registry.add_behaviour<Constant>("test_good.Constant");
+  constant.param("level", &Constant::level_).defaults_to(1.0).range(0.0, 1.0);
+  constant.param("value", &Constant::value_).defaults_to(0.0);
+  constant.port("out", &Constant::out_);
+  registry.add_behaviour<Faulty>("test_good.Faulty")
+      .param("throw_at", &Faulty::throw_at_)
+      .defaults_to(1)
+      .range(1, 1000000);
+}
+
 }  // namespace
 
 ARBITER_PLUGIN(registry) {
-  auto& constant = registry.add_behaviour<Constant>("test_good.Constant");
-  constant.param<double>("level").defaults_to(1.0).range(0.0, 1.0);
-  constant.param<double>("value").defaults_to(0.0);
-  constant.output<double>("out");
-  registry.add_behaviour<Faulty>("test_good.Faulty")
-      .param<std::int64_t>("throw_at")
-      .defaults_to(1)
-      .range(1, 1000000);
+  register_classes(registry);
 }

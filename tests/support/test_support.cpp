@@ -19,15 +19,6 @@
 
 namespace arbiter::test {
 
-void Probe::init(BehaviourInitContext& ctx) {
-  levels = ctx.param<std::vector<double>>("levels");
-  value = ctx.param<double>("value");
-  overwrite = ctx.param<bool>("overwrite");
-  record = ctx.param<bool>("record");
-  in = ctx.input<double>("in");
-  out = ctx.output<double>("out");
-}
-
 double Probe::activation(const StepContext& ctx) {
   const auto index = static_cast<std::size_t>(ctx.step() - 1);
   return levels[std::min(index, levels.size() - 1)];
@@ -62,11 +53,6 @@ double NanLevel::activation(const StepContext&) {
 
 double Thrower::activation(const StepContext&) {
   throw std::runtime_error("sensor unplugged");
-}
-
-void Feed::init(InitContext& ctx) {
-  out = ctx.output<double>("out");
-  in = ctx.input<double>("in");
 }
 
 void Feed::input(WriteContext& ctx) {
@@ -120,10 +106,6 @@ StateResult Planner::execute(StateContext& ctx) {
   return StateResult::kProceed;
 }
 
-void Pose::init(StateInitContext& ctx) {
-  x = ctx.param_handle<double>("x");
-}
-
 void Pose::activate(StateContext& ctx) {
   seen_x().push_back(ctx.param(x));
 }
@@ -165,24 +147,26 @@ Registry make_test_registry() {
   register_builtin_behaviours(registry);
   registry.set_origin("tests");
   auto& probe = registry.add_behaviour<Probe>("test.Probe");
-  probe.param<std::vector<double>>("levels").defaults_to(std::vector<double>{1.0});
-  probe.param<double>("value").defaults_to(0.0);
-  probe.param<bool>("overwrite").defaults_to(false);
-  probe.param<bool>("record").defaults_to(true);
-  probe.input<double>("in").make_optional();
-  probe.output<double>("out").make_optional();
+  probe.param("levels", &Probe::levels).defaults_to(std::vector<double>{1.0});
+  probe.param("value", &Probe::value).defaults_to(0.0);
+  probe.param("overwrite", &Probe::overwrite).defaults_to(false);
+  probe.param("record", &Probe::record).defaults_to(true);
+  probe.port("in", &Probe::in).make_optional();
+  probe.port("out", &Probe::out).make_optional();
   registry.add_behaviour<NanLevel>("test.NanLevel");
   registry.add_behaviour<Thrower>("test.Thrower");
   auto& feed = registry.add_interface<Feed>("test.Feed");
-  feed.output<double>("out").make_optional();
-  feed.input<double>("in").make_optional();
+  feed.port("out", &Feed::out).make_optional();
+  feed.port("in", &Feed::in).make_optional();
+  // Planner reads its own values of per-instance params in init(), which only the name-keyed
+  // ctx.param<T>(name) offers a state.
   auto& planner = add_state_class<Planner>(registry, "test.Planner");
   planner.param<std::string>("op").defaults_to(std::string("none"));
   planner.param<std::string>("target").defaults_to(std::string());
   planner.param<std::int64_t>("hold").defaults_to(1).at_least(1);
   planner.param<double>("x").defaults_to(0.0);
   auto& pose = add_state_class<Pose>(registry, "test.Pose");
-  pose.param<double>("x").range(-10.0, 10.0);
+  pose.param("x", &Pose::x).range(-10.0, 10.0);
   return registry;
 }
 
@@ -254,25 +238,31 @@ namespace {
 class Tuned : public Behaviour {
  public:
   double activation(const StepContext&) override { return 0.0; }
+  double gain = 0.0;
+  std::string mode;
+  std::int64_t retries = 0;
+  Vec2 offset;
 };
 
 /// Proceeds at once; it exists for its params.
 class Wait : public State {
  public:
   StateResult execute(StateContext&) override { return StateResult::kProceed; }
+  StateParam<std::int64_t> ticks;
+  StateParam<std::string> label;
 };
 
 }  // namespace
 
 void add_param_check_classes(Registry& registry) {
   auto& tuned = registry.add_behaviour<Tuned>("test.Tuned");
-  tuned.param<double>("gain").range(0.0, 1.0);
-  tuned.param<std::string>("mode").defaults_to(std::string("soft")).one_of({"soft", "hard"});
-  tuned.param<std::int64_t>("retries").defaults_to(3).at_least(0);
-  tuned.param<Vec2>("offset").defaults_to(Vec2{});
+  tuned.param("gain", &Tuned::gain).range(0.0, 1.0);
+  tuned.param("mode", &Tuned::mode).defaults_to(std::string("soft")).one_of({"soft", "hard"});
+  tuned.param("retries", &Tuned::retries).defaults_to(3).at_least(0);
+  tuned.param("offset", &Tuned::offset).defaults_to(Vec2{});
   auto& wait = add_state_class<Wait>(registry, "test.Wait");
-  wait.param<std::int64_t>("ticks").at_least(1);
-  wait.param<std::string>("label").defaults_to(std::string());
+  wait.param("ticks", &Wait::ticks).at_least(1);
+  wait.param("label", &Wait::label).defaults_to(std::string());
 }
 
 Diagnostics diagnose_text(const std::string& text, const Registry& registry,

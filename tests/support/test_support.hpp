@@ -22,7 +22,6 @@ namespace arbiter::test {
 /// every value its `in` port read in execute() or inhibited(), and the callbacks it saw.
 class Probe : public Behaviour {
  public:
-  void init(BehaviourInitContext& ctx) override;
   double activation(const StepContext& ctx) override;
   void update(const StepContext& ctx) override;
   void execute(ExecuteContext& ctx) override;
@@ -54,7 +53,6 @@ class Thrower : public Behaviour {
 /// An interface class: the input pass writes `step * 10` to `out`; the output pass records `in`.
 class Feed : public Interface {
  public:
-  void init(InitContext& ctx) override;
   void input(WriteContext& ctx) override;
   void output(const StepContext& ctx) override;
 
@@ -84,7 +82,6 @@ class Planner : public State {
 /// A state with a param `x` (default 0) that records the x of each activation in `seen_x`.
 class Pose : public State {
  public:
-  void init(StateInitContext& ctx) override;
   void activate(StateContext& ctx) override;
   StateResult execute(StateContext& ctx) override;
   static std::vector<double>& seen_x();

@@ -69,6 +69,32 @@ class InstanceInit : public Base {
     return param != nullptr ? param->location : location_;
   }
 
+  /// Gives the members that the class binds its params and ports to their values and handles,
+  /// before its init(): `instance` points to the Behaviour, Interface or State.
+  void bind_members(void* instance) {
+    for (std::size_t p = 0; p < cls_.params.size(); ++p) {
+      const ParamSpec& spec = cls_.params[p];
+      if (!spec.bind) continue;
+      const Param* param = params_.find(spec.name);
+      if (cls_.kind == ClassKind::kState && spec.per_instance && !spec.member_is_handle) {
+        // Its value varies per planned instance: one value in a member would be wrong for most.
+        error_at(location_, "class-error",
+                 fmt::format("class {} binds param '{}' to a plain member, but the param may be "
+                             "set per planned instance: bind a StateParam, or declare it "
+                             "state_level()",
+                             cls_.name, spec.name));
+      } else if (cls_.kind == ClassKind::kState && spec.member_is_handle) {
+        // A handle: each planned instance's value is read through it in a step.
+        spec.bind(instance, ParamValue{}, static_cast<std::uint32_t>(p));
+      } else if (param != nullptr) {
+        spec.bind(instance, param->value, static_cast<std::uint32_t>(p));
+      }
+    }
+    for (const auto& port : cls_.ports) {
+      if (port.bind) port.bind(instance, resolve_port(port.name, port.direction, *port.cpp_type));
+    }
+  }
+
   AnyOutput output_to_actuator(const std::string& actuator, const SourceLocation& at) override {
     std::vector<std::string> own;
     for (std::uint32_t a = layer_.actuator_begin; a < layer_.actuator_end; ++a) {
@@ -170,6 +196,17 @@ class InstanceInit : public Base {
     error_at(location_, "class-error",
              fmt::format("class {} resolves port '{}' that it does not declare", cls_.name, port));
     return kUnbound;
+  }
+
+  SourceLocation bound_param_location(const MemberKey& member) const override {
+    for (const auto& spec : cls_.params) {
+      if (spec.member == member) return param_location(spec.name);
+    }
+    diagnostics_.error(location_, "class-error",
+                       fmt::format("class {} asks where the param bound to a member was written, "
+                                   "but binds no param to that member",
+                                   cls_.name));
+    return location_;
   }
 
   std::uint32_t resolve_sensor(const std::string& sensor, const std::type_info& type,
@@ -480,8 +517,10 @@ class Compiler {
           program_, registry_, diagnostics_, layer, kNoBehaviour, layer.name, layer.location,
           *decl.interface, decl.params, decl.ports,
           InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
-      guarded_init(diagnostics_, *decl.interface, layer.location,
-                   [&] { layer.interface->init(init); });
+      guarded_init(diagnostics_, *decl.interface, layer.location, [&] {
+        init.bind_members(layer.interface.get());
+        layer.interface->init(init);
+      });
       return;
     }
     // Initialised in declaration order, not execution order: the writer slots their outputs get
@@ -501,8 +540,10 @@ class Compiler {
       BehaviourInit init(program_, registry_, diagnostics_, layer, b, behaviour.name,
                          behaviour.location, *behaviour.cls, source->params, source->ports,
                          InitScope{&bindings_, &claims_, nullptr, nullptr, &decl.sensors});
-      guarded_init(diagnostics_, *behaviour.cls, behaviour.location,
-                   [&] { behaviour.instance->init(init); });
+      guarded_init(diagnostics_, *behaviour.cls, behaviour.location, [&] {
+        init.bind_members(behaviour.instance.get());
+        behaviour.instance->init(init);
+      });
     }
   }
 
@@ -611,7 +652,10 @@ class Compiler {
                        params[s], ports[s],
                        InitScope{&bindings_, &claims_, &controller, &decl, sensors});
         guarded_init(reported[s] ? repeat : diagnostics_, *decl.states[s].cls,
-                     decl.states[s].location, [&] { state.init(init); });
+                     decl.states[s].location, [&] {
+                       init.bind_members(&state);
+                       state.init(init);
+                     });
         reported[s] = true;
       });
     }

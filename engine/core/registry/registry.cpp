@@ -62,6 +62,66 @@ const Param* ParamSet::find(std::string_view name) const {
   return nullptr;
 }
 
+void ClassInfo::reject_foreign_member(const std::string& item) const {
+  throw std::logic_error(
+      throw_instance == nullptr
+          ? fmt::format("class '{}' binds '{}' to a member, but was not registered with its C++ "
+                        "type (add_behaviour<T>, add_interface<T> or add_state_class<T>)",
+                        name, item)
+          : fmt::format("class '{}' binds '{}' to a member of another class", name, item));
+}
+
+void ClassInfo::reject_handle(const std::string& param_name) const {
+  throw std::logic_error(
+      fmt::format("{} class '{}' binds param '{}' to a StateParam handle, which "
+                  "only a state reads; bind a member of the param's type",
+                  to_string(kind), name, param_name));
+}
+
+ParamSpec& ClassInfo::add_param(std::string param_name, ParamKind param_kind, MemberKey member,
+                                std::function<void(void*, const ParamValue&, std::uint32_t)> bind) {
+  for (const auto& existing : params) {
+    if (existing.name == param_name) {
+      throw std::logic_error(fmt::format("class '{}' declares param '{}' twice", name, param_name));
+    }
+    if (!member.empty() && existing.member == member) {
+      throw std::logic_error(
+          fmt::format("class '{}' binds param '{}' to the member that param "
+                      "'{}' is already bound to",
+                      name, param_name, existing.name));
+    }
+  }
+  auto& spec = params.emplace_back();
+  spec.name = std::move(param_name);
+  spec.kind = param_kind;
+  spec.member = member;
+  spec.bind = std::move(bind);
+  return spec;
+}
+
+PortSpec& ClassInfo::add_port(std::string port_name, PortDirection direction,
+                              const std::type_info& type, MemberKey member,
+                              std::function<void(void*, std::uint32_t)> bind) {
+  for (const auto& existing : ports) {
+    if (existing.name == port_name) {
+      throw std::logic_error(fmt::format("class '{}' declares port '{}' twice", name, port_name));
+    }
+    if (!member.empty() && existing.member == member) {
+      throw std::logic_error(
+          fmt::format("class '{}' binds port '{}' to the member that port "
+                      "'{}' is already bound to",
+                      name, port_name, existing.name));
+    }
+  }
+  auto& spec = ports.emplace_back();
+  spec.name = std::move(port_name);
+  spec.direction = direction;
+  spec.cpp_type = &type;
+  spec.member = member;
+  spec.bind = std::move(bind);
+  return spec;
+}
+
 const ParamSpec* ClassInfo::find_param(std::string_view param_name) const {
   for (const auto& spec : params) {
     if (spec.name == param_name) return &spec;

@@ -35,17 +35,20 @@ class InitContext {
   /// The config's nominal step rate (`rate_hz`); one step lasts 1 / rate_hz seconds.
   virtual double rate_hz() const = 0;
 
-  /// A declared param's validated value (or its default). Asking for an undeclared param, or with
-  /// the wrong C++ type, is a programming error reported at the instance's location.
+  /// Legacy (see ClassInfo::param<T>(name)): a declared param's validated value (or its
+  /// default). Asking for an undeclared param, or with the wrong C++ type, is a programming
+  /// error reported at the instance's location. A param bound to a member needs no reading.
   template <typename T>
   T param(std::string_view param_name) {
     const ParamValue* value = find_param(param_name, typeid(T));
     if (value == nullptr || !std::holds_alternative<T>(*value)) return T{};
     return std::get<T>(*value);
   }
-  /// Where a param was written, or the instance's location for a default.
+  /// Where a param was written, or the instance's location for a default (legacy: by name).
   virtual SourceLocation param_location(std::string_view param_name) const = 0;
 
+  /// Legacy (see ClassInfo::input<T>(name)): a port's handle, resolved by name. A port bound to
+  /// a member holds its handle before init().
   template <typename T>
   Input<T> input(std::string_view port) {
     return Input<T>{resolve_port(port, PortDirection::kInput, typeid(T))};
@@ -99,6 +102,18 @@ class InitContext {
  protected:
   virtual std::uint32_t resolve_sensor(const std::string& sensor, const std::type_info& type,
                                        const SourceLocation& where) = 0;
+
+ public:
+  /// Where the param bound to `member` was written, or the instance's location for a default:
+  /// `ctx.error(ctx.param_location(&GoTo::target_), "...")`. A member that no param is bound to
+  /// is a programming error reported at the instance's location.
+  template <typename C, typename M>
+  SourceLocation param_location(M C::*member) const {
+    return bound_param_location(MemberKey(member));
+  }
+
+ protected:
+  virtual SourceLocation bound_param_location(const MemberKey& member) const = 0;
 };
 
 /// A behaviour's init(): also claims a state machine's controller to step.

@@ -6,10 +6,13 @@
 // with one declaration of params and ports that serves validation, compile and tooling alike.
 // It is a value: no global instance, nothing registered during static initialisation.
 
+#include <array>
+#include <cstring>
 #include <functional>
 #include <map>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -25,6 +28,8 @@
 namespace arbiter {
 
 class State;
+template <typename T>
+struct StateParam;
 
 enum class ClassKind { kBehaviour, kState, kInterface };
 const char* to_string(ClassKind kind);
@@ -69,6 +74,65 @@ constexpr ParamKind param_kind_of() {
                 "std::vector<double>, std::vector<std::string> or Node");
 }
 
+/// A data member of a class, type-erased, so that registration can tell a member bound twice and
+/// init() can ask where the param bound to it was written.
+class MemberKey {
+ public:
+  MemberKey() = default;
+  template <typename C, typename M>
+  explicit MemberKey(M C::*member) : type_(&typeid(member)) {
+    static_assert(sizeof member <= sizeof bytes_, "a data member pointer fits in a MemberKey");
+    std::memcpy(bytes_.data(), &member, sizeof member);
+  }
+  bool empty() const { return type_ == nullptr; }
+  bool operator==(const MemberKey& other) const {
+    return type_ != nullptr && other.type_ != nullptr && *type_ == *other.type_ &&
+           bytes_ == other.bytes_;
+  }
+
+ private:
+  const std::type_info* type_ = nullptr;
+  std::array<unsigned char, 2 * sizeof(void*)> bytes_{};
+};
+
+namespace detail {
+
+/// Class C's part of an instance: `throw_instance` throws the instance as a pointer to its own
+/// class, and the handler converts it to C, the class or one of its bases, as the language
+/// converts a thrown pointer (the conversion a binder cannot name, not knowing that class).
+template <typename C>
+C& instance_as(void (*throw_instance)(void*), void* instance) {
+  try {
+    throw_instance(instance);
+  } catch (C* part) {
+    return *part;
+  } catch (...) {
+  }
+  throw std::logic_error("a member binding does not fit the instance's class");
+}
+
+template <typename M>
+struct StateParamTraits : std::false_type {};
+template <typename T>
+struct StateParamTraits<StateParam<T>> : std::true_type {
+  using type = T;
+};
+
+template <typename M>
+struct PortTraits : std::false_type {};
+template <typename T>
+struct PortTraits<Input<T>> : std::true_type {
+  using type = T;
+  static constexpr bool kInput = true;
+};
+template <typename T>
+struct PortTraits<Output<T>> : std::true_type {
+  using type = T;
+  static constexpr bool kInput = false;
+};
+
+}  // namespace detail
+
 /// A validated param of one instance.
 struct Param {
   std::string name;
@@ -95,6 +159,11 @@ struct ParamSpec {
   /// The param's JSON Schema (draft-07, as JSON text) for `arbiter schema`, instead of the one
   /// its kind gives: how a structured (kAny) param tells editors and CI its shape.
   std::string json_schema;
+  /// The member the param is bound to, and how a new instance's member gets it before init():
+  /// its value (behaviours, interfaces) or its handle, `index` among the class's params (states).
+  MemberKey member;
+  std::function<void(void* instance, const ParamValue& value, std::uint32_t index)> bind;
+  bool member_is_handle = false;  ///< a StateParam, given its index rather than a value
 
   /// The default, which makes the param optional. It has the kind's C++ type (an integer is
   /// taken for a double); any other type is a mistake in the class's registration, which then
@@ -136,6 +205,10 @@ struct PortSpec {
   const std::type_info* cpp_type = nullptr;
   bool optional = false;  ///< may stay unbound when nothing of its name exists
   std::string description;
+  /// The Input or Output member the port is bound to, and how a new instance's member gets its
+  /// handle before init().
+  MemberKey member;
+  std::function<void(void* instance, std::uint32_t handle)> bind;
 
   PortSpec& make_optional() {
     optional = true;
@@ -158,25 +231,74 @@ struct ClassInfo {
   std::function<std::unique_ptr<Interface>()> make_interface;
   std::function<std::unique_ptr<State>()> make_state;
 
-  ParamSpec& param(std::string param_name, ParamKind param_kind) {
-    auto& spec = params.emplace_back();
-    spec.name = std::move(param_name);
-    spec.kind = param_kind;
-    return spec;
+  /// Throws an instance (a pointer to its Behaviour, Interface or State part; null at
+  /// registration) as a pointer to the class's C++ type. Set by add_behaviour<T>,
+  /// add_interface<T> and add_state_class<T>. A handler for a pointer to a base catches it too:
+  /// that is how registration tells that a bound member belongs to the class or one of its bases,
+  /// and how a binder reaches that part of an instance.
+  void (*throw_instance)(void* instance) = nullptr;
+
+  /// A param bound to a data member of the class (or of a public base): `info.param("gain",
+  /// &GoTo::gain_)`. The kind follows from the member's type (bool, std::int64_t, double,
+  /// std::string, Vec2, Vec3, std::vector<double>, std::vector<std::string> or Node); a new
+  /// instance's member holds the validated value before init(). A state's params vary per planned
+  /// instance, so a state binds a StateParam<T> handle, read in a step with `ctx.param(handle)`;
+  /// only a state_level() param may bind a state's plain member (else the load fails). A name or
+  /// member that comes twice, a member of another class, or a StateParam member of a class that is
+  /// no state, throws std::logic_error.
+  template <typename C, typename M>
+  ParamSpec& param(std::string param_name, M C::*member) {
+    check_owner<C>(param_name);
+    const auto cast = throw_instance;
+    if constexpr (detail::StateParamTraits<M>::value) {
+      // Checked here rather than on C, which may be a base shared by states (a mixin).
+      if (kind != ClassKind::kState) reject_handle(param_name);
+      ParamSpec& spec =
+          add_param(std::move(param_name),
+                    param_kind_of<typename detail::StateParamTraits<M>::type>(), MemberKey(member),
+                    [member, cast](void* instance, const ParamValue&, std::uint32_t index) {
+                      detail::instance_as<C>(cast, instance).*member = M{index};
+                    });
+      spec.member_is_handle = true;
+      return spec;
+    } else {
+      return add_param(std::move(param_name), param_kind_of<M>(), MemberKey(member),
+                       [member, cast](void* instance, const ParamValue& value, std::uint32_t) {
+                         detail::instance_as<C>(cast, instance).*member = std::get<M>(value);
+                       });
+    }
   }
-  /// A param of the kind whose C++ type is T, the type `ctx.param<T>()` reads it as:
-  /// `info.param<double>("speed").defaults_to(0.5)`.
+  /// A port bound to an Input<T> (a sensor the class reads) or Output<T> (an actuator it
+  /// writes) member: `info.port("velocity", &GoTo::velocity_)`. A new instance's member holds
+  /// the resolved handle before init(). Duplicates throw as for params.
+  template <typename C, typename M>
+  PortSpec& port(std::string port_name, M C::*member) {
+    using Traits = detail::PortTraits<M>;
+    static_assert(Traits::value, "a port binds to an Input<T> or Output<T> member");
+    check_owner<C>(port_name);
+    const auto cast = throw_instance;
+    return add_port(std::move(port_name),
+                    Traits::kInput ? PortDirection::kInput : PortDirection::kOutput,
+                    typeid(typename Traits::type), MemberKey(member),
+                    [member, cast](void* instance, std::uint32_t handle) {
+                      detail::instance_as<C>(cast, instance).*member = M{handle};
+                    });
+  }
+  /// Legacy, by name alone: the class then reads the param with `ctx.param<T>(name)` and the
+  /// port with `ctx.input<T>(name)` / `ctx.output<T>(name)` in init(), a second spelling of the
+  /// name that only the load checks. Kept for code not yet migrated to the bound forms above;
+  /// removed with the next plugin API version.
   template <typename T>
   ParamSpec& param(std::string param_name) {
-    return param(std::move(param_name), param_kind_of<T>());
+    return add_param(std::move(param_name), param_kind_of<T>(), {}, nullptr);
   }
   template <typename T>
   PortSpec& input(std::string port_name) {
-    return add_port(std::move(port_name), PortDirection::kInput, typeid(T));
+    return add_port(std::move(port_name), PortDirection::kInput, typeid(T), {}, nullptr);
   }
   template <typename T>
   PortSpec& output(std::string port_name) {
-    return add_port(std::move(port_name), PortDirection::kOutput, typeid(T));
+    return add_port(std::move(port_name), PortDirection::kOutput, typeid(T), {}, nullptr);
   }
   ClassInfo& describe(std::string text) {
     description = std::move(text);
@@ -186,13 +308,22 @@ struct ClassInfo {
   const PortSpec* find_port(std::string_view port_name) const;
 
  private:
-  PortSpec& add_port(std::string port_name, PortDirection direction, const std::type_info& type) {
-    auto& spec = ports.emplace_back();
-    spec.name = std::move(port_name);
-    spec.direction = direction;
-    spec.cpp_type = &type;
-    return spec;
+  template <typename C>
+  void check_owner(const std::string& item) const {
+    try {
+      if (throw_instance != nullptr) throw_instance(nullptr);
+    } catch (C*) {
+      return;
+    } catch (...) {
+    }
+    reject_foreign_member(item);
   }
+  [[noreturn]] void reject_foreign_member(const std::string& item) const;
+  [[noreturn]] void reject_handle(const std::string& param_name) const;
+  ParamSpec& add_param(std::string param_name, ParamKind param_kind, MemberKey member,
+                       std::function<void(void*, const ParamValue&, std::uint32_t)> bind);
+  PortSpec& add_port(std::string port_name, PortDirection direction, const std::type_info& type,
+                     MemberKey member, std::function<void(void*, std::uint32_t)> bind);
 };
 
 class Registry {
@@ -205,12 +336,18 @@ class Registry {
   ClassInfo& add_behaviour(std::string name) {
     auto& info = add_class(std::move(name), ClassKind::kBehaviour);
     info.make_behaviour = [] { return std::unique_ptr<Behaviour>(new T()); };
+    info.throw_instance = [](void* instance) {
+      throw static_cast<T*>(static_cast<Behaviour*>(instance));
+    };
     return info;
   }
   template <typename T>
   ClassInfo& add_interface(std::string name) {
     auto& info = add_class(std::move(name), ClassKind::kInterface);
     info.make_interface = [] { return std::unique_ptr<Interface>(new T()); };
+    info.throw_instance = [](void* instance) {
+      throw static_cast<T*>(static_cast<Interface*>(instance));
+    };
     return info;
   }
   /// States are created through a factory so that the State header stays out of this one.

@@ -29,6 +29,7 @@ using ArgValue = std::variant<bool, std::int64_t, double, Vec2, Vec3>;
 /// step by index (StateContext::param), with no name lookup.
 template <typename T>
 struct StateParam {
+  using type = T;
   std::uint32_t index = kNoIndex;  ///< among the class's params
   bool bound() const { return index != kNoIndex; }
 };
@@ -211,7 +212,12 @@ class ControllerHooks {
 /// Registers a state class `T` (default-constructible) under `name`.
 template <typename T>
 ClassInfo& add_state_class(Registry& registry, std::string name) {
-  return registry.add_state(std::move(name), [] { return std::unique_ptr<State>(new T()); });
+  ClassInfo& info =
+      registry.add_state(std::move(name), [] { return std::unique_ptr<State>(new T()); });
+  info.throw_instance = [](void* instance) {
+    throw static_cast<T*>(static_cast<State*>(instance));
+  };
+  return info;
 }
 
 }  // namespace arbiter
