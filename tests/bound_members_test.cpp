@@ -133,7 +133,7 @@ TEST_CASE("a misspelt param name in a config fails the load at the name", "[plug
   CHECK(error.location.line == 9);
   CHECK(error.location.column == 37);
   CHECK(error.message == "unknown param 'gian' for behaviour 'g' (test.Gain)");
-  CHECK_THAT(error.notes.at(0), Catch::Contains("'gain'"));
+  CHECK_THAT(error.notes.at(0).text, Catch::Contains("'gain'"));
 }
 
 TEST_CASE("a state's param bound to a StateParam handle reads each planned instance's value",

@@ -287,14 +287,6 @@ Program compile_text(const std::string& text, const Registry& registry, const st
   return std::move(*program);
 }
 
-Trace read_whole_trace(const std::string& path) {
-  Diagnostic error;
-  auto trace = read_trace(path, error);
-  INFO(format(error));
-  REQUIRE(trace);
-  return std::move(*trace);
-}
-
 std::string run_traced(Manager& manager, int steps) {
   std::ostringstream out;
   TraceWriter trace(out);
