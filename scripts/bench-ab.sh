@@ -126,7 +126,7 @@ for ((round = 1; round <= rounds; ++round)); do
     binary=$base_build/bench/arbiter_bench
     [ $side = new ] && binary=$new_build/bench/arbiter_bench
     "$binary" --benchmark_filter="$filter" --no-target-check \
-      --benchmark_out="$results/$side.$round.csv" --benchmark_out_format=csv "${extra[@]}" \
+      --benchmark_out="$results/$side.$round.json" --benchmark_out_format=json "${extra[@]}" \
       >"$results/$side.$round.txt" 2>&1 || {
       cat "$results/$side.$round.txt" >&2
       echo "bench-ab: the $side benchmark failed" >&2
@@ -142,16 +142,35 @@ echo "base $(git rev-parse --short "$base_commit") ($base_rev) against the worki
 echo "machine: $(nproc) cores (${cpu_model:-unknown CPU}), load average $(cut -d' ' -f1-3 /proc/loadavg);" \
   "CPU time of the benchmark thread"
 echo
-# Google Benchmark's CSV: a context header, then "name",iterations,real_time,cpu_time,time_unit,...
-# error_occurred. Aggregate rows (with --benchmark_repetitions) are left out: every repetition
-# is a sample of its own.
-awk -F, -v threshold="$threshold" '
-  function ns(value, unit) {
-    if (unit == "us") return value * 1e3
-    if (unit == "ms") return value * 1e6
-    if (unit == "s") return value * 1e9
-    return value
-  }
+# Google Benchmark's JSON, one field a line: each run's name, run_type, cpu_time, time_unit and
+# error_occurred become a line "side<TAB>name<TAB>ns<TAB>error". Aggregate runs (with
+# --benchmark_repetitions) are left out: every repetition is a sample of its own. (The CSV format
+# cannot be used: it refuses benchmarks with different counters in one run.)
+for file in "$results"/*.json; do
+  side=${file##*/}
+  awk -v side="${side%%.*}" '
+    function value(line) {
+      sub(/^[^:]*:[ ]*/, "", line); sub(/,[ ]*$/, "", line); gsub(/"/, "", line)
+      return line
+    }
+    /^[ ]*"benchmarks":/ { inside = 1 }
+    !inside { next }
+    /^[ ]*\{/ { name = ""; type = ""; cpu = ""; unit = "ns"; error = "false" }
+    /^[ ]*"name":/ { name = value($0) }
+    /^[ ]*"run_type":/ { type = value($0) }
+    /^[ ]*"cpu_time":/ { cpu = value($0) }
+    /^[ ]*"time_unit":/ { unit = value($0) }
+    /^[ ]*"error_occurred":/ { error = value($0) }
+    /^[ ]*\}/ && name != "" {
+      if (type != "aggregate") {
+        scale = unit == "us" ? 1e3 : unit == "ms" ? 1e6 : unit == "s" ? 1e9 : 1
+        printf "%s\t%s\t%s\t%s\n", side, name, error == "true" ? "" : cpu * scale, error
+      }
+      name = ""
+    }
+  ' "$file"
+done >"$results/samples.tsv"
+awk -F'\t' -v threshold="$threshold" '
   function median(list,    n, values, i, j, swap) {
     n = split(list, values, " ")
     for (i = 2; i <= n; ++i) {
@@ -162,14 +181,11 @@ awk -F, -v threshold="$threshold" '
     low = values[1]; high = values[n]
     return n % 2 ? values[(n + 1) / 2] : (values[n / 2] + values[n / 2 + 1]) / 2
   }
-  FNR == 1 { side = FILENAME ~ /\/base\.[0-9]+\.csv$/ ? "base" : "new" }
-  /^"/ {
-    name = $1
-    gsub(/"/, "", name)
-    if (name ~ /_(mean|median|stddev|cv|min|max)$/) next
+  {
+    side = $1; name = $2
     if (!(name in seen)) { seen[name] = 1; order[++names] = name }
-    if ($9 == "true") { failed[side, name] = 1; next }
-    samples[side, name] = samples[side, name] " " ns($4, $5)
+    if ($4 == "true") { failed[side, name] = 1; next }
+    samples[side, name] = samples[side, name] " " $3
   }
   END {
     printf "| benchmark | base ns | new ns | new/base | base range | new range | |\n"
@@ -197,4 +213,4 @@ awk -F, -v threshold="$threshold" '
     printf "\nflagged: beyond +-%s %% (-t); ns: CPU time per iteration (the step benchmarks: per step)\n",
            threshold
   }
-' "$results"/base.*.csv "$results"/new.*.csv
+' "$results/samples.tsv"
