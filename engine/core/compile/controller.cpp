@@ -142,6 +142,14 @@ void ControllerBuilder::index_state_values() {
       values.push_back(value);
     }
   }
+  // A state whose every required param has a value of its own needs no check per planning.
+  c_.check_required_.assign(c_.states_.size(), 0);
+  for (std::uint32_t s = 0; s < c_.states_.size(); ++s) {
+    const auto& specs = c_.states_[s].cls->params;
+    for (std::size_t p = 0; p < specs.size(); ++p) {
+      if (specs[p].required() && c_.state_values_[s][p] == nullptr) c_.check_required_[s] = 1;
+    }
+  }
 }
 
 std::string_view Controller::current_state() const {
@@ -271,7 +279,7 @@ std::optional<std::uint32_t> Controller::create(std::uint32_t state, const Plann
   // Pointers into args only once it is complete: it is reserved to the class's param count, and
   // load checks that the slots of a handle name distinct params.
   for (const auto& [param, value] : created.args) created.values[param] = &value;
-  for (std::uint32_t p = 0; p < specs.size(); ++p) {
+  for (std::uint32_t p = 0; check_required_[state] != 0 && p < specs.size(); ++p) {
     if (specs[p].required() && created.values[p] == nullptr) {
       fail(fmt::format("state '{}' ({}) planned without its required param '{}'", compiled.name,
                        compiled.cls->name, specs[p].name));
@@ -344,17 +352,23 @@ void Controller::record(const StepContext& context, Event::Kind kind, std::uint3
   }
   const Instance& of = instances_[instance];
   Event& event = events_[event_count_++];
-  event = Event{};
   event.kind = kind;
   event.state = of.state;
   event.sequence = sequence;
-  if (kind == Event::Kind::kExecute) return;
+  // Every field is written, without clearing the event first: three events a step.
   event.cause = ending.cause;
   event.proceeded = ending.proceeded;
   event.other = ending.other;
   event.preempt = ending.preempt;
+  event.args_count = 0;
+  if (kind == Event::Kind::kExecute) {
+    event.planned = nullptr;
+    event.args_begin = 0;
+    return;
+  }
   event.planned = of.planned;
   event.args_begin = static_cast<std::uint32_t>(event_args_used_);
+  if (of.args.empty()) return;
   for (const auto& [param, value] : of.args) {
     if (event_args_used_ == event_args_.size()) break;
     event_args_[event_args_used_++] = {param, arg_value(value)};

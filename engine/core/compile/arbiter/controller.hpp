@@ -211,6 +211,8 @@ class Controller {
   std::vector<CompiledState> states_;
   /// Per state, each class param's value before any planning (the state's, else the default).
   std::vector<std::vector<const ParamValue*>> state_values_;
+  /// Per state, 1 when a required param has no value of the state's own: planning checks it.
+  std::vector<std::uint8_t> check_required_;
   std::vector<Instance> instances_;
   std::vector<std::vector<std::uint32_t>> pools_;  ///< free instances per state
   std::size_t live_ = 0;
