@@ -284,22 +284,6 @@ struct ClassInfo {
                       detail::instance_as<C>(cast, instance).*member = M{handle};
                     });
   }
-  /// Legacy, by name alone: the class then reads the param with `ctx.param<T>(name)` and the
-  /// port with `ctx.input<T>(name)` / `ctx.output<T>(name)` in init(), a second spelling of the
-  /// name that only the load checks. Kept for code not yet migrated to the bound forms above;
-  /// removed with the next plugin API version.
-  template <typename T>
-  ParamSpec& param(std::string param_name) {
-    return add_param(std::move(param_name), param_kind_of<T>(), {}, nullptr);
-  }
-  template <typename T>
-  PortSpec& input(std::string port_name) {
-    return add_port(std::move(port_name), PortDirection::kInput, typeid(T), {}, nullptr);
-  }
-  template <typename T>
-  PortSpec& output(std::string port_name) {
-    return add_port(std::move(port_name), PortDirection::kOutput, typeid(T), {}, nullptr);
-  }
   ClassInfo& describe(std::string text) {
     description = std::move(text);
     return *this;

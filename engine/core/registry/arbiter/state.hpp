@@ -25,7 +25,7 @@ const char* to_string(ControllerStatus status);
 /// The value of a run-time param of a planned state instance: the kinds a plan edit may set.
 using ArgValue = std::variant<bool, std::int64_t, double, Vec2, Vec3>;
 
-/// A param of a state class, resolved in init() (StateInitContext::param_handle) and read in a
+/// A param of a state class, bound to the member at registration (ClassInfo::param) and read in a
 /// step by index (StateContext::param), with no name lookup.
 template <typename T>
 struct StateParam {
