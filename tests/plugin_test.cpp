@@ -352,22 +352,39 @@ TEST_CASE("a plugin whose registration throws is reported with the exception's m
   CHECK(registry.find_any_class("test_throws.Kicker") == nullptr);
 }
 
+namespace {
+/// A member of each C++ type the param-kind test binds.
+struct Kinds final : Behaviour {
+  double activation(const StepContext&) override { return 0.0; }
+  double gain = 0.0;
+  std::int64_t rounds = 0;
+  std::vector<std::string> names;
+  Vec2 target;
+  double speed = 0.0;
+  std::int64_t steps = 0;
+  std::int64_t count = 0;
+  bool loud = false;
+};
+}  // namespace
+
 TEST_CASE("a param declared by its C++ type gets that type's kind and a default of that type",
           "[plugin][registry]") {
-  ClassInfo info;
-  CHECK(info.param<double>("gain").kind == ParamKind::kDouble);
-  CHECK(info.param<std::int64_t>("rounds").kind == ParamKind::kInt);
-  CHECK(info.param<std::vector<std::string>>("names").kind == ParamKind::kStringList);
-  CHECK(info.param<Vec2>("target").kind == ParamKind::kVec2);
+  Registry registry;
+  auto& info = registry.add_behaviour<Kinds>("test.Kinds");
+  CHECK(info.param("gain", &Kinds::gain).kind == ParamKind::kDouble);
+  CHECK(info.param("rounds", &Kinds::rounds).kind == ParamKind::kInt);
+  CHECK(info.param("names", &Kinds::names).kind == ParamKind::kStringList);
+  CHECK(info.param("target", &Kinds::target).kind == ParamKind::kVec2);
   // An integer literal is taken for a double, so that `.defaults_to(3)` means 3.0.
-  const auto& gain = info.param<double>("speed").defaults_to(3);
+  const auto& gain = info.param("speed", &Kinds::speed).defaults_to(3);
   REQUIRE(gain.default_value);
   CHECK(std::get<double>(*gain.default_value) == 3.0);
-  CHECK(std::get<std::int64_t>(*info.param<std::int64_t>("steps").defaults_to(3).default_value) == 3);
+  CHECK(std::get<std::int64_t>(*info.param("steps", &Kinds::steps).defaults_to(3).default_value) ==
+        3);
   // A default of another type is the registration's mistake, told with the param's name.
-  CHECK_THROWS_WITH(info.param<std::int64_t>("count").defaults_to("3"),
+  CHECK_THROWS_WITH(info.param("count", &Kinds::count).defaults_to("3"),
                     "param 'count' is of kind int, but its default is of kind string");
-  CHECK_THROWS_WITH(info.param<bool>("loud").defaults_to(1),
+  CHECK_THROWS_WITH(info.param("loud", &Kinds::loud).defaults_to(1),
                     "param 'loud' is of kind bool, but its default is of kind int");
 }
 

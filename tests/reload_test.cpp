@@ -13,11 +13,11 @@
 
 #include <unistd.h>
 
-#include "core/run/carryover.hpp"  // internal: one test stages a carry-over by hand
 #include "arbiter/recording.hpp"
 #include "arbiter/reload.hpp"
 #include "arbiter/trace.hpp"
 #include "arbiter/trace_reader.hpp"
+#include "core/run/carryover.hpp"  // internal: one test stages a carry-over by hand
 #include "counting_new.hpp"
 #include "test_support.hpp"
 
@@ -54,7 +54,6 @@ ReloadResult staged_reload(const ConfigFile& config, const std::string& text, Re
 /// A probe that keeps its run-time state (how often it executed) across a params change.
 class Counter : public Behaviour {
  public:
-  void init(BehaviourInitContext& ctx) override { gain = ctx.param<double>("gain"); }
   double activation(const StepContext&) override { return 1.0; }
   void execute(ExecuteContext&) override { ++executions; }
   bool carry_over(Behaviour& previous) override {
@@ -67,7 +66,7 @@ class Counter : public Behaviour {
 
 Registry make_registry() {
   Registry registry = test::make_test_registry();
-  registry.add_behaviour<Counter>("test.Counter").param<double>("gain").defaults_to(1.0);
+  registry.add_behaviour<Counter>("test.Counter").param("gain", &Counter::gain).defaults_to(1.0);
   return registry;
 }
 

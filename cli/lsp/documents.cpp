@@ -346,7 +346,8 @@ const Server::Catalog& Server::catalog_of(const Analysis* analysis) const {
     registry = builtin.get();
   }
   std::string key;
-  for (const auto& [name, info] : registry->classes()) key += name.first + ' ' + info.origin + '\n';
+  for (const auto& [name, info] : registry->classes())
+    key += name.first + ' ' + info->origin + '\n';
   auto found = catalogs_.find(key);
   if (found == catalogs_.end()) {
     found = catalogs_

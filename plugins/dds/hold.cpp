@@ -52,7 +52,7 @@ class Hold final : public Behaviour {
 
 template <typename T>
 void register_hold(Registry& registry, const std::string& type) {
-  ClassInfo& info =
+  auto& info =
       registry.add_behaviour<Hold<T>>(fmt::format("dds.Hold{}", type))
           .describe(
               "Writes the last value its 'from' sensor received to its 'to' actuator every step, "

@@ -28,7 +28,8 @@ class BallMemory {
  public:
   static constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
 
-  static void declare_ports(ClassInfo& info) {
+  template <typename C>
+  static void declare_ports(ClassBinder<C>& info) {
     info.port("ball_visible", &BallMemory::visible_)
         .describe("whether the camera sees the ball this step");
     info.port("ball_position", &BallMemory::position_)

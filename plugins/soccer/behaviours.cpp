@@ -17,15 +17,15 @@ void register_go_behind_ball(Registry& registry);
 void register_kick_ball(Registry& registry);
 void register_head_control(Registry& registry);
 
-template <typename C>
-ParamSpec& declare_goal(ClassInfo& info, Vec2 C::*goal) {
+template <typename T, typename C>
+ParamSpec& declare_goal(ClassBinder<T>& info, Vec2 C::*goal) {
   return info.param("goal", goal)
       .defaults_to(Vec2{4.5, 0.0})
       .describe("the point to kick the ball to (m, field frame): the opponent goal's centre");
 }
 
-template <typename C>
-ParamSpec& declare_ball_timeout(ClassInfo& info, std::int64_t C::*ball_timeout,
+template <typename T, typename C>
+ParamSpec& declare_ball_timeout(ClassBinder<T>& info, std::int64_t C::*ball_timeout,
                                 std::int64_t steps) {
   return info.param("ball_timeout", ball_timeout)
       .defaults_to(steps)

@@ -38,8 +38,8 @@ double out_of_goal(Point goal) {
   return norm(goal) > 1e-9 ? bearing(Point{-goal.x, -goal.y}) : 0.0;
 }
 
-template <typename C, typename M>
-ParamSpec& declare_own_goal(ClassInfo& info, M C::*goal) {
+template <typename T, typename C, typename M>
+ParamSpec& declare_own_goal(ClassBinder<T>& info, M C::*goal) {
   return info.param("goal", goal)
       .defaults_to(Vec2{-4.5, 0.0})
       .describe("the centre of the goal to keep (m, field frame), on its goal line");

@@ -29,7 +29,8 @@ struct WalkParams {
   T max_turn{};
 
   /// Declares `gain`, `max_forward`, `max_sideways` and `max_turn`, bound to these members.
-  static void declare(ClassInfo& info, double forward_default, const char* forward_text) {
+  template <typename C>
+  static void declare(ClassBinder<C>& info, double forward_default, const char* forward_text) {
     info.param("gain", &WalkParams::gain)
         .defaults_to(1.5)
         .range(0.0, 10.0)

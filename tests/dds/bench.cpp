@@ -44,10 +44,7 @@ namespace {
 /// Records, in each step in which its `time` sensor was written, how old that time is.
 class Latency final : public Behaviour {
  public:
-  void init(BehaviourInitContext& ctx) override {
-    time_ = ctx.input<double>("time");
-    ages_.reserve(1 << 20);
-  }
+  void init(BehaviourInitContext&) override { ages_.reserve(1 << 20); }
   void update(const StepContext& ctx) override {
     if (recording && ctx.written(time_) && ages_.size() < ages_.capacity()) {
       ages_.push_back(monotonic_seconds() - ctx.read(time_));
@@ -59,6 +56,8 @@ class Latency final : public Behaviour {
   const std::vector<double>& ages() const { return ages_; }
 
  private:
+  friend Registry bench_registry();
+
   Input<double> time_;
   std::vector<double> ages_;
 };
@@ -66,7 +65,7 @@ class Latency final : public Behaviour {
 Registry bench_registry() {
   Registry registry = make_registry();
   registry.set_origin("bench");
-  registry.add_behaviour<Latency>("bench.Latency").input<double>("time");
+  registry.add_behaviour<Latency>("bench.Latency").port("time", &Latency::time_);
   return registry;
 }
 

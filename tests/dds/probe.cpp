@@ -15,17 +15,7 @@ namespace {
 /// point = (N, -N), vector = (N, 2N, -0.5), text = "step N" and time = the monotonic clock.
 class Stamp final : public Behaviour {
  public:
-  void init(BehaviourInitContext& ctx) override {
-    every_ = ctx.param<std::int64_t>("every");
-    flag_ = ctx.output<bool>("flag");
-    count_ = ctx.output<std::int64_t>("count");
-    level_ = ctx.output<double>("level");
-    point_ = ctx.output<Vec2>("point");
-    vector_ = ctx.output<Vec3>("vector");
-    text_ = ctx.output<std::string>("text");
-    time_ = ctx.output<double>("time");
-    scratch_.reserve(kStringCapacity);
-  }
+  void init(BehaviourInitContext&) override { scratch_.reserve(kStringCapacity); }
 
   double activation(const StepContext& ctx) override {
     return static_cast<std::int64_t>(ctx.step()) % every_ == 0 ? 1.0 : 0.0;
@@ -47,6 +37,8 @@ class Stamp final : public Behaviour {
   }
 
  private:
+  friend void dds_test::register_probe(Registry& registry);
+
   std::int64_t every_ = 1;
   Output<bool> flag_;
   Output<std::int64_t> count_;
@@ -69,15 +61,17 @@ double monotonic_seconds() {
 void register_probe(Registry& registry) {
   auto& info = registry.add_behaviour<Stamp>("probe.Stamp")
                    .describe("Writes values of every type, derived from the step number.");
-  info.param<std::int64_t>("every").defaults_to(1).at_least(1).describe(
-      "active (and writing) only in steps that are a multiple of this");
-  info.output<bool>("flag").make_optional().describe("step is odd");
-  info.output<std::int64_t>("count").make_optional().describe("the step");
-  info.output<double>("level").make_optional().describe("step / 2");
-  info.output<Vec2>("point").make_optional().describe("(step, -step)");
-  info.output<Vec3>("vector").make_optional().describe("(step, 2 step, -0.5)");
-  info.output<std::string>("text").make_optional().describe("'step N'");
-  info.output<double>("time").make_optional().describe("the monotonic clock (s)");
+  info.param("every", &Stamp::every_)
+      .defaults_to(1)
+      .at_least(1)
+      .describe("active (and writing) only in steps that are a multiple of this");
+  info.port("flag", &Stamp::flag_).make_optional().describe("step is odd");
+  info.port("count", &Stamp::count_).make_optional().describe("the step");
+  info.port("level", &Stamp::level_).make_optional().describe("step / 2");
+  info.port("point", &Stamp::point_).make_optional().describe("(step, -step)");
+  info.port("vector", &Stamp::vector_).make_optional().describe("(step, 2 step, -0.5)");
+  info.port("text", &Stamp::text_).make_optional().describe("'step N'");
+  info.port("time", &Stamp::time_).make_optional().describe("the monotonic clock (s)");
 }
 
 }  // namespace arbiter::dds_test

@@ -16,28 +16,28 @@ Registry make_fault_registry() {
   r.set_origin("robustness_test");
   constexpr std::int64_t kForever = std::numeric_limits<std::int64_t>::max();
   auto& faulty = r.add_behaviour<Faulty>("robust.Faulty");
-  faulty.param<std::string>("callback")
+  faulty.param("callback", &Faulty::callback)
       .defaults_to(std::string("activation"))
       .one_of({"init", "update", "activation", "execute", "inhibited"});
-  faulty.param<std::int64_t>("from").defaults_to(1);
-  faulty.param<std::int64_t>("until").defaults_to(kForever);
-  faulty.param<double>("level").defaults_to(1.0);
-  faulty.param<double>("value").defaults_to(0.0);
-  faulty.output<double>("out").make_optional();
+  faulty.param("from", &Faulty::from_param).defaults_to(1);
+  faulty.param("until", &Faulty::until_param).defaults_to(kForever);
+  faulty.param("level", &Faulty::level).defaults_to(1.0);
+  faulty.param("value", &Faulty::value).defaults_to(0.0);
+  faulty.port("out", &Faulty::out).make_optional();
   auto& odd = r.add_behaviour<Odd>("robust.Odd");
-  odd.param<std::string>("level").defaults_to(std::string("1"));
-  odd.param<std::string>("value").defaults_to(std::string("0"));
-  odd.param<std::int64_t>("from").defaults_to(1);
-  odd.output<double>("out").make_optional();
-  odd.output<Vec2>("out2").make_optional();
-  odd.output<Vec3>("out3").make_optional();
+  odd.param("level", &Odd::level_text).defaults_to(std::string("1"));
+  odd.param("value", &Odd::value_text).defaults_to(std::string("0"));
+  odd.param("from", &Odd::from_param).defaults_to(1);
+  odd.port("out", &Odd::out).make_optional();
+  odd.port("out2", &Odd::out2).make_optional();
+  odd.port("out3", &Odd::out3).make_optional();
   auto& feed = r.add_interface<FaultyFeed>("robust.FaultyFeed");
-  feed.param<std::string>("callback").defaults_to(std::string("input"));
-  feed.param<std::int64_t>("from").defaults_to(1);
-  feed.param<std::int64_t>("until").defaults_to(kForever);
-  feed.output<double>("out").make_optional();
+  feed.param("callback", &FaultyFeed::callback).defaults_to(std::string("input"));
+  feed.param("from", &FaultyFeed::from_param).defaults_to(1);
+  feed.param("until", &FaultyFeed::until_param).defaults_to(kForever);
+  feed.port("out", &FaultyFeed::out).make_optional();
   auto& state = add_state_class<FaultyState>(r, "robust.FaultyState");
-  state.param<std::string>("callback")
+  state.param("callback", &FaultyState::callback_param)
       .defaults_to(std::string("execute"))
       .one_of({"init", "activate", "execute", "deactivate"});
   return r;

@@ -28,13 +28,9 @@ namespace arbiter::test {
 /// execute() leaves a write behind. Counts its calls.
 class Faulty : public Behaviour {
  public:
-  void init(BehaviourInitContext& ctx) override {
-    callback = ctx.param<std::string>("callback");
-    from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
-    until = static_cast<std::uint64_t>(ctx.param<std::int64_t>("until"));
-    level = ctx.param<double>("level");
-    value = ctx.param<double>("value");
-    out = ctx.output<double>("out");
+  void init(BehaviourInitContext&) override {
+    from = static_cast<std::uint64_t>(from_param);
+    until = static_cast<std::uint64_t>(until_param);
     if (callback == "init") throw std::runtime_error("faulty init");
   }
   void update(const StepContext& ctx) override {
@@ -57,6 +53,8 @@ class Faulty : public Behaviour {
   }
 
   std::string callback;
+  std::int64_t from_param = 1;  // the params; a step number is unsigned
+  std::int64_t until_param = 0;
   std::uint64_t from = 1;
   std::uint64_t until = 0;
   double level = 1.0;
@@ -83,13 +81,10 @@ double number_of(const std::string& text);
 /// step in which it writes.
 class Odd : public Behaviour {
  public:
-  void init(BehaviourInitContext& ctx) override {
-    level = number_of(ctx.param<std::string>("level"));
-    value = number_of(ctx.param<std::string>("value"));
-    from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
-    out = ctx.output<double>("out");
-    out2 = ctx.output<Vec2>("out2");
-    out3 = ctx.output<Vec3>("out3");
+  void init(BehaviourInitContext&) override {
+    level = number_of(level_text);
+    value = number_of(value_text);
+    from = static_cast<std::uint64_t>(from_param);
   }
   double activation(const StepContext&) override { return level; }
   void execute(ExecuteContext& ctx) override {
@@ -99,6 +94,9 @@ class Odd : public Behaviour {
     ctx.write(out3, Vec3{0.0, 0.0, value});
   }
 
+  std::string level_text;  // the params, as text
+  std::string value_text;
+  std::int64_t from_param = 1;
   double level = 1.0;
   double value = 0.0;
   std::uint64_t from = 1;
@@ -111,11 +109,9 @@ class Odd : public Behaviour {
 /// `callback` (input or output) in steps [from, until], or from init.
 class FaultyFeed : public Interface {
  public:
-  void init(InitContext& ctx) override {
-    callback = ctx.param<std::string>("callback");
-    from = static_cast<std::uint64_t>(ctx.param<std::int64_t>("from"));
-    until = static_cast<std::uint64_t>(ctx.param<std::int64_t>("until"));
-    out = ctx.output<double>("out");
+  void init(InitContext&) override {
+    from = static_cast<std::uint64_t>(from_param);
+    until = static_cast<std::uint64_t>(until_param);
     if (callback == "init") throw 7;
   }
   void input(WriteContext& ctx) override {
@@ -131,6 +127,8 @@ class FaultyFeed : public Interface {
   }
 
   std::string callback;
+  std::int64_t from_param = 1;
+  std::int64_t until_param = 0;
   std::uint64_t from = 1;
   std::uint64_t until = 0;
   Output<double> out;
@@ -143,7 +141,7 @@ class FaultyFeed : public Interface {
 class FaultyState : public State {
  public:
   void init(StateInitContext& ctx) override {
-    callback = ctx.param<std::string>("callback");
+    callback = ctx.param(callback_param);
     if (callback == "init") throw std::runtime_error("faulty state init");
   }
   void activate(StateContext&) override { fail("activate"); }
@@ -153,6 +151,7 @@ class FaultyState : public State {
   }
   void deactivate(StateContext&) override { fail("deactivate"); }
 
+  StateParam<std::string> callback_param;
   std::string callback;
 
  private:

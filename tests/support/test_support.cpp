@@ -12,10 +12,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/compile/controller_builder.hpp"
 #include "arbiter/lint.hpp"
 #include "arbiter/trace.hpp"
 #include "builtins.hpp"
+#include "core/compile/controller_builder.hpp"
 
 namespace arbiter::test {
 
@@ -64,19 +64,19 @@ void Feed::output(const StepContext& ctx) {
 }
 
 void Planner::init(StateInitContext& ctx) {
-  op = ctx.param<std::string>("op");
-  target = ctx.param<std::string>("target");
-  hold = ctx.param<std::int64_t>("hold");
-  x = ctx.param_handle<double>("x");
+  // The state's own values: a planned instance's are not known before its step.
+  op = ctx.param(op_param);
+  target = ctx.param(target_param);
+  hold = ctx.param(hold_param);
   if (op != "append" && op != "prepend" && op != "go_to" && op != "insert_before" &&
       op != "insert_after") {
     return;
   }
   // x is passed only when set, so that targets without an x param can be planned too.
-  if (ctx.param<double>("x") != 0.0) {
-    with_x = ctx.plan_state<double>(target, {"x"}, ctx.param_location("target"));
+  if (ctx.param(x) != 0.0) {
+    with_x = ctx.plan_state<double>(target, {"x"}, ctx.param_location(&Planner::target_param));
   } else {
-    plain = ctx.plan_state<>(target, {}, ctx.param_location("target"));
+    plain = ctx.plan_state<>(target, {}, ctx.param_location(&Planner::target_param));
   }
 }
 
@@ -158,13 +158,12 @@ Registry make_test_registry() {
   auto& feed = registry.add_interface<Feed>("test.Feed");
   feed.port("out", &Feed::out).make_optional();
   feed.port("in", &Feed::in).make_optional();
-  // Planner reads its own values of per-instance params in init(), which only the name-keyed
-  // ctx.param<T>(name) offers a state.
+  // Planner reads the state's own values of its per-instance params in init().
   auto& planner = add_state_class<Planner>(registry, "test.Planner");
-  planner.param<std::string>("op").defaults_to(std::string("none"));
-  planner.param<std::string>("target").defaults_to(std::string());
-  planner.param<std::int64_t>("hold").defaults_to(1).at_least(1);
-  planner.param<double>("x").defaults_to(0.0);
+  planner.param("op", &Planner::op_param).defaults_to(std::string("none"));
+  planner.param("target", &Planner::target_param).defaults_to(std::string());
+  planner.param("hold", &Planner::hold_param).defaults_to(1).at_least(1);
+  planner.param("x", &Planner::x).defaults_to(0.0);
   auto& pose = add_state_class<Pose>(registry, "test.Pose");
   pose.param("x", &Pose::x).range(-10.0, 10.0);
   return registry;

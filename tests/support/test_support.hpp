@@ -71,10 +71,13 @@ class Planner : public State {
   void activate(StateContext& ctx) override;
   StateResult execute(StateContext& ctx) override;
 
-  std::string op;
+  StateParam<std::string> op_param;
+  StateParam<std::string> target_param;
+  StateParam<std::int64_t> hold_param;
+  StateParam<double> x;
+  std::string op;  ///< the state's own values of the params above
   std::string target;
   std::int64_t hold = 1;
-  StateParam<double> x;
   PlannedStateRef<double> with_x;  ///< target, when x is set on the state
   PlannedStateRef<> plain;         ///< target, otherwise
 };

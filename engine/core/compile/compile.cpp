@@ -64,7 +64,7 @@ class InstanceInit : public Base {
   const SourceLocation& location() const override { return location_; }
   double rate_hz() const override { return program_.rate_hz; }
 
-  SourceLocation param_location(std::string_view param_name) const override {
+  SourceLocation param_location(std::string_view param_name) const {
     const Param* param = params_.find(param_name);
     return param != nullptr ? param->location : location_;
   }
@@ -91,7 +91,7 @@ class InstanceInit : public Base {
       }
     }
     for (const auto& port : cls_.ports) {
-      if (port.bind) port.bind(instance, resolve_port(port.name, port.direction, *port.cpp_type));
+      if (port.bind) port.bind(instance, port_handle(port));
     }
   }
 
@@ -156,45 +156,16 @@ class InstanceInit : public Base {
   Diagnostics& diagnostics() override { return diagnostics_; }
 
  protected:
-  const ParamValue* find_param(std::string_view param_name,
-                               const std::type_info& requested) override {
-    const ParamSpec* spec = cls_.find_param(param_name);
-    const Param* param = params_.find(param_name);
-    if (spec == nullptr || param == nullptr) {
-      error_at(
-          location_, "class-error",
-          fmt::format("class {} reads param '{}' that it does not declare", cls_.name, param_name));
-      return nullptr;
-    }
-    const bool matches =
-        std::visit([&](const auto& value) { return typeid(value) == requested; }, param->value);
-    if (!matches) {
-      error_at(location_, "class-error",
-               fmt::format("class {} reads param '{}' ({}) as a different C++ type", cls_.name,
-                           param_name, to_string(spec->kind)));
-      return nullptr;
-    }
-    return &param->value;
-  }
-
-  std::uint32_t resolve_port(std::string_view port, PortDirection direction,
-                             const std::type_info& type) override {
+  /// The handle of a port the class declares: where its binding points, kUnbound if nowhere.
+  std::uint32_t port_handle(const PortSpec& port) {
     for (const auto& binding : ports_) {
-      if (binding.port->name != port) continue;
-      if (binding.port->direction != direction || *binding.port->cpp_type != type) {
-        error_at(location_, "class-error",
-                 fmt::format("class {} resolves port '{}' with a different direction or type "
-                             "than it declares",
-                             cls_.name, port));
-        return kUnbound;
-      }
+      if (binding.port->name != port.name) continue;
       if (binding.target.empty()) return kUnbound;
       const auto actuator = scope_.bindings->actuator.find(binding.target);
       if (actuator == scope_.bindings->actuator.end()) return kUnbound;
-      return direction == PortDirection::kInput ? actuator->second : slot_for(actuator->second);
+      return port.direction == PortDirection::kInput ? actuator->second
+                                                     : slot_for(actuator->second);
     }
-    error_at(location_, "class-error",
-             fmt::format("class {} resolves port '{}' that it does not declare", cls_.name, port));
     return kUnbound;
   }
 
@@ -305,24 +276,10 @@ class StateInit final : public InstanceInit<StateInitContext> {
   }
 
  protected:
-  std::uint32_t resolve_param(std::string_view param_name, ParamKind kind) override {
-    const ParamSpec* spec = cls_.find_param(param_name);
-    if (spec == nullptr) {
-      std::vector<std::string> known;
-      for (const auto& declared : cls_.params) known.push_back(declared.name);
-      error_at(
-          location_, "class-error",
-          fmt::format("class {} reads param '{}' that it does not declare", cls_.name, param_name))
-          .unknown_name(std::string(param_name), known);
-      return kNoIndex;
-    }
-    if (spec->kind != kind) {
-      error_at(location_, "class-error",
-               fmt::format("class {} reads param '{}' ({}) through a handle of kind {}", cls_.name,
-                           param_name, to_string(spec->kind), to_string(kind)));
-      return kNoIndex;
-    }
-    return static_cast<std::uint32_t>(spec - cls_.params.data());
+  const ParamValue* state_param(std::uint32_t index) const override {
+    if (index >= cls_.params.size()) return nullptr;
+    const Param* param = params_.find(cls_.params[index].name);
+    return param != nullptr ? &param->value : nullptr;
   }
 
   std::uint32_t resolve_state(const std::string& state, const std::string_view* params,

@@ -159,8 +159,8 @@ bool ModelBuilder::from_unloaded_plugin(const std::string& name) const {
   // A loaded plugin's classes name its library in their origin.
   const std::string library = fmt::format("arbiter_{}.so)", plugin);
   for (const auto& [key, info] : registry_.classes()) {
-    if (info.origin.size() >= library.size() &&
-        info.origin.compare(info.origin.size() - library.size(), library.size(), library) == 0) {
+    if (info->origin.size() >= library.size() &&
+        info->origin.compare(info->origin.size() - library.size(), library.size(), library) == 0) {
       return false;
     }
   }

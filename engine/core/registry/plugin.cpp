@@ -168,8 +168,12 @@ bool load_plugin(const std::string& name, const SourceLocation& where,
     return false;
   }
   for (const auto& entry : fresh.classes()) {
-    // `fresh` is ours and not const; Registry offers no mutable access to its classes.
-    auto& info = const_cast<ClassInfo&>(entry.second);
+    // `fresh` is ours: its classes may be changed. Each is the library's ClassBinder<T>, whose
+    // destructor is the library's code: a plain ClassInfo takes its place, so that the class
+    // may outlive the library's registry (registration is over; nothing binds members now).
+    auto& slot = const_cast<std::unique_ptr<ClassInfo>&>(entry.second);
+    slot = std::make_unique<ClassInfo>(std::move(*slot));
+    ClassInfo& info = *slot;
     hold_library(info.make_behaviour, library);
     hold_library(info.make_interface, library);
     hold_library(info.make_state, library);

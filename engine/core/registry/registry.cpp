@@ -62,21 +62,7 @@ const Param* ParamSet::find(std::string_view name) const {
   return nullptr;
 }
 
-void ClassInfo::reject_foreign_member(const std::string& item) const {
-  throw std::logic_error(
-      throw_instance == nullptr
-          ? fmt::format("class '{}' binds '{}' to a member, but was not registered with its C++ "
-                        "type (add_behaviour<T>, add_interface<T> or add_state_class<T>)",
-                        name, item)
-          : fmt::format("class '{}' binds '{}' to a member of another class", name, item));
-}
-
-void ClassInfo::reject_handle(const std::string& param_name) const {
-  throw std::logic_error(
-      fmt::format("{} class '{}' binds param '{}' to a StateParam handle, which "
-                  "only a state reads; bind a member of the param's type",
-                  to_string(kind), name, param_name));
-}
+ClassInfo::~ClassInfo() = default;
 
 ParamSpec& ClassInfo::add_param(std::string param_name, ParamKind param_kind, MemberKey member,
                                 std::function<void(void*, const ParamValue&, std::uint32_t)> bind) {
@@ -158,24 +144,30 @@ ValueType& Registry::add_value_type(ValueType type) {
 }
 
 ClassInfo& Registry::add_class(std::string name, ClassKind kind) {
+  auto info = std::make_unique<ClassInfo>();
+  ClassInfo& added = *info;
+  add_class(std::move(info), std::move(name), kind);
+  return added;
+}
+
+void Registry::add_class(std::unique_ptr<ClassInfo> info, std::string name, ClassKind kind) {
   if (find_class(kind, name) != nullptr) {
     throw std::logic_error(fmt::format("{} class '{}' registered twice", to_string(kind), name));
   }
-  ClassInfo info;
-  info.name = name;
-  info.kind = kind;
-  info.origin = origin_;
-  return classes_.emplace(std::make_pair(std::move(name), kind), std::move(info)).first->second;
+  info->name = name;
+  info->kind = kind;
+  info->origin = origin_;
+  classes_.emplace(std::make_pair(std::move(name), kind), std::move(info));
 }
 
 const ClassInfo* Registry::find_class(ClassKind kind, std::string_view name) const {
   const auto found = classes_.find(std::make_pair(std::string(name), kind));
-  return found == classes_.end() ? nullptr : &found->second;
+  return found == classes_.end() ? nullptr : found->second.get();
 }
 
 const ClassInfo* Registry::find_any_class(std::string_view name) const {
   const auto found = classes_.lower_bound(std::make_pair(std::string(name), ClassKind{}));
-  return found != classes_.end() && found->first.first == name ? &found->second : nullptr;
+  return found != classes_.end() && found->first.first == name ? found->second.get() : nullptr;
 }
 
 const ValueType* Registry::find_value_type(std::string_view name) const {
@@ -200,7 +192,7 @@ std::string Registry::value_type_name(const std::type_info& type) const {
 std::vector<std::string> Registry::class_names(ClassKind kind) const {
   std::vector<std::string> names;
   for (const auto& [key, info] : classes_) {
-    if (info.kind == kind) names.push_back(info.name);
+    if (info->kind == kind) names.push_back(info->name);
   }
   return names;
 }
@@ -213,11 +205,11 @@ std::vector<std::string> Registry::value_type_names() const {
 
 void Registry::merge(Registry&& other, const SourceLocation& where, Diagnostics& diagnostics) {
   for (auto& [key, info] : other.classes_) {
-    if (const ClassInfo* existing = find_class(info.kind, info.name)) {
+    if (const ClassInfo* existing = find_class(info->kind, info->name)) {
       diagnostics.error(
           where, "class-clash",
-          fmt::format("{} class '{}' from {} clashes with the one from {}", to_string(info.kind),
-                      info.name, info.origin, existing->origin));
+          fmt::format("{} class '{}' from {} clashes with the one from {}", to_string(info->kind),
+                      info->name, info->origin, existing->origin));
       continue;
     }
     classes_.emplace(key, std::move(info));

@@ -54,7 +54,8 @@ std::string catalog_text(const Registry& registry) {
   for (const ClassKind kind : kKinds) {
     out += fmt::format("{}{} classes\n", out.empty() ? "" : "\n", to_string(kind));
     bool any = false;
-    for (const auto& [key, cls] : registry.classes()) {
+    for (const auto& [key, info] : registry.classes()) {
+      const ClassInfo& cls = *info;
       if (cls.kind != kind) continue;
       if (any) out += "\n";
       any = true;
@@ -84,7 +85,8 @@ std::string catalog_text(const Registry& registry) {
 std::string catalog_json(const Registry& registry) {
   Json classes = Json::array();
   for (const ClassKind kind : kKinds) {
-    for (const auto& [key, cls] : registry.classes()) {
+    for (const auto& [key, info] : registry.classes()) {
+      const ClassInfo& cls = *info;
       if (cls.kind != kind) continue;
       Json params = Json::array();
       for (const auto& spec : cls.params) {

@@ -198,7 +198,7 @@ Json when(const char* key, const std::string& name, Json then) {
 std::vector<const ClassInfo*> classes_of(const Registry& registry, ClassKind kind) {
   std::vector<const ClassInfo*> out;
   for (const auto& [key, info] : registry.classes()) {
-    if (info.kind == kind) out.push_back(&info);
+    if (info->kind == kind) out.push_back(info.get());
   }
   return out;
 }

@@ -35,29 +35,6 @@ class InitContext {
   /// The config's nominal step rate (`rate_hz`); one step lasts 1 / rate_hz seconds.
   virtual double rate_hz() const = 0;
 
-  /// Legacy (see ClassInfo::param<T>(name)): a declared param's validated value (or its
-  /// default). Asking for an undeclared param, or with the wrong C++ type, is a programming
-  /// error reported at the instance's location. A param bound to a member needs no reading.
-  template <typename T>
-  T param(std::string_view param_name) {
-    const ParamValue* value = find_param(param_name, typeid(T));
-    if (value == nullptr || !std::holds_alternative<T>(*value)) return T{};
-    return std::get<T>(*value);
-  }
-  /// Where a param was written, or the instance's location for a default (legacy: by name).
-  virtual SourceLocation param_location(std::string_view param_name) const = 0;
-
-  /// Legacy (see ClassInfo::input<T>(name)): a port's handle, resolved by name. A port bound to
-  /// a member holds its handle before init().
-  template <typename T>
-  Input<T> input(std::string_view port) {
-    return Input<T>{resolve_port(port, PortDirection::kInput, typeid(T))};
-  }
-  template <typename T>
-  Output<T> output(std::string_view port) {
-    return Output<T>{resolve_port(port, PortDirection::kOutput, typeid(T))};
-  }
-
   /// An output to an actuator of the instance's own layer named in the config rather than
   /// declared as a port. Reports at `where` and returns an unbound output when there is none.
   virtual AnyOutput output_to_actuator(const std::string& actuator,
@@ -75,15 +52,6 @@ class InitContext {
   /// its mistakes are then reported with the model's codes and notes.
   virtual Diagnostics& diagnostics() = 0;
 
- protected:
-  virtual const ParamValue* find_param(std::string_view param_name,
-                                       const std::type_info& requested) = 0;
-  virtual std::uint32_t resolve_port(std::string_view port, PortDirection direction,
-                                     const std::type_info& type) = 0;
-
-  // Declared after every earlier virtual function, so that a plugin built against an earlier
-  // header of the same API version finds those at the same place in the table.
- public:
   /// The actuators the instance's layer declares, in declaration order, and the sensors it
   /// reads, in the order listed: for a class that moves whatever its layer names (a middleware
   /// bridge) rather than ports it declares. Write an actuator through output_to_actuator(), read
@@ -125,16 +93,21 @@ class BehaviourInitContext : public InitContext {
   virtual Controller* claim_controller(const std::string& machine, const SourceLocation& where) = 0;
 };
 
-/// A state's init(): also resolves its params and the states it plans to handles, so that a step
-/// looks up no name and a wrong name in code fails the load at a config location.
+/// A state's init(): also reads the state's own params and resolves the states it plans to
+/// handles, so that a step looks up no name and a wrong name in code fails the load at a config
+/// location.
 class StateInitContext : public InitContext {
  public:
-  /// A param of this state's class, read per instance in a step: `ctx.param(handle)`. Reports at
-  /// the state's location, and returns an unbound handle, when the class declares no such param
-  /// or T is not the C++ type of its kind.
+  /// The state's own value of a param bound to `handle` (set on the state, else the class
+  /// default): what init() can know of a per-instance param before any instance is planned, as a
+  /// state that plans another by a name in its params does. A planned instance's value is read
+  /// in a step (StateContext::param). The type's zero value for an unbound handle or an optional
+  /// param without a value.
   template <typename T>
-  StateParam<T> param_handle(std::string_view param_name) {
-    return StateParam<T>{resolve_param(param_name, param_kind_of<T>())};
+  T param(StateParam<T> handle) const {
+    const ParamValue* value = state_param(handle.index);
+    if (const T* typed = value == nullptr ? nullptr : std::get_if<T>(value)) return *typed;
+    return T{};
   }
 
   /// A state of the same controller with typed slots for run-time params, one per name in
@@ -166,7 +139,7 @@ class StateInitContext : public InitContext {
                           PlannedState& out) = 0;
 
  protected:
-  virtual std::uint32_t resolve_param(std::string_view param_name, ParamKind kind) = 0;
+  virtual const ParamValue* state_param(std::uint32_t index) const = 0;
   virtual std::uint32_t resolve_state(const std::string& state, const std::string_view* params,
                                       const ParamKind* kinds, std::size_t count,
                                       std::uint32_t* indices, const SourceLocation& where) = 0;

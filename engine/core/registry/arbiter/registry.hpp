@@ -97,20 +97,6 @@ class MemberKey {
 
 namespace detail {
 
-/// Class C's part of an instance: `throw_instance` throws the instance as a pointer to its own
-/// class, and the handler converts it to C, the class or one of its bases, as the language
-/// converts a thrown pointer (the conversion a binder cannot name, not knowing that class).
-template <typename C>
-C& instance_as(void (*throw_instance)(void*), void* instance) {
-  try {
-    throw_instance(instance);
-  } catch (C* part) {
-    return *part;
-  } catch (...) {
-  }
-  throw std::logic_error("a member binding does not fit the instance's class");
-}
-
 template <typename M>
 struct StateParamTraits : std::false_type {};
 template <typename T>
@@ -130,6 +116,28 @@ struct PortTraits<Output<T>> : std::true_type {
   using type = T;
   static constexpr bool kInput = false;
 };
+
+/// The Behaviour, Interface or State that T derives from: what a binder is given an instance as.
+template <typename T>
+using RootOf =
+    std::conditional_t<std::is_base_of_v<Behaviour, T>, Behaviour,
+                       std::conditional_t<std::is_base_of_v<Interface, T>, Interface, State>>;
+
+/// Class T's object, given as a pointer to its Behaviour, Interface or State part.
+template <typename T>
+T& instance_as(void* instance) {
+  return static_cast<T&>(*static_cast<RootOf<T>*>(instance));
+}
+
+/// Whether class T may bind a member of class B: B is T or a public, unambiguous base of T, so
+/// that a pointer to the member applies to a T.
+template <typename T, typename B>
+inline constexpr bool kMemberOf = std::is_base_of_v<B, T>&& std::is_convertible_v<T*, B*>;
+
+/// Whether class T may bind a param to a member of type M: a StateParam handle is read per
+/// planned instance, which only a state has.
+template <typename T, typename M>
+inline constexpr bool kParamMember = !StateParamTraits<M>::value || std::is_base_of_v<State, T>;
 
 }  // namespace detail
 
@@ -220,7 +228,16 @@ struct PortSpec {
   }
 };
 
+/// A class as the registry knows it. add_behaviour<T>, add_interface<T> and add_state_class<T>
+/// return it as a ClassBinder<T>, which binds its params and ports to members of T.
 struct ClassInfo {
+  ClassInfo() = default;
+  ClassInfo(const ClassInfo&) = default;
+  ClassInfo(ClassInfo&&) = default;
+  ClassInfo& operator=(const ClassInfo&) = default;
+  ClassInfo& operator=(ClassInfo&&) = default;
+  virtual ~ClassInfo();
+
   std::string name;
   ClassKind kind = ClassKind::kBehaviour;
   std::string origin = "built-in";
@@ -231,75 +248,6 @@ struct ClassInfo {
   std::function<std::unique_ptr<Interface>()> make_interface;
   std::function<std::unique_ptr<State>()> make_state;
 
-  /// Throws an instance (a pointer to its Behaviour, Interface or State part; null at
-  /// registration) as a pointer to the class's C++ type. Set by add_behaviour<T>,
-  /// add_interface<T> and add_state_class<T>. A handler for a pointer to a base catches it too:
-  /// that is how registration tells that a bound member belongs to the class or one of its bases,
-  /// and how a binder reaches that part of an instance.
-  void (*throw_instance)(void* instance) = nullptr;
-
-  /// A param bound to a data member of the class (or of a public base): `info.param("gain",
-  /// &GoTo::gain_)`. The kind follows from the member's type (bool, std::int64_t, double,
-  /// std::string, Vec2, Vec3, std::vector<double>, std::vector<std::string> or Node); a new
-  /// instance's member holds the validated value before init(). A state's params vary per planned
-  /// instance, so a state binds a StateParam<T> handle, read in a step with `ctx.param(handle)`;
-  /// only a state_level() param may bind a state's plain member (else the load fails). A name or
-  /// member that comes twice, a member of another class, or a StateParam member of a class that is
-  /// no state, throws std::logic_error.
-  template <typename C, typename M>
-  ParamSpec& param(std::string param_name, M C::*member) {
-    check_owner<C>(param_name);
-    const auto cast = throw_instance;
-    if constexpr (detail::StateParamTraits<M>::value) {
-      // Checked here rather than on C, which may be a base shared by states (a mixin).
-      if (kind != ClassKind::kState) reject_handle(param_name);
-      ParamSpec& spec =
-          add_param(std::move(param_name),
-                    param_kind_of<typename detail::StateParamTraits<M>::type>(), MemberKey(member),
-                    [member, cast](void* instance, const ParamValue&, std::uint32_t index) {
-                      detail::instance_as<C>(cast, instance).*member = M{index};
-                    });
-      spec.member_is_handle = true;
-      return spec;
-    } else {
-      return add_param(std::move(param_name), param_kind_of<M>(), MemberKey(member),
-                       [member, cast](void* instance, const ParamValue& value, std::uint32_t) {
-                         detail::instance_as<C>(cast, instance).*member = std::get<M>(value);
-                       });
-    }
-  }
-  /// A port bound to an Input<T> (a sensor the class reads) or Output<T> (an actuator it
-  /// writes) member: `info.port("velocity", &GoTo::velocity_)`. A new instance's member holds
-  /// the resolved handle before init(). Duplicates throw as for params.
-  template <typename C, typename M>
-  PortSpec& port(std::string port_name, M C::*member) {
-    using Traits = detail::PortTraits<M>;
-    static_assert(Traits::value, "a port binds to an Input<T> or Output<T> member");
-    check_owner<C>(port_name);
-    const auto cast = throw_instance;
-    return add_port(std::move(port_name),
-                    Traits::kInput ? PortDirection::kInput : PortDirection::kOutput,
-                    typeid(typename Traits::type), MemberKey(member),
-                    [member, cast](void* instance, std::uint32_t handle) {
-                      detail::instance_as<C>(cast, instance).*member = M{handle};
-                    });
-  }
-  /// Legacy, by name alone: the class then reads the param with `ctx.param<T>(name)` and the
-  /// port with `ctx.input<T>(name)` / `ctx.output<T>(name)` in init(), a second spelling of the
-  /// name that only the load checks. Kept for code not yet migrated to the bound forms above;
-  /// removed with the next plugin API version.
-  template <typename T>
-  ParamSpec& param(std::string param_name) {
-    return add_param(std::move(param_name), param_kind_of<T>(), {}, nullptr);
-  }
-  template <typename T>
-  PortSpec& input(std::string port_name) {
-    return add_port(std::move(port_name), PortDirection::kInput, typeid(T), {}, nullptr);
-  }
-  template <typename T>
-  PortSpec& output(std::string port_name) {
-    return add_port(std::move(port_name), PortDirection::kOutput, typeid(T), {}, nullptr);
-  }
   ClassInfo& describe(std::string text) {
     description = std::move(text);
     return *this;
@@ -307,23 +255,70 @@ struct ClassInfo {
   const ParamSpec* find_param(std::string_view param_name) const;
   const PortSpec* find_port(std::string_view port_name) const;
 
- private:
-  template <typename C>
-  void check_owner(const std::string& item) const {
-    try {
-      if (throw_instance != nullptr) throw_instance(nullptr);
-    } catch (C*) {
-      return;
-    } catch (...) {
-    }
-    reject_foreign_member(item);
-  }
-  [[noreturn]] void reject_foreign_member(const std::string& item) const;
-  [[noreturn]] void reject_handle(const std::string& param_name) const;
+ protected:
+  /// Throw std::logic_error for a name or member that comes twice.
   ParamSpec& add_param(std::string param_name, ParamKind param_kind, MemberKey member,
                        std::function<void(void*, const ParamValue&, std::uint32_t)> bind);
   PortSpec& add_port(std::string port_name, PortDirection direction, const std::type_info& type,
                      MemberKey member, std::function<void(void*, std::uint32_t)> bind);
+};
+
+/// Class T's ClassInfo, which binds T's params and ports to its members (or to members of a
+/// public base of T: a mixin). The member's class is checked at compile time, and a new instance
+/// reaches the member through T by static_cast, whatever base declared it.
+template <typename T>
+class ClassBinder final : public ClassInfo {
+ public:
+  /// A param bound to a data member: `info.param("gain", &GoTo::gain_)`. The kind follows from
+  /// the member's type (bool, std::int64_t, double, std::string, Vec2, Vec3, std::vector<double>,
+  /// std::vector<std::string> or Node); a new instance's member holds the validated value before
+  /// init(). A state's params vary per planned instance, so a state binds a StateParam<T> handle,
+  /// read in a step with `ctx.param(handle)`; only a state_level() param may bind a state's plain
+  /// member (else the load fails). A member of a class that T does not publicly derive from, or
+  /// a StateParam member of a class that is no state, does not compile; a name or member that
+  /// comes twice throws std::logic_error.
+  template <typename B, typename M>
+  ParamSpec& param(std::string param_name, M B::*member) {
+    static_assert(detail::kMemberOf<T, B>,
+                  "a param binds a member of the registered class or of a public base of it");
+    static_assert(detail::kParamMember<T, M>,
+                  "only a state binds a param to a StateParam handle (read per planned "
+                  "instance); bind a member of the param's type");
+    if constexpr (detail::StateParamTraits<M>::value) {
+      ParamSpec& spec = add_param(
+          std::move(param_name), param_kind_of<typename detail::StateParamTraits<M>::type>(),
+          MemberKey(member), [member](void* instance, const ParamValue&, std::uint32_t index) {
+            detail::instance_as<T>(instance).*member = M{index};
+          });
+      spec.member_is_handle = true;
+      return spec;
+    } else {
+      return add_param(std::move(param_name), param_kind_of<M>(), MemberKey(member),
+                       [member](void* instance, const ParamValue& value, std::uint32_t) {
+                         detail::instance_as<T>(instance).*member = std::get<M>(value);
+                       });
+    }
+  }
+  /// A port bound to an Input<T> (a sensor the class reads) or Output<T> (an actuator it
+  /// writes) member: `info.port("velocity", &GoTo::velocity_)`. A new instance's member holds
+  /// the resolved handle before init(). Members are checked, and duplicates throw, as for params.
+  template <typename B, typename M>
+  PortSpec& port(std::string port_name, M B::*member) {
+    using Traits = detail::PortTraits<M>;
+    static_assert(Traits::value, "a port binds to an Input<T> or Output<T> member");
+    static_assert(detail::kMemberOf<T, B>,
+                  "a port binds a member of the registered class or of a public base of it");
+    return add_port(std::move(port_name),
+                    Traits::kInput ? PortDirection::kInput : PortDirection::kOutput,
+                    typeid(typename Traits::type), MemberKey(member),
+                    [member](void* instance, std::uint32_t handle) {
+                      detail::instance_as<T>(instance).*member = M{handle};
+                    });
+  }
+  ClassBinder& describe(std::string text) {
+    ClassInfo::describe(std::move(text));
+    return *this;
+  }
 };
 
 class Registry {
@@ -333,21 +328,17 @@ class Registry {
   Registry();
 
   template <typename T>
-  ClassInfo& add_behaviour(std::string name) {
-    auto& info = add_class(std::move(name), ClassKind::kBehaviour);
+  ClassBinder<T>& add_behaviour(std::string name) {
+    static_assert(std::is_base_of_v<Behaviour, T>, "a behaviour class derives from Behaviour");
+    auto& info = add_bound_class<T>(std::move(name), ClassKind::kBehaviour);
     info.make_behaviour = [] { return std::unique_ptr<Behaviour>(new T()); };
-    info.throw_instance = [](void* instance) {
-      throw static_cast<T*>(static_cast<Behaviour*>(instance));
-    };
     return info;
   }
   template <typename T>
-  ClassInfo& add_interface(std::string name) {
-    auto& info = add_class(std::move(name), ClassKind::kInterface);
+  ClassBinder<T>& add_interface(std::string name) {
+    static_assert(std::is_base_of_v<Interface, T>, "an interface class derives from Interface");
+    auto& info = add_bound_class<T>(std::move(name), ClassKind::kInterface);
     info.make_interface = [] { return std::unique_ptr<Interface>(new T()); };
-    info.throw_instance = [](void* instance) {
-      throw static_cast<T*>(static_cast<Interface*>(instance));
-    };
     return info;
   }
   /// States are created through a factory so that the State header stays out of this one.
@@ -365,6 +356,15 @@ class Registry {
   /// Throws std::logic_error when `name` is taken for that kind: registering twice is a
   /// programming error. A behaviour and a state may share a name (`scripted`).
   ClassInfo& add_class(std::string name, ClassKind kind);
+  /// As add_class, as a ClassBinder<T> (add_behaviour<T>, add_interface<T> and
+  /// add_state_class<T> set its factory).
+  template <typename T>
+  ClassBinder<T>& add_bound_class(std::string name, ClassKind kind) {
+    auto binder = std::make_unique<ClassBinder<T>>();
+    ClassBinder<T>& info = *binder;
+    add_class(std::move(binder), std::move(name), kind);
+    return info;
+  }
 
   const ClassInfo* find_class(ClassKind kind, std::string_view name) const;
   /// A class of that name of any kind (for "is a state class, not a behaviour class").
@@ -377,7 +377,9 @@ class Registry {
   std::vector<std::string> class_names(ClassKind kind) const;
   std::vector<std::string> value_type_names() const;
   /// Every class, ordered by name, then kind.
-  const std::map<std::pair<std::string, ClassKind>, ClassInfo>& classes() const { return classes_; }
+  const std::map<std::pair<std::string, ClassKind>, std::unique_ptr<ClassInfo>>& classes() const {
+    return classes_;
+  }
   const std::vector<std::unique_ptr<ValueType>>& value_types() const { return value_types_; }
 
   /// Sets the origin recorded for classes and value types added from now on.
@@ -401,11 +403,14 @@ class Registry {
   void merge(Registry&& other, const SourceLocation& where, Diagnostics& diagnostics);
 
  private:
+  void add_class(std::unique_ptr<ClassInfo> info, std::string name, ClassKind kind);
+
   // Declared first so that it is destroyed last: the classes and value types below hold code
   // from these libraries.
   std::vector<std::shared_ptr<void>> libraries_;
   std::vector<std::string> library_paths_;
-  std::map<std::pair<std::string, ClassKind>, ClassInfo> classes_;
+  // Behind pointers: each is the ClassBinder<T> of its class, when it was added as one.
+  std::map<std::pair<std::string, ClassKind>, std::unique_ptr<ClassInfo>> classes_;
   std::vector<std::unique_ptr<ValueType>> value_types_;  // stable addresses for handles
   std::string origin_ = "built-in";
 };

@@ -25,7 +25,7 @@ const char* to_string(ControllerStatus status);
 /// The value of a run-time param of a planned state instance: the kinds a plan edit may set.
 using ArgValue = std::variant<bool, std::int64_t, double, Vec2, Vec3>;
 
-/// A param of a state class, resolved in init() (StateInitContext::param_handle) and read in a
+/// A param of a state class, bound to the member at registration (ClassBinder::param) and read in a
 /// step by index (StateContext::param), with no name lookup.
 template <typename T>
 struct StateParam {
@@ -211,12 +211,10 @@ class ControllerHooks {
 
 /// Registers a state class `T` (default-constructible) under `name`.
 template <typename T>
-ClassInfo& add_state_class(Registry& registry, std::string name) {
-  ClassInfo& info =
-      registry.add_state(std::move(name), [] { return std::unique_ptr<State>(new T()); });
-  info.throw_instance = [](void* instance) {
-    throw static_cast<T*>(static_cast<State*>(instance));
-  };
+ClassBinder<T>& add_state_class(Registry& registry, std::string name) {
+  static_assert(std::is_base_of_v<State, T>, "a state class derives from State");
+  auto& info = registry.add_bound_class<T>(std::move(name), ClassKind::kState);
+  info.make_state = [] { return std::unique_ptr<State>(new T()); };
   return info;
 }
 
