@@ -84,7 +84,9 @@ execute_process(COMMAND "${CMAKE_COMMAND}" -E compare_files "${SOURCE_DIR}/packa
                         "${WORK_DIR}/package-lock.json" RESULT_VARIABLE changed)
 if(changed OR NOT EXISTS "${WORK_DIR}/node_modules/elkjs/package.json")
   file(COPY "${SOURCE_DIR}/package.json" "${SOURCE_DIR}/package-lock.json" DESTINATION "${WORK_DIR}")
-  execute_process(COMMAND "${NPM}" ci --no-audit --no-fund --loglevel=error
+  # Offline, every build tries again: a few seconds, not npm's default minutes of retries.
+  execute_process(COMMAND "${NPM}" ci --no-audit --no-fund --loglevel=error --fetch-retries=1
+                          --fetch-retry-maxtimeout=10000 --fetch-timeout=60000
                   WORKING_DIRECTORY "${WORK_DIR}" RESULT_VARIABLE status
                   OUTPUT_VARIABLE npm_output ERROR_VARIABLE npm_output)
   if(NOT status EQUAL 0)
@@ -93,7 +95,7 @@ if(changed OR NOT EXISTS "${WORK_DIR}/node_modules/elkjs/package.json")
     if(first STREQUAL "")
       set(first "exit status ${status}")
     endif()
-    write_missing("`npm ci` in ${WORK_DIR} failed (${first}): is the npm registry reachable?")
+    write_missing("`npm ci` in ${WORK_DIR} failed (${first}): is the npm registry reachable? The next build tries again")
     return()
   endif()
 endif()
