@@ -156,7 +156,9 @@ int main(int argc, char** argv) {
                      "record the run as MCAP (steps, interface inputs, the config) for "
                      "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
                      "for the recording's writer; paced (--realtime, --serve), a step it has no "
-                     "room for is dropped and the gap recorded. A write that fails (a full disk) "
+                     "room for is dropped and the gap recorded. Messages are logged at the run's "
+                     "own time: simulated (step / rate_hz) flat out, the wall clock paced. A "
+                     "write that fails (a full disk) "
                      "is reported at once and ends the recording, not the run, which then exits 1",
                      "RUN.mcap",
                      "with --record: write the recording out to the disk at least every SECONDS, "

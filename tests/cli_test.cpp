@@ -359,7 +359,7 @@ TEST_CASE("a recording whose first step was dropped replays up to its gap", "[re
         if (record.topic == "/arbiter/step") {
           metadata("arbiter.gap", {{"after_step", "0"}, {"dropped", "1"}});
         }
-      } else {
+      } else if (channels.count(record.topic) != 0) {  // the log is not needed to replay
         content.clear();
         number(content, channels.at(record.topic), 2);
         number(content, 0, 4);  // sequence

@@ -69,10 +69,10 @@ int run_command(const Options& options) {
   if (!options.record_path.empty()) {
     // Paced, a step the writer has no room for is dropped rather than the pace lost; flat out,
     // the run waits for the writer and the recording loses nothing.
+    auto info = recording_info(options.file, registry, load_options_of(options), kVersion);
+    info.paced = options.realtime;  // logged on the wall clock; flat out, on the simulated one
     recorder = std::make_unique<arbiter::Recorder>(
-        options.record_path,
-        recording_info(options.file, registry, load_options_of(options), kVersion),
-        arbiter::Recorder::kSlots,
+        options.record_path, std::move(info), arbiter::Recorder::kSlots,
         options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
     if (!recorder->ok()) {
       std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);

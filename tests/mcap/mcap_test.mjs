@@ -38,7 +38,7 @@ test.after(() => rmSync(work, { recursive: true, force: true }));
 test("the channels are json messages with JSON Schemas", async () => {
   const reader = await indexed();
   const topics = [...reader.channelsById.values()].map((channel) => channel.topic).sort();
-  assert.deepEqual(topics, ["/arbiter/header", "/arbiter/inputs", "/arbiter/step"]);
+  assert.deepEqual(topics, ["/arbiter/header", "/arbiter/inputs", "/arbiter/log", "/arbiter/step"]);
   for (const channel of reader.channelsById.values()) {
     assert.equal(channel.messageEncoding, "json");
     const schema = reader.schemasById.get(channel.schemaId);
@@ -59,7 +59,9 @@ test("the statistics and chunk indexes agree with the messages", async () => {
     assert.ok(message.logTime >= stats.messageStartTime && message.logTime <= stats.messageEndTime);
   }
   assert.equal(stats.messageCount, total);
-  assert.equal(total, 442n);  // one header, 220 steps, 220 inputs, the safe pass at the end
+  // One header, 220 steps, 220 inputs, the safe pass at the end, and the two reports logged
+  // (the ball kicked, then the goal).
+  assert.equal(total, 444n);
   for (const [channel, count] of stats.channelMessageCounts) assert.equal(counts.get(channel), count);
   assert.equal(BigInt(reader.chunkIndexes.length), BigInt(stats.chunkCount));
   assert.ok(reader.chunkIndexes.length >= 1);

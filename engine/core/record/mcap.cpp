@@ -95,7 +95,8 @@ std::uint16_t Writer::channel(std::uint16_t schema, std::string_view topic,
   return id;
 }
 
-void Writer::message(std::uint16_t channel, std::uint64_t log_time, std::string_view data) {
+void Writer::message(std::uint16_t channel, std::uint64_t log_time, std::uint64_t publish_time,
+                     std::string_view data) {
   if (chunk_.empty()) {
     chunk_start_ = log_time;
     chunk_end_ = log_time;
@@ -113,7 +114,7 @@ void Writer::message(std::uint16_t channel, std::uint64_t log_time, std::string_
   put<std::uint16_t>(chunk_, channel);
   put<std::uint32_t>(chunk_, sequence_[channel]++);
   put<std::uint64_t>(chunk_, log_time);
-  put<std::uint64_t>(chunk_, log_time);
+  put<std::uint64_t>(chunk_, publish_time);
   chunk_ += data;
 }
 

@@ -51,7 +51,13 @@ class Writer {
   std::uint16_t channel(std::uint16_t schema, std::string_view topic, std::string_view encoding);
   /// A message into the open chunk. The owner closes the chunk once chunk_full(), between
   /// messages that belong together: a file cut off after a chunk then holds all of them or none.
-  void message(std::uint16_t channel, std::uint64_t log_time, std::string_view data);
+  /// `publish_time` is when it was published; the log time, by which readers order and seek, is
+  /// the time it is about.
+  void message(std::uint16_t channel, std::uint64_t log_time, std::string_view data) {
+    message(channel, log_time, log_time, data);
+  }
+  void message(std::uint16_t channel, std::uint64_t log_time, std::uint64_t publish_time,
+               std::string_view data);
   /// A metadata record (outside chunks, so the open chunk is closed first).
   void metadata(std::string_view name, const std::vector<std::pair<std::string, std::string>>& map);
   /// Writes the open chunk (if a message is in it) and its message indexes.

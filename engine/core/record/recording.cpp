@@ -10,66 +10,12 @@
 #include <chrono>
 #include <system_error>
 
+#include "arbiter/channels.hpp"
 #include "arbiter/trace.hpp"
 #include "core/record/mcap.hpp"
 #include "core/record/step_record.hpp"
 
 namespace arbiter {
-
-namespace {
-
-constexpr const char* kStepSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
- "title": "arbiter step record",
- "type": "object",
- "properties": {
-  "step": {"type": "integer", "minimum": 1},
-  "t": {"type": "number", "description": "seconds since the run began, at the step's start"},
-  "duration": {"type": "number", "description": "seconds the step took"},
-  "safe": {"type": "boolean", "description": "the safe-value pass of a stopping or pausing engine"},
-  "layers": {"type": "object", "additionalProperties": {"type": "object",
-    "additionalProperties": {"type": "object", "properties": {
-      "requested": {"type": "number"}, "activation": {"type": "number"},
-      "active": {"type": "boolean"}, "inhibited_by": {"type": "array", "items": {"type": "string"}}}}}},
-  "actuators": {"type": "object", "additionalProperties": {"type": "object",
-    "properties": {"value": {}, "written": {"type": "boolean"}}}},
-  "controllers": {"type": "object", "additionalProperties": {"type": "object", "properties": {
-    "cycle": {"type": "integer"}, "state": {"type": ["string", "null"]},
-    "queue": {"type": "array", "items": {"type": "string"}},
-    "params": {"type": "object", "description": "the current state's per-instance params"},
-    "events": {"type": "array", "items": {"type": "string"}},
-    "ended": {"type": "array", "description": "why each state deactivated in the step ended, in order",
-      "items": {"type": "object", "properties": {
-        "state": {"type": "string"}, "params": {"type": "object"},
-        "cause": {"enum": ["proceeded", "queue_empty", "preempted", "go_to", "terminated", "error", "restarted", "reloaded"]},
-        "to": {"type": "string"}, "by": {"type": "string"},
-        "preempt": {"type": "integer", "minimum": 0}, "proceeded": {"type": "boolean"}},
-       "required": ["state", "cause"]}},
-    "status": {"type": "string"}}}},
-  "reported": {"type": "array", "items": {"type": "object",
-    "properties": {"by": {"type": "string"}, "text": {"type": "string"}}}}},
- "required": ["step", "layers"]})";
-
-constexpr const char* kInputsSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
- "title": "arbiter interface inputs",
- "type": "object",
- "properties": {
-  "step": {"type": "integer", "minimum": 1},
-  "inputs": {"type": "object", "additionalProperties": {"type": "object",
-    "properties": {"value": {}, "written": {"type": "boolean"}}}},
-  "reported": {"type": "array", "items": {"type": "object",
-    "properties": {"by": {"type": "string"}, "text": {"type": "string"},
-                   "pass": {"enum": ["input", "output"]}}}}},
- "required": ["step", "inputs"]})";
-
-constexpr const char* kHeaderSchema = R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
- "title": "arbiter trace header",
- "type": "object",
- "properties": {"arbiter_trace": {"const": 1}, "name": {"type": "string"},
-  "reload": {"type": "integer"}, "after_step": {"type": "integer"},
-  "layers": {"type": "array"}},
- "required": ["arbiter_trace", "name", "layers"]})";
-
-}  // namespace
 
 void append_inputs_record(const Manager& manager, std::string& out) {
   const detail::StepLayout layout(manager.program());
@@ -84,7 +30,11 @@ constexpr std::size_t kReportTextBytes = 4096;
 // a hot reload neither allocates on the stepping thread nor waits there for the writer.
 struct Recorder::Generation {
   Generation(const Program& program, std::uint64_t stage_, std::size_t slots)
-      : stage(stage_), layout(program), header(trace_header(program)) {
+      : stage(stage_),
+        layout(program),
+        header(trace_header(program)),
+        channels(detail::channels(layout, program.name)),
+        rate_hz(program.rate_hz) {
     blocks.reset(layout, kReportTextBytes, slots);
     last.bytes.assign(blocks.shape().tracked.total, std::byte{0});
   }
@@ -94,6 +44,8 @@ struct Recorder::Generation {
   // The stepping thread's: the tracked parts as the last slot published left them.
   detail::StepImage last;
   std::string header;  // the program's trace header, without the reload's number and step
+  std::vector<Channel> channels;  // their schemas, written for the program
+  double rate_hz = 0.0;
   std::vector<std::pair<std::string, std::string>> files;  // the reloaded config's
 };
 
@@ -106,10 +58,13 @@ struct alignas(64) Recorder::Slot {
   enum class Kind { kSnapshot, kHeader, kEnd };
   Kind kind = Kind::kSnapshot;
   std::uint64_t step = 0;
-  std::uint64_t log_time = 0;
+  std::uint64_t wall_time = 0;       // kHeader
   std::uint64_t reload = 0;          // kHeader: Manager::reloads()
   std::unique_ptr<Generation> next;  // kHeader: the slots after it are laid out by it
 };
+
+// Who the recorder's own log messages are from.
+constexpr const char* kRecorderName = "recorder";
 
 struct Recorder::Output {
   explicit Output(int fd) : writer(fd) {}
@@ -117,11 +72,19 @@ struct Recorder::Output {
   std::uint16_t header = 0;
   std::uint16_t step = 0;
   std::uint16_t inputs = 0;
+  std::uint16_t log = 0;
   std::uint64_t last_step = 0;
   std::uint64_t dropped = 0;
+  // The simulated clock (RecordingInfo::paced false): step `clock_step` was at `clock_ns` after
+  // the start, and the steps after it come at `rate_hz`, which a hot reload may change.
+  std::uint64_t clock_step = 0;
+  std::uint64_t clock_ns = 0;
+  double rate_hz = 0.0;
   std::string record;  // reused between messages
   std::string inputs_record;
-  detail::StepImage image;  // the writer's, as of the last slot it formatted
+  std::string log_record;
+  std::string step_schema, inputs_schema;  // of the channels written to last
+  detail::StepImage image;                 // the writer's, as of the last slot it formatted
   // The stepping thread's: whether the last slot published is the one before the next (no step
   // dropped since), so that the next copies what changed. On a cache line of its own: the
   // writer writes the members above at every message.
@@ -209,12 +172,16 @@ void Recorder::on_start(const Manager& manager) {
                                      .count());
   auto& writer = out_->writer;
   writer.header("arbiter", "arbiter " + info_.version);
-  out_->header = writer.channel(writer.schema("arbiter.Header", "jsonschema", kHeaderSchema),
-                                "/arbiter/header", "json");
-  out_->step = writer.channel(writer.schema("arbiter.Step", "jsonschema", kStepSchema),
-                              "/arbiter/step", "json");
-  out_->inputs = writer.channel(writer.schema("arbiter.Inputs", "jsonschema", kInputsSchema),
-                                "/arbiter/inputs", "json");
+  written_ = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
+  stepping_ = written_.get();
+  const auto& channels = written_->channels;
+  out_->header = add_channel(channels[kHeaderChannel]);
+  out_->step = add_channel(channels[kStepChannel]);
+  out_->inputs = add_channel(channels[kInputsChannel]);
+  out_->log = add_channel(channels[kLogChannel]);
+  out_->rate_hz = written_->rate_hz;
+  out_->step_schema = channels[kStepChannel].schema;
+  out_->inputs_schema = channels[kInputsChannel].schema;
   std::vector<std::pair<std::string, std::string>> config;
   config.emplace_back("name", manager.program().name);
   config.emplace_back("rate_hz", fmt::format("{}", manager.program().rate_hz));
@@ -224,17 +191,46 @@ void Recorder::on_start(const Manager& manager) {
   config.emplace_back("plugins", plugins);
   for (const auto& [file, text] : info_.files) config.emplace_back("file:" + file, text);
   writer.metadata("arbiter.config", config);
-  written_ = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
-  stepping_ = written_.get();
   writer.message(out_->header, wall_start_ns_, written_->header);
+  for (const auto& diagnostic : info_.diagnostics) {
+    out_->log_record.clear();
+    append_log_message(
+        wall_start_ns_,
+        diagnostic.severity == Severity::kError ? LogLevel::kError : LogLevel::kWarning, "config",
+        diagnostic.message + " [" + diagnostic.code + "]", diagnostic.location.file,
+        static_cast<std::uint32_t>(std::max(diagnostic.location.line, 0)), out_->log_record);
+    writer.message(out_->log, wall_start_ns_, out_->log_record);
+  }
   check_written(0);
   set_writer_period(manager.program());
   started_ = true;
   writer_ = std::thread([this] { write_loop(); });
 }
 
-std::uint64_t Recorder::log_time(bool timed, double step_time) const {
+std::uint16_t Recorder::add_channel(const Channel& channel) {
+  auto& writer = out_->writer;
+  return writer.channel(writer.schema(channel.schema_name, kSchemaEncoding, channel.schema),
+                        channel.topic, kMessageEncoding);
+}
+
+std::uint64_t Recorder::wall_time(bool timed, double step_time) const {
   return wall_start_ns_ + (timed ? static_cast<std::uint64_t>(step_time * 1e9) : 0);
+}
+
+std::uint64_t Recorder::log_time(std::uint64_t step, std::uint64_t wall_time) const {
+  if (info_.paced) return wall_time;
+  const auto& out = *out_;
+  const auto since = step > out.clock_step ? step - out.clock_step : 0;
+  return wall_start_ns_ + out.clock_ns +
+         static_cast<std::uint64_t>(static_cast<double>(since) * 1e9 / out.rate_hz);
+}
+
+void Recorder::write_log(std::uint64_t time, std::uint64_t wall, LogLevel level,
+                         const std::string& name, std::string_view text) {
+  auto& out = *out_;
+  out.log_record.clear();
+  append_log_message(time, level, name, text, {}, 0, out.log_record);
+  out.writer.message(out.log, time, wall, out.log_record);
 }
 
 void Recorder::set_writer_period(const Program& program) {
@@ -342,7 +338,7 @@ void Recorder::on_reload(const Manager& manager) {
   slot->kind = Slot::Kind::kHeader;
   slot->step = manager.steps();
   slot->reload = manager.reloads();
-  slot->log_time = log_time(manager.timed(), manager.step_time());
+  slot->wall_time = wall_time(manager.timed(), manager.step_time());
   stepping_ = next.get();
   slot->next = std::move(next);
   out_->chained = false;  // the next step copies every tracked part whole, into the new blocks
@@ -419,9 +415,25 @@ void Recorder::write_loop() {
         reload.emplace_back("file:" + file, std::move(text));
       }
       written_->files.clear();
+      // The steps before the reload came at the replaced program's rate, those after it at its.
+      const auto time = log_time(slot.step, slot.wall_time);
+      out.clock_ns = time - wall_start_ns_;
+      out.clock_step = slot.step;
+      out.rate_hz = written_->rate_hz;
       if (!failed()) {
         out.writer.metadata("arbiter.reload", reload);
-        out.writer.message(out.header, slot.log_time, header);
+        // A program laid out otherwise has channels of its own, on the same topics: each
+        // message is checked against the schema of its program.
+        const auto& channels = written_->channels;
+        if (channels[kStepChannel].schema != out.step_schema) {
+          out.step = add_channel(channels[kStepChannel]);
+          out.step_schema = channels[kStepChannel].schema;
+        }
+        if (channels[kInputsChannel].schema != out.inputs_schema) {
+          out.inputs = add_channel(channels[kInputsChannel]);
+          out.inputs_schema = channels[kInputsChannel].schema;
+        }
+        out.writer.message(out.header, time, slot.wall_time, header);
       }
       out.last_step = slot.step;
       slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
@@ -431,23 +443,33 @@ void Recorder::write_loop() {
       // stepping thread's core before that could fill the slot again.
       detail::StepSnapshot step(written_->blocks.shape(), block(*written_, &slot));
       step.apply(out.image);
-      const auto time = log_time(step.timed, step.t);
+      const auto wall = wall_time(step.timed, step.t);
+      const auto time = log_time(step.step, wall);
       out.record.clear();
       detail::append_step_record(written_->layout, step, out.record);
       if (step.safe) {
-        out.writer.message(out.step, time, out.record);  // no inputs: nothing was read
+        out.writer.message(out.step, time, wall, out.record);  // no inputs: nothing was read
       } else {
         if (step.step > out.last_step + 1) {
           const auto gap = step.step - out.last_step - 1;
           out.dropped += gap;
           out.writer.metadata("arbiter.gap", {{"after_step", std::to_string(out.last_step)},
                                               {"dropped", std::to_string(gap)}});
+          write_log(time, wall, LogLevel::kWarning, kRecorderName,
+                    fmt::format("the recorder dropped {} step{} after step {}: the writer fell "
+                                "behind",
+                                gap, gap == 1 ? "" : "s", out.last_step));
         }
         out.last_step = step.step;
         out.inputs_record.clear();
         detail::append_inputs_record(written_->layout, step, out.inputs_record);
-        out.writer.message(out.step, time, out.record);
-        out.writer.message(out.inputs, time, out.inputs_record);
+        out.writer.message(out.step, time, wall, out.record);
+        out.writer.message(out.inputs, time, wall, out.inputs_record);
+      }
+      for (const auto& report : step.reports) {
+        write_log(time, wall, LogLevel::kInfo,
+                  detail::report_source(written_->layout, report.source),
+                  step.texts.substr(report.text_begin, report.text_size));
       }
     }
     // After a failed write the writer only frees the slots: the run goes on, unrecorded.

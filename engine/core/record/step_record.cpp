@@ -62,15 +62,15 @@ ParamValue param_value(const ArgValue& value) {
   return std::visit([](auto v) { return ParamValue(v); }, value);
 }
 
-// Who reported: a behaviour, an interface layer, or a standalone state machine (kNoBehaviour).
-const std::string& source_name(const StepLayout& layout, std::uint32_t source) {
+}  // namespace
+
+// A standalone state machine reports as kNoBehaviour.
+const std::string& report_source(const StepLayout& layout, std::uint32_t source) {
   static const std::string kStandalone = "state machines";
   if (source == kNoBehaviour) return kStandalone;
   if (source < layout.behaviours.size()) return layout.behaviours[source];
   return layout.layers[source - layout.behaviours.size()].name;
 }
-
-}  // namespace
 
 const char* event_verb(Controller::Event::Kind kind) {
   return kind == Controller::Event::Kind::kActivate  ? "activate"
@@ -692,7 +692,7 @@ void append_step_record(const StepLayout& layout, const StepSnapshot& step, std:
       const auto& report = step.reports[e];
       if (e > 0) out += ", ";
       out += R"({"by": )";
-      append_name(source_name(layout, report.source), out);
+      append_name(report_source(layout, report.source), out);
       out += R"(, "text": )";
       append_json_string(std::string(step.texts.substr(report.text_begin, report.text_size)), out);
       out += "}";

@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "arbiter/channels.hpp"
 #include "arbiter/controller.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/trace.hpp"
@@ -262,6 +263,16 @@ struct StepSnapshot {
 /// is not yet, and grown until the step's reported text fits): for those that may allocate.
 StepSnapshot capture_growing(const Manager& manager, const StepLayout& layout,
                              SnapshotBlocks& storage);
+
+/// The JSON Schemas of `/arbiter/step` and `/arbiter/inputs` for a program laid out as `layout`
+/// (named `name`), and every channel (channels.hpp): on the thread that lays a program out.
+std::string step_schema(const StepLayout& layout, const std::string& name);
+std::string inputs_schema(const StepLayout& layout, const std::string& name);
+std::vector<Channel> channels(const StepLayout& layout, const std::string& name);
+
+/// Who made a report (StepSnapshot::Report::source): a behaviour, an interface layer, or
+/// "state machines" for a standalone state machine.
+const std::string& report_source(const StepLayout& layout, std::uint32_t source);
 
 /// The step record of a snapshot, without the newline.
 void append_step_record(const StepLayout& layout, const StepSnapshot& step, std::string& out);

@@ -10,10 +10,12 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <utility>
 #include <vector>
 
+#include "arbiter/channels.hpp"
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/manager.hpp"
 
@@ -29,6 +31,12 @@ struct RecordingInfo {
   std::vector<std::pair<std::string, std::string>> files;
   std::vector<std::string> plugins;
   std::string version;  ///< Arbiter's
+  /// The run keeps to its rate in real time (`arbiter run --realtime`): its messages are logged
+  /// at the wall-clock time of their step. Otherwise at the run's own, simulated, time: step /
+  /// rate_hz after the run's start, however fast it went. Publish times are the wall clock.
+  bool paced = false;
+  /// What loading the config warned about: on `/arbiter/log` at the start.
+  std::vector<Diagnostic> diagnostics = {};
 };
 
 /// What a recorder does with a step when every slot of its ring still waits for the writer.
@@ -122,9 +130,17 @@ class Recorder : public Observer {
   /// Wakes the writer before its period is up: a system call, never made in a step that finds
   /// room.
   void wake_writer();
-  /// A message's log time: the wall clock at the run's start plus the step's "t" (the manager's
-  /// clock; a manager without one logs every step at the start).
-  std::uint64_t log_time(bool timed, double step_time) const;
+  /// The wall-clock time of a step: the wall clock at the run's start plus the step's "t" (the
+  /// manager's clock; a manager without one has every step at the start).
+  std::uint64_t wall_time(bool timed, double step_time) const;
+  /// The log time of step `step`, at `wall_time` on the wall clock (RecordingInfo::paced). The
+  /// writer's: it keeps the simulated clock.
+  std::uint64_t log_time(std::uint64_t step, std::uint64_t wall_time) const;
+  /// Adds a channel to the file, with its schema. The writer's, or before it starts.
+  std::uint16_t add_channel(const Channel& channel);
+  /// A message on `/arbiter/log`, logged at `time`, published at `wall`. The writer's.
+  void write_log(std::uint64_t time, std::uint64_t wall, LogLevel level, const std::string& name,
+                 std::string_view text);
   /// The writer's period for a program's rate.
   void set_writer_period(const Program& program);
   void publish();

@@ -1,0 +1,63 @@
+#pragma once
+// The channels a run publishes, the same in a recording (recording.hpp) and to a live viewer:
+// each one's topic, and the JSON Schema of its messages, written for the program that runs so
+// that a viewer (Foxglove, Lichtblick) knows every layer, behaviour, actuator and state machine
+// by name. docs/replay.md and docs/foxglove.md describe them.
+//
+// Every schema here is one that Lichtblick's JSON Schema parser accepts as it is: an object at
+// the top, and a `type` on every declared property, one type, never a list ("string" or "null"
+// cannot be said). A field the parser cannot describe is left undeclared, and checked by
+// `patternProperties`, which the parser does not read. tests/mcap/mcap_test.mjs applies its
+// rules to every schema of a recording.
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "arbiter/manager.hpp"
+
+namespace arbiter {
+
+/// A channel of JSON messages described by a JSON Schema (MCAP's and the Foxglove WebSocket
+/// protocol's encodings "json" and "jsonschema").
+struct Channel {
+  std::string topic;        ///< "/arbiter/step"
+  std::string schema_name;  ///< "arbiter.Step"
+  std::string schema;       ///< the JSON Schema, as text
+};
+
+inline constexpr std::string_view kMessageEncoding = "json";
+inline constexpr std::string_view kSchemaEncoding = "jsonschema";
+
+/// Where each channel is in what channels() returns.
+enum ChannelIndex : std::size_t {
+  kHeaderChannel,  ///< /arbiter/header: the trace header, at the start and at each hot reload
+  kStepChannel,    ///< /arbiter/step: the trace's step record, one per step
+  kInputsChannel,  ///< /arbiter/inputs: what interface layers read from the world, per step
+  kLogChannel,     ///< /arbiter/log: foxglove.Log, what code reported and what went wrong
+  kChannelCount
+};
+
+/// The channels of a run of `program`, in ChannelIndex order. Allocates: call it when a run
+/// starts or a program is staged, never in a step.
+std::vector<Channel> channels(const Program& program);
+
+/// foxglove.Log's levels.
+enum class LogLevel : std::uint8_t {
+  kUnknown = 0,
+  kDebug = 1,
+  kInfo = 2,
+  kWarning = 3,
+  kError = 4,
+  kFatal = 5
+};
+
+/// A message of the `/arbiter/log` channel (Foxglove's foxglove.Log): `time_ns` since the epoch,
+/// who it is from (`name`: a behaviour, a layer, "config"), and where in a file, if anywhere
+/// (`file` empty and `line` 0 when nowhere). Appended to `out`, without a newline.
+void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view name,
+                        std::string_view message, std::string_view file, std::uint32_t line,
+                        std::string& out);
+
+}  // namespace arbiter

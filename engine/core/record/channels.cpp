@@ -1,0 +1,329 @@
+#include "arbiter/channels.hpp"
+
+#include <fmt/format.h>
+
+#include <typeinfo>
+#include <utility>
+
+#include "arbiter/trace.hpp"
+#include "core/record/step_record.hpp"
+
+namespace arbiter {
+
+namespace {
+
+constexpr std::string_view kDraft = R"("$schema": "https://json-schema.org/draft/2020-12/schema")";
+
+void append_name(std::string_view name, std::string& out) {
+  detail::append_json_string(std::string(name), out);
+}
+
+// `{"type": "object", "properties": {NAME: SCHEMA, ...}, "required": [...], "additionalProperties":
+// false}` for fields all present in every message, each schema given by `field(i, out)`.
+template <typename Names, typename Field>
+void append_closed_object(const Names& names, Field field, std::string& out) {
+  out += R"({"type": "object", "properties": {)";
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (i > 0) out += ", ";
+    append_name(names[i], out);
+    out += ": ";
+    field(i, out);
+  }
+  out += R"(}, "required": [)";
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (i > 0) out += ", ";
+    append_name(names[i], out);
+  }
+  out += R"(], "additionalProperties": false})";
+}
+
+// The schema of a value as ValueType::append_json writes it, for the built-in types; empty for
+// a plugin's own type, whose JSON this cannot know.
+std::string value_schema(const ValueType& type) {
+  const auto& t = *type.cpp_type;
+  if (t == typeid(bool)) return R"({"type": "boolean"})";
+  if (t == typeid(std::int64_t)) return R"({"type": "integer"})";
+  if (t == typeid(double)) return R"({"type": "number"})";
+  if (t == typeid(std::string)) return R"({"type": "string"})";
+  if (t == typeid(Vec2)) {
+    return R"({"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2})";
+  }
+  if (t == typeid(Vec3)) {
+    return R"({"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3})";
+  }
+  return {};
+}
+
+// An actuator's or an input's `{"value": V, "written": B}`.
+void append_value_entry(const ValueType& type, std::string& out) {
+  const auto value = value_schema(type);
+  out += R"({"type": "object", "properties": {)";
+  if (!value.empty()) out += R"("value": )" + value + ", ";
+  out += R"("written": {"type": "boolean"}})";
+  if (value.empty()) {
+    // Checked all the same, out of the parser's sight (see channels.hpp).
+    out += fmt::format(R"(, "patternProperties": {{"^value$": {{"description": "a value of the )"
+                       R"(plugin type {}, as the plugin writes it"}}}})",
+                       type.name);
+  }
+  out += R"(, "required": ["value", "written"], "additionalProperties": false})";
+}
+
+// The schema of a param's value as append_param_json() writes it; empty for kAny, whose value
+// is the class's own.
+std::string param_schema(ParamKind kind) {
+  switch (kind) {
+    case ParamKind::kBool:
+      return R"({"type": "boolean"})";
+    case ParamKind::kInt:
+      return R"({"type": "integer"})";
+    case ParamKind::kDouble:
+      return R"({"type": "number"})";
+    case ParamKind::kString:
+      return R"({"type": "string"})";
+    case ParamKind::kVec2:
+    case ParamKind::kVec3:
+    case ParamKind::kDoubleList:
+      return R"({"type": "array", "items": {"type": "number"}})";
+    case ParamKind::kStringList:
+      return R"({"type": "array", "items": {"type": "string"}})";
+    case ParamKind::kAny:
+      break;
+  }
+  return {};
+}
+
+// The per-instance params of a machine's states: every param any of its states' classes has,
+// typed where they all agree on its kind. Open: a param left out is still allowed.
+std::string machine_params_schema(const detail::StepLayout::Machine& machine) {
+  std::vector<std::pair<std::string, std::string>> params;  // name, schema ("": no one type)
+  for (const auto& state : machine.states) {
+    for (const auto& param : state.cls->params) {
+      auto schema = param_schema(param.kind);
+      bool known = false;
+      for (auto& [name, kept] : params) {
+        if (name != param.name) continue;
+        known = true;
+        if (kept != schema) kept.clear();
+      }
+      if (!known) params.emplace_back(param.name, std::move(schema));
+    }
+  }
+  std::string out = R"({"type": "object", "description": "the state's per-instance params", )"
+                    R"("properties": {)";
+  bool first = true;
+  for (const auto& [name, schema] : params) {
+    if (schema.empty()) continue;
+    if (!first) out += ", ";
+    first = false;
+    append_name(name, out);
+    out += ": " + schema;
+  }
+  out += "}}";
+  return out;
+}
+
+void append_state_names(const detail::StepLayout::Machine& machine, std::string& out) {
+  for (std::size_t s = 0; s < machine.states.size(); ++s) {
+    if (s > 0) out += ", ";
+    append_name(machine.states[s].name, out);
+  }
+}
+
+void append_machine_schema(const detail::StepLayout::Machine& machine, std::string& out) {
+  const auto params = machine_params_schema(machine);
+  std::string names;
+  append_state_names(machine, names);
+  out += R"({"type": "object", "properties": {"cycle": {"type": "integer", "minimum": 0}, )";
+  out += R"("queue": {"type": "array", "items": {"type": "string", "enum": [)" + names + "]}}, ";
+  out += R"("params": )" + params + ", ";
+  out += R"("events": {"type": "array", "items": {"type": "string"}}, )";
+  out += R"("ended": {"type": "array", "description": "why each state deactivated in the step )"
+         R"(ended, in order", "items": {"type": "object", "properties": {)";
+  out += R"("state": {"type": "string", "enum": [)" + names + "]}, ";
+  out += R"("params": )" + params + ", ";
+  out += R"("cause": {"type": "string", "enum": [)";
+  using Cause = Controller::EndCause;
+  for (auto c = static_cast<int>(Cause::kProceeded); c <= static_cast<int>(Cause::kDropped); ++c) {
+    if (c > static_cast<int>(Cause::kProceeded)) out += ", ";
+    append_name(cause_name(static_cast<Cause>(c)), out);
+  }
+  out += R"(]}, "to": {"type": "string"}, "by": {"type": "string"}, )";
+  out += R"("preempt": {"type": "integer", "minimum": 0}, "proceeded": {"type": "boolean"}}, )";
+  out += R"("required": ["state", "cause"], "additionalProperties": false}}, )";
+  out += R"("status": {"type": "string", "enum": [)";
+  for (auto status :
+       {ControllerStatus::kRunning, ControllerStatus::kFinished, ControllerStatus::kError}) {
+    if (status != ControllerStatus::kRunning) out += ", ";
+    append_name(to_string(status), out);
+  }
+  // `state` is null before the first state and after the last: a type the parser cannot say,
+  // so checked out of its sight (see channels.hpp).
+  out += R"(]}}, "patternProperties": {"^state$": {"description": "the current state, null )"
+         R"(before the first and after the last", "enum": [)" +
+         names + (names.empty() ? "" : ", ") + "null]}}, ";
+  out += R"("required": ["cycle", "state", "queue", "events", "status"], )";
+  out += R"("additionalProperties": false})";
+}
+
+constexpr std::string_view kReportedSchema =
+    R"({"type": "array", "description": "what behaviour and interface code reported in the step", )"
+    R"("items": {"type": "object", "properties": {"by": {"type": "string"}, )"
+    R"("text": {"type": "string"}}, "required": ["by", "text"], "additionalProperties": false}})";
+
+constexpr std::string_view kHeaderSchema =
+    R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
+ "title": "arbiter trace header",
+ "type": "object",
+ "properties": {
+  "arbiter_trace": {"type": "integer", "const": 1},
+  "reload": {"type": "integer", "minimum": 1, "description": "which hot reload swapped the program in"},
+  "after_step": {"type": "integer", "minimum": 0, "description": "the last step of the program it replaced"},
+  "name": {"type": "string"},
+  "layers": {"type": "array", "items": {"type": "object", "properties": {
+    "name": {"type": "string"},
+    "order": {"type": "array", "items": {"type": "string"}, "description": "the layer's behaviours, in execution order"}},
+   "required": ["name", "order"], "additionalProperties": false}}},
+ "required": ["arbiter_trace", "name", "layers"],
+ "additionalProperties": false})";
+
+// Foxglove's documented foxglove.Log
+// (https://docs.foxglove.dev/docs/visualization/message-schemas/log), whose `level` the parser
+// reads as constants.
+constexpr std::string_view kLogSchema =
+    R"({"$schema": "https://json-schema.org/draft/2020-12/schema",
+ "title": "foxglove.Log",
+ "description": "A log message",
+ "type": "object",
+ "properties": {
+  "timestamp": {"type": "object", "title": "time", "description": "Timestamp of log message",
+   "properties": {"sec": {"type": "integer", "minimum": 0},
+                  "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999}},
+   "required": ["sec", "nsec"]},
+  "level": {"title": "foxglove.LogLevel", "description": "Log level",
+   "oneOf": [{"title": "UNKNOWN", "const": 0}, {"title": "DEBUG", "const": 1},
+             {"title": "INFO", "const": 2}, {"title": "WARNING", "const": 3},
+             {"title": "ERROR", "const": 4}, {"title": "FATAL", "const": 5}]},
+  "message": {"type": "string", "description": "Log message"},
+  "name": {"type": "string", "description": "Process or node name"},
+  "file": {"type": "string", "description": "Filename"},
+  "line": {"type": "integer", "minimum": 0, "maximum": 4294967295, "description": "Line number in the file"}},
+ "required": ["timestamp", "level", "message", "name", "file", "line"]})";
+
+}  // namespace
+
+namespace detail {
+
+std::string step_schema(const StepLayout& layout, const std::string& name) {
+  std::string out = "{";
+  out += kDraft;
+  out += R"(, "title": )";
+  append_name("arbiter step record of " + name, out);
+  out += R"(, "type": "object", "properties": {)";
+  out += R"("step": {"type": "integer", "minimum": 0}, )";
+  out += R"("safe": {"type": "boolean", "description": "the safe-value pass of a stopping or )"
+         R"(pausing engine"}, )";
+  out += R"("t": {"type": "number", "description": "seconds since the run began, at the step's )"
+         R"(start"}, )";
+  out += R"("duration": {"type": "number", "description": "seconds the step took"}, )";
+  out += R"("layers": )";
+  std::vector<std::string> names;
+  for (const auto& layer : layout.layers) names.push_back(layer.name);
+  append_closed_object(
+      names,
+      [&](std::size_t l, std::string& o) {
+        const auto& layer = layout.layers[l];
+        std::vector<std::string> behaviours(layout.behaviours.begin() + layer.behaviour_begin,
+                                            layout.behaviours.begin() + layer.behaviour_end);
+        append_closed_object(
+            behaviours,
+            [](std::size_t, std::string& b) {
+              b += R"({"type": "object", "properties": {"requested": {"type": "number"}, )"
+                   R"("activation": {"type": "number"}, "active": {"type": "boolean"}, )"
+                   R"("inhibited_by": {"type": "array", "items": {"type": "string"}}}, )"
+                   R"("required": ["requested", "activation", "active", "inhibited_by"], )"
+                   R"("additionalProperties": false})";
+            },
+            o);
+      },
+      out);
+  out += R"(, "actuators": )";
+  names.clear();
+  for (const auto& actuator : layout.actuators) names.push_back(actuator.name);
+  append_closed_object(
+      names,
+      [&](std::size_t a, std::string& o) { append_value_entry(*layout.actuators[a].type, o); },
+      out);
+  out += R"(, "controllers": )";
+  names.clear();
+  for (const auto& machine : layout.machines) names.push_back(machine.name);
+  append_closed_object(
+      names, [&](std::size_t c, std::string& o) { append_machine_schema(layout.machines[c], o); },
+      out);
+  out += R"(, "reported": )";
+  out += kReportedSchema;
+  out += R"(}, "required": ["step", "layers", "actuators", "controllers"], )";
+  out += R"("additionalProperties": false})";
+  return out;
+}
+
+std::string inputs_schema(const StepLayout& layout, const std::string& name) {
+  std::string out = "{";
+  out += kDraft;
+  out += R"(, "title": )";
+  append_name("arbiter interface inputs of " + name, out);
+  out += R"(, "type": "object", "properties": {"step": {"type": "integer", "minimum": 0}, )";
+  out += R"("inputs": )";
+  std::vector<std::string> names;
+  std::vector<std::uint32_t> inputs;
+  for (const auto& layer : layout.layers) {
+    if (!layer.interface) continue;
+    for (auto a = layer.actuator_begin; a < layer.actuator_end; ++a) {
+      names.push_back(layout.actuators[a].name);
+      inputs.push_back(a);
+    }
+  }
+  append_closed_object(
+      names,
+      [&](std::size_t i, std::string& o) {
+        append_value_entry(*layout.actuators[inputs[i]].type, o);
+      },
+      out);
+  out += R"(, "reported": {"type": "array", "description": "what interface code reported, and )"
+         R"(in which pass", "items": {"type": "object", "properties": {"by": {"type": "string"}, )"
+         R"("text": {"type": "string"}, "pass": {"type": "string", "enum": ["input", "output"]}}, )"
+         R"("required": ["by", "text", "pass"], "additionalProperties": false}}}, )";
+  out += R"("required": ["step", "inputs"], "additionalProperties": false})";
+  return out;
+}
+
+std::vector<Channel> channels(const StepLayout& layout, const std::string& name) {
+  std::vector<Channel> out(kChannelCount);
+  out[kHeaderChannel] = {"/arbiter/header", "arbiter.Header", std::string(kHeaderSchema)};
+  out[kStepChannel] = {"/arbiter/step", "arbiter.Step", step_schema(layout, name)};
+  out[kInputsChannel] = {"/arbiter/inputs", "arbiter.Inputs", inputs_schema(layout, name)};
+  out[kLogChannel] = {"/arbiter/log", "foxglove.Log", std::string(kLogSchema)};
+  return out;
+}
+
+}  // namespace detail
+
+std::vector<Channel> channels(const Program& program) {
+  return detail::channels(detail::StepLayout(program), program.name);
+}
+
+void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view name,
+                        std::string_view message, std::string_view file, std::uint32_t line,
+                        std::string& out) {
+  fmt::format_to(std::back_inserter(out),
+                 R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "level": {}, "message": )",
+                 time_ns / 1000000000u, time_ns % 1000000000u, static_cast<int>(level));
+  append_name(message, out);
+  out += R"(, "name": )";
+  append_name(name, out);
+  out += R"(, "file": )";
+  append_name(file, out);
+  fmt::format_to(std::back_inserter(out), R"(, "line": {}}})", line);
+}
+
+}  // namespace arbiter

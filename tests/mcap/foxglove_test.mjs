@@ -1,0 +1,197 @@
+// Recordings of the demos as Foxglove and Lichtblick open them: every channel's JSON Schema is
+// one Lichtblick's parser accepts (lichtblick_rules.mjs) and names the config's behaviours,
+// actuators and state machines; every message validates against its channel's schema (ajv);
+// log times are the run's own clock; what the run reported is on the foxglove.Log channel. Run
+// by run.sh, which sets ARBITER, ARBITER_SOURCE and NODE_MODULES.
+import { test } from "node:test";
+import assert from "node:assert/strict";
+import { execFileSync } from "node:child_process";
+import { mkdtempSync, readFileSync, rmSync } from "node:fs";
+import { createRequire } from "node:module";
+import { tmpdir } from "node:os";
+import path from "node:path";
+import { lichtblickFields } from "./lichtblick_rules.mjs";
+
+const require = createRequire(path.join(process.env.NODE_MODULES, "noop.js"));
+const { McapIndexedReader } = require("@mcap/core");
+const { decompress } = require("fzstd");
+const Ajv2020 = require("ajv/dist/2020").default;
+
+const work = mkdtempSync(path.join(tmpdir(), "arbiter-foxglove-"));
+test.after(() => rmSync(work, { recursive: true, force: true }));
+const decoder = new TextDecoder();
+
+// Records `config` (under configs/) with `args`; the recording and its trace, read whole.
+async function record(name, config, args) {
+  const file = path.join(work, `${name}.mcap`);
+  const trace = path.join(work, `${name}.jsonl`);
+  execFileSync(process.env.ARBITER, [
+    "run", path.join(process.env.ARBITER_SOURCE, "configs", config), "-q",
+    "--record", file, "--trace", trace, ...args,
+  ]);
+  const bytes = readFileSync(file);
+  const reader = await McapIndexedReader.Initialize({
+    readable: {
+      size: async () => BigInt(bytes.length),
+      read: async (offset, size) => bytes.subarray(Number(offset), Number(offset + size)),
+    },
+    decompressHandlers: { zstd: (data, size) => decompress(data, new Uint8Array(Number(size))) },
+  });
+  const channels = new Map();  // id -> {topic, schemaName, schema}
+  for (const channel of reader.channelsById.values()) {
+    const schema = reader.schemasById.get(channel.schemaId);
+    assert.equal(channel.messageEncoding, "json");
+    assert.equal(schema.encoding, "jsonschema");
+    channels.set(channel.id, {
+      topic: channel.topic, schemaName: schema.name, schema: JSON.parse(decoder.decode(schema.data)),
+    });
+  }
+  const messages = [];
+  for await (const message of reader.readMessages()) {
+    messages.push({
+      topic: channels.get(message.channelId).topic, channelId: message.channelId,
+      logTime: message.logTime, publishTime: message.publishTime,
+      text: decoder.decode(message.data), data: JSON.parse(decoder.decode(message.data)),
+    });
+  }
+  let rateHz;
+  for await (const metadata of reader.readMetadata({ name: "arbiter.config" })) {
+    rateHz = Number(metadata.metadata.get("rate_hz"));
+  }
+  const lines = readFileSync(trace, "utf8").trim().split("\n").map((line) => JSON.parse(line));
+  return { channels, messages, rateHz, lines, of: (topic) => messages.filter((m) => m.topic === topic) };
+}
+
+const demos = {
+  soccer: await record("soccer", "soccer/walk_and_kick.yaml", ["--steps", "220"]),
+  goalie: await record("goalie", "soccer/goalie.yaml", []),  // its config's 240 steps
+};
+
+test("the rules restated from Lichtblick's parser reject what it rejects", () => {
+  const ok = { type: "object", properties: { a: { type: "integer", const: 1 } } };
+  assert.equal(lichtblickFields(ok, "X").get("a"), "int32");
+  for (const property of [
+    { const: 1 },                                   // no type
+    { enum: ["input", "output"] },                  // no type
+    { type: ["string", "null"] },                   // a list of types
+    {},                                             // a value of any type
+    { type: "array" },                              // items of no type
+    { type: "array", items: { type: "array", items: { type: "number" } } },
+    { oneOf: [{ type: "string" }, { type: "null" }] },
+  ]) {
+    assert.throws(() => lichtblickFields({ type: "object", properties: { a: property } }, "X"),
+                  undefined, JSON.stringify(property));
+  }
+  assert.throws(() => lichtblickFields({ type: "array" }, "X"), /Expected "type": "object"/);
+});
+
+for (const [demo, run] of Object.entries(demos)) {
+  test(`${demo}: every schema passes Lichtblick's parser`, () => {
+    const topics = [...run.channels.values()].map((c) => `${c.topic} ${c.schemaName}`).sort();
+    assert.deepEqual(topics, ["/arbiter/header arbiter.Header", "/arbiter/inputs arbiter.Inputs",
+                              "/arbiter/log foxglove.Log", "/arbiter/step arbiter.Step"]);
+    for (const channel of run.channels.values()) {
+      assert.doesNotThrow(() => lichtblickFields(channel.schema, channel.schemaName), channel.topic);
+    }
+  });
+
+  test(`${demo}: every message validates against its channel's schema`, () => {
+    // strictRequired would refuse a machine's required `state`, which is declared by
+    // patternProperties, out of Lichtblick's sight, since it may be null.
+    const ajv = new Ajv2020({ strict: true, strictRequired: false, allErrors: true });
+    const validators = new Map();
+    for (const [id, channel] of run.channels) validators.set(id, ajv.compile(channel.schema));
+    const counts = {};
+    for (const message of run.messages) {
+      const validate = validators.get(message.channelId);
+      assert.ok(validate(message.data),
+                `${message.topic}: ${ajv.errorsText(validate.errors)} in ${message.text.slice(0, 300)}`);
+      counts[message.topic] = (counts[message.topic] ?? 0) + 1;
+    }
+    // The step schema is closed: a field it forgets to declare fails the record.
+    const step = [...run.channels.values()].find((c) => c.topic === "/arbiter/step");
+    const extra = { ...run.of("/arbiter/step")[0].data, unknown: 1 };
+    assert.equal(ajv.validate(step.schema, extra), false);
+    assert.ok(counts["/arbiter/step"] >= 220 && counts["/arbiter/inputs"] >= 220, JSON.stringify(counts));
+  });
+
+  test(`${demo}: the step messages are the trace's lines`, () => {
+    const lines = readFileSync(path.join(work, `${demo}.jsonl`), "utf8").trim().split("\n").slice(1);
+    assert.deepEqual(run.of("/arbiter/step").map((m) => m.text), lines);
+  });
+
+  test(`${demo}: log times are the simulated time, publish times the wall clock`, () => {
+    const steps = run.of("/arbiter/step").filter((m) => !m.data.safe);
+    assert.equal(run.rateHz, 15);
+    const start = run.of("/arbiter/header")[0].logTime;
+    for (const m of steps) {
+      const expected = start + BigInt(Math.floor((m.data.step * 1e9) / run.rateHz));
+      assert.ok(m.logTime - expected <= 1n && expected - m.logTime <= 1n,
+                `step ${m.data.step}: ${m.logTime - start} ns after the start`);
+    }
+    const span = Number(steps.at(-1).logTime - steps[0].logTime) / 1e9;
+    const simulated = (steps.at(-1).data.step - steps[0].data.step) / run.rateHz;
+    assert.ok(Math.abs(span - simulated) < 1e-6, `spans ${span} s, simulated ${simulated} s`);
+    // Flat out, the run took a fraction of that: the wall clock says so.
+    const wall = Number(steps.at(-1).publishTime - steps[0].publishTime) / 1e9;
+    assert.ok(wall < span / 2, `publish times span ${wall} s`);
+    console.log(`${demo}: ${steps.length} steps at ${run.rateHz} Hz: log times span ${span.toFixed(3)} s, ` +
+                `publish times ${wall.toFixed(4)} s`);
+  });
+
+  test(`${demo}: what the run reported is on the log, at its step's time`, () => {
+    const reported = [];
+    for (const m of run.of("/arbiter/step")) {
+      for (const r of m.data.reported ?? []) reported.push({ ...r, time: m.logTime });
+    }
+    assert.ok(reported.length > 0);
+    const logs = run.of("/arbiter/log");
+    assert.deepEqual(
+      logs.map((m) => ({ by: m.data.name, text: m.data.message, time: m.logTime })), reported);
+    for (const m of logs) {
+      assert.equal(m.data.level, 2);  // INFO
+      assert.equal(BigInt(m.data.timestamp.sec) * 1000000000n + BigInt(m.data.timestamp.nsec), m.logTime);
+    }
+  });
+}
+
+test("soccer: the step schema names each behaviour, actuator and their types", () => {
+  const step = [...demos.soccer.channels.values()].find((c) => c.topic === "/arbiter/step");
+  const fields = lichtblickFields(step.schema, step.schemaName);
+  // The documented plot path, /arbiter/step.layers.control.kick_ball.activation, resolves.
+  assert.equal(fields.get("layers.control.kick_ball.activation"), "float64");
+  assert.equal(fields.get("layers.control.kick_ball.requested"), "float64");
+  assert.equal(fields.get("layers.control.kick_ball.active"), "bool");
+  assert.equal(fields.get("layers.control.search_for_ball.inhibited_by[]"), "string");
+  assert.equal(fields.get("actuators.head_angle.value"), "float64");
+  assert.equal(fields.get("actuators.gait_velocity.value[]"), "float64");
+  assert.equal(fields.get("actuators.kick.value"), "bool");
+  assert.equal(fields.get("reported[].text"), "string");
+  const inputs = [...demos.soccer.channels.values()].find((c) => c.topic === "/arbiter/inputs");
+  assert.equal(lichtblickFields(inputs.schema, inputs.schemaName).get("inputs.ball_visible.value"), "bool");
+});
+
+test("goalie: the step schema names its state machine and its states' params", () => {
+  const step = [...demos.goalie.channels.values()].find((c) => c.topic === "/arbiter/step");
+  const fields = lichtblickFields(step.schema, step.schemaName);
+  assert.equal(fields.get("layers.control.goalie.activation"), "float64");
+  assert.equal(fields.get("actuators.dive.value"), "int32");
+  assert.equal(fields.get("controllers.goalie.cycle"), "uint32");
+  assert.equal(fields.get("controllers.goalie.status"), "string");
+  assert.equal(fields.get("controllers.goalie.queue[]"), "string");
+  assert.equal(fields.get("controllers.goalie.params.x"), "float64");
+  assert.equal(fields.get("controllers.goalie.ended[].cause"), "string");
+  // The states' names are the queue's only values.
+  const goalie = step.schema.properties.controllers.properties.goalie;
+  assert.deepEqual(goalie.properties.queue.items.enum.sort(),
+                   ["dive", "monitor_ball", "wait_for_button", "walk_to_pose"]);
+});
+
+test("a paced run logs its steps on the wall clock", async () => {
+  const run = await record("paced", "soccer/walk_and_kick.yaml", ["--steps", "6", "--realtime"]);
+  const steps = run.of("/arbiter/step").filter((m) => !m.data.safe);
+  for (const m of steps) assert.equal(m.logTime, m.publishTime);
+  const span = Number(steps.at(-1).logTime - steps[0].logTime) / 1e9;
+  // Five periods of 1/15 s, as the run kept them.
+  assert.ok(span > 0.25 && span < 0.6, `spans ${span} s`);
+});
