@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <utility>
 
 #include "arbiter/lint.hpp"
 #include "builtins.hpp"
@@ -46,10 +47,11 @@ arbiter::LoadOptions load_options_of(const Options& options) {
 }
 
 std::optional<arbiter::Program> load_or_report(const std::string& path, arbiter::Registry& registry,
-                                               const Options& options) {
+                                               const Options& options, arbiter::Diagnostics* kept) {
   arbiter::Diagnostics diagnostics;
   auto program = arbiter::load(path, registry, diagnostics, load_options_of(options));
   if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
+  if (kept != nullptr) *kept = std::move(diagnostics);
   return program;
 }
 

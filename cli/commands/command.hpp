@@ -71,9 +71,10 @@ Registry make_registry();
 /// Diagnostics as `--format` asks: text on stderr, or JSON on stdout.
 void print_diagnostics(const Diagnostics& diagnostics, const Options& options);
 LoadOptions load_options_of(const Options& options);
-/// The program of `path`, or nothing; its diagnostics, if any, printed on stderr either way.
+/// The program of `path`, or nothing; its diagnostics, if any, printed on stderr either way, and
+/// kept in `kept` if given.
 std::optional<Program> load_or_report(const std::string& path, Registry& registry,
-                                      const Options& options);
+                                      const Options& options, Diagnostics* kept = nullptr);
 
 /// Set by SIGINT and SIGTERM once install_interrupt_handlers() ran: a run or a server stops
 /// between two steps or requests, so that what it writes is complete.

@@ -108,15 +108,10 @@ RecordingInfo recording_info(const std::string& config, const Registry& registry
                              const LoadOptions& options, const std::string& version) {
   RecordingInfo info;
   info.version = version;
-  // The config has loaded already: this reads which files it used, and what it warned about
-  // as it was read and modelled, for the recording's log.
-  Diagnostics diagnostics;
-  const auto document = read_document(config, diagnostics, options.limits);
+  Diagnostics ignored;  // the config has loaded already: this reads which files it used
+  const auto document = read_document(config, ignored, options.limits);
   if (!document) return info;
-  const Model model = build_model(*document, registry, diagnostics, options.limits);
-  for (const auto& diagnostic : diagnostics.items()) {
-    if (diagnostic.severity == Severity::kWarning) info.diagnostics.push_back(diagnostic);
-  }
+  const Model model = build_model(*document, registry, ignored, options.limits);
   for (const auto& file : model.files) info.files.emplace_back(file, file_text(file));
   if (info.files.empty()) info.files.emplace_back(config, file_text(config));
   for (const auto& plugin : model.plugins) info.plugins.push_back(plugin.text);

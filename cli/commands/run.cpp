@@ -28,9 +28,10 @@ namespace arbiter::cli {
 int run_command(const Options& options) {
   auto registry = make_registry();
   arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
+  arbiter::Diagnostics load_diagnostics;  // its warnings go into the recording's log
   auto program = options.watch
                      ? load_watched(reloader, options.file, std::cerr, options.diagnostic_format)
-                     : load_or_report(options.file, registry, options);
+                     : load_or_report(options.file, registry, options, &load_diagnostics);
   if (!program) return kExitInvalid;
   const double rate_hz = program->rate_hz;
   const std::uint64_t steps =
@@ -71,6 +72,7 @@ int run_command(const Options& options) {
     // the run waits for the writer and the recording loses nothing.
     auto info = recording_info(options.file, registry, load_options_of(options), kVersion);
     info.paced = options.realtime;  // logged on the wall clock; flat out, on the simulated one
+    info.diagnostics = load_diagnostics.items();
     recorder = std::make_unique<arbiter::Recorder>(
         options.record_path, std::move(info), arbiter::Recorder::kSlots,
         options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);

@@ -195,3 +195,19 @@ test("a paced run logs its steps on the wall clock", async () => {
   // Five periods of 1/15 s, as the run kept them.
   assert.ok(span > 0.25 && span < 0.6, `spans ${span} s`);
 });
+
+test("the config's load warnings are on the log, with their file and line", async () => {
+  const run = await record("warned", "../tests/data/invalid/warn_duplicate_inhibition.yaml",
+                           ["--steps", "3"]);
+  const start = run.of("/arbiter/header")[0].logTime;
+  const warnings = run.of("/arbiter/log").filter((m) => m.data.name === "config");
+  assert.deepEqual(warnings.map((m) => [m.data.level, path.basename(m.data.file), m.data.line]),
+                   [[3, "warn_duplicate_inhibition.yaml", 12], [3, "warn_duplicate_inhibition.yaml", 13],
+                    [3, "warn_duplicate_inhibition.yaml", 14]]);
+  assert.match(warnings[0].data.message,
+               /^warning\[duplicate-inhibition\]: duplicate inhibition kick_ball => go_behind_ball: applied once\nnote: first declared at /);
+  for (const m of warnings) assert.equal(m.logTime, start);
+  const log = [...run.channels.values()].find((c) => c.topic === "/arbiter/log");
+  const validate = new Ajv2020({ strict: true }).compile(log.schema);
+  for (const m of warnings) assert.ok(validate(m.data), JSON.stringify(validate.errors));
+});

@@ -193,11 +193,16 @@ void Recorder::on_start(const Manager& manager) {
   writer.metadata("arbiter.config", config);
   writer.message(out_->header, wall_start_ns_, written_->header);
   for (const auto& diagnostic : info_.diagnostics) {
+    // As `arbiter validate` words it, without the location, which has fields of its own.
+    std::string text =
+        fmt::format("{}[{}]: {}", diagnostic.severity == Severity::kError ? "error" : "warning",
+                    diagnostic.code, diagnostic.message);
+    for (const auto& note : diagnostic.notes) text += "\nnote: " + note.text;
     out_->log_record.clear();
     append_log_message(
         wall_start_ns_,
         diagnostic.severity == Severity::kError ? LogLevel::kError : LogLevel::kWarning, "config",
-        diagnostic.message + " [" + diagnostic.code + "]", diagnostic.location.file,
+        text, diagnostic.location.file,
         static_cast<std::uint32_t>(std::max(diagnostic.location.line, 0)), out_->log_record);
     writer.message(out_->log, wall_start_ns_, out_->log_record);
   }
