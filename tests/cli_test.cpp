@@ -3,12 +3,15 @@
 
 #include <unistd.h>
 
+#include <fmt/format.h>
 #include <catch2/catch.hpp>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include "arbiter/catalog.hpp"
+#include "arbiter/recording.hpp"
+#include "arbiter/reload.hpp"
 #include "core/record/mcap.hpp"
 #include "tooling_support.hpp"
 
@@ -383,4 +386,122 @@ TEST_CASE("a recording whose first step was dropped replays up to its gap", "[re
                  "runs up to there"));
   CHECK(contains(replayed.out, "replayed 0 steps"));
   fs::remove_all(dir);
+}
+
+namespace {
+
+// Each reading a quarter of a second after the one before, however fast the run goes.
+class QuarterSecondClock : public StepClock {
+ public:
+  double now() override { return t += 0.25; }
+  double t = 0.0;
+};
+
+std::string clock_config(int rate_hz, bool second_behaviour) {
+  std::string text = fmt::format(
+      "arbiter: 1\nname: clock\nrate_hz: {}\nlayers:\n  - name: control\n    actuators:\n"
+      "      x: {{type: double}}\n    behaviours:\n"
+      "      a: {{type: scripted, params: {{activation: 1.0, writes: {{x: 1.0}}}}}}\n",
+      rate_hz);
+  if (second_behaviour) text += "      b: {type: scripted, params: {activation: 0.5}}\n";
+  return text;
+}
+
+struct Logged {
+  std::string what;   // "step N" or the topic
+  double time = 0.0;  // the log time, in seconds after the first header's
+  double t = -1.0;    // a step's "t"
+};
+
+// The messages of a recording of 10 steps of clock_config(10), reloaded with clock_config(20)
+// before the sixth; and the reload's after_step.
+std::pair<std::vector<Logged>, std::uint64_t> clock_recording(bool paced) {
+  const auto dir = fs::temp_directory_path() /
+                   ("arbiter_clock_" + std::to_string(::getpid()) + (paced ? "_paced" : ""));
+  fs::create_directories(dir);
+  const auto config = dir / "clock.yaml";
+  Registry registry = make_test_registry();
+  write_text(config, clock_config(10, false));
+  Reloader reloader(registry);
+  Diagnostics diagnostics;
+  auto program = reloader.load(config.string(), diagnostics);
+  INFO(format(diagnostics));
+  REQUIRE(program);
+  Manager manager(std::move(*program));
+  QuarterSecondClock clock;
+  manager.set_clock(&clock);
+  const auto path = dir / "run.mcap";
+  {
+    RecordingInfo info;
+    info.version = "test";
+    info.paced = paced;
+    Recorder recorder(path.string(), info, Recorder::kSlots, RingFull::kWaitForWriter);
+    REQUIRE(recorder.ok());
+    manager.add_observer(recorder);
+    for (int i = 0; i < 10; ++i) {
+      if (i == 5) {
+        write_text(config, clock_config(20, true));
+        REQUIRE(reloader.reload(manager).staged);
+      }
+      manager.step();
+    }
+    manager.finish();
+  }
+  std::ifstream in(path, std::ios::binary);
+  mcap::Reader reader(in);
+  mcap::Record record;
+  std::vector<Logged> times;
+  std::uint64_t start = 0, after_step = 0;
+  while (reader.next(record)) {
+    if (record.kind != mcap::Record::Kind::kMessage || record.topic == "/arbiter/inputs") continue;
+    if (times.empty()) start = record.log_time;
+    const auto message = Json::parse(record.data);
+    if (message.contains("after_step")) after_step = message["after_step"].get<std::uint64_t>();
+    Logged logged;
+    logged.what = record.topic;
+    logged.time = static_cast<double>(record.log_time - start) / 1e9;
+    if (record.topic == "/arbiter/step") {
+      logged.what = fmt::format("step {}", message["step"].get<std::uint64_t>());
+      logged.t = message["t"].get<double>();
+    }
+    times.push_back(logged);
+  }
+  REQUIRE(reader.error().empty());
+  fs::remove_all(dir);
+  return {times, after_step};
+}
+
+}  // namespace
+
+TEST_CASE("a recording is logged on the run's own clock", "[record]") {
+  SECTION("not paced: step / rate_hz after the start, at the rate of the program running") {
+    const auto [times, after] = clock_recording(false);
+    REQUIRE(after >= 5);
+    std::vector<std::pair<std::string, double>> expected{{"/arbiter/header", 0.0}};
+    for (std::uint64_t step = 1; step <= after; ++step) {
+      expected.emplace_back(fmt::format("step {}", step), step / 10.0);
+    }
+    expected.emplace_back("/arbiter/header", after / 10.0);
+    for (std::uint64_t step = after + 1; step <= 10; ++step) {
+      expected.emplace_back(fmt::format("step {}", step), after / 10.0 + (step - after) / 20.0);
+    }
+    REQUIRE(times.size() == expected.size());
+    for (std::size_t i = 0; i < times.size(); ++i) {
+      INFO(times[i].what << " at " << times[i].time);
+      CHECK(times[i].what == expected[i].first);
+      CHECK(times[i].time == Approx(expected[i].second).margin(1e-8));
+    }
+  }
+  SECTION("paced: the wall clock of each step, its \"t\" after the start") {
+    const auto [times, after] = clock_recording(true);
+    REQUIRE(times.size() == 12);  // the two headers and ten steps
+    double last = 0.0;
+    for (const auto& logged : times) {
+      if (logged.t < 0.0) continue;
+      INFO(logged.what);
+      CHECK(logged.time == Approx(logged.t).margin(1e-8));
+      CHECK(logged.time > last + 0.2);  // a quarter of a second, or more, after the one before
+      last = logged.time;
+    }
+  }
 }
