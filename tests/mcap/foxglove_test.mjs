@@ -5,8 +5,8 @@
 // by run.sh, which sets ARBITER, ARBITER_SOURCE and NODE_MODULES.
 import { test } from "node:test";
 import assert from "node:assert/strict";
-import { execFileSync } from "node:child_process";
-import { mkdtempSync, readFileSync, rmSync } from "node:fs";
+import { execFileSync, spawn } from "node:child_process";
+import { copyFileSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from "node:fs";
 import { createRequire } from "node:module";
 import { tmpdir } from "node:os";
 import path from "node:path";
@@ -29,6 +29,10 @@ async function record(name, config, args) {
     "run", path.join(process.env.ARBITER_SOURCE, "configs", config), "-q",
     "--record", file, "--trace", trace, ...args,
   ]);
+  return read(file, trace);
+}
+
+async function read(file, trace) {
   const bytes = readFileSync(file);
   const reader = await McapIndexedReader.Initialize({
     readable: {
@@ -58,8 +62,7 @@ async function record(name, config, args) {
   for await (const metadata of reader.readMetadata({ name: "arbiter.config" })) {
     rateHz = Number(metadata.metadata.get("rate_hz"));
   }
-  const lines = readFileSync(trace, "utf8").trim().split("\n").map((line) => JSON.parse(line));
-  return { channels, messages, rateHz, lines, of: (topic) => messages.filter((m) => m.topic === topic) };
+  return { channels, messages, rateHz, of: (topic) => messages.filter((m) => m.topic === topic) };
 }
 
 const demos = {
@@ -192,8 +195,8 @@ test("a paced run logs its steps on the wall clock", async () => {
   const steps = run.of("/arbiter/step").filter((m) => !m.data.safe);
   for (const m of steps) assert.equal(m.logTime, m.publishTime);
   const span = Number(steps.at(-1).logTime - steps[0].logTime) / 1e9;
-  // Five periods of 1/15 s, as the run kept them.
-  assert.ok(span > 0.25 && span < 0.6, `spans ${span} s`);
+  // Five periods of 1/15 s at least, as the run kept them (more on a busy machine).
+  assert.ok(span > 0.3 && span < 5, `spans ${span} s`);
 });
 
 test("the config's load warnings are on the log, with their file and line", async () => {
@@ -210,4 +213,38 @@ test("the config's load warnings are on the log, with their file and line", asyn
   const log = [...run.channels.values()].find((c) => c.topic === "/arbiter/log");
   const validate = new Ajv2020({ strict: true }).compile(log.schema);
   for (const m of warnings) assert.ok(validate(m.data), JSON.stringify(validate.errors));
+});
+
+test("a hot reload that adds a behaviour adds a step channel with its schema", async () => {
+  const config = path.join(work, "robot.yaml");
+  const file = path.join(work, "reloaded.mcap");
+  copyFileSync(path.join(process.env.ARBITER_SOURCE, "configs/soccer/walk_and_kick.yaml"), config);
+  const run = spawn(process.env.ARBITER, ["run", config, "--watch", "--realtime", "--record", file]);
+  let out = "";
+  run.stdout.on("data", (data) => { out += data; });
+  const exited = new Promise((resolve) => run.on("exit", resolve));
+  const waitFor = async (text) => {
+    for (let i = 0; i < 300 && !out.includes(text); ++i) await new Promise((r) => setTimeout(r, 50));
+    assert.ok(out.includes(text), `no "${text}" in: ${out}`);
+  };
+  await waitFor("control/head_control activated");
+  writeFileSync(config, readFileSync(config, "utf8").replace(
+    /^( {6}head_control: .*)$/m, "$1\n      wave: {type: scripted, params: {activation: 1}}"));
+  await waitFor("control/wave activated");
+  await new Promise((r) => setTimeout(r, 300));  // a few steps of the reloaded config
+  run.kill("SIGINT");
+  assert.equal(await exited, 0);
+  const recorded = await read(file);
+  const steps = [...recorded.channels].filter(([, c]) => c.topic === "/arbiter/step");
+  assert.equal(steps.length, 2);
+  const [[before, old], [after, now]] = steps;
+  assert.equal(lichtblickFields(old.schema, old.schemaName).get("layers.control.wave.activation"), undefined);
+  assert.equal(lichtblickFields(now.schema, now.schemaName).get("layers.control.wave.activation"), "float64");
+  const ajv = new Ajv2020({ strict: true, strictRequired: false });
+  const validators = new Map([...recorded.channels].map(([id, c]) => [id, ajv.compile(c.schema)]));
+  for (const m of recorded.messages) assert.ok(validators.get(m.channelId)(m.data), m.text.slice(0, 200));
+  const on = (id) => recorded.messages.filter((m) => m.channelId === id);
+  assert.ok(on(before).length > 0 && on(after).length > 0);
+  assert.ok(on(after).every((m) => "wave" in m.data.layers.control));
+  assert.ok(on(before).every((m) => !("wave" in m.data.layers.control)));
 });
