@@ -96,8 +96,8 @@ std::uint64_t StateContext::executions() const {
   return controller_->instances_[instance_].executions;
 }
 const ParamValue* StateContext::param_value(std::uint32_t index) const {
-  const auto& values = controller_->instances_[instance_].values;
-  return index < values.size() ? values[index] : nullptr;
+  const auto& of = controller_->instances_[instance_];
+  return index < of.own_values.size() ? of.values[index] : nullptr;
 }
 Controller* StateContext::child() const {
   const auto state = controller_->instances_[instance_].state;
@@ -256,11 +256,16 @@ std::optional<std::uint32_t> Controller::create(std::uint32_t state, const Plann
   created.planned = planned == nullptr ? nullptr : &planned->params;
   created.args.clear();
   created.executions = 0;
-  std::copy(state_values_[state].begin(), state_values_[state].end(), created.values.begin());
-  if (planned != nullptr) {
-    for (std::size_t i = 0; i < planned->params.size(); ++i) {
-      if (planned->param_index[i] < created.values.size()) {
-        created.values[planned->param_index[i]] = &planned->params[i].value;
+  // Most plans name a state without params of their own: the instance reads the state's table.
+  const bool own = count > 0 || (planned != nullptr && !planned->params.empty());
+  created.values = own ? created.own_values.data() : state_values_[state].data();
+  if (own) {
+    std::copy(state_values_[state].begin(), state_values_[state].end(), created.own_values.begin());
+    if (planned != nullptr) {
+      for (std::size_t i = 0; i < planned->params.size(); ++i) {
+        if (planned->param_index[i] < created.own_values.size()) {
+          created.own_values[planned->param_index[i]] = &planned->params[i].value;
+        }
       }
     }
   }
@@ -278,7 +283,7 @@ std::optional<std::uint32_t> Controller::create(std::uint32_t state, const Plann
   }
   // Pointers into args only once it is complete: it is reserved to the class's param count, and
   // load checks that the slots of a handle name distinct params.
-  for (const auto& [param, value] : created.args) created.values[param] = &value;
+  for (const auto& [param, value] : created.args) created.own_values[param] = &value;
   for (std::uint32_t p = 0; check_required_[state] != 0 && p < specs.size(); ++p) {
     if (specs[p].required() && created.values[p] == nullptr) {
       fail(fmt::format("state '{}' ({}) planned without its required param '{}'", compiled.name,
@@ -345,7 +350,7 @@ ArgValue arg_value(const ParamValue& value) {
 
 void Controller::record(const StepContext& context, Event::Kind kind, std::uint32_t instance,
                         const Ending& ending) {
-  const std::uint32_t sequence = context.data_->sequence++;
+  const std::uint32_t sequence = next_sequence(context);
   if (event_count_ >= kMaxEventsPerStep) {
     ++event_count_;
     return;
@@ -353,21 +358,15 @@ void Controller::record(const StepContext& context, Event::Kind kind, std::uint3
   const Instance& of = instances_[instance];
   Event& event = events_[event_count_++];
   event.kind = kind;
-  event.state = of.state;
-  event.sequence = sequence;
-  // Every field is written, without clearing the event first: three events a step.
   event.cause = ending.cause;
   event.proceeded = ending.proceeded;
+  event.state = of.state;
+  event.sequence = sequence;
   event.other = ending.other;
   event.preempt = ending.preempt;
-  event.args_count = 0;
-  if (kind == Event::Kind::kExecute) {
-    event.planned = nullptr;
-    event.args_begin = 0;
-    return;
-  }
   event.planned = of.planned;
   event.args_begin = static_cast<std::uint32_t>(event_args_used_);
+  event.args_count = 0;
   if (of.args.empty()) return;
   for (const auto& [param, value] : of.args) {
     if (event_args_used_ == event_args_.size()) break;
@@ -466,7 +465,7 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
       const auto& name = states_[instances_[current_].state].name;
       if (hooks_ != nullptr) hooks_->pre_activate(*this, name);
       StateContext activate_context(context, execute, *this, current_);
-      record(context, Event::Kind::kActivate, current_);
+      record(context, Event::Kind::kActivate, current_, Ending{});
       in_callback(current_, [&] { instances_[current_].object->activate(activate_context); });
     }
     if (terminate_ || status_ != ControllerStatus::kRunning) {
@@ -481,7 +480,7 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
     const auto& name = states_[instances_[current_].state].name;
     if (hooks_ != nullptr) hooks_->pre_execute(*this, name);
     StateContext execute_context(context, execute, *this, current_);
-    record(context, Event::Kind::kExecute, current_);
+    record_execute(context, current_);
     StateResult result = in_callback(
         current_, [&] { return instances_[current_].object->execute(execute_context); });
     ++instances_[current_].executions;

@@ -55,7 +55,7 @@ class ControllerBuilder {
         instance.state = s;
         instance.object = c_.states_[s].cls->make_state();
         instance.args.reserve(params);
-        instance.values.assign(params, nullptr);
+        instance.own_values.assign(params, nullptr);
         init(s, *instance.object);
         c_.pools_[s].push_back(static_cast<std::uint32_t>(c_.instances_.size()));
         c_.instances_.push_back(std::move(instance));

@@ -54,26 +54,31 @@ class Controller {
     std::uint32_t param;  ///< index into the state class's params
     ArgValue value;
   };
+  /// What happened to a state instance in a step. Three are recorded in a plain transition, so
+  /// each kind writes only the fields it has: `kind`, `state`, `sequence` and `args_count` are
+  /// always set; the rest hold stale values where the comment says they do not apply.
   struct Event {
     enum class Kind : std::uint8_t { kActivate, kExecute, kDeactivate };
     Kind kind = Kind::kExecute;
+    /// kDeactivate only, as `proceeded`, `other` and `preempt` are.
     EndCause cause = EndCause::kNone;
     /// kPreempted: the state had asked to proceed too (the pre-emption decided what followed).
     bool proceeded = false;
     std::uint32_t state = kNoState;
+    /// Where in the step it happened: reports (StepContext::report) and the events of every
+    /// controller draw from one counter per step, so observers can print them in order.
+    std::uint32_t sequence = 0;
+    /// The run-time params (event_args()); 0 for kExecute.
+    std::uint32_t args_count = 0;
     /// kPreempted, kGoTo: the state planned in its place (kNoState: none); kTerminated: the
     /// state whose callback called terminate() (kNoState: a hook of the owner).
     std::uint32_t other = kNoState;
     /// kPreempted: the index of the `preempt:` entry that fired (kNoIndex: a hook).
     std::uint32_t preempt = kNoIndex;
-    /// Where in the step it happened: reports (StepContext::report) and the events of every
-    /// controller draw from one counter per step, so observers can print them in order.
-    std::uint32_t sequence = 0;
-    /// kActivate, kDeactivate: the instance's per-instance params from the config (or null) and
-    /// its run-time ones (event_args()).
-    const std::vector<Param>* planned = nullptr;
+    /// kActivate, kDeactivate: where the run-time params start in event_args().
     std::uint32_t args_begin = 0;
-    std::uint32_t args_count = 0;
+    /// kActivate, kDeactivate: the instance's per-instance params from the config (or null).
+    const std::vector<Param>* planned = nullptr;
   };
   static constexpr std::size_t kMaxEventsPerStep = 64;
 
@@ -164,8 +169,10 @@ class Controller {
     const std::vector<Param>* planned = nullptr;  ///< per-instance params from the config
     std::vector<std::pair<std::uint32_t, ParamValue>> args;  ///< from Plan calls, by param index
     /// Each class param's value for this instance (args, else planned, else the state's, else
-    /// the default; null: none), so that a step reads a param by index. Sized at load.
-    std::vector<const ParamValue*> values;
+    /// the default; null: none), so that a step reads a param by index: the state's own table
+    /// (state_values_) while nothing was planned for the instance, else `own_values`.
+    const ParamValue* const* values = nullptr;
+    std::vector<const ParamValue*> own_values;  ///< sized at load: one per class param
     std::uint64_t executions = 0;
   };
 
@@ -181,10 +188,24 @@ class Controller {
     std::uint32_t other = kNoState;
     std::uint32_t preempt = kNoIndex;
   };
+  /// Records the activation (an empty `ending`) or the deactivation of `instance`.
   void record(const StepContext& context, Event::Kind kind, std::uint32_t instance,
               const Ending& ending);
-  void record(const StepContext& context, Event::Kind kind, std::uint32_t instance) {
-    record(context, kind, instance, Ending{});
+  /// Records an execution: the event of every step, so it writes only what an execution has.
+  void record_execute(const StepContext& context, std::uint32_t instance) {
+    const std::uint32_t sequence = next_sequence(context);
+    if (event_count_ >= kMaxEventsPerStep) {
+      ++event_count_;
+      return;
+    }
+    Event& event = events_[event_count_++];
+    event.kind = Event::Kind::kExecute;
+    event.state = instances_[instance].state;
+    event.sequence = sequence;
+    event.args_count = 0;
+  }
+  static std::uint32_t next_sequence(const StepContext& context) {
+    return context.data_->sequence++;
   }
   void fail(std::string message);
   void deactivate_current(StateContext& context, const Ending& ending);
