@@ -26,6 +26,11 @@ Diagnostic& Diagnostics::warning(const SourceLocation& where, std::string code,
       Diagnostic{where, Severity::kWarning, std::move(code), std::move(message), {}});
 }
 
+void Diagnostics::append(const Diagnostics& other) {
+  items_.insert(items_.end(), other.items_.begin(), other.items_.end());
+  error_count_ += other.error_count_;
+}
+
 void Diagnostics::promote_warnings() {
   for (auto& item : items_) item.severity = Severity::kError;
   error_count_ = items_.size();
