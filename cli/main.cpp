@@ -275,8 +275,9 @@ int main(int argc, char** argv) {
       "Run scenario tests: a behaviour graph stepped without a robot, its interface layers or\n"
       "classes substituted and its inputs scripted, checked step by step against what the test\n"
       "expects (docs/testing.md). Prints one line per test and, for each failed expectation,\n"
-      "file:line:col: error: expected ..., got ... followed by the explanation of that\n"
-      "behaviour or state machine at that step.");
+      "file:line:col: error[expectation]: expected ..., got ... followed by the explanation of\n"
+      "that behaviour or state machine at that step; every problem of an invalid test file in\n"
+      "one run, as validate prints them. The counts come last.");
   test_cmd
       ->add_option("PATH", options.test.paths,
                    "test files (arbiter_test: 1), or directories: every *.test.yaml, "
@@ -289,8 +290,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   test_cmd
       ->add_option("--junit", options.test.junit,
-                   "also write JUnit XML to FILE (one testcase per test file, one failure "
-                   "per failed expectation), for CI systems")
+                   "also write JUnit XML to FILE (one timed testcase per test file, its "
+                   "classname the file; one failure per failed expectation), for CI systems")
       ->type_name("FILE");
   test_cmd->footer(
       "Examples:\n"

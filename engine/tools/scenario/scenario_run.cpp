@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -260,20 +261,20 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
 
 ScenarioResult run_scenario_file(const std::string& path, Registry& registry,
                                  const ScenarioOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
   Diagnostics diagnostics;
   auto scenario = read_scenario(path, diagnostics, options.limits);
-  if (!scenario) {
-    ScenarioResult result;
+  ScenarioResult result;
+  if (scenario) {
+    result = run_scenario(*scenario, registry, options);
+    diagnostics.append(result.diagnostics);
+  } else {
     result.file = path;
     result.name = path;
-    result.diagnostics = std::move(diagnostics);
-    result.diagnostics.sort();
-    return result;
   }
-  ScenarioResult result = run_scenario(*scenario, registry, options);
-  diagnostics.append(result.diagnostics);
   diagnostics.sort();
   result.diagnostics = std::move(diagnostics);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 
