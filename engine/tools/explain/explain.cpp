@@ -62,10 +62,14 @@ struct Target {
 };
 
 std::optional<Target> resolve(const Program& program, std::string_view target, Explanation& error) {
+  // Each behaviour once, by the name that is enough to name it.
   std::vector<std::string> known;
   for (const auto& behaviour : program.behaviours) {
-    known.push_back(behaviour.name);
-    known.push_back(program.layers[behaviour.layer].name + "/" + behaviour.name);
+    const bool shared =
+        std::count_if(program.behaviours.begin(), program.behaviours.end(),
+                      [&](const auto& other) { return other.name == behaviour.name; }) > 1;
+    known.push_back(shared ? program.layers[behaviour.layer].name + "/" + behaviour.name
+                           : behaviour.name);
   }
   for (const auto& controller : program.controllers) known.push_back(controller->name());
   const auto not_found = [&](std::string text) {

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
@@ -66,8 +67,15 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
     }
     if (matches.size() == 1) return matches.front();
     if (matches.empty()) {
-      std::vector<std::string> known = behaviour_names;
-      for (const auto& behaviour : program.behaviours) known.push_back(behaviour.name);
+      // Each behaviour once, by the name that is enough to name it.
+      std::vector<std::string> known;
+      for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
+        const auto& name = program.behaviours[b].name;
+        const bool shared =
+            std::count_if(program.behaviours.begin(), program.behaviours.end(),
+                          [&](const auto& other) { return other.name == name; }) > 1;
+        known.push_back(shared ? behaviour_names[b] : name);
+      }
       diagnostics
           .error(name.location, "unknown-behaviour",
                  fmt::format("'{}' is not a behaviour of config '{}'", name.text, program.name))
