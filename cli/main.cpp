@@ -48,6 +48,36 @@ CLI::Option* add_serve_token_option(CLI::App& command, Options& options, const s
 }
 
 /// `--record FILE` and `--record-flush SECONDS` (which needs it), as run and replay share them.
+// Words the command line has left over, in the order they were written (CLI11 lists them
+// backwards), each option among them with the closest option the command takes.
+int report_extras(const CLI::App& app) {
+  const CLI::App* command = &app;
+  for (const CLI::App* sub : app.get_subcommands()) command = sub;
+  std::vector<std::string> names;
+  for (const CLI::App* scope : {&app, command}) {
+    for (const CLI::Option* option : scope->get_options()) {
+      for (const auto& name : option->get_lnames()) names.push_back("--" + name);
+      for (const auto& name : option->get_snames()) names.push_back("-" + name);
+    }
+  }
+  const std::vector<std::string> words = app.remaining(true);
+  std::string listed;
+  for (const auto& word : words) listed += (listed.empty() ? "" : " ") + arbiter::printable(word);
+  const std::string prefix = command == &app ? "arbiter" : "arbiter " + command->get_name();
+  std::cerr << fmt::format("{}: {} not expected: {}\n", prefix,
+                           words.size() > 1 ? "these arguments were" : "this argument was", listed);
+  for (const auto& word : words) {
+    if (word.size() < 2 || word[0] != '-') continue;
+    const std::string name = word.substr(0, word.find('='));
+    if (auto best = arbiter::closest(name, names)) {
+      std::cerr << fmt::format("  note: '{}': did you mean '{}'?\n", arbiter::printable(name),
+                               *best);
+    }
+  }
+  std::cerr << fmt::format("Run '{} --help' for more information.\n", prefix);
+  return kExitUsage;
+}
+
 void add_record_options(CLI::App& command, Options& options, const std::string& record_help,
                         const std::string& record_type, const std::string& flush_help) {
   command.add_option("--record", options.record_path, record_help)->type_name(record_type);
@@ -501,6 +531,8 @@ int main(int argc, char** argv) {
                                  : "Directory does not exist: " + dir);
       }
     }
+  } catch (const CLI::ExtrasError&) {
+    return report_extras(app);
   } catch (const CLI::ParseError& error) {
     // --help and --version exit 0 through app.exit; every real parse error is a usage error.
     const int code = app.exit(error);
