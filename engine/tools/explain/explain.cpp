@@ -1,5 +1,6 @@
 #include "arbiter/explain.hpp"
 
+#include "arbiter/dump.hpp"
 #include "arbiter/trace.hpp"
 
 #include <fmt/format.h>
@@ -440,10 +441,13 @@ Explanation explain_controller(const Program& program, std::uint32_t target, std
   std::string& text = out.text;
   text = fmt::format("state machine {} at step {}: cycle {}, {}\n", controller.name(), step,
                      now->value("cycle", 0), status);
-  text +=
-      fmt::format("  stepped by: {}\n",
-                  controller.owned() ? "its owner (a state_machine behaviour, or a parent state)"
-                                     : "the manager, after the output pass (it is standalone)");
+  const std::string owner = owner_of(program, controller);
+  text += fmt::format("  stepped by: {}\n",
+                      !controller.owned() ? "the manager, after the output pass (it is standalone)"
+                      : owner.empty() ? "its owner (a state_machine behaviour, or a parent state)"
+                      : controller.owner_behaviour() != kNoBehaviour
+                          ? fmt::format("behaviour {}, while it is active", owner)
+                          : fmt::format("state {} of its parent machine, while it runs", owner));
   if (before != nullptr) {
     text += "  before the step: " + describe_state(*before) + "\n";
   } else if (step == 1) {
