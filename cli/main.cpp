@@ -54,6 +54,10 @@ int report_extras(const CLI::App& app) {
   const CLI::App* command = &app;
   for (const CLI::App* sub : app.get_subcommands()) command = sub;
   std::vector<std::string> names;
+  std::vector<std::string> commands;
+  if (command == &app) {
+    for (const CLI::App* sub : app.get_subcommands({})) commands.push_back(sub->get_name());
+  }
   for (const CLI::App* scope : {&app, command}) {
     for (const CLI::Option* option : scope->get_options()) {
       for (const auto& name : option->get_lnames()) names.push_back("--" + name);
@@ -67,9 +71,11 @@ int report_extras(const CLI::App& app) {
   std::cerr << fmt::format("{}: {} not expected: {}\n", prefix,
                            words.size() > 1 ? "these arguments were" : "this argument was", listed);
   for (const auto& word : words) {
-    if (word.size() < 2 || word[0] != '-') continue;
+    if (word.empty() || (word[0] != '-' && (commands.empty() || &word != &words.front()))) {
+      continue;
+    }
     const std::string name = word.substr(0, word.find('='));
-    if (auto best = arbiter::closest(name, names)) {
+    if (auto best = arbiter::closest(name, word[0] == '-' ? names : commands)) {
       std::cerr << fmt::format("  note: '{}': did you mean '{}'?\n", arbiter::printable(name),
                                *best);
     }
@@ -533,6 +539,10 @@ int main(int argc, char** argv) {
     }
   } catch (const CLI::ExtrasError&) {
     return report_extras(app);
+  } catch (const CLI::RequiredError& error) {
+    // No command, but words: a misspelt command, told as the words it left over.
+    if (app.get_subcommands().empty() && !app.remaining().empty()) return report_extras(app);
+    return app.exit(error) == 0 ? kExitOk : kExitUsage;
   } catch (const CLI::ParseError& error) {
     // --help and --version exit 0 through app.exit; every real parse error is a usage error.
     const int code = app.exit(error);

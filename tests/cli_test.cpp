@@ -236,6 +236,9 @@ TEST_CASE("a mistyped option gets the option meant, and unexpected words are ech
         "arbiter run: these arguments were not expected: --stesp 5 extra\n"
         "  note: '--stesp': did you mean '--steps'?\n"
         "Run 'arbiter run --help' for more information.\n");
+  const auto command = run_cli("valdate configs/paper/walk_and_kick.yaml");
+  CHECK(command.exit_code == 2);
+  CHECK(contains(command.err, "  note: 'valdate': did you mean 'validate'?\n"));
 }
 
 TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
