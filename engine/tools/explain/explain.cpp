@@ -464,9 +464,10 @@ Explanation explain_controller(const Program& program, std::uint32_t target, std
     } else if (status == "error") {
       meaning.push_back("it stopped with an error (see the run's log)");
     } else if (controller.owned()) {
-      meaning.push_back(
-          "it was not stepped: its owner did not step it in this step (a state_machine behaviour "
-          "steps its controller only while it is active)");
+      meaning.push_back(fmt::format(
+          "it was not stepped: {} did not step it in this step (a state_machine behaviour "
+          "steps its controller only while it is active)",
+          owner.empty() ? std::string("its owner") : owner));
     } else {
       meaning.push_back("it was not stepped in this step");
     }
