@@ -48,6 +48,42 @@ CLI::Option* add_serve_token_option(CLI::App& command, Options& options, const s
 }
 
 /// `--record FILE` and `--record-flush SECONDS` (which needs it), as run and replay share them.
+// Words the command line has left over, in the order they were written (CLI11 lists them
+// backwards), each option among them with the closest option the command takes.
+int report_extras(const CLI::App& app) {
+  const CLI::App* command = &app;
+  for (const CLI::App* sub : app.get_subcommands()) command = sub;
+  std::vector<std::string> names;
+  std::vector<std::string> commands;
+  if (command == &app) {
+    for (const CLI::App* sub : app.get_subcommands({})) commands.push_back(sub->get_name());
+  }
+  for (const CLI::App* scope : {&app, command}) {
+    for (const CLI::Option* option : scope->get_options()) {
+      for (const auto& name : option->get_lnames()) names.push_back("--" + name);
+      for (const auto& name : option->get_snames()) names.push_back("-" + name);
+    }
+  }
+  const std::vector<std::string> words = app.remaining(true);
+  std::string listed;
+  for (const auto& word : words) listed += (listed.empty() ? "" : " ") + arbiter::printable(word);
+  const std::string prefix = command == &app ? "arbiter" : "arbiter " + command->get_name();
+  std::cerr << fmt::format("{}: {} not expected: {}\n", prefix,
+                           words.size() > 1 ? "these arguments were" : "this argument was", listed);
+  for (const auto& word : words) {
+    if (word.empty() || (word[0] != '-' && (commands.empty() || &word != &words.front()))) {
+      continue;
+    }
+    const std::string name = word.substr(0, word.find('='));
+    if (auto best = arbiter::closest(name, word[0] == '-' ? names : commands)) {
+      std::cerr << fmt::format("  note: '{}': did you mean '{}'?\n", arbiter::printable(name),
+                               *best);
+    }
+  }
+  std::cerr << fmt::format("Run '{} --help' for more information.\n", prefix);
+  return kExitUsage;
+}
+
 void add_record_options(CLI::App& command, Options& options, const std::string& record_help,
                         const std::string& record_type, const std::string& flush_help) {
   command.add_option("--record", options.record_path, record_help)->type_name(record_type);
@@ -277,8 +313,9 @@ int main(int argc, char** argv) {
       "Run scenario tests: a behaviour graph stepped without a robot, its interface layers or\n"
       "classes substituted and its inputs scripted, checked step by step against what the test\n"
       "expects (docs/testing.md). Prints one line per test and, for each failed expectation,\n"
-      "file:line:col: error: expected ..., got ... followed by the explanation of that\n"
-      "behaviour or state machine at that step.");
+      "file:line:col: error[expectation]: expected ..., got ... followed by the explanation of\n"
+      "that behaviour or state machine at that step; every problem of an invalid test file in\n"
+      "one run, as validate prints them. The counts come last.");
   test_cmd
       ->add_option("PATH", options.test.paths,
                    "test files (arbiter_test: 1), or directories: every *.test.yaml, "
@@ -291,8 +328,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   test_cmd
       ->add_option("--junit", options.test.junit,
-                   "also write JUnit XML to FILE (one testcase per test file, one failure "
-                   "per failed expectation), for CI systems")
+                   "also write JUnit XML to FILE (one timed testcase per test file, its "
+                   "classname the file; one failure per failed expectation), for CI systems")
       ->type_name("FILE");
   test_cmd->footer(
       "Examples:\n"
@@ -502,6 +539,12 @@ int main(int argc, char** argv) {
                                  : "Directory does not exist: " + dir);
       }
     }
+  } catch (const CLI::ExtrasError&) {
+    return report_extras(app);
+  } catch (const CLI::RequiredError& error) {
+    // No command, but words: a misspelt command, told as the words it left over.
+    if (app.get_subcommands().empty() && !app.remaining().empty()) return report_extras(app);
+    return app.exit(error) == 0 ? kExitOk : kExitUsage;
   } catch (const CLI::ParseError& error) {
     // --help and --version exit 0 through app.exit; every real parse error is a usage error.
     const int code = app.exit(error);

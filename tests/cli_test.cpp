@@ -230,6 +230,20 @@ TEST_CASE("every command's help ends with examples", "[help][cli]") {
   CHECK(contains(run_cli("validate --help").out, "redundant-inhibition"));
 }
 
+TEST_CASE("a mistyped option gets the option meant, and unexpected words are echoed in order",
+          "[cli]") {
+  const auto result = run_cli("run " + quoted(kSourceDir / "configs/paper/walk_and_kick.yaml") +
+                              " --stesp 5 extra");
+  CHECK(result.exit_code == 2);
+  CHECK(result.err ==
+        "arbiter run: these arguments were not expected: --stesp 5 extra\n"
+        "  note: '--stesp': did you mean '--steps'?\n"
+        "Run 'arbiter run --help' for more information.\n");
+  const auto command = run_cli("valdate configs/paper/walk_and_kick.yaml");
+  CHECK(command.exit_code == 2);
+  CHECK(contains(command.err, "  note: 'valdate': did you mean 'validate'?\n"));
+}
+
 TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
   SECTION("a valid config") {
     const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));

@@ -1,5 +1,5 @@
-// explain (engine/tools/explain/explain.cpp) from a trace, and why a state ended as the trace's `ended`,
-// run's report (cli/commands/run_report.cpp) and explain tell it.
+// explain (engine/tools/explain/explain.cpp) from a trace, and why a state ended as the trace's
+// `ended`, run's report (cli/commands/run_report.cpp) and explain tell it.
 
 #include <unistd.h>
 
@@ -72,6 +72,15 @@ TEST_CASE("explain gives the product of the factors and the normalisation", "[ex
   CHECK(contains(text, "refined = 0.3 × 0.4 = 0.12\n"));
   CHECK(contains(text, "0.12 / 0.896 (the sum of the layer's refined levels) = 0.133929\n"));
   CHECK_FALSE(contains(text, "note:"));
+}
+
+TEST_CASE("explain names what steps an owned state machine", "[explain]") {
+  const Explained run("tests/data/golden/relay.yaml", 6);
+  CHECK(contains(run.text_at(2, "match"),
+                 "stepped by: behaviour control/play, while it is active\n"));
+  const std::string child = run.text_at(2, "attack_plan");
+  CHECK(contains(child, "stepped by: state match/attack of its parent machine, while it runs\n"));
+  CHECK(contains(child, "it was not stepped: match/attack did not step it in this step"));
 }
 
 TEST_CASE("explain tells what a state machine did in a step", "[explain]") {

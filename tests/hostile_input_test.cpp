@@ -155,10 +155,11 @@ TEST_CASE("a trace record nested 100 000 levels deep is an error at its place, n
     const auto result = run_cli("test " + arg(test));
     CHECK_FALSE(result.signalled);
     CHECK(result.exit_code == 2);
-    INFO(result.err.substr(0, 400));
-    CHECK(result.err.find("deep.test.yaml:4:15: error: cannot compare with trace 'deep.jsonl': "
-                          "nesting deeper than 200 levels\n") != std::string::npos);
-    CHECK(result.err.find("note: in the trace at " + (dir / "deep.jsonl").string() +
+    INFO(result.out.substr(0, 400));
+    CHECK(result.out.find("deep.test.yaml:4:15: error[unreadable-trace]: cannot compare with "
+                          "trace 'deep.jsonl': nesting deeper than 200 levels\n") !=
+          std::string::npos);
+    CHECK(result.out.find("note: in the trace at " + (dir / "deep.jsonl").string() +
                           ":3:" + std::to_string(column) + "\n") != std::string::npos);
   }
 }
@@ -242,7 +243,8 @@ TEST_CASE("a scenario file nested 100 000 levels deep is an error at its place, 
     const auto result = run_cli("test " + arg(file));
     CHECK_FALSE(result.signalled);
     CHECK(result.exit_code == 2);
-    CHECK(result.err.find(where + std::string("error: nesting deeper than 200 levels")) !=
+    INFO(result.out.substr(0, 400));
+    CHECK(result.out.find(where + std::string("error[too-deep]: nesting deeper than 200 levels")) !=
           std::string::npos);
   }
 }

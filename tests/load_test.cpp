@@ -194,3 +194,14 @@ TEST_CASE("load_config reads texts held in memory before the disk, for included 
   CHECK(fixed.document() != nullptr);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("a 'known:' list prints a last name rather than '(1 more)', and counts two or more",
+          "[diagnostics]") {
+  std::vector<std::string> known;
+  for (char c = 'a'; c <= 'm'; ++c) known.emplace_back(3, c);
+  CHECK(suggest("zzz", known) ==
+        "known: aaa, bbb, ccc, ddd, eee, fff, ggg, hhh, iii, jjj, kkk, lll, mmm");
+  known.emplace_back("nnn");
+  CHECK(suggest("zzz", known) ==
+        "known: aaa, bbb, ccc, ddd, eee, fff, ggg, hhh, iii, jjj, kkk, lll, ... (2 more)");
+}

@@ -145,7 +145,8 @@ TEST_CASE("a path that is neither a test file nor a directory of them is a usage
 }
 
 TEST_CASE(
-    "the JUnit XML is well-formed: a testcase per test file, a failure per failed expectation",
+    "the JUnit XML is well-formed: a testcase per test file, named by its file and timed, a "
+    "failure per failed expectation",
     "[scenario]") {
   const fs::path xml = fs::temp_directory_path() / "arbiter_scenario_junit.xml";
   fs::remove(xml);
@@ -156,7 +157,11 @@ TEST_CASE(
   const auto files = scenarios_in(kScenarios / "failing").size() +
                      scenarios_in(kSourceDir / "tests/scenarios/soccer").size();
   CHECK(count(text, "<testcase ") == files);
-  CHECK(count(text, "<failure ") == count(result.out, ": error: expected "));
+  CHECK(count(text, "<failure ") == count(result.out, ": error[expectation]: expected "));
+  CHECK(count(text, " time=\"") == files + 2);
+  CHECK(text.find("<testcase name=\"machine_state\" "
+                  "classname=\"tests/data/scenarios/failing/machine_state.test.yaml\"") !=
+        std::string::npos);
   const auto lint = test::run_captured("xmllint --noout \"" + xml.string() + "\"");
   INFO(lint.err);
   CHECK(lint.exit_code == 0);

@@ -16,10 +16,10 @@
 
 namespace arbiter::cli {
 
-bool use_color(const std::string& choice) {
+bool use_color(const std::string& choice, std::FILE* stream) {
   if (choice != "auto") return choice == "always";
   const char* term = std::getenv("TERM");
-  return isatty(fileno(stderr)) != 0 && std::getenv("NO_COLOR") == nullptr && term != nullptr &&
+  return isatty(fileno(stream)) != 0 && std::getenv("NO_COLOR") == nullptr && term != nullptr &&
          std::string_view(term) != "dumb";
 }
 

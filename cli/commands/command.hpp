@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <cstdio>
 #include <optional>
 #include <string>
 #include <vector>
@@ -64,8 +65,8 @@ struct Options {
 
 constexpr const char* kVersion = "0.1.0";
 
-/// `--color auto` colours diagnostics when stderr is a terminal (and NO_COLOR is not set).
-bool use_color(const std::string& choice);
+/// `--color auto` colours diagnostics when `stream` is a terminal (and NO_COLOR is not set).
+bool use_color(const std::string& choice, std::FILE* stream = stderr);
 /// The registry every command starts from: the built-in classes (plugins add theirs at load).
 Registry make_registry();
 /// Diagnostics as `--format` asks: text on stderr, or JSON on stdout.

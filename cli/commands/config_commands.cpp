@@ -88,13 +88,7 @@ int validate_command(const Options& options) {
   for (const auto& file : options.files) {
     arbiter::Diagnostics diagnostics;
     ok = arbiter::load(file, registry, diagnostics, load_options_of(options)).has_value() && ok;
-    for (const auto& item : diagnostics.items()) {
-      if (item.severity == arbiter::Severity::kError) {
-        all.error(item.location, item.code, item.message).notes = item.notes;
-      } else {
-        all.warning(item.location, item.code, item.message).notes = item.notes;
-      }
-    }
+    all.append(diagnostics);
     if (options.format == "text" && diagnostics.empty()) {
       std::cerr << fmt::format("{}: ok\n", file);
     }

@@ -71,16 +71,21 @@ std::string junit_xml(const std::vector<ScenarioResult>& results) {
     errors += result.status == ScenarioResult::Status::kInvalid ? 1 : 0;
   }
   std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  out +=
-      fmt::format("<testsuites name=\"arbiter test\" tests=\"{}\" failures=\"{}\" errors=\"{}\">\n",
-                  results.size(), failures, errors);
+  double seconds = 0.0;
+  for (const auto& result : results) seconds += result.seconds;
   out += fmt::format(
-      "  <testsuite name=\"arbiter test\" tests=\"{}\" failures=\"{}\" errors=\"{}\">\n",
-      results.size(), failures, errors);
+      "<testsuites name=\"arbiter test\" tests=\"{}\" failures=\"{}\" errors=\"{}\" "
+      "time=\"{:.3f}\">\n",
+      results.size(), failures, errors, seconds);
+  out += fmt::format(
+      "  <testsuite name=\"arbiter test\" tests=\"{}\" failures=\"{}\" errors=\"{}\" "
+      "time=\"{:.3f}\">\n",
+      results.size(), failures, errors, seconds);
   for (const auto& result : results) {
-    const std::string classname = std::filesystem::path(result.file).parent_path().string();
-    out += fmt::format("    <testcase name=\"{}\" classname=\"{}\" file=\"{}\"",
-                       xml_escaped(result.name), xml_escaped(classname), xml_escaped(result.file));
+    // CI systems group by classname: one group per test file, as a test file is one test.
+    out += fmt::format("    <testcase name=\"{}\" classname=\"{}\" file=\"{}\" time=\"{:.3f}\"",
+                       xml_escaped(result.name), xml_escaped(result.file), xml_escaped(result.file),
+                       result.seconds);
     if (result.status == ScenarioResult::Status::kPassed) {
       out += "/>\n";
       continue;
@@ -130,18 +135,19 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
         ++failed;
         out << fmt::format("FAIL {} ({} of {} expectations failed)\n", printable(file),
                            result.failures.size(), result.expectations);
-        for (const auto& failure : result.failures) {
-          out << format(failure.diagnostic);
-          out << indented(printable(failure.explanation, true));
-        }
         break;
       case ScenarioResult::Status::kInvalid:
         ++invalid;
         out << fmt::format("INVALID {}\n", printable(file));
         break;
     }
-    // Load warnings and the reasons a test could not run, as `arbiter validate` prints them.
-    if (!result.diagnostics.empty()) err << format(result.diagnostics);
+    // Load warnings and the reasons a test could not run, as `arbiter validate` prints them, under
+    // the test's line and in the same stream, so that they stay in order however it is read.
+    out << format(result.diagnostics, command.format);
+    for (const auto& failure : result.failures) {
+      out << format(failure.diagnostic, command.format);
+      out << indented(printable(failure.explanation, true));
+    }
     out.flush();
     results.push_back(std::move(result));
   }
@@ -162,6 +168,8 @@ int test_command(Options& options) {
   auto registry = make_registry();
   options.test.options.plugins = load_options_of(options).plugins;
   options.test.options.limits = load_options_of(options).limits;
+  // The report is on stdout: coloured when that is a terminal.
+  options.test.format = FormatOptions::readable(use_color(options.color, stdout));
   return run_tests(options.test, registry, std::cout, std::cerr);
 }
 

@@ -79,7 +79,7 @@ get_filename_component(cmake_bin "${CMAKE_COMMAND}" DIRECTORY)
 run_checked(output 0 "${CMAKE_COMMAND}" -E env --unset=ARBITER_PLUGIN_PATH
             "${cmake_bin}/ctest" --test-dir "${consumer_build}" --verbose)
 expect_in("${output}" "ctest in the consumer project"
-  "patrol_scenarios[ .]*Passed"
+  "patrol_scenarios/patrol[ .]*Passed"
   "PASS [^\n]*patrol.test.yaml \\(6 expectations, 30 steps\\)")
 
 # The plugin's classes run: the robot drives to the gate, then the lookout's countdown plans

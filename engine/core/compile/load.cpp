@@ -39,12 +39,7 @@ std::optional<Program> load(const std::string& path, Registry& registry, Diagnos
   if (diagnostics.empty()) {
     diagnostics = std::move(loaded.diagnostics);
   } else {
-    for (const auto& item : loaded.diagnostics.items()) {
-      auto& copy = item.severity == Severity::kError
-                       ? diagnostics.error(item.location, item.code, item.message)
-                       : diagnostics.warning(item.location, item.code, item.message);
-      copy.notes = item.notes;
-    }
+    diagnostics.append(loaded.diagnostics);
     diagnostics.sort();
   }
   return std::move(loaded.program);

@@ -26,6 +26,11 @@ Diagnostic& Diagnostics::warning(const SourceLocation& where, std::string code,
       Diagnostic{where, Severity::kWarning, std::move(code), std::move(message), {}});
 }
 
+void Diagnostics::append(const Diagnostics& other) {
+  items_.insert(items_.end(), other.items_.begin(), other.items_.end());
+  error_count_ += other.error_count_;
+}
+
 void Diagnostics::promote_warnings() {
   for (auto& item : items_) item.severity = Severity::kError;
   error_count_ = items_.size();
@@ -408,11 +413,13 @@ std::string suggest(std::string_view wrong, const std::vector<std::string>& know
     total = known.size();
   }
   std::string list;
-  for (std::size_t i = 0; i < sorted.size() && i < kMaxListed; ++i) {
+  // "(1 more)" would take the place of the name itself.
+  const std::size_t listed = total == kMaxListed + 1 ? total : kMaxListed;
+  for (std::size_t i = 0; i < sorted.size() && i < listed; ++i) {
     if (i > 0) list += ", ";
     list += sorted[i];
   }
-  if (total > kMaxListed) {
+  if (total > listed) {
     list += fmt::format(", ... ({} more)", total - std::min(kMaxListed, sorted.size()));
   }
   if (const auto best = closest(wrong, known)) {

@@ -181,35 +181,51 @@ std::string indent_mistake(std::string_view text, std::size_t at) {
     candidates.push_back({column, start});
     if (depth == 0) break;
   }
+  // Candidates run from the nearest line up. A tie goes to the inner block, the lines just above
+  // (a key between its parent's column and its siblings' is most often a sibling), and the outer
+  // one is named too.
   const Candidate* nearest = nullptr;
+  const Candidate* outer = nullptr;
   std::size_t best = std::string_view::npos;
   for (const auto& candidate : candidates) {
     const std::size_t distance =
         candidate.column > indent ? candidate.column - indent : indent - candidate.column;
     if (distance == 0) return {};
-    // A tie goes to the outer block: a key is more often pushed in than pulled out.
-    if (distance < best || (distance == best && candidate.column < nearest->column)) {
+    if (distance < best) {
       best = distance;
       nearest = &candidate;
+      outer = nullptr;
+    } else if (distance == best && outer == nullptr &&
+               (candidate.column > indent) != (nearest->column > indent)) {
+      outer = &candidate;
     }
   }
   if (nearest == nullptr) return {};
-  std::size_t word_end = nearest->line_begin + nearest->column;
-  while (word_end < text.size() && text[word_end] != ':' && text[word_end] != '\n' &&
-         text[word_end] != ' ') {
-    ++word_end;
+  const auto place = [&](const Candidate& candidate) {
+    std::size_t word_end = candidate.line_begin + candidate.column;
+    while (word_end < text.size() && text[word_end] != ':' && text[word_end] != '\n' &&
+           text[word_end] != ' ') {
+      ++word_end;
+    }
+    const std::string_view word = text.substr(candidate.line_begin + candidate.column,
+                                              word_end - candidate.line_begin - candidate.column);
+    const std::size_t line_number = static_cast<std::size_t>(std::count(
+                                        text.begin(), text.begin() + candidate.line_begin, '\n')) +
+                                    1;
+    return fmt::format(
+        "{} on line {}",
+        word == "-" || word.empty() ? std::string("the list item") : fmt::format("'{}'", word),
+        line_number);
+  };
+  const std::string spaces = fmt::format(
+      "{} space{}", best == 1 ? std::string("one") : std::to_string(best), best == 1 ? "" : "s");
+  std::string note = fmt::format("this line is indented {} too {} to line up with {}", spaces,
+                                 nearest->column > indent ? "little" : "much", place(*nearest));
+  if (outer != nullptr) {
+    note += fmt::format(" (or {} too {} for {})", spaces,
+                        outer->column > indent ? "little" : "much", place(*outer));
   }
-  const std::string_view word = text.substr(nearest->line_begin + nearest->column,
-                                            word_end - nearest->line_begin - nearest->column);
-  const std::size_t line_number =
-      static_cast<std::size_t>(std::count(text.begin(), text.begin() + nearest->line_begin, '\n')) +
-      1;
-  return fmt::format(
-      "this line is indented {} space{} too {} to line up with {} on line {}",
-      best == 1 ? std::string("one") : std::to_string(best), best == 1 ? "" : "s",
-      nearest->column > indent ? "little" : "much",
-      word == "-" || word.empty() ? std::string("the list item") : fmt::format("'{}'", word),
-      line_number);
+  return note;
 }
 
 /// Turns a yaml-cpp exception into a diagnostic that says what is wrong in the user's terms.

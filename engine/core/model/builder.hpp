@@ -164,6 +164,9 @@ class ModelBuilder {
   std::vector<PendingLayer> pending_layers_;
   std::vector<const Node*> pending_machines_;
   std::map<std::string, ActuatorInfo> actuator_index_;
+  /// The one type-mismatch error of each actuator some port disagrees with, by actuator name
+  /// (an index into the diagnostics): every port that disagrees is a note of it.
+  std::map<std::string, std::size_t> type_mismatches_;
   // The keys written beside a behaviour's `params:` while its params are read.
   const std::vector<std::pair<std::string, std::size_t>>* misplaced_ = nullptr;
   std::vector<std::string> include_stack_;  // canonical paths of the files being read

@@ -341,11 +341,22 @@ std::vector<PortBinding> ModelBuilder::bind_ports(const ClassInfo& cls, const No
     const auto& actuator = actuator_index_.at(target);
     const ValueType* port_type = registry_.value_type_of(*spec.cpp_type);
     if (actuator.type != nullptr && port_type != actuator.type) {
-      diagnostics_.error(
-          binding.location, "type-mismatch",
-          fmt::format("port '{}' of {} ({}) has type '{}' but {} '{}' is '{}'", spec.name, owner,
-                      cls.name, registry_.value_type_name(*spec.cpp_type),
-                      input ? "sensor" : "actuator", target, actuator.type->name));
+      // The declaration is the one place to change for every port, or each port's class: one
+      // error there, each port that disagrees a note.
+      auto [mismatch, first] = type_mismatches_.try_emplace(target, diagnostics_.items().size());
+      if (first) {
+        diagnostics_.error(actuator.location, "type-mismatch",
+                           fmt::format("actuator '{}' has type '{}', but a port bound to it has "
+                                       "another",
+                                       target, actuator.type->name));
+      }
+      diagnostics_.at(mismatch->second)
+          .notes.push_back(
+              {fmt::format("port '{}' of {} ({}) at {} {} it as '{}'{}", spec.name, owner, cls.name,
+                           to_string(binding.location), input ? "reads" : "writes",
+                           registry_.value_type_name(*spec.cpp_type),
+                           input ? fmt::format(" (sensor '{}')", target) : ""),
+               binding.location});
       continue;
     }
     binding.target = target;

@@ -3,7 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
+#include <optional>
+
+#include "tools/dump/param_json.hpp"
 
 namespace arbiter {
 
@@ -37,6 +41,80 @@ bool delayed(const Program& program, std::uint32_t reader, std::uint32_t a) {
          source >= reader;
 }
 
+/// The declaration behaviour `b` was compiled from, or nullptr when the program has no model.
+const BehaviourDecl* declaration_of(const Program& program, std::uint32_t b) {
+  if (!program.model) return nullptr;
+  const auto& behaviour = program.behaviours[b];
+  const LayerDecl* layer = program.model->find_layer(program.layers[behaviour.layer].name);
+  if (layer == nullptr) return nullptr;
+  for (const auto& declared : layer->behaviours) {
+    if (declared.name.text == behaviour.name) return &declared;
+  }
+  return nullptr;
+}
+
+/// Behaviours of layer `l` with an input port bound to its sensor of actuator `a`, in execution
+/// order (known only when the program has its model).
+std::vector<std::uint32_t> sensor_readers(const Program& program, std::uint32_t l,
+                                          std::uint32_t a) {
+  std::vector<std::uint32_t> readers;
+  const CompiledLayer& layer = program.layers[l];
+  for (auto b = layer.behaviour_begin; b < layer.behaviour_end; ++b) {
+    const BehaviourDecl* declared = declaration_of(program, b);
+    if (declared == nullptr) continue;
+    for (const auto& binding : declared->ports) {
+      if (binding.port != nullptr && binding.port->direction == PortDirection::kInput &&
+          binding.target == program.actuators[a].name) {
+        readers.push_back(b);
+        break;
+      }
+    }
+  }
+  return readers;
+}
+
+/// What steps an owned state machine: a behaviour, or a state of a parent machine.
+struct Owner {
+  std::uint32_t behaviour = kNoBehaviour;
+  const Controller* parent = nullptr;
+  std::uint32_t state = 0;
+};
+
+Owner find_owner(const Program& program, const Controller& controller) {
+  Owner owner;
+  owner.behaviour = controller.owner_behaviour();
+  if (owner.behaviour != kNoBehaviour) return owner;
+  for (const auto& other : program.controllers) {
+    for (std::uint32_t s = 0; s < other->states().size(); ++s) {
+      if (other->child_of(s) == &controller) {
+        owner.parent = other.get();
+        owner.state = s;
+        return owner;
+      }
+    }
+  }
+  return owner;
+}
+
+/// `layer/behaviour` or `machine/state`; empty for a standalone machine.
+std::string owner_name(const Program& program, const Owner& owner) {
+  if (owner.behaviour != kNoBehaviour) {
+    const auto& behaviour = program.behaviours[owner.behaviour];
+    return program.layers[behaviour.layer].name + "/" + behaviour.name;
+  }
+  if (owner.parent != nullptr) {
+    return owner.parent->name() + "/" + owner.parent->states()[owner.state].name;
+  }
+  return {};
+}
+
+/// "stepped by control/play", or "standalone".
+std::string stepping(const Program& program, const Controller& controller) {
+  if (!controller.owned()) return "standalone";
+  const std::string owner = arbiter::owner_of(program, controller);
+  return owner.empty() ? "stepped by its owner" : "stepped by " + owner;
+}
+
 std::vector<std::string> names_of(const Program& program, const std::vector<std::uint32_t>& ids) {
   std::vector<std::string> names;
   for (auto id : ids) names.push_back(program.behaviours[id].name);
@@ -54,6 +132,10 @@ std::string join_names(const Program& program, const std::vector<std::uint32_t>&
 }
 
 }  // namespace
+
+std::string owner_of(const Program& program, const Controller& controller) {
+  return owner_name(program, find_owner(program, controller));
+}
 
 std::string dump_text(const Program& program, std::string_view only_layer) {
   std::string out =
@@ -124,16 +206,17 @@ std::string dump_text(const Program& program, std::string_view only_layer) {
     if (layer.sensors.empty()) out += " (none)";
     for (std::size_t i = 0; i < layer.sensors.size(); ++i) {
       const auto& actuator = program.actuators[layer.sensors[i]];
-      out += fmt::format("{} {} (from {})", i == 0 ? "" : ",", actuator.name,
-                         program.layers[actuator.layer].name);
+      const auto readers = sensor_readers(program, l, layer.sensors[i]);
+      out += fmt::format("{} {} (from {}{})", i == 0 ? "" : ",", actuator.name,
+                         program.layers[actuator.layer].name,
+                         readers.empty() ? "" : ", read by " + join_names(program, readers, ", "));
     }
     out += "\n";
   }
   if (!only_layer.empty()) return out;
   for (const auto& controller : program.controllers) {
     out += fmt::format("\nstate machine {} (capacity {}, {})\n", controller->name(),
-                       controller->capacity(),
-                       controller->owned() ? "stepped by its owner" : "standalone");
+                       controller->capacity(), stepping(program, *controller));
     out += "  states:\n";
     for (std::uint32_t s = 0; s < controller->states().size(); ++s) {
       const auto& state = controller->states()[s];
@@ -259,17 +342,35 @@ void dot_layer_edges(const Program& program, std::uint32_t l, bool external_sour
     out += fmt::format("  {} -> {} [color=\"darkgreen\"{}];\n", actuator_id(program, a),
                        sensor_id(program, l, a),
                        late ? ", style=\"dashed\", constraint=false, label=\"last step\"" : "");
+    for (auto reader : sensor_readers(program, l, a)) {
+      out += fmt::format("  {} -> {} [color=\"darkgreen\", arrowhead=\"vee\"];\n",
+                         sensor_id(program, l, a), behaviour_id(program, reader));
+    }
   }
 }
 
-void dot_controller(const Controller& controller, std::string& out) {
+/// The states of `controller` in the order of its initial queue, then the others as declared.
+std::vector<std::uint32_t> states_in_queue_order(const Controller& controller) {
+  std::vector<std::uint32_t> order;
+  const auto add = [&](std::uint32_t s) {
+    if (std::find(order.begin(), order.end(), s) == order.end()) order.push_back(s);
+  };
+  for (std::size_t i = 0; i < controller.queue_size(); ++i) {
+    for (std::uint32_t s = 0; s < controller.states().size(); ++s) {
+      if (controller.states()[s].name == controller.queued(i)) add(s);
+    }
+  }
+  for (std::uint32_t s = 0; s < controller.states().size(); ++s) add(s);
+  return order;
+}
+
+void dot_controller(const Program& program, const Controller& controller, std::string& out) {
   out += fmt::format("  subgraph {} {{\n", quote("cluster_machine_" + controller.name()));
   out += fmt::format("    label={};\n",
                      quote(fmt::format("state machine {} ({}, capacity {})", controller.name(),
-                                       controller.owned() ? "stepped by its owner" : "standalone",
-                                       controller.capacity())));
+                                       stepping(program, controller), controller.capacity())));
   out += "    style=\"rounded,dashed\";\n    color=\"gray50\";\n";
-  for (std::uint32_t s = 0; s < controller.states().size(); ++s) {
+  for (auto s : states_in_queue_order(controller)) {
     const auto& state = controller.states()[s];
     out += fmt::format("    {} [label={}, shape=ellipse];\n", state_id(controller, s),
                        quote(fmt::format("{}\n{}", state.name, state.cls->name)));
@@ -286,13 +387,33 @@ void dot_controller(const Controller& controller, std::string& out) {
   out += "  }\n";
 }
 
-void dot_controller_edges(const Controller& controller, std::string& out) {
+/// The edge from what steps a machine (`from`, a node id) into the machine's cluster.
+std::string steps_edge(const std::string& from, const Controller& child) {
+  return fmt::format("  {} -> {} [lhead={}, style=\"bold\", label=\"steps\"];\n", from,
+                     state_id(child, states_in_queue_order(child).front()),
+                     quote("cluster_machine_" + child.name()));
+}
+
+void dot_controller_edges(const Program& program, const Controller& controller, std::string& out) {
+  // The initial queue, state to state: the order the machine runs them in.
+  std::optional<std::uint32_t> previous;
+  for (std::size_t i = 0; i < controller.queue_size(); ++i) {
+    for (std::uint32_t s = 0; s < controller.states().size(); ++s) {
+      if (controller.states()[s].name != controller.queued(i)) continue;
+      if (previous) {
+        out += fmt::format("  {} -> {} [style=\"dotted\", label=\"then\"];\n",
+                           state_id(controller, *previous), state_id(controller, s));
+      }
+      previous = s;
+    }
+  }
+  if (controller.owner_behaviour() != kNoBehaviour && !controller.states().empty()) {
+    out += steps_edge(behaviour_id(program, controller.owner_behaviour()), controller);
+  }
   for (std::uint32_t s = 0; s < controller.states().size(); ++s) {
     const Controller* child = controller.child_of(s);
     if (child == nullptr || child->states().empty()) continue;
-    out += fmt::format("  {} -> {} [lhead={}, style=\"bold\", label=\"steps\"];\n",
-                       state_id(controller, s), state_id(*child, 0),
-                       quote("cluster_machine_" + child->name()));
+    out += steps_edge(state_id(controller, s), *child);
   }
 }
 
@@ -302,14 +423,60 @@ Json location_json(const SourceLocation& location) {
   return {{"file", location.file}, {"line", location.line}, {"column", location.column}};
 }
 
+/// A value as written in the config: numbers, booleans and null as such, other scalars as
+/// strings.
+Json node_json(const Node& node) {
+  if (node.is_mapping()) {
+    Json object = Json::object();
+    for (const auto& entry : node.entries()) object[entry.key] = node_json(entry.value);
+    return object;
+  }
+  if (node.is_sequence()) {
+    Json array = Json::array();
+    for (const auto& item : node.items()) array.push_back(node_json(item));
+    return array;
+  }
+  if (!node.quoted()) {
+    if (node.reads_as_null()) return Json();
+    if (auto value = node.as_bool()) return *value;
+    if (auto value = node.as_int()) return *value;
+    if (auto value = node.as_double()) return std::isfinite(*value) ? Json(*value) : Json();
+  }
+  return node.text();
+}
+
+/// {param: value}, in the class's order, defaults included.
+Json params_json(const ParamSet& params) {
+  Json out = Json::object();
+  for (const auto& param : params.items) {
+    out[param.name] = std::holds_alternative<Node>(param.value)
+                          ? node_json(std::get<Node>(param.value))
+                          : detail::param_json(param.value);
+  }
+  return out;
+}
+
+/// {port: the sensor or actuator it is bound to, or null}.
+Json ports_json(const std::vector<PortBinding>& ports) {
+  Json out = Json::object();
+  for (const auto& binding : ports) {
+    if (binding.port == nullptr) continue;
+    out[binding.port->name] = binding.target.empty() ? Json() : Json(binding.target);
+  }
+  return out;
+}
+
 Json layer_json(const Program& program, std::uint32_t l) {
   const CompiledLayer& layer = program.layers[l];
   Json behaviours = Json::array();
   for (auto b = layer.behaviour_begin; b < layer.behaviour_end; ++b) {
     const auto& behaviour = program.behaviours[b];
+    const BehaviourDecl* declared = declaration_of(program, b);
     behaviours.push_back({{"name", behaviour.name},
                           {"class", behaviour.cls->name},
                           {"order", b - layer.behaviour_begin + 1},
+                          {"params", declared ? params_json(declared->params) : Json()},
+                          {"ports", declared ? ports_json(declared->ports) : Json()},
                           {"location", location_json(behaviour.location)}});
   }
   Json inhibitions = Json::array();
@@ -342,10 +509,16 @@ Json layer_json(const Program& program, std::uint32_t l) {
   for (auto a : layer.sensors) {
     sensors.push_back({{"name", program.actuators[a].name},
                        {"layer", program.layers[program.actuators[a].layer].name},
-                       {"last_step", delayed(program, l, a)}});
+                       {"last_step", delayed(program, l, a)},
+                       {"readers", names_of(program, sensor_readers(program, l, a))}});
   }
+  // An interface layer's class has params and ports as a behaviour has.
+  const LayerDecl* declared = program.model ? program.model->find_layer(layer.name) : nullptr;
+  const bool bound = layer.is_interface() && declared != nullptr;
   return {{"name", layer.name},
           {"interface", layer.is_interface() ? Json(layer.interface_class->name) : Json()},
+          {"params", bound ? params_json(declared->params) : Json()},
+          {"ports", bound ? ports_json(declared->ports) : Json()},
           {"normalise", layer.normalise},
           {"location", location_json(layer.location)},
           {"behaviours", std::move(behaviours)},
@@ -354,13 +527,22 @@ Json layer_json(const Program& program, std::uint32_t l) {
           {"sensors", std::move(sensors)}};
 }
 
-Json controller_json(const Controller& controller) {
+Json controller_json(const Program& program, const Controller& controller) {
   Json states = Json::array();
   for (std::uint32_t s = 0; s < controller.states().size(); ++s) {
     const auto& state = controller.states()[s];
     const Controller* child = controller.child_of(s);
+    const StateDecl* declared = nullptr;
+    for (std::size_t m = 0; program.model && m < program.model->state_machines.size(); ++m) {
+      const auto& machine = program.model->state_machines[m];
+      if (machine.name.text != controller.name()) continue;
+      for (const auto& candidate : machine.states) {
+        if (candidate.name.text == state.name) declared = &candidate;
+      }
+    }
     states.push_back({{"name", state.name},
                       {"class", state.cls->name},
+                      {"params", declared ? params_json(declared->params) : Json()},
                       {"machine", child != nullptr ? Json(child->name()) : Json()},
                       {"location", location_json(state.location)}});
   }
@@ -368,9 +550,14 @@ Json controller_json(const Controller& controller) {
   for (std::size_t i = 0; i < controller.queue_size(); ++i) {
     queue.push_back(std::string(controller.queued(i)));
   }
-  return {{"name", controller.name()},         {"standalone", !controller.owned()},
-          {"capacity", controller.capacity()}, {"location", location_json(controller.location())},
-          {"states", std::move(states)},       {"queue", std::move(queue)}};
+  const std::string owner = arbiter::owner_of(program, controller);
+  return {{"name", controller.name()},
+          {"standalone", !controller.owned()},
+          {"owner", owner.empty() ? Json() : Json(owner)},
+          {"capacity", controller.capacity()},
+          {"location", location_json(controller.location())},
+          {"states", std::move(states)},
+          {"queue", std::move(queue)}};
 }
 
 }  // namespace
@@ -394,8 +581,10 @@ std::string dump_dot(const Program& program, std::string_view only_layer) {
     dot_layer_edges(program, l, !only_layer.empty(), out);
   }
   if (only_layer.empty()) {
-    for (const auto& controller : program.controllers) dot_controller(*controller, out);
-    for (const auto& controller : program.controllers) dot_controller_edges(*controller, out);
+    for (const auto& controller : program.controllers) dot_controller(program, *controller, out);
+    for (const auto& controller : program.controllers) {
+      dot_controller_edges(program, *controller, out);
+    }
   }
   out += "}\n";
   return out;
@@ -410,7 +599,7 @@ std::string dump_json(const Program& program, std::string_view only_layer) {
   Json machines = Json::array();
   if (only_layer.empty()) {
     for (const auto& controller : program.controllers) {
-      machines.push_back(controller_json(*controller));
+      machines.push_back(controller_json(program, *controller));
     }
   }
   Json dump = {{"arbiter_dump", 1}, {"name", program.name}, {"rate_hz", program.rate_hz}};

@@ -1,5 +1,6 @@
 #include "arbiter/explain.hpp"
 
+#include "arbiter/dump.hpp"
 #include "arbiter/trace.hpp"
 
 #include <fmt/format.h>
@@ -62,10 +63,14 @@ struct Target {
 };
 
 std::optional<Target> resolve(const Program& program, std::string_view target, Explanation& error) {
+  // Each behaviour once, by the name that is enough to name it.
   std::vector<std::string> known;
   for (const auto& behaviour : program.behaviours) {
-    known.push_back(behaviour.name);
-    known.push_back(program.layers[behaviour.layer].name + "/" + behaviour.name);
+    const bool shared =
+        std::count_if(program.behaviours.begin(), program.behaviours.end(),
+                      [&](const auto& other) { return other.name == behaviour.name; }) > 1;
+    known.push_back(shared ? program.layers[behaviour.layer].name + "/" + behaviour.name
+                           : behaviour.name);
   }
   for (const auto& controller : program.controllers) known.push_back(controller->name());
   const auto not_found = [&](std::string text) {
@@ -436,10 +441,13 @@ Explanation explain_controller(const Program& program, std::uint32_t target, std
   std::string& text = out.text;
   text = fmt::format("state machine {} at step {}: cycle {}, {}\n", controller.name(), step,
                      now->value("cycle", 0), status);
-  text +=
-      fmt::format("  stepped by: {}\n",
-                  controller.owned() ? "its owner (a state_machine behaviour, or a parent state)"
-                                     : "the manager, after the output pass (it is standalone)");
+  const std::string owner = owner_of(program, controller);
+  text += fmt::format("  stepped by: {}\n",
+                      !controller.owned() ? "the manager, after the output pass (it is standalone)"
+                      : owner.empty() ? "its owner (a state_machine behaviour, or a parent state)"
+                      : controller.owner_behaviour() != kNoBehaviour
+                          ? fmt::format("behaviour {}, while it is active", owner)
+                          : fmt::format("state {} of its parent machine, while it runs", owner));
   if (before != nullptr) {
     text += "  before the step: " + describe_state(*before) + "\n";
   } else if (step == 1) {
@@ -456,9 +464,10 @@ Explanation explain_controller(const Program& program, std::uint32_t target, std
     } else if (status == "error") {
       meaning.push_back("it stopped with an error (see the run's log)");
     } else if (controller.owned()) {
-      meaning.push_back(
-          "it was not stepped: its owner did not step it in this step (a state_machine behaviour "
-          "steps its controller only while it is active)");
+      meaning.push_back(fmt::format(
+          "it was not stepped: {} did not step it in this step (a state_machine behaviour "
+          "steps its controller only while it is active)",
+          owner.empty() ? std::string("its owner") : owner));
     } else {
       meaning.push_back("it was not stepped in this step");
     }

@@ -120,11 +120,14 @@ class Substituter {
     const auto& matches = exact.empty() ? by_short_name : exact;
     if (matches.size() == 1) return matches;
     if (matches.empty()) {
+      // Each thing once, by the name that is enough to name it.
       std::vector<std::string> known;
       for (const auto& candidate : candidates) {
-        for (const auto* name : {&candidate.short_name, &candidate.qualified}) {
-          if (std::find(known.begin(), known.end(), *name) == known.end()) known.push_back(*name);
-        }
+        const bool shared =
+            std::count_if(candidates.begin(), candidates.end(), [&](const Candidate& other) {
+              return other.short_name == candidate.short_name;
+            }) > 1;
+        known.push_back(shared ? candidate.qualified : candidate.short_name);
       }
       diagnostics_
           .error(substitution.location, "substitute-target",

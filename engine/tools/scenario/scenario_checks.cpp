@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
@@ -66,8 +67,15 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
     }
     if (matches.size() == 1) return matches.front();
     if (matches.empty()) {
-      std::vector<std::string> known = behaviour_names;
-      for (const auto& behaviour : program.behaviours) known.push_back(behaviour.name);
+      // Each behaviour once, by the name that is enough to name it.
+      std::vector<std::string> known;
+      for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
+        const auto& name = program.behaviours[b].name;
+        const bool shared =
+            std::count_if(program.behaviours.begin(), program.behaviours.end(),
+                          [&](const auto& other) { return other.name == name; }) > 1;
+        known.push_back(shared ? behaviour_names[b] : name);
+      }
       diagnostics
           .error(name.location, "unknown-behaviour",
                  fmt::format("'{}' is not a behaviour of config '{}'", name.text, program.name))
@@ -151,7 +159,10 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
         if (expectation.kind == Expectation::Kind::kState) named = {expectation.state};
         bool ok = true;
         for (const auto& state : named) {
-          if (find_state(controller, state)) continue;
+          if (auto found = find_state(controller, state)) {
+            resolved.state = *found;
+            continue;
+          }
           diagnostics
               .error(expectation.target.location, "unknown-state",
                      fmt::format("state machine '{}' has no state '{}'", controller.name(), state))
@@ -167,8 +178,49 @@ bool ExpectationChecks::resolve(const Scenario& scenario, const Program& program
   return diagnostics.error_count() == errors;
 }
 
+void ExpectationChecks::follow_state(Resolved& resolved, const Manager& manager) {
+  const Controller& controller = *manager.program().controllers[resolved.index];
+  for (std::size_t i = 0; i < controller.event_count(); ++i) {
+    const Controller::Event& event = controller.events()[i];
+    if (event.state != resolved.state) continue;
+    if (event.kind == Controller::Event::Kind::kActivate) {
+      resolved.started = manager.steps();
+      resolved.ended = 0;
+    } else if (event.kind == Controller::Event::Kind::kDeactivate) {
+      resolved.ended = manager.steps();
+      resolved.ended_cycle = controller.cycle();
+      resolved.ending = event;
+    }
+  }
+}
+
+// How the expected state's last run went: "; 'dive' ran from step 201 and ended at step 230:
+// proceeded", or "; 'dive' has not run yet (2nd in the queue)".
+std::string ExpectationChecks::state_history(const Resolved& resolved,
+                                             const Manager& manager) const {
+  const Controller& controller = *manager.program().controllers[resolved.index];
+  const std::string& name = controller.states()[resolved.state].name;
+  if (resolved.ended != 0) {
+    return fmt::format("; '{}' ran from step {} and ended at step {}: {}", name, resolved.started,
+                       resolved.ended,
+                       end_text(state_end(controller, resolved.ending), resolved.ended_cycle));
+  }
+  if (resolved.started != 0) return {};
+  for (std::size_t i = 0; i < controller.queue_size(); ++i) {
+    if (controller.queued_state(i) == resolved.state) {
+      return fmt::format("; '{}' has not run yet (it is number {} in the queue)", name, i + 1);
+    }
+  }
+  return fmt::format("; '{}' has not run yet, and is not in the queue", name);
+}
+
 void ExpectationChecks::check(const Manager& manager, double tolerance) {
   const std::uint64_t step = manager.steps();
+  for (auto& resolved : resolved_) {
+    if (!resolved.failed && resolved.expectation->kind == Expectation::Kind::kState) {
+      follow_state(resolved, manager);
+    }
+  }
   for (std::size_t e = 0; e < resolved_.size(); ++e) {
     Resolved& resolved = resolved_[e];
     const Expectation& expectation = *resolved.expectation;
@@ -275,8 +327,8 @@ std::string ExpectationChecks::check_one(const Resolved& resolved, const Manager
       const std::string got = controller.current_state().empty()
                                   ? fmt::format("no state ({})", to_string(controller.status()))
                                   : fmt::format("'{}'", controller.current_state());
-      return fmt::format("expected state machine '{}' {} to be in state '{}', got {}", name, at(),
-                         expectation.state, got);
+      return fmt::format("expected state machine '{}' {} to be in state '{}', got {}{}", name, at(),
+                         expectation.state, got, state_history(resolved, manager));
     }
     case Expectation::Kind::kQueue: {
       const Controller& controller = *program.controllers[resolved.index];

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "arbiter/behaviour.hpp"
+#include "arbiter/controller.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/scenario.hpp"
 #include "arbiter/trace_diff.hpp"
@@ -44,7 +45,16 @@ class ExpectationChecks {
     std::uint32_t index = 0;    // behaviour, actuator or controller
     std::string expected_json;  // an actuator's expected value as the trace writes it
     bool failed = false;
+    // kState: the expected state, and its last run so far, to tell how it ended when it is
+    // expected later (steps 0: none).
+    std::uint32_t state = 0;
+    std::uint64_t started = 0;
+    std::uint64_t ended = 0;
+    std::uint64_t ended_cycle = 0;
+    Controller::Event ending;
   };
+  void follow_state(Resolved& resolved, const Manager& manager);
+  std::string state_history(const Resolved& resolved, const Manager& manager) const;
   std::string check_one(const Resolved& resolved, const Manager& manager, double tolerance);
 
   std::vector<Resolved> resolved_;

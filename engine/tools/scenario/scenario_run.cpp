@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -139,8 +141,15 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
 
   // The input sources and the checks are separate pieces: each source substitutes its own
   // interface class, each kind of check compares its own things after each step.
+  // An incomplete scenario reported the files it names that do not exist, and a replay beside
+  // `inputs:`.
+  const auto readable = [&](const std::string& path) {
+    std::error_code error;
+    return scenario.complete || std::filesystem::is_regular_file(path, error);
+  };
   std::optional<Replayed> replayed;
-  if (!scenario.replay.text.empty()) {
+  if (!scenario.replay.text.empty() && readable(scenario.replay_path) &&
+      (scenario.complete || scenario.inputs_location.file.empty())) {
     replayed = read_replayed(scenario, diagnostics);
     if (!replayed) {
       diagnostics.sort();
@@ -162,21 +171,48 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
   load.limits = options.limits;
   load.plugins = options.plugins;
   // No lint step: a test reports what it tests; `arbiter validate` lints the config.
+  bool edit_failed = false;
   load.edit_model = [&](Model& model, Diagnostics& reported) {
     std::vector<const ClassInfo*> before;
     for (const auto& layer : model.layers) before.push_back(layer.interface);
-    return substitute(model, substitutions, registry, reported) &&
-           inputs.prepare(scenario, model, reported) &&
-           (!replayed ||
-            feed_from_recording(model, before, scenario, *replayed->inputs, registry, reported));
+    const bool substituted = substitute(model, substitutions, registry, reported);
+    // Once a layer that `inputs:` should feed failed to be substituted, what the inputs would be
+    // told follows from that mistake.
+    bool fed = true;
+    for (const auto& item : scenario.substitutions) {
+      const LayerDecl* layer = model.find_layer(item.target.text);
+      fed = fed && (!item.inputs || substituted ||
+                    (layer != nullptr && layer->interface == &inputs.interface_class()));
+    }
+    const bool prepared = fed && inputs.prepare(scenario, model, reported);
+    edit_failed = !(substituted && prepared &&
+                    (!replayed || feed_from_recording(model, before, scenario, *replayed->inputs,
+                                                      registry, reported)));
+    return !edit_failed;
   };
+  if (!readable(scenario.config_path)) {
+    diagnostics.sort();
+    return result;
+  }
   Loaded loaded = load_config(scenario.config_path, registry, load);
-  diagnostics = std::move(loaded.diagnostics);
+  diagnostics.append(loaded.diagnostics);
   auto& program = loaded.program;
+  // The names the expectations use are the config's with or without the substitutions: when
+  // those are wrong, the names are checked against the config as it is, in the same run.
+  std::optional<Program> unedited;
+  if (edit_failed) {
+    LoadOptions plain;
+    plain.limits = options.limits;
+    plain.plugins = options.plugins;
+    unedited = load_config(scenario.config_path, registry, plain).program;
+  }
+  const Program* named = program ? &*program : unedited ? &*unedited : nullptr;
   ExpectationChecks checks;
   TraceChecks traces;
-  if (!program || !checks.resolve(scenario, *program, diagnostics) ||
-      !traces.resolve(scenario, replayed ? &replayed->trace : nullptr, steps, diagnostics)) {
+  bool resolved = named != nullptr && checks.resolve(scenario, *named, diagnostics);
+  resolved = traces.resolve(scenario, replayed ? &replayed->trace : nullptr, steps, diagnostics) &&
+             resolved;
+  if (!program || !resolved || !scenario.complete) {
     diagnostics.sort();
     return result;
   }
@@ -225,17 +261,21 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
 
 ScenarioResult run_scenario_file(const std::string& path, Registry& registry,
                                  const ScenarioOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
   Diagnostics diagnostics;
   auto scenario = read_scenario(path, diagnostics, options.limits);
-  if (!scenario) {
-    ScenarioResult result;
+  ScenarioResult result;
+  if (scenario) {
+    result = run_scenario(*scenario, registry, options);
+    diagnostics.append(result.diagnostics);
+  } else {
     result.file = path;
     result.name = path;
-    result.diagnostics = std::move(diagnostics);
-    result.diagnostics.sort();
-    return result;
   }
-  return run_scenario(*scenario, registry, options);
+  diagnostics.sort();
+  result.diagnostics = std::move(diagnostics);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
 }
 
 }  // namespace arbiter

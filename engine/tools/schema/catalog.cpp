@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "tools/schema/param_json.hpp"
+#include "tools/dump/param_json.hpp"
 
 namespace arbiter {
 

@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "arbiter/lint.hpp"
-#include "tools/schema/param_json.hpp"
+#include "tools/dump/param_json.hpp"
 
 namespace arbiter {
 

@@ -70,6 +70,9 @@ class Diagnostics {
   Diagnostic& at(std::size_t index) { return items_.at(index); }
   bool empty() const { return items_.empty(); }
 
+  /// Adds every report of `other`, after these, as it was made.
+  void append(const Diagnostics& other);
+
   /// Turns every warning into an error (`--strict`).
   void promote_warnings();
 

@@ -24,6 +24,10 @@ std::string dump_text(const Program& program, std::string_view layer = {});
 /// (and the actuators its sensors read). Byte-identical for the same program.
 std::string dump_dot(const Program& program, std::string_view layer = {});
 
+/// What steps an owned state machine of `program`: its behaviour (`layer/name`) or the state of a
+/// parent machine (`machine/state`); empty when it is standalone.
+std::string owner_of(const Program& program, const Controller& controller);
+
 /// The same graph as JSON (`{"arbiter_dump": 1, ...}`, described in docs/cli.md), for tools.
 std::string dump_json(const Program& program, std::string_view layer = {});
 

@@ -93,16 +93,20 @@ struct Scenario {
   /// 0 when `steps:` is not given: with `replay:`, the recording's steps.
   std::uint64_t steps = 0;
   SourceLocation steps_location;  ///< where `steps:`'s value is, if it is given
+  /// False when reading the file reported an error: what could be read is still checked against
+  /// the config, so that one run reports every mistake, but it is not run.
+  bool complete = true;
 };
 
 /// Whether `path` names a scenario test file (`*.test.yaml`, `*.test.yml`, `*.test.json`).
 bool is_scenario_file(std::string_view path);
 
 /// Checks a parsed test file and reads it. Reports every problem at its place; returns nullopt
-/// when anything was an error.
+/// when the file is not a mapping, and a scenario that is not `complete` when anything else was
+/// an error.
 std::optional<Scenario> build_scenario(const Node& root, Diagnostics& diagnostics);
 
-/// Reads and checks a test file.
+/// Reads and checks a test file (as build_scenario(); nullopt too when it does not parse).
 std::optional<Scenario> read_scenario(const std::string& path, Diagnostics& diagnostics,
                                       const ReadLimits& limits = {});
 

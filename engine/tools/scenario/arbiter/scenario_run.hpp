@@ -44,6 +44,7 @@ struct ScenarioResult {
   std::vector<ScenarioFailure> failures;
   std::size_t expectations = 0;
   std::uint64_t steps = 0;  ///< steps run
+  double seconds = 0.0;     ///< wall time (run_scenario_file(): reading the file included)
 };
 
 /// Runs a scenario read by read_scenario(). Plugins the config names are loaded into `registry`

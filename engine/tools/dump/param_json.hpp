@@ -1,5 +1,6 @@
 #pragma once
-// Param values as JSON, for the tools that describe classes (schema, catalog). Internal.
+// Param values as JSON, for the tools that describe classes and configs (schema, catalog, dump).
+// Internal.
 
 #include <cmath>
 #include <nlohmann/json.hpp>
