@@ -349,7 +349,7 @@ ArgValue arg_value(const ParamValue& value) {
 }  // namespace
 
 void Controller::record(const StepContext& context, Event::Kind kind, std::uint32_t instance,
-                        const Ending& ending) {
+                        const Ending* ending) {
   const std::uint32_t sequence = next_sequence(context);
   if (event_count_ >= kMaxEventsPerStep) {
     ++event_count_;
@@ -358,12 +358,14 @@ void Controller::record(const StepContext& context, Event::Kind kind, std::uint3
   const Instance& of = instances_[instance];
   Event& event = events_[event_count_++];
   event.kind = kind;
-  event.cause = ending.cause;
-  event.proceeded = ending.proceeded;
   event.state = of.state;
   event.sequence = sequence;
-  event.other = ending.other;
-  event.preempt = ending.preempt;
+  if (ending != nullptr) {
+    event.cause = ending->cause;
+    event.proceeded = ending->proceeded;
+    event.other = ending->other;
+    event.preempt = ending->preempt;
+  }
   event.planned = of.planned;
   event.args_begin = static_cast<std::uint32_t>(event_args_used_);
   event.args_count = 0;
@@ -376,7 +378,7 @@ void Controller::record(const StepContext& context, Event::Kind kind, std::uint3
 }
 
 void Controller::deactivate_current(StateContext& context, const Ending& ending) {
-  record(context, Event::Kind::kDeactivate, current_, ending);
+  record(context, Event::Kind::kDeactivate, current_, &ending);
   in_callback(current_, [&] { instances_[current_].object->deactivate(context); });
   release(current_);
   current_ = kNoIndex;
@@ -465,7 +467,7 @@ void Controller::step(const StepContext& context, ExecuteContext* execute) {
       const auto& name = states_[instances_[current_].state].name;
       if (hooks_ != nullptr) hooks_->pre_activate(*this, name);
       StateContext activate_context(context, execute, *this, current_);
-      record(context, Event::Kind::kActivate, current_, Ending{});
+      record(context, Event::Kind::kActivate, current_, nullptr);
       in_callback(current_, [&] { instances_[current_].object->activate(activate_context); });
     }
     if (terminate_ || status_ != ControllerStatus::kRunning) {

@@ -188,10 +188,11 @@ class Controller {
     std::uint32_t other = kNoState;
     std::uint32_t preempt = kNoIndex;
   };
-  /// Records the activation (an empty `ending`) or the deactivation of `instance`.
+  /// Records an activation (no `ending`) or a deactivation of `instance`; each kind writes only
+  /// the fields it has, as three events are recorded in a plain transition.
   void record(const StepContext& context, Event::Kind kind, std::uint32_t instance,
-              const Ending& ending);
-  /// Records an execution: the event of every step, so it writes only what an execution has.
+              const Ending* ending);
+  /// Records an execution: the event of every step.
   void record_execute(const StepContext& context, std::uint32_t instance) {
     const std::uint32_t sequence = next_sequence(context);
     if (event_count_ >= kMaxEventsPerStep) {
