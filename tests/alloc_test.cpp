@@ -17,9 +17,9 @@
 #include "arbiter/load.hpp"
 #include "arbiter/recording.hpp"
 #include "arbiter/substitute.hpp"
+#include "commands/timing.hpp"
 #include "counting_new.hpp"
 #include "test_support.hpp"
-#include "commands/timing.hpp"
 
 using arbiter::test::allocations;
 using arbiter::test::counting;
@@ -295,7 +295,8 @@ namespace {
 /// Allocations on the stepping thread in steps 2..steps of `program` recorded into an MCAP file,
 /// safe passes included; `dropped`: the steps the recorder dropped.
 std::size_t allocations_recorded(Program program, int steps, std::uint64_t& dropped) {
-  const auto path = std::filesystem::temp_directory_path() / "arbiter_alloc_record.mcap";
+  const test::TempDir scratch;
+  const auto path = scratch.path() / "arbiter_alloc_record.mcap";
   Manager manager(std::move(program));
   CountingClock clock;
   manager.set_clock(&clock);

@@ -162,7 +162,8 @@ TEST_CASE("the compact format is one line per diagnostic and per note, without c
 
 TEST_CASE("load_config reads texts held in memory before the disk, for included files too",
           "[load]") {
-  const auto dir = std::filesystem::temp_directory_path() / "arbiter_overlay_test";
+  const test::TempDir scratch;
+  const auto dir = scratch.path() / "arbiter_overlay_test";
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const std::string main = (dir / "main.yaml").string();

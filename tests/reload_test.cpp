@@ -413,7 +413,8 @@ TEST_CASE("a recorded swap allocates nothing on the stepping thread", "[reload][
   ConfigFile config(kSwap);
   Reloader reloader(registry());
   Manager manager(load(reloader, config.path()));
-  const auto path = std::filesystem::temp_directory_path() / "arbiter_reload_recorded.mcap";
+  const test::TempDir scratch;
+  const auto path = scratch.path() / "arbiter_reload_recorded.mcap";
   {
     RecordingInfo info;
     info.version = "test";

@@ -79,7 +79,8 @@ TEST_CASE(
     "[scenario][replay]") {
   // The recording is made now, beside copies of the test files (tests/cli/record_scenarios.sh),
   // and the tests run there with the paths they have in the source tree.
-  const fs::path out = fs::temp_directory_path() / "arbiter_recorded_scenarios";
+  const test::TempDir scratch;
+  const fs::path out = scratch.path() / "arbiter_recorded_scenarios";
   const auto made = test::run_captured(
       "bash \"" + (kSourceDir / "tests/cli/record_scenarios.sh").string() + "\" \"" + ARBITER_CLI +
       "\" \"" + kSourceDir.string() + "\" \"" + out.string() + "\"");
@@ -111,7 +112,8 @@ TEST_CASE(
 TEST_CASE(
     "a scenario replays each of two interface layers from its own recorded inputs and reports",
     "[scenario][replay]") {
-  const fs::path dir = fs::temp_directory_path() / "arbiter_two_counters_scenario";
+  const test::TempDir scratch;
+  const fs::path dir = scratch.path() / "arbiter_two_counters_scenario";
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string cli =
@@ -148,7 +150,8 @@ TEST_CASE(
     "the JUnit XML is well-formed: a testcase per test file, named by its file and timed, a "
     "failure per failed expectation",
     "[scenario]") {
-  const fs::path xml = fs::temp_directory_path() / "arbiter_scenario_junit.xml";
+  const test::TempDir scratch;
+  const fs::path xml = scratch.path() / "arbiter_scenario_junit.xml";
   fs::remove(xml);
   const auto result = run_cli(
       "test tests/data/scenarios/failing tests/scenarios/soccer --junit \"" + xml.string() + "\"");

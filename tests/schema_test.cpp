@@ -328,7 +328,8 @@ TEST_CASE("an actuator's default has its type's shape in the schema, as the engi
 }
 
 TEST_CASE("the extended schema checks the DDS bridge's topics as the bridge does", "[schema]") {
-  const fs::path probe = fs::temp_directory_path() / "arbiter_dds_schema_probe.yaml";
+  const test::TempDir scratch;
+  const fs::path probe = scratch.path() / "arbiter_dds_schema_probe.yaml";
   write_text(probe, "arbiter: 1\nname: probe\nplugins: [dds]\n");
   if (!plugins_built(probe)) return;
   const auto validator = extended_schema(probe);
