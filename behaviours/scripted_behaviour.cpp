@@ -71,6 +71,7 @@ void register_scripted_behaviour(Registry& registry) {
 }
 
 void register_builtin_behaviours(Registry& registry) {
+  register_inputs_interface(registry);
   register_scripted_behaviour(registry);
   register_scripted_state(registry);
   register_state_machine_behaviour(registry);

@@ -152,6 +152,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   run_cmd->add_option("--trace", options.trace_path,
                       "write a JSON-lines trace of every step to this file");
+  run_cmd
+      ->add_option("--inputs", options.inputs_path,
+                   "feed the config's layers of the built-in class 'interface: inputs' from this "
+                   "file: a list of {step: N, ACTUATOR: VALUE, ...}, each value held until a "
+                   "later entry changes it (as a test's 'inputs:')")
+      ->type_name("FILE");
   add_record_options(*run_cmd, options,
                      "record the run as MCAP (steps, interface inputs, the config) for "
                      "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
@@ -171,10 +177,12 @@ int main(int argc, char** argv) {
                  "run flat out even with --serve (which otherwise paces at rate_hz), e.g. for a "
                  "soak test")
       ->excludes("--realtime");
-  run_cmd->add_flag("--watch", options.watch,
-                    "reload the config whenever it or a file it includes changes, without "
-                    "stopping the run (a broken edit is reported and the previous config runs "
-                    "on); without --steps, runs until Ctrl-C");
+  run_cmd
+      ->add_flag("--watch", options.watch,
+                 "reload the config whenever it or a file it includes changes, without "
+                 "stopping the run (a broken edit is reported and the previous config runs "
+                 "on); without --steps, runs until Ctrl-C")
+      ->excludes("--inputs");
   run_cmd
       ->add_option("--serve", options.serve,
                    "serve the live view (a web page) on [ADDR:]PORT (ADDR defaults to 127.0.0.1, "

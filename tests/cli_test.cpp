@@ -182,7 +182,8 @@ TEST_CASE("arbiter plugins lists every class with its params and ports", "[plugi
     CHECK(contains(result.out, "      turn_rate: double, default "));
     CHECK(contains(result.out, "      gait_velocity: output vec3\n"));
     CHECK(contains(result.out, "      ball_visible: input bool"));
-    CHECK(contains(result.out, "interface classes\n  soccer.WorldLink"));
+    CHECK(contains(result.out, "interface classes\n  inputs (built-in)\n"));
+    CHECK(contains(result.out, "\n  soccer.WorldLink (plugin soccer ("));
   }
   SECTION("every plugin on the path, by default") {
     const auto result = run_cli("plugins --format json");

@@ -15,6 +15,7 @@
 
 #include "arbiter/manager.hpp"
 #include "arbiter/reload.hpp"
+#include "arbiter/scenario_run.hpp"
 #include "arbiter/trace.hpp"
 #include "commands/command.hpp"
 #include "commands/record.hpp"
@@ -28,9 +29,23 @@ namespace arbiter::cli {
 int run_command(const Options& options) {
   auto registry = make_registry();
   arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
-  auto program = options.watch
-                     ? load_watched(reloader, options.file, std::cerr, options.diagnostic_format)
-                     : load_or_report(options.file, registry, options);
+  arbiter::InputFeed inputs;                                       // --inputs
+  std::optional<arbiter::Program> program;
+  if (options.watch) {
+    program = load_watched(reloader, options.file, std::cerr, options.diagnostic_format);
+  } else if (!options.inputs_path.empty()) {
+    arbiter::Diagnostics diagnostics;
+    arbiter::LoadOptions load = load_options_of(options);
+    if (inputs.read(options.inputs_path, diagnostics, load.limits)) {
+      load.edit_model = [&](arbiter::Model& model, arbiter::Diagnostics& reported) {
+        return inputs.edit(model, registry, reported);
+      };
+      program = arbiter::load(options.file, registry, diagnostics, load);
+    }
+    if (!diagnostics.empty()) std::cerr << arbiter::format(diagnostics, options.diagnostic_format);
+  } else {
+    program = load_or_report(options.file, registry, options);
+  }
   if (!program) return kExitInvalid;
   const double rate_hz = program->rate_hz;
   const std::uint64_t steps =

@@ -130,6 +130,24 @@ ScenarioFailure failure_at(const SourceLocation& location, std::string code, std
 
 }  // namespace
 
+InputFeed::InputFeed() : inputs_(std::make_unique<ScheduledInputs>()) {}
+InputFeed::~InputFeed() = default;
+
+bool InputFeed::read(const std::string& path, Diagnostics& diagnostics, const ReadLimits& limits) {
+  auto entries = read_inputs_file(path, diagnostics, limits);
+  if (!entries) return false;
+  entries_ = std::move(*entries);
+  where_.file = path;
+  where_.line = 1;
+  where_.column = 1;
+  return true;
+}
+
+bool InputFeed::edit(Model& model, const Registry& registry, Diagnostics& diagnostics) {
+  inputs_->feed_builtin_layers(model, registry);
+  return inputs_->prepare(entries_, where_, model, diagnostics);
+}
+
 ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
                             const ScenarioOptions& options) {
   ScenarioResult result;
@@ -165,8 +183,10 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
   load.edit_model = [&](Model& model, Diagnostics& reported) {
     std::vector<const ClassInfo*> before;
     for (const auto& layer : model.layers) before.push_back(layer.interface);
-    return substitute(model, substitutions, registry, reported) &&
-           inputs.prepare(scenario, model, reported) &&
+    if (!substitute(model, substitutions, registry, reported)) return false;
+    // A recording feeds every interface layer the test leaves alone, the built-in ones too.
+    if (!replayed) inputs.feed_builtin_layers(model, registry);
+    return inputs.prepare(scenario.inputs, scenario.inputs_location, model, reported) &&
            (!replayed ||
             feed_from_recording(model, before, scenario, *replayed->inputs, registry, reported));
   };
