@@ -57,9 +57,11 @@ void register_scripted_behaviour(Registry& registry) {
   info.param("activation", &ScriptedBehaviour::levels_)
       .defaults_to(std::vector<double>{1.0})
       .range(0.0, 1.0)
+      .held_by_step()
       .describe(
-          "the requested level: a number, or a list with one level per step (the last is "
-          "held)");
+          "the requested level: a number, a list with one level per step (the last is held), "
+          "or a list of {from: STEP, level: LEVEL}, each held from its step on (0 before the "
+          "first)");
   info.param("writes", &ScriptedBehaviour::writes_node_)
       .defaults_to(Node())
       .schema(R"({"type": ["object", "null"],
