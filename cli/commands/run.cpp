@@ -172,10 +172,10 @@ int run_command(const Options& options) {
   }
   if (!options.quiet) {
     const double wall = std::chrono::duration<double>(Clock::now() - started).count();
-    std::cout << fmt::format("{}simulated {:.2f} s at {} Hz in {:.3f} s of wall time{}\n",
+    std::cout << fmt::format("{}simulated {:.2f} s at {} Hz in {} of wall time{}\n",
                              interrupted ? "interrupted: " : "",
-                             static_cast<double>(manager.steps()) / rate_hz, rate_hz, wall,
-                             options.realtime ? " (real time)" : "");
+                             static_cast<double>(manager.steps()) / rate_hz, rate_hz,
+                             wall_time(wall), options.realtime ? " (real time)" : "");
     std::cout << timing.text(options.realtime) << std::flush;
   }
   if (live) live->serve_until(manager, interrupted);
