@@ -1,6 +1,8 @@
 # Bash completion for `arbiter`: commands, options, option values, config files, and the layer
 # and behaviour names of the config on the command line (read with `arbiter dump`).
-# Installed as share/bash-completion/completions/arbiter; to try it from the sources:
+# Installed as PREFIX/share/bash-completion/completions/arbiter, where bash-completion finds it
+# for PREFIX /usr, /usr/local or ~/.local; for another PREFIX, see docs/cli.md ("Bash
+# completion"). To try it from the sources:
 #   source cli/arbiter-completion.bash
 
 _arbiter_config_of() {  # the first config file among the words typed so far
@@ -51,6 +53,7 @@ _arbiter() {
   prev=${COMP_WORDS[COMP_CWORD - 1]}
   local commands="validate run dump explain test plugins schema view plot replay diff lsp"
   local global="--help --version --log-level --plugin-path --max-file-bytes --color"
+  local global_after="--log-level --plugin-path --max-file-bytes --color"  # after the command
 
   command=""
   for ((i = 1; i < COMP_CWORD; ++i)); do
@@ -80,7 +83,7 @@ _arbiter() {
       return ;;
     --record) mapfile -t COMPREPLY < <(_arbiter_files '\.mcap$'); return ;;
     --compare) mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$'); return ;;
-    --config) mapfile -t COMPREPLY < <(_arbiter_files '\.(yaml|yml|json)$'); return ;;
+    --config | --inputs) mapfile -t COMPREPLY < <(_arbiter_files '\.(yaml|yml|json)$'); return ;;
     --tolerance) return ;;
     --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
     --steps | --step | --load | --serve | --serve-token | --rt-priority | --record-flush) return ;;
@@ -100,7 +103,7 @@ _arbiter() {
   local options
   case "$command" in
     validate) options="--format --strict --help" ;;
-    run) options="--steps --trace --record --record-flush --quiet --realtime --strict --serve --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --help" ;;
+    run) options="--steps --trace --inputs --record --record-flush --quiet --realtime --strict --serve --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
     test) options="--junit --tolerance --help" ;;
@@ -113,7 +116,8 @@ _arbiter() {
     lsp) options="--help" ;;
   esac
   if [[ $cur == -* ]]; then
-    mapfile -t COMPREPLY < <(compgen -W "$options" -- "$cur")
+    # Global options may follow the command too (`arbiter run FILE --plugin-path DIR`).
+    mapfile -t COMPREPLY < <(compgen -W "$options $global_after" -- "$cur")
     return
   fi
   case "$command" in

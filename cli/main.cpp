@@ -94,6 +94,18 @@ void add_record_options(CLI::App& command, Options& options, const std::string& 
       ->needs("--record");
 }
 
+// What every option that reads a run takes.
+constexpr const char* kTraceHelp =
+    "the run: a JSON-lines trace (arbiter run --trace) or a recording (.mcap, arbiter run "
+    "--record)";
+
+// `--steps 0` would run nothing and print an empty summary: refused with what to give instead.
+std::string refuse_zero_steps(const std::string& text) {
+  return text == "0" ? "0 steps would run nothing: give 1 or more, or leave --steps out to run "
+                       "the config's 'steps:'"
+                     : std::string();
+}
+
 constexpr const char* kExitCodes =
     "Exit codes: 0 ok, 1 invalid config (or failed run), 2 usage error.";
 constexpr const char* kExitCodesTrace =
@@ -109,17 +121,31 @@ std::string lint_list() {
   return out;
 }
 
+// "Examples" and where the files they name are: installed beside the binary
+// (PREFIX/share/arbiter), else in the source tree the binary was built from.
+std::string examples_heading() {
+  std::error_code failed;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", failed);
+  const auto installed = exe.parent_path().parent_path() / ARBITER_DATADIR / "arbiter";
+  if (!failed && std::filesystem::is_directory(installed / "configs", failed)) {
+    return fmt::format("Examples (run them in {}, where their files are installed):\n",
+                       installed.string());
+  }
+  return "Examples (run them at the top of the source tree, where their files are):\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace arbiter::cli;
+  const std::string examples = examples_heading();
   CLI::App app{
       "arbiter: a data-driven behaviour engine for robots.\n"
       "Behaviour layers, inhibitions and state controllers are declared in YAML or JSON configs,\n"
       "validated with file:line:column diagnostics, and bound to C++ classes.\n",
       "arbiter"};
   app.footer(fmt::format(
-      "Examples:\n"
+      "{}"
       "  arbiter validate configs/paper/walk_and_kick.yaml\n"
       "  arbiter run configs/paper/walk_and_kick.yaml --steps 20 --trace out.jsonl\n"
       "  arbiter explain configs/paper/walk_and_kick.yaml --trace out.jsonl --step 8 "
@@ -130,7 +156,7 @@ int main(int argc, char** argv) {
       "  arbiter schema > arbiter.schema.json\n\n"
       "{}\n"
       "Run 'arbiter COMMAND --help' for a command's options and examples.",
-      kExitCodes));
+      examples, kExitCodes));
   app.require_subcommand(1);
   // Global options also work after the command: `arbiter run FILE --plugin-path DIR`.
   app.fallthrough();
@@ -141,9 +167,11 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}))
       ->capture_default_str();
   app.add_option("--plugin-path", options.plugin_path,
-                 "a directory to look for plugins in (repeatable); searched before "
-                 "ARBITER_PLUGIN_PATH and the plugins that come with arbiter")
-      ->type_name("DIR");
+                 "a directory to look for plugins in, one per option: '--plugin-path A "
+                 "--plugin-path B'; searched before ARBITER_PLUGIN_PATH (colon-separated) and "
+                 "the plugins that come with arbiter")
+      ->type_name("DIR")
+      ->allow_extra_args(false);
   app.add_option("--max-file-bytes", options.max_file_bytes,
                  "refuse config files (and included files) larger than this; default 16777216 "
                  "(16 MiB)")
@@ -171,7 +199,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   validate_cmd->add_flag("--strict", options.strict, "treat warnings (and lints) as errors");
   validate_cmd->footer(
-      "Examples:\n"
+      examples +
       "  arbiter validate configs/paper/*.yaml\n"
       "  arbiter validate --strict robot.yaml          # a warning fails the check too\n"
       "  arbiter validate --format json robot.yaml     # for editors and CI\n"
@@ -183,11 +211,19 @@ int main(int argc, char** argv) {
   run_cmd->add_option("FILE", options.file, "the config to run")->required();
   run_cmd
       ->add_option("--steps", options.steps,
-                   "number of steps to run (default: the config's 'steps:', else 100)")
-      ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1} << 40))
-      ->capture_default_str();
+                   "number of steps to run; default: the config's 'steps:' (100 when it has "
+                   "none; with --watch, until Ctrl-C)")
+      ->check(refuse_zero_steps)
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40).description(""))
+      ->type_name("N");
   run_cmd->add_option("--trace", options.trace_path,
                       "write a JSON-lines trace of every step to this file");
+  run_cmd
+      ->add_option("--inputs", options.inputs_path,
+                   "feed the config's layers of the built-in class 'interface: inputs' from this "
+                   "file: a list of {step: N, ACTUATOR: VALUE, ...}, each value held until a "
+                   "later entry changes it (as a test's 'inputs:')")
+      ->type_name("FILE");
   add_record_options(*run_cmd, options,
                      "record the run as MCAP (steps, interface inputs, the config) for "
                      "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
@@ -209,10 +245,12 @@ int main(int argc, char** argv) {
                  "run flat out even with --serve (which otherwise paces at rate_hz), e.g. for a "
                  "soak test")
       ->excludes("--realtime");
-  run_cmd->add_flag("--watch", options.watch,
-                    "reload the config whenever it or a file it includes changes, without "
-                    "stopping the run (a broken edit is reported and the previous config runs "
-                    "on); without --steps, runs until Ctrl-C");
+  run_cmd
+      ->add_flag("--watch", options.watch,
+                 "reload the config whenever it or a file it includes changes, without "
+                 "stopping the run (a broken edit is reported and the previous config runs "
+                 "on); without --steps, runs until Ctrl-C")
+      ->excludes("--inputs");
   run_cmd
       ->add_option("--serve", options.serve,
                    "serve the live view (a web page) on [ADDR:]PORT (ADDR defaults to 127.0.0.1, "
@@ -240,7 +278,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 99))
       ->type_name("N");
   run_cmd->footer(
-      std::string("Examples:\n"
+      std::string(examples +
                   "  arbiter run configs/paper/walk_and_kick.yaml --steps 20\n"
                   "  arbiter run configs/paper/walk_and_kick.yaml --trace out.jsonl -q\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --realtime   # Ctrl-C "
@@ -270,7 +308,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"text", "dot", "json"}))
       ->capture_default_str();
   dump_cmd->footer(
-      std::string("Examples:\n"
+      std::string(examples +
                   "  arbiter dump configs/paper/walk_and_kick.yaml\n"
                   "  arbiter dump configs/paper/walk_and_kick.yaml --format dot | dot -Tsvg "
                   "-o walk_and_kick.svg\n"
@@ -291,15 +329,14 @@ int main(int argc, char** argv) {
                    "a behaviour ('name', or 'layer/name' when several layers have one of that "
                    "name) or a state machine ('name' or 'state_machines/name')")
       ->required();
-  explain_cmd
-      ->add_option("--trace", options.trace_path, "the JSON-lines trace (arbiter run --trace)")
+  explain_cmd->add_option("--trace", options.trace_path, kTraceHelp)
       ->required()
       ->check(CLI::ExistingFile);
   explain_cmd->add_option("--step", options.step, "the step, counting from 1")
       ->required()
       ->check(CLI::PositiveNumber);
   explain_cmd->footer(
-      std::string("Examples:\n"
+      std::string(examples +
                   "  arbiter run configs/paper/walk_and_kick.yaml --steps 20 --trace out.jsonl -q\n"
                   "  arbiter explain configs/paper/walk_and_kick.yaml --trace out.jsonl --step 8 "
                   "search_for_ball\n"
@@ -332,7 +369,7 @@ int main(int argc, char** argv) {
                    "classname the file; one failure per failed expectation), for CI systems")
       ->type_name("FILE");
   test_cmd->footer(
-      "Examples:\n"
+      examples +
       "  arbiter test tests/scenarios/soccer/kick_needs_a_close_ball.test.yaml\n"
       "  arbiter test tests/scenarios/ --junit results.xml   # every test under a directory\n"
       "  arbiter test --tolerance 0.01 my_tests/\n\n"
@@ -361,7 +398,7 @@ int main(int argc, char** argv) {
       "Serve the web view of a trace of 'arbiter run': the graph, each behaviour coloured by its\n"
       "activation, the state machines, timelines, and a slider to scrub through the steps.");
   view_cmd->add_option("FILE", options.file, "the config the trace was written with")->required();
-  view_cmd->add_option("--trace", options.trace_path, "the JSON-lines trace (arbiter run --trace)")
+  view_cmd->add_option("--trace", options.trace_path, kTraceHelp)
       ->required()
       ->check(CLI::ExistingFile);
   view_cmd
@@ -379,7 +416,7 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   view_cmd->footer(
       std::string(
-          "Examples:\n"
+          examples +
           "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl\n"
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --serve 0\n"
@@ -391,7 +428,7 @@ int main(int argc, char** argv) {
       "plot",
       "Draw a trace of 'arbiter run' as an SVG timeline: a row per behaviour with its activation,\n"
       "requested level and active steps, a row per state machine with its states and events.");
-  plot_cmd->add_option("TRACE", options.trace_path, "the JSON-lines trace (arbiter run --trace)")
+  plot_cmd->add_option("TRACE", options.trace_path, kTraceHelp)
       ->required()
       ->check(CLI::ExistingFile);
   plot_cmd->add_option("--output,-o", options.output, "the SVG file to write (default: stdout)")
@@ -405,7 +442,7 @@ int main(int argc, char** argv) {
       ->type_name("B");
   plot_cmd->footer(
       std::string(
-          "Examples:\n"
+          examples +
           "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
           "  arbiter plot run.jsonl -o timeline.svg\n"
           "  arbiter plot run.jsonl --actuators > timeline.svg\n"
@@ -436,7 +473,7 @@ int main(int argc, char** argv) {
                    "replay at most this many steps (the recording is read that far only)")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40));
   replay_cmd->footer(
-      "Examples:\n"
+      examples +
       "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --record run.mcap -q\n"
       "  arbiter replay run.mcap                      # repeats the run exactly?\n"
       "  arbiter replay run.mcap --config edited.yaml --record what_if.mcap\n"
@@ -457,12 +494,11 @@ int main(int argc, char** argv) {
   diff_cmd->add_option("--format", options.format, "text or json")
       ->check(CLI::IsMember({"text", "json"}))
       ->capture_default_str();
-  diff_cmd->footer(
-      "Examples:\n"
-      "  arbiter diff run.mcap what_if.mcap\n"
-      "  arbiter diff run.jsonl replay.jsonl --format json\n"
-      "  arbiter diff a.mcap b.mcap --tolerance 1e-6\n\n"
-      "Exit codes: 0 identical, 1 different, 2 usage error or unreadable input.");
+  diff_cmd->footer(examples +
+                   "  arbiter diff run.mcap what_if.mcap\n"
+                   "  arbiter diff run.jsonl replay.jsonl --format json\n"
+                   "  arbiter diff a.mcap b.mcap --tolerance 1e-6\n\n"
+                   "Exit codes: 0 identical, 1 different, 2 usage error or unreadable input.");
 
   auto* plugins_cmd = app.add_subcommand(
       "plugins",
@@ -477,12 +513,11 @@ int main(int argc, char** argv) {
   plugins_cmd->add_option("--format", options.format, "text or json")
       ->check(CLI::IsMember({"text", "json"}))
       ->capture_default_str();
-  plugins_cmd->footer(
-      "Examples:\n"
-      "  arbiter plugins\n"
-      "  arbiter plugins --load soccer --format json\n"
-      "  arbiter --plugin-path ~/robot/plugins plugins\n\n"
-      "Exit codes: 0 ok, 1 a plugin failed to load, 2 usage error.");
+  plugins_cmd->footer(examples +
+                      "  arbiter plugins\n"
+                      "  arbiter plugins --load soccer --format json\n"
+                      "  arbiter --plugin-path ~/robot/plugins plugins\n\n"
+                      "Exit codes: 0 ok, 1 a plugin failed to load, 2 usage error.");
 
   auto* schema_cmd = app.add_subcommand(
       "schema",
@@ -495,7 +530,7 @@ int main(int argc, char** argv) {
       ->type_name("NAME");
   schema_cmd->add_flag("--builtin", options.builtin_only, "include the built-in classes only");
   schema_cmd->footer(
-      "Examples:\n"
+      examples +
       "  arbiter schema > arbiter.schema.json\n"
       "  arbiter schema --load soccer > soccer.schema.json\n"
       "Then start a YAML config with\n"
@@ -510,10 +545,11 @@ int main(int argc, char** argv) {
       "and lint of 'validate' as the config is typed, completion, hover, go to definition,\n"
       "references, rename, outline and quick fixes, on YAML and JSON configs and their includes.");
   lsp_cmd->footer(
-      "An editor starts it; an open file's unsaved text wins over the file on disk.\n"
-      "Plugins the configs name are found as for the other commands (--plugin-path,\n"
-      "ARBITER_PLUGIN_PATH). Logs go to stderr. docs/editors.md shows each editor's setup.\n\n"
-      "Examples:\n"
+      std::string("An editor starts it; an open file's unsaved text wins over the file on disk.\n"
+                  "Plugins the configs name are found as for the other commands (--plugin-path,\n"
+                  "ARBITER_PLUGIN_PATH). Logs go to stderr. docs/editors.md shows each editor's "
+                  "setup.\n\n") +
+      examples +
       "  arbiter lsp\n"
       "  arbiter --plugin-path ~/robot/plugins lsp\n"
       "  Neovim 0.7 and later, in a config's buffer (docs/editors.md has an init.lua set-up):\n"

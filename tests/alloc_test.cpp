@@ -110,6 +110,48 @@ TEST_CASE("with its thread filter set, the counter sees that thread's allocation
   CHECK(allocations.load() >= 2);
 }
 
+// Reports formatted text each step: numbers, and a text longer than a report holds, made of
+// two-byte characters so that the cut falls inside one.
+class Reporter final : public Behaviour {
+ public:
+  double activation(const StepContext&) override { return 1.0; }
+  void execute(ExecuteContext& ctx) override {
+    ctx.report("room {} started at {:.1f} m", ctx.step(), 2.5);
+    ctx.report("a{}", std::string_view(long_text_));
+  }
+
+ private:
+  std::string long_text_ = [] {
+    std::string text;
+    for (int i = 0; i < 100; ++i) text += "\u00e9";  // é
+    return text;
+  }();
+};
+
+TEST_CASE("formatted reports allocate nothing; a text too long is cut and marked", "[alloc]") {
+  Registry registry = test::make_test_registry();
+  registry.add_behaviour<Reporter>("test.Reporter");
+  Manager manager(test::compile_text(R"(
+arbiter: 1
+name: reports
+layers:
+  - name: control
+    behaviours:
+      rooms: {type: test.Reporter}
+)",
+                                     registry));
+  CHECK(allocations_in_steps(manager, 50) == 0);
+  REQUIRE(manager.event_count() == 2);
+  CHECK(manager.event_source(manager.event(0)) == "rooms");
+  CHECK(std::string(manager.event(0).text) == "room 50 started at 2.5 m");
+  // 127 bytes fit; the cut backs up to the start of the character it would split.
+  std::string expected = "a";
+  for (int i = 0; i < 61; ++i) expected += "\u00e9";
+  expected += "\u2026";  // …
+  CHECK(std::string(manager.event(1).text) == expected);
+  CHECK(expected.size() < detail::kReportBytes);
+}
+
 TEST_CASE("behaviour layers step without allocating", "[alloc]") {
   CHECK(allocations_per_run(read_config("configs/paper/walk_and_kick.yaml"), 200) == 0);
   CHECK(allocations_per_run(R"(

@@ -185,7 +185,8 @@ TEST_CASE("arbiter plugins lists every class with its params and ports", "[plugi
     CHECK(contains(result.out, "      turn_rate: double, default "));
     CHECK(contains(result.out, "      gait_velocity: output vec3\n"));
     CHECK(contains(result.out, "      ball_visible: input bool"));
-    CHECK(contains(result.out, "interface classes\n  soccer.WorldLink"));
+    CHECK(contains(result.out, "interface classes\n  inputs (built-in)\n"));
+    CHECK(contains(result.out, "\n  soccer.WorldLink (plugin soccer ("));
   }
   SECTION("every plugin on the path, by default") {
     const auto result = run_cli("plugins --format json");
@@ -201,15 +202,15 @@ TEST_CASE("arbiter plugins lists every class with its params and ports", "[plugi
 }
 
 TEST_CASE("arbiter run prints a step's events in the order they happened", "[run][cli][soccer]") {
-  // The world reports the shot in the input pass; the goalie behaviour then sees it, pre-empts
-  // its plan to dive and reports the dive.
+  // The world reports the shot in the input pass; the goalie behaviour then sees it and pre-empts
+  // its plan to dive, and the dive state reports the dive, under its own name.
   const auto result = run_cli("run configs/soccer/goalie.yaml --steps 210");
   REQUIRE(result.exit_code == 0);
   CHECK(contains(result.out,
                  "step  201  world: shot on goal\n"
                  "step  201  goalie: monitor_ball ended (pre-empted by dive)\n"
                  "step  201  goalie: dive (cycle 201; queued: monitor_ball)\n"
-                 "step  201  goalie: goalie dives left\n"));
+                 "step  201  goalie/dive: goalie dives left\n"));
   CHECK(contains(result.out,
                  "step   11  goalie: wait_for_button ended (proceeded)\n"
                  "step   11  goalie: walk_to_pose {x: -4.2, y: 0.0, theta: 0.0} "
@@ -222,7 +223,9 @@ TEST_CASE("every command's help ends with examples", "[help][cli]") {
     DYNAMIC_SECTION("arbiter " << command << " --help") {
       const auto result = run_cli(command + " --help");
       CHECK(result.exit_code == 0);
-      CHECK(contains(result.out, "\nExamples:\n  arbiter "));
+      // The heading says where the files the examples name are.
+      CHECK(contains(result.out, "\nExamples (run them "));
+      CHECK(contains(result.out, "where their files are"));
       CHECK(contains(result.out, "\n  arbiter " + command));
       CHECK(contains(result.out, "Exit codes: 0 ok"));
     }

@@ -33,6 +33,7 @@ struct Options {
   std::uint64_t steps = 100;
   bool steps_given = false;  ///< `--steps` was on the command line: it overrides the config's
   std::string trace_path;
+  std::string inputs_path;  ///< `run --inputs`
   std::string layer;
   bool quiet = false;
   std::string log_level = "warn";

@@ -15,6 +15,7 @@
 
 #include "arbiter/manager.hpp"
 #include "arbiter/reload.hpp"
+#include "arbiter/scenario_run.hpp"
 #include "arbiter/trace.hpp"
 #include "commands/command.hpp"
 #include "commands/record.hpp"
@@ -29,9 +30,24 @@ int run_command(const Options& options) {
   auto registry = make_registry();
   arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
   arbiter::Diagnostics load_diagnostics;  // its warnings go into the recording's log
-  auto program = options.watch
-                     ? load_watched(reloader, options.file, std::cerr, options.diagnostic_format)
-                     : load_or_report(options.file, registry, options, &load_diagnostics);
+  arbiter::InputFeed inputs;              // --inputs
+  std::optional<arbiter::Program> program;
+  if (options.watch) {
+    program = load_watched(reloader, options.file, std::cerr, options.diagnostic_format);
+  } else if (!options.inputs_path.empty()) {
+    arbiter::LoadOptions load = load_options_of(options);
+    if (inputs.read(options.inputs_path, load_diagnostics, load.limits)) {
+      load.edit_model = [&](arbiter::Model& model, arbiter::Diagnostics& reported) {
+        return inputs.edit(model, registry, reported);
+      };
+      program = arbiter::load(options.file, registry, load_diagnostics, load);
+    }
+    if (!load_diagnostics.empty()) {
+      std::cerr << arbiter::format(load_diagnostics, options.diagnostic_format);
+    }
+  } else {
+    program = load_or_report(options.file, registry, options, &load_diagnostics);
+  }
   if (!program) return kExitInvalid;
   const double rate_hz = program->rate_hz;
   const std::uint64_t steps =
@@ -159,10 +175,10 @@ int run_command(const Options& options) {
   }
   if (!options.quiet) {
     const double wall = std::chrono::duration<double>(Clock::now() - started).count();
-    std::cout << fmt::format("{}simulated {:.2f} s at {} Hz in {:.3f} s of wall time{}\n",
+    std::cout << fmt::format("{}simulated {:.2f} s at {} Hz in {} of wall time{}\n",
                              interrupted ? "interrupted: " : "",
-                             static_cast<double>(manager.steps()) / rate_hz, rate_hz, wall,
-                             options.realtime ? " (real time)" : "");
+                             static_cast<double>(manager.steps()) / rate_hz, rate_hz,
+                             wall_time(wall), options.realtime ? " (real time)" : "");
     std::cout << timing.text(options.realtime) << std::flush;
   }
   if (live) live->serve_until(manager, interrupted);

@@ -199,8 +199,12 @@ void RunReport::on_safe(const Manager& manager) {
     values +=
         fmt::format("{}{} = {}", values.empty() ? "" : ", ", program.actuators[a].name, value);
   }
+  const bool single_step = manager.steps() == last_safe_step_ + 1 && last_safe_step_ > 0;
+  last_safe_step_ = manager.steps();
+  if (single_step && values == last_safe_) return;
   print(fmt::format("step {:>4}  safe values output: {}\n", manager.steps(), values));
   out_ << std::flush;
+  last_safe_ = std::move(values);
 }
 
 void RunReport::on_finish(const Manager& manager) {

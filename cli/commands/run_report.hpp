@@ -18,7 +18,8 @@ class RunReport : public Observer {
   /// Re-keys what it counts per behaviour and controller by name: indices change.
   void on_reload(const Manager& manager) override;
   void on_finish(const Manager& manager) override;
-  /// A line naming the safe values output, each time.
+  /// A line naming the safe values output; not again for a pass one single step after the last
+  /// with the same values (stepping a paused run from the live view passes after each step).
   void on_safe(const Manager& manager) override;
 
  private:
@@ -44,6 +45,8 @@ class RunReport : public Observer {
   std::uint64_t repeats_ = 0;
   std::uint64_t first_repeat_ = 0;
   std::uint64_t last_repeat_ = 0;
+  std::string last_safe_;             ///< the values of the last safe pass
+  std::uint64_t last_safe_step_ = 0;  ///< the step it followed
 };
 
 }  // namespace arbiter::cli

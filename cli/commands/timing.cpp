@@ -22,6 +22,14 @@ std::string micros(double seconds) {
 
 }  // namespace
 
+std::string wall_time(double seconds) {
+  if (seconds >= 1.0) return fmt::format("{:.2f} s", seconds);
+  const bool millis = seconds >= 1e-3;
+  const double value = millis ? seconds * 1e3 : seconds * 1e6;
+  const int decimals = value < 10.0 ? 2 : value < 100.0 ? 1 : 0;
+  return fmt::format("{:.{}f} {}", value, decimals, millis ? "ms" : "µs");
+}
+
 void Histogram::record(double seconds) {
   std::size_t bucket = 0;
   if (seconds > kSmallest) {

@@ -13,6 +13,10 @@
 
 namespace arbiter::cli {
 
+/// A span of wall time for people, in the unit that keeps three figures: "2.41 s", "13.2 ms",
+/// "412 µs" (a run flat out is often over in less than a millisecond).
+std::string wall_time(double seconds);
+
 /// Seconds since construction on the steady clock.
 class SteadyStepClock : public StepClock {
  public:

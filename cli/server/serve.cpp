@@ -193,6 +193,8 @@ bool ServeAddress::loopback() const {
   return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
 }
 
+constexpr const char* kFavicon = "/favicon.ico";
+
 WebServer::WebServer() : server_(std::make_unique<httplib::Server>()) {
   server_->new_task_queue = [this] { return new BoundedPool(kServerThreads, stopping_); };
   // Idle keep-alive connections hold a thread; a short timeout frees it (and speeds up stop()).
@@ -201,6 +203,12 @@ WebServer::WebServer() : server_(std::make_unique<httplib::Server>()) {
   // To develop the web app: its files from a directory, read at every request (docs/live_view.md).
   const char* dir = std::getenv("ARBITER_WEB_DIR");
   const std::string web_dir = dir != nullptr ? dir : "";
+  // The page declares no icon, but a browser asks for one all the same (opening the bare URL,
+  // or a bookmark): an empty answer rather than an error in its console and network log.
+  server_->Get(kFavicon, [](const httplib::Request&, httplib::Response& response) {
+    response.status = 204;
+    response.set_header("Cache-Control", "max-age=86400");
+  });
   for (std::size_t i = 0; i < web::kAssetCount; ++i) {
     const web::Asset& asset = web::kAssets[i];
     server_->Get(
@@ -309,7 +317,7 @@ void WebServer::guard(const LiveAccess& access) {
     if (given.empty()) given = request.get_header_value("X-Arbiter-Token");
     if (given.empty()) given = cookie_value(request.get_header_value("Cookie"), cookie);
     const bool authorised = same_token(given, access.token);
-    bool page = false;
+    bool page = request.path == kFavicon;
     for (std::size_t i = 0; i < web::kAssetCount; ++i) {
       page = page || request.path == web::kAssets[i].path;
     }
@@ -427,6 +435,7 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
       std::uint64_t next = 0;
       std::uint64_t graph_seen = 0;
       std::uint64_t status_seen = 0;
+      std::uint64_t safe_seen = 0;
       std::chrono::steady_clock::time_point timing_sent{};
     };
     auto cursor = std::make_shared<Cursor>();
@@ -437,9 +446,10 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
     response.set_header("Cache-Control", "no-cache");
     response.set_chunked_content_provider(
         "text/event-stream", [this, cursor](std::size_t, httplib::DataSink& sink) {
-          return stream(
-              cursor->next, cursor->graph_seen, cursor->status_seen, cursor->timing_sent,
-              [&sink](const std::string& text) { return sink.write(text.data(), text.size()); });
+          return stream(cursor->next, cursor->graph_seen, cursor->status_seen, cursor->safe_seen,
+                        cursor->timing_sent, [&sink](const std::string& text) {
+                          return sink.write(text.data(), text.size());
+                        });
         });
   });
   const auto control = [this](const char* path, bool pause, bool single_step) {
@@ -517,7 +527,21 @@ void LiveView::on_start(const Manager& manager) {
     std::lock_guard lock(ring_[i].mutex);
     ring_[i].record.reserve(2 * scratch_.size() + 256);
   }
+  {
+    std::lock_guard lock(mutex_);
+    safe_record_.reserve(2 * scratch_.size() + 256);
+  }
   ++status_version_;
+}
+
+void LiveView::on_safe(const Manager& manager) {
+  scratch_.clear();
+  records_.append(manager, scratch_);  // with "safe": true
+  {
+    std::lock_guard lock(mutex_);
+    safe_record_.assign(scratch_);
+  }
+  ++safe_version_;
 }
 
 void LiveView::on_reload(const Manager& manager) {
@@ -598,8 +622,11 @@ bool LiveView::hold(const Manager& manager, const std::atomic<bool>& interrupted
 }
 
 void LiveView::serve_until(const Manager& manager, const std::atomic<bool>& interrupted) {
+  // Interrupted, the run ends and so does the server: no promise that it stays.
+  if (interrupted) return;
   if (out_ != nullptr) {
-    *out_ << fmt::format("the run is over; the live view stays at {} until Ctrl-C\n", server_.url())
+    *out_ << fmt::format("the run is over; the live view stays at {} until Ctrl-C\n",
+                         server_.page_url())
           << std::flush;
   }
   while (!interrupted) {
@@ -610,13 +637,13 @@ void LiveView::serve_until(const Manager& manager, const std::atomic<bool>& inte
 }
 
 bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint64_t& status_seen,
-                      std::chrono::steady_clock::time_point& timing_sent,
+                      std::uint64_t& safe_seen, std::chrono::steady_clock::time_point& timing_sent,
                       const std::function<bool(const std::string&)>& write) {
   // Polled rather than woken by each step: the stepping thread then shares no lock with the
   // streams but a slot's, and a fast engine's steps reach a page in batches.
   const auto news = [&] {
     return graph_version_ != graph_seen || status_version_ != status_seen ||
-           (newest_ > 0 && next <= newest_);
+           safe_version_ != safe_seen || (newest_ > 0 && next <= newest_);
   };
   for (int i = 0; i < 50 && !server_.stopping(); ++i) {
     std::this_thread::sleep_for(kPoll);
@@ -640,6 +667,12 @@ bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint6
       out += sse_frame("step", next, record);
       ++sent;
     }
+  }
+  // After the steps: the safe pass follows the step it belongs to.
+  if (const std::uint64_t version = safe_version_; version != safe_seen && next > newest) {
+    std::lock_guard lock(mutex_);
+    if (!safe_record_.empty()) out += sse_frame("safe", 0, safe_record_);
+    safe_seen = version;
   }
   if (const std::uint64_t version = status_version_; version != status_seen) {
     out += sse_frame(

@@ -121,6 +121,9 @@ class LiveView : public Observer {
   void on_step(const Manager& manager) override;
   void on_reload(const Manager& manager) override;
   void on_finish(const Manager& manager) override;
+  /// The safe-value pass of a pausing engine: the page shows what the engine output then, not
+  /// the last step's commands, until the next step.
+  void on_safe(const Manager& manager) override;
 
   /// Called by the run loop before each step, on the stepping thread. Returns at once while the
   /// page has not paused the run; while paused, waits until the page resumes it or asks for a
@@ -150,7 +153,7 @@ class LiveView : public Observer {
   /// Appends the record of `step` to `out`; false when the ring no longer holds it.
   bool copy_record(std::uint64_t step, std::string& out);
   bool stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint64_t& status_seen,
-              std::chrono::steady_clock::time_point& timing_sent,
+              std::uint64_t& safe_seen, std::chrono::steady_clock::time_point& timing_sent,
               const std::function<bool(const std::string&)>& write);
 
   WebServer server_;
@@ -159,6 +162,7 @@ class LiveView : public Observer {
   std::atomic<std::uint64_t> newest_{0};  // the step of the newest record in the ring; 0: none
   std::atomic<std::uint64_t> graph_version_{0};
   std::atomic<std::uint64_t> status_version_{0};
+  std::atomic<std::uint64_t> safe_version_{0};
   std::atomic<bool> finished_{false};
   StepRecordFormatter records_;
   std::string scratch_;  // the stepping thread's record, built before taking a slot's lock
@@ -166,6 +170,7 @@ class LiveView : public Observer {
   std::condition_variable changed_;  // control from the page, explain requests, stopping
   std::string graph_;                // the dump JSON of the current program
   std::string header_;               // the trace header of the current program
+  std::string safe_record_;          // the record of the last safe-value pass
   std::deque<ExplainRequest*> requests_;
   std::condition_variable answered_;
   std::atomic<bool> paused_{false};

@@ -32,7 +32,7 @@ expect() {
 }
 
 expect "" -- validate run dump explain test plugins schema view plot replay diff lsp
-expect "replay" "--c" -- --config
+expect "replay" "--c" -- --config --color
 expect "diff" "--t" -- --tolerance
 expect "ex" -- explain
 expect "--log-level" "warn" "du" -- dump
@@ -50,9 +50,15 @@ expect "explain" "configs/paper/walk_and_kick.yaml" "control/k" -- control/kick_
 expect "explain" "configs/paper/goalie_plan.yaml" "go" -- goalie
 expect "run" "configs/paper/walk_and_k" -- configs/paper/walk_and_kick.yaml \
   configs/paper/walk_and_kick.json
-expect "plugins" "-" -- --format --load --builtin --help
+expect "plugins" "-" -- --format --load --builtin --help --log-level --plugin-path \
+  --max-file-bytes --color
 expect "run" "x.yaml" "--se" -- --serve --serve-token --serve-readonly
 expect "run" "x.yaml" "--rt" -- --rt-priority
+# Global options also after the command, as the parser takes them there.
+expect "run" "x.yaml" "--plu" -- --plugin-path
+expect "validate" "--c" -- --color
+expect "explain" "x.yaml" "--m" -- --max-file-bytes
+expect "run" "x.yaml" "--in" -- --inputs
 expect "run" "x.yaml" "--rt-priority" "" --
 # Each behaviour once, by its name; LAYER/NAME once a '/' is typed.
 expect "explain" "configs/paper/walk_and_kick.yaml" "" -- go_behind_ball head_control kick_ball \
@@ -72,7 +78,7 @@ expect "replay" "x.mcap" "--record-flush" "" --
 expect "test" "--j" -- --junit
 expect "test" "tests/scenarios/soccer/goalie_d" -- tests/scenarios/soccer/goalie_dives_at_the_shot.test.yaml
 expect "ls" -- lsp
-expect "lsp" "-" -- --help
+expect "lsp" "-" -- --help --log-level --plugin-path --max-file-bytes --color
 
 echo "completion: $passed passed, $failed failed"
 [[ $failed -eq 0 ]]

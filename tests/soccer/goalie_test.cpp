@@ -47,7 +47,7 @@ TEST_CASE("the goalie waits for the button, takes its place, re-plans and dives 
   // The world reports the shot in the input pass, before the goalie sees it and dives.
   CHECK(lines_with(log, "201 ") == std::vector<std::string>{"201 world: shot on goal",
                                                             "201 activate dive",
-                                                            "201 goalie: goalie dives left"});
+                                                            "201 goalie/dive: goalie dives left"});
   REQUIRE(activations.size() >= 7);
   CHECK(activations[6] == "231 activate monitor_ball");
   CHECK(lines_with(log, "world: ball saved").size() == 1);

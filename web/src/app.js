@@ -15,10 +15,11 @@ async function start() {
   const reply = await fetch('info');
   if (reply.status === 403) {
     // The server lets in only the holder of its token (the URL arbiter printed).
-    setStatus('token needed', 'lost');
+    // Only the message: an empty graph, timelines and controls would say nothing true.
     const note = document.getElementById('token-needed');
     note.textContent = await reply.text();
     note.hidden = false;
+    document.body.replaceChildren(note);
     return;
   }
   // The server has put the token in a cookie: keep it out of the address bar and history, and keep

@@ -43,7 +43,8 @@ after(async () => {
 });
 
 /// Starts `arbiter ARGS` and resolves with the URL it prints (with the live view's token, if
-/// any), the server's base URL and the token.
+/// any), the server's base URL and the token, the process and what it printed so far
+/// (`output()`: stdout and stderr).
 function serve(args) {
   return new Promise((resolve, reject) => {
     const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
@@ -56,7 +57,7 @@ function serve(args) {
       const found = out.match(/(http:\/\/127\.0\.0\.1:\d+\/)(\?token=([\w.-]+))?/);
       if (found) {
         clearTimeout(timer);
-        resolve({url: found[0], base: found[1], token: found[3], child});
+        resolve({url: found[0], base: found[1], token: found[3], child, output: () => out + err});
       }
     });
     child.stderr.on('data', (data) => { err += data; });
@@ -67,6 +68,11 @@ function serve(args) {
 async function open(url) {
   const page = await browser.newPage({viewport: {width: 1400, height: 900}});
   page.setDefaultTimeout(10000);
+  // Every request the page makes (its favicon too) is answered.
+  page.failed = [];
+  page.on('response', (response) => {
+    if (response.status() >= 400) page.failed.push(`${response.status()} ${response.url()}`);
+  });
   await page.goto(url);
   if (await page.locator('#web-app-missing').count()) {
     throw new Error(`this arbiter was built without the web app: ${await page.textContent('body')}`);
@@ -82,7 +88,7 @@ const waitForStep = (page, step) =>
 const behaviour = (page, name) => page.locator(`.behaviour[data-name="control/${name}"]`);
 
 test('the live page shows every behaviour and inhibition of the config', async () => {
-  const {url} = await serve(['run', paper, '--serve', '0', '--paused', '--steps', '1000', '-q']);
+  const {url, base} = await serve(['run', paper, '--serve', '0', '--paused', '--steps', '1000', '-q']);
   const page = await open(url);
   assert.equal(await page.locator('.behaviour').count(), 4);
   assert.equal(await page.locator('#graph .edge').count(), 4);
@@ -93,7 +99,67 @@ test('the live page shows every behaviour and inhibition of the config', async (
   assert.equal(await implicit.getAttribute('data-from'), 'kick_ball');
   assert.equal(await implicit.getAttribute('data-to'), 'search_for_ball');
   assert.equal(await page.locator('.timeline').count(), 4);
+  await page.waitForTimeout(300);
+  assert.deepEqual(page.failed, [], 'no request of the page fails');
   await page.close();
+  // A browser asks for /favicon.ico whatever the page says: answered, with no token needed.
+  assert.equal((await fetch(`${base}favicon.ico`)).status, 204);
+});
+
+/// Resolves when `child` has exited and closed its output, with all it printed.
+const exited = (child, output) => new Promise((resolve) => {
+  child.on('close', () => resolve(output()));
+});
+
+test('paused, the live page shows the safe values the engine output; single steps print them once', async () => {
+  const run = await serve(['run', soccer, '--serve', '0', '--paused', '--steps', '100000']);
+  const page = await open(run.url);
+  const gait = page.locator('.port.actuator[data-actuator="gait_velocity"] .value');
+  await page.click('#resume');
+  // Running, the robot walks: the page shows the commands of each step.
+  await page.waitForFunction(() => Number(document.querySelector('#step').textContent) >= 20);
+  await page.click('#pause');
+  await page.waitForSelector('#status.paused');
+  // Paused, it shows what the engine output in its safe pass: the robot stands.
+  await page.waitForSelector('body[data-safe="true"]');
+  assert.equal(await gait.textContent(), '[0, 0, 0]');
+  const paused = await stepShown(page);
+  for (let step = paused + 1; step <= paused + 3; ++step) {
+    await page.click('#single-step');
+    await waitForStep(page, step);
+    await page.waitForSelector('body[data-safe="true"]');
+    assert.equal(await gait.textContent(), '[0, 0, 0]', `the safe values after single step ${step}`);
+  }
+  // The terminal told the safe values when the run paused, not again after each single step.
+  const safeLines = run.output().split('\n').filter((line) => line.includes('safe values output'));
+  assert.equal(safeLines.length, 1, safeLines.join('\n'));
+  await page.click('#resume');
+  await page.waitForFunction(() => document.body.dataset.safe === undefined);
+  await page.close();
+});
+
+test('after the run, Pause, Step and Resume are gone; the terminal gives the URL with its token', async () => {
+  const run = await serve(['run', paper, '--serve', '0', '--steps', '5']);
+  const page = await open(run.url);
+  await page.waitForSelector('#status.finished');
+  assert.equal(await page.isVisible('#live-controls'), false);
+  for (const id of ['pause', 'single-step', 'resume']) {
+    assert.equal(await page.isDisabled(`#${id}`), true, `#${id} is disabled`);
+  }
+  await page.waitForFunction(() => Number(document.querySelector('#step').textContent) === 5);
+  const over = run.output().match(/the run is over; the live view stays at (\S+) until Ctrl-C/);
+  assert.ok(over, run.output());
+  assert.equal(over[1], run.url, 'the URL after the run carries the token');
+  await page.close();
+});
+
+test('Ctrl-C during a served run ends it without promising that the page stays', async () => {
+  const run = await serve(['run', paper, '--serve', '0', '--steps', '100000']);
+  await new Promise((resolve) => setTimeout(resolve, 500));
+  run.child.kill('SIGINT');
+  const output = await exited(run.child, run.output);
+  assert.match(output, /interrupted: simulated/);
+  assert.doesNotMatch(output, /stays at/);
 });
 
 test('colours follow the steps; pause, single step and resume drive the engine', async () => {
@@ -553,5 +619,9 @@ test('the page opened without the token explains that it needs one', async () =>
   await page.waitForSelector('#token-needed:not([hidden])');
   assert.match(await page.textContent('#token-needed'), /needs its token/);
   assert.equal(await page.locator('.behaviour').count(), 0);
+  // Only the message: no empty graph, legend, timelines, step counter or controls.
+  for (const selector of ['main', 'header', '#graph-panel', '#timelines', '#live-controls']) {
+    assert.equal(await page.locator(selector).count(), 0, `${selector} is not on the page`);
+  }
   await page.close();
 });

@@ -87,7 +87,11 @@ StateContext::StateContext(const StepContext& step, ExecuteContext* execute, Con
       execute_(execute),
       controller_(&controller),
       instance_(instance),
-      plan_(controller) {}
+      plan_(controller) {
+  if (controller.report_base_ != kNoIndex && instance < controller.instances_.size()) {
+    self_ = controller.report_base_ + controller.instances_[instance].state;
+  }
+}
 
 std::uint64_t StateContext::cycle() const {
   return controller_->cycle_;

@@ -39,6 +39,13 @@ class ControllerBuilder {
     c_.owner_behaviour_ = owner_behaviour;
   }
   void set_children(std::vector<Controller*> children) { c_.children_ = std::move(children); }
+  /// Numbers its states' reports from `base` on (an event source after every behaviour and
+  /// layer of the program), each named "machine/state".
+  void set_report_base(std::uint32_t base) {
+    c_.report_base_ = base;
+    c_.report_names_.clear();
+    for (const auto& state : c_.states_) c_.report_names_.push_back(c_.name() + "/" + state.name);
+  }
   void set_state_child(std::uint32_t state, std::uint32_t child) {
     c_.states_[state].child = child;
   }

@@ -110,6 +110,9 @@ class ModelBuilder {
 
   std::optional<ParamValue> read_param(const ParamSpec& spec, const Node& node,
                                        std::string_view owner);
+  /// A by_step number list written as `{from: N, level: X}` items, expanded into one per step.
+  std::optional<ParamValue> read_by_step(const ParamSpec& spec, const Node& node,
+                                         std::string_view owner);
   /// Validates `params` (may be null) against the class; fills in defaults.
   ParamSet read_params(const ClassInfo& cls, const Node* params, const SourceLocation& owner_at,
                        std::string_view owner, bool fill_defaults = true);

@@ -286,6 +286,7 @@ std::optional<ParamValue> ModelBuilder::read_param(const ParamSpec& spec, const 
         return ParamValue{std::vector<double>{*value}};
       }
       if (node.items().empty()) return fail(kExpected, node);
+      if (spec.by_step && node.items().front().is_mapping()) return read_by_step(spec, node, owner);
       std::vector<double> values;
       bool ok = true;
       for (const auto& item : node.items()) {
@@ -318,6 +319,53 @@ std::optional<ParamValue> ModelBuilder::read_param(const ParamSpec& spec, const 
       return ParamValue{node};
   }
   return std::nullopt;
+}
+
+std::optional<ParamValue> ModelBuilder::read_by_step(const ParamSpec& spec, const Node& node,
+                                                     std::string_view owner) {
+  // The expanded list holds a number per step up to the last `from`: a bound keeps a hostile
+  // step number from taking the memory of a list that long.
+  constexpr long long kLastStep = 1 << 20;
+  constexpr std::string_view kExpected = "a mapping {from: STEP, level: LEVEL}";
+  std::vector<double> values;
+  bool ok = true;
+  long long last = 0;
+  for (const auto& item : node.items()) {
+    Fields fields(item, fmt::format("an item of param '{}' of {}", spec.name, owner),
+                  {"from", "level"}, diagnostics_, kExpected);
+    const Node* from = fields.required("from");
+    const Node* level = fields.required("level");
+    if (!fields.ok() || from == nullptr || level == nullptr) {
+      ok = false;
+      continue;
+    }
+    const auto step = from->as_int();
+    if (!step || *step <= last || *step > kLastStep) {
+      diagnostics_.error(
+          from->location(), "out-of-range",
+          step && *step <= last && last > 0
+              ? fmt::format("'from' of param '{}' of {} is {}; the steps must increase (the item "
+                            "before is from step {})",
+                            spec.name, owner, from->text(), last)
+              : fmt::format("'from' of param '{}' of {} must be a step from 1 to {}, found {}",
+                            spec.name, owner, kLastStep, from->describe()));
+      ok = false;
+      continue;
+    }
+    last = *step;
+    ParamSpec number = spec;
+    number.kind = ParamKind::kDouble;
+    const auto value = read_param(number, *level, owner);
+    if (!value) {
+      ok = false;
+      continue;
+    }
+    // The level before holds up to this step; before the first item, 0.
+    values.resize(static_cast<std::size_t>(*step - 1), values.empty() ? 0.0 : values.back());
+    values.push_back(std::get<double>(*value));
+  }
+  if (!ok) return std::nullopt;
+  return ParamValue{std::move(values)};
 }
 
 ParamSet ModelBuilder::read_params(const ClassInfo& cls, const Node* params,

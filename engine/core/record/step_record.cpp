@@ -64,12 +64,16 @@ ParamValue param_value(const ArgValue& value) {
 
 }  // namespace
 
-// A standalone state machine reports as kNoBehaviour.
+// Who reported: a behaviour, an interface layer, a state ("machine/state"), or a standalone state
+// machine's code outside its states (kNoBehaviour).
 const std::string& report_source(const StepLayout& layout, std::uint32_t source) {
   static const std::string kStandalone = "state machines";
   if (source == kNoBehaviour) return kStandalone;
   if (source < layout.behaviours.size()) return layout.behaviours[source];
-  return layout.layers[source - layout.behaviours.size()].name;
+  const std::size_t layer = source - layout.behaviours.size();
+  if (layer < layout.layers.size()) return layout.layers[layer].name;
+  const std::size_t state = layer - layout.layers.size();
+  return state < layout.state_sources.size() ? layout.state_sources[state] : kStandalone;
 }
 
 const char* event_verb(Controller::Event::Kind kind) {
@@ -150,6 +154,7 @@ StepLayout::StepLayout(const Program& program) {
     machine.capacity = controller->capacity();
     for (const auto& state : controller->states()) {
       machine.states.push_back({state.name, state.cls});
+      state_sources.push_back(controller->name() + "/" + state.name);
       machine.most_params = std::max(machine.most_params, state.cls->params.size());
     }
     machines.push_back(std::move(machine));

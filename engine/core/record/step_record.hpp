@@ -58,6 +58,9 @@ struct StepLayout {
   /// Every actuator's value is a built-in number, vector or flag: the values copy as bytes.
   bool plain_values = true;
   std::vector<Machine> machines;
+  /// "machine/state" for each state of each machine in order: the names of the event sources
+  /// after the behaviours and layers (a state's reports).
+  std::vector<std::string> state_sources;
 };
 
 /// The scalars at the start of a snapshot's block: a cache line, which a streamed capture

@@ -1,5 +1,6 @@
 #include "arbiter/manager.hpp"
 
+#include "core/compile/controller_builder.hpp"
 #include "core/run/carryover.hpp"
 
 #include <fmt/format.h>
@@ -119,6 +120,8 @@ Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
   events_.resize(kEventsPerStep);
   data_.events = events_.data();
   data_.event_capacity = events_.size();
+  report_text_.resize(kEventsPerStep * detail::kReportBytes);
+  data_.report_text = report_text_.data();
   data_.step = 0;
   const auto first = prepare(std::move(program), detail::Carryover{});
   swap_in(*first);
@@ -133,7 +136,13 @@ std::unique_ptr<Manager::Staged> Manager::prepare(Program program,
                                                   detail::Carryover carryover) const {
   auto staged = std::make_unique<Staged>();
   staged->state = RunState(program);
-  for (const auto& controller : program.controllers) controller->set_logger(logger_.get());
+  // Each state's reports carry a source of their own, after every behaviour and layer.
+  auto source = static_cast<std::uint32_t>(program.behaviours.size() + program.layers.size());
+  for (const auto& controller : program.controllers) {
+    controller->set_logger(logger_.get());
+    ControllerBuilder(*controller).set_report_base(source);
+    source += static_cast<std::uint32_t>(controller->states().size());
+  }
   staged->behaviour_continues.assign(program_.behaviours.size(), 0);
   staged->interface_continues.assign(program_.layers.size(), 0);
   staged->controller_continues.assign(program_.controllers.size(), 0);
@@ -313,7 +322,13 @@ const std::string& Manager::event_source(const detail::StepData::Event& event) c
   static const std::string kStandalone = "state machines";
   if (event.source == kNoBehaviour) return kStandalone;
   if (event.source < program_.behaviours.size()) return program_.behaviours[event.source].name;
-  return program_.layers[event.source - program_.behaviours.size()].name;
+  if (event.source - program_.behaviours.size() < program_.layers.size()) {
+    return program_.layers[event.source - program_.behaviours.size()].name;
+  }
+  for (const auto& controller : program_.controllers) {
+    if (const std::string* name = controller->report_source(event.source)) return *name;
+  }
+  return kStandalone;
 }
 
 void Manager::add_observer(Observer& observer) {

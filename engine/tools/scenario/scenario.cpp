@@ -194,6 +194,8 @@ class ScenarioReader {
     }
   }
 
+ public:
+  // Also a file of inputs by itself (read_inputs_file).
   void read_inputs(const Node& node, Scenario& scenario) {
     if (!node.is_sequence()) {
       diagnostics_.error(node.location(), "wrong-type",
@@ -242,6 +244,7 @@ class ScenarioReader {
         [](const ScenarioInput& a, const ScenarioInput& b) { return a.step < b.step; });
   }
 
+ private:
   void read_expect(const Node& node, Scenario& scenario) {
     if (node.is_scalar() && node.text() == "identical") {
       if (scenario.replay.text.empty()) {
@@ -483,6 +486,17 @@ class ScenarioReader {
 };
 
 }  // namespace
+
+std::optional<std::vector<ScenarioInput>> read_inputs_file(const std::string& path,
+                                                           Diagnostics& diagnostics,
+                                                           const ReadLimits& limits) {
+  auto document = read_document(path, diagnostics, limits);
+  if (!document || diagnostics.has_errors()) return std::nullopt;
+  Scenario scenario;
+  ScenarioReader(diagnostics).read_inputs(*document, scenario);
+  if (diagnostics.has_errors()) return std::nullopt;
+  return std::move(scenario.inputs);
+}
 
 bool is_scenario_file(std::string_view path) {
   return scenario_suffix(path) > 0;

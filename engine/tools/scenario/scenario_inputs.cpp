@@ -50,8 +50,17 @@ ScheduledInputs::ScheduledInputs() {
   class_.make_interface = [this] { return std::make_unique<InputsInterface>(tracks_); };
 }
 
-bool ScheduledInputs::prepare(const Scenario& scenario, const Model& model,
-                              Diagnostics& diagnostics) {
+void ScheduledInputs::feed_builtin_layers(Model& model, const Registry& registry) const {
+  // The built-in class is registered by behaviours/, which the tools do not link: by its name.
+  const ClassInfo* builtin = registry.find_class(ClassKind::kInterface, "inputs");
+  if (builtin == nullptr) return;
+  for (auto& layer : model.layers) {
+    if (layer.interface == builtin) layer.interface = &class_;
+  }
+}
+
+bool ScheduledInputs::prepare(const std::vector<ScenarioInput>& inputs, const SourceLocation& where,
+                              const Model& model, Diagnostics& diagnostics) {
   const std::size_t errors = diagnostics.error_count();
   std::vector<std::string> fed_layers;
   std::vector<std::string> fed_actuators;
@@ -60,8 +69,8 @@ bool ScheduledInputs::prepare(const Scenario& scenario, const Model& model,
     fed_layers.push_back(layer.name.text);
     for (const auto& actuator : layer.actuators) fed_actuators.push_back(actuator.name.text);
   }
-  if (!scenario.inputs.empty() && fed_layers.empty()) {
-    auto& error = diagnostics.error(scenario.inputs_location, "inputs-without-layer",
+  if (!inputs.empty() && fed_layers.empty()) {
+    auto& error = diagnostics.error(where, "inputs-without-layer",
                                     "'inputs:' gives values, but no interface layer is fed from "
                                     "them");
     for (const auto& layer : model.layers) {
@@ -70,9 +79,11 @@ bool ScheduledInputs::prepare(const Scenario& scenario, const Model& model,
           fmt::format("feed interface layer '{}' with 'substitute: {{{}: inputs}}'",
                       layer.name.text, layer.name.text));
     }
+    error.notes.push_back(
+        "or declare a layer of the config with the built-in 'interface: inputs' (docs/config.md)");
     return false;
   }
-  for (const auto& input : scenario.inputs) {
+  for (const auto& input : inputs) {
     for (const auto& value : input.values) {
       const std::string& name = value.actuator.text;
       const ActuatorDecl* actuator = model.find_actuator(name);

@@ -25,10 +25,15 @@ class ScheduledInputs {
   /// outlive the program compiled with it, and so must this object.
   const ClassInfo& interface_class() const { return class_; }
 
-  /// Reads the scenario's inputs against `model`, in which the fed layers have interface_class():
-  /// each name must be an actuator of a fed layer and each value fit its type. Reports at the
-  /// places; false when anything was wrong.
-  bool prepare(const Scenario& scenario, const Model& model, Diagnostics& diagnostics);
+  /// Feeds the layers of `model` bound to the built-in interface class `inputs` (which writes
+  /// nothing itself): gives them interface_class().
+  void feed_builtin_layers(Model& model, const Registry& registry) const;
+
+  /// Reads `inputs` (a scenario's `inputs:`, or a file's, written at `where`) against `model`,
+  /// in which the fed layers have interface_class(): each name must be an actuator of a fed
+  /// layer and each value fit its type. Reports at the places; false when anything was wrong.
+  bool prepare(const std::vector<ScenarioInput>& inputs, const SourceLocation& where,
+               const Model& model, Diagnostics& diagnostics);
 
   /// One actuator's values, by step (written in the input pass of each step from the first).
   struct Track {

@@ -132,6 +132,24 @@ ScenarioFailure failure_at(const SourceLocation& location, std::string code, std
 
 }  // namespace
 
+InputFeed::InputFeed() : inputs_(std::make_unique<ScheduledInputs>()) {}
+InputFeed::~InputFeed() = default;
+
+bool InputFeed::read(const std::string& path, Diagnostics& diagnostics, const ReadLimits& limits) {
+  auto entries = read_inputs_file(path, diagnostics, limits);
+  if (!entries) return false;
+  entries_ = std::move(*entries);
+  where_.file = path;
+  where_.line = 1;
+  where_.column = 1;
+  return true;
+}
+
+bool InputFeed::edit(Model& model, const Registry& registry, Diagnostics& diagnostics) {
+  inputs_->feed_builtin_layers(model, registry);
+  return inputs_->prepare(entries_, where_, model, diagnostics);
+}
+
 ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
                             const ScenarioOptions& options) {
   ScenarioResult result;
@@ -176,6 +194,8 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
     std::vector<const ClassInfo*> before;
     for (const auto& layer : model.layers) before.push_back(layer.interface);
     const bool substituted = substitute(model, substitutions, registry, reported);
+    // A recording feeds every interface layer the test leaves alone, the built-in ones too.
+    if (!replayed) inputs.feed_builtin_layers(model, registry);
     // Once a layer that `inputs:` should feed failed to be substituted, what the inputs would be
     // told follows from that mistake.
     bool fed = true;
@@ -184,7 +204,8 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
       fed = fed && (!item.inputs || substituted ||
                     (layer != nullptr && layer->interface == &inputs.interface_class()));
     }
-    const bool prepared = fed && inputs.prepare(scenario, model, reported);
+    const bool prepared =
+        fed && inputs.prepare(scenario.inputs, scenario.inputs_location, model, reported);
     edit_failed = !(substituted && prepared &&
                     (!replayed || feed_from_recording(model, before, scenario, *replayed->inputs,
                                                       registry, reported)));

@@ -93,6 +93,21 @@ Json param_schema(const ClassInfo& cls, const ParamSpec& spec) {
       Json list = {
           {"title", "List of numbers"}, {"type", "array"}, {"minItems", 1}, {"items", item}};
       out = {{"anyOf", Json::array({item, std::move(list)})}};
+      if (spec.by_step) {
+        Json held = {
+            {"title", "Level from a step on"},
+            {"type", "object"},
+            {"required", {"from", "level"}},
+            {"additionalProperties", false},
+            {"properties",
+             {{"from",
+               {{"title", "From step"}, {"type", "integer"}, {"minimum", 1}, {"maximum", 1 << 20}}},
+              {"level", item}}}};
+        out["anyOf"].push_back({{"title", "Levels by step"},
+                                {"type", "array"},
+                                {"minItems", 1},
+                                {"items", std::move(held)}});
+      }
       break;
     }
     case ParamKind::kStringList:

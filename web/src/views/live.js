@@ -1,5 +1,5 @@
 // The live view: the stream of a running engine (`arbiter run --serve`), with Pause, Step and
-// Resume.
+// Resume while it runs, and the safe values it output while paused.
 import {setStatus, showTiming} from '../panels.js';
 import {HISTORY} from '../records.js';
 import {RunPage} from '../run_page.js';
@@ -9,11 +9,27 @@ const REPORTED_KEPT = 200;  // the oldest reported events are dropped
 /** @param {{readonly?: boolean}} info the server's /info */
 export function live(info) {
   const page = new RunPage({reportedKept: REPORTED_KEPT});
-  document.getElementById('live-controls').hidden = !!info.readonly;
+  const controls = document.getElementById('live-controls');
+  controls.hidden = !!info.readonly;
+  const buttons = ['pause', 'single-step', 'resume'].map((id) => document.getElementById(id));
   const control = (action) => fetch(`control/${action}`, {method: 'POST'});
-  document.getElementById('pause').onclick = () => control('pause');
-  document.getElementById('single-step').onclick = () => control('step');
-  document.getElementById('resume').onclick = () => control('resume');
+  buttons[0].onclick = () => control('pause');
+  buttons[1].onclick = () => control('step');
+  buttons[2].onclick = () => control('resume');
+  // The safe-value pass of the engine that paused: shown instead of its last step's commands
+  // (that is what its interface layers output), until the next step.
+  let safe = null;
+  const showSafe = () => {
+    const shown = page.records[page.records.length - 1];
+    if (!safe || !shown || safe.step !== shown.step) return;
+    // An actuator without a safe value keeps the last step's value, held as it was.
+    safe.held = {...shown.held};
+    for (const [name, value] of Object.entries(safe.actuators || {})) {
+      if (value.written) delete safe.held[name];
+    }
+    page.show(safe);
+    document.body.dataset.safe = 'true';
+  };
   let graphText = '';
   let drawPending = false;
   const events = new EventSource('events');
@@ -35,14 +51,26 @@ export function live(info) {
       drawPending = true;
       requestAnimationFrame(() => {
         drawPending = false;
+        delete document.body.dataset.safe;
         page.show(page.records[page.records.length - 1]);
+        showSafe();
       });
     }
   });
+  events.addEventListener('safe', (event) => {
+    safe = JSON.parse(event.data);
+    if (!drawPending) showSafe();
+  });
   events.addEventListener('status', (event) => {
     const status = JSON.parse(event.data);
-    if (status.finished) setStatus('finished', 'finished');
-    else setStatus(status.paused ? 'paused' : 'running', status.paused ? 'paused' : 'running');
+    if (status.finished) {
+      // Nothing is left to pause, step or resume.
+      setStatus('finished', 'finished');
+      for (const button of buttons) button.disabled = true;
+      controls.hidden = true;
+    } else {
+      setStatus(status.paused ? 'paused' : 'running', status.paused ? 'paused' : 'running');
+    }
   });
   events.addEventListener('timing', (event) => showTiming(JSON.parse(event.data)));
   events.onerror = () => setStatus('connection lost: reconnecting…', 'lost');

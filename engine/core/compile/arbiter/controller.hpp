@@ -91,6 +91,13 @@ class Controller {
   std::uint64_t cycle() const { return cycle_; }
   std::size_t capacity() const { return capacity_; }
   const std::vector<CompiledState>& states() const { return states_; }
+  /// What a report of one of its states names as its source ("machine/state"), for an event
+  /// source (StepData::Event::source) of this controller's states; else nullptr. A state's report
+  /// is its own, not that of the behaviour stepping the machine.
+  const std::string* report_source(std::uint32_t source) const {
+    if (source < report_base_ || source - report_base_ >= report_names_.size()) return nullptr;
+    return &report_names_[source - report_base_];
+  }
   /// The configured initial queue (`queue:`), which a restart begins with.
   const std::vector<PlannedState>& initial_queue() const { return initial_; }
 
@@ -254,6 +261,10 @@ class Controller {
   bool stepping_ = false;
   bool owned_ = false;
   std::uint32_t owner_behaviour_ = kNoBehaviour;
+  /// The event source of its first state's reports (kNoIndex: its states report as the owner
+  /// does), and each state's source name.
+  std::uint32_t report_base_ = kNoIndex;
+  std::vector<std::string> report_names_;
   std::array<Event, kMaxEventsPerStep> events_{};
   std::size_t event_count_ = 0;
   std::vector<EventArg> event_args_;  ///< sized when the pool is built

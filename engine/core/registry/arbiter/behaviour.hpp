@@ -3,12 +3,16 @@
 // callback receives. Handles are indices resolved once in init(); the step reads and writes
 // through them without looking up a name.
 
+#include <fmt/format.h>
+
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
 #include <typeinfo>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -95,7 +99,26 @@ struct StepData {
   /// Counts what happens in the step, reports and state machine events alike (from 0 in every
   /// step), so that observers can tell them in the order they happened.
   std::uint32_t sequence = 0;
+  /// The text of formatted reports: event_capacity slots of kReportBytes, laid out at load.
+  char* report_text = nullptr;
 };
+
+/// The bytes of a formatted report's text slot, its terminating NUL included.
+inline constexpr std::size_t kReportBytes = 128;
+
+/// Ends the formatted text of `size` bytes in `text` (a kReportBytes slot that holds the first
+/// kReportBytes - 1 of them): text cut short ends in "…", and no UTF-8 character is split.
+inline void end_report(char* text, std::size_t size) {
+  constexpr std::size_t kMax = kReportBytes - 1;
+  if (size <= kMax) {
+    text[size] = '\0';
+    return;
+  }
+  constexpr char kEllipsis[] = "\xE2\x80\xA6";
+  std::size_t end = kMax - (sizeof kEllipsis - 1);
+  while (end > 0 && (static_cast<unsigned char>(text[end]) & 0xC0) == 0x80) --end;
+  std::memcpy(text + end, kEllipsis, sizeof kEllipsis);
+}
 
 template <typename T>
 const T& zero_value() {
@@ -130,6 +153,29 @@ class StepContext {
   /// beyond a per-step capacity further events are dropped.
   void report(const char* text) const {
     if (data_->event_count < data_->event_capacity) {
+      data_->events[data_->event_count] = {self_, text, data_->sequence};
+    }
+    ++data_->event_count;
+    ++data_->sequence;
+  }
+  /// Reports text formatted as fmt::format would (`ctx.report("room {} started", room)`), into
+  /// a buffer of the step laid out at load: allocation-free for numbers, strings and every type
+  /// whose formatter allocates nothing. Text longer than kReportBytes - 1 bytes is cut and ends in
+  /// "…". C++20 checks the format string when compiling; under C++17, one that does not fit its
+  /// arguments is reported as written, followed by " (bad format)", rather than throwing.
+  template <typename... Args>
+  void report(fmt::format_string<Args...> format, Args&&... args) const {
+    if (data_->event_count < data_->event_capacity && data_->report_text != nullptr) {
+      char* text = data_->report_text + data_->event_count * detail::kReportBytes;
+      try {
+        detail::end_report(text, fmt::format_to_n(text, detail::kReportBytes - 1, format,
+                                                  std::forward<Args>(args)...)
+                                     .size);
+      } catch (const fmt::format_error&) {
+        detail::end_report(text, fmt::format_to_n(text, detail::kReportBytes - 1, "{} (bad format)",
+                                                  fmt::string_view(format))
+                                     .size);
+      }
       data_->events[data_->event_count] = {self_, text, data_->sequence};
     }
     ++data_->event_count;

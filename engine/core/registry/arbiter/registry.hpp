@@ -172,6 +172,10 @@ struct ParamSpec {
   MemberKey member;
   std::function<void(void* instance, const ParamValue& value, std::uint32_t index)> bind;
   bool member_is_handle = false;  ///< a StateParam, given its index rather than a value
+  /// For a number list indexed by step (the last is held): its items may instead be written as
+  /// `{from: N, level: X}`, each level held from step N on (0 before the first), which the model
+  /// expands into the per-step list.
+  bool by_step = false;
 
   /// The default, which makes the param optional. It has the kind's C++ type (an integer is
   /// taken for a double); any other type is a mistake in the class's registration, which then
@@ -196,6 +200,11 @@ struct ParamSpec {
   }
   ParamSpec& schema(std::string json_schema_text) {
     json_schema = std::move(json_schema_text);
+    return *this;
+  }
+  /// A number list with one number per step may be given by step ranges (see by_step).
+  ParamSpec& held_by_step() {
+    by_step = true;
     return *this;
   }
   ParamSpec& state_level() {

@@ -218,6 +218,7 @@ class Manager {
   std::uint64_t stage_number_ = 0;
   std::vector<Observer*> observers_;
   std::vector<detail::StepData::Event> events_;
+  std::vector<char> report_text_;  ///< the text slots of formatted reports (StepContext::report)
   detail::StepData data_;
 };
 

@@ -106,6 +106,12 @@ bool is_scenario_file(std::string_view path);
 /// an error.
 std::optional<Scenario> build_scenario(const Node& root, Diagnostics& diagnostics);
 
+/// Reads a file of inputs (`arbiter run --inputs FILE`): a list of `{step: N, ACTUATOR: VALUE,
+/// ...}` entries, as a test's `inputs:` has them.
+std::optional<std::vector<ScenarioInput>> read_inputs_file(const std::string& path,
+                                                           Diagnostics& diagnostics,
+                                                           const ReadLimits& limits = {});
+
 /// Reads and checks a test file (as build_scenario(); nullopt too when it does not parse).
 std::optional<Scenario> read_scenario(const std::string& path, Diagnostics& diagnostics,
                                       const ReadLimits& limits = {});

@@ -6,16 +6,41 @@
 // by the explanation (explain.hpp) of its behaviour or state machine at that step.
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/document.hpp"
+#include "arbiter/model.hpp"
 #include "arbiter/plugin.hpp"
 #include "arbiter/registry.hpp"
 #include "arbiter/scenario.hpp"
 
 namespace arbiter {
+
+class ScheduledInputs;
+
+/// `arbiter run --inputs FILE`: the values a file gives by step (read_inputs_file), written by
+/// the layers of a config bound to the built-in interface class `inputs`.
+class InputFeed {
+ public:
+  InputFeed();
+  ~InputFeed();
+  InputFeed(const InputFeed&) = delete;
+  InputFeed& operator=(const InputFeed&) = delete;
+
+  /// Reads the file; false after reporting into `diagnostics`.
+  bool read(const std::string& path, Diagnostics& diagnostics, const ReadLimits& limits = {});
+  /// For LoadOptions::edit_model, once: feeds the built-in `inputs` layers of `model` from the
+  /// file and checks its names and values against them. This object must outlive the program.
+  bool edit(Model& model, const Registry& registry, Diagnostics& diagnostics);
+
+ private:
+  std::unique_ptr<ScheduledInputs> inputs_;
+  std::vector<ScenarioInput> entries_;
+  SourceLocation where_;
+};
 
 struct ScenarioOptions {
   /// How far a level or number may be from one expected as a single number.
