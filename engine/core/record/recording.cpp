@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <string_view>
 #include <system_error>
 
 #include "arbiter/trace.hpp"
@@ -70,6 +71,12 @@ constexpr const char* kHeaderSchema = R"({"$schema": "https://json-schema.org/dr
  "required": ["arbiter_trace", "name", "layers"]})";
 
 }  // namespace
+
+std::vector<RecordedChannel> recording_channels(const Program&) {
+  return {{kHeaderTopic, "arbiter.Header", kHeaderSchema},
+          {kStepTopic, "arbiter.Step", kStepSchema},
+          {kInputsTopic, "arbiter.Inputs", kInputsSchema}};
+}
 
 void append_inputs_record(const Manager& manager, std::string& out) {
   const detail::StepLayout layout(manager.program());
@@ -209,12 +216,14 @@ void Recorder::on_start(const Manager& manager) {
                                      .count());
   auto& writer = out_->writer;
   writer.header("arbiter", "arbiter " + info_.version);
-  out_->header = writer.channel(writer.schema("arbiter.Header", "jsonschema", kHeaderSchema),
-                                "/arbiter/header", "json");
-  out_->step = writer.channel(writer.schema("arbiter.Step", "jsonschema", kStepSchema),
-                              "/arbiter/step", "json");
-  out_->inputs = writer.channel(writer.schema("arbiter.Inputs", "jsonschema", kInputsSchema),
-                                "/arbiter/inputs", "json");
+  for (const auto& channel : recording_channels(manager.program())) {
+    const auto id = writer.channel(writer.schema(channel.schema_name, "jsonschema", channel.schema),
+                                   channel.topic, "json");
+    const std::string_view topic = channel.topic;
+    if (topic == kHeaderTopic) out_->header = id;
+    if (topic == kStepTopic) out_->step = id;
+    if (topic == kInputsTopic) out_->inputs = id;
+  }
   std::vector<std::pair<std::string, std::string>> config;
   config.emplace_back("name", manager.program().name);
   config.emplace_back("rate_hz", fmt::format("{}", manager.program().rate_hz));

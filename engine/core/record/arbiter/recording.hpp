@@ -205,6 +205,22 @@ class Recorder : public Observer {
   std::atomic<bool> finished_{false};
 };
 
+/// The topics of a recording's channels.
+inline constexpr const char* kHeaderTopic = "/arbiter/header";
+inline constexpr const char* kStepTopic = "/arbiter/step";
+inline constexpr const char* kInputsTopic = "/arbiter/inputs";
+
+/// A channel of a recording: its messages are JSON, its schema a JSON Schema. The live Foxglove
+/// server (`arbiter run --foxglove`) advertises the same, so that one layout works on both.
+struct RecordedChannel {
+  std::string topic;
+  std::string schema_name;
+  std::string schema;
+};
+
+/// The channels of a recording of `program`, in the order a recording declares them.
+std::vector<RecordedChannel> recording_channels(const Program& program);
+
 /// The message on `/arbiter/inputs`: {"step": N, "inputs": {NAME: {"value": V, "written": B}}}
 /// for every actuator of an interface layer, and "reported": [TEXT, ...] when interface code
 /// reported something in the step.
