@@ -502,6 +502,7 @@ struct FoxgloveServer::Impl {
     server.set_open_handler([this](Handle handle) { on_open(handle); });
     server.set_close_handler([this](Handle handle) { on_close(handle); });
     server.set_fail_handler([this](Handle handle) {
+      if (stopped) return;  // a handshake cut short by the end of the run
       std::error_code error;
       const auto connection = server.get_con_from_hdl(handle, error);
       if (error) return;
