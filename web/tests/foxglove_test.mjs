@@ -6,7 +6,7 @@
 //   NODE_MODULES    where `npm ci` put the packages of web/package.json
 import {test as nodeTest, after} from 'node:test';
 import assert from 'node:assert/strict';
-import {spawn} from 'node:child_process';
+import {execFileSync, spawn} from 'node:child_process';
 import {createRequire} from 'node:module';
 import {mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
@@ -143,6 +143,32 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   client.close();
   server.child.kill('SIGINT');
   assert.equal((await server.exited).code, 0);
+});
+
+test('replay --foxglove serves a recording at its pace, its messages as a run sends them', async () => {
+  const recording = path.join(scratch, 'run.mcap');
+  execFileSync(arbiter, ['run', soccer, '--steps', '30', '--record', recording, '-q'], {cwd: source});
+  const server = await serve(['replay', recording, '--foxglove', '0']);
+  const {client, channels} = await connect(server.url);
+  const ajv = new Ajv2020({strict: false});
+  const step = [...channels.values()].find((channel) => channel.topic === '/arbiter/step');
+  const validate = ajv.compile(JSON.parse(step.schema));
+  const steps = [];
+  client.on('message', ({data}) => {
+    const message = JSON.parse(new TextDecoder().decode(data));
+    assert.ok(validate(message), ajv.errorsText(validate.errors));
+    steps.push(message.step);
+  });
+  client.subscribe(step.id);
+  await waitFor('the end of the replay', () => /the replay is over/.test(server.output().out), 20000);
+  server.child.kill('SIGINT');
+  const {code, out} = await server.exited;
+  assert.equal(code, 0);
+  assert.match(out, /replayed 30 steps of .*: identical to the recording/);
+  // Paced at 15 Hz, the replay was still stepping when the client subscribed.
+  assert.ok(steps.length > 5, `steps received: ${steps}`);
+  assert.equal(steps.at(-1), 30);
+  assert.deepEqual(steps, [...steps].sort((a, b) => a - b));
 });
 
 test('a client that stops reading does not slow the steps: its messages are dropped, and counted', async () => {
