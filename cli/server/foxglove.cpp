@@ -91,6 +91,7 @@ struct FoxgloveServer::Impl {
     std::map<std::uint32_t, std::uint32_t> subscriptions;  // subscription id -> channel id
     std::uint64_t dropped = 0;
     bool dropping = false;  // its last message was dropped: logged once per spell
+    std::uint64_t warnings = 0;
   };
 
   WsServer server;
@@ -175,8 +176,15 @@ struct FoxgloveServer::Impl {
   }
 
   // The server's thread from here on.
-  void log_client(const Client& client, const std::string& what) {
-    spdlog::warn("foxglove client {}: {}", client.name, what);
+  /// A warning about `client`: the first kMaxWarnings, so that a client sending garbage in a
+  /// loop does not flood the log.
+  void log_client(Client& client, const std::string& what) {
+    constexpr std::uint64_t kMaxWarnings = 20;
+    if (++client.warnings <= kMaxWarnings)
+      spdlog::warn("foxglove client {}: {}", client.name, what);
+    if (client.warnings == kMaxWarnings) {
+      spdlog::warn("foxglove client {}: its further problems are not logged", client.name);
+    }
   }
   void send_text(Handle handle, const std::string& text) {
     std::error_code error;
@@ -184,7 +192,9 @@ struct FoxgloveServer::Impl {
   }
   void status(Handle handle, Client& client, StatusLevel level, const std::string& message) {
     log_client(client, message);
-    send_text(handle, Json{{"op", "status"}, {"level", level}, {"message", message}}.dump());
+    // The message quotes the client, whose text need not be UTF-8.
+    send_text(handle, Json{{"op", "status"}, {"level", level}, {"message", message}}.dump(
+                          -1, ' ', false, Json::error_handler_t::replace));
   }
   Json channel_json(const Advertised& advertised) const {
     return {{"id", advertised.id},
@@ -380,9 +390,8 @@ struct FoxgloveServer::Impl {
       }
     }
     if (found->second.dropped > 0) {
-      log_client(found->second, fmt::format("left; {} messages to it were dropped (it read too "
-                                            "slowly)",
-                                            found->second.dropped));
+      spdlog::warn("foxglove client {}: left; {} messages to it were dropped (it read too slowly)",
+                   found->second.name, found->second.dropped);
     }
     spdlog::info("foxglove client {} left ({} connected)", found->second.name, clients.size() - 1);
     clients.erase(found);
