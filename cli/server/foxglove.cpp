@@ -14,7 +14,6 @@
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -422,9 +421,13 @@ struct FoxgloveServer::Impl {
       const auto it = request.find(key);
       return it != request.end() && it->is_array() ? &*it : nullptr;
     };
-    const auto id_of = [](const Json& value) -> std::optional<std::uint32_t> {
-      if (!value.is_number_unsigned() || value.get<std::uint64_t>() > 0xffffffffu) return {};
-      return value.get<std::uint32_t>();
+    // An id is an unsigned 32-bit number; -1: not one.
+    const auto id_of = [](const Json& value) -> std::int64_t {
+      if (!value.is_number_unsigned() || value.get<std::uint64_t>() > 0xffffffffu) return -1;
+      return value.get<std::int64_t>();
+    };
+    const auto member_id = [&](const Json& item, const char* key) -> std::int64_t {
+      return item.is_object() && item.contains(key) ? id_of(item[key]) : -1;
     };
     if (*op == "subscribe") {
       const Json* subscriptions = list("subscriptions");
@@ -433,31 +436,31 @@ struct FoxgloveServer::Impl {
         return;
       }
       for (const auto& item : *subscriptions) {
-        const auto id = item.is_object() && item.contains("id") ? id_of(item["id"]) : std::nullopt;
-        const auto channel_id = item.is_object() && item.contains("channelId")
-                                    ? id_of(item["channelId"])
-                                    : std::nullopt;
-        if (!id || !channel_id) {
+        const auto id_value = member_id(item, "id");
+        const auto channel_value = member_id(item, "channelId");
+        if (id_value < 0 || channel_value < 0) {
           status(handle, client, kError,
                  fmt::format("subscribe: expected {{\"id\": N, \"channelId\": N}} with "
                              "unsigned 32-bit numbers, got {}",
                              printable(item.dump().substr(0, 80))));
           continue;
         }
-        const Advertised* advertised = channel(*channel_id);
+        const auto id = static_cast<std::uint32_t>(id_value);
+        const auto channel_id = static_cast<std::uint32_t>(channel_value);
+        const Advertised* advertised = channel(channel_id);
         if (advertised == nullptr) {
           status(handle, client, kWarning,
-                 fmt::format("subscribe: no channel has the id {}", *channel_id));
+                 fmt::format("subscribe: no channel has the id {}", channel_id));
           continue;
         }
-        if (client.subscriptions.count(*id) > 0) {
+        if (client.subscriptions.count(id) > 0) {
           status(handle, client, kError,
-                 fmt::format("subscribe: the subscription id {} is in use", *id));
+                 fmt::format("subscribe: the subscription id {} is in use", id));
           continue;
         }
-        client.subscriptions[*id] = *channel_id;
+        client.subscriptions[id] = channel_id;
         if (advertised->channel.topic == kHeaderTopic && !header.empty()) {
-          send_data(handle, client, *id, header_time, header);
+          send_data(handle, client, id, header_time, header);
         }
       }
       update_wanted();
@@ -469,7 +472,7 @@ struct FoxgloveServer::Impl {
       }
       for (const auto& item : *ids) {
         const auto id = id_of(item);
-        if (!id || client.subscriptions.erase(*id) == 0) {
+        if (id < 0 || client.subscriptions.erase(static_cast<std::uint32_t>(id)) == 0) {
           status(handle, client, kWarning,
                  fmt::format("unsubscribe: no subscription has the id {}",
                              printable(item.dump().substr(0, 40))));
