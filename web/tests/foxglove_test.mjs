@@ -171,6 +171,31 @@ test('replay --foxglove serves a recording at its pace, its messages as a run se
   assert.deepEqual(steps, [...steps].sort((a, b) => a - b));
 });
 
+test('a hot reload (--watch) sends the reloaded program\'s header, and the steps go on', async () => {
+  const config = soccerAt(30);
+  const server = await serve(['run', config, '--watch', '--foxglove', '0', '-q']);
+  const {client, channels} = await connect(server.url);
+  const headers = [];
+  let lastStep = 0;
+  const subscriptions = new Map();
+  for (const channel of channels.values()) subscriptions.set(client.subscribe(channel.id), channel.topic);
+  client.on('message', ({subscriptionId, data}) => {
+    const message = JSON.parse(new TextDecoder().decode(data));
+    const topic = subscriptions.get(subscriptionId);
+    if (topic === '/arbiter/header') headers.push(message);
+    if (topic === '/arbiter/step') lastStep = message.step;
+  });
+  await waitFor('a few steps', () => lastStep >= 5, 10000);
+  writeFileSync(config, readFileSync(config, 'utf8').replace('noise: 0.02', 'noise: 0.03'));
+  await waitFor('the reloaded header', () => headers.some((header) => header.reload >= 1), 20000);
+  const reloaded = headers.find((header) => header.reload >= 1);
+  await waitFor('steps after the reload', () => lastStep > reloaded.after_step + 5, 10000);
+  assert.equal(headers[0].arbiter_trace, 1);
+  client.close();
+  server.child.kill('SIGINT');
+  assert.equal((await server.exited).code, 0);
+});
+
 test('a client that stops reading does not slow the steps: its messages are dropped, and counted', async () => {
   // Paced fast, so that an unread client's backlog fills within the run.
   const rate = 2000;
