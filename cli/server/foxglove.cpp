@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
 
 #include <asio/steady_timer.hpp>
 #include <websocketpp/config/asio_no_tls.hpp>
@@ -10,10 +11,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cstring>
 #include <map>
 #include <mutex>
-#include <nlohmann/json.hpp>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -49,8 +48,6 @@ std::uint64_t wall_ns() {
                                         .count());
 }
 
-}  // namespace
-
 // The ring laid out for one program, as a recorder's (recording.cpp): made where the program is
 // staged, so that a hot reload does not allocate on the stepping thread.
 struct Generation {
@@ -79,6 +76,8 @@ struct alignas(64) Slot {
   std::uint64_t reload = 0;
   std::unique_ptr<Generation> next;
 };
+
+}  // namespace
 
 struct FoxgloveServer::Impl {
   struct Advertised {
