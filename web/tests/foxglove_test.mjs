@@ -6,7 +6,7 @@
 //   NODE_MODULES    where `npm ci` put the packages of web/package.json
 import {test as nodeTest, after} from 'node:test';
 import assert from 'node:assert/strict';
-import {execFileSync, spawn} from 'node:child_process';
+import {execFileSync, spawn, spawnSync} from 'node:child_process';
 import {createRequire} from 'node:module';
 import {mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
@@ -292,4 +292,32 @@ test('garbage frames, unknown channels and 100 connections are survived with a l
   assert.match(err, /client .* connected \(\d+ connected\)/);
   assert.doesNotMatch(err, /terminate|Segmentation|Aborted/);
   assert.equal(channels.size >= 3, true);
+});
+
+test('loopback unless another address is asked for, with a warning; a bad address is a usage error', async () => {
+  const bad = spawnSync(arbiter, ['run', soccer, '--foxglove', '127.0.0.1:99999'], {cwd: source, encoding: 'utf8'});
+  assert.equal(bad.status, 2);
+  assert.match(bad.stderr, /--foxglove: .*the port must be a number from 0 to 65535/);
+  const local = await serve(['run', soccer, '--foxglove', '0', '-q']);
+  const all = await new Promise((resolve, reject) => {
+    const child = spawn(arbiter, ['run', soccer, '--foxglove', '0.0.0.0:0', '-q'], {cwd: source});
+    children.push(child);
+    let out = '';
+    let err = '';
+    child.stdout.on('data', (data) => { out += data; });
+    child.stderr.on('data', (data) => { err += data; });
+    const timer = setInterval(() => {
+      if (/ws:\/\//.test(out)) {
+        clearInterval(timer);
+        resolve({child, out, err});
+      }
+    }, 20);
+    child.on('exit', (code) => reject(new Error(`arbiter exited with ${code}: ${err}`)));
+  });
+  assert.match(all.out, /ws:\/\/0\.0\.0\.0:\d+/);
+  assert.match(all.err, /serving on 0\.0\.0\.0, not only to this machine: .*no authentication/);
+  assert.doesNotMatch(local.output().err, /not only to this machine/);
+  all.child.kill('SIGINT');
+  local.child.kill('SIGINT');
+  await local.exited;
 });
