@@ -91,11 +91,14 @@ void foxglove_after_run(FoxgloveServer& server, std::string_view command, std::o
                         std::ostream& err) {
   const std::string summary = server.summary(command);
   err << summary;
-  out << fmt::format("the {} is over; the Foxglove server stays at {} until Ctrl-C\n", command,
-                     server.url())
-      << std::flush;
-  install_interrupt_handlers();
-  while (!interrupted) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  // Interrupted already (Ctrl-C during the steps, or after --serve's page): it stops with it.
+  if (!interrupted) {
+    out << fmt::format("the {} is over; the Foxglove server stays at {} until Ctrl-C\n", command,
+                       server.url())
+        << std::flush;
+    install_interrupt_handlers();
+    while (!interrupted) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
   server.stop();
 }
 
