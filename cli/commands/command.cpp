@@ -91,8 +91,9 @@ void foxglove_after_run(FoxgloveServer& server, std::string_view command, std::o
                         std::ostream& err) {
   const std::string summary = server.summary(command);
   err << summary;
-  // Interrupted already (Ctrl-C during the steps, or after --serve's page): it stops with it.
-  if (!interrupted) {
+  // Interrupted already (Ctrl-C during the steps, or after --serve's page), or no run started (a
+  // replay that could not start): it stops at once.
+  if (!interrupted && server.counts().started) {
     out << fmt::format("the {} is over; the Foxglove server stays at {} until Ctrl-C\n", command,
                        server.url())
         << std::flush;

@@ -617,6 +617,7 @@ FoxgloveCounts FoxgloveServer::counts() const {
   counts.sent = impl_->sent.load();
   counts.dropped_for_slow_clients = impl_->dropped_for_clients.load();
   counts.dropped_steps = impl_->dropped_steps.load();
+  counts.started = impl_->started.load();
   return counts;
 }
 

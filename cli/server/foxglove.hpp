@@ -26,6 +26,8 @@ struct FoxgloveCounts {
   std::uint64_t dropped_for_slow_clients = 0;
   /// Steps the stepping thread found no free slot for: the server fell behind the steps.
   std::uint64_t dropped_steps = 0;
+  /// A run started (on_start): there was something to serve.
+  bool started = false;
 };
 
 /// The server. As an observer it only copies each step into a ring of slots laid out when the
