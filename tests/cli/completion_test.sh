@@ -53,6 +53,9 @@ expect "run" "configs/paper/walk_and_k" -- configs/paper/walk_and_kick.yaml \
 expect "plugins" "-" -- --format --load --builtin --help
 expect "run" "x.yaml" "--se" -- --serve --serve-token --serve-readonly
 expect "run" "x.yaml" "--rt" -- --rt-priority
+expect "run" "x.yaml" "--fo" -- --foxglove
+expect "replay" "x.mcap" "--fo" -- --foxglove
+expect "run" "x.yaml" "--foxglove" "" --
 expect "run" "x.yaml" "--rt-priority" "" --
 # Each behaviour once, by its name; LAYER/NAME once a '/' is typed.
 expect "explain" "configs/paper/walk_and_kick.yaml" "" -- go_behind_ball head_control kick_ball \
