@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -20,14 +21,21 @@
 #include <thread>
 #include <vector>
 
+#if ARBITER_HAS_FOXGLOVE
+#include <nlohmann/json.hpp>
+#include <websocketpp/client.hpp>
+#include <websocketpp/config/asio_no_tls_client.hpp>
+#endif
+
 #include "arbiter/lint.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/recorded_inputs.hpp"
 #include "arbiter/recording.hpp"
 #include "arbiter/trace_reader.hpp"
 #include "benchmarks.hpp"
-#include "generator.hpp"
 #include "commands/record.hpp"
+#include "generator.hpp"
+#include "server/foxglove.hpp"
 #include "support.hpp"
 
 namespace arbiter::bench {
@@ -259,6 +267,125 @@ void record_paced(benchmark::State& state) {
   state.counters["dropped"] = static_cast<double>(dropped);
 }
 
+#if ARBITER_HAS_FOXGLOVE
+/// A Foxglove client on its own thread: subscribes to every channel the server advertises and
+/// reads (and counts) every message, as a viewer keeping up does.
+class FoxgloveClient {
+ public:
+  using Client = websocketpp::client<websocketpp::config::asio_client>;
+  explicit FoxgloveClient(const std::string& url) {
+    client_.clear_access_channels(websocketpp::log::alevel::all);
+    client_.clear_error_channels(websocketpp::log::elevel::all);
+    client_.init_asio();
+    client_.set_message_handler(
+        [this](websocketpp::connection_hdl handle, Client::message_ptr message) {
+          if (message->get_opcode() == websocketpp::frame::opcode::binary) {
+            ++received_;
+            return;
+          }
+          const auto json = nlohmann::json::parse(message->get_payload(), nullptr, false);
+          if (!json.is_object() || json.value("op", "") != "advertise") return;
+          auto subscribe =
+              nlohmann::json{{"op", "subscribe"}, {"subscriptions", nlohmann::json::array()}};
+          for (const auto& channel : json["channels"]) {
+            subscribe["subscriptions"].push_back({{"id", next_++}, {"channelId", channel["id"]}});
+          }
+          client_.send(handle, subscribe.dump(), websocketpp::frame::opcode::text);
+        });
+    std::error_code error;
+    auto connection = client_.get_connection(url, error);
+    if (error) return;
+    connection->add_subprotocol("foxglove.websocket.v1");
+    client_.connect(connection);
+    thread_ = std::thread([this] { client_.run(); });
+  }
+  ~FoxgloveClient() {
+    client_.stop();
+    if (thread_.joinable()) thread_.join();
+  }
+  std::uint64_t received() const { return received_; }
+
+ private:
+  Client client_;
+  std::thread thread_;
+  std::atomic<std::uint64_t> received_{0};
+  std::uint32_t next_ = 0;
+};
+
+/// The soccer demo at a robot's pace, as record/soccer/paced: each step timed alone, the plain
+/// program and one served over the Foxglove WebSocket protocol (`arbiter run --foxglove`) to a
+/// client subscribed to every channel, in turn; medians.
+void foxglove_paced(benchmark::State& state) {
+  std::optional<Program> programs[2];
+  Registry soccer_registry = make_registry();
+  if (!load_twice(state, Graph::kLayers, true, soccer_registry, programs)) return;
+  Manager plain(std::move(*programs[0]), quiet());
+  Manager served(std::move(*programs[1]), quiet());
+  std::ostringstream said;
+  // The server's and the client's threads on CPU 1, as start_pinned() puts a recorder's writer,
+  // and the stepping thread on CPU 0.
+  std::optional<PinnedTo> others_cpu(1);
+  auto server = cli::FoxgloveServer::open("127.0.0.1", 0, "bench", "arbiter bench", said, said);
+  if (!server) {
+    state.SkipWithError(said.str().c_str());
+    return;
+  }
+  served.add_observer(*server);
+  served.step();
+  plain.step();
+  FoxgloveClient client(server->url());
+  others_cpu.reset();
+  // Subscribed once the steps reach the client.
+  for (int i = 0; i < 2000 && client.received() == 0; ++i) {
+    served.step();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  if (client.received() == 0) {
+    state.SkipWithError("the client received nothing");
+    return;
+  }
+  constexpr std::size_t kSteps = 200;  // of each, per iteration
+  constexpr auto kPeriod = std::chrono::microseconds(500);
+  std::vector<double> plain_ns;
+  std::vector<double> served_ns;
+  {
+    std::optional<PinnedTo> stepping_cpu;
+    stepping_cpu.emplace(0);
+    using Clock = std::chrono::steady_clock;
+    auto next = Clock::now();
+    const auto timed_step = [&](Manager& manager, std::vector<double>& ns) {
+      next += kPeriod;
+      std::this_thread::sleep_until(next);
+      const auto start = Clock::now();
+      manager.step();
+      ns.push_back(std::chrono::duration<double, std::nano>(Clock::now() - start).count());
+    };
+    for (auto _ : state) {
+      for (std::size_t i = 0; i < kSteps; ++i) {
+        timed_step(plain, plain_ns);
+        timed_step(served, served_ns);
+      }
+    }
+  }
+  const auto received = client.received();
+  served.finish();
+  const auto counts = server->counts();
+  server->stop();
+  const auto median = [](std::vector<double>& values) {
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  };
+  const double plain_median = median(plain_ns);
+  const double served_median = median(served_ns);
+  state.counters["ns_per_step"] = plain_median;
+  state.counters["served_ns_per_step"] = served_median;
+  state.counters["overhead"] = served_median / plain_median - 1.0;
+  state.counters["received"] = static_cast<double>(received);
+  state.counters["dropped"] =
+      static_cast<double>(counts.dropped_steps + counts.dropped_for_slow_clients);
+}
+#endif
+
 /// `arbiter replay` of a recording of the soccer demo `state.range(0)` steps long, whole, in
 /// recorded steps per second (CPU time); and apart, the two reads of the recording a replay
 /// makes as it goes: its inputs (each step's message parsed and held) and its step records
@@ -478,6 +605,12 @@ void register_benchmarks() {
       ->ComputeStatistics("min", fastest)
       ->Iterations(5)
       ->UseRealTime();
+#if ARBITER_HAS_FOXGLOVE
+  benchmark::RegisterBenchmark("foxglove/soccer/paced", foxglove_paced)
+      ->ComputeStatistics("min", fastest)
+      ->Iterations(5)
+      ->UseRealTime();
+#endif
   const std::pair<const char*, ReplayPart> replay_parts[] = {
       {"replay/soccer", ReplayPart::kWhole},
       {"replay/soccer/read_inputs", ReplayPart::kInputs},

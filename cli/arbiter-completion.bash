@@ -86,7 +86,7 @@ _arbiter() {
     --config | --inputs) mapfile -t COMPREPLY < <(_arbiter_files '\.(yaml|yml|json)$'); return ;;
     --tolerance) return ;;
     --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
-    --steps | --step | --load | --serve | --serve-token | --rt-priority | --record-flush) return ;;
+    --steps | --step | --load | --serve | --serve-token | --foxglove | --rt-priority | --record-flush) return ;;
     --junit) mapfile -t COMPREPLY < <(_arbiter_files '\.xml$'); return ;;
     --output | -o) mapfile -t COMPREPLY < <(_arbiter_files '\.svg$'); return ;;
   esac
@@ -103,13 +103,13 @@ _arbiter() {
   local options
   case "$command" in
     validate) options="--format --strict --help" ;;
-    run) options="--steps --trace --inputs --record --record-flush --quiet --realtime --strict --serve --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --help" ;;
+    run) options="--steps --trace --inputs --record --record-flush --quiet --realtime --strict --serve --foxglove --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
     test) options="--junit --tolerance --help" ;;
     view) options="--trace --serve --step --help" ;;
     plot) options="--output --actuators --compare --help" ;;
-    replay) options="--config --trace --record --record-flush --steps --help" ;;
+    replay) options="--config --trace --record --record-flush --foxglove --steps --help" ;;
     diff) options="--tolerance --format --help" ;;
     plugins) options="--format --load --builtin --help" ;;
     schema) options="--load --builtin --help" ;;

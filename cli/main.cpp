@@ -14,6 +14,7 @@
 #include "arbiter/lint.hpp"
 #include "commands/command.hpp"
 #include "commands/record.hpp"
+#include "server/foxglove.hpp"
 #include "server/serve.hpp"
 
 namespace {
@@ -242,8 +243,8 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--strict", options.strict, "treat config warnings as errors");
   run_cmd
       ->add_flag("--full-speed", options.full_speed,
-                 "run flat out even with --serve (which otherwise paces at rate_hz), e.g. for a "
-                 "soak test")
+                 "run flat out even with --serve or --foxglove (which otherwise pace at rate_hz), "
+                 "e.g. for a soak test")
       ->excludes("--realtime");
   run_cmd
       ->add_flag("--watch", options.watch,
@@ -256,6 +257,15 @@ int main(int argc, char** argv) {
                    "serve the live view (a web page) on [ADDR:]PORT (ADDR defaults to 127.0.0.1, "
                    "PORT 0 picks a free one) and pace the steps at rate_hz; the server stays up "
                    "after the last step until Ctrl-C")
+      ->check(check_serve_address, "")
+      ->type_name("[ADDR:]PORT");
+  run_cmd
+      ->add_option("--foxglove", options.foxglove,
+                   "serve the run live over the Foxglove WebSocket protocol on [ADDR:]PORT, for "
+                   "Foxglove and Lichtblick (ADDR defaults to 127.0.0.1: the protocol has no "
+                   "authentication, so give another address only on a trusted network; PORT 0 "
+                   "picks a free one) and pace the steps at rate_hz; the server stays up after "
+                   "the last step until Ctrl-C")
       ->check(check_serve_address, "")
       ->type_name("[ADDR:]PORT");
   run_cmd
@@ -285,6 +295,8 @@ int main(int argc, char** argv) {
                   "stops cleanly\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --steps 300 --serve 8080   "
                   "# then open the printed URL (it carries the token)\n"
+                  "  arbiter run configs/soccer/walk_and_kick.yaml --foxglove 8765   "
+                  "# then connect Foxglove to ws://127.0.0.1:8765\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --realtime --rt-priority 50   "
                   "# SCHED_FIFO\n\n"
                   "Actuators with a 'safe:' value carry it in a last output pass when the run "
@@ -469,6 +481,14 @@ int main(int argc, char** argv) {
                      "with --record: write the recording out to the disk at least every SECONDS; "
                      "0: only every 256 KiB of steps");
   replay_cmd
+      ->add_option("--foxglove", options.foxglove,
+                   "serve the replay live over the Foxglove WebSocket protocol on [ADDR:]PORT "
+                   "(ADDR defaults to 127.0.0.1: the protocol has no authentication; PORT 0 picks "
+                   "a free one), stepping at the recorded rate_hz; the server stays up after the "
+                   "last step until Ctrl-C")
+      ->check(check_serve_address, "")
+      ->type_name("[ADDR:]PORT");
+  replay_cmd
       ->add_option("--steps", options.steps,
                    "replay at most this many steps (the recording is read that far only)")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40));
@@ -477,6 +497,7 @@ int main(int argc, char** argv) {
       "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --record run.mcap -q\n"
       "  arbiter replay run.mcap                      # repeats the run exactly?\n"
       "  arbiter replay run.mcap --config edited.yaml --record what_if.mcap\n"
+      "  arbiter replay run.mcap --foxglove 8765      # watch it in Foxglove or Lichtblick\n"
       "  arbiter diff run.mcap what_if.mcap\n\n"
       "Exit codes: 0 ok (the replay matched, or the what-if ran), 1 the replay differs from the "
       "recording or a config or recording is invalid, 2 usage error or an output (--trace, "
@@ -559,7 +580,8 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
-    if (run_cmd->parsed() && !options.serve.empty() && !options.full_speed) {
+    if (run_cmd->parsed() && (!options.serve.empty() || !options.foxglove.empty()) &&
+        !options.full_speed) {
       options.realtime = true;
     }
     // Checked here rather than by the option, so that `lsp` can start and show it in the editor.
@@ -617,7 +639,18 @@ int main(int argc, char** argv) {
       replay.steps = replay_cmd->count("--steps") > 0 ? options.steps : 0;
       replay.load = load_options_of(options);
       replay.version = kVersion;
-      return arbiter::cli::replay(replay, registry, std::cout, std::cerr);
+      std::unique_ptr<FoxgloveServer> foxglove;
+      if (!options.foxglove.empty()) {
+        foxglove = open_foxglove(options.foxglove, "replay", std::cout, std::cerr);
+        if (!foxglove) return kExitUsage;
+        replay.observers.push_back(foxglove.get());
+        replay.paced = true;
+        replay.stop = &interrupted;
+        install_interrupt_handlers();
+      }
+      const int code = arbiter::cli::replay(replay, registry, std::cout, std::cerr);
+      if (foxglove) foxglove_after_run(*foxglove, "replay", std::cout, std::cerr);
+      return code;
     }
     if (diff_cmd->parsed()) {
       return diff(options.diff_a, options.diff_b, options.tolerance, options.format, std::cout,

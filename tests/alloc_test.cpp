@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,14 @@
 #include <sstream>
 #include <thread>
 #include <vector>
+
+#if ARBITER_HAS_FOXGLOVE
+#include <nlohmann/json.hpp>
+#include <websocketpp/client.hpp>
+#include <websocketpp/config/asio_no_tls_client.hpp>
+
+#include "server/foxglove.hpp"
+#endif
 
 #include "arbiter/load.hpp"
 #include "arbiter/recording.hpp"
@@ -394,3 +403,77 @@ TEST_CASE("a recorded step allocates nothing on the stepping thread", "[alloc][r
     CHECK(dropped == 0);
   }
 }
+
+#if ARBITER_HAS_FOXGLOVE
+TEST_CASE("a step served to a subscribed Foxglove client allocates nothing on the stepping thread",
+          "[alloc][foxglove]") {
+  using Client = websocketpp::client<websocketpp::config::asio_client>;
+  Registry registry = test::make_test_registry();
+  LoadOptions options;
+  options.plugins.path.push_back(ARBITER_PLUGIN_DIR);
+  Diagnostics diagnostics;
+  auto program = load(std::string(ARBITER_SOURCE_DIR) + "/configs/soccer/walk_and_kick.yaml",
+                      registry, diagnostics, options);
+  REQUIRE(program);
+  Manager manager(std::move(*program));
+  CountingClock clock;
+  manager.set_clock(&clock);
+  std::ostringstream said;
+  auto server = cli::FoxgloveServer::open("127.0.0.1", 0, "test", "arbiter test", said, said);
+  REQUIRE(server);
+  manager.add_observer(*server);
+  manager.step();
+  // A client that subscribes to every channel it is advertised, and counts the messages.
+  Client client;
+  std::atomic<std::uint64_t> received{0};
+  client.clear_access_channels(websocketpp::log::alevel::all);
+  client.clear_error_channels(websocketpp::log::elevel::all);
+  client.init_asio();
+  client.set_message_handler([&](websocketpp::connection_hdl handle, Client::message_ptr message) {
+    if (message->get_opcode() == websocketpp::frame::opcode::binary) {
+      ++received;
+      return;
+    }
+    const auto json = nlohmann::json::parse(message->get_payload(), nullptr, false);
+    if (!json.is_object() || json.value("op", "") != "advertise") return;
+    auto subscribe =
+        nlohmann::json{{"op", "subscribe"}, {"subscriptions", nlohmann::json::array()}};
+    for (const auto& channel : json["channels"]) {
+      subscribe["subscriptions"].push_back({{"id", channel["id"]}, {"channelId", channel["id"]}});
+    }
+    client.send(handle, subscribe.dump(), websocketpp::frame::opcode::text);
+  });
+  std::error_code error;
+  auto connection = client.get_connection(server->url(), error);
+  REQUIRE(!error);
+  connection->add_subprotocol("foxglove.websocket.v1");
+  client.connect(connection);
+  std::thread reader([&] { client.run(); });
+  for (int i = 0; i < 2000 && received == 0; ++i) {
+    manager.step();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  REQUIRE(received > 0);  // subscribed: the steps are captured from here on
+  const auto sent_before = server->counts().sent;
+  allocations = 0;
+  arbiter::test::only_thread = std::this_thread::get_id();  // not the server's or the client's
+  counting = true;
+  for (int i = 0; i < 300; ++i) {
+    manager.step();
+    if (i % 50 == 0) manager.safe_pass();
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  counting = false;
+  arbiter::test::only_thread = std::thread::id();
+  const auto counted = allocations.load();
+  manager.finish();
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const auto counts = server->counts();
+  server->stop();
+  client.stop();
+  reader.join();
+  CHECK(counted == 0);
+  CHECK(counts.sent > sent_before + 300);  // the steps went out, step records and inputs
+  CHECK(counts.dropped_steps == 0);
+}
+#endif

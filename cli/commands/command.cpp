@@ -5,14 +5,18 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <utility>
+#include <thread>
 
 #include "arbiter/lint.hpp"
 #include "builtins.hpp"
+#include "server/foxglove.hpp"
+#include "server/serve.hpp"
 
 namespace arbiter::cli {
 
@@ -66,6 +70,39 @@ extern "C" void on_interrupt(int) {
 void install_interrupt_handlers() {
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
+}
+
+std::unique_ptr<FoxgloveServer> open_foxglove(const std::string& text, std::string_view command,
+                                              std::ostream& out, std::ostream& err) {
+  std::string error;
+  const auto address = ServeAddress::parse(text, error);
+  if (!error.empty()) {
+    err << fmt::format("arbiter {}: --foxglove: {}\n", command, error);
+    return nullptr;
+  }
+  auto server = FoxgloveServer::open(address.host, address.port, command,
+                                     fmt::format("arbiter {}", kVersion), out, err);
+  if (server) {
+    err << exposure_warning(address,
+                            "watch the run: the Foxglove WebSocket protocol has no authentication");
+  }
+  return server;
+}
+
+void foxglove_after_run(FoxgloveServer& server, std::string_view command, std::ostream& out,
+                        std::ostream& err) {
+  const std::string summary = server.summary(command);
+  err << summary;
+  // Interrupted already (Ctrl-C during the steps, or after --serve's page), or no run started (a
+  // replay that could not start): it stops at once.
+  if (!interrupted && server.counts().started) {
+    out << fmt::format("the {} is over; the Foxglove server stays at {} until Ctrl-C\n", command,
+                       server.url())
+        << std::flush;
+    install_interrupt_handlers();
+    while (!interrupted) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  server.stop();
 }
 
 }  // namespace arbiter::cli

@@ -5,8 +5,11 @@
 #include <atomic>
 #include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <optional>
+#include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "arbiter/diagnostics.hpp"
@@ -44,6 +47,7 @@ struct Options {
   std::string target;
   bool watch = false;                         ///< `run --watch`
   std::string serve;                          ///< `run --serve`: [ADDR:]PORT
+  std::string foxglove;                       ///< `run --foxglove`, `replay --foxglove`
   std::string view_serve = "127.0.0.1:8080";  ///< `view --serve`
   std::string output;                         ///< `plot -o`
   bool actuators = false;
@@ -82,6 +86,17 @@ std::optional<Program> load_or_report(const std::string& path, Registry& registr
 /// between two steps or requests, so that what it writes is complete.
 extern std::atomic<bool> interrupted;
 void install_interrupt_handlers();
+
+class FoxgloveServer;
+/// The Foxglove WebSocket server of `--foxglove [ADDR:]PORT` (server/foxglove.hpp), warning on
+/// `err` when it can be reached from other machines; nullptr when it cannot serve (said on
+/// `err`, as `command`).
+std::unique_ptr<FoxgloveServer> open_foxglove(const std::string& address, std::string_view command,
+                                              std::ostream& out, std::ostream& err);
+/// After a run or replay with `--foxglove`: says what was dropped, then serves on until
+/// interrupted, so that a viewer keeps its connection and what it received.
+void foxglove_after_run(FoxgloveServer& server, std::string_view command, std::ostream& out,
+                        std::ostream& err);
 
 int validate_command(const Options& options);
 int dump_command(const Options& options);

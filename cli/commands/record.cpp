@@ -4,12 +4,15 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <deque>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include "arbiter/document.hpp"
 #include "arbiter/model.hpp"
@@ -214,8 +217,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     recorder->set_flush_interval(options.record_flush);
     manager.add_observer(*recorder);
   }
+  for (Observer* observer : options.observers) manager.add_observer(*observer);
   SimulatedClock clock;
   manager.set_clock(&clock);
+  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(1.0 / manager.program().rate_hz));
+  auto next_step = std::chrono::steady_clock::now();
   const auto written_out = [&] {
     const std::string text = trace_text.str();
     trace_text.str(std::string());
@@ -276,6 +283,14 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       loaded = step;
     }
     if (now) have_event = next_event(event);
+    if (options.paced) {
+      std::this_thread::sleep_until(next_step);
+      next_step = std::max(next_step + period, std::chrono::steady_clock::now());
+      if (options.stop != nullptr && *options.stop) {
+        last = manager.steps();  // the verdict is on the steps replayed
+        break;
+      }
+    }
     clock.t = static_cast<double>(step - 1) / manager.program().rate_hz;
     manager.step();
     // The trace writer wrote the step's record last (after a reload's header, if any).

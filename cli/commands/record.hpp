@@ -1,10 +1,12 @@
 #pragma once
 // `arbiter run --record`, `arbiter replay` and `arbiter diff` (docs/replay.md).
 
+#include <atomic>
 #include <cstdint>
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "arbiter/load.hpp"
 #include "arbiter/program.hpp"
@@ -27,6 +29,12 @@ struct ReplayOptions {
   std::uint64_t steps = 0;                         ///< 0: all recorded
   LoadOptions load;
   std::string version;
+  /// Observers of the replay besides its own (`--foxglove`'s server).
+  std::vector<Observer*> observers;
+  /// Steps at the recorded config's rate_hz, not flat out, and stops between two steps when
+  /// `stop` (if any) becomes true: for a viewer that watches the replay.
+  bool paced = false;
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// Runs the recorded system again on its recorded inputs; returns the exit code.

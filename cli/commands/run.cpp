@@ -1,5 +1,5 @@
 // `arbiter run`: a config stepped, paced or flat out, with its trace, recording, report, watcher
-// and live view attached as observers of the manager.
+// live view and Foxglove server attached as observers of the manager.
 
 #include <fmt/format.h>
 #include <spdlog/sinks/ostream_sink.h>
@@ -22,6 +22,7 @@
 #include "commands/run_report.hpp"
 #include "commands/timing.hpp"
 #include "commands/watch.hpp"
+#include "server/foxglove.hpp"
 #include "server/serve.hpp"
 
 namespace arbiter::cli {
@@ -116,6 +117,13 @@ int run_command(const Options& options) {
     if (!live) return kExitUsage;
     manager.add_observer(*live);
   }
+  std::unique_ptr<FoxgloveServer> foxglove;  // --foxglove
+  if (!options.foxglove.empty()) {
+    foxglove = open_foxglove(options.foxglove, "run", std::cout, std::cerr);
+    if (!foxglove) return kExitUsage;
+    foxglove->set_paced(options.realtime);  // as the recording's log times (info.paced)
+    manager.add_observer(*foxglove);
+  }
   SteadyStepClock clock;
   manager.set_clock(&clock);
   RunTiming timing(1.0 / rate_hz);
@@ -182,6 +190,7 @@ int run_command(const Options& options) {
     std::cout << timing.text(options.realtime) << std::flush;
   }
   if (live) live->serve_until(manager, interrupted);
+  if (foxglove) foxglove_after_run(*foxglove, "run", std::cout, std::cerr);
   if (trace_file.is_open() && !trace_file) {
     std::cerr << fmt::format("arbiter run: writing trace '{}' failed\n", options.trace_path);
     return kExitInvalid;

@@ -59,6 +59,9 @@ expect "run" "x.yaml" "--plu" -- --plugin-path
 expect "validate" "--c" -- --color
 expect "explain" "x.yaml" "--m" -- --max-file-bytes
 expect "run" "x.yaml" "--in" -- --inputs
+expect "run" "x.yaml" "--fo" -- --foxglove
+expect "replay" "x.mcap" "--fo" -- --foxglove
+expect "run" "x.yaml" "--foxglove" "" --
 expect "run" "x.yaml" "--rt-priority" "" --
 # Each behaviour once, by its name; LAYER/NAME once a '/' is typed.
 expect "explain" "configs/paper/walk_and_kick.yaml" "" -- go_behind_ball head_control kick_ball \

@@ -75,12 +75,8 @@ struct Recorder::Output {
   std::uint16_t log = 0;
   std::uint64_t last_step = 0;
   std::uint64_t dropped = 0;
-  // The simulated clock (RecordingInfo::paced false): step `clock_step` was at `clock_ns` after
-  // the start, and the steps after it come at `rate_hz`, which a hot reload may change.
-  std::uint64_t clock_step = 0;
-  std::uint64_t clock_ns = 0;
-  double rate_hz = 0.0;
-  std::string record;  // reused between messages
+  detail::LogClock clock;  // made when the run starts
+  std::string record;      // reused between messages
   std::string inputs_record;
   std::string log_record;
   std::string step_schema, inputs_schema;  // of the channels written to last
@@ -179,7 +175,7 @@ void Recorder::on_start(const Manager& manager) {
   out_->step = add_channel(channels[kStepChannel]);
   out_->inputs = add_channel(channels[kInputsChannel]);
   out_->log = add_channel(channels[kLogChannel]);
-  out_->rate_hz = written_->rate_hz;
+  out_->clock = detail::LogClock(info_.paced, wall_start_ns_, written_->rate_hz);
   out_->step_schema = channels[kStepChannel].schema;
   out_->inputs_schema = channels[kInputsChannel].schema;
   std::vector<std::pair<std::string, std::string>> config;
@@ -223,19 +219,7 @@ std::uint64_t Recorder::wall_time(bool timed, double step_time) const {
 }
 
 std::uint64_t Recorder::log_time(std::uint64_t step, std::uint64_t wall_time) const {
-  if (info_.paced) return wall_time;
-  const auto& out = *out_;
-  const auto since = step > out.clock_step ? step - out.clock_step : 0;
-  return wall_start_ns_ + out.clock_ns +
-         static_cast<std::uint64_t>(static_cast<double>(since) * 1e9 / out.rate_hz);
-}
-
-void Recorder::write_log(std::uint64_t time, std::uint64_t wall, LogLevel level,
-                         const std::string& name, std::string_view text) {
-  auto& out = *out_;
-  out.log_record.clear();
-  append_log_message(time, level, name, text, {}, 0, out.log_record);
-  out.writer.message(out.log, time, wall, out.log_record);
+  return out_->clock.time(step, wall_time);
 }
 
 void Recorder::set_writer_period(const Program& program) {
@@ -421,10 +405,7 @@ void Recorder::write_loop() {
       }
       written_->files.clear();
       // The steps before the reload came at the replaced program's rate, those after it at its.
-      const auto time = log_time(slot.step, slot.wall_time);
-      out.clock_ns = time - wall_start_ns_;
-      out.clock_step = slot.step;
-      out.rate_hz = written_->rate_hz;
+      const auto time = out.clock.reload(slot.step, slot.wall_time, written_->rate_hz);
       if (!failed()) {
         out.writer.metadata("arbiter.reload", reload);
         // A program laid out otherwise has channels of its own, on the same topics: each
@@ -460,10 +441,10 @@ void Recorder::write_loop() {
           out.dropped += gap;
           out.writer.metadata("arbiter.gap", {{"after_step", std::to_string(out.last_step)},
                                               {"dropped", std::to_string(gap)}});
-          write_log(time, wall, LogLevel::kWarning, kRecorderName,
-                    fmt::format("the recorder dropped {} step{} after step {}: the writer fell "
-                                "behind",
-                                gap, gap == 1 ? "" : "s", out.last_step));
+          out.log_record.clear();
+          detail::append_dropped_log(time, kRecorderName, gap, out.last_step,
+                                     "the writer fell behind", out.log_record);
+          out.writer.message(out.log, time, wall, out.log_record);
         }
         out.last_step = step.step;
         out.inputs_record.clear();
@@ -471,11 +452,9 @@ void Recorder::write_loop() {
         out.writer.message(out.step, time, wall, out.record);
         out.writer.message(out.inputs, time, wall, out.inputs_record);
       }
-      for (const auto& report : step.reports) {
-        write_log(time, wall, LogLevel::kInfo,
-                  detail::report_source(written_->layout, report.source),
-                  step.texts.substr(report.text_begin, report.text_size));
-      }
+      detail::for_each_report_log(
+          written_->layout, step, time, out.log_record,
+          [&](const std::string& message) { out.writer.message(out.log, time, wall, message); });
     }
     // After a failed write the writer only frees the slots: the run goes on, unrecorded.
     if (!failed()) {

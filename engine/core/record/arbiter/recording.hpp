@@ -138,9 +138,6 @@ class Recorder : public Observer {
   std::uint64_t log_time(std::uint64_t step, std::uint64_t wall_time) const;
   /// Adds a channel to the file, with its schema. The writer's, or before it starts.
   std::uint16_t add_channel(const Channel& channel);
-  /// A message on `/arbiter/log`, logged at `time`, published at `wall`. The writer's.
-  void write_log(std::uint64_t time, std::uint64_t wall, LogLevel level, const std::string& name,
-                 std::string_view text);
   /// The writer's period for a program's rate.
   void set_writer_period(const Program& program);
   void publish();

@@ -1,0 +1,765 @@
+#include "server/foxglove.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
+
+#include <asio/steady_timer.hpp>
+#include <websocketpp/config/asio_no_tls.hpp>
+#include <websocketpp/server.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "arbiter/channels.hpp"
+#include "arbiter/diagnostics.hpp"
+#include "arbiter/recording.hpp"
+#include "arbiter/trace.hpp"
+#include "core/record/step_record.hpp"
+
+namespace arbiter::cli {
+
+std::string foxglove_left_out() {
+  return "";
+}
+
+namespace {
+
+using WsServer = websocketpp::server<websocketpp::config::asio>;
+using Handle = websocketpp::connection_hdl;
+using Json = nlohmann::json;
+
+constexpr const char* kSubprotocol = "foxglove.websocket.v1";
+// Reported text a slot holds, as a recording's; a step that reported more is dropped.
+constexpr std::size_t kReportTextBytes = 4096;
+// How often the server's thread looks at the ring: a client sees a step at most this late.
+constexpr auto kPoll = std::chrono::milliseconds(5);
+// The Foxglove WebSocket protocol's status levels.
+enum StatusLevel { kInfo = 0, kWarning = 1, kError = 2 };
+
+std::uint64_t wall_ns() {
+  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::system_clock::now().time_since_epoch())
+                                        .count());
+}
+
+// The ring laid out for one program, as a recorder's (recording.cpp): made where the program is
+// staged, so that a hot reload does not allocate on the stepping thread.
+struct Generation {
+  Generation(const Program& program, std::uint64_t stage_, std::size_t slots)
+      : stage(stage_),
+        layout(program),
+        header(trace_header(program)),
+        channels(detail::channels(layout, program.name)),
+        rate_hz(program.rate_hz) {
+    blocks.reset(layout, kReportTextBytes, slots);
+    last.bytes.assign(blocks.shape().tracked.total, std::byte{0});
+  }
+  std::uint64_t stage = 0;
+  detail::StepLayout layout;
+  detail::SnapshotBlocks blocks;
+  detail::StepImage last;  // the stepping thread's: the tracked parts as its last capture left them
+  std::string header;
+  std::vector<Channel> channels;  // channels(program), in ChannelIndex order
+  double rate_hz = 0.0;
+};
+
+// Who the server's own log messages are from.
+constexpr const char* kServerName = "Foxglove server";
+
+// A step's values are in the block of the same index of the generation it was captured with; the
+// stepping thread writes nothing here for a step, only for a reload's header.
+struct alignas(64) Slot {
+  enum class Kind { kSnapshot, kHeader };
+  Kind kind = Kind::kSnapshot;
+  std::uint64_t step = 0;
+  std::uint64_t reload = 0;
+  std::uint64_t wall_time = 0;  // kHeader: the wall clock when the run started or reloaded
+  // kSnapshot: the steps dropped just before this one. Written by the stepping thread only after
+  // a drop, and set back to 0 by the server's thread, so that a step writes nothing here.
+  std::uint64_t dropped = 0;
+  std::unique_ptr<Generation> next;
+};
+
+}  // namespace
+
+struct FoxgloveServer::Impl {
+  struct Advertised {
+    std::uint32_t id = 0;
+    Channel channel;
+  };
+  struct Client {
+    std::string name;                                      // its address, for the log
+    std::map<std::uint32_t, std::uint32_t> subscriptions;  // subscription id -> channel id
+    std::uint64_t dropped = 0;
+    bool dropping = false;  // its last message was dropped: logged once per spell
+    std::uint64_t warnings = 0;
+  };
+
+  WsServer server;
+  std::thread thread;
+  std::string url;
+  std::string name;
+  std::unique_ptr<asio::steady_timer> timer;
+  std::atomic<bool> stopped{false};
+
+  // The ring: the stepping thread fills head, the server's thread reads tail.
+  std::unique_ptr<Slot[]> ring;
+  std::size_t ring_size = kSlots + 1;
+  alignas(64) std::atomic<std::size_t> head{0};
+  std::size_t tail_seen = 0;  // the stepping thread's view of tail
+  bool unpublished = false;
+  bool chained = false;
+  std::uint64_t pending_drops = 0;  // steps dropped since the last slot published
+  Generation* stepping = nullptr;
+  std::atomic<bool> started{false};
+  alignas(64) std::atomic<std::size_t> tail{0};
+  // Some client is subscribed to a channel that steps feed: only then are steps captured.
+  alignas(64) std::atomic<bool> wanted{false};
+  std::atomic<std::uint64_t> headers_published{0};
+  std::atomic<std::uint64_t> headers_written{0};
+  std::mutex staged_mutex;
+  std::unique_ptr<Generation> staged;  // by staged_mutex
+  // Generations the stepping thread swapped in after the server stopped: nobody reads them.
+  std::vector<std::unique_ptr<Generation>> orphans;
+
+  // The server thread's.
+  std::unique_ptr<Generation> reading;
+  detail::StepImage image;
+  std::vector<Advertised> channels;
+  std::uint32_t next_channel = 1;
+  std::map<Handle, Client, std::owner_less<Handle>> clients;
+  std::string header;  // the last /arbiter/header message, for clients that subscribe later
+  std::uint64_t header_time = 0;
+  std::uint64_t wall_start = 0;
+  bool paced = false;  // set before the run starts: the log times' clock (detail::LogClock)
+  std::uint64_t run_start = 0;
+  detail::LogClock clock;
+  std::string record, inputs, log, frame;
+
+  std::atomic<std::size_t> connected{0};
+  std::atomic<std::uint64_t> opened{0}, sent{0}, dropped_for_clients{0}, dropped_steps{0};
+
+  std::size_t after(std::size_t index) const { return index + 1 == ring_size ? 0 : index + 1; }
+  detail::SnapshotBlock block(const Generation& generation, const Slot* slot) const {
+    return generation.blocks[static_cast<std::size_t>(slot - ring.get())];
+  }
+
+  Slot* claim() {
+    const auto at = head.load(std::memory_order_relaxed);
+    const auto next = after(at);
+    if (next == tail_seen) {
+      tail_seen = tail.load(std::memory_order_acquire);
+      if (next == tail_seen) return nullptr;
+    }
+    return &ring[at];
+  }
+  void publish() {
+    head.store(after(head.load(std::memory_order_relaxed)), std::memory_order_release);
+  }
+  void settle() {
+    if (!unpublished) return;
+    detail::fence_streamed_stores();
+    publish();
+    unpublished = false;
+  }
+  void capture(const Manager& manager) {
+    settle();
+    if (!wanted.load(std::memory_order_relaxed)) {
+      chained = false;  // the next capture copies every tracked part whole
+      return;
+    }
+    Slot* slot = claim();
+    if (slot == nullptr ||
+        !detail::capture_step(manager, stepping->layout, stepping->blocks.shape(),
+                              block(*stepping, slot), false, &stepping->last, chained)) {
+      dropped_steps.fetch_add(1, std::memory_order_relaxed);
+      ++pending_drops;
+      chained = false;
+      return;
+    }
+    if (pending_drops > 0) {
+      slot->dropped = pending_drops;
+      pending_drops = 0;
+    }
+    chained = true;
+    unpublished = true;
+  }
+
+  // The server's thread from here on.
+  /// A warning about `client`: the first kMaxWarnings, so that a client sending garbage in a
+  /// loop does not flood the log.
+  void log_client(Client& client, const std::string& what) {
+    constexpr std::uint64_t kMaxWarnings = 20;
+    if (++client.warnings <= kMaxWarnings)
+      spdlog::warn("foxglove client {}: {}", client.name, what);
+    if (client.warnings == kMaxWarnings) {
+      spdlog::warn("foxglove client {}: its further problems are not logged", client.name);
+    }
+  }
+  void send_text(Handle handle, const std::string& text) {
+    std::error_code error;
+    server.send(handle, text, websocketpp::frame::opcode::text, error);
+  }
+  void status(Handle handle, Client& client, StatusLevel level, const std::string& message) {
+    log_client(client, message);
+    // The message quotes the client, whose text need not be UTF-8.
+    send_text(handle, Json{{"op", "status"}, {"level", level}, {"message", message}}.dump(
+                          -1, ' ', false, Json::error_handler_t::replace));
+  }
+  Json channel_json(const Advertised& advertised) const {
+    return {{"id", advertised.id},
+            {"topic", advertised.channel.topic},
+            {"encoding", std::string(kMessageEncoding)},
+            {"schemaName", advertised.channel.schema_name},
+            {"schema", advertised.channel.schema},
+            {"schemaEncoding", std::string(kSchemaEncoding)}};
+  }
+  std::string advertise(const std::vector<const Advertised*>& list) const {
+    Json array = Json::array();
+    for (const auto* advertised : list) array.push_back(channel_json(*advertised));
+    return Json{{"op", "advertise"}, {"channels", std::move(array)}}.dump();
+  }
+  const Advertised* channel(std::uint32_t id) const {
+    for (const auto& advertised : channels) {
+      if (advertised.id == id) return &advertised;
+    }
+    return nullptr;
+  }
+  const Advertised* topic(const std::string& name) const {
+    for (const auto& advertised : channels) {
+      if (advertised.channel.topic == name) return &advertised;
+    }
+    return nullptr;
+  }
+  // Advertised in the order of channels(program).
+  const Advertised* channel_at(ChannelIndex index) const {
+    return index < channels.size() ? &channels[index] : nullptr;
+  }
+  void update_wanted() {
+    const auto* step = channel_at(kStepChannel);
+    const auto* in = channel_at(kInputsChannel);
+    const auto* log_channel = channel_at(kLogChannel);
+    bool any = false;
+    for (const auto& [handle, client] : clients) {
+      for (const auto& [subscription, id] : client.subscriptions) {
+        for (const auto* fed : {step, in, log_channel})
+          any = any || (fed != nullptr && id == fed->id);
+      }
+    }
+    wanted.store(any, std::memory_order_relaxed);
+  }
+
+  /// Sends `payload` on `advertised` to every client subscribed to it, but to a client with
+  /// more than kClientBacklog bytes unsent: that one's message is dropped.
+  void broadcast(const Advertised* advertised, std::uint64_t time, const std::string& payload) {
+    if (advertised == nullptr) return;
+    for (auto& [handle, client] : clients) {
+      for (const auto& [subscription, id] : client.subscriptions) {
+        if (id != advertised->id) continue;
+        send_data(handle, client, subscription, time, payload);
+      }
+    }
+  }
+  void send_data(Handle handle, Client& client, std::uint32_t subscription, std::uint64_t time,
+                 const std::string& payload) {
+    std::error_code error;
+    const auto connection = server.get_con_from_hdl(handle, error);
+    if (error) return;
+    if (connection->get_buffered_amount() > kClientBacklog) {
+      ++client.dropped;
+      dropped_for_clients.fetch_add(1, std::memory_order_relaxed);
+      if (!client.dropping) {
+        log_client(client, "reads too slowly: its messages are dropped until it catches up");
+      }
+      client.dropping = true;
+      return;
+    }
+    client.dropping = false;
+    // Message Data: opcode 1, the subscription id (u32) and the log time (u64), little-endian.
+    frame.assign(1, '\x01');
+    for (int i = 0; i < 4; ++i) frame += static_cast<char>((subscription >> (8 * i)) & 0xff);
+    for (int i = 0; i < 8; ++i) frame += static_cast<char>((time >> (8 * i)) & 0xff);
+    frame += payload;
+    connection->send(frame, websocketpp::frame::opcode::binary);
+    sent.fetch_add(1, std::memory_order_relaxed);
+  }
+
+  /// Advertises `generation`'s channels: on a reload, those whose schema changed are
+  /// unadvertised and advertised anew under a new id (a subscription to the old one ends).
+  void take_channels(const Generation& generation) {
+    std::vector<Advertised> next;
+    for (const auto& channel : generation.channels) {
+      const Advertised* known = topic(channel.topic);
+      if (known != nullptr && known->channel.schema == channel.schema &&
+          known->channel.schema_name == channel.schema_name) {
+        next.push_back(*known);
+      } else {
+        next.push_back({next_channel++, channel});
+      }
+    }
+    std::vector<std::uint32_t> gone;
+    for (const auto& old : channels) {
+      if (std::none_of(next.begin(), next.end(),
+                       [&](const Advertised& kept) { return kept.id == old.id; })) {
+        gone.push_back(old.id);
+      }
+    }
+    std::vector<const Advertised*> fresh;
+    for (const auto& advertised : next) {
+      if (std::none_of(channels.begin(), channels.end(),
+                       [&](const Advertised& old) { return old.id == advertised.id; })) {
+        fresh.push_back(&advertised);
+      }
+    }
+    channels = std::move(next);
+    for (auto& [handle, client] : clients) {
+      for (auto it = client.subscriptions.begin(); it != client.subscriptions.end();) {
+        const bool ended = std::find(gone.begin(), gone.end(), it->second) != gone.end();
+        it = ended ? client.subscriptions.erase(it) : std::next(it);
+      }
+      if (!gone.empty()) {
+        send_text(handle, Json{{"op", "unadvertise"}, {"channelIds", gone}}.dump());
+      }
+      if (!fresh.empty()) send_text(handle, advertise(fresh));
+    }
+    update_wanted();
+  }
+
+  void pump() {
+    std::size_t at = tail.load(std::memory_order_relaxed);
+    const std::size_t end = head.load(std::memory_order_acquire);
+    for (; at != end; at = after(at)) {
+      Slot& slot = ring[at];
+      if (slot.kind == Slot::Kind::kHeader) {
+        reading = std::move(slot.next);
+        // The run's first header is the program's as it is, a reload's says which and when (the
+        // header schema has `reload` >= 1), as in a recording.
+        header = slot.reload == 0 ? reading->header
+                                  : reload_header(reading->header, slot.reload, slot.step);
+        if (slot.reload == 0) {
+          run_start = slot.wall_time;
+          clock = detail::LogClock(paced, run_start, reading->rate_hz);
+          header_time = run_start;
+        } else {
+          header_time = clock.reload(slot.step, slot.wall_time, reading->rate_hz);
+        }
+        take_channels(*reading);
+        broadcast(channel_at(kHeaderChannel), header_time, header);
+        slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
+        headers_written.fetch_add(1, std::memory_order_release);
+        continue;
+      }
+      detail::StepSnapshot step(reading->blocks.shape(), block(*reading, &slot));
+      step.apply(image);
+      const auto wall =
+          step.timed ? run_start + static_cast<std::uint64_t>(step.t * 1e9) : wall_ns();
+      const auto time = clock.time(step.step, wall);
+      const auto* log_channel = channel_at(kLogChannel);
+      if (slot.dropped > 0) {
+        const auto gap = slot.dropped;
+        slot.dropped = 0;  // released to the stepping thread with the slot
+        log.clear();
+        detail::append_dropped_log(time, kServerName, gap,
+                                   step.step > gap ? step.step - gap - 1 : 0,
+                                   "its thread fell behind the steps", log);
+        broadcast(log_channel, time, log);
+      }
+      if (const auto* advertised = channel_at(kStepChannel)) {
+        record.clear();
+        detail::append_step_record(reading->layout, step, record);
+        broadcast(advertised, time, record);
+      }
+      if (const auto* advertised = channel_at(kInputsChannel);
+          advertised != nullptr && !step.safe) {
+        inputs.clear();
+        detail::append_inputs_record(reading->layout, step, inputs);
+        broadcast(advertised, time, inputs);
+      }
+      detail::for_each_report_log(
+          reading->layout, step, time, log,
+          [&](const std::string& message) { broadcast(log_channel, time, message); });
+    }
+    tail.store(at, std::memory_order_release);
+  }
+  void schedule() {
+    timer->expires_after(kPoll);
+    timer->async_wait([this](const std::error_code& error) {
+      if (error || stopped) return;
+      pump();
+      schedule();
+    });
+  }
+
+  void on_open(Handle handle) {
+    std::error_code error;
+    const auto connection = server.get_con_from_hdl(handle, error);
+    if (error) return;
+    Client& client = clients[handle];
+    client.name = connection->get_remote_endpoint();
+    opened.fetch_add(1, std::memory_order_relaxed);
+    connected.store(clients.size());
+    spdlog::info("foxglove client {} connected ({} connected)", client.name, clients.size());
+    send_text(handle, Json{{"op", "serverInfo"},
+                           {"name", name},
+                           {"capabilities", Json::array()},
+                           {"supportedEncodings", Json::array()},
+                           {"metadata", Json::object()},
+                           {"sessionId", std::to_string(wall_start)}}
+                          .dump());
+    std::vector<const Advertised*> all;
+    for (const auto& advertised : channels) all.push_back(&advertised);
+    if (!all.empty()) send_text(handle, advertise(all));
+  }
+  void on_close(Handle handle) {
+    const auto found = clients.find(handle);
+    if (found == clients.end()) return;
+    std::error_code error;
+    const auto connection = server.get_con_from_hdl(handle, error);
+    if (!error) {
+      // Closed by the server for what the client sent (a frame too big, not WebSocket), or by
+      // the client or its network, which is no fault.
+      using namespace websocketpp::close::status;
+      const auto code = connection->get_local_close_code();
+      const bool faulted = code == protocol_error || code == unsupported_data ||
+                           code == invalid_payload || code == policy_violation ||
+                           code == message_too_big;
+      if (faulted) {
+        spdlog::warn("foxglove: closed the connection of client {}: {}", found->second.name,
+                     connection->get_local_close_reason());
+      }
+    }
+    if (found->second.dropped > 0) {
+      spdlog::warn("foxglove client {}: left; {} messages to it were dropped (it read too slowly)",
+                   found->second.name, found->second.dropped);
+    }
+    spdlog::info("foxglove client {} left ({} connected)", found->second.name, clients.size() - 1);
+    clients.erase(found);
+    connected.store(clients.size());
+    update_wanted();
+  }
+  void on_message(Handle handle, const WsServer::message_ptr& message) {
+    const auto found = clients.find(handle);
+    if (found == clients.end()) return;
+    Client& client = found->second;
+    if (message->get_opcode() != websocketpp::frame::opcode::text) {
+      status(handle, client, kError,
+             "a binary message: this server takes no client messages but subscribe and "
+             "unsubscribe (it has no clientPublish capability)");
+      return;
+    }
+    const std::string& text = message->get_payload();
+    const Json request = Json::parse(text, nullptr, false);
+    const auto op = request.is_object() ? request.find("op") : request.end();
+    if (!request.is_object() || op == request.end() || !op->is_string()) {
+      status(handle, client, kError,
+             fmt::format("a malformed message: expected a JSON object with a string \"op\", got "
+                         "'{}'",
+                         printable(text.substr(0, 80))));
+      return;
+    }
+    const auto list = [&](const char* key) {
+      const auto it = request.find(key);
+      return it != request.end() && it->is_array() ? &*it : nullptr;
+    };
+    // An id is an unsigned 32-bit number; -1: not one.
+    const auto id_of = [](const Json& value) -> std::int64_t {
+      if (!value.is_number_unsigned() || value.get<std::uint64_t>() > 0xffffffffu) return -1;
+      return value.get<std::int64_t>();
+    };
+    const auto member_id = [&](const Json& item, const char* key) -> std::int64_t {
+      return item.is_object() && item.contains(key) ? id_of(item[key]) : -1;
+    };
+    if (*op == "subscribe") {
+      const Json* subscriptions = list("subscriptions");
+      if (subscriptions == nullptr) {
+        status(handle, client, kError, "subscribe: expected \"subscriptions\": [{id, channelId}]");
+        return;
+      }
+      for (const auto& item : *subscriptions) {
+        const auto id_value = member_id(item, "id");
+        const auto channel_value = member_id(item, "channelId");
+        if (id_value < 0 || channel_value < 0) {
+          status(handle, client, kError,
+                 fmt::format("subscribe: expected {{\"id\": N, \"channelId\": N}} with "
+                             "unsigned 32-bit numbers, got {}",
+                             printable(item.dump().substr(0, 80))));
+          continue;
+        }
+        const auto id = static_cast<std::uint32_t>(id_value);
+        const auto channel_id = static_cast<std::uint32_t>(channel_value);
+        const Advertised* advertised = channel(channel_id);
+        if (advertised == nullptr) {
+          status(handle, client, kWarning,
+                 fmt::format("subscribe: no channel has the id {}", channel_id));
+          continue;
+        }
+        if (client.subscriptions.count(id) > 0) {
+          status(handle, client, kError,
+                 fmt::format("subscribe: the subscription id {} is in use", id));
+          continue;
+        }
+        client.subscriptions[id] = channel_id;
+        if (advertised == channel_at(kHeaderChannel) && !header.empty()) {
+          send_data(handle, client, id, header_time, header);
+        }
+      }
+      update_wanted();
+    } else if (*op == "unsubscribe") {
+      const Json* ids = list("subscriptionIds");
+      if (ids == nullptr) {
+        status(handle, client, kError, "unsubscribe: expected \"subscriptionIds\": [N, ...]");
+        return;
+      }
+      for (const auto& item : *ids) {
+        const auto id = id_of(item);
+        if (id < 0 || client.subscriptions.erase(static_cast<std::uint32_t>(id)) == 0) {
+          status(handle, client, kWarning,
+                 fmt::format("unsubscribe: no subscription has the id {}",
+                             printable(item.dump().substr(0, 40))));
+        }
+      }
+      update_wanted();
+    } else {
+      status(handle, client, kWarning,
+             fmt::format("the operation '{}' is not supported by this server",
+                         printable(op->get<std::string>().substr(0, 40))));
+    }
+  }
+
+  bool start(const std::string& host, int port, std::string& error) {
+    server.clear_access_channels(websocketpp::log::alevel::all);
+    server.clear_error_channels(websocketpp::log::elevel::all);
+    std::error_code ec;
+    server.init_asio(ec);
+    if (ec) {
+      error = ec.message();
+      return false;
+    }
+    server.set_reuse_addr(true);
+    server.set_max_message_size(kMaxClientMessage);
+    server.set_validate_handler([this](Handle handle) {
+      const auto connection = server.get_con_from_hdl(handle);
+      for (const auto& protocol : connection->get_requested_subprotocols()) {
+        if (protocol == kSubprotocol) {
+          connection->select_subprotocol(kSubprotocol);
+          return true;
+        }
+      }
+      spdlog::warn(
+          "foxglove: refused a connection from {} that did not ask for the {} "
+          "subprotocol",
+          connection->get_remote_endpoint(), kSubprotocol);
+      return false;
+    });
+    server.set_open_handler([this](Handle handle) { on_open(handle); });
+    server.set_close_handler([this](Handle handle) { on_close(handle); });
+    server.set_fail_handler([this](Handle handle) {
+      if (stopped) return;  // a handshake cut short by the end of the run
+      std::error_code error;
+      const auto connection = server.get_con_from_hdl(handle, error);
+      if (error) return;
+      spdlog::warn("foxglove: a connection from {} failed: {}", connection->get_remote_endpoint(),
+                   connection->get_ec().message());
+    });
+    server.set_message_handler(
+        [this](Handle handle, WsServer::message_ptr message) { on_message(handle, message); });
+    asio::ip::tcp::endpoint endpoint;
+    const auto ip = asio::ip::make_address(host == "localhost" ? "127.0.0.1" : host, ec);
+    if (ec) {
+      error = fmt::format("'{}' is not an IP address", host);
+      return false;
+    }
+    endpoint = {ip, static_cast<unsigned short>(port)};
+    server.listen(endpoint, ec);
+    if (ec) {
+      error = fmt::format("cannot listen on {}:{}: {}", host, port, ec.message());
+      return false;
+    }
+    server.start_accept(ec);
+    const auto local = server.get_local_endpoint(ec);
+    if (ec) {
+      error = ec.message();
+      return false;
+    }
+    const bool v6 = local.address().is_v6();
+    url = fmt::format("ws://{}{}{}:{}", v6 ? "[" : "", local.address().to_string(), v6 ? "]" : "",
+                      local.port());
+    timer = std::make_unique<asio::steady_timer>(server.get_io_service());
+    schedule();
+    thread = std::thread([this] {
+      // A handler that throws ends that call only: the server goes on.
+      while (!stopped) {
+        try {
+          server.run();
+          break;
+        } catch (const std::exception& failure) {
+          spdlog::error("foxglove server: {}", failure.what());
+        }
+      }
+    });
+    return true;
+  }
+
+  void stop() {
+    if (!thread.joinable()) return;
+    asio::post(server.get_io_service(), [this] {
+      stopped = true;
+      timer->cancel();
+      std::error_code error;
+      server.stop_listening(error);
+      for (const auto& [handle, client] : clients) {
+        server.close(handle, websocketpp::close::status::going_away, "the run is over", error);
+      }
+    });
+    // Connections close within the handshake's timeout; after it, the loop is stopped.
+    for (int i = 0; i < 50 && connected.load() > 0; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    server.stop();
+    thread.join();
+  }
+};
+
+FoxgloveServer::FoxgloveServer() : impl_(std::make_unique<Impl>()) {
+  impl_->ring = std::make_unique<Slot[]>(impl_->ring_size);
+}
+
+FoxgloveServer::~FoxgloveServer() {
+  stop();
+}
+
+std::unique_ptr<FoxgloveServer> FoxgloveServer::open(const std::string& host, int port,
+                                                     std::string_view command,
+                                                     const std::string& name, std::ostream& out,
+                                                     std::ostream& err) {
+  std::unique_ptr<FoxgloveServer> server(new FoxgloveServer());
+  server->impl_->name = name;
+  server->impl_->wall_start = wall_ns();
+  std::string error;
+  if (!server->impl_->start(host, port, error)) {
+    err << fmt::format("arbiter {}: --foxglove: {}\n", command, error);
+    return nullptr;
+  }
+  out << fmt::format(
+             "serving the Foxglove WebSocket protocol at {} (in Foxglove or Lichtblick: "
+             "Open connection, Foxglove WebSocket)\n",
+             server->url())
+      << std::flush;
+  return server;
+}
+
+std::string FoxgloveServer::url() const {
+  return impl_->url;
+}
+
+FoxgloveCounts FoxgloveServer::counts() const {
+  FoxgloveCounts counts;
+  counts.clients = impl_->opened.load();
+  counts.sent = impl_->sent.load();
+  counts.dropped_for_slow_clients = impl_->dropped_for_clients.load();
+  counts.dropped_steps = impl_->dropped_steps.load();
+  counts.started = impl_->started.load();
+  return counts;
+}
+
+std::string FoxgloveServer::summary(std::string_view command) const {
+  const auto counted = counts();
+  if (counted.dropped_for_slow_clients == 0 && counted.dropped_steps == 0) return "";
+  return fmt::format(
+      "arbiter {}: --foxglove: {} messages were dropped for clients that read too slowly, and {} "
+      "steps for a server that fell behind ({} sent, to {} connections)\n",
+      command, counted.dropped_for_slow_clients, counted.dropped_steps, counted.sent,
+      counted.clients);
+}
+
+void FoxgloveServer::set_paced(bool paced) {
+  impl_->paced = paced;
+}
+
+void FoxgloveServer::stop() {
+  impl_->stop();
+}
+
+void FoxgloveServer::on_start(const Manager& manager) {
+  auto& impl = *impl_;
+  auto generation =
+      std::make_unique<Generation>(manager.program(), manager.stage_number(), impl.ring_size);
+  impl.stepping = generation.get();
+  // Handed to the server's thread as a reload would be: it advertises the channels then.
+  Slot* slot = impl.claim();
+  slot->kind = Slot::Kind::kHeader;
+  slot->step = manager.steps();
+  slot->reload = 0;
+  slot->wall_time = wall_ns();
+  slot->next = std::move(generation);
+  impl.headers_published.fetch_add(1, std::memory_order_release);
+  impl.publish();
+  impl.started = true;
+}
+
+void FoxgloveServer::on_step(const Manager& manager) {
+  if (impl_->started) impl_->capture(manager);
+}
+
+void FoxgloveServer::on_safe(const Manager& manager) {
+  if (impl_->started) impl_->capture(manager);
+}
+
+void FoxgloveServer::on_staged(const Program& next, std::uint64_t stage) {
+  auto generation = std::make_unique<Generation>(next, stage, impl_->ring_size);
+  std::lock_guard<std::mutex> lock(impl_->staged_mutex);
+  std::swap(impl_->staged, generation);
+}
+
+void FoxgloveServer::on_reload(const Manager& manager) {
+  auto& impl = *impl_;
+  if (!impl.started) return;
+  impl.settle();
+  std::unique_ptr<Generation> next;
+  {
+    std::lock_guard<std::mutex> lock(impl.staged_mutex);
+    if (impl.staged && impl.staged->stage == manager.stage_number()) next = std::move(impl.staged);
+  }
+  if (!next) {
+    next = std::make_unique<Generation>(manager.program(), manager.stage_number(), impl.ring_size);
+  }
+  impl.stepping = next.get();
+  impl.chained = false;
+  // A header is never dropped: the steps after it are laid out by it. The server's thread frees
+  // a slot within its poll.
+  Slot* slot = nullptr;
+  while ((slot = impl.claim()) == nullptr && !impl.stopped) std::this_thread::yield();
+  if (slot == nullptr) {
+    impl.orphans.push_back(std::move(next));
+    return;
+  }
+  slot->kind = Slot::Kind::kHeader;
+  slot->step = manager.steps();
+  slot->reload = manager.reloads();
+  slot->wall_time = wall_ns();
+  slot->next = std::move(next);
+  impl.headers_published.fetch_add(1, std::memory_order_release);
+  impl.publish();
+}
+
+void FoxgloveServer::on_retiring(const Program&) {
+  // The server's thread formats steps of the replaced program until it reaches the header.
+  auto& impl = *impl_;
+  const auto published = impl.headers_published.load(std::memory_order_acquire);
+  while (impl.headers_written.load(std::memory_order_acquire) < published && !impl.stopped) {
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+}
+
+void FoxgloveServer::on_finish(const Manager&) {
+  if (impl_->started) impl_->settle();
+}
+
+}  // namespace arbiter::cli

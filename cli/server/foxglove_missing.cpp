@@ -1,0 +1,51 @@
+// The Foxglove server of a build without websocketpp (cli/CMakeLists.txt): --foxglove says why
+// it is not there.
+
+#include <fmt/format.h>
+
+#include "server/foxglove.hpp"
+
+#ifndef ARBITER_FOXGLOVE_LEFT_OUT
+#define ARBITER_FOXGLOVE_LEFT_OUT "it was left out of the build"
+#endif
+
+namespace arbiter::cli {
+
+std::string foxglove_left_out() {
+  return ARBITER_FOXGLOVE_LEFT_OUT;
+}
+
+struct FoxgloveServer::Impl {};
+
+FoxgloveServer::FoxgloveServer() = default;
+FoxgloveServer::~FoxgloveServer() = default;
+
+std::unique_ptr<FoxgloveServer> FoxgloveServer::open(const std::string&, int,
+                                                     std::string_view command, const std::string&,
+                                                     std::ostream&, std::ostream& err) {
+  err << fmt::format(
+      "arbiter {}: --foxglove: this arbiter was built without the Foxglove WebSocket server ({}); "
+      "docs/foxglove.md tells how to build it\n",
+      command, foxglove_left_out());
+  return nullptr;
+}
+
+std::string FoxgloveServer::url() const {
+  return "";
+}
+FoxgloveCounts FoxgloveServer::counts() const {
+  return {};
+}
+std::string FoxgloveServer::summary(std::string_view) const {
+  return "";
+}
+void FoxgloveServer::stop() {}
+void FoxgloveServer::on_start(const Manager&) {}
+void FoxgloveServer::on_step(const Manager&) {}
+void FoxgloveServer::on_safe(const Manager&) {}
+void FoxgloveServer::on_staged(const Program&, std::uint64_t) {}
+void FoxgloveServer::on_reload(const Manager&) {}
+void FoxgloveServer::on_retiring(const Program&) {}
+void FoxgloveServer::on_finish(const Manager&) {}
+
+}  // namespace arbiter::cli

@@ -1,0 +1,352 @@
+// `arbiter run --foxglove`, seen by Foxglove's own client (@foxglove/ws-protocol, over the `ws`
+// socket) as Foxglove and Lichtblick see it. Run through web/tests/foxglove_run.sh (CTest
+// `foxglove.live`), which sets:
+//   ARBITER         the arbiter binary
+//   ARBITER_SOURCE  the source tree (for the configs)
+//   NODE_MODULES    where `npm ci` put the packages of web/package.json
+import {test as nodeTest, after} from 'node:test';
+import assert from 'node:assert/strict';
+import {execFileSync, spawn, spawnSync} from 'node:child_process';
+import {createRequire} from 'node:module';
+import {mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
+import {tmpdir} from 'node:os';
+import path from 'node:path';
+import net from 'node:net';
+
+const test = (name, fn) => nodeTest(name, {timeout: 90000}, fn);
+
+const require = createRequire(path.join(process.env.NODE_MODULES, 'package.json'));
+const {FoxgloveClient} = require('@foxglove/ws-protocol');
+const WebSocket = require('ws');
+const Ajv2020 = require('ajv/dist/2020').default;
+
+const arbiter = process.env.ARBITER;
+const source = process.env.ARBITER_SOURCE;
+const soccer = 'configs/soccer/walk_and_kick.yaml';
+const scratch = mkdtempSync(path.join(tmpdir(), 'arbiter-foxglove-'));
+const children = [];
+
+after(() => {
+  for (const child of children) child.kill('SIGINT');
+  rmSync(scratch, {recursive: true, force: true});
+});
+
+/// Starts `arbiter ARGS`; resolves with the ws:// URL it prints, the child, and a function that
+/// resolves with all it printed once it exited (after a SIGINT, as the server stays up).
+function serve(args) {
+  return new Promise((resolve, reject) => {
+    const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
+    children.push(child);
+    let out = '';
+    let err = '';
+    const exited = new Promise((done) => child.on('exit', (code) => done({code, out, err})));
+    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 15000);
+    child.stdout.on('data', (data) => {
+      out += data;
+      const found = out.match(/ws:\/\/127\.0\.0\.1:\d+/);
+      if (found) {
+        clearTimeout(timer);
+        resolve({url: found[0], child, exited, output: () => ({out, err})});
+      }
+    });
+    child.stderr.on('data', (data) => { err += data; });
+    child.on('exit', (code) => reject(new Error(`arbiter exited with ${code}:\n${out}${err}`)));
+  });
+}
+
+/// A Foxglove client on `url`: resolves once the server advertised its channels.
+function connect(url) {
+  return new Promise((resolve, reject) => {
+    const ws = new WebSocket(url, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]);
+    const client = new FoxgloveClient({ws});
+    const state = {ws, client, serverInfo: null, channels: new Map(), statuses: []};
+    const timer = setTimeout(() => reject(new Error(`no advertise from ${url} in 15 s`)), 15000);
+    client.on('error', reject);
+    client.on('close', (event) => reject(new Error(`closed before advertise: ${event.code}`)));
+    client.on('serverInfo', (info) => { state.serverInfo = info; });
+    client.on('status', (status) => state.statuses.push(status));
+    client.on('advertise', (channels) => {
+      for (const channel of channels) state.channels.set(channel.id, channel);
+      clearTimeout(timer);
+      resolve(state);
+    });
+  });
+}
+
+const waitFor = (what, predicate, ms = 60000) => new Promise((resolve, reject) => {
+  const started = Date.now();
+  const timer = setInterval(() => {
+    if (predicate()) {
+      clearInterval(timer);
+      resolve();
+    } else if (Date.now() - started > ms) {
+      clearInterval(timer);
+      reject(new Error(`timed out waiting for ${what}`));
+    }
+  }, 20);
+});
+
+/// The soccer demo at `rate` steps per second, in the scratch folder beside its includes.
+function soccerAt(rate) {
+  const file = path.join(scratch, `soccer_${rate}.yaml`);
+  const text = readFileSync(path.join(source, soccer), 'utf8').replace(/^rate_hz: .*$/m, `rate_hz: ${rate}`);
+  // Relative includes and plugin paths keep working from the source's configs/soccer.
+  writeFileSync(file, text);
+  return file;
+}
+
+test('a Foxglove client subscribes to every channel, every message fits its schema, and it sees the kick', async () => {
+  const server = await serve(['run', soccer, '--foxglove', '0', '--steps', '100000', '-q']);
+  const {client, serverInfo, channels} = await connect(server.url);
+  assert.match(serverInfo.name, /^arbiter /);
+  // Exactly the channels of a recording (arbiter::channels()), in its order, JSON with JSON Schemas.
+  const advertised = [...channels.values()].sort((a, b) => a.id - b.id);
+  assert.deepEqual(advertised.map((channel) => `${channel.topic} ${channel.schemaName}`),
+                   ['/arbiter/header arbiter.Header', '/arbiter/step arbiter.Step',
+                    '/arbiter/inputs arbiter.Inputs', '/arbiter/log foxglove.Log']);
+  // The step schema is the config's own: each behaviour a typed field.
+  const stepSchema = JSON.parse(advertised[1].schema);
+  assert.equal(stepSchema.properties.layers.properties.control.properties.kick_ball
+                   .properties.activation.type, 'number');
+  const ajv = new Ajv2020({strict: false, allErrors: true});
+  const validators = new Map();
+  const subscriptions = new Map();
+  for (const channel of channels.values()) {
+    assert.equal(channel.encoding, 'json');
+    assert.equal(channel.schemaEncoding, 'jsonschema');
+    validators.set(channel.id, ajv.compile(JSON.parse(channel.schema)));
+    subscriptions.set(client.subscribe(channel.id), channel);
+  }
+  const received = new Map();
+  const invalid = [];
+  let kickedAt = 0;
+  let lastStep = 0;
+  let lastTime = 0n;
+  const reports = [];  // [{by, text, time}] of the steps received
+  const logs = [];
+  client.on('message', ({subscriptionId, timestamp, data}) => {
+    const channel = subscriptions.get(subscriptionId);
+    assert.ok(channel, `a message for the subscription ${subscriptionId}, which the client made`);
+    const message = JSON.parse(new TextDecoder().decode(data));
+    const validate = validators.get(channel.id);
+    if (!validate(message)) invalid.push(`${channel.topic}: ${ajv.errorsText(validate.errors)}`);
+    received.set(channel.topic, (received.get(channel.topic) || 0) + 1);
+    if (channel.topic === '/arbiter/step') {
+      assert.ok(message.step > lastStep, `steps arrive in order: ${message.step} after ${lastStep}`);
+      assert.ok(timestamp >= lastTime, 'log times do not go back');
+      lastStep = message.step;
+      lastTime = timestamp;
+      if (!kickedAt && message.layers.control.kick_ball.active) kickedAt = message.step;
+      for (const {by, text} of message.reported || []) reports.push({by, text, time: timestamp});
+    }
+    if (channel.topic === '/arbiter/log') logs.push({by: message.name, text: message.message, time: timestamp, message});
+  });
+  await waitFor('kick_ball to become active', () => kickedAt > 0);
+  await waitFor('a few more steps', () => lastStep > kickedAt + 3, 5000);
+  console.log(`kick_ball active at step ${kickedAt}; messages per topic:`,
+              Object.fromEntries(received));
+  assert.deepEqual(invalid, []);
+  assert.ok(received.get('/arbiter/header') >= 1, 'the header is sent to a client that subscribes late');
+  assert.ok(received.get('/arbiter/inputs') > 10);
+  // What the world reported (the kick) is on /arbiter/log too, at its step's log time: a paced
+  // run's, the wall clock.
+  await waitFor('the kick reported', () => logs.some((log) => /kick/.test(log.text)), 10000);
+  const kick = logs.find((log) => /kick/.test(log.text));
+  assert.equal(kick.message.level, 2);  // INFO
+  assert.equal(BigInt(kick.message.timestamp.sec) * 1000000000n + BigInt(kick.message.timestamp.nsec),
+               kick.time);
+  assert.ok(reports.some((report) => report.by === kick.by && report.text === kick.text &&
+                                     report.time === kick.time),
+            `the step that reported ${kick.by}: ${kick.text} at ${kick.time} has it in "reported"`);
+  const late = Math.abs(Number(kick.time / 1000000n) - Date.now());
+  assert.ok(late < 30000, `logged on the wall clock: ${late} ms from now`);
+  assert.deepEqual(invalid, []);
+  client.close();
+  server.child.kill('SIGINT');
+  assert.equal((await server.exited).code, 0);
+});
+
+test('replay --foxglove serves a recording at its pace, its messages as a run sends them', async () => {
+  const recording = path.join(scratch, 'run.mcap');
+  execFileSync(arbiter, ['run', soccer, '--steps', '30', '--record', recording, '-q'], {cwd: source});
+  const server = await serve(['replay', recording, '--foxglove', '0']);
+  const {client, channels} = await connect(server.url);
+  const ajv = new Ajv2020({strict: false});
+  const step = [...channels.values()].find((channel) => channel.topic === '/arbiter/step');
+  const validate = ajv.compile(JSON.parse(step.schema));
+  const steps = [];
+  const times = [];
+  client.on('message', ({data, timestamp}) => {
+    const message = JSON.parse(new TextDecoder().decode(data));
+    assert.ok(validate(message), ajv.errorsText(validate.errors));
+    steps.push(message.step);
+    times.push(timestamp);
+  });
+  client.subscribe(step.id);
+  await waitFor('the end of the replay', () => /the replay is over/.test(server.output().out), 20000);
+  server.child.kill('SIGINT');
+  const {code, out} = await server.exited;
+  assert.equal(code, 0);
+  assert.match(out, /replayed 30 steps of .*: identical to the recording/);
+  // Paced at 15 Hz, the replay was still stepping when the client subscribed.
+  assert.ok(steps.length > 5, `steps received: ${steps}`);
+  assert.equal(steps.at(-1), 30);
+  assert.deepEqual(steps, [...steps].sort((a, b) => a - b));
+  // Logged on the simulated clock, as a recording of a replay is: step / rate_hz (15 Hz).
+  for (let i = 1; i < steps.length; ++i) {
+    const expected = (steps[i] - steps[i - 1]) * 1e9 / 15;
+    assert.ok(Math.abs(Number(times[i] - times[i - 1]) - expected) <= 2,
+              `steps ${steps[i - 1]} and ${steps[i]} are ${times[i] - times[i - 1]} ns apart`);
+  }
+});
+
+test('a hot reload (--watch) sends the reloaded program\'s header, and the steps go on', async () => {
+  const config = soccerAt(30);
+  const server = await serve(['run', config, '--watch', '--foxglove', '0', '-q']);
+  const {client, channels} = await connect(server.url);
+  const headers = [];
+  let lastStep = 0;
+  const subscriptions = new Map();
+  for (const channel of channels.values()) subscriptions.set(client.subscribe(channel.id), channel.topic);
+  client.on('message', ({subscriptionId, data}) => {
+    const message = JSON.parse(new TextDecoder().decode(data));
+    const topic = subscriptions.get(subscriptionId);
+    if (topic === '/arbiter/header') headers.push(message);
+    if (topic === '/arbiter/step') lastStep = message.step;
+  });
+  await waitFor('a few steps', () => lastStep >= 5, 10000);
+  writeFileSync(config, readFileSync(config, 'utf8').replace('noise: 0.02', 'noise: 0.03'));
+  await waitFor('the reloaded header', () => headers.some((header) => header.reload >= 1), 20000);
+  const reloaded = headers.find((header) => header.reload >= 1);
+  await waitFor('steps after the reload', () => lastStep > reloaded.after_step + 5, 10000);
+  assert.equal(headers[0].arbiter_trace, 1);
+  client.close();
+  server.child.kill('SIGINT');
+  assert.equal((await server.exited).code, 0);
+});
+
+test('a client that stops reading does not slow the steps: its messages are dropped, and counted', async () => {
+  // Paced fast, so that an unread client's backlog fills within the run.
+  const rate = 2000;
+  const steps = 10000;
+  const config = soccerAt(rate);
+  const timed = async (withClient) => {
+    const args = ['run', config, '--foxglove', '0', '--steps', String(steps)];
+    const server = await serve(args);
+    let stalled = null;
+    if (withClient) {
+      stalled = await connect(server.url);
+      for (const channel of stalled.channels.values()) stalled.client.subscribe(channel.id);
+      // Reads nothing more: the server's sends pile up in the socket and then in its queue.
+      stalled.client.on('message', () => stalled.ws._socket.pause());
+    }
+    await waitFor('the end of the run', () => /the run is over/.test(server.output().out), 60000);
+    server.child.kill('SIGINT');
+    const {code, out, err} = await server.exited;
+    assert.equal(code, 0, err);
+    if (stalled) stalled.ws.terminate();
+    const wall = Number(out.match(/in ([\d.]+) s of wall time/)[1]);
+    const timing = out.split('\n').filter((line) => /step|period|overrun/i.test(line)).join('\n  ');
+    return {wall, timing, err};
+  };
+  const alone = await timed(false);
+  const slow = await timed(true);
+  console.log(`${steps} steps paced at ${rate} Hz (${steps / rate} s), on this machine:\n` +
+              `without a client: ${alone.wall} s of wall time\n  ${alone.timing}\n` +
+              `with a client that stopped reading: ${slow.wall} s of wall time\n  ${slow.timing}\n` +
+              `server: ${slow.err.trim()}`);
+  assert.match(slow.err, /(\d+) messages were dropped for clients that read too slowly/);
+  assert.ok(Number(slow.err.match(/(\d+) messages were dropped/)[1]) > 0);
+  assert.match(slow.err, /reads too slowly: its messages are dropped/);
+  // The run kept its pace: a client that blocked it would have held it until the end of the
+  // test, one that slowed each step by a millisecond would have taken 10 s longer. A paced run's
+  // wall time also grows with each period a loaded machine makes it miss: that noise is allowed.
+  assert.ok(slow.wall < alone.wall * 1.5 + 1,
+            `${slow.wall} s with the client against ${alone.wall} s without`);
+});
+
+test('garbage frames, unknown channels and 100 connections are survived with a log line each', async () => {
+  const server = await serve(['run', soccer, '--foxglove', '0', '--steps', '100000', '-q',
+                              '--log-level', 'info']);
+  const {client, ws, channels, statuses} = await connect(server.url);
+  const send = (data) => ws.send(data);
+  send('not json at all');
+  send('{"op": 7}');
+  send('[1, 2, 3]');
+  send(JSON.stringify({op: 'subscribe', subscriptions: [{id: 1, channelId: 9999}]}));
+  send(JSON.stringify({op: 'subscribe', subscriptions: [{id: -1, channelId: 'x'}]}));
+  send(JSON.stringify({op: 'subscribe'}));
+  send(JSON.stringify({op: 'unsubscribe', subscriptionIds: [12345]}));
+  send(JSON.stringify({op: 'publish', data: 1}));
+  send(Buffer.from([0x01, 0xff, 0xff, 0xff, 0xff, 0x00]));
+  await waitFor('a status message for each', () => statuses.length >= 9, 5000);
+  console.log('statuses:', statuses.map((status) => status.message));
+  // Raw garbage over TCP, not even a WebSocket handshake; and a frame too big to take.
+  await new Promise((resolve) => {
+    const socket = net.connect(Number(server.url.split(':')[2]), '127.0.0.1', () => {
+      socket.end('\x00\xff garbage\r\n\r\n');
+    });
+    socket.resume();  // reads the server's answer, to see it close the connection
+    socket.on('close', resolve);
+    socket.setTimeout(5000, () => {
+      socket.destroy();
+      resolve();
+    });
+    socket.on('error', resolve);
+  });
+  ws.send('x'.repeat(200000));
+  // 100 clients connect, subscribe and leave.
+  const many = await Promise.all(Array.from({length: 100}, () => connect(server.url)));
+  for (const other of many) {
+    for (const id of other.channels.keys()) other.client.subscribe(id);
+  }
+  await new Promise((resolve) => setTimeout(resolve, 300));
+  for (const other of many) other.ws.terminate();
+  // The server still serves: a new client gets the steps.
+  const last = await connect(server.url);
+  const step = [...last.channels.values()].find((channel) => channel.topic === '/arbiter/step');
+  let got = 0;
+  last.client.on('message', () => { got += 1; });
+  last.client.subscribe(step.id);
+  await waitFor('steps for a client after all that', () => got >= 3, 10000);
+  last.client.close();
+  client.close();
+  server.child.kill('SIGINT');
+  const {err} = await server.exited;
+  console.log(err.split('\n').filter((line) => !/connected|left|End of File/.test(line)).join('\n'));
+  assert.match(err, /malformed message/);
+  assert.match(err, /no channel has the id 9999/);
+  assert.match(err, /a connection from .* failed: .*/);
+  assert.match(err, /closed the connection of client .*: A message was too large/);
+  assert.match(err, /client .* connected \(\d+ connected\)/);
+  assert.doesNotMatch(err, /terminate|Segmentation|Aborted/);
+  assert.equal(channels.size >= 3, true);
+});
+
+test('loopback unless another address is asked for, with a warning; a bad address is a usage error', async () => {
+  const bad = spawnSync(arbiter, ['run', soccer, '--foxglove', '127.0.0.1:99999'], {cwd: source, encoding: 'utf8'});
+  assert.equal(bad.status, 2);
+  assert.match(bad.stderr, /--foxglove: .*the port must be a number from 0 to 65535/);
+  const local = await serve(['run', soccer, '--foxglove', '0', '-q']);
+  const all = await new Promise((resolve, reject) => {
+    const child = spawn(arbiter, ['run', soccer, '--foxglove', '0.0.0.0:0', '-q'], {cwd: source});
+    children.push(child);
+    let out = '';
+    let err = '';
+    child.stdout.on('data', (data) => { out += data; });
+    child.stderr.on('data', (data) => { err += data; });
+    const timer = setInterval(() => {
+      if (/ws:\/\//.test(out)) {
+        clearInterval(timer);
+        resolve({child, out, err});
+      }
+    }, 20);
+    child.on('exit', (code) => reject(new Error(`arbiter exited with ${code}: ${err}`)));
+  });
+  assert.match(all.out, /ws:\/\/0\.0\.0\.0:\d+/);
+  assert.match(all.err, /serving on 0\.0\.0\.0, not only to this machine: .*no authentication/);
+  assert.doesNotMatch(local.output().err, /not only to this machine/);
+  all.child.kill('SIGINT');
+  local.child.kill('SIGINT');
+  await local.exited;
+});
