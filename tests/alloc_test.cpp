@@ -137,7 +137,7 @@ class Reporter final : public Behaviour {
   }();
 };
 
-TEST_CASE("formatted reports allocate nothing; a text too long is cut and marked", "[alloc]") {
+TEST_CASE("formatted reports allocate nothing, and a text too long is cut and marked", "[alloc]") {
   Registry registry = test::make_test_registry();
   registry.add_behaviour<Reporter>("test.Reporter");
   Manager manager(test::compile_text(R"(
