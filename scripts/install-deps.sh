@@ -5,7 +5,8 @@ set -euo pipefail
 
 packages=(cmake g++ ninja-build pkg-config libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libzstd-dev zlib1g-dev
           libspdlog-dev catch2 libcli11-dev libbenchmark-dev libvalijson-dev
-          cyclonedds-dev cyclonedds-tools libcpp-httplib-dev esbuild libwebsocketpp-dev libasio-dev)
+          cyclonedds-dev cyclonedds-tools libcpp-httplib-dev esbuild libwebsocketpp-dev libasio-dev
+          python3-dev pybind11-dev)
 # The web app's build (web/) runs npm. Looked for by command, so that a Node.js installed some
 # other way (whose npm is not Debian's package) counts.
 command -v node >/dev/null || packages+=(nodejs)

@@ -173,6 +173,8 @@ command -v nvim >/dev/null || test_tools+=(neovim)
 command -v make >/dev/null || test_tools+=(make)
 command -v clang++ >/dev/null || test_tools+=(clang)
 test_tools+=(libclang-rt-dev)
+# pytest runs the Python module's tests; pandas is what its recordings turn into.
+test_tools+=(python3-pytest python3-pandas)
 scripts/install-deps.sh "${test_tools[@]}"
 
 status=0
