@@ -51,7 +51,7 @@ _arbiter() {
   local cur prev command word i
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
-  local commands="validate run dump explain test plugins schema view plot replay diff lsp"
+  local commands="validate run dump explain test plugins schema view plot replay diff lsp new"
   local global="--help --version --log-level --plugin-path --max-file-bytes --color"
   local global_after="--log-level --plugin-path --max-file-bytes --color"  # after the command
 
@@ -114,6 +114,7 @@ _arbiter() {
     plugins) options="--format --load --builtin --help" ;;
     schema) options="--load --builtin --help" ;;
     lsp) options="--help" ;;
+    new) options="--help" ;;
   esac
   if [[ $cur == -* ]]; then
     # Global options may follow the command too (`arbiter run FILE --plugin-path DIR`).
@@ -122,6 +123,21 @@ _arbiter() {
   fi
   case "$command" in
     plugins | schema | lsp) return ;;
+    new)
+      # `new plugin NAME [DIR]`: the kind of project, then a name to type, then a directory.
+      local after=()
+      for ((i = i + 1; i < COMP_CWORD; ++i)); do
+        case "${COMP_WORDS[i]}" in
+          --log-level | --plugin-path | --max-file-bytes | --color) ((++i)) ;;
+          -*) ;;
+          *) after+=("${COMP_WORDS[i]}") ;;
+        esac
+      done
+      case ${#after[@]} in
+        0) mapfile -t COMPREPLY < <(compgen -W "plugin" -- "$cur") ;;
+        2) mapfile -t COMPREPLY < <(compgen -d -- "$cur") ;;
+      esac
+      return ;;
     plot | diff)
       mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$')
       return ;;

@@ -13,6 +13,7 @@
 
 #include "arbiter/lint.hpp"
 #include "commands/command.hpp"
+#include "commands/new_project.hpp"
 #include "commands/record.hpp"
 #include "server/foxglove.hpp"
 #include "server/serve.hpp"
@@ -578,6 +579,33 @@ int main(int argc, char** argv) {
       "vim.lsp.start(c) else vim.lsp.buf_attach_client(0, vim.lsp.start_client(c)) end\n\n"
       "Exit codes: 0 after 'shutdown' and 'exit', 1 when the input ends or 'exit' comes first.");
 
+  auto* new_cmd = app.add_subcommand(
+      "new", "Start a project from a template: 'arbiter new plugin NAME [DIR]'.");
+  new_cmd->require_subcommand(1);
+  auto* new_plugin_cmd = new_cmd->add_subcommand(
+      "plugin",
+      "Write a starter plugin project into DIR: a CMakeLists.txt that builds against the\n"
+      "installed Arbiter SDK, a behaviour class (NAME.Stop), a state class (NAME.Drive), a config\n"
+      "that uses them, a scenario test and a README. It builds and its test passes as written.");
+  new_plugin_cmd
+      ->add_option("NAME", options.new_name,
+                   "the plugin's name: letters, digits and '_', starting with a letter; it names "
+                   "the library (arbiter_NAME.so), the C++ namespace and the classes (NAME.Stop)")
+      ->required();
+  new_plugin_cmd->add_option(
+      "DIR", options.new_dir,
+      "where to write it (default: NAME); must not exist or be empty: nothing is overwritten");
+  new_plugin_cmd->footer(
+      "Examples:\n"
+      "  arbiter new plugin rover\n"
+      "  arbiter new plugin rover plugins/rover\n"
+      "  cmake -S rover -B rover/build && cmake --build rover/build && ctest --test-dir "
+      "rover/build\n"
+      "  arbiter --plugin-path rover/build run rover/rover.yaml\n\n"
+      "docs/tutorial.md builds a behaviour graph and then extends it with such a plugin.\n\n"
+      "Exit codes: 0 written, 1 a file could not be written, 2 usage error (a bad NAME, a DIR "
+      "that is not empty).");
+
   try {
     app.parse(argc, argv);
     if (run_cmd->parsed() && (!options.serve.empty() || !options.foxglove.empty()) &&
@@ -659,6 +687,9 @@ int main(int argc, char** argv) {
     if (plugins_cmd->parsed()) return plugins_command(options);
     if (schema_cmd->parsed()) return schema_command(options);
     if (lsp_cmd->parsed()) return lsp_command(options);
+    if (new_plugin_cmd->parsed()) {
+      return new_plugin(options.new_name, options.new_dir, std::cout, std::cerr);
+    }
   } catch (const std::exception& error) {
     std::cerr << fmt::format("arbiter: {}\n", arbiter::printable(error.what()));
     return kExitInvalid;

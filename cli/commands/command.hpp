@@ -65,6 +65,8 @@ struct Options {
   double tolerance = 1e-9;     ///< `diff --tolerance`
   std::string compare_path;    ///< `plot --compare`
   std::string color = "auto";  ///< `--color`
+  std::string new_name;        ///< `new plugin NAME [DIR]`
+  std::string new_dir;
   arbiter::FormatOptions diagnostic_format = arbiter::FormatOptions::readable();
 };
 

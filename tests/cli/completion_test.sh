@@ -31,7 +31,12 @@ expect() {
   fi
 }
 
-expect "" -- validate run dump explain test plugins schema view plot replay diff lsp
+expect "" -- validate run dump explain test plugins schema view plot replay diff lsp new
+expect "n" -- new
+expect "new" "" -- plugin
+expect "new" "plugin" "rover" "configs/pa" -- configs/paper
+expect "new" "--plugin-path" "configs" "plugin" "rover" "configs/so" -- configs/soccer
+expect "new" "plugin" "" --
 expect "replay" "--c" -- --config --color
 expect "diff" "--t" -- --tolerance
 expect "ex" -- explain

@@ -1,0 +1,40 @@
+#include <arbiter/init_context.hpp>
+#include <arbiter/state.hpp>
+#include <cstdint>
+
+#include "classes.hpp"
+
+namespace @NAME@ {
+namespace {
+
+/// A state: commands `speed` for `steps` executions, then proceeds to the next planned state.
+/// Its params may differ per planned instance, so they bind to StateParam handles, read in the
+/// step with ctx.param(). Objects are pooled and reused: activate() sets up each instance.
+class Drive final : public arbiter::State {
+ public:
+  void activate(arbiter::StateContext& ctx) override { left_ = ctx.param(steps_); }
+
+  arbiter::StateResult execute(arbiter::StateContext& ctx) override {
+    ctx.write(speed_, ctx.param(target_));
+    return --left_ > 0 ? arbiter::StateResult::kHold : arbiter::StateResult::kProceed;
+  }
+
+ private:
+  friend void @NAME@::register_drive(arbiter::Registry& registry);
+  arbiter::StateParam<double> target_;
+  arbiter::StateParam<std::int64_t> steps_;
+  arbiter::Output<double> speed_;
+  std::int64_t left_ = 0;
+};
+
+}  // namespace
+
+void register_drive(arbiter::Registry& registry) {
+  auto& info = arbiter::add_state_class<Drive>(registry, "@NAME@.Drive")
+                   .describe("Drives at a speed for a number of steps.");
+  info.param("speed", &Drive::target_).range(-2.0, 2.0).describe("the forward speed (m/s)");
+  info.param("steps", &Drive::steps_).defaults_to(10).range(1, 100000).describe("how long");
+  info.port("speed", &Drive::speed_).describe("the commanded forward speed (m/s)");
+}
+
+}  // namespace @NAME@

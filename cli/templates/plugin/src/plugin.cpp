@@ -1,0 +1,11 @@
+// The plugin's entry points: the plugin API version it was built for, and the function that
+// registers its classes (a class added to the project is registered here too).
+
+#include <arbiter/plugin.hpp>
+
+#include "classes.hpp"
+
+ARBITER_PLUGIN(registry) {
+  @NAME@::register_stop(registry);
+  @NAME@::register_drive(registry);
+}
