@@ -39,7 +39,7 @@ grep -q "'rover/src/stop.cpp' exists and is not a directory; nothing was written
 # An empty directory is taken, and so is one to make, however deep.
 mkdir empty
 expect_exit 0 "$cli" new plugin probe empty
-[ -f empty/probe.yaml ] && [ -f empty/tests/probe.test.yaml ] || fail "empty/ not filled"
+{ [ -f empty/probe.yaml ] && [ -f empty/tests/probe.test.yaml ]; } || fail "empty/ not filled"
 expect_exit 0 "$cli" new plugin deep a/b/c
 [ -f a/b/c/src/plugin.cpp ] || fail "a/b/c/ not made"
 
