@@ -53,13 +53,16 @@ CLI::Option* add_serve_token_option(CLI::App& command, Options& options, const s
 // Words the command line has left over, in the order they were written (CLI11 lists them
 // backwards), each option among them with the closest option the command takes.
 int report_extras(const CLI::App& app) {
+  // The innermost command given: `arbiter new plugin` is two deep.
   const CLI::App* command = &app;
-  for (const CLI::App* sub : app.get_subcommands()) command = sub;
+  std::string prefix = "arbiter";
+  for (auto given = app.get_subcommands(); !given.empty(); given = command->get_subcommands()) {
+    command = given.back();
+    prefix += " " + command->get_name();
+  }
   std::vector<std::string> names;
   std::vector<std::string> commands;
-  if (command == &app) {
-    for (const CLI::App* sub : app.get_subcommands({})) commands.push_back(sub->get_name());
-  }
+  for (const CLI::App* sub : command->get_subcommands({})) commands.push_back(sub->get_name());
   for (const CLI::App* scope : {&app, command}) {
     for (const CLI::Option* option : scope->get_options()) {
       for (const auto& name : option->get_lnames()) names.push_back("--" + name);
@@ -69,7 +72,6 @@ int report_extras(const CLI::App& app) {
   const std::vector<std::string> words = app.remaining(true);
   std::string listed;
   for (const auto& word : words) listed += (listed.empty() ? "" : " ") + arbiter::printable(word);
-  const std::string prefix = command == &app ? "arbiter" : "arbiter " + command->get_name();
   std::cerr << fmt::format("{}: {} not expected: {}\n", prefix,
                            words.size() > 1 ? "these arguments were" : "this argument was", listed);
   for (const auto& word : words) {
@@ -155,7 +157,8 @@ int main(int argc, char** argv) {
       "  arbiter dump configs/paper/walk_and_kick.yaml --format dot | dot -Tsvg -o graph.svg\n"
       "  arbiter test tests/scenarios/soccer/\n"
       "  arbiter plugins\n"
-      "  arbiter schema > arbiter.schema.json\n\n"
+      "  arbiter schema > arbiter.schema.json\n"
+      "  arbiter new plugin rover          # a plugin project of your own (docs/tutorial.md)\n\n"
       "{}\n"
       "Run 'arbiter COMMAND --help' for a command's options and examples.",
       examples, kExitCodes));
@@ -628,8 +631,17 @@ int main(int argc, char** argv) {
   } catch (const CLI::ExtrasError&) {
     return report_extras(app);
   } catch (const CLI::RequiredError& error) {
-    // No command, but words: a misspelt command, told as the words it left over.
-    if (app.get_subcommands().empty() && !app.remaining().empty()) return report_extras(app);
+    // No command (or no kind of project after `new`), but words: a misspelt command, told as the
+    // words it left over.
+    const bool no_kind = new_cmd->parsed() && !new_plugin_cmd->parsed();
+    if ((app.get_subcommands().empty() || no_kind) && !app.remaining(true).empty()) {
+      return report_extras(app);
+    }
+    if (no_kind) {
+      std::cerr << "arbiter new: say what to start: 'arbiter new plugin NAME [DIR]'\n"
+                   "Run 'arbiter new --help' for more information.\n";
+      return kExitUsage;
+    }
     return app.exit(error) == 0 ? kExitOk : kExitUsage;
   } catch (const CLI::ParseError& error) {
     // --help and --version exit 0 through app.exit; every real parse error is a usage error.

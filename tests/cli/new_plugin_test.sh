@@ -67,4 +67,18 @@ grep -qF "cannot name a plugin: it is empty" err.txt || fail "an empty name is n
 expect_exit 0 "$cli" new plugin "$(printf 'x%.0s' {1..64})"
 expect_exit 0 "$cli" new plugin Rover_2
 
+# Usage errors name the command as typed, and a misspelt kind of project the one meant.
+expect_exit 2 "$cli" new plugn rover
+grep -qF "arbiter new: these arguments were not expected: plugn rover" err.txt ||
+  fail "'new plugn' not told"
+grep -qF "note: 'plugn': did you mean 'plugin'?" err.txt || fail "no 'plugin' offered for 'plugn'"
+expect_exit 2 "$cli" new
+grep -qF "arbiter new: say what to start: 'arbiter new plugin NAME [DIR]'" err.txt ||
+  fail "'new' alone not told"
+expect_exit 2 "$cli" new plugin x y z
+grep -qF "arbiter new plugin: this argument was not expected: z" err.txt ||
+  fail "an extra argument not told"
+grep -qF "Run 'arbiter new plugin --help'" err.txt || fail "no help for 'new plugin' offered"
+{ [ ! -e x ] && [ ! -e y ]; } || fail "a usage error wrote files"
+
 echo "arbiter new plugin writes the template and refuses what it must: 1 passed, 0 failed"
