@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "arbiter/diagnostics.hpp"
+#include "commands/command.hpp"
 
 namespace arbiter::cli {
 namespace {
@@ -119,7 +120,7 @@ int new_plugin(const std::string& name, const std::string& dir_given, std::ostre
     if (const std::string better = suggested_name(name); !better.empty() && better != name) {
       err << fmt::format("  note: did you mean '{}'?\n", better);
     }
-    return 2;
+    return kExitUsage;
   }
   const std::string dir_text = dir_given.empty() ? name : dir_given;
   const fs::path dir(dir_text);
@@ -128,26 +129,26 @@ int new_plugin(const std::string& name, const std::string& dir_given, std::ostre
   if (failed && failed != std::errc::no_such_file_or_directory) {
     err << fmt::format("{}: cannot look at '{}': {}\n", kCommand, printable(dir_text),
                        failed.message());
-    return 2;
+    return kExitUsage;
   }
   if (fs::exists(status)) {
     if (!fs::is_directory(status)) {
       err << fmt::format("{}: '{}' exists and is not a directory; nothing was written\n", kCommand,
                          printable(dir_text));
-      return 2;
+      return kExitUsage;
     }
     fs::directory_iterator entries(dir, failed);
     if (failed) {
       err << fmt::format("{}: cannot read the directory '{}': {}\n", kCommand, printable(dir_text),
                          failed.message());
-      return 2;
+      return kExitUsage;
     }
     if (entries != fs::directory_iterator()) {
       err << fmt::format(
           "{}: the directory '{}' is not empty (it has '{}'); nothing was written\n"
           "  note: give a new or empty directory: arbiter new plugin {} DIR\n",
           kCommand, printable(dir_text), printable(entries->path().filename().string()), name);
-      return 2;
+      return kExitUsage;
     }
   }
 
@@ -159,7 +160,7 @@ int new_plugin(const std::string& name, const std::string& dir_given, std::ostre
     if (failed) {
       err << fmt::format("{}: cannot make the directory '{}': {}\n", kCommand,
                          printable(path.parent_path().string()), failed.message());
-      return 1;
+      return kExitInvalid;
     }
     const std::string text =
         replaced(std::string_view(reinterpret_cast<const char*>(file.bytes), file.size), name);
@@ -172,12 +173,12 @@ int new_plugin(const std::string& name, const std::string& dir_given, std::ostre
     if (stream != nullptr && std::fclose(stream) != 0 && ok) {
       err << fmt::format("{}: cannot write '{}': {}\n", kCommand, printable(path.string()),
                          std::strerror(errno));
-      return 1;
+      return kExitInvalid;
     }
     if (!ok) {
       err << fmt::format("{}: cannot write '{}': {}\n", kCommand, printable(path.string()),
                          std::strerror(error));
-      return 1;
+      return kExitInvalid;
     }
     written.push_back(path.string());
   }
@@ -198,7 +199,7 @@ int new_plugin(const std::string& name, const std::string& dir_given, std::ostre
       "  arbiter --plugin-path {0}/build run {0}/{1}.yaml\n"
       "{0}/README.md tells more.\n",
       at, name);
-  return 0;
+  return kExitOk;
 }
 
 }  // namespace arbiter::cli
