@@ -585,6 +585,10 @@ int main(int argc, char** argv) {
   auto* new_cmd = app.add_subcommand(
       "new", "Start a project from a template: 'arbiter new plugin NAME [DIR]'.");
   new_cmd->require_subcommand(1);
+  new_cmd->footer(
+      "Examples:\n"
+      "  arbiter new plugin rover\n\n"
+      "Run 'arbiter new plugin --help' for its arguments and what to run next.");
   auto* new_plugin_cmd = new_cmd->add_subcommand(
       "plugin",
       "Write a starter plugin project into DIR: a CMakeLists.txt that builds against the\n"
