@@ -43,6 +43,11 @@ struct ProgramDiff {
 /// the behaviours and interface layers whose params changed from the models.
 ProgramDiff diff(const Program& before, const Program& after);
 
+/// diff() and the params that changed, of behaviours, interface layers and states: what an edit
+/// changed, as a hot reload reports it. Both programs need their models (Program::model); a
+/// params change needs them, and both programs' classes from one registry.
+ProgramDiff config_diff(const Program& before, const Program& after);
+
 /// One line per change, each indented by `indent`: `+ behaviour control/kick_ball (scripted)`,
 /// `- inhibition control: a => b`, `~ behaviour control/b: params`.
 std::string format(const ProgramDiff& diff, const std::string& indent = "  ");
