@@ -1,0 +1,73 @@
+#!/bin/bash
+# `arbiter diff` says why two runs part, checked against golden files (tests/data/golden/diff/):
+# the docs' what-if without kick_ball (the same inputs met a different graph), a seed change (the
+# inputs differed first) and a param change in a state machine. Then explain and view of a
+# recording without a config (the one it holds) and with one that is not its own.
+# ARBITER_UPDATE_GOLDEN=1 rewrites the golden files instead of comparing.
+set -eu
+cli=$1
+source_dir=$2
+golden=$source_dir/tests/data/golden/diff
+# shellcheck source=expect.sh
+source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
+export ARBITER_PLUGIN_PATH=$(dirname "$cli")/../plugins
+
+# check NAME: out.txt is the golden file NAME.
+check() {
+  if [[ -n ${ARBITER_UPDATE_GOLDEN:-} ]]; then
+    cp "$work/out.txt" "$golden/$1"
+    return
+  fi
+  diff -u "$golden/$1" "$work/out.txt" >"$work/golden_diff.txt" || fail "$1 differs from its golden file"
+}
+
+# Relative names in the work folder, so that the output names the files alike on every machine.
+cd "$work"
+cp "$source_dir/configs/soccer/walk_and_kick.yaml" walk_and_kick.yaml
+sed -e '/kick_ball: {type/d' -e '/kick_ball => go_behind_ball/d' walk_and_kick.yaml >no_kick.yaml
+sed -e 's/seed: 7/seed: 8/' walk_and_kick.yaml >seed8.yaml
+cp "$source_dir/configs/paper/hierarchical.yaml" match.yaml
+sed -e 's/dribble: {type: scripted, params: {hold: 3}}/dribble: {type: scripted, params: {hold: 5}}/' \
+  match.yaml >match_hold5.yaml
+grep -q 'hold: 5' match_hold5.yaml || fail "the edit of hierarchical.yaml did not apply"
+
+expect_exit 0 "$cli" run walk_and_kick.yaml --steps 220 -q --record run.mcap --trace run.jsonl
+expect_exit 0 "$cli" replay run.mcap --config no_kick.yaml --record no_kick.mcap
+expect_exit 0 "$cli" run seed8.yaml --steps 220 -q --record seed8.mcap
+expect_exit 0 "$cli" run match.yaml --steps 20 -q --record match.mcap
+expect_exit 0 "$cli" run match_hold5.yaml --steps 20 -q --record match_hold5.mcap
+
+# The what-if: the same inputs met a graph without kick_ball.
+expect_exit 1 "$cli" diff run.mcap no_kick.mcap
+check no_kick.txt
+expect_exit 1 "$cli" diff run.mcap no_kick.mcap --format json
+check no_kick.json
+# A seed change: the world's inputs differed first.
+expect_exit 1 "$cli" diff run.mcap seed8.mcap
+check seed.txt
+# A state's param changed: the state machine parts first.
+expect_exit 1 "$cli" diff match.mcap match_hold5.mcap
+check state_param.txt
+# A trace holds neither its inputs apart nor its config: said, and the recording side explained.
+expect_exit 1 "$cli" diff run.jsonl no_kick.mcap
+check trace_and_recording.txt
+
+# explain and view of a recording: without a config, the one it holds.
+expect_exit 0 "$cli" explain --trace run.mcap --step 171 kick_ball
+check explain_recorded.txt
+# With one that is not its own: what the recording holds, and how the given one differs.
+expect_exit 1 "$cli" explain no_kick.yaml --trace run.mcap --step 171 go_behind_ball
+cp "$work/err.txt" "$work/out.txt"
+check explain_mismatch.txt
+expect_exit 1 "$cli" view no_kick.yaml --trace run.mcap --serve 0
+grep -q "^run.mcap: error\[config-mismatch\]: the recording was made with another config than no_kick.yaml" \
+  "$work/err.txt" || fail "view accepts a config that is not the recording's"
+! grep -q "MCAP" "$work/err.txt" || fail "view quotes the recording's bytes"
+# A config that differs from the recording's only in its layout of layers is refused too, and the
+# recording's header is not quoted as a source line.
+expect_exit 1 "$cli" view "$source_dir/configs/paper/walk_and_kick.yaml" --trace run.mcap --serve 0
+! grep -q "MCAP" "$work/err.txt" || fail "view quotes the recording's bytes as a source line"
+# A trace holds no config.
+expect_exit 2 "$cli" explain --trace run.jsonl --step 171 kick_ball
+grep -q "run.jsonl is a trace, which holds no config" "$work/err.txt" || fail "explain of a trace without a config"
+echo ok
