@@ -289,12 +289,22 @@ Why find_why(Run& a, Run& b, const TraceDiff& diff, double tolerance) {
                       std::find(in_b.begin(), in_b.end(), what) != in_b.end();
     return both ? 0 : 1;
   };
+  std::vector<std::string> candidates;
   for (const auto& what : first.what) {
-    if (rank(what) < 4 && (why.target.empty() || rank(what) < rank(why.target))) why.target = what;
+    if (rank(what) < 4) candidates.push_back(what);
   }
-  if (!why.target.empty()) {
-    why.a = explain_side(a, why.target, first.step);
-    why.b = explain_side(b, why.target, first.step);
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [&](const auto& x, const auto& y) { return rank(x) < rank(y); });
+  // An input actuator has no behaviour to explain: the first candidate explained in a run.
+  for (const auto& what : candidates) {
+    Why::Side in_a = explain_side(a, what, first.step);
+    Why::Side in_b = explain_side(b, what, first.step);
+    if (why.target.empty() || in_a.explained || in_b.explained) {
+      why.target = what;
+      why.a = std::move(in_a);
+      why.b = std::move(in_b);
+    }
+    if (why.a.explained || why.b.explained) break;
   }
   return why;
 }
