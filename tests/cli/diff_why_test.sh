@@ -70,4 +70,18 @@ expect_exit 1 "$cli" view "$source_dir/configs/paper/walk_and_kick.yaml" --trace
 # A trace holds no config.
 expect_exit 2 "$cli" explain --trace run.jsonl --step 171 kick_ball
 grep -q "run.jsonl is a trace, which holds no config" "$work/err.txt" || fail "explain of a trace without a config"
+
+# plot --compare: B's rows under A's for state machines and actuators too, A and B named.
+expect_exit 0 "$cli" plot match.mcap --compare match_hold5.mcap -o compare.svg
+grep -q 'class="row controller compared" data-name="state_machines/attack_plan"' compare.svg ||
+  fail "plot --compare: no B row for the state machine"
+grep -q '<title>step 9: the runs differ</title>' compare.svg ||
+  fail "plot --compare: the state machine's first divergent step is not shaded"
+grep -q 'A: match.mcap (20 steps), B: match_hold5.mcap (20 steps)' compare.svg ||
+  fail "plot --compare does not name A and B"
+expect_exit 0 "$cli" plot run.mcap --compare no_kick.mcap --actuators -o compare.svg
+grep -q 'class="row actuator compared" data-name="kick"' compare.svg ||
+  fail "plot --compare: no B row for an actuator"
+[[ $(grep -o '<title>step 220: the runs differ</title>' compare.svg | wc -l) -eq 1 ]] ||
+  fail "plot --compare: the kick actuator's last divergent step is not shaded once"
 echo ok
