@@ -324,10 +324,9 @@ std::string indented(const std::string& text, const std::string& indent) {
 std::string inputs_text(const Why& why, std::uint64_t step) {
   if (!why.inputs_unknown.empty()) return "not known: " + why.inputs_unknown;
   if (why.inputs) {
-    return fmt::format(
-        "they differed first, at step {}{} ({}): the graphs met different inputs", why.inputs->step,
-        why.inputs->step == step ? ", in its input pass, before its behaviours ran" : "",
-        join(why.inputs->what, ", "));
+    return fmt::format("they differed first, at step {} ({}){}: the runs met different inputs",
+                       why.inputs->step, join(why.inputs->what, ", "),
+                       why.inputs->step == step ? ", read before the step's behaviours ran" : "");
   }
   return fmt::format("the same up to step {}: the same inputs met {}", step,
                      why.config && why.config->empty() ? "the same config" : "a different graph");
