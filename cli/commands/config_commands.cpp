@@ -137,7 +137,8 @@ int explain_command(const Options& options) {
   std::string config = options.file;
   std::string target = options.target;
   if (target.empty()) std::swap(config, target);
-  if (target.empty()) {
+  // A config given without a target is not a target: the target was forgotten.
+  if (target.empty() || std::filesystem::is_regular_file(target)) {
     std::cerr << "arbiter explain: name the behaviour or state machine to explain\n";
     return kExitUsage;
   }

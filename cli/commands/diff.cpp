@@ -140,9 +140,11 @@ std::string value_text(const std::string& what, const Json& entry) {
 }
 
 /// Where the recorded inputs of two recordings first differ, up to `last`: the step and the
-/// inputs; nullopt when they are the same. The inputs are compared as actuators are.
+/// inputs; nullopt when they are the same, or when either cannot be read (then `error`). The
+/// inputs are compared as actuators are.
 std::optional<TraceDiff::Divergence> inputs_divergence(const std::string& a, const std::string& b,
-                                                       std::uint64_t last, double tolerance) {
+                                                       std::uint64_t last, double tolerance,
+                                                       std::string& error) {
   RecordingReader first(a);
   RecordingReader second(b);
   TraceDiffer differ(tolerance);
@@ -180,6 +182,9 @@ std::optional<TraceDiff::Divergence> inputs_divergence(const std::string& a, con
       more_x = next(first, x);
       more_y = next(second, y);
     }
+  }
+  for (const auto* reader : {&first, &second}) {
+    if (reader->error()) error = reader->error()->message;
   }
   return std::nullopt;
 }
@@ -252,7 +257,8 @@ Why::Side explain_side(const Run& run, const std::string& what, std::uint64_t st
   const Explanation explanation = explain(program, *source, step, target);
   side.explained = explanation.status == Explanation::Status::kOk;
   side.text = side.explained ? explanation.text
-                             : fmt::format("{} has no {}: {}", run.label, target, explanation.text);
+                             : fmt::format("{} cannot be explained in {}: {}", target, run.label,
+                                           explanation.text);
   return side;
 }
 
@@ -268,7 +274,9 @@ Why find_why(Run& a, Run& b, const TraceDiff& diff, double tolerance) {
     if (std::find(in_a.begin(), in_a.end(), name) == in_a.end()) why.only_b.push_back(name);
   }
   if (a.recording && b.recording) {
-    why.inputs = inputs_divergence(a.path, b.path, first.step, tolerance);
+    std::string error;
+    why.inputs = inputs_divergence(a.path, b.path, first.step, tolerance, error);
+    if (!error.empty()) why.inputs_unknown = "the recorded inputs cannot be read: " + error;
   } else {
     why.inputs_unknown = fmt::format("{} a trace: only recordings keep their inputs apart",
                                      !a.recording && !b.recording ? "A and B are"

@@ -67,6 +67,9 @@ grep -q "^run.mcap: error\[config-mismatch\]: the recording was made with anothe
 # recording's header is not quoted as a source line.
 expect_exit 1 "$cli" view "$source_dir/configs/paper/walk_and_kick.yaml" --trace run.mcap --serve 0
 ! grep -q "MCAP" "$work/err.txt" || fail "view quotes the recording's bytes as a source line"
+# A config without a target: the target was forgotten, not the config.
+expect_exit 2 "$cli" explain walk_and_kick.yaml --trace run.mcap --step 171
+grep -q "name the behaviour or state machine to explain" "$work/err.txt" || fail "explain without a target"
 # A trace holds no config.
 expect_exit 2 "$cli" explain --trace run.jsonl --step 171 kick_ball
 grep -q "run.jsonl is a trace, which holds no config" "$work/err.txt" || fail "explain of a trace without a config"
