@@ -466,14 +466,14 @@ std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
   auto layers = behaviours_of(trace);
   if (options.compare != nullptr) {
     // What only the second run has gets its rows too.
-    for (const auto& [layer, names] : behaviours_of(*options.compare)) {
+    for (const auto& other : behaviours_of(*options.compare)) {
       auto found = std::find_if(layers.begin(), layers.end(),
-                                [&](const auto& item) { return item.first == layer; });
+                                [&](const auto& item) { return item.first == other.first; });
       if (found == layers.end()) {
-        layers.emplace_back(layer, names);
+        layers.push_back(other);
         continue;
       }
-      for (const auto& name : names) {
+      for (const auto& name : other.second) {
         if (std::find(found->second.begin(), found->second.end(), name) == found->second.end()) {
           found->second.push_back(name);
         }
