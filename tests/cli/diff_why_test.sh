@@ -55,6 +55,13 @@ check trace_and_recording.txt
 # explain and view of a recording: without a config, the one it holds.
 expect_exit 0 "$cli" explain --trace run.mcap --step 171 kick_ball
 check explain_recorded.txt
+# view serves a recording with the config it holds.
+"$cli" view --trace run.mcap --serve 0 >"$work/out.txt" 2>"$work/err.txt" &
+pid=$!
+wait_for "viewing run.mcap (220 steps of walk_and_kick) at http" "$work/out.txt"
+kill "$pid"
+wait "$pid" 2>/dev/null || true
+pid=
 # With one that is not its own: what the recording holds, and how the given one differs.
 expect_exit 1 "$cli" explain no_kick.yaml --trace run.mcap --step 171 go_behind_ball
 cp "$work/err.txt" "$work/out.txt"
