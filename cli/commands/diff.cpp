@@ -336,8 +336,13 @@ std::string inputs_text(const Why& why, std::uint64_t step) {
                        why.inputs->step, join(why.inputs->what, ", "),
                        why.inputs->step == step ? ", read before the step's behaviours ran" : "");
   }
-  return fmt::format("the same up to step {}: the same inputs met {}", step,
-                     why.config && why.config->empty() ? "the same config" : "a different graph");
+  if (why.config && why.config->empty()) {
+    return fmt::format(
+        "the same up to step {}: the same inputs met the same config, so something in the run is "
+        "not deterministic (a behaviour, state or plugin; docs/replay.md, Determinism)",
+        step);
+  }
+  return fmt::format("the same up to step {}: the same inputs met a different graph", step);
 }
 
 std::string text_of(const Run& a, const Run& b, const TraceDiff& diff, const Why& why) {

@@ -7,6 +7,7 @@
 set -eu
 cli=$1
 source_dir=$2
+test_plugins=$3
 golden=$source_dir/tests/data/golden/diff
 # shellcheck source=expect.sh
 source "$(dirname "${BASH_SOURCE[0]}")/expect.sh"
@@ -51,6 +52,15 @@ check state_param.txt
 # A trace holds neither its inputs apart nor its config: said, and the recording side explained.
 expect_exit 1 "$cli" diff run.jsonl no_kick.mcap
 check trace_and_recording.txt
+
+# The same inputs and the same config, yet the runs differ: something is not deterministic.
+cp "$source_dir/tests/data/replay/unsteady.yaml" unsteady.yaml
+ARBITER_PLUGIN_PATH=$test_plugins expect_exit 0 "$cli" run unsteady.yaml --steps 20 -q --record unsteady.mcap
+ARBITER_PLUGIN_PATH=$test_plugins expect_exit 1 "$cli" replay unsteady.mcap --record unsteady_again.mcap
+ARBITER_PLUGIN_PATH=$test_plugins expect_exit 1 "$cli" diff unsteady.mcap unsteady_again.mcap
+grep -qx "inputs: the same up to step 1: the same inputs met the same config, so something in the run is not deterministic (a behaviour, state or plugin; docs/replay.md, Determinism)" \
+  "$work/out.txt" || fail "diff of a run that is not deterministic"
+grep -qx "config: the same in A and B" "$work/out.txt" || fail "diff of two runs of one config"
 
 # explain and view of a recording: without a config, the one it holds.
 expect_exit 0 "$cli" explain --trace run.mcap --step 171 kick_ball
