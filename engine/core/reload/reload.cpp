@@ -557,6 +557,15 @@ ProgramDiff config_diff(const Program& before, const Program& after) {
   ProgramDiff out;
   std::vector<std::string> restarted;
   match(before, after, out, restarted);
+  // What a reload keeps (docs/hot_reload.md) but two runs may differ by.
+  if (before.name != after.name) {
+    out.changes.push_back({Change::Kind::kChanged, "config", "name",
+                           fmt::format("{} -> {}", before.name, after.name)});
+  }
+  if (before.rate_hz != after.rate_hz) {
+    out.changes.push_back({Change::Kind::kChanged, "config", "rate_hz",
+                           fmt::format("{:g} -> {:g}", before.rate_hz, after.rate_hz)});
+  }
   return out;
 }
 
