@@ -87,10 +87,13 @@ void load_run_config(Run& run, Registry& registry, const LoadOptions& load) {
     run.no_program = fmt::format("{}'s config cannot be read: {}", run.label, error);
   } else if (!run.config.program) {
     const auto& items = run.config.diagnostics.items();
+    const auto error = std::find_if(items.begin(), items.end(), [](const Diagnostic& item) {
+      return item.severity == Severity::kError;
+    });
     run.no_program = fmt::format(
         "{}'s config ({}) does not load here{}", run.label, run.config.config,
-        items.empty() ? std::string()
-                      : ": " + to_string(items.front().location) + ": " + items.front().message);
+        error == items.end() ? std::string()
+                             : ": " + to_string(error->location) + ": " + error->message);
   }
 }
 
@@ -101,10 +104,12 @@ std::vector<std::string> behaviours_of(const Json& header) {
   if (!layers.is_array()) return out;
   for (const auto& layer : layers) {
     const Json& order = member(layer, "order");
-    if (!order.is_array()) continue;
+    const Json& layer_name = member(layer, "name");
+    if (!order.is_array() || !layer_name.is_string()) continue;
     for (const auto& name : order) {
-      if (name.is_string())
-        out.push_back(member(layer, "name").get<std::string>() + "/" + name.get<std::string>());
+      if (name.is_string()) {
+        out.push_back(layer_name.get<std::string>() + "/" + name.get<std::string>());
+      }
     }
   }
   return out;
@@ -131,7 +136,9 @@ std::string value_text(const std::string& what, const Json& entry) {
   if (what.rfind("machine:", 0) == 0) {
     const Json& state = member(entry, "state");
     std::vector<std::string> events;
-    for (const auto& event : member(entry, "events")) events.push_back(event.get<std::string>());
+    for (const auto& event : member(entry, "events")) {
+      if (event.is_string()) events.push_back(event.get<std::string>());
+    }
     return fmt::format("state {}, events [{}]",
                        state.is_string() ? state.get<std::string>() : "(none)", join(events, ", "));
   }
@@ -472,7 +479,9 @@ int diff(const std::string& a, const std::string& b, double tolerance, const std
     whole["why"] = json_of(run_a, run_b, *result, why);
     out << whole.dump() << "\n";
   } else {
-    out << format_text(*result, "A " + a, "B " + b) << text_of(run_a, run_b, *result, why);
+    // The values, states and events quoted are the runs': escaped as explain escapes them.
+    out << format_text(*result, "A " + a, "B " + b)
+        << printable(text_of(run_a, run_b, *result, why), true);
   }
   return 1;
 }
