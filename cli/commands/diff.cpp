@@ -280,7 +280,14 @@ Why find_why(Run& a, Run& b, const TraceDiff& diff, double tolerance) {
   for (const auto& name : in_b) {
     if (std::find(in_a.begin(), in_a.end(), name) == in_a.end()) why.only_b.push_back(name);
   }
-  if (a.recording && b.recording) {
+  if (first.what.empty()) {
+    // Nothing differs in the steps both have: one run only goes on longer.
+    const bool a_longer = diff.steps_a > diff.steps_b;
+    why.inputs_unknown =
+        fmt::format("the runs agree on every step both have; only {} has step {} ({} steps, {} {})",
+                    a_longer ? "A" : "B", first.step, std::max(diff.steps_a, diff.steps_b),
+                    a_longer ? "B" : "A", std::min(diff.steps_a, diff.steps_b));
+  } else if (a.recording && b.recording) {
     std::string error;
     why.inputs = inputs_divergence(a.path, b.path, first.step, tolerance, error);
     if (!error.empty()) why.inputs_unknown = "the recorded inputs cannot be read: " + error;
@@ -363,7 +370,11 @@ std::string text_of(const Run& a, const Run& b, const TraceDiff& diff, const Why
                          value_text(what, entry_of(b.record, what)));
     }
   }
-  out += "inputs: " + inputs_text(why, first.step) + "\n";
+  if (first.what.empty()) {
+    out += why.inputs_unknown + "\n";
+  } else {
+    out += "inputs: " + inputs_text(why, first.step) + "\n";
+  }
   if (why.config) {
     out += why.config->empty() ? std::string("config: the same in A and B\n")
                                : "config, from A's to B's:\n" + format(*why.config, "  ");
