@@ -283,10 +283,11 @@ Why find_why(Run& a, Run& b, const TraceDiff& diff, double tolerance) {
   if (first.what.empty()) {
     // Nothing differs in the steps both have: one run only goes on longer.
     const bool a_longer = diff.steps_a > diff.steps_b;
-    why.inputs_unknown =
-        fmt::format("the runs agree on every step both have; only {} has step {} ({} steps, {} {})",
-                    a_longer ? "A" : "B", first.step, std::max(diff.steps_a, diff.steps_b),
-                    a_longer ? "B" : "A", std::min(diff.steps_a, diff.steps_b));
+    why.inputs_unknown = fmt::format(
+        "the runs agree on every step both have; only {0} has step {1} ({0} has {2} steps, {3} "
+        "{4})",
+        a_longer ? "A" : "B", first.step, std::max(diff.steps_a, diff.steps_b),
+        a_longer ? "B" : "A", std::min(diff.steps_a, diff.steps_b));
   } else if (a.recording && b.recording) {
     std::string error;
     why.inputs = inputs_divergence(a.path, b.path, first.step, tolerance, error);

@@ -53,6 +53,13 @@ check state_param.txt
 expect_exit 1 "$cli" diff run.jsonl no_kick.mcap
 check trace_and_recording.txt
 
+# One run only goes on longer: said so, and no cause is made up.
+expect_exit 0 "$cli" replay run.mcap --steps 200 --record short.mcap
+expect_exit 1 "$cli" diff run.mcap short.mcap
+grep -qx "the runs agree on every step both have; only A has step 201 (A has 220 steps, B 200)" \
+  "$work/out.txt" || fail "diff of a run and a shorter replay of it"
+! grep -q "^inputs:" "$work/out.txt" || fail "diff of a shorter run says something of its inputs"
+
 # The same inputs and the same config, yet the runs differ: something is not deterministic.
 cp "$source_dir/tests/data/replay/unsteady.yaml" unsteady.yaml
 ARBITER_PLUGIN_PATH=$test_plugins expect_exit 0 "$cli" run unsteady.yaml --steps 20 -q --record unsteady.mcap
