@@ -62,6 +62,7 @@ struct Run {
 };
 
 void read_step(Run& run, std::uint64_t step) {
+  if (!readable_again(run.path)) return;  // read once already, by the diff
   const auto source = open_trace(run.path);
   TraceRecord record;
   while (source->next(record)) {
@@ -75,6 +76,11 @@ void read_step(Run& run, std::uint64_t step) {
 }
 
 void load_run_config(Run& run, Registry& registry, const LoadOptions& load) {
+  if (!readable_again(run.path)) {
+    run.no_program =
+        fmt::format("{} is not a file (a pipe?), read once already by the diff", run.label);
+    return;
+  }
   run.recording = is_recording(run.path);
   if (!run.recording) {
     run.no_program = fmt::format("{} is a trace: only a recording holds its config", run.label);
@@ -274,10 +280,13 @@ Why find_why(Run& a, Run& b, const TraceDiff& diff, double tolerance) {
   const auto& first = *diff.first_divergence;
   const auto in_a = behaviours_of(a.header);
   const auto in_b = behaviours_of(b.header);
-  for (const auto& name : in_a) {
+  // A run not read again (a pipe) has no header here: nothing is only in the other.
+  for (const auto& name :
+       a.header.is_null() || b.header.is_null() ? std::vector<std::string>() : in_a) {
     if (std::find(in_b.begin(), in_b.end(), name) == in_b.end()) why.only_a.push_back(name);
   }
-  for (const auto& name : in_b) {
+  for (const auto& name :
+       a.header.is_null() || b.header.is_null() ? std::vector<std::string>() : in_b) {
     if (std::find(in_a.begin(), in_a.end(), name) == in_a.end()) why.only_b.push_back(name);
   }
   if (first.what.empty()) {
@@ -288,6 +297,8 @@ Why find_why(Run& a, Run& b, const TraceDiff& diff, double tolerance) {
         "{4})",
         a_longer ? "A" : "B", first.step, std::max(diff.steps_a, diff.steps_b),
         a_longer ? "B" : "A", std::min(diff.steps_a, diff.steps_b));
+  } else if (!readable_again(a.path) || !readable_again(b.path)) {
+    why.inputs_unknown = !a.no_program.empty() ? a.no_program : b.no_program;
   } else if (a.recording && b.recording) {
     std::string error;
     why.inputs = inputs_divergence(a.path, b.path, first.step, tolerance, error);
@@ -367,8 +378,11 @@ std::string text_of(const Run& a, const Run& b, const TraceDiff& diff, const Why
     out += fmt::format("at step {}:\n", first.step);
     for (const auto& what : first.what) {
       if (what.find('/') == std::string::npos && what.find(':') == std::string::npos) continue;
-      out += fmt::format("  {}: A {}; B {}\n", what, value_text(what, entry_of(a.record, what)),
-                         value_text(what, entry_of(b.record, what)));
+      const auto value = [&](const Run& run) {
+        return run.header.is_null() ? std::string("not read again (not a file)")
+                                    : value_text(what, entry_of(run.record, what));
+      };
+      out += fmt::format("  {}: A {}; B {}\n", what, value(a), value(b));
     }
   }
   if (first.what.empty()) {

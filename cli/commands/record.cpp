@@ -368,6 +368,11 @@ void note_end(const std::string& path, const std::string& truncated, const std::
   if (!damaged.empty()) err << fmt::format("{}: warning: {}\n", path, damaged);
 }
 
+bool readable_again(const std::string& path) {
+  std::error_code error;
+  return fs::is_regular_file(path, error);
+}
+
 RecordedProgram load_recorded_program(const std::string& recording, Registry& registry,
                                       LoadOptions options) {
   RecordedProgram out;
@@ -400,7 +405,17 @@ std::optional<Program> program_of_run(const std::string& config, const std::stri
                                       std::string_view command, const FormatOptions& format_options,
                                       std::ostream& err, int& exit) {
   exit = 1;
-  const bool recording = is_recording(run);
+  // A pipe is read once, by the command itself: its config is not read first.
+  const bool again = readable_again(run);
+  const bool recording = again && is_recording(run);
+  if (config.empty() && !again) {
+    err << fmt::format(
+        "arbiter {}: {} is not a file (a pipe?): a recording's config is read from it before its "
+        "steps, so it must be a file; or give the config ('arbiter {} CONFIG --trace {}')\n",
+        command, run, command, run);
+    exit = 2;
+    return std::nullopt;
+  }
   if (config.empty()) {
     if (!recording) {
       err << fmt::format(

@@ -53,6 +53,10 @@ void note_end(const std::string& path, const std::string& truncated, const std::
 std::string recording_failed(std::string_view command, const std::string& path,
                              const std::string& error);
 
+/// Whether a run can be read more than once: a file, not a pipe (`<(...)`, /dev/stdin), which
+/// only the command's own reading may read.
+bool readable_again(const std::string& path);
+
 /// The config a recording holds (its `arbiter.config` metadata), loaded: what explain, view and
 /// diff read a recording against. The files are read from the recording, under the names the run
 /// read them by, so that locations name them as the run did.

@@ -91,6 +91,15 @@ grep -q "^run.mcap: error\[config-mismatch\]: the recording was made with anothe
 # recording's header is not quoted as a source line.
 expect_exit 1 "$cli" view "$source_dir/configs/paper/walk_and_kick.yaml" --trace run.mcap --serve 0
 ! grep -q "MCAP" "$work/err.txt" || fail "view quotes the recording's bytes as a source line"
+# A pipe is read once: with a config, explain reads it as before; without, it asks for a file.
+expect_exit 0 "$cli" explain walk_and_kick.yaml --trace <(cat run.mcap) --step 171 kick_ball
+cmp -s "$work/out.txt" "$golden/explain_recorded.txt" || fail "explain of a recording read from a pipe"
+expect_exit 2 "$cli" explain --trace <(cat run.mcap) --step 171 kick_ball
+grep -q "is not a file (a pipe?): a recording's config is read from it before its steps" "$work/err.txt" ||
+  fail "explain of a piped recording without a config"
+expect_exit 1 "$cli" diff <(cat run.mcap) no_kick.mcap
+grep -q "^config: not known: A is not a file (a pipe?), read once already by the diff" "$work/out.txt" ||
+  fail "diff of a piped recording"
 # A config without a target: the target was forgotten, not the config.
 expect_exit 2 "$cli" explain walk_and_kick.yaml --trace run.mcap --step 171
 grep -q "name the behaviour or state machine to explain" "$work/err.txt" || fail "explain without a target"
