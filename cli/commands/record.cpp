@@ -446,16 +446,18 @@ std::optional<Program> program_of_run(const std::string& config, const std::stri
   if (!program) return std::nullopt;
   if (!recording) return program;
   auto recorded = load_recorded_program(run, registry, options);
+  // A recording that cannot be read is reported where its steps are read.
+  if (!recorded.error.empty()) return program;
   if (!recorded.program) {
-    std::string why = recorded.error;
-    if (why.empty() && !recorded.diagnostics.empty()) {
-      why = recorded.diagnostics.items().front().message;
-    }
-    while (!why.empty() && why.back() == '\n') why.pop_back();
+    const auto& items = recorded.diagnostics.items();
+    const auto error = std::find_if(items.begin(), items.end(), [](const Diagnostic& item) {
+      return item.severity == Severity::kError;
+    });
     err << fmt::format(
-        "{}: warning: the config the recording holds cannot be read back, so {} is not checked "
-        "against it: {}\n",
-        run, config, printable(why));
+        "{}: warning: the config the recording holds ({}) does not load here, so {} is not "
+        "checked against it{}\n",
+        run, recorded.config, config,
+        error == items.end() ? std::string() : ": " + printable(error->message));
     return program;
   }
   const ProgramDiff changes = config_diff(*recorded.program, *program);
