@@ -202,6 +202,56 @@ std::optional<TraceDiff::Divergence> inputs_divergence(const std::string& a, con
   return std::nullopt;
 }
 
+/// As inputs_divergence(), for runs of which one at least is a trace: the actuators `names` (the
+/// inputs, as a recording's config names them) of the step records.
+std::optional<TraceDiff::Divergence> inputs_in_steps(const std::string& a, const std::string& b,
+                                                     const std::vector<std::string>& names,
+                                                     std::uint64_t last, double tolerance,
+                                                     std::string& error) {
+  const auto first = open_trace(a);
+  const auto second = open_trace(b);
+  TraceDiffer differ(tolerance);
+  const auto next = [last](TraceSource& source, TraceRecord& record) {
+    while (source.next(record)) {
+      if (record.kind == TraceRecord::Kind::kStep) return record.step <= last;
+    }
+    return false;
+  };
+  const auto inputs_of = [&](const TraceRecord& record) {
+    const Json parsed = Json::parse(record.text);
+    const Json& actuators = member(parsed, "actuators");
+    Json out = Json::object();
+    out["step"] = record.step;
+    out["layers"] = Json::object();
+    out["actuators"] = Json::object();
+    for (const auto& name : names) out["actuators"][name] = member(actuators, name);
+    return out.dump();
+  };
+  TraceRecord x;
+  TraceRecord y;
+  bool more_x = next(*first, x);
+  bool more_y = next(*second, y);
+  while (more_x && more_y) {
+    if (x.step < y.step) {
+      more_x = next(*first, x);
+    } else if (y.step < x.step) {
+      more_y = next(*second, y);
+    } else {
+      differ.compare(x.step, inputs_of(x), inputs_of(y));
+      if (auto found = differ.finish(0, 0, 0).first_divergence) {
+        for (auto& name : found->what) name = name.substr(std::string("actuator:").size());
+        return found;
+      }
+      more_x = next(*first, x);
+      more_y = next(*second, y);
+    }
+  }
+  for (const auto* source : {first.get(), second.get()}) {
+    if (source->error()) error = source->error()->message;
+  }
+  return std::nullopt;
+}
+
 /// The behaviour whose explanation says why `what` differs in a run of `program` at the step of
 /// `record`: the behaviour itself, a state machine itself, or for an actuator the behaviour that
 /// wrote it (the active one of its writers). Empty when there is none (an interface actuator).
@@ -241,6 +291,7 @@ struct Why {
   std::vector<std::string> only_b;
   std::optional<TraceDiff::Divergence> inputs;  ///< where the inputs first differ
   std::string inputs_unknown;                   ///< why that is not known
+  std::string inputs_from;                      ///< with a trace: whose config named the inputs
   std::optional<ProgramDiff> config;            ///< from A's config to B's
   std::string config_unknown;
   std::string target;  ///< what is explained
@@ -303,6 +354,21 @@ Why find_why(Run& a, Run& b, const TraceDiff& diff, double tolerance) {
     std::string error;
     why.inputs = inputs_divergence(a.path, b.path, first.step, tolerance, error);
     if (!error.empty()) why.inputs_unknown = "the recorded inputs cannot be read: " + error;
+  } else if (const Run* known = a.config.program ? &a : b.config.program ? &b : nullptr) {
+    // A trace beside a recording: the recording's config names the inputs, which a step record
+    // holds as the interface layers' actuators.
+    const Program& program = *known->config.program;
+    std::vector<std::string> names;
+    for (const auto& layer : program.layers) {
+      if (!layer.is_interface()) continue;
+      for (auto i = layer.actuator_begin; i < layer.actuator_end; ++i) {
+        names.push_back(program.actuators[i].name);
+      }
+    }
+    std::string error;
+    why.inputs = inputs_in_steps(a.path, b.path, names, first.step, tolerance, error);
+    if (!error.empty()) why.inputs_unknown = error;
+    why.inputs_from = fmt::format("{}'s config", known->label);
   } else {
     why.inputs_unknown = fmt::format("{} a trace: only recordings keep their inputs apart",
                                      !a.recording && !b.recording ? "A and B are"
@@ -357,10 +423,19 @@ std::string indented(const std::string& text, const std::string& indent) {
 
 std::string inputs_text(const Why& why, std::uint64_t step) {
   if (!why.inputs_unknown.empty()) return "not known: " + why.inputs_unknown;
+  // With a trace, the inputs are the step records' values of the actuators a config names.
+  const std::string from =
+      why.inputs_from.empty() ? std::string() : " (the inputs " + why.inputs_from + " names)";
   if (why.inputs) {
-    return fmt::format("they differed first, at step {} ({}){}: the runs met different inputs",
+    return fmt::format("they differed first, at step {} ({}){}: the runs met different inputs{}",
                        why.inputs->step, join(why.inputs->what, ", "),
-                       why.inputs->step == step ? ", read before the step's behaviours ran" : "");
+                       why.inputs->step == step ? ", read before the step's behaviours ran" : "",
+                       from);
+  }
+  if (!from.empty()) {
+    return fmt::format(
+        "the same up to step {}{}: what differs came from the graph, not from its inputs", step,
+        from);
   }
   if (why.config && why.config->empty()) {
     return fmt::format(

@@ -53,6 +53,12 @@ check state_param.txt
 expect_exit 1 "$cli" diff run.jsonl no_kick.mcap
 check trace_and_recording.txt
 
+# A trace beside a recording: the recording's config names the inputs in the trace's records.
+expect_exit 0 "$cli" run seed8.yaml --steps 220 -q --trace seed8.jsonl
+expect_exit 1 "$cli" diff seed8.jsonl run.mcap
+grep -qx "inputs: they differed first, at step 3 (ball_position), read before the step's behaviours ran: the runs met different inputs (the inputs B's config names)" \
+  "$work/out.txt" || fail "diff of a trace and a recording whose inputs differ"
+
 # One run only goes on longer: said so, and no cause is made up.
 expect_exit 0 "$cli" replay run.mcap --steps 200 --record short.mcap
 expect_exit 1 "$cli" diff run.mcap short.mcap
