@@ -338,13 +338,12 @@ int main(int argc, char** argv) {
       "step: its requested level, each inhibitor's level and factor (1 - a), the chain behind an\n"
       "implicit inhibition, the product and the normalisation. Naming a state machine instead\n"
       "tells which state ran, what was queued and the events.");
-  explain_cmd->add_option("FILE", options.file, "the config the trace was written with")
-      ->required();
-  explain_cmd
-      ->add_option("BEHAVIOUR", options.target,
-                   "a behaviour ('name', or 'layer/name' when several layers have one of that "
-                   "name) or a state machine ('name' or 'state_machines/name')")
-      ->required();
+  explain_cmd->add_option("FILE", options.file,
+                          "the config the trace was written with; left out, a recording's own "
+                          "(a recording given one says how it differs from its own)");
+  explain_cmd->add_option("BEHAVIOUR", options.target,
+                          "a behaviour ('name', or 'layer/name' when several layers have one of "
+                          "that name) or a state machine ('name' or 'state_machines/name')");
   explain_cmd->add_option("--trace", options.trace_path, kTraceHelp)
       ->required()
       ->check(CLI::ExistingFile);
@@ -357,7 +356,9 @@ int main(int argc, char** argv) {
                   "  arbiter explain configs/paper/walk_and_kick.yaml --trace out.jsonl --step 8 "
                   "search_for_ball\n"
                   "  arbiter explain configs/paper/hierarchical.yaml --trace h.jsonl --step 6 "
-                  "match\n\n"
+                  "match\n"
+                  "  arbiter explain --trace run.mcap --step 171 kick_ball   # the recorded "
+                  "config\n\n"
                   "Exit codes: 0 ok, 1 invalid config or trace, 2 usage error (no such behaviour "
                   "or step)."));
 
@@ -413,7 +414,9 @@ int main(int argc, char** argv) {
       "view",
       "Serve the web view of a trace of 'arbiter run': the graph, each behaviour coloured by its\n"
       "activation, the state machines, timelines, and a slider to scrub through the steps.");
-  view_cmd->add_option("FILE", options.file, "the config the trace was written with")->required();
+  view_cmd->add_option("FILE", options.file,
+                       "the config the trace was written with; left out, a recording's own (a "
+                       "recording given one says how it differs from its own)");
   view_cmd->add_option("--trace", options.trace_path, kTraceHelp)
       ->required()
       ->check(CLI::ExistingFile);
@@ -436,7 +439,8 @@ int main(int argc, char** argv) {
           "  arbiter run configs/soccer/walk_and_kick.yaml --steps 220 --trace run.jsonl -q\n"
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl\n"
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --serve 0\n"
-          "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --step 171\n\n"
+          "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --step 171\n"
+          "  arbiter view --trace run.mcap                 # with the config it recorded\n\n"
           "Ctrl-C stops the server.\n") +
       kExitCodesTrace);
 
@@ -510,7 +514,10 @@ int main(int argc, char** argv) {
   auto* diff_cmd = app.add_subcommand(
       "diff",
       "Compare two runs, traces (.jsonl) or recordings (.mcap) in any mix, step by step: where\n"
-      "they first diverge, and per behaviour, actuator and state machine in how many steps.");
+      "they first diverge, and per behaviour, actuator and state machine in how many steps. At\n"
+      "the first divergence it says why: the values of A and B, whether the inputs differed\n"
+      "first (recordings keep them), how the configs the recordings hold differ, and the\n"
+      "explanation of what first differs in each run, against its own config.");
   diff_cmd->add_option("A", options.diff_a, "the first run")->required()->check(CLI::ExistingFile);
   diff_cmd->add_option("B", options.diff_b, "the second run")->required()->check(CLI::ExistingFile);
   diff_cmd->add_option("--tolerance", options.tolerance, "numbers this close are equal")
@@ -697,8 +704,8 @@ int main(int argc, char** argv) {
       return code;
     }
     if (diff_cmd->parsed()) {
-      return diff(options.diff_a, options.diff_b, options.tolerance, options.format, std::cout,
-                  std::cerr);
+      return diff(options.diff_a, options.diff_b, options.tolerance, options.format,
+                  load_options_of(options), std::cout, std::cerr);
     }
     if (plugins_cmd->parsed()) return plugins_command(options);
     if (schema_cmd->parsed()) return schema_command(options);

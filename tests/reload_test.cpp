@@ -553,3 +553,24 @@ TEST_CASE("a reload's diff tells what changed in a state machine, old -> new", "
         "  ~ controller plan: states added: run, rest; states removed: go; queue [wait, go] -> "
         "[wait, run, rest]\n");
 }
+
+TEST_CASE("config_diff tells params, inhibitions and the rate apart, as a reload does",
+          "[reload]") {
+  std::string text = kTwoProbes;
+  text.replace(text.find("name: pair\n"), 11, "name: pair\nrate_hz: 10\n");
+  ConfigFile first(text);
+  ConfigFile second(flipped(text));
+  Reloader reload_first(registry());
+  Reloader reload_second(registry());
+  const Program before = load(reload_first, first.path());
+  std::string edited = flipped(text);
+  edited.replace(edited.find("value: 2"), 8, "value: 3");
+  edited.replace(edited.find("rate_hz: 10"), 11, "rate_hz: 20");
+  second.write(edited);
+  const Program after = load(reload_second, second.path());
+  CHECK(lines_of(format(config_diff(before, after), "")) ==
+        std::vector<std::string>{"- inhibition control: a -> b", "+ inhibition control: b -> a",
+                                 "~ behaviour control/b: params: value 2.0 -> 3.0",
+                                 "~ config rate_hz: 10 -> 20"});
+  CHECK(config_diff(before, before).empty());
+}

@@ -15,6 +15,7 @@
 #include "arbiter/schema.hpp"
 #include "arbiter/trace_reader.hpp"
 #include "commands/command.hpp"
+#include "commands/record.hpp"
 #include "lsp/server.hpp"
 
 namespace arbiter::cli {
@@ -132,15 +133,26 @@ int schema_command(const Options& options) {
 }
 
 int explain_command(const Options& options) {
-  auto registry = make_registry();
-  auto program = load_or_report(options.file, registry, options);
-  if (!program) return kExitInvalid;
+  // With one positional the config is left out: it names what to explain.
+  std::string config = options.file;
+  std::string target = options.target;
+  if (target.empty()) std::swap(config, target);
+  // A config given without a target is not a target: the target was forgotten.
+  if (target.empty() || std::filesystem::is_regular_file(target)) {
+    std::cerr << "arbiter explain: name the behaviour or state machine to explain\n";
+    return kExitUsage;
+  }
   if (!std::ifstream(options.trace_path, std::ios::binary)) {
     std::cerr << fmt::format("arbiter explain: cannot read trace '{}'\n", options.trace_path);
     return kExitUsage;
   }
+  auto registry = make_registry();
+  int exit = kExitInvalid;
+  auto program = program_of_run(config, options.trace_path, registry, load_options_of(options),
+                                "explain", options.diagnostic_format, std::cerr, exit);
+  if (!program) return exit;
   const auto trace = arbiter::open_trace(options.trace_path);
-  const auto explanation = arbiter::explain(*program, *trace, options.step, options.target);
+  const auto explanation = arbiter::explain(*program, *trace, options.step, target);
   if (explanation.status == arbiter::Explanation::Status::kOk) {
     // Its states, events and values are the trace's: escaped like every quote of input.
     std::cout << arbiter::printable(explanation.text, true);

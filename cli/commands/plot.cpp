@@ -62,7 +62,9 @@ class Plot {
   /// Starts a row: its `<g>`, background and label; returns the row's top.
   double open_row(const std::string& kind, const std::string& name, const std::string& label) {
     const double top = y_;
-    body_ += fmt::format(R"(<g class="row {}" data-name="{}">)", kind, xml_escaped(name));
+    const bool compared = other_ != nullptr && trace_ == other_;
+    body_ += fmt::format(R"(<g class="row {}{}" data-name="{}">)", kind,
+                         compared ? " compared" : "", xml_escaped(name));
     body_ += fmt::format(R"(<title>{}</title>)", xml_escaped(name));
     body_ += fmt::format(R"(<rect x="{}" y="{}" width="{}" height="{}" fill="#f4f4f4"/>)", kLeft,
                          top, kWidth, kRow);
@@ -96,34 +98,76 @@ class Plot {
     return d;
   }
 
-  void behaviour(const std::string& layer, const std::string& name) {
-    behaviour_row(layer, name, name, "behaviour");
-    if (other_ == nullptr) return;
+  /// A row drawn by `draw` (given its label, it returns the row's top); comparing, the other
+  /// run's under it, with the steps where `differs` (given both runs' records) shaded.
+  template <typename Draw, typename Differs>
+  void rows(const std::string& label, Draw draw, Differs differs) {
+    if (other_ == nullptr) {
+      draw(label);
+      return;
+    }
     const TraceFile* first = trace_;
+    draw(label + " (A)");
     trace_ = other_;
-    const double top = behaviour_row(layer, name, name + " (B)", "behaviour compared");
+    const double top = draw(label + " (B)");
     trace_ = first;
-    // Steps where the two runs' active flag or activation differ, shaded on the second row.
-    const auto entry = [&](const TraceFile& trace, std::size_t i) -> const Json& {
-      return member(member(member(trace.records[i], "layers"), layer), name);
-    };
     const std::size_t common = std::min(first->records.size(), other_->records.size());
     for (std::size_t i = 0; i < common; ++i) {
-      const Json& a = entry(*first, i);
-      const Json& b = entry(*other_, i);
-      if ((member(a, "active") == true) == (member(b, "active") == true) &&
-          std::fabs(number_or(member(a, "activation"), 0.0) -
-                    number_or(member(b, "activation"), 0.0)) <= 1e-9) {
-        continue;
-      }
+      if (!differs(first->records[i], other_->records[i])) continue;
       body_ += fmt::format(
           R"(<rect class="divergent" x="{:.1f}" y="{:.1f}" width="{:.1f}" height="{}" fill="#ff7f0e" fill-opacity="0.45"><title>step {}: the runs differ</title></rect>)",
           x(i), top, std::max(x(i + 1) - x(i), 1.0), kRow, step_at(i));
     }
   }
 
-  double behaviour_row(const std::string& layer, const std::string& name, const std::string& label,
-                       const std::string& kind) {
+  void behaviour(const std::string& layer, const std::string& name) {
+    rows(
+        name, [&](const std::string& label) { return behaviour_row(layer, name, label); },
+        [&](const Json& a_record, const Json& b_record) {
+          const Json& a = member(member(member(a_record, "layers"), layer), name);
+          const Json& b = member(member(member(b_record, "layers"), layer), name);
+          return (member(a, "active") == true) != (member(b, "active") == true) ||
+                 std::fabs(number_or(member(a, "activation"), 0.0) -
+                           number_or(member(b, "activation"), 0.0)) > 1e-9;
+        });
+  }
+
+  void controller(const std::string& name) {
+    rows(
+        name, [&](const std::string& label) { return controller_row(name, label); },
+        [&](const Json& a_record, const Json& b_record) {
+          const Json& a = member(member(a_record, "controllers"), name);
+          const Json& b = member(member(b_record, "controllers"), name);
+          return member(a, "state") != member(b, "state") ||
+                 member(a, "events") != member(b, "events");
+        });
+  }
+
+  void actuator(const std::string& name) {
+    rows(
+        name, [&](const std::string& label) { return actuator_row(name, label); },
+        [&](const Json& a_record, const Json& b_record) {
+          const Json& a = member(member(a_record, "actuators"), name);
+          const Json& b = member(member(b_record, "actuators"), name);
+          return member(a, "written") != member(b, "written") ||
+                 !close(member(a, "value"), member(b, "value"));
+        });
+  }
+
+  /// Equal values, numbers within 1e-9 (as `arbiter diff` compares by default).
+  static bool close(const Json& a, const Json& b) {
+    if (a.is_number() && b.is_number()) return std::fabs(a.get<double>() - b.get<double>()) <= 1e-9;
+    if (a.is_array() && b.is_array() && a.size() == b.size()) {
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        if (!close(a[i], b[i])) return false;
+      }
+      return true;
+    }
+    return a == b;
+  }
+
+  double behaviour_row(const std::string& layer, const std::string& name,
+                       const std::string& label) {
     std::vector<double> activation;
     std::vector<double> requested;
     std::vector<char> active;
@@ -133,7 +177,7 @@ class Plot {
       requested.push_back(number_or(member(entry, "requested"), 0.0));
       active.push_back(member(entry, "active") == true ? 1 : 0);
     }
-    const double top = open_row(kind, layer + "/" + name, label);
+    const double top = open_row("behaviour", layer + "/" + name, label);
     body_ += fmt::format(R"(<path class="activation" d="{}" fill="#4c9be8" fill-opacity="0.55"/>)",
                          steps_path(activation, top, true));
     body_ += fmt::format(
@@ -162,8 +206,8 @@ class Plot {
     return top;
   }
 
-  void controller(const std::string& name) {
-    const double top = open_row("controller", "state_machines/" + name, name);
+  double controller_row(const std::string& name, const std::string& label) {
+    const double top = open_row("controller", "state_machines/" + name, label);
     std::size_t begin = 0;
     std::string state;
     std::size_t colour = 0;
@@ -200,9 +244,10 @@ class Plot {
     }
     segment(trace_->records.size());
     close_row();
+    return top;
   }
 
-  void actuator(const std::string& name) {
+  double actuator_row(const std::string& name, const std::string& label) {
     // One series per component: a number or bool is one, a vector one per element.
     std::vector<std::vector<double>> series;
     bool text_valued = false;
@@ -239,7 +284,7 @@ class Plot {
       low -= 0.5;
       high += 0.5;
     }
-    const double top = open_row("actuator", name, name);
+    const double top = open_row("actuator", name, label);
     for (std::size_t c = 0; c < series.size(); ++c) {
       std::vector<double> scaled;
       for (const double v : series[c]) scaled.push_back((v - low) / (high - low));
@@ -257,6 +302,7 @@ class Plot {
                            top + kRow / 2 + 4);
     }
     close_row();
+    return top;
   }
 
   std::string finish(const std::string& title, const std::string& subtitle) {
@@ -390,6 +436,24 @@ std::vector<std::pair<std::string, std::vector<std::string>>> behaviours_of(
   return layers;
 }
 
+/// The names of the members of `key` ("controllers", "actuators") in the first records of the
+/// runs, each once: the first run's, then what only the second has.
+std::vector<std::string> names_of(const std::string& key, const TraceFile& trace,
+                                  const TraceFile* other) {
+  std::vector<std::string> names;
+  for (const TraceFile* run : {&trace, other}) {
+    if (run == nullptr || run->records.empty()) continue;
+    const Json& items = member(run->records.front(), key);
+    if (!items.is_object()) continue;
+    for (const auto& item : items.items()) {
+      if (std::find(names.begin(), names.end(), item.key()) == names.end()) {
+        names.push_back(item.key());
+      }
+    }
+  }
+  return names;
+}
+
 }  // namespace
 
 std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
@@ -399,30 +463,50 @@ std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
     plot.section("events");
     plot.reported();
   }
-  for (const auto& [layer, names] : behaviours_of(trace)) {
+  auto layers = behaviours_of(trace);
+  if (options.compare != nullptr) {
+    // What only the second run has gets its rows too.
+    for (const auto& other : behaviours_of(*options.compare)) {
+      auto found = std::find_if(layers.begin(), layers.end(),
+                                [&](const auto& item) { return item.first == other.first; });
+      if (found == layers.end()) {
+        layers.push_back(other);
+        continue;
+      }
+      for (const auto& name : other.second) {
+        if (std::find(found->second.begin(), found->second.end(), name) == found->second.end()) {
+          found->second.push_back(name);
+        }
+      }
+    }
+  }
+  for (const auto& [layer, names] : layers) {
     if (names.empty()) continue;
     plot.section("layer " + layer);
     for (const auto& name : names) plot.behaviour(layer, name);
   }
-  if (!trace.records.empty()) {
-    const Json& controllers = member(trace.records.front(), "controllers");
-    if (controllers.is_object() && !controllers.empty()) {
-      plot.section("state machines");
-      for (const auto& item : controllers.items()) plot.controller(item.key());
-    }
-    const Json& actuators = member(trace.records.front(), "actuators");
-    if (options.actuators && actuators.is_object() && !actuators.empty()) {
-      plot.section("actuators");
-      for (const auto& item : actuators.items()) plot.actuator(item.key());
-    }
+  if (const auto machines = names_of("controllers", trace, options.compare); !machines.empty()) {
+    plot.section("state machines");
+    for (const auto& machine : machines) plot.controller(machine);
+  }
+  if (const auto actuators = names_of("actuators", trace, options.compare);
+      options.actuators && !actuators.empty()) {
+    plot.section("actuators");
+    for (const auto& actuator : actuators) plot.actuator(actuator);
   }
   const Json& name = member(trace.header, "name");
   const std::string title = name.is_string() ? name.get<std::string>() : "trace";
-  const std::string subtitle =
+  std::string subtitle =
       trace.records.empty()
           ? "no steps"
           : fmt::format("steps {} to {}", trace.records.front()["step"].get<std::uint64_t>(),
                         trace.records.back()["step"].get<std::uint64_t>());
+  if (options.compare != nullptr) {
+    subtitle = fmt::format(
+        "A: {} ({} steps), B: {} ({} steps); under each row of A, B's, the steps where they "
+        "differ shaded",
+        options.name_a, trace.records.size(), options.name_b, options.compare->records.size());
+  }
   plot.reloads();
   return plot.finish(title, subtitle);
 }
@@ -446,6 +530,8 @@ int plot_command(const Options& options) {
     }
     note_end(options.compare_path, compare->truncated, compare->damaged, std::cerr);
     plot_options.compare = &*compare;
+    plot_options.name_a = options.trace_path;
+    plot_options.name_b = options.compare_path;
   }
   const std::string svg = plot_svg(*trace, plot_options);
   if (options.output.empty() || options.output == "-") {

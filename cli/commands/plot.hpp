@@ -9,9 +9,12 @@ namespace arbiter::cli {
 
 struct PlotOptions {
   bool actuators = false;  ///< add a row per actuator (its value over the steps)
-  /// `--compare`: a second run, whose row of each behaviour is drawn under the first's, with the
-  /// steps where they differ shaded. Steps are aligned by position.
+  /// `--compare`: a second run (B), whose row of each behaviour, state machine and actuator is
+  /// drawn under the first's (A), with the steps where they differ shaded. Steps are aligned by
+  /// position. The subtitle names A and B.
   const TraceFile* compare = nullptr;
+  std::string name_a;
+  std::string name_b;
 };
 
 /// An SVG timeline of `trace`: per layer, a row per behaviour (in execution order) with its

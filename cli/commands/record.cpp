@@ -368,20 +368,118 @@ void note_end(const std::string& path, const std::string& truncated, const std::
   if (!damaged.empty()) err << fmt::format("{}: warning: {}\n", path, damaged);
 }
 
-int diff(const std::string& a, const std::string& b, double tolerance, const std::string& format,
-         std::ostream& out, std::ostream& err) {
-  const auto first = open_trace(a);
-  const auto second = open_trace(b);
-  Diagnostic error;
-  const auto result = diff_traces(*first, *second, error, tolerance);
-  if (!result) {
-    err << arbiter::format(error);
-    return 2;
+bool readable_again(const std::string& path) {
+  std::error_code error;
+  return fs::is_regular_file(path, error);
+}
+
+RecordedProgram load_recorded_program(const std::string& recording, Registry& registry,
+                                      LoadOptions options) {
+  RecordedProgram out;
+  RecordingReader reader(recording);
+  if (reader.error()) {
+    out.error = format(*reader.error());
+    return out;
   }
-  note_end(a, first->truncated(), first->damaged(), err);
-  note_end(b, second->truncated(), second->damaged(), err);
-  out << (format == "json" ? format_json(*result) : format_text(*result, a, b));
-  return result->identical ? 0 : 1;
+  const auto& files = reader.info().files;
+  if (files.empty()) {
+    out.error = fmt::format("{}: error: the recording holds no config (no arbiter.config record)\n",
+                            recording);
+    return out;
+  }
+  // Unlike a replay's (RecordedConfig), these files keep their recorded names: nothing runs them,
+  // and an explanation's locations must name the files the run read.
+  out.files = std::make_shared<Overlay>();
+  for (const auto& [name, text] : files) out.files->set(name, text);
+  out.config = files.front().first;
+  options.source = out.files.get();
+  options.lint = nullptr;  // the run's config, read back: how it reads was said when it ran
+  Loaded loaded = load_config(out.config, registry, options);
+  out.diagnostics = std::move(loaded.diagnostics);
+  out.program = std::move(loaded.program);
+  return out;
+}
+
+std::optional<Program> program_of_run(const std::string& config, const std::string& run,
+                                      Registry& registry, const LoadOptions& options,
+                                      std::string_view command, const FormatOptions& format_options,
+                                      std::ostream& err, int& exit) {
+  exit = 1;
+  // A pipe is read once, by the command itself: its config is not read first.
+  const bool again = readable_again(run);
+  const bool recording = again && is_recording(run);
+  if (config.empty() && !again) {
+    err << fmt::format(
+        "arbiter {}: {} is not a file (a pipe?): a recording's config is read from it before its "
+        "steps, so it must be a file; or give the config ('arbiter {} CONFIG --trace {}')\n",
+        command, run, command, run);
+    exit = 2;
+    return std::nullopt;
+  }
+  if (config.empty()) {
+    if (!recording) {
+      err << fmt::format(
+          "arbiter {}: {} is a trace, which holds no config: give the config it was written "
+          "with ('arbiter {} CONFIG --trace {}'); a recording (.mcap) holds its own\n",
+          command, run, command, run);
+      exit = 2;
+      return std::nullopt;
+    }
+    auto recorded = load_recorded_program(run, registry, options);
+    if (!recorded.error.empty()) {
+      err << recorded.error;
+      return std::nullopt;
+    }
+    if (!recorded.program) {
+      err << fmt::format(
+          "{}: error: the config the recording holds ({}) does not load here; give one with "
+          "'arbiter {} CONFIG --trace {}'\n",
+          run, recorded.config, command, run);
+      err << format(recorded.diagnostics, format_options);
+      return std::nullopt;
+    }
+    return std::move(recorded.program);
+  }
+  Diagnostics diagnostics;
+  auto program = load(config, registry, diagnostics, options);
+  if (!diagnostics.empty()) err << format(diagnostics, format_options);
+  if (!program) return std::nullopt;
+  if (!recording) return program;
+  auto recorded = load_recorded_program(run, registry, options);
+  // A recording that cannot be read is reported where its steps are read.
+  if (!recorded.error.empty()) return program;
+  if (!recorded.program) {
+    const auto& items = recorded.diagnostics.items();
+    const auto error = std::find_if(items.begin(), items.end(), [](const Diagnostic& item) {
+      return item.severity == Severity::kError;
+    });
+    err << fmt::format(
+        "{}: warning: the config the recording holds ({}) does not load here, so {} is not "
+        "checked against it{}\n",
+        run, recorded.config, config,
+        error == items.end() ? std::string() : ": " + printable(error->message));
+    return program;
+  }
+  const ProgramDiff changes = config_diff(*recorded.program, *program);
+  if (changes.empty()) return program;
+  Diagnostic mismatch;
+  mismatch.location.file = run;
+  mismatch.code = "config-mismatch";
+  mismatch.message = fmt::format("the recording was made with another config than {}", config);
+  mismatch.notes.emplace_back(
+      fmt::format("the recording holds {}; from it to {}:", recorded.config, config));
+  // One note per change: a note is a line.
+  const std::string lines = arbiter::format(changes, "");
+  for (std::size_t at = 0, end = 0; at < lines.size(); at = end + 1) {
+    end = lines.find('\n', at);
+    mismatch.notes.emplace_back("  " + lines.substr(at, end - at));
+  }
+  mismatch.notes.emplace_back(fmt::format(
+      "leave the config out to read the run with the one it holds ('arbiter {} --trace {} ...'), "
+      "or replay the run with this one ('arbiter replay {} --config {}')",
+      command, run, run, config));
+  err << format(mismatch, format_options);
+  return std::nullopt;
 }
 
 }  // namespace arbiter::cli

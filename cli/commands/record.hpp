@@ -3,11 +3,14 @@
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "arbiter/document.hpp"
 #include "arbiter/load.hpp"
 #include "arbiter/program.hpp"
 #include "arbiter/recording.hpp"
@@ -50,8 +53,37 @@ void note_end(const std::string& path, const std::string& truncated, const std::
 std::string recording_failed(std::string_view command, const std::string& path,
                              const std::string& error);
 
-/// Compares two traces or recordings; `format` is "text" or "json". Returns the exit code.
+/// Whether a run can be read more than once: a file, not a pipe (`<(...)`, /dev/stdin), which
+/// only the command's own reading may read.
+bool readable_again(const std::string& path);
+
+/// The config a recording holds (its `arbiter.config` metadata), loaded: what explain, view and
+/// diff read a recording against. The files are read from the recording, under the names the run
+/// read them by, so that locations name them as the run did.
+struct RecordedProgram {
+  /// The recorded files, in front of the disk; the program was loaded through them.
+  std::shared_ptr<Overlay> files;
+  std::string config;  ///< the recorded config's path (its first file)
+  std::optional<Program> program;
+  Diagnostics diagnostics;  ///< of the load: why there is no program
+  std::string error;        ///< set when the recording cannot be read or holds no config
+};
+RecordedProgram load_recorded_program(const std::string& recording, Registry& registry,
+                                      LoadOptions options);
+
+/// The program a run (trace or recording) is read against by `command` (explain, view): `config`
+/// when given, checked against the config a recording holds; else the one the recording holds.
+/// nullopt when there is none, or the given config is not the recording's: said on `err`, with
+/// the exit code in `exit`.
+std::optional<Program> program_of_run(const std::string& config, const std::string& run,
+                                      Registry& registry, const LoadOptions& options,
+                                      std::string_view command, const FormatOptions& format,
+                                      std::ostream& err, int& exit);
+
+/// Compares two traces or recordings; `format` is "text" or "json". At the first divergence it
+/// also says why, from the configs the recordings hold (loaded with `load`). Returns the exit
+/// code.
 int diff(const std::string& a, const std::string& b, double tolerance, const std::string& format,
-         std::ostream& out, std::ostream& err);
+         const LoadOptions& load, std::ostream& out, std::ostream& err);
 
 }  // namespace arbiter::cli

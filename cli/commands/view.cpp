@@ -75,7 +75,9 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
   note_end(trace_path, trace->truncated, trace->damaged, err);
   if (const auto header = check_trace_header(program, trace->header_line);
       header.status != Explanation::Status::kOk) {
-    err << bad_trace(trace_path, 1, header.text, header.notes, format_options);
+    // A recording's header is a message, not a line to quote.
+    err << bad_trace(trace_path, is_recording(trace_path) ? 0 : 1, header.text, header.notes,
+                     format_options);
     return 1;
   }
   if (!trace->reloads.empty()) {
@@ -156,8 +158,11 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
 
 int view_command(const Options& options) {
   auto registry = make_registry();
-  auto program = load_or_report(options.file, registry, options);
-  if (!program) return kExitInvalid;
+  int exit = kExitInvalid;
+  auto program =
+      program_of_run(options.file, options.trace_path, registry, load_options_of(options), "view",
+                     options.diagnostic_format, std::cerr, exit);
+  if (!program) return exit;
   install_interrupt_handlers();
   std::string unused;  // the option's check has parsed it already
   LiveAccess access;

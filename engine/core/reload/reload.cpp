@@ -535,6 +535,40 @@ ProgramDiff diff(const Program& before, const Program& after) {
   return out;
 }
 
+namespace {
+
+/// What carries over from `before` to `after`, and in `out` their structural diff followed by the
+/// params changes the models tell.
+detail::Carryover match(const Program& before, const Program& after, ProgramDiff& out,
+                        std::vector<std::string>& restarted) {
+  const Model no_model;
+  CarryoverMatcher matcher(before, before.model ? *before.model : no_model, after,
+                           after.model ? *after.model : no_model);
+  ProgramDiff params;
+  detail::Carryover carryover = matcher.run(params, restarted);
+  out = diff(before, after);
+  out.changes.insert(out.changes.end(), params.changes.begin(), params.changes.end());
+  return carryover;
+}
+
+}  // namespace
+
+ProgramDiff config_diff(const Program& before, const Program& after) {
+  ProgramDiff out;
+  std::vector<std::string> restarted;
+  match(before, after, out, restarted);
+  // What a reload keeps (docs/hot_reload.md) but two runs may differ by.
+  if (before.name != after.name) {
+    out.changes.push_back({Change::Kind::kChanged, "config", "name",
+                           fmt::format("{} -> {}", before.name, after.name)});
+  }
+  if (before.rate_hz != after.rate_hz) {
+    out.changes.push_back({Change::Kind::kChanged, "config", "rate_hz",
+                           fmt::format("{:g} -> {:g}", before.rate_hz, after.rate_hz)});
+  }
+  return out;
+}
+
 std::string format(const ProgramDiff& diff, const std::string& indent) {
   std::string out;
   for (const auto& change : diff.changes) {
@@ -585,16 +619,7 @@ ReloadResult Reloader::reload(Manager& manager) {
   manager.withdraw();
   auto program = load_program(result.diagnostics);
   if (!program) return result;
-  const Model no_model;
-  const Program& running = manager.program();
-  CarryoverMatcher matcher(running, running.model ? *running.model : no_model, *program,
-                           *program->model);
-  detail::Carryover carryover = matcher.run(result.diff, result.restarted);
-  ProgramDiff structure = diff(manager.program(), *program);
-  // Structure first, then the params changes the matcher found.
-  structure.changes.insert(structure.changes.end(), result.diff.changes.begin(),
-                           result.diff.changes.end());
-  result.diff = std::move(structure);
+  detail::Carryover carryover = match(manager.program(), *program, result.diff, result.restarted);
   if (on_staging_) on_staging_(texts_);
   manager.stage(std::move(*program), std::move(carryover));
   result.staged = true;

@@ -305,6 +305,14 @@ std::unique_ptr<TraceSource> trace_source(std::string bytes, std::string file) {
   return std::make_unique<OwnedJsonlSource>(std::move(in), std::move(file));
 }
 
+bool is_recording(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string start(mcap::kMagic.size(), '\0');
+  in.read(start.data(), static_cast<std::streamsize>(start.size()));
+  start.resize(static_cast<std::size_t>(in.gcount()));
+  return is_mcap(start);
+}
+
 std::unique_ptr<TraceSource> open_trace(const std::string& path) {
   auto in = std::make_unique<PrefixedStream>();
   if (!in->file().open(path)) return std::make_unique<UnreadableSource>(path);

@@ -24,7 +24,8 @@ namespace arbiter {
 struct Change {
   enum class Kind { kAdded, kRemoved, kChanged };
   Kind kind = Kind::kChanged;
-  /// "layer", "behaviour", "inhibition", "actuator" or "controller".
+  /// "layer", "behaviour", "inhibition", "actuator", "controller", or "config" (its name or
+  /// rate_hz: config_diff()).
   std::string item;
   /// "control/kick_ball", "control: kick_ball => go_behind_ball", "gait_velocity", "goalie".
   std::string name;
@@ -42,6 +43,12 @@ struct ProgramDiff {
 /// (declaration), each added, removed or changed. Params are not in a Program: Reloader adds
 /// the behaviours and interface layers whose params changed from the models.
 ProgramDiff diff(const Program& before, const Program& after);
+
+/// diff() and the params that changed, of behaviours, interface layers and states: what an edit
+/// changed, as a hot reload reports it; and the config's name and rate_hz ("config" changes),
+/// which a reload keeps but two runs may differ by. Both programs need their models
+/// (Program::model); a params change needs them, and both programs' classes from one registry.
+ProgramDiff config_diff(const Program& before, const Program& after);
 
 /// One line per change, each indented by `indent`: `+ behaviour control/kick_ball (scripted)`,
 /// `- inhibition control: a => b`, `~ behaviour control/b: params`.

@@ -78,6 +78,9 @@ std::unique_ptr<TraceSource> jsonl_trace_source(std::istream& in, std::string fi
 /// with MCAP's magic (or is a piece of it: a recording cut off at once), else JSON lines.
 std::unique_ptr<TraceSource> trace_source(std::string bytes, std::string file);
 
+/// Whether the file at `path` is a recording (it starts with MCAP's magic), not a trace.
+bool is_recording(const std::string& path);
+
 /// The trace or recording at `path`, by its content: an MCAP recording starts with MCAP's magic,
 /// anything else is read as JSON lines. The file is read as next() needs it, never whole. A file
 /// that cannot be opened gives a source whose first next() fails with the reason.
