@@ -7,9 +7,9 @@
 //   ARBITER_SCREENSHOT (optional) where to save the screenshot of the soccer demo
 import {test as nodeTest, before, after} from 'node:test';
 import assert from 'node:assert/strict';
-import {spawn, execFileSync} from 'node:child_process';
+import {spawn, execFile, execFileSync} from 'node:child_process';
 import {createRequire} from 'node:module';
-import {copyFileSync, mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
+import {copyFileSync, existsSync, mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import path from 'node:path';
 
@@ -624,4 +624,34 @@ test('the page opened without the token explains that it needs one', async () =>
     assert.equal(await page.locator(selector).count(), 0, `${selector} is not on the page`);
   }
   await page.close();
+});
+
+/// Runs `chromium --headless ARGS URL` as a user would from a shell, resolving with its stdout.
+function headless(args, url) {
+  return new Promise((resolve, reject) => {
+    execFile(process.env.CHROMIUM || '/usr/bin/chromium',
+             ['--headless', '--no-sandbox', '--disable-gpu', '--no-first-run', '--window-size=1400,900',
+              `--user-data-dir=${mkdtempSync(path.join(scratch, 'profile-'))}`, ...args, url],
+             {timeout: 40000, maxBuffer: 1 << 24}, (error, stdout, stderr) => {
+               if (error) reject(new Error(`chromium ${args.join(' ')}: ${error.message}\n${stderr}`));
+               else resolve(stdout);
+             });
+  });
+}
+
+test('chromium --headless --screenshot of the live page with ?snapshot shows the run as it is', async () => {
+  const run = await serve(['run', soccer, '--serve', '0', '--steps', '100000', '-q']);
+  await new Promise((resolve) => setTimeout(resolve, 1500));  // 15 Hz: some 20 steps
+  // The DOM at the moment the screenshot is taken (the load event): the step the run had reached.
+  const dom = await headless(['--dump-dom'], `${run.url}&snapshot`);
+  const step = Number((dom.match(/<b id="step">(\d+)<\/b>/) || [])[1]);
+  assert.ok(step >= 10, `the snapshot shows step ${step}`);
+  assert.match(dom, /data-snapshot="true"/);
+  assert.match(dom, /<span id="status" class="badge running">snapshot: running<\/span>/);
+  assert.match(dom, /class="behaviour[^"]*"[^>]*data-name="control\/go_behind_ball"/);
+  // The picture itself: taken, and the browser exits.
+  const png = path.join(scratch, 'snapshot.png');
+  await headless([`--screenshot=${png}`], `${run.url}&snapshot`);
+  assert.ok(existsSync(png));
+  assert.equal(readFileSync(png).subarray(1, 4).toString(), 'PNG');
 });

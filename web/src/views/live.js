@@ -3,14 +3,20 @@
 import {setStatus, showTiming} from '../panels.js';
 import {HISTORY} from '../records.js';
 import {RunPage} from '../run_page.js';
+import {snapshotAsked} from '../snapshot.js';
 
 const REPORTED_KEPT = 200;  // the oldest reported events are dropped
 
-/** @param {{readonly?: boolean}} info the server's /info */
+/**
+ * @param {{readonly?: boolean}} info the server's /info
+ * @returns {Promise<void>} resolved at once, or for a snapshot once it is drawn
+ */
 export function live(info) {
   const page = new RunPage({reportedKept: REPORTED_KEPT});
+  const snapshot = snapshotAsked();
   const controls = document.getElementById('live-controls');
-  controls.hidden = !!info.readonly;
+  // A snapshot is a picture: nothing on it can pause the run.
+  controls.hidden = !!info.readonly || snapshot;
   const buttons = ['pause', 'single-step', 'resume'].map((id) => document.getElementById(id));
   const control = (action) => fetch(`control/${action}`, {method: 'POST'});
   buttons[0].onclick = () => control('pause');
@@ -31,13 +37,14 @@ export function live(info) {
     document.body.dataset.safe = 'true';
   };
   let graphText = '';
+  let graphDrawn = Promise.resolve();
   let drawPending = false;
-  const events = new EventSource('events');
+  const events = new EventSource(snapshot ? 'events?snapshot=1' : 'events');
   events.addEventListener('graph', (event) => {
     // A reload swaps the program in: draw the new graph; the history is kept by name.
     if (event.data === graphText) return;
     graphText = event.data;
-    page.setGraph(JSON.parse(event.data));
+    graphDrawn = page.setGraph(JSON.parse(event.data));
   });
   events.addEventListener('step', (event) => {
     const record = JSON.parse(event.data);
@@ -74,4 +81,20 @@ export function live(info) {
   });
   events.addEventListener('timing', (event) => showTiming(JSON.parse(event.data)));
   events.onerror = () => setStatus('connection lost: reconnecting…', 'lost');
+  if (!snapshot) return Promise.resolve();
+  // The server ends a snapshot's stream with "end" once it has sent the run up to the step it
+  // had when the page connected.
+  return new Promise((resolve) => {
+    events.addEventListener('end', async () => {
+      events.close();
+      await graphDrawn;
+      delete document.body.dataset.safe;
+      page.show(page.records[page.records.length - 1] || null);
+      showSafe();
+      const status = document.getElementById('status');
+      status.textContent = `snapshot: ${status.textContent}`;
+      document.body.dataset.snapshot = 'true';
+      resolve();
+    });
+  });
 }
