@@ -655,3 +655,93 @@ test('chromium --headless --screenshot of the live page with ?snapshot shows the
   assert.ok(existsSync(png));
   assert.equal(readFileSync(png).subarray(1, 4).toString(), 'PNG');
 });
+
+// The x (client coordinates) of the middle of `step` in the timelines' strip of steps.
+async function xOfStep(page, step) {
+  return page.evaluate((n) => {
+    const canvas = document.querySelector('#timeline-rows .timeline canvas');
+    const box = canvas.getBoundingClientRect();
+    const section = document.querySelector('#timelines');
+    const from = Number(section.dataset.from);
+    const to = Number(section.dataset.to);
+    return {x: box.left + ((n - from + 0.5) / (to - from + 1)) * box.width, y: box.top + box.height / 2};
+  }, step);
+}
+const timelineRange = async (page) => {
+  const [, from, to] = (await page.textContent('#timeline-range')).match(/^steps (\d+) to (\d+)$/);
+  return [Number(from), Number(to)];
+};
+// Waits for the frame the timelines draw after a change.
+const nextFrame = (page) => page.evaluate(() => new Promise((resolve) => requestAnimationFrame(() => requestAnimationFrame(resolve))));
+
+test('the timelines zoom, pan and jump to the step clicked, with the cursor at the step shown', async () => {
+  const trace = path.join(scratch, 'soccer-timelines.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '220', '--trace', trace, '-q'], {cwd: source});
+  const {url} = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
+  const page = await open(`${url}&step=171`);
+  await nextFrame(page);
+  assert.deepEqual(await timelineRange(page), [1, 220]);
+  // The axis: steps, and the run's time under them.
+  assert.equal(await page.locator('.timeline-axis').count(), 1);
+  // The wheel zooms in about the step under the pointer.
+  let at = await xOfStep(page, 100);
+  await page.mouse.move(at.x, at.y);
+  await page.mouse.wheel(0, -600);
+  await nextFrame(page);
+  let [from, to] = await timelineRange(page);
+  assert.ok(to - from < 100, `zoomed in: steps ${from} to ${to}`);
+  assert.ok(from <= 100 && 100 <= to, `step 100 stays in view: steps ${from} to ${to}`);
+  // A drag to the left shows later steps.
+  const before = from;
+  at = await xOfStep(page, 100);
+  await page.mouse.move(at.x, at.y);
+  await page.mouse.down();
+  await page.mouse.move(at.x - 200, at.y, {steps: 5});
+  await page.mouse.up();
+  await nextFrame(page);
+  [from, to] = await timelineRange(page);
+  assert.ok(from > before, `panned: steps ${from} to ${to}, from ${before}`);
+  assert.equal(await stepShown(page), 171, 'a drag does not jump');
+  // Keys, with the timelines focused: 0 shows the whole run, - and + zoom.
+  await page.focus('#timelines');
+  await page.keyboard.press('0');
+  await nextFrame(page);
+  assert.deepEqual(await timelineRange(page), [1, 220]);
+  await page.keyboard.press('+');
+  await nextFrame(page);
+  [from, to] = await timelineRange(page);
+  assert.ok(to - from <= 111 && from <= 171 && 171 <= to, `zoomed about the cursor: steps ${from} to ${to}`);
+  await page.keyboard.press('Shift+ArrowLeft');
+  await nextFrame(page);
+  assert.ok((await timelineRange(page))[0] < from, 'Shift+← pans to earlier steps');
+  assert.equal(await stepShown(page), 171, 'Shift+← does not step');
+  await page.keyboard.press('0');
+  await nextFrame(page);
+  // Hovering tells the step, its time and the row's values there.
+  at = await xOfStep(page, 50);
+  await page.mouse.move(at.x, at.y);
+  await page.waitForSelector('#timeline-tip:not([hidden])');
+  const tip = await page.textContent('#timeline-tip');
+  assert.match(tip, /^step 50 {2}t [\d.]+ m?s\ncontrol\/kick_ball: activation 0\.00, inactive$/);
+  // A click shows that step: the graph, the slider, the address and the cursor follow.
+  await page.mouse.click(at.x, at.y);
+  await waitForStep(page, 50);
+  assert.equal(await page.$eval('#scrub', (node) => Number(node.value)), 49);
+  assert.equal(new URL(page.url()).searchParams.get('step'), '50');
+  await nextFrame(page);
+  const red = await page.evaluate(({x}) => {
+    const canvas = document.querySelector('#timeline-rows .timeline canvas');
+    const box = canvas.getBoundingClientRect();
+    const ratio = canvas.width / box.width;
+    const pixel = canvas.getContext('2d').getImageData(Math.round((x - box.left) * ratio), 2, 1, 1).data;
+    return [...pixel.slice(0, 3)];
+  }, at);
+  assert.ok(red[0] > 200 && red[1] < 80 && red[2] < 80, `the cursor is drawn at the step shown: rgb ${red}`);
+  // The step of the kick, clicked on the go_behind_ball row: inhibited there.
+  at = await xOfStep(page, 171);
+  const row = await page.locator('.timeline[data-name="control/go_behind_ball"] canvas').boundingBox();
+  await page.mouse.click(at.x, row.y + row.height / 2);
+  await waitForStep(page, 171);
+  assert.equal(await behaviour(page, 'kick_ball').getAttribute('data-active'), 'true');
+  await page.close();
+});
