@@ -25,7 +25,7 @@ export class Columns {
     this.t = [];
     /** @type {Map<string, {activation: number[], state: number[]}>} 'layer/behaviour' */
     this.behaviours = new Map();
-    /** @type {Map<string, number[]>} 'actuator' or 'actuator[i]': numbers, NaN where none */
+    /** @type {Map<string, (number|null)[]>} 'actuator' or 'actuator[i]': numbers, null where none (a gap in a plot) */
     this.values = new Map();
     /** @type {Map<string, (string|null)[]>} state machine -> its state in each step */
     this.machines = new Map();
@@ -67,9 +67,9 @@ export class Columns {
     for (const [name, actuator] of Object.entries(record.actuators || {})) {
       const value = actuator.value;
       if (Array.isArray(value)) {
-        value.forEach((component, i) => this.series(this.values, `${name}[${i}]`).push(toNumber(component)));
+        value.forEach((component, i) => this.series(this.values, `${name}[${i}]`, null).push(toNumber(component)));
       } else {
-        this.series(this.values, name).push(toNumber(value));
+        this.series(this.values, name, null).push(toNumber(value));
       }
     }
     for (const [name, machine] of Object.entries(record.controllers || {})) {
@@ -83,7 +83,7 @@ export class Columns {
         series.state.push(IDLE);
       }
     }
-    for (const series of this.values.values()) if (series.length < length) series.push(NaN);
+    for (const series of this.values.values()) if (series.length < length) series.push(null);
     for (const series of this.machines.values()) if (series.length < length) series.push(null);
   }
 
@@ -118,5 +118,5 @@ export class Columns {
 function toNumber(value) {
   if (typeof value === 'number') return value;
   if (typeof value === 'boolean') return value ? 1 : 0;
-  return NaN;
+  return null;
 }

@@ -4,6 +4,7 @@
 import {Columns} from './columns.js';
 import {ExplainPanel} from './explain.js';
 import {GraphView} from './graph.js';
+import {Plots} from './plots.js';
 import {Controllers, Reported} from './panels.js';
 import {WriteTracker} from './records.js';
 import {TimeView} from './time_view.js';
@@ -33,6 +34,7 @@ export class RunPage {
     this.reported = new Reported(document.getElementById('reported'), reportedKept);
     this.timelines = new Timelines(document.getElementById('timelines'), this.columns, this.time);
     this.timelines.queueAt = (machine) => this.current?.controllers?.[machine]?.queue ?? null;
+    this.plots = new Plots(document.getElementById('plots'), this.columns, this.time, () => this.timelines.strip());
   }
 
   /** A record received, in step order: notes what it held and reported. */

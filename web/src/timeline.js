@@ -186,15 +186,16 @@ export class Timelines {
     const {steps} = this.columns;
     const [begin, end] = this.indices();
     const view = this.view;
-    const perStep = w / (view.to - view.from + 1);
-    const span = Math.max(1, Math.ceil(perStep));
     // Many steps to a pixel: each pixel column shows the highest activation among its steps, and
     // a bar if any of them was active (or inhibited), so that no activation is lost to zooming out.
+    // Columns start and end on whole pixels: no seams between steps.
     let left = -1;
+    let right = -1;
     let top = 0;
     let state = 0;
     const flush = () => {
       if (left < 0) return;
+      const span = Math.max(1, right - left);
       if (top > 0) {
         context.fillStyle = colour(top);
         context.fillRect(left, h - 3 - top * (h - 5), span, top * (h - 5));
@@ -208,14 +209,14 @@ export class Timelines {
       }
     };
     for (let i = begin; i < end; ++i) {
-      const x = view.x(steps[i], w);
-      const here = perStep >= 1 ? x : Math.floor(x);
+      const here = Math.floor(view.x(steps[i], w));
       if (here !== left) {
         flush();
         left = here;
         top = 0;
         state = 0;
       }
+      right = Math.floor(view.x(steps[i] + 1, w));
       const a = series.activation[i];
       if (a > top) top = Math.min(1, a);
       const s = series.state[i];

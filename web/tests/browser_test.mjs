@@ -745,3 +745,54 @@ test('the timelines zoom, pan and jump to the step clicked, with the cursor at t
   assert.equal(await behaviour(page, 'kick_ball').getAttribute('data-active'), 'true');
   await page.close();
 });
+
+test('a value plot of gait_velocity[0] over a 3000-step recording, on the timelines\' steps and cursor', async () => {
+  const recording = path.join(scratch, 'soccer-3000.mcap');
+  const trace = path.join(scratch, 'soccer-3000.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '3000', '--record', recording, '--trace', trace, '-q'], {cwd: source});
+  const expected = new Map(readFileSync(trace, 'utf8').trim().split('\n').slice(1).map((line) => {
+    const record = JSON.parse(line);
+    return [record.step, record.actuators.gait_velocity.value[0]];
+  }));
+  const {url} = await serve(['view', soccer, '--trace', recording, '--serve', '0']);
+  const page = await open(`${url}&step=1500`);
+  assert.deepEqual(await timelineRange(page), [1, 3000]);
+  // Every numeric actuator and vector component can be plotted; booleans too, as 0 and 1.
+  const choices = await page.$$eval('#plot-add option', (options) => options.map((option) => option.value).filter(Boolean));
+  for (const key of ['gait_velocity[0]', 'gait_velocity[1]', 'gait_velocity[2]', 'head_angle', 'kick', 'robot_pose[2]']) {
+    assert.ok(choices.includes(key), `${key} among ${choices}`);
+  }
+  await page.selectOption('#plot-add', 'gait_velocity[0]');
+  const plot = page.locator('.plot[data-series="gait_velocity[0]"]');
+  await plot.waitFor();
+  const value = () => plot.locator('li[data-series="gait_velocity[0]"] .plot-value').textContent();
+  // The legend gives the value at the step shown, as the recording has it.
+  assert.equal(await value(), expected.get(1500).toFixed(3));
+  // Several in one plot.
+  await plot.locator('select').selectOption('head_angle');
+  await page.waitForSelector('.plot[data-series="gait_velocity[0] head_angle"]');
+  const both = page.locator('.plot[data-series="gait_velocity[0] head_angle"]');
+  // The plot's steps lie under the timelines': hovering a step there gives that step's value.
+  await both.scrollIntoViewIfNeeded();
+  await nextFrame(page);
+  const over = await both.locator('.u-over').boundingBox();
+  const strip = await page.locator('#timeline-rows .timeline canvas').first().boundingBox();
+  assert.ok(Math.abs(over.x - strip.x) <= 2 && Math.abs(over.width - strip.width) <= 2,
+            `plot ${JSON.stringify(over)} under timelines ${JSON.stringify(strip)}`);
+  const at = await xOfStep(page, 2400);
+  await page.mouse.move(at.x, over.y + over.height / 2);
+  // (A pixel holds some 3 steps: the one under the pointer is about step 2400.)
+  await page.waitForFunction(() => /^step 2\d\d\d /.test(document.querySelector('.plot .plot-step').textContent));
+  const hovered = Number((await both.locator('.plot-step').textContent()).match(/^step (\d+)/)[1]);
+  assert.ok(Math.abs(hovered - 2400) <= 3, `hovered step ${hovered}`);
+  assert.equal(await both.locator('li[data-series="gait_velocity[0]"] .plot-value').textContent(), expected.get(hovered).toFixed(3));
+  // A click in the plot shows that step; the wheel there zooms the timelines too.
+  await page.mouse.click(at.x, over.y + over.height / 2);
+  await waitForStep(page, hovered);
+  await page.mouse.wheel(0, -800);
+  await nextFrame(page);
+  const [from, to] = await timelineRange(page);
+  assert.ok(to - from < 1500 && from <= 2400 && 2400 <= to, `zoomed from the plot: steps ${from} to ${to}`);
+  if (process.env.ARBITER_SCREENSHOT_PLOT) await page.screenshot({path: process.env.ARBITER_SCREENSHOT_PLOT, fullPage: true});
+  await page.close();
+});
