@@ -149,6 +149,8 @@ export class GraphView {
   constructor(svg, onHover) {
     this.svg = svg;
     this.onHover = onHover;
+    /** Called with 'layer/name' when a behaviour is clicked. */
+    this.onClick = (key) => {};
     this.behaviours = new Map();  // 'layer/name' -> {group, rect, level, mark, name, inhibitors, ...}
     this.ports = new Map();       // actuator name -> {group, value, title, about}
     this.drawing = 0;
@@ -283,6 +285,7 @@ export class GraphView {
       el('title', {}, g).textContent = `${key} (${behaviour.class}), execution order ${behaviour.order}`;
       g.addEventListener('mouseenter', () => this.onHover(key));
       g.addEventListener('mouseleave', () => this.onHover(null));
+      g.addEventListener('click', () => this.onClick(key));
       this.behaviours.set(key, {group: g, rect, level, mark, name, inhibitors, order: size.rowIndex,
                                 wrap: (list) => size.wrap.lines(list, size.room), indent: size.wrap.indent});
     }

@@ -25,15 +25,18 @@ export class RunPage {
     this.onSeek = (step) => {};
     this.time.onSeek = (step) => this.onSeek(step);
     this.writes = new WriteTracker();
-    this.explain = new ExplainPanel(document.getElementById('explain'));
+    this.explain = new ExplainPanel(document.getElementById('explain'), document.getElementById('explain-subject'));
     this.graph = new GraphView(document.getElementById('graph'), (key) => {
-      this.graph.highlight(key);
+      this.graph.highlight(key || this.explain.pinned);
       this.explain.hover(key);
     });
+    this.graph.onClick = (key) => this.explain.pin(key);
+    this.explain.onPin = (key) => this.graph.highlight(key);
     this.controllers = new Controllers(document.getElementById('controllers'));
     this.reported = new Reported(document.getElementById('reported'), reportedKept);
     this.timelines = new Timelines(document.getElementById('timelines'), this.columns, this.time);
     this.timelines.queueAt = (machine) => this.current?.controllers?.[machine]?.queue ?? null;
+    this.timelines.onLabel = (key) => this.explain.pin(key);
     this.plots = new Plots(document.getElementById('plots'), this.columns, this.time, () => this.timelines.strip());
   }
 

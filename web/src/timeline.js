@@ -54,6 +54,8 @@ export class Timelines {
     this.visible = new Set();    // rows on the screen
     this.pointer = null;         // {strip, x, y}: where the pointer is, for the tip
     this.queueAt = () => null;   // the queue of a state machine at the cursor (from the record)
+    /** Called with 'layer/name' when a behaviour's label is clicked. */
+    this.onLabel = (key) => {};
     this.observer = new IntersectionObserver((entries) => {
       for (const entry of entries) {
         if (entry.isIntersecting) this.visible.add(entry.target);
@@ -112,13 +114,14 @@ export class Timelines {
       if (this.collapsed.has(layer.name)) this.toggle(layer.name, group, head, true);
       for (const behaviour of layer.behaviours) {
         const key = `${layer.name}/${behaviour.name}`;
-        this.add('timeline', key, key, group, ROW_HEIGHT, {'data-name': key});
+        const strip = this.add('timeline', key, key, group, ROW_HEIGHT, {'data-name': key});
+        strip.row.querySelector('.label').onclick = () => this.onLabel(key);
       }
     }
     for (const machine of graph.state_machines || []) {
       const strip = this.add('timeline-machine', machine.name, machine.name, this.rows, ROW_HEIGHT,
                              {'data-machine': machine.name});
-      strip.note = html('span', {class: 'queue'}, strip.row);
+      strip.note = html('div', {class: 'timeline-queue', 'data-machine': machine.name}, this.rows);
     }
     this.add('timeline-events', '', 'reported', this.rows, ROW_HEIGHT);
     this.applyFilter();
@@ -138,6 +141,7 @@ export class Timelines {
     for (const strip of this.strips) {
       if (strip.kind !== 'timeline' && strip.kind !== 'timeline-machine') continue;
       strip.row.hidden = !!words && !strip.key.toLowerCase().includes(words);
+      if (strip.note) strip.note.hidden = strip.row.hidden;
     }
     this.view.changed();
   }

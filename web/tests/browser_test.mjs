@@ -659,7 +659,7 @@ test('chromium --headless --screenshot of the live page with ?snapshot shows the
 // The x (client coordinates) of the middle of `step` in the timelines' strip of steps.
 async function xOfStep(page, step) {
   return page.evaluate((n) => {
-    const canvas = document.querySelector('#timeline-rows .timeline canvas');
+    const canvas = document.querySelector('#timeline-rows .timeline-axis canvas');
     const box = canvas.getBoundingClientRect();
     const section = document.querySelector('#timelines');
     const from = Number(section.dataset.from);
@@ -718,7 +718,7 @@ test('the timelines zoom, pan and jump to the step clicked, with the cursor at t
   await page.keyboard.press('0');
   await nextFrame(page);
   // Hovering tells the step, its time and the row's values there.
-  at = await xOfStep(page, 50);
+  at = {x: (await xOfStep(page, 50)).x, y: await yOfRow(page, '.timeline[data-name="control/kick_ball"]')};
   await page.mouse.move(at.x, at.y);
   await page.waitForSelector('#timeline-tip:not([hidden])');
   const tip = await page.textContent('#timeline-tip');
@@ -739,8 +739,7 @@ test('the timelines zoom, pan and jump to the step clicked, with the cursor at t
   assert.ok(red[0] > 200 && red[1] < 80 && red[2] < 80, `the cursor is drawn at the step shown: rgb ${red}`);
   // The step of the kick, clicked on the go_behind_ball row: inhibited there.
   at = await xOfStep(page, 171);
-  const row = await page.locator('.timeline[data-name="control/go_behind_ball"] canvas').boundingBox();
-  await page.mouse.click(at.x, row.y + row.height / 2);
+  await page.mouse.click(at.x, await yOfRow(page, '.timeline[data-name="control/go_behind_ball"]'));
   await waitForStep(page, 171);
   assert.equal(await behaviour(page, 'kick_ball').getAttribute('data-active'), 'true');
   await page.close();
@@ -794,5 +793,97 @@ test('a value plot of gait_velocity[0] over a 3000-step recording, on the timeli
   const [from, to] = await timelineRange(page);
   assert.ok(to - from < 1500 && from <= 2400 && 2400 <= to, `zoomed from the plot: steps ${from} to ${to}`);
   if (process.env.ARBITER_SCREENSHOT_PLOT) await page.screenshot({path: process.env.ARBITER_SCREENSHOT_PLOT, fullPage: true});
+  await page.close();
+});
+
+/// The y of the middle of `selector`'s canvas (a timeline row or lane), scrolled into view.
+async function yOfRow(page, selector) {
+  const canvas = page.locator(`${selector} canvas`);
+  await canvas.scrollIntoViewIfNeeded();
+  const box = await canvas.boundingBox();
+  return box.y + box.height / 2;
+}
+/// The colour of `selector`'s canvas at `x` (client).
+const pixelAt = (page, selector, x) => page.$eval(`${selector} canvas`, (canvas, x) => {
+  const box = canvas.getBoundingClientRect();
+  const ratio = canvas.width / box.width;
+  // Near the top: under the text of a band's label.
+  return [...canvas.getContext('2d').getImageData(Math.round((x - box.left) * ratio), Math.round(4 * ratio), 1, 1).data.slice(0, 3)].join(',');
+}, x);
+
+test('a lane per state machine with its states over time and the queue at the cursor; a lane of reported events', async () => {
+  // The goalie: wait_for_button to step 10, walk_to_pose 11-113, monitor_ball 114, walk_to_pose
+  // 115-129, monitor_ball 130-200, dive 201-230 (the world reports the shot and the save), then
+  // monitor_ball.
+  const trace = path.join(scratch, 'goalie.jsonl');
+  const goalie = 'configs/soccer/goalie.yaml';
+  execFileSync(arbiter, ['run', goalie, '--steps', '300', '--trace', trace, '-q'], {cwd: source});
+  const {url} = await serve(['view', goalie, '--trace', trace, '--serve', '0']);
+  const page = await open(`${url}&step=205`);
+  const lane = '.timeline-machine[data-machine="goalie"]';
+  assert.equal(await page.locator(lane).count(), 1);
+  assert.equal(await page.textContent('.timeline-queue[data-machine="goalie"]'), 'queue: monitor_ball');
+  const y = await yOfRow(page, lane);
+  const tipAt = async (step, rowY) => {
+    const {x} = await xOfStep(page, step);
+    await page.mouse.move(x, rowY);
+    await page.waitForFunction((n) => document.querySelector('#timeline-tip').textContent.startsWith(`step ${n} `), step);
+    return (await page.textContent('#timeline-tip')).split('\n').slice(1).join('\n');
+  };
+  // The history, not only the state shown: each step's state under the pointer.
+  assert.equal(await tipAt(5, y), 'goalie: wait_for_button');
+  assert.equal(await tipAt(60, y), 'goalie: walk_to_pose');
+  assert.equal(await tipAt(150, y), 'goalie: monitor_ball');
+  assert.equal(await tipAt(215, y), 'goalie: dive');
+  // A band per state, the same colour for the same state.
+  const colourAt = async (step) => pixelAt(page, lane, (await xOfStep(page, step)).x);
+  assert.equal(await colourAt(60), await colourAt(120));
+  assert.notEqual(await colourAt(60), await colourAt(150));
+  assert.notEqual(await colourAt(150), await colourAt(215));
+  // A click on the lane shows that step, with its queue.
+  await page.mouse.click((await xOfStep(page, 114)).x, y);
+  await waitForStep(page, 114);
+  assert.equal(await page.textContent('.timeline-queue[data-machine="goalie"]'), 'queue: walk_to_pose, monitor_ball');
+  // The reported events, with their text.
+  const events = await yOfRow(page, '.timeline-events');
+  assert.equal(await tipAt(201, events), 'world: shot on goal\ngoalie/dive: goalie dives left');
+  assert.equal(await tipAt(214, events), 'world: ball saved');
+  await page.close();
+});
+
+test('the explain panel is pinned to a behaviour, readable, and follows the cursor', async () => {
+  const trace = path.join(scratch, 'soccer-explain.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '220', '--trace', trace, '-q'], {cwd: source});
+  const {url} = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
+  const page = await open(`${url}&step=171`);
+  await behaviour(page, 'go_behind_ball').click();
+  const answer = (step) => page.waitForSelector(`#explain[data-step="${step}"][data-target="control/go_behind_ball"]`);
+  await answer(171);
+  // Readable: the verdict a heading, the inhibitors a table.
+  assert.equal(await page.textContent('#explain .explain-head'),
+               'behaviour go_behind_ball (layer control) at step 171: inactive, activation 0');
+  const cells = await page.$$eval('#explain .explain-table tr:first-child td', (tds) => tds.map((td) => td.textContent.trim()));
+  assert.deepEqual(cells.slice(0, 3), ['kick_ball', 'activation 1', 'factor 0']);
+  assert.match(await page.textContent('#explain .explain-formula'), /^activation = 1 × 0 = 0$/);
+  assert.equal(await page.$eval('#explain', (node) => getComputedStyle(node).whiteSpace), 'normal');
+  assert.match(await page.textContent('#explain-subject'), /pinned: control\/go_behind_ball/);
+  // Pinned: the pointer leaves the graph for the timelines; a click there moves the cursor, and
+  // the panel explains the same behaviour at the new step.
+  const {x} = await xOfStep(page, 100);
+  const y = await yOfRow(page, '.timeline[data-name="control/head_control"]');
+  await page.mouse.click(x, y);
+  await waitForStep(page, 100);
+  await answer(100);
+  assert.equal(await page.textContent('#explain .explain-head'),
+               'behaviour go_behind_ball (layer control) at step 100: active, activation 1');
+  // The panel stays in view while the page is scrolled to the timelines.
+  const box = await page.locator('#explain').boundingBox();
+  assert.ok(box.y >= 0 && box.y < 900, `the explain panel at y ${box.y}`);
+  // A timeline's label pins its behaviour.
+  await page.locator('.timeline[data-name="control/search_for_ball"] .label').click();
+  await page.waitForSelector('#explain[data-step="100"][data-target="control/search_for_ball"]');
+  await page.keyboard.press('ArrowRight');
+  await waitForStep(page, 101);
+  await page.waitForSelector('#explain[data-step="101"][data-target="control/search_for_ball"]');
   await page.close();
 });
