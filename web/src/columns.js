@@ -25,6 +25,7 @@ export class Columns {
     this.t = [];
     /** @type {Map<string, {activation: number[], state: number[]}>} 'layer/behaviour' */
     this.behaviours = new Map();
+    this.byLayer = new Map();  // the same series: layer -> behaviour -> series
     /** @type {Map<string, (number|null)[]>} 'actuator' or 'actuator[i]': numbers, null where none (a gap in a plot) */
     this.values = new Map();
     /** @type {Map<string, (string|null)[]>} state machine -> its state in each step */
@@ -52,13 +53,18 @@ export class Columns {
     const length = this.steps.length + 1;
     this.steps.push(record.step);
     this.t.push(typeof record.t === 'number' ? record.t : NaN);
-    for (const [layer, behaviours] of Object.entries(record.layers || {})) {
-      for (const [name, levels] of Object.entries(behaviours)) {
-        const key = `${layer}/${name}`;
-        let series = this.behaviours.get(key);
+    for (const layer in record.layers || {}) {
+      const behaviours = record.layers[layer];
+      // By layer, then name: no 'layer/name' string to build for each behaviour of each step.
+      let named = this.byLayer.get(layer);
+      if (!named) this.byLayer.set(layer, (named = new Map()));
+      for (const name in behaviours) {
+        const levels = behaviours[name];
+        let series = named.get(name);
         if (!series) {
           series = {activation: new Array(length - 1).fill(NaN), state: new Array(length - 1).fill(IDLE)};
-          this.behaviours.set(key, series);
+          this.behaviours.set(`${layer}/${name}`, series);
+          named.set(name, series);
         }
         series.activation.push(Number(levels.activation) || 0);
         series.state.push(levels.active ? ACTIVE : levels.requested > 0 ? INHIBITED : IDLE);

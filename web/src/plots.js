@@ -18,14 +18,14 @@ export class Plots {
    * @param {HTMLElement} section the plots' section
    * @param {import('./columns.js').Columns} columns
    * @param {import('./time_view.js').TimeView} view
-   * @param {() => {left: number, width: number}} strip where the timelines draw their steps
+   * @param {() => number} stripWidth how wide the timelines draw their steps (CSS pixels)
    */
-  constructor(section, columns, view, strip) {
+  constructor(section, columns, view, stripWidth) {
     this.list = section.querySelector('#plot-list');
     this.adder = section.querySelector('#plot-add');
     this.columns = columns;
     this.view = view;
-    this.strip = strip;
+    this.stripWidth = stripWidth;
     /** @type {{box: HTMLElement, keys: string[], legend: HTMLElement, chart: uPlot | null}[]} */
     this.plots = [];
     this.fills = [];  // each select's refill
@@ -107,7 +107,7 @@ export class Plots {
 
   /** The uPlot's width: its steps exactly under the timelines' (its y axis to their right). */
   width() {
-    return Math.max(200, Math.round(this.strip().width) + AXIS_SIZE);
+    return Math.max(200, Math.round(this.stripWidth()) + AXIS_SIZE);
   }
 
   data(plot) {

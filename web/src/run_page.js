@@ -37,7 +37,7 @@ export class RunPage {
     this.timelines = new Timelines(document.getElementById('timelines'), this.columns, this.time);
     this.timelines.queueAt = (machine) => this.current?.controllers?.[machine]?.queue ?? null;
     this.timelines.onLabel = (key) => this.explain.pin(key);
-    this.plots = new Plots(document.getElementById('plots'), this.columns, this.time, () => this.timelines.strip());
+    this.plots = new Plots(document.getElementById('plots'), this.columns, this.time, () => this.timelines.stripWidth);
   }
 
   /** A record received, in step order: notes what it held and reported. */

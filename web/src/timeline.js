@@ -76,7 +76,12 @@ export class Timelines {
       this.showTip();
     });
     this.filter.addEventListener('input', () => this.applyFilter());
-    new ResizeObserver(() => this.view.changed()).observe(this.rows);
+    this.stripWidth = 0;  // CSS pixels, measured when the rows change size, not each frame
+    new ResizeObserver(() => {
+      const canvas = this.strips.length ? this.strips[0].canvas : null;
+      this.stripWidth = canvas ? canvas.getBoundingClientRect().width : 0;
+      this.view.changed();
+    }).observe(this.rows);
   }
 
   /** Where the steps are drawn, in client coordinates: the canvases' column. */
@@ -154,10 +159,12 @@ export class Timelines {
     this.section.dataset.to = String(view.to);
     if (!this.strips.length) return;
     const ratio = window.devicePixelRatio || 1;
-    const width = Math.round(this.strips[0].canvas.getBoundingClientRect().width * ratio);
+    const width = Math.round(this.stripWidth * ratio);
     if (!width) return;
+    // Only the rows on the screen: a row filtered out or folded away is not displayed, and so
+    // not intersecting.
     for (const strip of this.strips) {
-      if (!this.visible.has(strip.row) || strip.row.hidden || strip.row.offsetParent === null) continue;
+      if (!this.visible.has(strip.row)) continue;
       const canvas = strip.canvas;
       const height = Math.round(Number(canvas.getAttribute('height')) * ratio);
       if (canvas.width !== width || canvas.height !== height) {
