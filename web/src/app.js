@@ -45,4 +45,5 @@ async function start() {
 
 // Asked for a snapshot, the page is loaded once it is drawn (or has said why it cannot be).
 const releaseLoad = snapshotAsked() ? holdLoad() : () => {};
-start().finally(releaseLoad);
+// Two frames after it is ready: the timelines and plots draw in the next one.
+start().finally(() => requestAnimationFrame(() => requestAnimationFrame(releaseLoad)));

@@ -34,6 +34,9 @@ export class Plots {
       if (this.adder.value) this.add([this.adder.value]);
       this.adder.value = '';
     });
+    // The plots the address asks for (`?plot=gait_velocity[0],head_angle&plot=kick`: a plot
+    // each), made once the values have arrived: a link or a headless screenshot shows them.
+    this.asked = new URLSearchParams(location.search).getAll('plot').map((list) => list.split(',').filter(Boolean));
     view.subscribe(() => this.draw());
   }
 
@@ -155,6 +158,13 @@ export class Plots {
 
   draw() {
     for (const fill of this.fills) fill();
+    if (this.asked.length && this.columns.length) {
+      for (const keys of this.asked) {
+        const known = keys.filter((key) => this.columns.values.has(key));
+        if (known.length) this.add(known);
+      }
+      this.asked = [];
+    }
     if (!this.plots.length) return;
     const width = this.width();
     for (const plot of this.plots) {

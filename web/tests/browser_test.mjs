@@ -654,6 +654,14 @@ test('chromium --headless --screenshot of the live page with ?snapshot shows the
   await headless([`--screenshot=${png}`], `${run.url}&snapshot`);
   assert.ok(existsSync(png));
   assert.equal(readFileSync(png).subarray(1, 4).toString(), 'PNG');
+  // The trace view too, at the step and with the plots the address asks for.
+  const trace = path.join(scratch, 'soccer-snapshot.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '220', '--trace', trace, '-q'], {cwd: source});
+  const view = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
+  const viewed = await headless(['--dump-dom'], `${view.url}&step=171&snapshot&plot=gait_velocity[0],head_angle`);
+  assert.match(viewed, /<b id="step">171<\/b>/);
+  assert.match(viewed, /class="behaviour active"[^>]*data-name="control\/kick_ball"|data-name="control\/kick_ball"[^>]*data-active="true"/);
+  assert.match(viewed, /<div class="plot" data-series="gait_velocity\[0\] head_angle">/);
 });
 
 // The x (client coordinates) of the middle of `step` in the timelines' strip of steps.

@@ -29,7 +29,9 @@ export async function trace(info) {
     scrub.value = index;
     page.show(records[index]);
     // The address names the step shown: a reload or a copied link opens there again.
-    history.replaceState(null, '', `${location.pathname}?step=${records[index].step}`);
+    const params = new URLSearchParams(location.search);
+    params.set('step', records[index].step);
+    history.replaceState(null, '', `${location.pathname}?${params}`.replace(/=(?=&|$)/g, ''));
   };
   scrub.oninput = () => go(Number(scrub.value));
   document.getElementById('previous').onclick = () => go(Number(scrub.value) - 1);
