@@ -977,3 +977,23 @@ test('1000 behaviours streamed live at 100 Hz: the page stays responsive (median
   assert.equal(await page.locator('.timeline:visible').count(), 900);
   await page.close();
 }, 120000);
+
+test('live: a step clicked in the timelines stays shown while the run goes on, until Follow', async () => {
+  const {url} = await serve(['run', soccer, '--serve', '0', '--steps', '100000', '-q']);
+  const page = await open(url);
+  await page.waitForFunction(() => Number(document.querySelector('#step').textContent) >= 30);
+  await nextFrame(page);
+  const {x} = await xOfStep(page, 10);
+  await page.mouse.click(x, await yOfRow(page, '.timeline[data-name="control/go_behind_ball"]'));
+  await waitForStep(page, 10);
+  assert.equal(await page.getAttribute('body', 'data-pinned'), '10');
+  assert.equal(await page.isVisible('#follow'), true);
+  // The run goes on (the timelines grow), the page stays at step 10.
+  const [, last] = await timelineRange(page);
+  await page.waitForFunction((n) => Number(document.querySelector('#timelines').dataset.to) > n + 5, last);
+  assert.equal(await stepShown(page), 10);
+  await page.click('#follow');
+  await page.waitForFunction((n) => Number(document.querySelector('#step').textContent) > n + 5, last);
+  assert.equal(await page.isVisible('#follow'), false);
+  await page.close();
+});
