@@ -199,25 +199,26 @@ export class Timelines {
     const view = this.view;
     // Many steps to a pixel: each pixel column shows the highest activation among its steps, and
     // a bar if any of them was active (or inhibited), so that no activation is lost to zooming out.
-    // Columns start and end on whole pixels: no seams between steps.
+    // Columns start and end on whole pixels: no seams between steps. Runs of columns alike are
+    // drawn as one rectangle: a long recording zoomed out draws a few hundred, not a
+    // rectangle and a colour for each of its thousands of columns.
+    const runs = {level: [], active: [], inhibited: []};  // [left, right, value] each
+    const extend = (list, left, right, value) => {
+      const run = list[list.length - 1];
+      if (run && run[1] === left && run[2] === value) run[1] = right;
+      else list.push([left, right, value]);
+    };
     let left = -1;
     let right = -1;
     let top = 0;
     let state = 0;
     const flush = () => {
       if (left < 0) return;
-      const span = Math.max(1, right - left);
-      if (top > 0) {
-        context.fillStyle = colour(top);
-        context.fillRect(left, h - 3 - top * (h - 5), span, top * (h - 5));
-      }
-      if (state & 1) {
-        context.fillStyle = '#1b7f3b';
-        context.fillRect(left, h - 3, span, 3);
-      } else if (state & 2) {
-        context.fillStyle = '#c62828';
-        context.fillRect(left, h - 2, span, 2);
-      }
+      const end = Math.max(left + 1, right);
+      // 64 shades: enough for the eye, and runs of them join.
+      if (top > 0) extend(runs.level, left, end, Math.round(top * 64) / 64);
+      if (state & 1) extend(runs.active, left, end, 1);
+      else if (state & 2) extend(runs.inhibited, left, end, 1);
     };
     for (let i = begin; i < end; ++i) {
       const here = Math.floor(view.x(steps[i], w));
@@ -235,6 +236,16 @@ export class Timelines {
       else if (s === INHIBITED) state |= 2;
     }
     flush();
+    let style = '';
+    for (const [from, to, level] of runs.level) {
+      const fill = colour(level);
+      if (fill !== style) context.fillStyle = style = fill;
+      context.fillRect(from, h - 3 - level * (h - 5), to - from, level * (h - 5));
+    }
+    context.fillStyle = '#1b7f3b';
+    for (const [from, to] of runs.active) context.fillRect(from, h - 3, to - from, 3);
+    context.fillStyle = '#c62828';
+    for (const [from, to] of runs.inhibited) context.fillRect(from, h - 2, to - from, 2);
   }
 
   drawAxis(context, w, h) {
