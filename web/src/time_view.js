@@ -166,6 +166,8 @@ export function attachPointer(element, view, strip) {
  */
 export function attachKeys(element, view) {
   element.addEventListener('keydown', (event) => {
+    // Typing in a field (the filter by name) is typing.
+    if (event.target.closest('input, select, textarea')) return;
     const span = view.to - view.from + 1;
     if (event.key === '+' || event.key === '=') view.zoom(0.5, view.cursor ?? undefined);
     else if (event.key === '-') view.zoom(2, view.cursor ?? undefined);

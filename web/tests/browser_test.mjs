@@ -727,6 +727,16 @@ test('the timelines zoom, pan and jump to the step clicked, with the cursor at t
   assert.equal(await stepShown(page), 171, 'Shift+← does not step');
   await page.keyboard.press('0');
   await nextFrame(page);
+  // Typed into the filter, + - 0 are text, not zoom keys.
+  await page.locator('#timeline-filter').pressSequentially('ball');
+  assert.deepEqual(await page.locator('.timeline:visible').evaluateAll((rows) => rows.map((row) => row.dataset.name)),
+                   ['control/kick_ball', 'control/go_behind_ball', 'control/search_for_ball']);
+  await page.locator('#timeline-filter').pressSequentially('+0');
+  assert.equal(await page.inputValue('#timeline-filter'), 'ball+0');
+  assert.equal(await page.locator('.timeline:visible').count(), 0);
+  await nextFrame(page);
+  assert.deepEqual(await timelineRange(page), [1, 220]);
+  await page.fill('#timeline-filter', '');
   // Hovering tells the step, its time and the row's values there.
   at = {x: (await xOfStep(page, 50)).x, y: await yOfRow(page, '.timeline[data-name="control/kick_ball"]')};
   await page.mouse.move(at.x, at.y);

@@ -40,6 +40,7 @@ export async function trace(info) {
   page.onSeek = (step) => go(indexOfStep(page.columns, step));
   document.addEventListener('keydown', (event) => {
     if (event.target === scrub) return;  // the slider moves itself
+    if (event.target.closest('input, select, textarea')) return;  // the caret moves in a field
     if (event.key === 'ArrowLeft') go(Number(scrub.value) - 1);
     if (event.key === 'ArrowRight') go(Number(scrub.value) + 1);
   });
