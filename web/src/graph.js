@@ -323,6 +323,26 @@ export class GraphView {
     });
   }
 
+  /**
+   * Marks the behaviours whose 'layer/name' holds `words` and dims the others (none when empty).
+   * @returns {string | null} the first match, in execution order
+   */
+  mark(words) {
+    let first = null;
+    for (const [key, item] of this.behaviours) {
+      const match = !!words && key.toLowerCase().includes(words);
+      if (match && !first) first = key;
+      item.group.classList.toggle('matched', match);
+      item.group.classList.toggle('unmatched', !!words && !match);
+    }
+    return first;
+  }
+
+  /** Scrolls `key`'s box into view. */
+  reveal(key) {
+    this.behaviours.get(key)?.group.scrollIntoView({block: 'center', inline: 'center'});
+  }
+
   /** Marks the hovered behaviour ('layer/name', or null). */
   highlight(key) {
     for (const [name, item] of this.behaviours) item.group.classList.toggle('hovered', name === key);

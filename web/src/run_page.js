@@ -37,6 +37,14 @@ export class RunPage {
     this.timelines = new Timelines(document.getElementById('timelines'), this.columns, this.time);
     this.timelines.queueAt = (machine) => this.current?.controllers?.[machine]?.queue ?? null;
     this.timelines.onLabel = (key) => this.explain.pin(key);
+    // The filter by name finds behaviours in the graph too.
+    this.timelines.onFilter = (words) => this.graph.mark(words);
+    this.timelines.onFind = (words) => {
+      const key = this.graph.mark(words);
+      if (!key) return;
+      this.graph.reveal(key);
+      this.explain.pin(key);
+    };
     this.plots = new Plots(document.getElementById('plots'), this.columns, this.time, () => this.timelines.stripWidth);
   }
 
@@ -73,7 +81,7 @@ export class RunPage {
     document.getElementById('title').textContent = graph.name;
     document.title = `arbiter: ${graph.name}`;
     this.controllers.build(graph);
-    this.timelines.build(graph);
+    this.timelines.build(graph);  // and marks the behaviours its filter finds
     this.show(this.current);
   }
 

@@ -56,6 +56,9 @@ export class Timelines {
     this.queueAt = () => null;   // the queue of a state machine at the cursor (from the record)
     /** Called with 'layer/name' when a behaviour's label is clicked. */
     this.onLabel = (key) => {};
+    /** Called with the filter's text (lower case) as it changes, and when Enter is pressed in it. */
+    this.onFilter = (words) => {};
+    this.onFind = (words) => {};
     this.observer = new IntersectionObserver((entries) => {
       for (const entry of entries) {
         if (entry.isIntersecting) this.visible.add(entry.target);
@@ -76,6 +79,10 @@ export class Timelines {
       this.showTip();
     });
     this.filter.addEventListener('input', () => this.applyFilter());
+    // Enter: the first behaviour that matches (onFind shows it in the graph and explains it).
+    this.filter.addEventListener('keydown', (event) => {
+      if (event.key === 'Enter') this.onFind(this.filter.value.trim().toLowerCase());
+    });
     this.stripWidth = 0;  // CSS pixels, measured when the rows change size, not each frame
     new ResizeObserver(() => {
       const canvas = this.strips.length ? this.strips[0].canvas : null;
@@ -143,6 +150,7 @@ export class Timelines {
   /** Keeps the behaviour rows and lanes whose name holds the filter's text. */
   applyFilter() {
     const words = this.filter.value.trim().toLowerCase();
+    this.onFilter(words);
     for (const strip of this.strips) {
       if (strip.kind !== 'timeline' && strip.kind !== 'timeline-machine') continue;
       strip.row.hidden = !!words && !strip.key.toLowerCase().includes(words);

@@ -905,6 +905,13 @@ test('the explain panel is pinned to a behaviour, readable, and follows the curs
   await page.keyboard.press('ArrowRight');
   await waitForStep(page, 101);
   await page.waitForSelector('#explain[data-step="101"][data-target="control/search_for_ball"]');
+  // The filter by name finds behaviours in the graph too: Enter explains the first.
+  await page.locator('#timeline-filter').fill('head');
+  assert.deepEqual(await page.locator('#graph .behaviour.matched').evaluateAll((nodes) => nodes.map((node) => node.dataset.name)),
+                   ['control/head_control']);
+  assert.equal(await page.locator('#graph .behaviour.unmatched').count(), 3);
+  await page.locator('#timeline-filter').press('Enter');
+  await page.waitForSelector('#explain[data-step="101"][data-target="control/head_control"]');
   await page.close();
 });
 
@@ -982,6 +989,13 @@ test('1000 behaviours streamed live at 100 Hz: the page stays responsive (median
   // Search and fold: a filter by name leaves the matching rows; a layer folds away.
   await page.fill('#timeline-filter', 'b_3_4');
   assert.equal(await page.locator('.timeline:visible').count(), 11);  // b_3_4, b_3_40 ... b_3_49
+  // Enter finds the first in the graph, far off the screen: it is scrolled into view, explained.
+  await page.fill('#timeline-filter', 'b_7_93');
+  await page.locator('#timeline-filter').press('Enter');
+  await page.waitForSelector('#explain[data-target="layer_7/b_7_93"]');
+  const found = await page.locator('.behaviour[data-name="layer_7/b_7_93"] rect').boundingBox();
+  assert.ok(found.y >= 0 && found.y + found.height <= 900 && found.x >= 0 && found.x + found.width <= 1400,
+            `b_7_93 on the screen: ${JSON.stringify(found)}`);
   await page.fill('#timeline-filter', '');
   await page.click('.timeline-group[data-layer="layer_0"] .timeline-layer');
   assert.equal(await page.locator('.timeline:visible').count(), 900);
