@@ -443,13 +443,30 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
     if (const auto last = parse_step(request.get_header_value("Last-Event-ID"))) {
       cursor->next = *last + 1;
     }
+    // A snapshot (the page's ?snapshot, docs/live_view.md) is the run as it is now: the stream
+    // ends, with an "end" event, once it has sent the steps up to this one. A stream that never
+    // ends keeps a headless browser from ever taking its screenshot.
+    const bool snapshot = request.has_param("snapshot");
+    const std::uint64_t last_step = newest_;
     response.set_header("Cache-Control", "no-cache");
     response.set_chunked_content_provider(
-        "text/event-stream", [this, cursor](std::size_t, httplib::DataSink& sink) {
-          return stream(cursor->next, cursor->graph_seen, cursor->status_seen, cursor->safe_seen,
-                        cursor->timing_sent, [&sink](const std::string& text) {
-                          return sink.write(text.data(), text.size());
-                        });
+        "text/event-stream",
+        [this, cursor, snapshot, last_step](std::size_t, httplib::DataSink& sink) {
+          const auto write = [&sink](const std::string& text) {
+            return sink.write(text.data(), text.size());
+          };
+          if (!stream(cursor->next, cursor->graph_seen, cursor->status_seen, cursor->safe_seen,
+                      cursor->timing_sent, write)) {
+            return false;
+          }
+          if (snapshot && cursor->graph_seen != 0 && cursor->status_seen != 0 &&
+              (last_step == 0 || cursor->next > last_step) && cursor->safe_seen == safe_version_) {
+            if (!write(sse_frame("end", 0, fmt::format(R"({{"step": {}}})", last_step)))) {
+              return false;
+            }
+            sink.done();
+          }
+          return true;
         });
   });
   const auto control = [this](const char* path, bool pause, bool single_step) {

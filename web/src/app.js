@@ -3,6 +3,7 @@
 // comparison of two runs) is a module in views/ and an entry in VIEWS, with the mode its server
 // reports in /info.
 import {setStatus} from './panels.js';
+import {holdLoad, snapshotAsked} from './snapshot.js';
 import {live} from './views/live.js';
 import {trace} from './views/trace.js';
 
@@ -42,4 +43,7 @@ async function start() {
   document.body.dataset.ready = 'true';
 }
 
-start();
+// Asked for a snapshot, the page is loaded once it is drawn (or has said why it cannot be).
+const releaseLoad = snapshotAsked() ? holdLoad() : () => {};
+// Two frames after it is ready: the timelines and plots draw in the next one.
+start().finally(() => requestAnimationFrame(() => requestAnimationFrame(releaseLoad)));

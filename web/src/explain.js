@@ -1,36 +1,102 @@
-// The explain panel: the server's `explain` answer for the hovered behaviour at the step shown
-// (the same answer as `arbiter explain`).
+// The explain panel: the server's `explain` answer (the same as `arbiter explain`) for a
+// behaviour at the step shown, laid out to be read: the verdict as a heading, the inhibitors as
+// a table. Clicking a behaviour (in the graph or a timeline's label) pins the panel to it; hovering
+// another shows that one until the pointer leaves. It follows the step shown: a click in the
+// timelines explains that step.
+import {html} from './dom.js';
+
+/**
+ * The text of an answer as HTML in `box`: the first line a heading, each line of three or more
+ * columns (two spaces apart) a table row, the others paragraphs indented as they were.
+ */
+export function renderAnswer(box, text) {
+  box.replaceChildren();
+  const lines = text.replace(/\n+$/, '').split('\n');
+  html('h3', {class: 'explain-head'}, box).textContent = lines[0];
+  let table = null;
+  for (const line of lines.slice(1)) {
+    const indent = line.length - line.trimStart().length;
+    const cells = line.trim().split(/\s{2,}/);
+    if (cells.length >= 3) {
+      if (!table) table = html('table', {class: 'explain-table'}, box);
+      const row = html('tr', {}, table);
+      // A space after each cell keeps the text readable when copied.
+      cells.forEach((cell, i) => {
+        html('td', {class: i === cells.length - 1 && cells.length > 3 ? 'explain-source' : ''}, row).textContent = `${cell} `;
+      });
+      continue;
+    }
+    table = null;
+    const kind = /^activation = /.test(line.trim()) ? 'explain-formula' : indent === 0 ? 'explain-line' : 'explain-detail';
+    const p = html('p', {class: kind}, box);
+    p.style.paddingLeft = `${Math.max(0, indent - 2) * 0.5}em`;
+    p.textContent = line.trim();
+  }
+}
 
 export class ExplainPanel {
-  /** @param {HTMLElement} output */
-  constructor(output) {
+  /**
+   * @param {HTMLElement} output where the answer goes
+   * @param {HTMLElement} subject the line that names what is explained, and how to unpin it
+   */
+  constructor(output, subject) {
     this.output = output;
+    this.subject = subject;
     this.step = null;     // the step shown
     this.hovered = null;  // 'layer/name'
+    this.pinned = null;   // 'layer/name'
     this.pending = false;
     this.shown = '';      // 'step key' of the answer shown
+    /** Called when the pinned behaviour changes. */
+    this.onPin = (key) => {};
+  }
+
+  get target() {
+    return this.hovered || this.pinned;
   }
 
   /** The behaviour hovered, or null: asks for its answer. */
   hover(key) {
     this.hovered = key;
-    if (key) this.ask();
+    if (this.target) this.ask();
   }
 
-  /** The step the page shows: the hovered behaviour's answer follows it. */
+  /** Pins the panel to `key` (null: unpins it). */
+  pin(key) {
+    this.pinned = key;
+    this.onPin(key);
+    this.subject.replaceChildren();
+    if (key) {
+      this.subject.append(`pinned: ${key} `);
+      const unpin = html('button', {type: 'button', class: 'unpin', title: 'explain the behaviour hovered only'}, this.subject);
+      unpin.textContent = 'unpin';
+      unpin.onclick = () => this.pin(null);
+    } else {
+      this.subject.textContent = 'Hover over a behaviour, or click it to pin it here.';
+    }
+    this.subject.parentElement.dataset.pinned = key || '';
+    if (this.target) this.ask();
+  }
+
+  /** The step the page shows: the answer follows it. */
   setStep(step) {
     this.step = step;
-    if (this.hovered) this.ask();
+    if (this.target) this.ask();
   }
 
   async ask() {
     if (this.step === null || this.pending) return;
-    const asked = `${this.step} ${this.hovered}`;
+    const target = this.target;
+    const asked = `${this.step} ${target}`;
     if (asked === this.shown) return;
     this.pending = true;
     try {
-      const response = await fetch(`explain?step=${this.step}&target=${encodeURIComponent(this.hovered)}`);
-      this.output.textContent = await response.text();
+      const response = await fetch(`explain?step=${this.step}&target=${encodeURIComponent(target)}`);
+      const text = await response.text();
+      if (response.ok) renderAnswer(this.output, text);
+      else this.output.textContent = text;
+      this.output.dataset.step = String(this.step);
+      this.output.dataset.target = target;
       this.shown = asked;
     } catch (error) {
       this.output.textContent = `explain failed: ${error}`;
@@ -38,6 +104,6 @@ export class ExplainPanel {
       this.pending = false;
     }
     // The step or the behaviour changed while the answer was on its way.
-    if (this.hovered && `${this.step} ${this.hovered}` !== this.shown) this.ask();
+    if (this.target && `${this.step} ${this.target}` !== this.shown) this.ask();
   }
 }

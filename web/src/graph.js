@@ -17,6 +17,8 @@ const BAR = 5;        // half the inhibited end's bar, and how far before the bo
 const TYPICAL_VALUE = {bool: 'false', int: '-12345', double: '-12.345', vec2: '[-1.234, -1.234]',
                        vec3: '[-1.234, -1.234, -1.234]', string: '"a short text"', other: '{"a": 1, "b": 2}'};
 const INHIBITORS_ROOM = 260;  // a list of inhibitors wider than this is wrapped
+const LARGE = 200;            // behaviours: from here, only those on the screen are redrawn,
+const LARGE_PERIOD = 100;     // and at most every this many ms
 
 // ELK's own build without a web worker: layouts of a few dozen boxes take milliseconds.
 const elk = new ELK();
@@ -149,9 +151,13 @@ export class GraphView {
   constructor(svg, onHover) {
     this.svg = svg;
     this.onHover = onHover;
+    /** Called with 'layer/name' when a behaviour is clicked. */
+    this.onClick = (key) => {};
     this.behaviours = new Map();  // 'layer/name' -> {group, rect, level, mark, name, inhibitors, ...}
     this.ports = new Map();       // actuator name -> {group, value, title, about}
     this.drawing = 0;
+    this.shownAt = -Infinity;  // when a large graph was last redrawn
+    this.trailing = null;      // its next redraw
   }
 
   /**
@@ -166,6 +172,7 @@ export class GraphView {
     const layouts = await Promise.all(graph.layers.map((layer, index) => layoutLayer(layer, sizes[index])));
     if (drawing !== this.drawing) return false;
     this.build(graph, sizes, layouts);
+    this.watchScreen();
     return true;
   }
 
@@ -283,7 +290,8 @@ export class GraphView {
       el('title', {}, g).textContent = `${key} (${behaviour.class}), execution order ${behaviour.order}`;
       g.addEventListener('mouseenter', () => this.onHover(key));
       g.addEventListener('mouseleave', () => this.onHover(null));
-      this.behaviours.set(key, {group: g, rect, level, mark, name, inhibitors, order: size.rowIndex,
+      g.addEventListener('click', () => this.onClick(key));
+      this.behaviours.set(key, {key, group: g, rect, level, mark, name, inhibitors, order: size.rowIndex,
                                 wrap: (list) => size.wrap.lines(list, size.room), indent: size.wrap.indent});
     }
     const routed = new Map((layout.edges || []).map((edge) => [edge.id, edge]));
@@ -315,39 +323,108 @@ export class GraphView {
     });
   }
 
+  /**
+   * Marks the behaviours whose 'layer/name' holds `words` and dims the others (none when empty).
+   * @returns {string | null} the first match, in execution order
+   */
+  mark(words) {
+    let first = null;
+    for (const [key, item] of this.behaviours) {
+      const match = !!words && key.toLowerCase().includes(words);
+      if (match && !first) first = key;
+      item.group.classList.toggle('matched', match);
+      item.group.classList.toggle('unmatched', !!words && !match);
+    }
+    return first;
+  }
+
+  /** Scrolls `key`'s box into view. */
+  reveal(key) {
+    this.behaviours.get(key)?.group.scrollIntoView({block: 'center', inline: 'center'});
+  }
+
   /** Marks the hovered behaviour ('layer/name', or null). */
   highlight(key) {
     for (const [name, item] of this.behaviours) item.group.classList.toggle('hovered', name === key);
   }
 
-  /** Shows `record` (one step): levels, activity, active inhibitors and actuator values. */
-  show(record) {
-    for (const [key, item] of this.behaviours) {
-      const levels = levelsOf(record, key) || {activation: 0, requested: 0, active: false, inhibited_by: []};
-      const activation = Number(levels.activation) || 0;
-      item.rect.setAttribute('fill', colour(activation));
-      item.group.setAttribute('data-activation', activation);
-      item.group.setAttribute('data-active', levels.active ? 'true' : 'false');
-      item.group.classList.toggle('active', !!levels.active);
-      item.group.classList.toggle('inhibited', !levels.active && levels.requested > 0);
-      item.mark.textContent = levels.active ? '●' : '';
-      const ink = activation > 0.55 ? '#fff' : '#1d2733';
-      item.name.setAttribute('fill', ink);
-      item.level.setAttribute('fill', ink);
-      item.level.textContent = `activation ${activation.toFixed(2)} of ${Number(levels.requested).toFixed(2)}`;
-      if (item.inhibitors) {
-        item.inhibitors.setAttribute('fill', ink);
-        item.inhibitors.replaceChildren();
-        const active = (levels.inhibited_by || []).filter((name) => item.order.has(name))
-            .sort((a, b) => item.order.get(a) - item.order.get(b));
-        item.wrap(active).forEach((line, index, lines) => {
-          const x = Number(item.inhibitors.getAttribute('x')) + (index ? item.indent : 0);
-          const words = (index ? '' : '⊣ ') + line.join(', ') + (index < lines.length - 1 ? ',' : '');
-          el('tspan', {x, dy: index ? 12 : 0}, item.inhibitors).textContent = words;
-        });
+  /**
+   * Large graphs are redrawn only where they are on the screen: a behaviour scrolled into view
+   * is brought up to the step shown then. (Small ones are redrawn whole: nothing to gain.)
+   */
+  watchScreen() {
+    this.observer?.disconnect();
+    this.observer = null;
+    if (this.behaviours.size < LARGE) return;
+    const items = new Map([...this.behaviours.values()].map((item) => [item.group, item]));
+    this.observer = new IntersectionObserver((entries) => {
+      for (const entry of entries) {
+        const item = items.get(entry.target);
+        item.onScreen = entry.isIntersecting;
+        if (item.onScreen && this.record) this.showBehaviour(item.key, item, this.record);
       }
+    });
+    for (const item of this.behaviours.values()) {
+      item.onScreen = false;
+      this.observer.observe(item.group);
+    }
+  }
+
+  /**
+   * Shows `record` (one step): levels, activity, active inhibitors and actuator values. A large
+   * graph is redrawn at most every LARGE_PERIOD ms (the last record asked for is drawn then):
+   * painting it costs more than a frame, and the timelines show every step anyway.
+   */
+  show(record) {
+    this.record = record;
+    if (this.observer) {
+      const wait = this.shownAt + LARGE_PERIOD - performance.now();
+      if (wait > 0) {
+        this.trailing ??= setTimeout(() => {
+          this.trailing = null;
+          this.show(this.record);
+        }, wait);
+        return;
+      }
+      this.shownAt = performance.now();
+    }
+    for (const [key, item] of this.behaviours) {
+      if (this.observer && !item.onScreen) continue;
+      this.showBehaviour(key, item, record);
     }
     for (const [name, port] of this.ports) showActuator(port, record, name);
+  }
+
+  /** Shows one behaviour at `record`, if it changed since it was last shown. */
+  showBehaviour(key, item, record) {
+    const levels = levelsOf(record, key) || {activation: 0, requested: 0, active: false, inhibited_by: []};
+    const activation = Number(levels.activation) || 0;
+    // Most behaviours keep their levels from one step to the next: a large graph streamed live
+    // is redrawn only where it changed.
+    const shown = `${activation} ${levels.active} ${levels.requested} ${levels.inhibited_by}`;
+    if (item.shown === shown) return;
+    item.shown = shown;
+    item.rect.setAttribute('fill', colour(activation));
+    item.group.setAttribute('data-activation', activation);
+    item.group.setAttribute('data-active', levels.active ? 'true' : 'false');
+    item.group.classList.toggle('active', !!levels.active);
+    item.group.classList.toggle('inhibited', !levels.active && levels.requested > 0);
+    item.mark.textContent = levels.active ? '●' : '';
+    const ink = activation > 0.55 ? '#fff' : '#1d2733';
+    item.name.setAttribute('fill', ink);
+    item.level.setAttribute('fill', ink);
+    item.level.textContent = `activation ${activation.toFixed(2)} of ${Number(levels.requested).toFixed(2)}`;
+    if (item.inhibitors) {
+      item.inhibitors.setAttribute('fill', ink);
+      item.inhibitors.replaceChildren();
+      const active = (levels.inhibited_by || []).filter((name) => item.order.has(name))
+          .sort((a, b) => item.order.get(a) - item.order.get(b));
+      item.wrap(active).forEach((line, index, lines) => {
+        const x = Number(item.inhibitors.getAttribute('x')) + (index ? item.indent : 0);
+        const words = (index ? '' : '⊣ ') + line.join(', ') + (index < lines.length - 1 ? ',' : '');
+        el('tspan', {x, dy: index ? 12 : 0}, item.inhibitors).textContent = words;
+      });
+    }
   }
 }
 

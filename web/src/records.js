@@ -1,7 +1,7 @@
 // The step records both views draw: the trace format (docs/semantics.md, "The trace"), from the
 // live stream or from a trace file.
 
-/** Steps a timeline shows, and steps the live view keeps. */
+/** Steps the live view's timelines show up to the newest, and the fewest it keeps (RunPage.trim). */
 export const HISTORY = 300;
 
 /**

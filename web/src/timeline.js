@@ -1,58 +1,381 @@
-// A timeline per behaviour: its activation over the last HISTORY steps up to the one shown, a
-// green bar where it was active and a red one where it requested a level but was inhibited.
+// The timelines: over the steps in view (time_view.js), an axis of steps and the run's time `t`,
+// a row per behaviour (its activation, a green bar where it was active, a red one where it
+// requested a level but was inhibited), grouped by layer (a layer folds away), a lane per state
+// machine with its states as bands, and a lane of what code reported. The cursor marks the step
+// shown; hovering tells the values at a step; a filter keeps the rows whose name matches.
+import {ACTIVE, INHIBITED, lowerBound} from './columns.js';
 import {colour, html} from './dom.js';
-import {HISTORY, levelsOf} from './records.js';
+import {attachKeys, attachPointer} from './time_view.js';
+
+const ROW_HEIGHT = 22;
+const AXIS_HEIGHT = 34;
+
+/** About `count` round numbers (1, 2, 5 × 10^n apart) between `from` and `to`. */
+export function ticks(from, to, count) {
+  const raw = Math.max(1, (to - from) / count);
+  const power = 10 ** Math.floor(Math.log10(raw));
+  const gap = [1, 2, 5, 10].map((m) => m * power).find((m) => m >= raw);
+  const out = [];
+  for (let tick = Math.ceil(from / gap) * gap; tick <= to; tick += gap) out.push(tick);
+  return out;
+}
+
+/** A state's colour: the same for the same name, in every lane. */
+function bandColour(name) {
+  let hash = 0;
+  for (const c of name) hash = (hash * 31 + c.charCodeAt(0)) >>> 0;
+  return `hsl(${hash % 360}, 55%, 82%)`;
+}
+
+/** The run's time `t` (seconds) as the axis and the tip write it. */
+export function formatTime(t) {
+  if (!Number.isFinite(t)) return '';
+  if (Math.abs(t) < 1) return `t ${(t * 1000).toFixed(t < 0.01 ? 2 : 1)} ms`;
+  return `t ${t.toFixed(t < 100 ? 3 : 1)} s`;
+}
 
 export class Timelines {
   /**
-   * @param {HTMLElement} rows where the rows go
-   * @param {HTMLElement} range the label of the steps shown
+   * @param {HTMLElement} section the timelines' section (it takes the keys when focused)
+   * @param {import('./columns.js').Columns} columns
+   * @param {import('./time_view.js').TimeView} view
    */
-  constructor(rows, range) {
-    this.rows = rows;
-    this.range = range;
-    this.canvases = new Map();  // 'layer/name' -> canvas
+  constructor(section, columns, view) {
+    this.section = section;
+    this.rows = section.querySelector('#timeline-rows');
+    this.range = section.querySelector('#timeline-range');
+    this.tip = section.querySelector('#timeline-tip');
+    this.filter = section.querySelector('#timeline-filter');
+    this.columns = columns;
+    this.view = view;
+    /** @type {{kind: string, key: string, row: HTMLElement, canvas: HTMLCanvasElement, note?: HTMLElement}[]} */
+    this.strips = [];
+    this.collapsed = new Set();  // layers folded away
+    this.visible = new Set();    // rows on the screen
+    this.pointer = null;         // {strip, x, y}: where the pointer is, for the tip
+    this.queueAt = () => null;   // the queue of a state machine at the cursor (from the record)
+    /** Called with 'layer/name' when a behaviour's label is clicked. */
+    this.onLabel = (key) => {};
+    /** Called with the filter's text (lower case) as it changes, and when Enter is pressed in it. */
+    this.onFilter = (words) => {};
+    this.onFind = (words) => {};
+    this.observer = new IntersectionObserver((entries) => {
+      for (const entry of entries) {
+        if (entry.isIntersecting) this.visible.add(entry.target);
+        else this.visible.delete(entry.target);
+      }
+      this.view.changed();
+    });
+    view.subscribe(() => this.draw());
+    attachPointer(this.rows, view, () => this.strip());
+    attachKeys(section, view);
+    this.rows.addEventListener('pointermove', (event) => {
+      const row = event.target.closest('[data-strip]');
+      this.pointer = row ? {strip: this.strips[Number(row.dataset.strip)], x: event.clientX, y: event.clientY} : null;
+      this.showTip();
+    });
+    this.rows.addEventListener('pointerleave', () => {
+      this.pointer = null;
+      this.showTip();
+    });
+    this.filter.addEventListener('input', () => this.applyFilter());
+    // Enter: the first behaviour that matches (onFind shows it in the graph and explains it).
+    this.filter.addEventListener('keydown', (event) => {
+      if (event.key === 'Enter') this.onFind(this.filter.value.trim().toLowerCase());
+    });
+    this.stripWidth = 0;  // CSS pixels, measured when the rows change size, not each frame
+    new ResizeObserver(() => {
+      const canvas = this.strips.length ? this.strips[0].canvas : null;
+      this.stripWidth = canvas ? canvas.getBoundingClientRect().width : 0;
+      this.view.changed();
+    }).observe(this.rows);
   }
 
-  /** A row per behaviour of `graph` (the JSON dump), in execution order. */
+  /** Where the steps are drawn, in client coordinates: the canvases' column. */
+  strip() {
+    const canvas = this.strips.length ? this.strips[0].canvas : null;
+    if (!canvas) return {left: 0, width: 1};
+    const box = canvas.getBoundingClientRect();
+    return {left: box.left, width: Math.max(1, box.width)};
+  }
+
+  add(kind, key, label, parent, height = ROW_HEIGHT, attributes = {}) {
+    const row = html('div', {class: kind, 'data-strip': this.strips.length, ...attributes}, parent);
+    html('span', {class: 'label', title: label}, row).textContent = label;
+    const canvas = html('canvas', {height}, row);
+    canvas.style.height = `${height}px`;
+    const strip = {kind, key, row, canvas};
+    this.strips.push(strip);
+    this.observer.observe(row);
+    return strip;
+  }
+
+  /** The rows of `graph` (the JSON dump): behaviours in execution order, then its state machines. */
   build(graph) {
+    for (const strip of this.strips) this.observer.unobserve(strip.row);
     this.rows.replaceChildren();
-    this.canvases.clear();
+    this.strips = [];
+    this.visible.clear();
+    this.add('timeline-axis', '', 'step · t', this.rows, AXIS_HEIGHT);
     for (const layer of graph.layers) {
+      if (!layer.behaviours.length) continue;
+      const group = html('div', {class: 'timeline-group', 'data-layer': layer.name}, this.rows);
+      const head = html('button', {type: 'button', class: 'timeline-layer', 'aria-expanded': 'true'}, group);
+      head.textContent = `${layer.name} (${layer.behaviours.length})`;
+      head.onclick = () => this.toggle(layer.name, group, head);
+      if (this.collapsed.has(layer.name)) this.toggle(layer.name, group, head, true);
       for (const behaviour of layer.behaviours) {
         const key = `${layer.name}/${behaviour.name}`;
-        const row = html('div', {class: 'timeline', 'data-name': key}, this.rows);
-        html('span', {class: 'label', title: key}, row).textContent = key;
-        this.canvases.set(key, html('canvas', {width: 3 * HISTORY, height: 26}, row));
+        const strip = this.add('timeline', key, key, group, ROW_HEIGHT, {'data-name': key});
+        strip.row.querySelector('.label').onclick = () => this.onLabel(key);
+      }
+    }
+    for (const machine of graph.state_machines || []) {
+      const strip = this.add('timeline-machine', machine.name, machine.name, this.rows, ROW_HEIGHT,
+                             {'data-machine': machine.name});
+      strip.note = html('div', {class: 'timeline-queue', 'data-machine': machine.name}, this.rows);
+    }
+    this.add('timeline-events', '', 'reported', this.rows, ROW_HEIGHT);
+    this.applyFilter();
+  }
+
+  toggle(layer, group, head, collapse = !this.collapsed.has(layer)) {
+    if (collapse) this.collapsed.add(layer);
+    else this.collapsed.delete(layer);
+    group.classList.toggle('collapsed', collapse);
+    head.setAttribute('aria-expanded', String(!collapse));
+    this.view.changed();
+  }
+
+  /** Keeps the behaviour rows and lanes whose name holds the filter's text. */
+  applyFilter() {
+    const words = this.filter.value.trim().toLowerCase();
+    this.onFilter(words);
+    for (const strip of this.strips) {
+      if (strip.kind !== 'timeline' && strip.kind !== 'timeline-machine') continue;
+      strip.row.hidden = !!words && !strip.key.toLowerCase().includes(words);
+      if (strip.note) strip.note.hidden = strip.row.hidden;
+    }
+    this.view.changed();
+  }
+
+  /** Redraws the rows on the screen. */
+  draw() {
+    const view = this.view;
+    this.range.textContent = this.columns.length ? `steps ${view.from} to ${view.to}` : '';
+    this.section.dataset.from = String(view.from);
+    this.section.dataset.to = String(view.to);
+    if (!this.strips.length) return;
+    const ratio = window.devicePixelRatio || 1;
+    const width = Math.round(this.stripWidth * ratio);
+    if (!width) return;
+    // Only the rows on the screen: a row filtered out or folded away is not displayed, and so
+    // not intersecting.
+    for (const strip of this.strips) {
+      if (!this.visible.has(strip.row)) continue;
+      const canvas = strip.canvas;
+      const height = Math.round(Number(canvas.getAttribute('height')) * ratio);
+      if (canvas.width !== width || canvas.height !== height) {
+        canvas.width = width;
+        canvas.height = height;
+      }
+      const context = canvas.getContext('2d');
+      context.setTransform(ratio, 0, 0, ratio, 0, 0);
+      const w = width / ratio;
+      const h = height / ratio;
+      context.clearRect(0, 0, w, h);
+      if (strip.kind === 'timeline') this.drawBehaviour(context, strip.key, w, h);
+      else if (strip.kind === 'timeline-axis') this.drawAxis(context, w, h);
+      else if (strip.kind === 'timeline-machine') this.drawMachine(context, strip, w, h);
+      else if (strip.kind === 'timeline-events') this.drawEvents(context, w, h);
+      this.drawCursor(context, w, h);
+    }
+    this.showTip();
+  }
+
+  /** The indices of the steps in view. */
+  indices() {
+    const steps = this.columns.steps;
+    return [lowerBound(steps, this.view.from), lowerBound(steps, this.view.to + 1)];
+  }
+
+  drawBehaviour(context, key, w, h) {
+    const series = this.columns.behaviours.get(key);
+    if (!series) return;
+    const {steps} = this.columns;
+    const [begin, end] = this.indices();
+    const view = this.view;
+    // Many steps to a pixel: each pixel column shows the highest activation among its steps, and
+    // a bar if any of them was active (or inhibited), so that no activation is lost to zooming out.
+    // Columns start and end on whole pixels: no seams between steps. Runs of columns alike are
+    // drawn as one rectangle: a long recording zoomed out draws a few hundred, not a
+    // rectangle and a colour for each of its thousands of columns.
+    const runs = {level: [], active: [], inhibited: []};  // [left, right, value] each
+    const extend = (list, left, right, value) => {
+      const run = list[list.length - 1];
+      if (run && run[1] === left && run[2] === value) run[1] = right;
+      else list.push([left, right, value]);
+    };
+    let left = -1;
+    let right = -1;
+    let top = 0;
+    let state = 0;
+    const flush = () => {
+      if (left < 0) return;
+      const end = Math.max(left + 1, right);
+      // 64 shades: enough for the eye, and runs of them join.
+      if (top > 0) extend(runs.level, left, end, Math.round(top * 64) / 64);
+      if (state & 1) extend(runs.active, left, end, 1);
+      else if (state & 2) extend(runs.inhibited, left, end, 1);
+    };
+    for (let i = begin; i < end; ++i) {
+      const here = Math.floor(view.x(steps[i], w));
+      if (here !== left) {
+        flush();
+        left = here;
+        top = 0;
+        state = 0;
+      }
+      right = Math.floor(view.x(steps[i] + 1, w));
+      const a = series.activation[i];
+      if (a > top) top = Math.min(1, a);
+      const s = series.state[i];
+      if (s === ACTIVE) state |= 1;
+      else if (s === INHIBITED) state |= 2;
+    }
+    flush();
+    let style = '';
+    for (const [from, to, level] of runs.level) {
+      const fill = colour(level);
+      if (fill !== style) context.fillStyle = style = fill;
+      context.fillRect(from, h - 3 - level * (h - 5), to - from, level * (h - 5));
+    }
+    context.fillStyle = '#1b7f3b';
+    for (const [from, to] of runs.active) context.fillRect(from, h - 3, to - from, 3);
+    context.fillStyle = '#c62828';
+    for (const [from, to] of runs.inhibited) context.fillRect(from, h - 2, to - from, 2);
+  }
+
+  drawAxis(context, w, h) {
+    const view = this.view;
+    context.fillStyle = '#667085';
+    context.strokeStyle = '#d0d5dd';
+    context.font = '10.5px "DejaVu Sans", system-ui, sans-serif';
+    context.textAlign = 'center';
+    context.textBaseline = 'top';
+    const perStep = w / (view.to - view.from + 1);
+    for (const tick of ticks(view.from, view.to, Math.max(2, Math.floor(w / 90)))) {
+      const x = view.x(tick, w) + perStep / 2;
+      // The labels at the ends stay inside the strip.
+      context.textAlign = x < 30 ? 'left' : x > w - 30 ? 'right' : 'center';
+      context.fillRect(x, 0, 1, 4);
+      context.fillText(String(tick), x, 5);
+      context.fillText(formatTime(this.columns.timeAt(tick)), x, 19);
+    }
+  }
+
+  drawMachine(context, strip, w, h) {
+    const states = this.columns.machines.get(strip.key);
+    if (states) {
+      const {steps} = this.columns;
+      const [begin, end] = this.indices();
+      context.font = '11px "DejaVu Sans", system-ui, sans-serif';
+      context.textBaseline = 'middle';
+      context.textAlign = 'left';
+      // A band per run of steps in the same state.
+      for (let i = begin; i < end;) {
+        let j = i + 1;
+        while (j < end && states[j] === states[i]) ++j;
+        if (states[i] !== null) {
+          const left = this.view.x(steps[i], w);
+          const right = this.view.x(steps[j - 1] + 1, w);
+          context.fillStyle = bandColour(states[i]);
+          context.fillRect(left, 2, Math.max(1, right - left - 1), h - 4);
+          const label = states[i];
+          if (right - left > context.measureText(label).width + 8) {
+            context.fillStyle = '#1d2733';
+            context.fillText(label, left + 4, h / 2);
+          }
+        }
+        i = j;
+      }
+    }
+    const queue = this.queueAt(strip.key);
+    strip.note.textContent = queue ? `queue: ${queue.length ? queue.join(', ') : '(empty)'}` : '';
+  }
+
+  drawEvents(context, w, h) {
+    const events = this.columns.events;
+    const stepsOf = (index) => events[index].step;
+    let i = lowerBoundBy(events.length, stepsOf, this.view.from);
+    context.font = '11px "DejaVu Sans", system-ui, sans-serif';
+    context.textBaseline = 'middle';
+    context.textAlign = 'left';
+    let freeFrom = -Infinity;  // a label is written only where the one before it has ended
+    for (; i < events.length && events[i].step <= this.view.to; ++i) {
+      const x = this.view.x(events[i].step, w);
+      context.fillStyle = '#a63603';
+      context.fillRect(x, 2, 2, h - 4);
+      const label = `${events[i].by}: ${events[i].text}`;
+      if (x + 4 >= freeFrom) {
+        context.fillText(label, x + 5, h / 2);
+        freeFrom = x + 5 + context.measureText(label).width + 6;
       }
     }
   }
 
-  /** Draws the HISTORY records of `records` up to `current` (the last one if null). */
-  draw(records, current) {
-    const end = current ? records.indexOf(current) + 1 : records.length;
-    const begin = Math.max(0, end - HISTORY);
-    this.range.textContent = end > begin ? `steps ${records[begin].step} to ${records[end - 1].step}` : '';
-    for (const [key, canvas] of this.canvases) {
-      const context = canvas.getContext('2d');
-      const w = canvas.width / HISTORY;
-      const h = canvas.height;
-      context.clearRect(0, 0, canvas.width, h);
-      for (let i = begin; i < end; ++i) {
-        const levels = levelsOf(records[i], key);
-        if (!levels) continue;
-        const x = (i - begin) * w;
-        const a = Math.max(0, Math.min(1, Number(levels.activation) || 0));
-        context.fillStyle = colour(a);
-        context.fillRect(x, h - 3 - a * (h - 5), Math.ceil(w), a * (h - 5));
-        if (levels.active) {
-          context.fillStyle = '#1b7f3b';
-          context.fillRect(x, h - 3, Math.ceil(w), 3);
-        } else if (levels.requested > 0) {
-          context.fillStyle = '#c62828';
-          context.fillRect(x, h - 2, Math.ceil(w), 2);
-        }
-      }
+  drawCursor(context, w, h) {
+    const view = this.view;
+    const perStep = w / (view.to - view.from + 1);
+    if (view.hover !== null) {
+      context.fillStyle = 'rgba(21, 112, 239, 0.35)';
+      context.fillRect(view.x(view.hover, w) + perStep / 2 - 0.5, 0, 1, h);
+    }
+    if (view.cursor !== null && view.cursor >= view.from && view.cursor <= view.to) {
+      context.fillStyle = '#d92d20';
+      context.fillRect(view.x(view.cursor, w) + perStep / 2 - 1, 0, 2, h);
     }
   }
+
+  /** The tip: the step under the pointer, its time, and the row's values there. */
+  showTip() {
+    const view = this.view;
+    const pointer = this.pointer;
+    if (!pointer || view.hover === null) {
+      this.tip.hidden = true;
+      return;
+    }
+    const step = view.hover;
+    const index = this.columns.indexAtOrBefore(step);
+    const lines = [`step ${step}  ${formatTime(this.columns.timeAt(step))}`];
+    const {strip} = pointer;
+    if (strip.kind === 'timeline' && index >= 0 && this.columns.steps[index] === step) {
+      const series = this.columns.behaviours.get(strip.key);
+      if (series) {
+        const state = series.state[index] === ACTIVE ? 'active' : series.state[index] === INHIBITED ? 'inhibited' : 'inactive';
+        lines.push(`${strip.key}: activation ${series.activation[index].toFixed(2)}, ${state}`);
+      }
+    } else if (strip.kind === 'timeline-machine' && index >= 0) {
+      lines.push(`${strip.key}: ${this.columns.machines.get(strip.key)?.[index] ?? '(no state)'}`);
+    } else if (strip.kind === 'timeline-events') {
+      for (const event of this.columns.events) if (event.step === step) lines.push(`${event.by}: ${event.text}`);
+    }
+    this.tip.textContent = lines.join('\n');
+    this.tip.hidden = false;
+    const box = this.section.getBoundingClientRect();
+    this.tip.style.left = `${pointer.x - box.left + 12}px`;
+    this.tip.style.top = `${pointer.y - box.top + 14}px`;
+  }
+}
+
+/** The first index below `length` whose value (`valueAt`, ascending) is >= `value`. */
+function lowerBoundBy(length, valueAt, value) {
+  let low = 0;
+  let high = length;
+  while (low < high) {
+    const middle = (low + high) >>> 1;
+    if (valueAt(middle) < value) low = middle + 1;
+    else high = middle;
+  }
+  return low;
 }

@@ -3,7 +3,8 @@
 #   run.sh ARBITER SOURCE_DIR WORK_DIR
 # WORK_DIR (BUILD/web) holds the node_modules that the build installed from web/package-lock.json
 # (web/bundle.cmake); npm_ci_into installs it there if the build did not (tests/support/npm_ci.sh).
-# ARBITER_SCREENSHOT=docs/live_view.png also saves the README's screenshot of the soccer demo.
+# ARBITER_SCREENSHOT=docs/live_view.png also saves the README's screenshot of the soccer demo;
+# ARBITER_FRAME_BUDGET_MS=16 checks the live page's frame-time target (docs/performance.md).
 set -euo pipefail
 arbiter=$1
 source=$2

@@ -3,14 +3,20 @@
 import {setStatus, showTiming} from '../panels.js';
 import {HISTORY} from '../records.js';
 import {RunPage} from '../run_page.js';
+import {snapshotAsked} from '../snapshot.js';
 
 const REPORTED_KEPT = 200;  // the oldest reported events are dropped
 
-/** @param {{readonly?: boolean}} info the server's /info */
+/**
+ * @param {{readonly?: boolean}} info the server's /info
+ * @returns {Promise<void>} resolved at once, or for a snapshot once it is drawn
+ */
 export function live(info) {
-  const page = new RunPage({reportedKept: REPORTED_KEPT});
+  const page = new RunPage({reportedKept: REPORTED_KEPT, followSpan: HISTORY});
+  const snapshot = snapshotAsked();
   const controls = document.getElementById('live-controls');
-  controls.hidden = !!info.readonly;
+  // A snapshot is a picture: nothing on it can pause the run.
+  controls.hidden = !!info.readonly || snapshot;
   const buttons = ['pause', 'single-step', 'resume'].map((id) => document.getElementById(id));
   const control = (action) => fetch(`control/${action}`, {method: 'POST'});
   buttons[0].onclick = () => control('pause');
@@ -20,6 +26,7 @@ export function live(info) {
   // (that is what its interface layers output), until the next step.
   let safe = null;
   const showSafe = () => {
+    if (pinned) return;
     const shown = page.records[page.records.length - 1];
     if (!safe || !shown || safe.step !== shown.step) return;
     // An actuator without a safe value keeps the last step's value, held as it was.
@@ -30,27 +37,58 @@ export function live(info) {
     page.show(safe);
     document.body.dataset.safe = 'true';
   };
+  // A step clicked in the timelines stays shown while the run goes on, until Follow (or End).
+  let pinned = null;
+  const followButton = document.getElementById('follow');
+  const follow = () => {
+    pinned = null;
+    followButton.hidden = true;
+    delete document.body.dataset.pinned;
+    const last = page.records[page.records.length - 1];
+    if (last) page.show(last);
+    showSafe();
+  };
+  followButton.onclick = follow;
+  page.onSeek = (step) => {
+    const record = page.recordAt(step);
+    if (!record) return;
+    if (record === page.records[page.records.length - 1]) {
+      follow();
+      return;
+    }
+    pinned = record;
+    followButton.hidden = false;
+    document.body.dataset.pinned = String(step);
+    delete document.body.dataset.safe;
+    page.show(record);
+  };
+  document.addEventListener('keydown', (event) => {
+    if (event.key === 'End' && pinned) follow();
+  });
   let graphText = '';
+  let graphDrawn = Promise.resolve();
   let drawPending = false;
-  const events = new EventSource('events');
+  const events = new EventSource(snapshot ? 'events?snapshot=1' : 'events');
   events.addEventListener('graph', (event) => {
     // A reload swaps the program in: draw the new graph; the history is kept by name.
     if (event.data === graphText) return;
     graphText = event.data;
-    page.setGraph(JSON.parse(event.data));
+    graphDrawn = page.setGraph(JSON.parse(event.data));
   });
   events.addEventListener('step', (event) => {
     const record = JSON.parse(event.data);
     const last = page.records[page.records.length - 1];
     if (last && record.step <= last.step) return;  // already have it (a reconnect)
     page.add(record);
-    if (page.records.length > HISTORY) page.records.splice(0, page.records.length - HISTORY);
+    page.trim(HISTORY);
+    if (pinned && !page.recordAt(pinned.step)) follow();  // the step shown has been dropped
     // Steps arrive in batches (up to 300 when a page connects or falls behind): draw the newest
     // once per frame, not every one of them.
     if (!drawPending) {
       drawPending = true;
       requestAnimationFrame(() => {
         drawPending = false;
+        if (pinned) return;
         delete document.body.dataset.safe;
         page.show(page.records[page.records.length - 1]);
         showSafe();
@@ -74,4 +112,20 @@ export function live(info) {
   });
   events.addEventListener('timing', (event) => showTiming(JSON.parse(event.data)));
   events.onerror = () => setStatus('connection lost: reconnecting…', 'lost');
+  if (!snapshot) return Promise.resolve();
+  // The server ends a snapshot's stream with "end" once it has sent the run up to the step it
+  // had when the page connected.
+  return new Promise((resolve) => {
+    events.addEventListener('end', async () => {
+      events.close();
+      await graphDrawn;
+      delete document.body.dataset.safe;
+      page.show(page.records[page.records.length - 1] || null);
+      showSafe();
+      const status = document.getElementById('status');
+      status.textContent = `snapshot: ${status.textContent}`;
+      document.body.dataset.snapshot = 'true';
+      resolve();
+    });
+  });
 }

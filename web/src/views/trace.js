@@ -3,12 +3,10 @@ import {setStatus} from '../panels.js';
 import {RunPage} from '../run_page.js';
 
 // The index of the record of `step`, or of the nearest step the trace has.
-function indexOfStep(records, step) {
-  let best = 0;
-  records.forEach((record, index) => {
-    if (Math.abs(record.step - step) < Math.abs(records[best].step - step)) best = index;
-  });
-  return best;
+function indexOfStep(columns, step) {
+  const index = Math.max(0, columns.indexAtOrBefore(step));
+  const next = Math.min(index + 1, columns.length - 1);
+  return Math.abs(columns.steps[next] - step) < Math.abs(columns.steps[index] - step) ? next : index;
 }
 
 /** @param {{step: number}} info the server's /info: the step to open at */
@@ -31,18 +29,23 @@ export async function trace(info) {
     scrub.value = index;
     page.show(records[index]);
     // The address names the step shown: a reload or a copied link opens there again.
-    history.replaceState(null, '', `${location.pathname}?step=${records[index].step}`);
+    const params = new URLSearchParams(location.search);
+    params.set('step', records[index].step);
+    history.replaceState(null, '', `${location.pathname}?${params}`.replace(/=(?=&|$)/g, ''));
   };
   scrub.oninput = () => go(Number(scrub.value));
   document.getElementById('previous').onclick = () => go(Number(scrub.value) - 1);
   document.getElementById('next').onclick = () => go(Number(scrub.value) + 1);
+  // A step clicked in the timelines or plots.
+  page.onSeek = (step) => go(indexOfStep(page.columns, step));
   document.addEventListener('keydown', (event) => {
     if (event.target === scrub) return;  // the slider moves itself
+    if (event.target.closest('input, select, textarea')) return;  // the caret moves in a field
     if (event.key === 'ArrowLeft') go(Number(scrub.value) - 1);
     if (event.key === 'ArrowRight') go(Number(scrub.value) + 1);
   });
   // At the step in the address, else where `arbiter view` says (--step, by default the last).
   const asked = Number(new URLSearchParams(location.search).get('step')) || info.step;
-  if (records.length) go(indexOfStep(records, asked));
+  if (records.length) go(indexOfStep(page.columns, asked));
   setStatus(`trace of ${records.length} steps`, 'trace');
 }

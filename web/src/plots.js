@@ -1,0 +1,180 @@
+// Plots of the actuators' values over the steps in view (uPlot): any number of plots, each of
+// any numeric actuators and vector components (`gait_velocity[0]`), under the timelines and on
+// the same scale of steps, with the same cursor, hover, zoom, pan and click to jump.
+import uPlot from 'uplot';
+import {html} from './dom.js';
+import {attachPointer} from './time_view.js';
+import {formatTime} from './timeline.js';
+
+const HEIGHT = 150;
+const AXIS_SIZE = 56;  // the y axis, right of the steps
+const COLOURS = ['#1570ef', '#d92d20', '#12b76a', '#f79009', '#7a5af8', '#0e9384', '#dd2590', '#344054'];
+
+/** A number as a plot's legend writes it. */
+const formatNumber = (value) => (Number.isFinite(value) ? (Number.isInteger(value) ? String(value) : value.toFixed(3)) : '–');
+
+export class Plots {
+  /**
+   * @param {HTMLElement} section the plots' section
+   * @param {import('./columns.js').Columns} columns
+   * @param {import('./time_view.js').TimeView} view
+   * @param {() => number} stripWidth how wide the timelines draw their steps (CSS pixels)
+   */
+  constructor(section, columns, view, stripWidth) {
+    this.list = section.querySelector('#plot-list');
+    this.adder = section.querySelector('#plot-add');
+    this.columns = columns;
+    this.view = view;
+    this.stripWidth = stripWidth;
+    /** @type {{box: HTMLElement, keys: string[], legend: HTMLElement, chart: uPlot | null}[]} */
+    this.plots = [];
+    this.fills = [];  // each select's refill
+    this.fillChoices(this.adder);
+    this.adder.addEventListener('change', () => {
+      if (this.adder.value) this.add([this.adder.value]);
+      this.adder.value = '';
+    });
+    // The plots the address asks for (`?plot=gait_velocity[0],head_angle&plot=kick`: a plot
+    // each), made once the values have arrived: a link or a headless screenshot shows them.
+    this.asked = new URLSearchParams(location.search).getAll('plot').map((list) => list.split(',').filter(Boolean));
+    view.subscribe(() => this.draw());
+  }
+
+  /** Offers in `select` the numeric series, also those that appear later (a reload adds them). */
+  fillChoices(select) {
+    const fill = () => {
+      if (select.options.length - 1 === this.columns.values.size) return;
+      const first = select.options[0];
+      select.replaceChildren(first);
+      for (const key of this.columns.values.keys()) html('option', {value: key}, select).textContent = key;
+      select.value = '';
+    };
+    this.fills.push(fill);
+    fill();
+  }
+
+  /** A new plot of `keys` ('actuator' or 'actuator[i]'). */
+  add(keys) {
+    const box = html('div', {class: 'plot'}, this.list);
+    const side = html('div', {class: 'plot-side'}, box);
+    const legend = html('ul', {class: 'plot-legend'}, side);
+    const tools = html('div', {class: 'plot-tools'}, side);
+    const more = html('select', {'aria-label': 'plot another value here'}, tools);
+    html('option', {value: ''}, more).textContent = 'add a value…';
+    this.fillChoices(more);
+    const fill = this.fills[this.fills.length - 1];
+    const close = html('button', {type: 'button', class: 'plot-close', title: 'remove this plot'}, tools);
+    close.textContent = 'remove';
+    const area = html('div', {class: 'plot-area'}, box);
+    const plot = {box, keys: [], legend, area, chart: null};
+    this.plots.push(plot);
+    more.addEventListener('change', () => {
+      if (more.value && !plot.keys.includes(more.value)) this.setKeys(plot, [...plot.keys, more.value]);
+      more.value = '';
+    });
+    close.onclick = () => {
+      plot.chart?.destroy();
+      this.fills.splice(this.fills.indexOf(fill), 1);
+      box.remove();
+      this.plots.splice(this.plots.indexOf(plot), 1);
+    };
+    this.setKeys(plot, keys);
+    return plot;
+  }
+
+  setKeys(plot, keys) {
+    plot.keys = keys;
+    plot.box.dataset.series = keys.join(' ');
+    plot.chart?.destroy();
+    const view = this.view;
+    const options = {
+      width: this.width(),
+      height: HEIGHT,
+      legend: {show: false},
+      padding: [8, 0, 4, 0],
+      cursor: {show: false, drag: {x: false, y: false}},
+      select: {show: false},
+      // Step s is drawn at the middle of its slot, as in the timelines: from - 0.5 to to + 0.5.
+      scales: {x: {time: false, auto: false, range: () => [view.from - 0.5, view.to + 0.5]}},
+      axes: [{show: false}, {side: 1, size: AXIS_SIZE, font: '10.5px "DejaVu Sans", sans-serif', gap: 3}],
+      series: [{}, ...keys.map((key, i) => ({label: key, stroke: COLOURS[i % COLOURS.length], width: 1.5, points: {show: false}}))],
+      hooks: {draw: [(chart) => this.drawCursor(chart)]},
+    };
+    plot.chart = new uPlot(options, this.data(plot), plot.area);
+    attachPointer(plot.chart.over, view, () => {
+      const box = plot.chart.over.getBoundingClientRect();
+      return {left: box.left, width: Math.max(1, box.width)};
+    });
+    this.legend(plot);
+  }
+
+  /** The uPlot's width: its steps exactly under the timelines' (its y axis to their right). */
+  width() {
+    return Math.max(200, Math.round(this.stripWidth()) + AXIS_SIZE);
+  }
+
+  data(plot) {
+    const empty = () => new Array(this.columns.length).fill(null);
+    return [this.columns.steps, ...plot.keys.map((key) => this.columns.values.get(key) || empty())];
+  }
+
+  /** Each series with its value at the hovered step, or else at the step shown. */
+  legend(plot) {
+    const view = this.view;
+    const step = view.hover ?? view.cursor;
+    const index = step === null ? -1 : this.columns.indexAtOrBefore(step);
+    const exact = index >= 0 && this.columns.steps[index] === step;
+    plot.legend.replaceChildren();
+    const head = html('li', {class: 'plot-step'}, plot.legend);
+    head.textContent = exact ? `step ${step}  ${formatTime(this.columns.t[index])}` : '';
+    plot.keys.forEach((key, i) => {
+      const item = html('li', {'data-series': key}, plot.legend);
+      html('span', {class: 'plot-swatch', style: `background: ${COLOURS[i % COLOURS.length]}`}, item);
+      html('span', {class: 'plot-name'}, item).textContent = key;
+      const value = exact ? this.columns.values.get(key)?.[index] : NaN;
+      html('span', {class: 'plot-value'}, item).textContent = formatNumber(value);
+      const remove = html('button', {type: 'button', class: 'plot-remove', title: `remove ${key}`}, item);
+      remove.textContent = '×';
+      remove.onclick = () => this.setKeys(plot, plot.keys.filter((other) => other !== key));
+    });
+  }
+
+  drawCursor(chart) {
+    const view = this.view;
+    const context = chart.ctx;
+    const {left, top, width, height} = chart.bbox;
+    const x = (step) => left + ((step - view.from + 0.5) / (view.to - view.from + 1)) * width;
+    context.save();
+    if (view.hover !== null) {
+      context.fillStyle = 'rgba(21, 112, 239, 0.35)';
+      context.fillRect(x(view.hover) - 0.5, top, 1, height);
+    }
+    if (view.cursor !== null && view.cursor >= view.from && view.cursor <= view.to) {
+      context.fillStyle = '#d92d20';
+      context.fillRect(x(view.cursor) - 1, top, 2, height);
+    }
+    context.restore();
+  }
+
+  draw() {
+    for (const fill of this.fills) fill();
+    if (this.asked.length && this.columns.length) {
+      for (const keys of this.asked) {
+        const known = keys.filter((key) => this.columns.values.has(key));
+        if (known.length) this.add(known);
+      }
+      this.asked = [];
+    }
+    if (!this.plots.length) return;
+    const width = this.width();
+    for (const plot of this.plots) {
+      const chart = plot.chart;
+      if (chart.width !== width) chart.setSize({width, height: HEIGHT});
+      chart.batch(() => {
+        chart.setData(this.data(plot), false);
+        chart.setScale('x', {min: this.view.from - 0.5, max: this.view.to + 0.5});
+      });
+      this.legend(plot);
+    }
+  }
+}
