@@ -206,10 +206,48 @@ class Indexer {
     a_.inhibitions.push_back(std::move(site));
   }
 
+  // The params of a state's class that plan states (plans_states).
+  std::vector<std::string> planning_params(const std::string& type) const {
+    std::vector<std::string> names;
+    const ClassInfo* cls = a_.registry ? a_.registry->find_class(ClassKind::kState, type) : nullptr;
+    if (!cls) return names;
+    for (const auto& param : cls->params) {
+      if (plans_states(param)) names.push_back(param.name);
+    }
+    return names;
+  }
+
+  // A queue entry, a state name or {state: {params}}, in `machine`, and the states its params
+  // plan in turn.
+  void read_queue_entry(const Node& entry, const std::string& machine, const Node* states,
+                        const std::string& file) {
+    if (entry.is_scalar()) {
+      add(Kind::kState, machine, entry.text(), file, span(entry), false);
+      return;
+    }
+    if (!entry.is_mapping() || entry.size() != 1) return;
+    const auto& only = entry.entries().front();
+    add(Kind::kState, machine, only.key, file, key_span(only), false);
+    const Node* state = states ? states->find(only.key) : nullptr;
+    if (state) read_planned(type_of(*state), &only.value, machine, states, file);
+  }
+
+  void read_planned(const std::string& type, const Node* params, const std::string& machine,
+                    const Node* states, const std::string& file) {
+    if (!params || !params->is_mapping()) return;
+    for (const auto& name : planning_params(type)) {
+      const Node* list = params->find(name);
+      if (!list || !list->is_sequence()) continue;
+      for (const auto& item : list->items()) read_queue_entry(item, machine, states, file);
+    }
+  }
+
   void read_machine(const Node::Entry& machine, const std::string& file) {
     add(Kind::kMachine, {}, machine.key, file, key_span(machine), true);
     if (!machine.value.is_mapping()) return;
-    if (const Node* states = machine.value.find("states"); states && states->is_mapping()) {
+    const Node* states = machine.value.find("states");
+    if (states && !states->is_mapping()) states = nullptr;
+    if (states) {
       for (const auto& state : states->entries()) {
         add(Kind::kState, machine.key, state.key, file, key_span(state), true,
             type_of(state.value));
@@ -222,15 +260,11 @@ class Indexer {
         if (const Node* child = state.value.find("machine"); child && child->is_scalar()) {
           add(Kind::kMachine, {}, child->text(), file, span(*child), false);
         }
+        read_planned(type_of(state.value), state.value.find("params"), machine.key, states, file);
       }
     }
     auto queue_entry = [&](const Node& entry) {
-      if (entry.is_scalar()) {
-        add(Kind::kState, machine.key, entry.text(), file, span(entry), false);
-      } else if (entry.is_mapping() && entry.size() == 1) {
-        const auto& only = entry.entries().front();
-        add(Kind::kState, machine.key, only.key, file, key_span(only), false);
-      }
+      read_queue_entry(entry, machine.key, states, file);
     };
     if (const Node* queue = machine.value.find("queue"); queue && queue->is_sequence()) {
       for (const auto& entry : queue->items()) queue_entry(entry);

@@ -189,6 +189,13 @@ struct Analysis {
   }
 };
 
+/// Whether a state class's param names states to plan (scripted's append: and prepend:): one
+/// declared with the queue's entry schema, so that its items are the queue's, in the state's
+/// machine.
+inline bool plans_states(const ParamSpec& param) {
+  return param.json_schema.find("#/definitions/queue_entry") != std::string::npos;
+}
+
 /// Fills the lines, occurrences and inhibitions of `analysis` from its loaded files.
 void index_config(Analysis& analysis);
 

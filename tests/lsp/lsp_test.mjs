@@ -468,6 +468,47 @@ test('state names complete in a queue and go to their declaration', async () => 
   });
 });
 
+// Applies a WorkspaceEdit's edits of `uri` to `text` (from the last, so that earlier ranges hold).
+function applyEdits(text, edits) {
+  const lines = text.split('\n');
+  const offset = (p) => lines.slice(0, p.line).reduce((n, l) => n + l.length + 1, 0) + p.character;
+  const sorted = [...edits].sort((a, b) => offset(b.range.start) - offset(a.range.start));
+  for (const e of sorted) text = text.slice(0, offset(e.range.start)) + e.newText + text.slice(offset(e.range.end));
+  return text;
+}
+
+test("a state named in a scripted state's append: or prepend: is renamed, and found by references, definition and hover", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = read('configs/paper/goalie_plan.yaml');
+    assert.deepEqual(await client.open(uri, text), []);
+    const planned = positionOf(text, 'monitor_ball]');
+    const declared = rangeOf(text, '      monitor_ball:', { skip: 6, length: 12 });
+    const definition = await client.request('textDocument/definition', { textDocument: { uri }, position: planned });
+    assert.deepEqual(definition, { uri, range: declared });
+    const references = await client.request('textDocument/references',
+      { textDocument: { uri }, position: declared.start, context: { includeDeclaration: true } });
+    assert.deepEqual(references.map((r) => r.range).sort((a, b) => a.start.line - b.start.line),
+      [declared, rangeOf(text, 'monitor_ball]', { length: 12 }), rangeOf(text, '- monitor_ball\n', { skip: 2, length: 12 })]);
+    const walk = await client.request('textDocument/references',
+      { textDocument: { uri }, position: positionOf(text, 'walk_to_pose: {type'), context: { includeDeclaration: false } });
+    // Three in prepend: and append:, one in the queue.
+    assert.equal(walk.length, 4, JSON.stringify(walk));
+    const hover = await client.request('textDocument/hover', { textDocument: { uri }, position: planned });
+    assert.match(hover.contents.value, /\*\*state\*\* `monitor_ball` of state machine `goalie` \(class `scripted`\)/);
+
+    const edit = await client.request('textDocument/rename',
+      { textDocument: { uri }, position: declared.start, newName: 'watch_ball' });
+    const renamed = applyEdits(text, edit.changes[uri]);
+    // Every other byte, the comments that name it included, is left as it was.
+    assert.equal(renamed, text.replace('      monitor_ball:\n', '      watch_ball:\n')
+      .replace('monitor_ball]', 'watch_ball]').replace('      - monitor_ball\n', '      - watch_ball\n'));
+    const dir = tempDir();
+    fs.writeFileSync(path.join(dir, 'goalie_plan.yaml'), renamed);
+    assert.deepEqual(validated(path.join(dir, 'goalie_plan.yaml')), []);
+    assert.deepEqual(await client.change(uri, renamed), []);
+  });
+});
+
 test('a file that does not parse gets its syntax error located and keeps completion', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
