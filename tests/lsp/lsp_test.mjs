@@ -509,6 +509,57 @@ test("a state named in a scripted state's append: or prepend: is renamed, and fo
   });
 });
 
+test('completion items replace the word typed, a dotted prefix included', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const edited = text.replace('kick_ball: {type: soccer.KickBall}', 'kick_ball: {type: soccer.}');
+    await client.change(uri, edited);
+    const at = positionOf(edited, 'soccer.}', { skip: 7 });
+    const result = await client.request('textDocument/completion', { textDocument: { uri }, position: at });
+    const item = result.items.find((i) => i.label === 'soccer.GoBehindBall');
+    assert.ok(item, JSON.stringify(result.items));
+    assert.deepEqual(item.textEdit, { range: rangeOf(edited, 'soccer.}', { length: 7 }), newText: 'soccer.GoBehindBall' });
+    assert.equal(applyEdits(edited, [item.textEdit]), text.replace('soccer.KickBall}', 'soccer.GoBehindBall}'));
+    // Every item carries its range, an empty one where nothing is typed yet.
+    const keys = await client.request('textDocument/completion',
+      { textDocument: { uri }, position: positionOf(text, 'rate_hz: 15\n', { skip: 12 }) });
+    assert.ok(keys.items.length > 0);
+    for (const i of keys.items) assert.deepEqual(i.textEdit.range.start, i.textEdit.range.end, i.label);
+  });
+});
+
+test('completion works inside YAML flow mappings and sequences', async () => {
+  await withClient(async (client) => {
+    const plan = read('configs/paper/goalie_plan.yaml');
+    await client.open(plan.uri, plan.text);
+    const labels = async (uri, edited, needle, skip) => {
+      await client.change(uri, edited);
+      const result = await client.request('textDocument/completion',
+        { textDocument: { uri }, position: positionOf(edited, needle, { skip }) });
+      return result.items.map((i) => i.label).sort();
+    };
+    const states = ['monitor_ball', 'obstacle_ahead', 'wait_for_button', 'walk_to_pose'];
+    // A pre-emption's go_to: in a flow mapping that is a sequence item.
+    let edited = plan.text.replace('{cycle: 40, go_to: wait_for_button}', '{cycle: 40, go_to: }');
+    assert.deepEqual(await labels(plan.uri, edited, 'go_to: }', 7), states);
+    // A state planned by a scripted state's append: (a name, or the key of {name: {params}}).
+    edited = plan.text.replace('monitor_ball]', 'mon]');
+    assert.deepEqual(await labels(plan.uri, edited, 'mon]', 3), states);
+    edited = plan.text.replace('prepend: [{walk_to_pose: {hold: 2}}', 'prepend: [{wal: {hold: 2}}');
+    assert.deepEqual(await labels(plan.uri, edited, '[{wal', 5), states);
+
+    // The params of a behaviour's class in `params: {`, for a behaviour the last config that
+    // parsed did not have yet.
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    edited = text.replace('      head_control: {type: soccer.HeadControl}',
+      '      head_control: {type: soccer.HeadControl}\n      searching: {type: soccer.SearchForBall, params: {tu');
+    const params = await labels(uri, edited, 'params: {tu', 11);
+    assert.ok(params.includes('turn_rate') && params.includes('walk_speed'), params.join());
+  });
+});
+
 test('a file that does not parse gets its syntax error located and keeps completion', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
