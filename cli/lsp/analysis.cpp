@@ -126,6 +126,7 @@ class Indexer {
       add(Kind::kClass, {}, interface->text(), file, span(*interface), false);
     }
     read_ports(layer.find("ports"), file);
+    if (layer.find("interface")) a_.port_owners.push_back({layer_name, {}, file, &layer});
     if (const Node* actuators = layer.find("actuators"); actuators && actuators->is_mapping()) {
       for (const auto& actuator : actuators->entries()) {
         add(Kind::kActuator, {}, actuator.key, file, key_span(actuator), true,
@@ -143,6 +144,7 @@ class Indexer {
         add(Kind::kBehaviour, layer_name, behaviour.key, file, key_span(behaviour), true,
             type_of(behaviour.value));
         const Node& value = behaviour.value;
+        a_.port_owners.push_back({layer_name, behaviour.key, file, &value});
         if (value.is_scalar()) add(Kind::kClass, {}, value.text(), file, span(value), false);
         if (!value.is_mapping()) continue;
         if (const Node* type = value.find("type"); type && type->is_scalar()) {

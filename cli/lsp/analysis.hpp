@@ -160,6 +160,14 @@ struct InhibitionSite {
   std::size_t end = 0;
 };
 
+/// A behaviour, or a layer's interface, that binds ports: where a `ports:` entry would go.
+struct PortOwner {
+  std::string layer;
+  std::string behaviour;  // empty for the layer's interface
+  std::string file;
+  const Node* node = nullptr;  // the behaviour's value, or the layer's mapping (in `loaded`)
+};
+
 struct Analysis {
   std::string root;
   // Before `loaded`, so destroyed after it: the program holds the registry's plugin code.
@@ -168,6 +176,7 @@ struct Analysis {
   std::map<std::string, std::unique_ptr<Lines>> lines;  // by file
   std::vector<Occurrence> occurrences;
   std::vector<InhibitionSite> inhibitions;
+  std::vector<PortOwner> port_owners;
 
   const Lines* lines_of(const std::string& file) const {
     const auto found = lines.find(file);

@@ -509,6 +509,88 @@ test("a state named in a scripted state's append: or prepend: is renamed, and fo
   });
 });
 
+test('renaming an actuator that ports bind by name adds ports: entries that keep them bound (YAML)', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const edit = await client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(text, 'ball_visible: {'), newName: 'seen' });
+    const renamed = applyEdits(text, edit.changes[uri]);
+    // The world's interface writes it and every soccer behaviour reads it through a port of its
+    // name; a flow mapping gets the entry before its brace, a block mapping a line of its own.
+    assert.equal(renamed, text
+      .replace('      ball_visible: {type: bool}', '      seen: {type: bool}')
+      .replace('    sensors: [gait_velocity, head_angle, kick]\n', '    sensors: [gait_velocity, head_angle, kick]\n    ports: {ball_visible: seen}\n')
+      .replace('sensors: [ball_visible,', 'sensors: [seen,')
+      .replace('{type: soccer.KickBall}', '{type: soccer.KickBall, ports: {ball_visible: seen}}')
+      .replace('{type: soccer.GoBehindBall}', '{type: soccer.GoBehindBall, ports: {ball_visible: seen}}')
+      .replace('params: {turn_rate: 0.6}}', 'params: {turn_rate: 0.6}, ports: {ball_visible: seen}}')
+      .replace('{type: soccer.HeadControl}', '{type: soccer.HeadControl, ports: {ball_visible: seen}}'));
+    assert.deepEqual(await client.change(uri, renamed), []);
+  });
+});
+
+test('renaming an actuator that ports bind by name adds ports: entries that keep them bound (JSON)', async () => {
+  const dir = tempDir();
+  const file = path.join(dir, 'walk_and_kick.json');
+  const text = `{
+  "arbiter": 1,
+  "name": "walk_and_kick",
+  "plugins": ["soccer"],
+  "layers": [
+    {
+      "name": "world",
+      "interface": "soccer.WorldLink",
+      "actuators": {
+        "ball_visible": {"type": "bool"},
+        "ball_position": {"type": "vec2"},
+        "robot_pose": {"type": "vec3"}
+      },
+      "sensors": ["gait_velocity", "head_angle", "kick"]
+    },
+    {
+      "name": "control",
+      "sensors": ["ball_visible", "ball_position", "robot_pose"],
+      "actuators": {
+        "gait_velocity": {"type": "vec3", "aggregate": true, "safe": [0, 0, 0]},
+        "head_angle": {"type": "double", "aggregate": true},
+        "kick": {"type": "bool", "safe": false}
+      },
+      "behaviours": {
+        "kick_ball": "soccer.KickBall",
+        "go_behind_ball": {
+          "type": "soccer.GoBehindBall"
+        },
+        "search_for_ball": {"type": "soccer.SearchForBall", "ports": {}},
+        "head_control": {"type": "soccer.HeadControl", "ports": {"ball_position": "ball_position"}}
+      },
+      "inhibitions": ["kick_ball => go_behind_ball", "go_behind_ball => search_for_ball", "search_for_ball -> head_control"]
+    }
+  ]
+}
+`;
+  fs.writeFileSync(file, text);
+  await withClient(async (client) => {
+    const uri = uriOf(file);
+    assert.deepEqual(await client.open(uri, text), []);
+    const edit = await client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(text, '"ball_visible": {', { skip: 1 }), newName: 'seen' });
+    const renamed = applyEdits(text, edit.changes[uri]);
+    // A behaviour given as its class alone becomes a mapping; an empty or a multi-line ports:
+    // gets the entry; one that binds the port already is left alone.
+    assert.equal(renamed, text
+      .replace('"ball_visible": {"type": "bool"}', '"seen": {"type": "bool"}')
+      .replace('"sensors": ["gait_velocity", "head_angle", "kick"]', '"sensors": ["gait_velocity", "head_angle", "kick"], "ports": {"ball_visible": "seen"}')
+      .replace('"sensors": ["ball_visible",', '"sensors": ["seen",')
+      .replace('"kick_ball": "soccer.KickBall"', '"kick_ball": {"type": "soccer.KickBall", "ports": {"ball_visible": "seen"}}')
+      .replace('"type": "soccer.GoBehindBall"\n', '"type": "soccer.GoBehindBall", "ports": {"ball_visible": "seen"}\n')
+      .replace('"ports": {}', '"ports": {"ball_visible": "seen"}')
+      .replace('"ball_position": "ball_position"}', '"ball_position": "ball_position", "ball_visible": "seen"}'));
+    fs.writeFileSync(file, renamed);
+    assert.deepEqual(validated(file), []);
+  });
+});
+
 test('completion items replace the word typed, a dotted prefix included', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
