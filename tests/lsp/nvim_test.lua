@@ -113,4 +113,37 @@ expect_one(part, 'parts/part.yaml', 'unknown-class', 'scriptd')
 -- An include cycle is an error on the root file, at the include that leads into it.
 local root = open('cycle/root.yaml')
 expect_one(root, 'cycle/root.yaml', 'include-cycle', 'a.yaml')
+
+-- :lua vim.lsp.buf.rename() of a state that a scripted state plans in its append: renames it
+-- there too: the saved file validates, and only the lines that name the state changed.
+local plan = open('goalie_plan.yaml')
+settle(plan, 'goalie_plan.yaml')
+local before = vim.api.nvim_buf_get_lines(plan, 0, -1, false)
+local declared = vim.fn.search('^      monitor_ball:', 'w')
+if declared == 0 then fail('goalie_plan.yaml: no state monitor_ball') end
+vim.api.nvim_win_set_cursor(0, { declared, 8 })
+vim.lsp.buf.rename('watch_ball')
+local renamed = vim.wait(15000, function()
+  return vim.fn.search('^      - watch_ball$', 'nw') > 0
+end, 50)
+if not renamed then fail('goalie_plan.yaml: the rename was not applied within 15 s') end
+local after = vim.api.nvim_buf_get_lines(plan, 0, -1, false)
+if #after ~= #before then fail('goalie_plan.yaml: the rename added or removed lines') end
+local changed = {}
+for i, line in ipairs(before) do
+  if after[i] ~= line then
+    if after[i] ~= line:gsub('monitor_ball', 'watch_ball') then
+      fail('goalie_plan.yaml:' .. i .. ': ' .. after[i])
+    end
+    table.insert(changed, i)
+  end
+end
+if table.concat(changed, ',') ~= '24,28,33' then
+  fail('goalie_plan.yaml: changed lines ' .. table.concat(changed, ','))
+end
+vim.cmd('write')
+local output = vim.fn.system({ 'arbiter', 'validate', project .. '/goalie_plan.yaml' })
+if vim.v.shell_error ~= 0 then fail('goalie_plan.yaml after the rename: ' .. output) end
+settle(plan, 'goalie_plan.yaml')
+if #vim.diagnostic.get(plan) ~= 0 then fail('goalie_plan.yaml: diagnostics after the rename') end
 os.exit(0)
