@@ -1,0 +1,229 @@
+// The edit operations (engine/tools/edit): applied to every inhibition of every config in
+// configs/, each gives a config that validates, with the edited change and no other.
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "arbiter/edit.hpp"
+#include "arbiter/load.hpp"
+#include "arbiter/model.hpp"
+#include "tooling_support.hpp"
+
+namespace fs = std::filesystem;
+using namespace arbiter;
+using namespace arbiter::test;
+
+namespace {
+
+std::vector<std::string> split_lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::size_t at = 0;
+  while (at <= text.size()) {
+    const auto newline = text.find('\n', at);
+    if (newline == std::string::npos) {
+      lines.push_back(text.substr(at));
+      break;
+    }
+    lines.push_back(text.substr(at, newline - at));
+    at = newline + 1;
+  }
+  return lines;
+}
+
+/// The lines of `before` outside the edits' lines are in `after`, in order, byte for byte: the
+/// lines before the first edited one and after the last are equal.
+void check_untouched(const std::string& before, const std::string& after,
+                     const std::vector<TextEdit>& edits, const std::string& file) {
+  std::size_t first = before.size(), last = 0;
+  for (const auto& edit : edits) {
+    if (edit.file != file) continue;
+    first = std::min(first, edit.begin);
+    last = std::max(last, edit.end);
+  }
+  const auto old_lines = split_lines(before);
+  const auto new_lines = split_lines(after);
+  const auto line_of = [&](std::size_t offset) {
+    return static_cast<std::size_t>(std::count(before.begin(), before.begin() + offset, '\n'));
+  };
+  const std::size_t head = line_of(first);
+  const std::size_t tail = old_lines.size() - 1 - line_of(last);
+  REQUIRE(new_lines.size() >= head + tail);
+  for (std::size_t i = 0; i < head; ++i) CHECK(new_lines[i] == old_lines[i]);
+  for (std::size_t i = 0; i < tail; ++i)
+    CHECK(new_lines[new_lines.size() - 1 - i] == old_lines[old_lines.size() - 1 - i]);
+}
+
+/// Loads `path` with `edits` applied over the disk: its diagnostics, and the texts it read.
+Loaded load_edited(const std::string& path, const std::vector<TextEdit>& edits, Registry& registry,
+                   Overlay& overlay) {
+  Loaded original = load_config(path, registry);
+  for (const auto& file : original.files.files())
+    overlay.set(file->path, apply_edits(file->text, file->path, edits));
+  LoadOptions options;
+  options.source = &overlay;
+  return load_config(path, registry, options);
+}
+
+using Operation = EditResult (*)(const Loaded&, const InhibitionRef&);
+
+/// The declared inhibition of `model`, or nullptr.
+const InhibitionDecl* declared(const Model& model, const InhibitionRef& which) {
+  for (const auto& layer : model.layers) {
+    if (layer.name.text != which.layer) continue;
+    for (const auto& inhibition : layer.inhibitions) {
+      if (inhibition.inhibitor.text == which.inhibitor &&
+          inhibition.inhibited.text == which.inhibited)
+        return &inhibition;
+    }
+  }
+  return nullptr;
+}
+
+/// Applies `operation` to every inhibition of every config in configs/; `expect` checks the
+/// inhibition after the edit (nullptr when gone) against the one before.
+void apply_to_every_inhibition(Operation operation, const char* name,
+                               void (*expect)(const InhibitionDecl& before,
+                                              const InhibitionDecl* after)) {
+  for (const auto& path : configs_under(kSourceDir / "configs")) {
+    if (!plugins_built(path)) continue;
+    Registry registry = builtin_registry();
+    const Loaded loaded = load_config(path.string(), registry);
+    if (!loaded.model || loaded.diagnostics.has_errors()) continue;  // configs meant to fail
+    for (const auto& layer : loaded.model->layers) {
+      for (const auto& inhibition : layer.inhibitions) {
+        const InhibitionRef which{layer.name.text, inhibition.inhibitor.text,
+                                  inhibition.inhibited.text};
+        DYNAMIC_SECTION(name << " " << fs::relative(path, kSourceDir).string() << " "
+                             << which.inhibitor << " -> " << which.inhibited) {
+          const EditResult result = operation(loaded, which);
+          REQUIRE(result.ok());
+          REQUIRE_FALSE(result.edits.empty());
+          Registry again = builtin_registry();
+          Overlay overlay;
+          const Loaded edited = load_edited(path.string(), result.edits, again, overlay);
+          INFO(format(edited.diagnostics));
+          CHECK_FALSE(edited.diagnostics.has_errors());
+          REQUIRE(edited.model);
+          expect(inhibition, declared(*edited.model, which));
+          for (const auto& file : loaded.files.files()) {
+            const std::string* text = overlay.find(file->path);
+            REQUIRE(text != nullptr);
+            check_untouched(file->text, *text, result.edits, file->path);
+          }
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("removing each inhibition of each shipped config leaves a valid config", "[edit]") {
+  apply_to_every_inhibition(
+      &remove_inhibition, "remove",
+      [](const InhibitionDecl&, const InhibitionDecl* after) { CHECK(after == nullptr); });
+}
+
+TEST_CASE("flipping the chaining of each inhibition of each shipped config leaves a valid config",
+          "[edit]") {
+  apply_to_every_inhibition(&flip_chaining, "flip",
+                            [](const InhibitionDecl& before, const InhibitionDecl* after) {
+                              REQUIRE(after != nullptr);
+                              CHECK(after->chaining == !before.chaining);
+                            });
+}
+
+namespace {
+
+/// `text` with its only occurrence of `from` replaced by `to`.
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  REQUIRE(at != std::string::npos);
+  REQUIRE(text.find(from, at + 1) == std::string::npos);
+  return text.replace(at, from.size(), to);
+}
+
+/// `config` (a file of `dir` named `name`) after `operation` on `which`, checked to validate.
+std::string edited_text(const std::string& name, const std::string& config, Operation operation,
+                        const InhibitionRef& which) {
+  test::TempDir dir;
+  const std::string path = dir.write(name, config);
+  Registry registry = builtin_registry();
+  const Loaded loaded = load_config(path, registry);
+  INFO(format(loaded.diagnostics));
+  REQUIRE_FALSE(loaded.diagnostics.has_errors());
+  const EditResult result = operation(loaded, which);
+  INFO(result.refused);
+  REQUIRE(result.ok());
+  const std::string text = apply_edits(config, path, result.edits);
+  write_text(path, text);
+  Registry again = builtin_registry();
+  const Loaded edited = load_config(path, again);
+  INFO(text << format(edited.diagnostics));
+  CHECK_FALSE(edited.diagnostics.has_errors());
+  return text;
+}
+
+}  // namespace
+
+TEST_CASE("inhibitions written as mappings, as the only item, and in JSON are edited in place",
+          "[edit]") {
+  const std::string yaml = R"(arbiter: 1
+name: forms
+layers:
+  - name: l
+    behaviours: {a: scripted, b: scripted, c: scripted}
+    inhibitions:
+      - inhibitor: a   # the kick wins
+        inhibited: b
+      - {inhibitor: b, inhibited: c, chaining: true}
+  - name: m
+    behaviours: {d: scripted, e: scripted}
+    inhibitions:
+      - d => e
+    normalise: false
+)";
+  const InhibitionRef ab{"l", "a", "b"}, bc{"l", "b", "c"}, de{"m", "d", "e"};
+  CHECK(edited_text("forms.yaml", yaml, &flip_chaining, ab) ==
+        replaced(yaml, "        inhibited: b\n", "        inhibited: b\n        chaining: true\n"));
+  CHECK(edited_text("forms.yaml", yaml, &flip_chaining, bc) ==
+        replaced(yaml, "chaining: true}", "chaining: false}"));
+  CHECK(edited_text("forms.yaml", yaml, &remove_inhibition, ab) ==
+        replaced(yaml, "      - inhibitor: a   # the kick wins\n        inhibited: b\n", ""));
+  CHECK(edited_text("forms.yaml", yaml, &remove_inhibition, bc) ==
+        replaced(yaml, "      - {inhibitor: b, inhibited: c, chaining: true}\n", ""));
+  // The only item goes with its key: `inhibitions:` alone would be null.
+  CHECK(edited_text("forms.yaml", yaml, &remove_inhibition, de) ==
+        replaced(yaml, "    inhibitions:\n      - d => e\n", ""));
+
+  const std::string json = R"({
+  "arbiter": 1,
+  "name": "forms",
+  "layers": [
+    {
+      "name": "l",
+      "behaviours": {"a": "scripted", "b": "scripted", "c": "scripted"},
+      "inhibitions": ["a => b", {"inhibitor": "b", "inhibited": "c"}]
+    }
+  ]
+}
+)";
+  CHECK(edited_text("forms.json", json, &flip_chaining, ab) ==
+        replaced(json, "\"a => b\"", "\"a -> b\""));
+  CHECK(edited_text("forms.json", json, &flip_chaining, bc) ==
+        replaced(json, "\"inhibited\": \"c\"}", "\"inhibited\": \"c\", \"chaining\": true}"));
+  CHECK(edited_text("forms.json", json, &remove_inhibition, ab) ==
+        replaced(json, "\"a => b\", ", ""));
+  CHECK(edited_text("forms.json", json, &remove_inhibition, bc) ==
+        replaced(json, ", {\"inhibitor\": \"b\", \"inhibited\": \"c\"}", ""));
+
+  // An inhibition that is not declared (a => c is implied at most) is refused with the reason.
+  test::TempDir dir;
+  Registry registry = builtin_registry();
+  const Loaded loaded = load_config(dir.write("forms.json", json), registry);
+  const EditResult refused = remove_inhibition(loaded, {"l", "a", "c"});
+  CHECK(refused.edits.empty());
+  CHECK(refused.refused == "no inhibition 'a -> c' in layer 'l'");
+}
