@@ -310,6 +310,15 @@ json location_json(const Analysis& analysis, const std::string& file, std::size_
           {"range", lines ? lines->range(begin, end) : range_json(0, 0)}};
 }
 
+void add_changes(const Analysis& analysis, const std::vector<TextEdit>& edits, json& changes) {
+  for (const auto& edit : edits) {
+    const Lines* lines = analysis.lines_of(edit.file);
+    if (!lines) continue;
+    changes[path_to_uri(edit.file)].push_back(
+        {{"range", lines->range(edit.begin, edit.end)}, {"newText", edit.text}});
+  }
+}
+
 bool name_char(char c) {
   return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '$' ||
          c == '-';

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "arbiter/edit.hpp"
 #include "arbiter/load.hpp"
 #include "arbiter/registry.hpp"
 #include "lsp/server.hpp"
@@ -221,6 +222,9 @@ Cursor cursor_of(const json& params, const Analysis* analysis);
 /// The LSP location of bytes [begin, end) of `file`.
 json location_json(const Analysis& analysis, const std::string& file, std::size_t begin,
                    std::size_t end);
+
+/// The engine's edits as the `changes` of a WorkspaceEdit, added to `changes` (by URI).
+void add_changes(const Analysis& analysis, const std::vector<TextEdit>& edits, json& changes);
 
 /// A character of a name, as config text is read: letters, digits, `_`, `.`, `$` and `-`.
 bool name_char(char c);

@@ -4,7 +4,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cctype>
 
 #include "lsp/analysis.hpp"
 #include "lsp/server.hpp"
@@ -13,70 +12,12 @@ namespace arbiter::lsp {
 
 namespace {
 
-/// The offset of the bracket that closes the flow collection opening at `open`, or npos.
-std::size_t flow_close(const std::string& text, std::size_t open) {
-  int depth = 0;
-  for (std::size_t at = open; at < text.size(); ++at) {
-    const char c = text[at];
-    if (c == '"' || c == '\'') {
-      for (++at; at < text.size() && text[at] != c; ++at) {
-        if (c == '"' && text[at] == '\\') ++at;
-      }
-    } else if (c == '#' && at > open && (text[at - 1] == ' ' || text[at - 1] == '\n')) {
-      while (at < text.size() && text[at] != '\n') ++at;  // a YAML comment
-    } else if (c == '{' || c == '[') {
-      ++depth;
-    } else if ((c == '}' || c == ']') && --depth == 0) {
-      return at;
-    }
-  }
-  return std::string::npos;
-}
-
-/// An edit that adds `key: value` (written as `entry`) to the mapping `node`: before the closing
-/// brace of a flow mapping, or as a line of its own after the last line of a block mapping, at
-/// its keys' indentation. Empty when the mapping's text cannot be found.
-json add_entry(const Lines& lines, const Node& node, const std::string& entry) {
-  const std::string& text = lines.text();
-  const SourceLocation where = node.location();
-  const std::size_t begin = lines.offset(where.line, where.column);
-  if (begin >= text.size()) return nullptr;
-  if (text[begin] == '{') {
-    const std::size_t close = flow_close(text, begin);
-    if (close == std::string::npos) return nullptr;
-    std::size_t at = close;
-    while (at > begin + 1 && std::isspace(static_cast<unsigned char>(text[at - 1]))) --at;
-    const bool empty = at == begin + 1;
-    return {{"range", lines.range(at, at)}, {"newText", (empty ? "" : ", ") + entry}};
-  }
-  const std::size_t first = lines.line_of(begin);
-  const std::size_t column = begin - lines.line_start(first);
-  std::size_t last = first;
-  for (std::size_t l = first + 1; l < lines.line_count(); ++l) {
-    const std::size_t start = lines.line_start(l);
-    const std::size_t end = lines.line_end(l);
-    std::size_t indent = start;
-    while (indent < end && text[indent] == ' ') ++indent;
-    if (indent == end || text[indent] == '#') continue;  // blank, or a comment
-    if (indent - start < column) break;
-    last = l;
-  }
-  const std::string line = std::string(column, ' ') + entry;
-  if (last + 1 < lines.line_count()) {
-    const std::size_t next = lines.line_start(last + 1);
-    return {{"range", lines.range(next, next)}, {"newText", line + "\n"}};
-  }
-  const std::size_t end = lines.line_end(last);
-  return {{"range", lines.range(end, end)}, {"newText", "\n" + line}};
-}
-
 /// The edits that keep the ports bound by name to actuator `old` bound to it as `name`: a
 /// `ports:` entry for each, as a person would add it.
-std::vector<std::pair<std::string, json>> follow_ports(const Analysis& analysis,
-                                                       const std::string& old,
-                                                       const std::string& name) {
+std::vector<TextEdit> follow_ports(const Analysis& analysis, const std::string& old,
+                                   const std::string& name) {
   const auto& model = analysis.loaded.model;
-  std::vector<std::pair<std::string, json>> edits;
+  std::vector<TextEdit> edits;
   if (!model) {
     // Which ports bind by name is known only from a config that loads.
     for (const auto& [key, cls] : analysis.registry->classes()) {
@@ -116,30 +57,32 @@ std::vector<std::pair<std::string, json>> follow_ports(const Analysis& analysis,
       const Node& node = *found->node;
       const Node* ports = node.is_mapping() ? node.find("ports") : nullptr;
       if (ports && ports->is_mapping() && ports->find(old)) continue;  // bound explicitly
-      const Lines* lines = analysis.lines_of(found->file);
+      const SourceFile* file = analysis.loaded.files.find(found->file);
       const bool json_text = format_of(found->file) == DocumentFormat::kJson;
       auto quote = [&](const std::string& word) { return json_text ? "\"" + word + "\"" : word; };
       const std::string entry = quote(old) + ": " + quote(name);
-      json edit;
-      if (lines && ports && ports->is_mapping()) {
-        edit = add_entry(*lines, *ports, entry);
-      } else if (lines && node.is_mapping()) {
-        edit = add_entry(*lines, node, quote("ports") + ": {" + entry + "}");
-      } else if (lines && node.is_scalar()) {
+      EditResult added{{}, "its text was not found"};
+      if (file && ports && ports->is_mapping()) {
+        added = add_entry(*file, *ports, entry);
+      } else if (file && node.is_mapping()) {
+        added = add_entry(*file, node, quote("ports") + ": {" + entry + "}");
+      } else if (file && node.is_scalar()) {
         // `kick_ball: soccer.KickBall` becomes a mapping, to hold its ports.
         const SourceLocation where = node.location();
-        const std::size_t begin = lines->offset(where.line, where.column);
-        const std::size_t end = lines->token_end(begin);
-        edit = {{"range", lines->range(begin, end)},
-                {"newText",
-                 fmt::format("{{{}: {}, {}: {{{}}}}}", quote("type"),
-                             lines->text().substr(begin, end - begin), quote("ports"), entry)}};
+        const std::size_t begin = offset_of(file->text, where.line, where.column);
+        const Lines* lines = analysis.lines_of(found->file);
+        const std::size_t end = lines ? lines->token_end(begin) : begin;
+        added = {{{found->file, begin, end,
+                   fmt::format("{{{}: {}, {}: {{{}}}}}", quote("type"),
+                               file->text.substr(begin, end - begin), quote("ports"), entry)}},
+                 {}};
       }
-      if (edit.is_null())
-        throw RequestError{kRequestFailed, fmt::format("{} binds port '{}' by name, and no "
-                                                       "ports: entry could be added to its text",
-                                                       who, old)};
-      edits.emplace_back(found->file, std::move(edit));
+      if (!added.ok())
+        throw RequestError{kRequestFailed,
+                           fmt::format("{} binds port '{}' by name, and no ports: entry could "
+                                       "be added to its text: {}",
+                                       who, old, added.refused)};
+      edits.insert(edits.end(), added.edits.begin(), added.edits.end());
     }
   }
   return edits;
@@ -210,10 +153,8 @@ json Server::rename(const json& params) const {
     changes[path_to_uri(other.file)].push_back(
         {{"range", lines->range(other.begin, other.end)}, {"newText", name}});
   }
-  if (item->kind == Kind::kActuator) {
-    for (auto& [file, edit] : follow_ports(*analysis, item->name, name))
-      changes[path_to_uri(file)].push_back(std::move(edit));
-  }
+  if (item->kind == Kind::kActuator)
+    add_changes(*analysis, follow_ports(*analysis, item->name, name), changes);
   return {{"changes", changes}};
 }
 

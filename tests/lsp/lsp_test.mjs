@@ -591,6 +591,36 @@ test('renaming an actuator that ports bind by name adds ports: entries that keep
   });
 });
 
+for (const [format, config] of [['YAML', yaml], ['JSON', json]]) {
+  test(`code actions on a ${format} inhibition flip its chaining and remove it, changing only its text`, async () => {
+    await withClient(async (client) => {
+      const { uri, text } = config();
+      await client.open(uri, text);
+      const needle = 'kick_ball => go_behind_ball';
+      const at = positionOf(text, needle, { skip: 3 });
+      const actions = await client.request('textDocument/codeAction',
+        { textDocument: { uri }, range: { start: at, end: at }, context: { diagnostics: [] } });
+      const flip = actions.find((a) => a.title === "Make 'kick_ball => go_behind_ball' non-chaining (->)");
+      assert.ok(flip, JSON.stringify(actions.map((a) => a.title)));
+      const flipped = applyEdits(text, flip.edit.changes[uri]);
+      assert.equal(flipped, text.replace(needle, 'kick_ball -> go_behind_ball'));
+      const remove = actions.find((a) => a.title === "Remove the inhibition 'kick_ball => go_behind_ball'");
+      assert.ok(remove);
+      const removed = applyEdits(text, remove.edit.changes[uri]);
+      assert.equal(removed, format === 'YAML'
+        ? text.replace('      - kick_ball => go_behind_ball\n', '')
+        : text.replace('        "kick_ball => go_behind_ball",\n', ''));
+      // What the server then reports is what validate reports on the edited file.
+      const dir = tempDir();
+      for (const edited of [flipped, removed]) {
+        const file = path.join(dir, path.basename(uri));
+        fs.writeFileSync(file, edited);
+        assert.deepEqual(summary(await client.change(uri, edited)), validated(file));
+      }
+    });
+  });
+}
+
 test('completion items replace the word typed, a dotted prefix included', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
