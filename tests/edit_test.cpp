@@ -55,17 +55,6 @@ void check_untouched(const std::string& before, const std::string& after,
     CHECK(new_lines[new_lines.size() - 1 - i] == old_lines[old_lines.size() - 1 - i]);
 }
 
-/// Loads `path` with `edits` applied over the disk: its diagnostics, and the texts it read.
-Loaded load_edited(const std::string& path, const std::vector<TextEdit>& edits, Registry& registry,
-                   Overlay& overlay) {
-  Loaded original = load_config(path, registry);
-  for (const auto& file : original.files.files())
-    overlay.set(file->path, apply_edits(file->text, file->path, edits));
-  LoadOptions options;
-  options.source = &overlay;
-  return load_config(path, registry, options);
-}
-
 using Operation = EditResult (*)(const Loaded&, const InhibitionRef&);
 
 /// The declared inhibition of `model`, or nullptr.
@@ -101,16 +90,16 @@ void apply_to_every_inhibition(Operation operation, const char* name,
           REQUIRE(result.ok());
           REQUIRE_FALSE(result.edits.empty());
           Registry again = builtin_registry();
-          Overlay overlay;
-          const Loaded edited = load_edited(path.string(), result.edits, again, overlay);
+          const EditedConfig after_edit = load_edited(loaded, result.edits, again);
+          const Loaded& edited = after_edit.loaded;
           INFO(format(edited.diagnostics));
           CHECK_FALSE(edited.diagnostics.has_errors());
           REQUIRE(edited.model);
           expect(inhibition, declared(*edited.model, which));
           for (const auto& file : loaded.files.files()) {
-            const std::string* text = overlay.find(file->path);
-            REQUIRE(text != nullptr);
-            check_untouched(file->text, *text, result.edits, file->path);
+            const SourceFile* after = edited.files.find(file->path);
+            REQUIRE(after != nullptr);
+            check_untouched(file->text, after->text, result.edits, file->path);
           }
         }
       }

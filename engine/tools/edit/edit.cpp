@@ -220,6 +220,18 @@ std::string apply_edits(const std::string& text, const std::string& file,
   return result;
 }
 
+EditedConfig load_edited(const Loaded& loaded, const std::vector<TextEdit>& edits,
+                         Registry& registry, LoadOptions options) {
+  EditedConfig edited;
+  edited.texts = std::make_unique<Overlay>();
+  if (loaded.files.files().empty()) return edited;
+  for (const auto& file : loaded.files.files())
+    edited.texts->set(file->path, apply_edits(file->text, file->path, edits));
+  options.source = edited.texts.get();
+  edited.loaded = load_config(loaded.files.files().front()->path, registry, options);
+  return edited;
+}
+
 EditResult add_entry(const SourceFile& file, const Node& node, const std::string& entry) {
   const std::string& text = file.text;
   const std::size_t begin = offset_at(file, node.location());

@@ -5,6 +5,7 @@
 // the element. The language server's rename and code actions use them.
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,19 @@ EditResult add_entry(const SourceFile& file, const Node& node, const std::string
 
 /// The byte offset of a 1-based line and code-point column of `text` (clamped to the line).
 std::size_t offset_of(const std::string& text, int line, int column);
+
+/// A config loaded again with edits applied, before anything is written.
+struct EditedConfig {
+  /// The edited texts, which the load read through (declared first: destroyed after `loaded`).
+  std::unique_ptr<Overlay> texts;
+  Loaded loaded;
+};
+
+/// The config of `loaded` loaded again with `edits` applied to the texts it read (files it did
+/// not read come from the disk): the diagnostics, model and program the edits would give.
+/// `options.source` is replaced; the plugins are loaded into `registry` again.
+EditedConfig load_edited(const Loaded& loaded, const std::vector<TextEdit>& edits,
+                         Registry& registry, LoadOptions options = {});
 
 /// `text` (of `file`) with the edits of `file` applied; they must not overlap.
 std::string apply_edits(const std::string& text, const std::string& file,
