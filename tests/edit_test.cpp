@@ -1,8 +1,11 @@
 // The edit operations (engine/tools/edit): applied to every inhibition of every config in
 // configs/, each gives a config that validates, with the edited change and no other.
 
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -215,4 +218,110 @@ layers:
   const EditResult refused = remove_inhibition(loaded, {"l", "a", "c"});
   CHECK(refused.edits.empty());
   CHECK(refused.refused == "no inhibition 'a -> c' in layer 'l'");
+}
+
+namespace {
+
+/// A param's value as a config writes it, for the kinds written as one scalar; empty otherwise.
+std::string written(const ParamValue& value) {
+  if (const auto* b = std::get_if<bool>(&value)) return *b ? "true" : "false";
+  if (const auto* i = std::get_if<std::int64_t>(&value)) return std::to_string(*i);
+  if (const auto* d = std::get_if<double>(&value)) return fmt::format("{}", *d);
+  if (const auto* s = std::get_if<std::string>(&value)) return nlohmann::json(*s).dump();
+  return {};
+}
+
+}  // namespace
+
+TEST_CASE("setting each scalar param of each behaviour of each shipped config edits one value",
+          "[edit]") {
+  int written_params = 0, added_params = 0;
+  for (const auto& path : configs_under(kSourceDir / "configs")) {
+    if (!plugins_built(path)) continue;
+    Registry registry = builtin_registry();
+    const Loaded loaded = load_config(path.string(), registry);
+    if (!loaded.model || loaded.diagnostics.has_errors()) continue;
+    for (const auto& layer : loaded.model->layers) {
+      for (const auto& behaviour : layer.behaviours) {
+        for (const auto& param : behaviour.params.items) {
+          const std::string value = written(param.value);
+          if (value.empty()) continue;
+          (param.defaulted ? added_params : written_params) += 1;
+          DYNAMIC_SECTION(fs::relative(path, kSourceDir).string()
+                          << " " << behaviour.name.text << "." << param.name << " = " << value) {
+            const EditResult result =
+                set_param(loaded, layer.name.text, behaviour.name.text, param.name, value);
+            INFO(result.refused);
+            REQUIRE(result.ok());
+            Registry again = builtin_registry();
+            const EditedConfig after_edit = load_edited(loaded, result.edits, again);
+            const Loaded& edited = after_edit.loaded;
+            INFO(format(edited.diagnostics));
+            CHECK_FALSE(edited.diagnostics.has_errors());
+            REQUIRE(edited.model);
+            const Param* now = nullptr;
+            for (const auto& l : edited.model->layers) {
+              for (const auto& b : l.behaviours) {
+                if (l.name.text == layer.name.text && b.name.text == behaviour.name.text)
+                  now = b.params.find(param.name);
+              }
+            }
+            REQUIRE(now != nullptr);
+            CHECK(written(now->value) == value);
+            // A param that was not written is now written, where set_param put it.
+            CHECK_FALSE(now->defaulted);
+            for (const auto& file : loaded.files.files()) {
+              const SourceFile* after = edited.files.find(file->path);
+              REQUIRE(after != nullptr);
+              check_untouched(file->text, after->text, result.edits, file->path);
+            }
+          }
+        }
+      }
+    }
+  }
+  // Both ways are tried: a written value replaced, a missing param added.
+  CHECK(written_params > 0);
+  CHECK(added_params > 0);
+}
+
+TEST_CASE("a param is set where it is written, added to params:, or params: added", "[edit]") {
+  const std::string yaml = R"(arbiter: 1
+name: params
+layers:
+  - name: l
+    behaviours:
+      a: scripted
+      b: {type: scripted, params: {activation: 0.5}}
+      c:
+        type: scripted   # no params yet
+
+      d:
+        type: scripted
+        params:
+          activation: [1, 0]
+)";
+  test::TempDir dir;
+  Registry registry = builtin_registry();
+  const Loaded loaded = load_config(dir.write("params.yaml", yaml), registry);
+  REQUIRE_FALSE(loaded.diagnostics.has_errors());
+  auto set = [&](const std::string& behaviour, const std::string& param, const std::string& value) {
+    const EditResult result = set_param(loaded, "l", behaviour, param, value);
+    INFO(result.refused);
+    REQUIRE(result.ok());
+    Registry again = builtin_registry();
+    const EditedConfig edited = load_edited(loaded, result.edits, again);
+    INFO(format(edited.loaded.diagnostics));
+    CHECK_FALSE(edited.loaded.diagnostics.has_errors());
+    return edited.loaded.files.files().front()->text;
+  };
+  CHECK(set("a", "activation", "0.25") ==
+        replaced(yaml, "a: scripted", "a: {type: scripted, params: {activation: 0.25}}"));
+  CHECK(set("b", "activation", "0.75") == replaced(yaml, "activation: 0.5", "activation: 0.75"));
+  CHECK(set("b", "writes", "{}") == replaced(yaml, "0.5}}", "0.5, writes: {}}}"));
+  CHECK(set("c", "activation", "1") ==
+        replaced(yaml, "# no params yet\n", "# no params yet\n        params: {activation: 1}\n"));
+  CHECK(set("d", "activation", "[0, 1]") == replaced(yaml, "[1, 0]", "[0, 1]"));
+  CHECK(set("d", "writes", "{}") == replaced(yaml, "[1, 0]\n", "[1, 0]\n          writes: {}\n"));
+  CHECK(set_param(loaded, "l", "e", "activation", "1").refused == "no behaviour 'e' in layer 'l'");
 }

@@ -294,4 +294,58 @@ EditResult flip_chaining(const Loaded& loaded, const InhibitionRef& inhibition) 
   return result;
 }
 
+EditResult set_param(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
+                     const std::string& param, const std::string& value) {
+  for (const auto& file : loaded.files.files()) {
+    const Node* layers =
+        file->root && file->root->is_mapping() ? file->root->find("layers") : nullptr;
+    if (!layers || !layers->is_sequence()) continue;
+    for (const auto& item : layers->items()) {
+      const Node* name = item.is_mapping() ? item.find("name") : nullptr;
+      const Node* behaviours = name ? item.find("behaviours") : nullptr;
+      if (!name || !name->is_scalar() || name->text() != layer || !behaviours ||
+          !behaviours->is_mapping())
+        continue;
+      const Node* node = behaviours->find(behaviour);
+      if (!node) continue;
+      const bool json = format_of(file->path) == DocumentFormat::kJson;
+      auto key = [&](const std::string& word) { return json ? "\"" + word + "\"" : word; };
+      const std::string& text = file->text;
+      if (node->is_scalar()) {
+        // `kick_ball: soccer.KickBall` becomes a mapping, to hold its params.
+        const std::size_t begin = offset_at(*file, node->location());
+        const std::size_t end = scalar_end(text, begin, *node);
+        return {{{file->path, begin, end,
+                  fmt::format("{{{}: {}, {}: {{{}: {}}}}}", key("type"),
+                              text.substr(begin, end - begin), key("params"), key(param), value)}},
+                {}};
+      }
+      const Node* params = node->is_mapping() ? node->find("params") : nullptr;
+      if (!params || !params->is_mapping()) {
+        if (params) return {{}, fmt::format("the params of '{}' are not a mapping", behaviour)};
+        return add_entry(*file, *node,
+                         fmt::format("{}: {{{}: {}}}", key("params"), key(param), value));
+      }
+      const Node* current = params->find(param);
+      if (!current) return add_entry(*file, *params, key(param) + ": " + value);
+      const std::size_t begin = offset_at(*file, current->location());
+      std::size_t end = begin;
+      if (current->is_scalar()) {
+        end = scalar_end(text, begin, *current);
+      } else if (begin < text.size() && (text[begin] == '[' || text[begin] == '{')) {
+        end = flow_close(text, begin);
+        if (end == std::string::npos) return {{}, "the param's flow value has no closing bracket"};
+        ++end;
+      } else {
+        return {{},
+                fmt::format("param '{}' of '{}' is written as a block collection: edit its "
+                            "lines instead",
+                            param, behaviour)};
+      }
+      return {{{file->path, begin, end, value}}, {}};
+    }
+  }
+  return {{}, fmt::format("no behaviour '{}' in layer '{}'", behaviour, layer)};
+}
+
 }  // namespace arbiter

@@ -43,6 +43,13 @@ EditResult remove_inhibition(const Loaded& loaded, const InhibitionRef& inhibiti
 /// Makes a chaining inhibition (`=>`) non-chaining (`->`) and the other way round.
 EditResult flip_chaining(const Loaded& loaded, const InhibitionRef& inhibition);
 
+/// Sets the param `param` of behaviour `behaviour` of layer `layer` to `value`, written as it is
+/// to be in the file (`0.6`, `true`, `"text"`, `[1, 2]`): the value replaced where the param is
+/// written, else the param added to `params:` (which is added when missing). A value written as
+/// a block collection is refused: replacing its lines is not an edit of one value.
+EditResult set_param(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
+                     const std::string& param, const std::string& value);
+
 /// Adds `entry` (`key: value`, as it is to be written) to the mapping `node` of `file`: before
 /// a flow mapping's closing brace, else as a line of its own after the last line of the block
 /// mapping, at its keys' indentation. Refused when the mapping's text is not where `node` says.
