@@ -18,26 +18,35 @@ std::vector<TextEdit> follow_ports(const Analysis& analysis, const std::string& 
                                    const std::string& name) {
   const auto& model = analysis.loaded.model;
   std::vector<TextEdit> edits;
-  if (!model) {
-    // Which ports bind by name is known only from a config that loads.
-    for (const auto& [key, cls] : analysis.registry->classes()) {
-      for (const auto& port : cls->ports) {
-        if (port.name == old) {
-          throw RequestError{kRequestFailed,
-                             fmt::format("'{}' is also a port name ({}): fix the config's errors "
-                                         "first, so that the ports bound to it by name are known",
-                                         old, key.first)};
-        }
+  // Which ports bind by name is known only from the classes: while a behaviour's or an
+  // interface's class is unknown (misspelt, or its plugin not found), it is not.
+  static const std::vector<LayerDecl> kNoLayers;
+  const auto& layers = model ? model->layers : kNoLayers;
+  for (const auto& owner : analysis.port_owners) {
+    bool known = false;
+    for (const auto& layer : layers) {
+      if (layer.name.text != owner.layer) continue;
+      if (owner.behaviour.empty()) known = known || layer.interface != nullptr;
+      for (const auto& behaviour : layer.behaviours) {
+        if (behaviour.name.text == owner.behaviour) known = known || behaviour.cls != nullptr;
       }
     }
-    return edits;
+    if (!known) {
+      throw RequestError{
+          kRequestFailed,
+          fmt::format("the class of {} is not known, so whether a port of it binds to '{}' by "
+                      "name is not: fix the config's errors first",
+                      owner.behaviour.empty() ? "the interface of layer '" + owner.layer + "'"
+                                              : "'" + owner.behaviour + "'",
+                      old)};
+    }
   }
   auto binds = [&](const std::vector<PortBinding>& ports) {
     return std::any_of(ports.begin(), ports.end(), [&](const PortBinding& binding) {
       return binding.port && binding.port->name == old && binding.target == old;
     });
   };
-  for (const auto& layer : model->layers) {
+  for (const auto& layer : layers) {
     std::vector<std::string> owners;
     if (binds(layer.ports)) owners.emplace_back();
     for (const auto& behaviour : layer.behaviours) {

@@ -530,6 +530,22 @@ test('renaming an actuator that ports bind by name adds ports: entries that keep
   });
 });
 
+test('renaming an actuator while a class is unknown is refused with the reason, since its ports are not known', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const broken = text.replace('{type: soccer.KickBall}', '{type: soccer.KickBal}');
+    await client.change(uri, broken);
+    await assert.rejects(client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(broken, 'ball_visible: {'), newName: 'seen' }),
+    /the class of 'kick_ball' is not known, so whether a port of it binds to 'ball_visible' by name is not/);
+    // A behaviour's rename does not depend on ports.
+    const edit = await client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(broken, 'go_behind_ball: {'), newName: 'approach' });
+    assert.equal(edit.changes[uri].length, 3);
+  });
+});
+
 test('renaming an actuator that ports bind by name adds ports: entries that keep them bound (JSON)', async () => {
   const dir = tempDir();
   const file = path.join(dir, 'walk_and_kick.json');
