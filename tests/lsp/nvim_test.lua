@@ -146,4 +146,27 @@ local output = vim.fn.system({ 'arbiter', 'validate', project .. '/goalie_plan.y
 if vim.v.shell_error ~= 0 then fail('goalie_plan.yaml after the rename: ' .. output) end
 settle(plan, 'goalie_plan.yaml')
 if #vim.diagnostic.get(plan) ~= 0 then fail('goalie_plan.yaml: diagnostics after the rename') end
-os.exit(0)
+
+-- <C-x><C-o> (vim.lsp.omnifunc) after `type: soccer.` replaces the dotted word the server says
+-- it replaces: soccer.GoBehindBall, not soccer.soccer.GoBehindBall. The keys are typed once this
+-- file has run, so the check polls on a timer.
+vim.cmd('buffer ' .. broken)
+vim.cmd('setlocal noswapfile')  -- the edit is not saved: no swap file for the next run to find
+vim.bo.omnifunc = 'v:lua.vim.lsp.omnifunc'
+local typed = vim.fn.search('kick_ball: {type: soccer.KickBall}', 'w')
+if typed == 0 then fail('walk_and_kick.yaml: no kick_ball line') end
+vim.api.nvim_buf_set_lines(broken, typed - 1, typed, false, { '      kick_ball: {type: soccer.}' })
+settle(broken, 'walk_and_kick.yaml')
+vim.api.nvim_win_set_cursor(0, { typed, 30 })
+local deadline = vim.loop.now() + 15000
+vim.loop.new_timer():start(100, 100, vim.schedule_wrap(function()
+  local line = vim.api.nvim_buf_get_lines(broken, typed - 1, typed, false)[1]
+  if line ~= '      kick_ball: {type: soccer.}' then
+    if not line:match('^      kick_ball: {type: soccer%.%u%w+}$') then
+      fail('completion after type: soccer. gave: ' .. line)
+    end
+    os.exit(0)
+  end
+  if vim.loop.now() > deadline then fail('no completion after type: soccer. within 15 s') end
+end))
+vim.api.nvim_feedkeys(vim.api.nvim_replace_termcodes('a<C-x><C-o>', true, false, true), 'n', false)
