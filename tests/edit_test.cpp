@@ -325,3 +325,91 @@ layers:
   CHECK(set("d", "writes", "{}") == replaced(yaml, "[1, 0]\n", "[1, 0]\n          writes: {}\n"));
   CHECK(set_param(loaded, "l", "e", "activation", "1").refused == "no behaviour 'e' in layer 'l'");
 }
+
+TEST_CASE("adding an inhibition to each layer of each shipped config declares it and only it",
+          "[edit]") {
+  int added = 0;
+  for (const auto& path : configs_under(kSourceDir / "configs")) {
+    if (!plugins_built(path)) continue;
+    Registry registry = builtin_registry();
+    const Loaded loaded = load_config(path.string(), registry);
+    if (!loaded.program || !loaded.model || loaded.diagnostics.has_errors()) continue;
+    const Program& program = *loaded.program;
+    for (const auto& layer : program.layers) {
+      if (layer.behaviour_end - layer.behaviour_begin < 2) continue;
+      // From the first behaviour in execution order to the last, in the direction the layer's
+      // inhibitions run in that order, so that no cycle is made.
+      std::uint32_t from = layer.behaviour_begin, to = layer.behaviour_end - 1;
+      bool backwards = false;
+      for (std::uint32_t b = layer.behaviour_begin; b < layer.behaviour_end; ++b) {
+        for (const auto& inhibition : program.inhibitions.of(b))
+          backwards = backwards || inhibition.inhibitor > inhibition.inhibited;
+      }
+      if (backwards) std::swap(from, to);
+      const InhibitionRef which{layer.name, program.behaviours[from].name,
+                                program.behaviours[to].name};
+      if (declared(*loaded.model, which)) continue;
+      for (const bool chaining : {true, false}) {
+        ++added;
+        DYNAMIC_SECTION(fs::relative(path, kSourceDir).string()
+                        << " " << which.inhibitor << (chaining ? " => " : " -> ")
+                        << which.inhibited) {
+          const EditResult result = add_inhibition(loaded, which, chaining);
+          INFO(result.refused);
+          REQUIRE(result.ok());
+          Registry again = builtin_registry();
+          const EditedConfig after_edit = load_edited(loaded, result.edits, again);
+          const Loaded& edited = after_edit.loaded;
+          INFO(format(edited.diagnostics));
+          CHECK_FALSE(edited.diagnostics.has_errors());
+          REQUIRE(edited.model);
+          const InhibitionDecl* now = declared(*edited.model, which);
+          REQUIRE(now != nullptr);
+          CHECK(now->chaining == chaining);
+          for (const auto& file : loaded.files.files()) {
+            const SourceFile* after = edited.files.find(file->path);
+            REQUIRE(after != nullptr);
+            check_untouched(file->text, after->text, result.edits, file->path);
+          }
+          // Declared twice is refused.
+          CHECK_FALSE(add_inhibition(edited, which, chaining).ok());
+        }
+      }
+    }
+  }
+  CHECK(added > 0);
+}
+
+TEST_CASE("an inhibition is added after the last item, or with the inhibitions: key", "[edit]") {
+  const std::string yaml = R"(arbiter: 1
+name: add
+layers:
+  - name: block
+    behaviours: {a: scripted, b: scripted, c: scripted}
+    inhibitions:
+      - a => b   # first
+    normalise: false
+  - name: flow
+    behaviours: {d: scripted, e: scripted, f: scripted}
+    inhibitions: [d => e]
+  - name: none
+    behaviours: {g: scripted, h: scripted}
+)";
+  test::TempDir dir;
+  Registry registry = builtin_registry();
+  const Loaded loaded = load_config(dir.write("add.yaml", yaml), registry);
+  REQUIRE_FALSE(loaded.diagnostics.has_errors());
+  auto add = [&](const InhibitionRef& which, bool chaining) {
+    const EditResult result = add_inhibition(loaded, which, chaining);
+    INFO(result.refused);
+    REQUIRE(result.ok());
+    return apply_edits(yaml, loaded.files.files().front()->path, result.edits);
+  };
+  CHECK(add({"block", "b", "c"}, true) == replaced(yaml, "# first\n", "# first\n      - b => c\n"));
+  CHECK(add({"flow", "e", "f"}, false) == replaced(yaml, "[d => e]", "[d => e, e -> f]"));
+  CHECK(add({"none", "g", "h"}, true) ==
+        replaced(yaml, "h: scripted}\n", "h: scripted}\n    inhibitions: [g => h]\n"));
+  CHECK(add_inhibition(loaded, {"block", "a", "b"}, false).refused ==
+        "the inhibition 'a -> b' in layer 'block' is already declared");
+  CHECK(add_inhibition(loaded, {"other", "a", "b"}, false).refused == "no layer 'other'");
+}

@@ -260,6 +260,56 @@ EditResult remove_inhibition(const Loaded& loaded, const InhibitionRef& inhibiti
   return result;
 }
 
+EditResult add_inhibition(const Loaded& loaded, const InhibitionRef& inhibition, bool chaining) {
+  if (!sites_of(loaded, inhibition).empty())
+    return {{}, fmt::format("the inhibition {} is already declared", describe(inhibition))};
+  for (const auto& file : loaded.files.files()) {
+    const Node* layers =
+        file->root && file->root->is_mapping() ? file->root->find("layers") : nullptr;
+    if (!layers || !layers->is_sequence()) continue;
+    for (const auto& layer : layers->items()) {
+      const Node* name = layer.is_mapping() ? layer.find("name") : nullptr;
+      if (!name || !name->is_scalar() || name->text() != inhibition.layer) continue;
+      const bool json = format_of(file->path) == DocumentFormat::kJson;
+      const std::string arrow = fmt::format("{} {} {}", inhibition.inhibitor,
+                                            chaining ? "=>" : "->", inhibition.inhibited);
+      const std::string item = json ? "\"" + arrow + "\"" : arrow;
+      const Node* list = layer.find("inhibitions");
+      if (!list || list->reads_as_null()) {
+        if (list) return {{}, "the layer's inhibitions: is empty but not a sequence"};
+        return add_entry(*file, layer,
+                         fmt::format("{}: [{}]", json ? "\"inhibitions\"" : "inhibitions", item));
+      }
+      if (!list->is_sequence()) return {{}, "the layer's inhibitions: is not a sequence"};
+      const std::string& text = file->text;
+      const std::size_t begin = offset_at(*file, list->location());
+      if (begin < text.size() && text[begin] == '[') {
+        const std::size_t close = flow_close(text, begin);
+        if (close == std::string::npos) return {{}, "the inhibitions' flow sequence has no ']'"};
+        std::size_t at = close;
+        while (at > begin + 1 && space(text[at - 1])) --at;
+        return {{{file->path, at, at, (at == begin + 1 ? "" : ", ") + item}}, {}};
+      }
+      if (list->items().empty()) return {{}, "the layer's inhibitions: has no item to follow"};
+      // A new line like the last item's, after it.
+      const std::size_t last = offset_at(*file, list->items().back().location());
+      std::size_t dash = last;
+      while (dash > 0 && text[dash - 1] == ' ') --dash;
+      if (dash == 0 || text[dash - 1] != '-')
+        return {{}, "the last inhibition is not a '- ' item on a line of its own"};
+      --dash;
+      const std::size_t start = line_start(text, dash);
+      const std::size_t end = block_end(text, last, last - start);
+      std::string line = text.substr(start, last - start) + item;
+      std::fill(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(dash - start), ' ');
+      if (end == text.size() && (text.empty() || text.back() != '\n'))
+        return {{{file->path, end, end, "\n" + line}}, {}};
+      return {{{file->path, end, end, line + "\n"}}, {}};
+    }
+  }
+  return {{}, fmt::format("no layer '{}'", inhibition.layer)};
+}
+
 EditResult flip_chaining(const Loaded& loaded, const InhibitionRef& inhibition) {
   EditResult result;
   for (const Site& site : sites_of(loaded, inhibition)) {

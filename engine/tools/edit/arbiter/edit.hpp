@@ -40,6 +40,11 @@ struct InhibitionRef {
 /// one), wherever `loaded`'s files declare it.
 EditResult remove_inhibition(const Loaded& loaded, const InhibitionRef& inhibition);
 
+/// Declares the inhibition, chaining (`=>`) or not (`->`): after the last item of the layer's
+/// `inhibitions:` (a line of its own in a block sequence), or the key added with it. Refused
+/// when the layer is not declared or the inhibition already is.
+EditResult add_inhibition(const Loaded& loaded, const InhibitionRef& inhibition, bool chaining);
+
 /// Makes a chaining inhibition (`=>`) non-chaining (`->`) and the other way round.
 EditResult flip_chaining(const Loaded& loaded, const InhibitionRef& inhibition);
 
