@@ -3,101 +3,10 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
-
 #include "lsp/analysis.hpp"
 #include "lsp/server.hpp"
 
 namespace arbiter::lsp {
-
-namespace {
-
-/// The edits that keep the ports bound by name to actuator `old` bound to it as `name`: a
-/// `ports:` entry for each, as a person would add it.
-std::vector<TextEdit> follow_ports(const Analysis& analysis, const std::string& old,
-                                   const std::string& name) {
-  const auto& model = analysis.loaded.model;
-  std::vector<TextEdit> edits;
-  // Which ports bind by name is known only from the classes: while a behaviour's or an
-  // interface's class is unknown (misspelt, or its plugin not found), it is not.
-  static const std::vector<LayerDecl> kNoLayers;
-  const auto& layers = model ? model->layers : kNoLayers;
-  for (const auto& owner : analysis.port_owners) {
-    bool known = false;
-    for (const auto& layer : layers) {
-      if (layer.name.text != owner.layer) continue;
-      if (owner.behaviour.empty()) known = known || layer.interface != nullptr;
-      for (const auto& behaviour : layer.behaviours) {
-        if (behaviour.name.text == owner.behaviour) known = known || behaviour.cls != nullptr;
-      }
-    }
-    if (!known) {
-      throw RequestError{
-          kRequestFailed,
-          fmt::format("the class of {} is not known, so whether a port of it binds to '{}' by "
-                      "name is not: fix the config's errors first",
-                      owner.behaviour.empty() ? "the interface of layer '" + owner.layer + "'"
-                                              : "'" + owner.behaviour + "'",
-                      old)};
-    }
-  }
-  auto binds = [&](const std::vector<PortBinding>& ports) {
-    return std::any_of(ports.begin(), ports.end(), [&](const PortBinding& binding) {
-      return binding.port && binding.port->name == old && binding.target == old;
-    });
-  };
-  for (const auto& layer : layers) {
-    std::vector<std::string> owners;
-    if (binds(layer.ports)) owners.emplace_back();
-    for (const auto& behaviour : layer.behaviours) {
-      if (binds(behaviour.ports)) owners.push_back(behaviour.name.text);
-    }
-    for (const auto& owner : owners) {
-      const auto found = std::find_if(
-          analysis.port_owners.begin(), analysis.port_owners.end(), [&](const PortOwner& item) {
-            return item.layer == layer.name.text && item.behaviour == owner;
-          });
-      const std::string who =
-          owner.empty() ? "the interface of layer '" + layer.name.text + "'" : "'" + owner + "'";
-      if (found == analysis.port_owners.end() || !found->node)
-        throw RequestError{kRequestFailed, fmt::format("{} binds port '{}' by name, and its text "
-                                                       "was not found to add a ports: entry",
-                                                       who, old)};
-      const Node& node = *found->node;
-      const Node* ports = node.is_mapping() ? node.find("ports") : nullptr;
-      if (ports && ports->is_mapping() && ports->find(old)) continue;  // bound explicitly
-      const SourceFile* file = analysis.loaded.files.find(found->file);
-      const bool json_text = format_of(found->file) == DocumentFormat::kJson;
-      auto quote = [&](const std::string& word) { return json_text ? "\"" + word + "\"" : word; };
-      const std::string entry = quote(old) + ": " + quote(name);
-      EditResult added{{}, "its text was not found"};
-      if (file && ports && ports->is_mapping()) {
-        added = add_entry(*file, *ports, entry);
-      } else if (file && node.is_mapping()) {
-        added = add_entry(*file, node, quote("ports") + ": {" + entry + "}");
-      } else if (file && node.is_scalar()) {
-        // `kick_ball: soccer.KickBall` becomes a mapping, to hold its ports.
-        const SourceLocation where = node.location();
-        const std::size_t begin = offset_of(file->text, where.line, where.column);
-        const Lines* lines = analysis.lines_of(found->file);
-        const std::size_t end = lines ? lines->token_end(begin) : begin;
-        added = {{{found->file, begin, end,
-                   fmt::format("{{{}: {}, {}: {{{}}}}}", quote("type"),
-                               file->text.substr(begin, end - begin), quote("ports"), entry)}},
-                 {}};
-      }
-      if (!added.ok())
-        throw RequestError{kRequestFailed,
-                           fmt::format("{} binds port '{}' by name, and no ports: entry could "
-                                       "be added to its text: {}",
-                                       who, old, added.refused)};
-      edits.insert(edits.end(), added.edits.begin(), added.edits.end());
-    }
-  }
-  return edits;
-}
-
-}  // namespace
 
 json Server::definition(const json& params) const {
   const std::string path = uri_to_path(params.at("textDocument").at("uri"));
@@ -142,28 +51,14 @@ json Server::rename(const json& params) const {
     throw RequestError{kRequestFailed,
                        "only a behaviour, actuator, layer, state or state machine can be renamed"};
   }
-  const std::string name = params.at("newName");
-  if (!is_identifier(name)) {
-    throw RequestError{kRequestFailed,
-                       fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
-  }
-  for (const auto& other : analysis->occurrences) {
-    if (other.definition && other.kind == item->kind && other.scope == item->scope &&
-        other.name == name) {
-      throw RequestError{kRequestFailed, fmt::format("'{}' is already taken", name)};
-    }
-  }
+  // Checked on a fresh registry, into which the config's plugins are loaded again.
+  Registry registry = make_registry_();
+  const EditResult renamed = checked(
+      analysis->loaded, rename_symbol(analysis->loaded, *analysis, *item, params.at("newName")),
+      registry, options_);
+  if (!renamed.ok()) throw RequestError{kRequestFailed, renamed.refused};
   json changes = json::object();
-  for (const auto& other : analysis->occurrences) {
-    if (other.kind != item->kind || other.scope != item->scope || other.name != item->name)
-      continue;
-    const Lines* lines = analysis->lines_of(other.file);
-    if (!lines) continue;
-    changes[path_to_uri(other.file)].push_back(
-        {{"range", lines->range(other.begin, other.end)}, {"newText", name}});
-  }
-  if (item->kind == Kind::kActuator)
-    add_changes(*analysis, follow_ports(*analysis, item->name, name), changes);
+  add_changes(*analysis, renamed.edits, changes);
   return {{"changes", changes}};
 }
 

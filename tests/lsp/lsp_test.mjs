@@ -546,6 +546,16 @@ test('renaming an actuator while a class is unknown is refused with the reason, 
   });
 });
 
+test("renaming an actuator a scripted behaviour names in its writes: is refused with the error it would leave", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = json();
+    await client.open(uri, text);
+    await assert.rejects(client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(text, '"kick": {', { skip: 1 }), newName: 'shoot' }),
+    /the edit would leave an error it does not know how to avoid: .*walk_and_kick.json:\d+:\d+: 'kick' is not an actuator of layer 'control'/);
+  });
+});
+
 test('renaming an actuator that ports bind by name adds ports: entries that keep them bound (JSON)', async () => {
   const dir = tempDir();
   const file = path.join(dir, 'walk_and_kick.json');

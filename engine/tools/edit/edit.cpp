@@ -192,6 +192,105 @@ TextEdit remove_item(const Site& site) {
   return {site.file->path, from, to, {}};
 }
 
+/// The edits that keep the ports bound by name to actuator `old` bound to it as `name`: a
+/// `ports:` entry for each, as a person would add it.
+EditResult follow_ports(const Loaded& loaded, const ConfigIndex& index, const std::string& old,
+                        const std::string& name) {
+  const auto& model = loaded.model;
+  std::vector<TextEdit> edits;
+  // Which ports bind by name is known only from the classes: while a behaviour's or an
+  // interface's class is unknown (misspelt, or its plugin not found), it is not.
+  static const std::vector<LayerDecl> kNoLayers;
+  const auto& layers = model ? model->layers : kNoLayers;
+  for (const auto& owner : index.port_owners) {
+    bool known = false;
+    for (const auto& layer : layers) {
+      if (layer.name.text != owner.layer) continue;
+      if (owner.behaviour.empty()) known = known || layer.interface != nullptr;
+      for (const auto& behaviour : layer.behaviours) {
+        if (behaviour.name.text == owner.behaviour) known = known || behaviour.cls != nullptr;
+      }
+    }
+    if (!known) {
+      return {{},
+              fmt::format("the class of {} is not known, so whether a port of it binds to '{}' by "
+                          "name is not: fix the config's errors first",
+                          owner.behaviour.empty() ? "the interface of layer '" + owner.layer + "'"
+                                                  : "'" + owner.behaviour + "'",
+                          old)};
+    }
+  }
+  // A state binds its ports by name only (it has no ports:), so none can follow the rename.
+  if (model) {
+    for (const auto& machine : model->state_machines) {
+      for (const auto& state : machine.states) {
+        if (!state.cls) continue;
+        for (const auto& port : state.cls->ports) {
+          if (port.name != old) continue;
+          return {{},
+                  fmt::format("state '{}' of state machine '{}' ({}) binds port '{}' by name, "
+                              "and a state has no ports: to bind it to '{}'",
+                              state.name.text, machine.name.text, state.cls->name, old, name)};
+        }
+      }
+    }
+  }
+  auto binds = [&](const std::vector<PortBinding>& ports) {
+    return std::any_of(ports.begin(), ports.end(), [&](const PortBinding& binding) {
+      return binding.port && binding.port->name == old && binding.target == old;
+    });
+  };
+  for (const auto& layer : layers) {
+    std::vector<std::string> owners;
+    if (binds(layer.ports)) owners.emplace_back();
+    for (const auto& behaviour : layer.behaviours) {
+      if (binds(behaviour.ports)) owners.push_back(behaviour.name.text);
+    }
+    for (const auto& owner : owners) {
+      const auto found = std::find_if(
+          index.port_owners.begin(), index.port_owners.end(), [&](const PortOwner& item) {
+            return item.layer == layer.name.text && item.behaviour == owner;
+          });
+      const std::string who =
+          owner.empty() ? "the interface of layer '" + layer.name.text + "'" : "'" + owner + "'";
+      if (found == index.port_owners.end() || !found->node)
+        return {{},
+                fmt::format("{} binds port '{}' by name, and its text was not found to add "
+                            "a ports: entry",
+                            who, old)};
+      const Node& node = *found->node;
+      const Node* ports = node.is_mapping() ? node.find("ports") : nullptr;
+      if (ports && ports->is_mapping() && ports->find(old)) continue;  // bound explicitly
+      const SourceFile* file = loaded.files.find(found->file);
+      const bool json_text = format_of(found->file) == DocumentFormat::kJson;
+      auto quote = [&](const std::string& word) { return json_text ? "\"" + word + "\"" : word; };
+      const std::string entry = quote(old) + ": " + quote(name);
+      EditResult added{{}, "its text was not found"};
+      if (file && ports && ports->is_mapping()) {
+        added = add_entry(*file, *ports, entry);
+      } else if (file && node.is_mapping()) {
+        added = add_entry(*file, node, quote("ports") + ": {" + entry + "}");
+      } else if (file && node.is_scalar()) {
+        // `kick_ball: soccer.KickBall` becomes a mapping, to hold its ports.
+        const SourceLocation where = node.location();
+        const std::size_t begin = offset_of(file->text, where.line, where.column);
+        const std::size_t end = token_end(file->text, begin);
+        added = {{{found->file, begin, end,
+                   fmt::format("{{{}: {}, {}: {{{}}}}}", quote("type"),
+                               file->text.substr(begin, end - begin), quote("ports"), entry)}},
+                 {}};
+      }
+      if (!added.ok())
+        return {{},
+                fmt::format("{} binds port '{}' by name, and no ports: entry could be added "
+                            "to its text: {}",
+                            who, old, added.refused)};
+      edits.insert(edits.end(), added.edits.begin(), added.edits.end());
+    }
+  }
+  return {edits, {}};
+}
+
 }  // namespace
 
 std::size_t offset_of(const std::string& text, int line, int column) {
@@ -257,6 +356,43 @@ EditResult remove_inhibition(const Loaded& loaded, const InhibitionRef& inhibiti
   EditResult result;
   for (const Site& site : sites_of(loaded, inhibition)) result.edits.push_back(remove_item(site));
   if (result.edits.empty()) result.refused = "no inhibition " + describe(inhibition);
+  return result;
+}
+
+EditResult rename_symbol(const Loaded& loaded, const ConfigIndex& index, const Occurrence& symbol,
+                         const std::string& name) {
+  if (symbol.kind == SymbolKind::kClass || symbol.kind == SymbolKind::kInclude)
+    return {{}, "only a behaviour, actuator, layer, state or state machine can be renamed"};
+  if (!is_identifier(name))
+    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  for (const auto& other : index.occurrences) {
+    if (other.definition && other.kind == symbol.kind && other.scope == symbol.scope &&
+        other.name == name)
+      return {{}, fmt::format("'{}' is already taken", name)};
+  }
+  EditResult result;
+  for (const auto& other : index.occurrences) {
+    if (other.kind == symbol.kind && other.scope == symbol.scope && other.name == symbol.name)
+      result.edits.push_back({other.file, other.begin, other.end, name});
+  }
+  if (symbol.kind != SymbolKind::kActuator) return result;
+  EditResult ports = follow_ports(loaded, index, symbol.name, name);
+  if (!ports.ok()) return ports;
+  result.edits.insert(result.edits.end(), ports.edits.begin(), ports.edits.end());
+  return result;
+}
+
+EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
+                   const LoadOptions& options) {
+  if (!result.ok() || loaded.diagnostics.has_errors()) return result;
+  const EditedConfig edited = load_edited(loaded, result.edits, registry, options);
+  for (const auto& diagnostic : edited.loaded.diagnostics.items()) {
+    if (diagnostic.severity != Severity::kError) continue;
+    const SourceLocation& at = diagnostic.location;
+    return {{},
+            fmt::format("the edit would leave an error it does not know how to avoid: {}:{}:{}: {}",
+                        at.file, at.line, at.column, diagnostic.message)};
+  }
   return result;
 }
 

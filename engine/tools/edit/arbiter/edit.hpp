@@ -11,6 +11,8 @@
 
 #include "arbiter/document.hpp"
 #include "arbiter/load.hpp"
+#include "arbiter/model.hpp"
+#include "arbiter/registry.hpp"
 
 namespace arbiter {
 
@@ -35,6 +37,73 @@ struct InhibitionRef {
   std::string inhibitor;
   std::string inhibited;
 };
+
+// What a config declares and uses, by place: the index the operations and an editor's
+// navigation (definition, references, hover) read.
+
+enum class SymbolKind { kBehaviour, kActuator, kState, kMachine, kLayer, kClass, kInclude };
+
+/// A name in a config's text: its declaration, or a use of it.
+struct Occurrence {
+  SymbolKind kind;
+  std::string scope;  ///< a behaviour's layer, a state's machine
+  std::string name;
+  std::string file;
+  std::size_t begin = 0;  ///< bytes of the name in the file's text
+  std::size_t end = 0;
+  bool definition = false;
+  std::string detail;  ///< a definition's class or type
+};
+
+/// An inhibition item as written.
+struct InhibitionSite {
+  std::string layer;
+  std::string inhibitor;
+  std::string inhibited;
+  bool chaining = false;
+  std::string file;
+  std::size_t begin = 0;  ///< the whole item
+  std::size_t end = 0;
+};
+
+/// A behaviour, or a layer's interface, that binds ports: where a `ports:` entry would go.
+struct PortOwner {
+  std::string layer;
+  std::string behaviour;  ///< empty for the layer's interface
+  std::string file;
+  const Node* node = nullptr;  ///< the behaviour's value, or the layer's mapping (in the Loaded)
+};
+
+struct ConfigIndex {
+  std::vector<Occurrence> occurrences;  ///< in the order of the files and their text
+  std::vector<InhibitionSite> inhibitions;
+  std::vector<PortOwner> port_owners;
+};
+
+/// Indexes the files of `loaded` (which must outlive the index); `registry`, the one it was
+/// loaded with, tells which state params plan states (plans_states).
+ConfigIndex index_config(const Loaded& loaded, const Registry* registry);
+
+/// Whether a state class's param names states to plan (scripted's append: and prepend:): one
+/// declared with the queue's entry schema, so that its items are the queue's, in the state's
+/// machine.
+bool plans_states(const ParamSpec& param);
+
+/// Renames what `symbol` names (its declaration and every use) to `name`; an actuator's rename
+/// also adds the `ports:` entries that keep ports bound to it by name bound. Refused when `name`
+/// is not an identifier or is taken, or when which ports bind by name is not known.
+EditResult rename_symbol(const Loaded& loaded, const ConfigIndex& index, const Occurrence& symbol,
+                         const std::string& name);
+
+/// `result` checked by loading the config with its edits (load_edited, into `registry`): when
+/// that reports an error and `loaded` had none, the edits are withdrawn and the result refused
+/// with the first error. It catches a use of a name no operation knows how to follow (an
+/// actuator named in a scripted behaviour's `writes:`), rather than leave a config that fails.
+EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
+                   const LoadOptions& options = {});
+
+/// The end of the token at `begin` of `text`: a quoted string with its quotes, or a name.
+std::size_t token_end(const std::string& text, std::size_t begin);
 
 /// Removes the inhibition from the layer's `inhibitions:` (the whole key when it was the only
 /// one), wherever `loaded`'s files declare it.
