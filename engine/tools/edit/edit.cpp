@@ -169,8 +169,12 @@ TextEdit remove_item(const Site& site) {
     return {site.file->path, line_start(text, key), end, {}};
   }
   std::size_t from = begin;
-  std::size_t to = item.is_scalar() ? scalar_end(text, begin, item) : flow_close(text, begin) + 1;
-  if (!item.is_scalar() && to == 0) to = begin;
+  std::size_t to = begin;
+  if (item.is_scalar()) {
+    to = scalar_end(text, begin, item);
+  } else if (const std::size_t close = flow_close(text, begin); close != std::string::npos) {
+    to = close + 1;
+  }
   if (item.is_scalar() && !item.quoted()) {
     // An unquoted flow item runs to the next ',' or ']'.
     to = std::min(text.find_first_of(",]\n", begin), text.size());
