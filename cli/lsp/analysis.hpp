@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "arbiter/edit.hpp"
 #include "arbiter/load.hpp"
 #include "arbiter/registry.hpp"
 #include "lsp/server.hpp"
@@ -99,29 +100,7 @@ class Lines {
   }
 
   /// The extent of the token at `begin`: a quoted string with its quotes, or a name.
-  std::size_t token_end(std::size_t begin) const {
-    if (begin >= text_.size()) return begin;
-    const char first = text_[begin];
-    if (first == '"' || first == '\'') {
-      for (std::size_t at = begin + 1; at < text_.size() && text_[at] != '\n'; ++at) {
-        if (text_[at] == '\\' && first == '"') {
-          ++at;
-        } else if (text_[at] == first) {
-          return at + 1;
-        }
-      }
-      return begin + 1;
-    }
-    std::size_t at = begin;
-    while (at < text_.size()) {
-      const auto c = static_cast<unsigned char>(text_[at]);
-      const bool name = std::isalnum(c) || c == '_' || c == '.' || c == '$' || c == '/' ||
-                        c >= 0x80 || (c == '-' && at + 1 < text_.size() && text_[at + 1] != '>');
-      if (!name) break;
-      ++at;
-    }
-    return at == begin ? std::min(begin + 1, line_end(line_of(begin))) : at;
-  }
+  std::size_t token_end(std::size_t begin) const { return arbiter::token_end(text_, begin); }
 
   std::size_t line_of(std::size_t offset) const {
     return static_cast<std::size_t>(std::upper_bound(starts_.begin(), starts_.end(), offset) -
@@ -135,39 +114,19 @@ class Lines {
   std::vector<std::size_t> starts_;
 };
 
-// What a config declares and uses, by place.
+// What a config declares and uses, by place (engine/tools/edit).
+using Kind = SymbolKind;
+using arbiter::InhibitionSite;
+using arbiter::Occurrence;
+using arbiter::PortOwner;
 
-enum class Kind { kBehaviour, kActuator, kState, kMachine, kLayer, kClass, kInclude };
-
-struct Occurrence {
-  Kind kind;
-  std::string scope;  // a behaviour's layer, a state's machine
-  std::string name;
-  std::string file;
-  std::size_t begin = 0;  // bytes of the name in the file's text
-  std::size_t end = 0;
-  bool definition = false;
-  std::string detail;  // a definition's class or type
-};
-
-struct InhibitionSite {
-  std::string layer;
-  std::string inhibitor;
-  std::string inhibited;
-  bool chaining = false;
-  std::string file;
-  std::size_t begin = 0;  // the whole item
-  std::size_t end = 0;
-};
-
-struct Analysis {
+/// A config loaded, with the index of its names (ConfigIndex) and its files' lines.
+struct Analysis : ConfigIndex {
   std::string root;
   // Before `loaded`, so destroyed after it: the program holds the registry's plugin code.
   std::unique_ptr<Registry> registry;
   Loaded loaded;
   std::map<std::string, std::unique_ptr<Lines>> lines;  // by file
-  std::vector<Occurrence> occurrences;
-  std::vector<InhibitionSite> inhibitions;
 
   const Lines* lines_of(const std::string& file) const {
     const auto found = lines.find(file);
@@ -205,6 +164,9 @@ Cursor cursor_of(const json& params, const Analysis* analysis);
 /// The LSP location of bytes [begin, end) of `file`.
 json location_json(const Analysis& analysis, const std::string& file, std::size_t begin,
                    std::size_t end);
+
+/// The engine's edits as the `changes` of a WorkspaceEdit, added to `changes` (by URI).
+void add_changes(const Analysis& analysis, const std::vector<TextEdit>& edits, json& changes);
 
 /// A character of a name, as config text is read: letters, digits, `_`, `.`, `$` and `-`.
 bool name_char(char c);

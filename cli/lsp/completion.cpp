@@ -20,6 +20,9 @@ struct Context {
   std::vector<std::string> path;
   std::string key;
   std::size_t word_begin = 0;
+  /// The `type:` written in the flow mapping that holds the cursor's `params:` mapping, for a
+  /// behaviour or state the last config that parsed did not have yet.
+  std::string type;
 };
 
 /// Scans flow text (JSON, or a YAML flow collection) from `begin` to `end` into `context`.
@@ -28,6 +31,7 @@ void scan_flow(const std::string& text, std::size_t begin, std::size_t end, Cont
     bool object;
     std::string key;
     bool after_colon = false;
+    std::string type;  // the value of this mapping's `type:`
   };
   std::vector<Frame> frames;
   std::string last_string;
@@ -42,12 +46,15 @@ void scan_flow(const std::string& text, std::size_t begin, std::size_t end, Cont
       }
       if (j >= end) break;  // the cursor is inside this string
       last_string = value;
+      if (!frames.empty() && frames.back().after_colon && frames.back().key == "type")
+        frames.back().type = value;
       i = j;
     } else if (c == '{' || c == '[') {
       if (!frames.empty()) {
         context.path.push_back(frames.back().object ? frames.back().key : "*");
+        context.type = frames.back().object ? frames.back().type : std::string();
       }
-      frames.push_back({c == '{', {}, false});
+      frames.push_back({c == '{', {}, false, {}});
     } else if (c == '}' || c == ']') {
       if (!frames.empty()) frames.pop_back();
       if (!frames.empty() && !context.path.empty()) context.path.pop_back();
@@ -56,12 +63,15 @@ void scan_flow(const std::string& text, std::size_t begin, std::size_t end, Cont
       frames.back().after_colon = true;
     } else if (c == ',' && !frames.empty()) {
       frames.back().after_colon = false;
-    } else if (!frames.empty() && frames.back().object && !frames.back().after_colon &&
-               name_char(c)) {
-      // an unquoted YAML flow key
+    } else if (!frames.empty() && frames.back().object && name_char(c)) {
+      // an unquoted YAML flow key, or value
       std::size_t j = i;
       while (j < end && name_char(text[j])) ++j;
-      last_string = text.substr(i, j - i);
+      if (!frames.back().after_colon) {
+        last_string = text.substr(i, j - i);
+      } else if (frames.back().key == "type") {
+        frames.back().type = text.substr(i, j - i);
+      }
       i = j - 1;
     }
   }
@@ -98,23 +108,32 @@ Context context_at(const Lines& lines, std::size_t offset, bool json_format) {
   std::vector<std::string> reversed;
   int column = here.content;
   bool in_sequence = false;
-  // The current line: `key: value`, `- item`, `key: [flow` or a key being typed.
+  // The current line: `key: value`, `- item`, `key: {flow`, `- {flow` or a key being typed.
   const auto colon = current.find(": ");
-  if (!here.key.empty() || colon != std::string::npos) {
-    const std::string key = here.key.empty() ? parse_yaml_line(current).key : here.key;
-    const std::size_t after = colon == std::string::npos ? current.size() : colon + 1;
-    const auto flow = current.find_first_of("[{", after);
-    if (flow != std::string::npos) {
-      Context inner;
-      scan_flow(current, flow, current.size(), inner);
-      context.at = inner.at;
-      context.key = inner.key;
-      inner.path.insert(inner.path.begin(), key);
-      context.path = inner.path;
-    } else if (colon != std::string::npos) {
-      context.at = Context::At::kValue;
-      context.key = parse_yaml_line(current.substr(0, colon + 1)).key;
-    }
+  const std::string key = here.key.empty() ? parse_yaml_line(current).key : here.key;
+  const auto content = static_cast<std::size_t>(here.content);
+  auto opens_flow = [&](std::size_t at) {
+    return at < current.size() && (current[at] == '{' || current[at] == '[');
+  };
+  std::size_t flow = std::string::npos;
+  if (opens_flow(content)) {
+    flow = content;  // the whole item or line is a flow collection
+  } else if (!key.empty()) {
+    std::size_t at = current.find(':', content) + 1;
+    while (at < current.size() && current[at] == ' ') ++at;
+    if (opens_flow(at)) flow = at;
+  }
+  if (flow != std::string::npos) {
+    Context inner;
+    scan_flow(current, flow, current.size(), inner);
+    context.at = inner.at;
+    context.key = inner.key;
+    context.type = inner.type;
+    if (flow != content) inner.path.insert(inner.path.begin(), key);
+    context.path = inner.path;
+  } else if (colon != std::string::npos) {
+    context.at = Context::At::kValue;
+    context.key = parse_yaml_line(current.substr(0, colon + 1)).key;
   }
   if (here.dash >= 0) {
     in_sequence = true;
@@ -262,9 +281,13 @@ json Server::completion(const json& params) const {
   const Analysis* analysis = good_analysis_of(path);
   const Catalog& catalog = catalog_of(analysis);
   json items = json::array();
+  // The item replaces the word typed so far, a dotted prefix included: without a range, clients
+  // take their own idea of a word (`type: soccer.` would become `soccer.soccer.KickBall`).
+  const json replaced = lines.range(context.word_begin, offset);
   auto add = [&](const std::string& label, int kind, const std::string& detail,
                  const std::string& documentation = {}) {
-    json item = {{"label", label}, {"kind", kind}};
+    json item = {
+        {"label", label}, {"kind", kind}, {"textEdit", {{"range", replaced}, {"newText", label}}}};
     if (!detail.empty()) item["detail"] = detail;
     if (!documentation.empty())
       item["documentation"] = {{"kind", "markdown"}, {"value", documentation}};
@@ -307,6 +330,21 @@ json Server::completion(const json& params) const {
   };
   const auto& p = context.path;
   using At = Context::At;
+  // Within a state's param that plans states of its machine (scripted's append: and prepend:).
+  auto plans_states_at = [&](const std::vector<std::string>& at) {
+    if (!analysis || !analysis->registry ||
+        !matches(at, {"state_machines", "*", "states", "*", "params", "*"}))
+      return false;
+    for (const auto& item : analysis->occurrences) {
+      if (!item.definition || item.kind != Kind::kState || item.scope != at[1] ||
+          item.name != at[3])
+        continue;
+      const ClassInfo* cls = analysis->registry->find_class(ClassKind::kState, item.detail);
+      const ParamSpec* param = cls ? cls->find_param(at[5]) : nullptr;
+      return param && plans_states(*param);
+    }
+    return false;
+  };
   if (context.at == At::kKey) {
     if (p.empty()) {
       keys(catalog.schema);
@@ -320,14 +358,15 @@ json Server::completion(const json& params) const {
       keys(definition("state_machine"));
     } else if (matches(p, {"state_machines", "*", "states", "*"})) {
       keys(definition("state"));
-    } else if (matches(p, {"state_machines", "*", "queue", "*"})) {
+    } else if (matches(p, {"state_machines", "*", "queue", "*"}) ||
+               (p.size() == 7 && p[6] == "*" && plans_states_at({p.begin(), p.end() - 1}))) {
       names(Kind::kState, p[1], false);
     } else if (matches(p, {"layers", "*", "behaviours", "*", "params"}) ||
                matches(p, {"state_machines", "*", "states", "*", "params"})) {
       // The params of the class the enclosing behaviour or state names.
       const Kind kind = p[0] == "layers" ? Kind::kBehaviour : Kind::kState;
-      std::string type;
-      if (analysis) {
+      std::string type = context.type;
+      if (analysis && type.empty()) {
         for (const auto& item : analysis->occurrences) {
           if (item.definition && item.kind == kind && item.name == p[3]) type = item.detail;
         }
@@ -362,6 +401,8 @@ json Server::completion(const json& params) const {
     } else if (key == "sensors") {
       names(Kind::kActuator, {}, true);
     }
+  } else if (plans_states_at(p)) {
+    names(Kind::kState, p[1], false);
   } else {
     const std::string list = p.empty() ? std::string() : p.back();
     if (list == "inhibitions" || list == "sensors" || list == "queue") {

@@ -51,26 +51,14 @@ json Server::rename(const json& params) const {
     throw RequestError{kRequestFailed,
                        "only a behaviour, actuator, layer, state or state machine can be renamed"};
   }
-  const std::string name = params.at("newName");
-  if (!is_identifier(name)) {
-    throw RequestError{kRequestFailed,
-                       fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
-  }
-  for (const auto& other : analysis->occurrences) {
-    if (other.definition && other.kind == item->kind && other.scope == item->scope &&
-        other.name == name) {
-      throw RequestError{kRequestFailed, fmt::format("'{}' is already taken", name)};
-    }
-  }
+  // Checked on a fresh registry, into which the config's plugins are loaded again.
+  Registry registry = make_registry_();
+  const EditResult renamed = checked(
+      analysis->loaded, rename_symbol(analysis->loaded, *analysis, *item, params.at("newName")),
+      registry, options_);
+  if (!renamed.ok()) throw RequestError{kRequestFailed, renamed.refused};
   json changes = json::object();
-  for (const auto& other : analysis->occurrences) {
-    if (other.kind != item->kind || other.scope != item->scope || other.name != item->name)
-      continue;
-    const Lines* lines = analysis->lines_of(other.file);
-    if (!lines) continue;
-    changes[path_to_uri(other.file)].push_back(
-        {{"range", lines->range(other.begin, other.end)}, {"newText", name}});
-  }
+  add_changes(*analysis, renamed.edits, changes);
   return {{"changes", changes}};
 }
 

@@ -178,6 +178,17 @@ json Server::code_actions(const json& params) const {
   json actions = json::array();
   if (!text) return actions;
   const Lines lines(*text);
+  // The analysis holds the text the edits are computed on: it must be the buffer's.
+  const Analysis* analysis = analysis_of(path);
+  const Lines* analysed = analysis ? analysis->lines_of(path) : nullptr;
+  if (analysed && analysed->text() != *text) analysis = nullptr;
+  auto site_at = [&](std::size_t offset) -> const InhibitionSite* {
+    for (const auto& site : analysis->inhibitions) {
+      if (site.file == path && site.begin <= offset && offset <= std::max(site.begin, site.end))
+        return &site;
+    }
+    return nullptr;
+  };
   for (const auto& diagnostic :
        params.value("context", json::object()).value("diagnostics", json::array())) {
     if (diagnostic.value("source", "") != "arbiter") continue;
@@ -191,51 +202,41 @@ json Server::code_actions(const json& params) const {
             {{"changes",
               {{uri, json::array({{{"range", diagnostic["range"]}, {"newText", *name}}})}}}}}});
     }
-    if (diagnostic.value("code", "") == "redundant-inhibition") {
-      const std::size_t begin = lines.offset(diagnostic["range"]["start"]);
-      std::size_t end = lines.token_end(begin);
-      const std::size_t line = lines.line_of(begin);
-      // The item's extent: to the end of the line in a block sequence, else the flow item.
-      std::size_t from = begin, to = end;
-      const std::string before =
-          text->substr(lines.line_start(line), begin - lines.line_start(line));
-      const bool block = before.find_first_not_of(' ') != std::string::npos &&
-                         before.substr(before.find_first_not_of(' ')).rfind("- ", 0) == 0 &&
-                         before.find_first_not_of(" -") == std::string::npos;
-      if (block) {
-        from = lines.line_start(line);
-        to = line + 1 < lines.line_count() ? lines.line_start(line + 1) : text->size();
-      } else {
-        if (!(text->at(begin) == '"' || text->at(begin) == '\'')) {
-          // an unquoted flow item runs to the next ',' or ']'
-          to = text->find_first_of(",]\n", begin);
-          while (to > begin && (*text)[to - 1] == ' ') --to;
-        }
-        // With the comma before it (or, for the first item, the one after it).
-        const auto space = [&](std::size_t at) {
-          return std::isspace(static_cast<unsigned char>((*text)[at])) != 0;
-        };
-        std::size_t back = from;
-        while (back > 0 && space(back - 1)) --back;
-        if (back > 0 && (*text)[back - 1] == ',') {
-          from = back - 1;
-        } else {
-          std::size_t after = to;
-          while (after < text->size() && space(after)) ++after;
-          if (after < text->size() && (*text)[after] == ',') {
-            to = after + 1;
-            while (to < text->size() && space(to)) ++to;
-          }
-        }
-      }
-      actions.push_back(
-          {{"title", "Remove the inhibition: chaining already implies it"},
-           {"kind", "quickfix"},
-           {"diagnostics", json::array({diagnostic})},
-           {"edit",
-            {{"changes",
-              {{uri, json::array({{{"range", lines.range(from, to)}, {"newText", ""}}})}}}}}});
+    if (diagnostic.value("code", "") == "redundant-inhibition" && analysis) {
+      const InhibitionSite* site = site_at(lines.offset(diagnostic["range"]["start"]));
+      if (!site) continue;
+      const EditResult removed =
+          remove_inhibition(analysis->loaded, {site->layer, site->inhibitor, site->inhibited});
+      if (!removed.ok()) continue;
+      json changes = json::object();
+      add_changes(*analysis, removed.edits, changes);
+      actions.push_back({{"title", "Remove the inhibition: chaining already implies it"},
+                         {"kind", "quickfix"},
+                         {"diagnostics", json::array({diagnostic})},
+                         {"edit", {{"changes", changes}}}});
     }
+  }
+  // The graph operations on the inhibition at the cursor, from the engine's edit operations.
+  const InhibitionSite* site =
+      analysis ? site_at(lines.offset(
+                     params.value("range", json::object()).value("start", json::object())))
+               : nullptr;
+  if (site) {
+    const InhibitionRef which{site->layer, site->inhibitor, site->inhibited};
+    auto offer = [&](const std::string& title, const EditResult& result) {
+      if (!result.ok()) return;
+      json changes = json::object();
+      add_changes(*analysis, result.edits, changes);
+      actions.push_back(
+          {{"title", title}, {"kind", "refactor.rewrite"}, {"edit", {{"changes", changes}}}});
+    };
+    offer(site->chaining
+              ? fmt::format("Make '{} => {}' non-chaining (->)", which.inhibitor, which.inhibited)
+              : fmt::format("Make '{} -> {}' chaining (=>)", which.inhibitor, which.inhibited),
+          flip_chaining(analysis->loaded, which));
+    offer(fmt::format("Remove the inhibition '{} {} {}'", which.inhibitor,
+                      site->chaining ? "=>" : "->", which.inhibited),
+          remove_inhibition(analysis->loaded, which));
   }
   return actions;
 }

@@ -132,7 +132,8 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
               {"referencesProvider", true},
               {"renameProvider", true},
               {"documentSymbolProvider", true},
-              {"codeActionProvider", {{"codeActionKinds", json::array({"quickfix"})}}}}},
+              {"codeActionProvider",
+               {{"codeActionKinds", json::array({"quickfix", "refactor.rewrite"})}}}}},
             {"serverInfo", {{"name", "arbiter"}}}};
   }
   if (method == "initialized") {

@@ -468,6 +468,236 @@ test('state names complete in a queue and go to their declaration', async () => 
   });
 });
 
+// Applies a WorkspaceEdit's edits of `uri` to `text` (from the last, so that earlier ranges hold).
+function applyEdits(text, edits) {
+  const lines = text.split('\n');
+  const offset = (p) => lines.slice(0, p.line).reduce((n, l) => n + l.length + 1, 0) + p.character;
+  const sorted = [...edits].sort((a, b) => offset(b.range.start) - offset(a.range.start));
+  for (const e of sorted) text = text.slice(0, offset(e.range.start)) + e.newText + text.slice(offset(e.range.end));
+  return text;
+}
+
+test("a state named in a scripted state's append: or prepend: is renamed, and found by references, definition and hover", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = read('configs/paper/goalie_plan.yaml');
+    assert.deepEqual(await client.open(uri, text), []);
+    const planned = positionOf(text, 'monitor_ball]');
+    const declared = rangeOf(text, '      monitor_ball:', { skip: 6, length: 12 });
+    const definition = await client.request('textDocument/definition', { textDocument: { uri }, position: planned });
+    assert.deepEqual(definition, { uri, range: declared });
+    const references = await client.request('textDocument/references',
+      { textDocument: { uri }, position: declared.start, context: { includeDeclaration: true } });
+    assert.deepEqual(references.map((r) => r.range).sort((a, b) => a.start.line - b.start.line),
+      [declared, rangeOf(text, 'monitor_ball]', { length: 12 }), rangeOf(text, '- monitor_ball\n', { skip: 2, length: 12 })]);
+    const walk = await client.request('textDocument/references',
+      { textDocument: { uri }, position: positionOf(text, 'walk_to_pose: {type'), context: { includeDeclaration: false } });
+    // Three in prepend: and append:, one in the queue.
+    assert.equal(walk.length, 4, JSON.stringify(walk));
+    const hover = await client.request('textDocument/hover', { textDocument: { uri }, position: planned });
+    assert.match(hover.contents.value, /\*\*state\*\* `monitor_ball` of state machine `goalie` \(class `scripted`\)/);
+
+    const edit = await client.request('textDocument/rename',
+      { textDocument: { uri }, position: declared.start, newName: 'watch_ball' });
+    const renamed = applyEdits(text, edit.changes[uri]);
+    // Every other byte, the comments that name it included, is left as it was.
+    assert.equal(renamed, text.replace('      monitor_ball:\n', '      watch_ball:\n')
+      .replace('monitor_ball]', 'watch_ball]').replace('      - monitor_ball\n', '      - watch_ball\n'));
+    const dir = tempDir();
+    fs.writeFileSync(path.join(dir, 'goalie_plan.yaml'), renamed);
+    assert.deepEqual(validated(path.join(dir, 'goalie_plan.yaml')), []);
+    assert.deepEqual(await client.change(uri, renamed), []);
+  });
+});
+
+test('renaming an actuator that ports bind by name adds ports: entries that keep them bound (YAML)', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const edit = await client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(text, 'ball_visible: {'), newName: 'seen' });
+    const renamed = applyEdits(text, edit.changes[uri]);
+    // The world's interface writes it and every soccer behaviour reads it through a port of its
+    // name; a flow mapping gets the entry before its brace, a block mapping a line of its own.
+    assert.equal(renamed, text
+      .replace('      ball_visible: {type: bool}', '      seen: {type: bool}')
+      .replace('    sensors: [gait_velocity, head_angle, kick]\n', '    sensors: [gait_velocity, head_angle, kick]\n    ports: {ball_visible: seen}\n')
+      .replace('sensors: [ball_visible,', 'sensors: [seen,')
+      .replace('{type: soccer.KickBall}', '{type: soccer.KickBall, ports: {ball_visible: seen}}')
+      .replace('{type: soccer.GoBehindBall}', '{type: soccer.GoBehindBall, ports: {ball_visible: seen}}')
+      .replace('params: {turn_rate: 0.6}}', 'params: {turn_rate: 0.6}, ports: {ball_visible: seen}}')
+      .replace('{type: soccer.HeadControl}', '{type: soccer.HeadControl, ports: {ball_visible: seen}}'));
+    assert.deepEqual(await client.change(uri, renamed), []);
+  });
+});
+
+test('renaming an actuator while a class is unknown is refused with the reason, since its ports are not known', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const broken = text.replace('{type: soccer.KickBall}', '{type: soccer.KickBal}');
+    await client.change(uri, broken);
+    await assert.rejects(client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(broken, 'ball_visible: {'), newName: 'seen' }),
+    /the class of 'kick_ball' is not known, so whether a port of it binds to 'ball_visible' by name is not/);
+    // A behaviour's rename does not depend on ports.
+    const edit = await client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(broken, 'go_behind_ball: {'), newName: 'approach' });
+    assert.equal(edit.changes[uri].length, 3);
+  });
+});
+
+test("renaming an actuator a scripted behaviour names in its writes: is refused with the error it would leave", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = json();
+    await client.open(uri, text);
+    await assert.rejects(client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(text, '"kick": {', { skip: 1 }), newName: 'shoot' }),
+    /the edit would leave an error it does not know how to avoid: .*walk_and_kick.json:\d+:\d+: 'kick' is not an actuator of layer 'control'/);
+  });
+});
+
+test('renaming an actuator that ports bind by name adds ports: entries that keep them bound (JSON)', async () => {
+  const dir = tempDir();
+  const file = path.join(dir, 'walk_and_kick.json');
+  const text = `{
+  "arbiter": 1,
+  "name": "walk_and_kick",
+  "plugins": ["soccer"],
+  "layers": [
+    {
+      "name": "world",
+      "interface": "soccer.WorldLink",
+      "actuators": {
+        "ball_visible": {"type": "bool"},
+        "ball_position": {"type": "vec2"},
+        "robot_pose": {"type": "vec3"}
+      },
+      "sensors": ["gait_velocity", "head_angle", "kick"]
+    },
+    {
+      "name": "control",
+      "sensors": ["ball_visible", "ball_position", "robot_pose"],
+      "actuators": {
+        "gait_velocity": {"type": "vec3", "aggregate": true, "safe": [0, 0, 0]},
+        "head_angle": {"type": "double", "aggregate": true},
+        "kick": {"type": "bool", "safe": false}
+      },
+      "behaviours": {
+        "kick_ball": "soccer.KickBall",
+        "go_behind_ball": {
+          "type": "soccer.GoBehindBall"
+        },
+        "search_for_ball": {"type": "soccer.SearchForBall", "ports": {}},
+        "head_control": {"type": "soccer.HeadControl", "ports": {"ball_position": "ball_position"}}
+      },
+      "inhibitions": ["kick_ball => go_behind_ball", "go_behind_ball => search_for_ball", "search_for_ball -> head_control"]
+    }
+  ]
+}
+`;
+  fs.writeFileSync(file, text);
+  await withClient(async (client) => {
+    const uri = uriOf(file);
+    assert.deepEqual(await client.open(uri, text), []);
+    const edit = await client.request('textDocument/rename',
+      { textDocument: { uri }, position: positionOf(text, '"ball_visible": {', { skip: 1 }), newName: 'seen' });
+    const renamed = applyEdits(text, edit.changes[uri]);
+    // A behaviour given as its class alone becomes a mapping; an empty or a multi-line ports:
+    // gets the entry; one that binds the port already is left alone.
+    assert.equal(renamed, text
+      .replace('"ball_visible": {"type": "bool"}', '"seen": {"type": "bool"}')
+      .replace('"sensors": ["gait_velocity", "head_angle", "kick"]', '"sensors": ["gait_velocity", "head_angle", "kick"], "ports": {"ball_visible": "seen"}')
+      .replace('"sensors": ["ball_visible",', '"sensors": ["seen",')
+      .replace('"kick_ball": "soccer.KickBall"', '"kick_ball": {"type": "soccer.KickBall", "ports": {"ball_visible": "seen"}}')
+      .replace('"type": "soccer.GoBehindBall"\n', '"type": "soccer.GoBehindBall", "ports": {"ball_visible": "seen"}\n')
+      .replace('"ports": {}', '"ports": {"ball_visible": "seen"}')
+      .replace('"ball_position": "ball_position"}', '"ball_position": "ball_position", "ball_visible": "seen"}'));
+    fs.writeFileSync(file, renamed);
+    assert.deepEqual(validated(file), []);
+  });
+});
+
+for (const [format, config] of [['YAML', yaml], ['JSON', json]]) {
+  test(`code actions on a ${format} inhibition flip its chaining and remove it, changing only its text`, async () => {
+    await withClient(async (client) => {
+      const { uri, text } = config();
+      await client.open(uri, text);
+      const needle = 'kick_ball => go_behind_ball';
+      const at = positionOf(text, needle, { skip: 3 });
+      const actions = await client.request('textDocument/codeAction',
+        { textDocument: { uri }, range: { start: at, end: at }, context: { diagnostics: [] } });
+      const flip = actions.find((a) => a.title === "Make 'kick_ball => go_behind_ball' non-chaining (->)");
+      assert.ok(flip, JSON.stringify(actions.map((a) => a.title)));
+      const flipped = applyEdits(text, flip.edit.changes[uri]);
+      assert.equal(flipped, text.replace(needle, 'kick_ball -> go_behind_ball'));
+      const remove = actions.find((a) => a.title === "Remove the inhibition 'kick_ball => go_behind_ball'");
+      assert.ok(remove);
+      const removed = applyEdits(text, remove.edit.changes[uri]);
+      assert.equal(removed, format === 'YAML'
+        ? text.replace('      - kick_ball => go_behind_ball\n', '')
+        : text.replace('        "kick_ball => go_behind_ball",\n', ''));
+      // What the server then reports is what validate reports on the edited file.
+      const dir = tempDir();
+      for (const edited of [flipped, removed]) {
+        const file = path.join(dir, path.basename(uri));
+        fs.writeFileSync(file, edited);
+        assert.deepEqual(summary(await client.change(uri, edited)), validated(file));
+      }
+    });
+  });
+}
+
+test('completion items replace the word typed, a dotted prefix included', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const edited = text.replace('kick_ball: {type: soccer.KickBall}', 'kick_ball: {type: soccer.}');
+    await client.change(uri, edited);
+    const at = positionOf(edited, 'soccer.}', { skip: 7 });
+    const result = await client.request('textDocument/completion', { textDocument: { uri }, position: at });
+    const item = result.items.find((i) => i.label === 'soccer.GoBehindBall');
+    assert.ok(item, JSON.stringify(result.items));
+    assert.deepEqual(item.textEdit, { range: rangeOf(edited, 'soccer.}', { length: 7 }), newText: 'soccer.GoBehindBall' });
+    assert.equal(applyEdits(edited, [item.textEdit]), text.replace('soccer.KickBall}', 'soccer.GoBehindBall}'));
+    // Every item carries its range, an empty one where nothing is typed yet.
+    const keys = await client.request('textDocument/completion',
+      { textDocument: { uri }, position: positionOf(text, 'rate_hz: 15\n', { skip: 12 }) });
+    assert.ok(keys.items.length > 0);
+    for (const i of keys.items) assert.deepEqual(i.textEdit.range.start, i.textEdit.range.end, i.label);
+  });
+});
+
+test('completion works inside YAML flow mappings and sequences', async () => {
+  await withClient(async (client) => {
+    const plan = read('configs/paper/goalie_plan.yaml');
+    await client.open(plan.uri, plan.text);
+    const labels = async (uri, edited, needle, skip) => {
+      await client.change(uri, edited);
+      const result = await client.request('textDocument/completion',
+        { textDocument: { uri }, position: positionOf(edited, needle, { skip }) });
+      return result.items.map((i) => i.label).sort();
+    };
+    const states = ['monitor_ball', 'obstacle_ahead', 'wait_for_button', 'walk_to_pose'];
+    // A pre-emption's go_to: in a flow mapping that is a sequence item.
+    let edited = plan.text.replace('{cycle: 40, go_to: wait_for_button}', '{cycle: 40, go_to: }');
+    assert.deepEqual(await labels(plan.uri, edited, 'go_to: }', 7), states);
+    // A state planned by a scripted state's append: (a name, or the key of {name: {params}}).
+    edited = plan.text.replace('monitor_ball]', 'mon]');
+    assert.deepEqual(await labels(plan.uri, edited, 'mon]', 3), states);
+    edited = plan.text.replace('prepend: [{walk_to_pose: {hold: 2}}', 'prepend: [{wal: {hold: 2}}');
+    assert.deepEqual(await labels(plan.uri, edited, '[{wal', 5), states);
+
+    // The params of a behaviour's class in `params: {`, for a behaviour the last config that
+    // parsed did not have yet.
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    edited = text.replace('      head_control: {type: soccer.HeadControl}',
+      '      head_control: {type: soccer.HeadControl}\n      searching: {type: soccer.SearchForBall, params: {tu');
+    const params = await labels(uri, edited, 'params: {tu', 11);
+    assert.ok(params.includes('turn_rate') && params.includes('walk_speed'), params.join());
+  });
+});
+
 test('a file that does not parse gets its syntax error located and keeps completion', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();

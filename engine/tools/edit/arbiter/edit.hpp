@@ -1,0 +1,152 @@
+#pragma once
+// engine/tools/edit: changes to a behaviour graph made as edits of its configs' text, each what a
+// person would have typed: the lines an operation does not need to change stay byte for byte as
+// they were, comments and key order included, in YAML and JSON alike, in the file that declares
+// the element. The language server's rename and code actions use them.
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "arbiter/document.hpp"
+#include "arbiter/load.hpp"
+#include "arbiter/model.hpp"
+#include "arbiter/registry.hpp"
+
+namespace arbiter {
+
+/// Bytes [begin, end) of `file`'s text, replaced with `text`.
+struct TextEdit {
+  std::string file;
+  std::size_t begin = 0;
+  std::size_t end = 0;
+  std::string text;
+};
+
+/// What an operation gives: its edits, or why it was refused (and no edit).
+struct EditResult {
+  std::vector<TextEdit> edits;
+  std::string refused;
+  bool ok() const { return refused.empty(); }
+};
+
+/// A declared inhibition, by its layer and its endpoints' names.
+struct InhibitionRef {
+  std::string layer;
+  std::string inhibitor;
+  std::string inhibited;
+};
+
+// What a config declares and uses, by place: the index the operations and an editor's
+// navigation (definition, references, hover) read.
+
+enum class SymbolKind { kBehaviour, kActuator, kState, kMachine, kLayer, kClass, kInclude };
+
+/// A name in a config's text: its declaration, or a use of it.
+struct Occurrence {
+  SymbolKind kind;
+  std::string scope;  ///< a behaviour's layer, a state's machine
+  std::string name;
+  std::string file;
+  std::size_t begin = 0;  ///< bytes of the name in the file's text
+  std::size_t end = 0;
+  bool definition = false;
+  std::string detail;  ///< a definition's class or type
+};
+
+/// An inhibition item as written.
+struct InhibitionSite {
+  std::string layer;
+  std::string inhibitor;
+  std::string inhibited;
+  bool chaining = false;
+  std::string file;
+  std::size_t begin = 0;  ///< the whole item
+  std::size_t end = 0;
+};
+
+/// A behaviour, or a layer's interface, that binds ports: where a `ports:` entry would go.
+struct PortOwner {
+  std::string layer;
+  std::string behaviour;  ///< empty for the layer's interface
+  std::string file;
+  const Node* node = nullptr;  ///< the behaviour's value, or the layer's mapping (in the Loaded)
+};
+
+struct ConfigIndex {
+  std::vector<Occurrence> occurrences;  ///< in the order of the files and their text
+  std::vector<InhibitionSite> inhibitions;
+  std::vector<PortOwner> port_owners;
+};
+
+/// Indexes the files of `loaded` (which must outlive the index); `registry`, the one it was
+/// loaded with, tells which state params plan states (plans_states).
+ConfigIndex index_config(const Loaded& loaded, const Registry* registry);
+
+/// Whether a state class's param names states to plan (scripted's append: and prepend:): one
+/// declared with the queue's entry schema, so that its items are the queue's, in the state's
+/// machine.
+bool plans_states(const ParamSpec& param);
+
+/// Renames what `symbol` names (its declaration and every use) to `name`; an actuator's rename
+/// also adds the `ports:` entries that keep ports bound to it by name bound. Refused when `name`
+/// is not an identifier or is taken, or when which ports bind by name is not known.
+EditResult rename_symbol(const Loaded& loaded, const ConfigIndex& index, const Occurrence& symbol,
+                         const std::string& name);
+
+/// `result` checked by loading the config with its edits (load_edited, into `registry`): when
+/// that reports an error and `loaded` had none, the edits are withdrawn and the result refused
+/// with the first error. It catches a use of a name no operation knows how to follow (an
+/// actuator named in a scripted behaviour's `writes:`), rather than leave a config that fails.
+EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
+                   const LoadOptions& options = {});
+
+/// The end of the token at `begin` of `text`: a quoted string with its quotes, or a name.
+std::size_t token_end(const std::string& text, std::size_t begin);
+
+/// Removes the inhibition from the layer's `inhibitions:` (the whole key when it was the only
+/// one), wherever `loaded`'s files declare it.
+EditResult remove_inhibition(const Loaded& loaded, const InhibitionRef& inhibition);
+
+/// Declares the inhibition, chaining (`=>`) or not (`->`): after the last item of the layer's
+/// `inhibitions:` (a line of its own in a block sequence), or the key added with it. Refused
+/// when the layer is not declared or the inhibition already is.
+EditResult add_inhibition(const Loaded& loaded, const InhibitionRef& inhibition, bool chaining);
+
+/// Makes a chaining inhibition (`=>`) non-chaining (`->`) and the other way round.
+EditResult flip_chaining(const Loaded& loaded, const InhibitionRef& inhibition);
+
+/// Sets the param `param` of behaviour `behaviour` of layer `layer` to `value`, written as it is
+/// to be in the file (`0.6`, `true`, `"text"`, `[1, 2]`): the value replaced where the param is
+/// written, else the param added to `params:` (which is added when missing). A value written as
+/// a block collection is refused: replacing its lines is not an edit of one value.
+EditResult set_param(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
+                     const std::string& param, const std::string& value);
+
+/// Adds `entry` (`key: value`, as it is to be written) to the mapping `node` of `file`: before
+/// a flow mapping's closing brace, else as a line of its own after the last line of the block
+/// mapping, at its keys' indentation. Refused when the mapping's text is not where `node` says.
+EditResult add_entry(const SourceFile& file, const Node& node, const std::string& entry);
+
+/// The byte offset of a 1-based line and code-point column of `text` (clamped to the line).
+std::size_t offset_of(const std::string& text, int line, int column);
+
+/// A config loaded again with edits applied, before anything is written.
+struct EditedConfig {
+  /// The edited texts, which the load read through (declared first: destroyed after `loaded`).
+  std::unique_ptr<Overlay> texts;
+  Loaded loaded;
+};
+
+/// The config of `loaded` loaded again with `edits` applied to the texts it read (files it did
+/// not read come from the disk): the diagnostics, model and program the edits would give.
+/// `options.source` is replaced; the plugins are loaded into `registry` again.
+EditedConfig load_edited(const Loaded& loaded, const std::vector<TextEdit>& edits,
+                         Registry& registry, LoadOptions options = {});
+
+/// `text` (of `file`) with the edits of `file` applied; they must not overlap.
+std::string apply_edits(const std::string& text, const std::string& file,
+                        const std::vector<TextEdit>& edits);
+
+}  // namespace arbiter
