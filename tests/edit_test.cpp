@@ -461,12 +461,14 @@ TEST_CASE("renaming each name of each shipped config renames every use and nothi
             checked(loaded, rename_symbol(loaded, index, symbol, name), check);
         if (!result.ok()) {
           // The uses no operation follows, refused with the reason: an actuator named in a
-          // scripted behaviour's writes: or bound by name to a state's port, a state a class
-          // plans by a name written in its C++ (the soccer goalie's).
+          // scripted behaviour's writes:, bound by name to a state's port or named in a class's
+          // own params (the DDS bridge's topics:), a state a class plans by a name written in
+          // its C++ (the soccer goalie's).
           INFO(result.refused);
           const bool actuator = symbol.kind == SymbolKind::kActuator &&
                                 (contains(result.refused, "is not an actuator of layer") ||
-                                 contains(result.refused, "a state has no ports:"));
+                                 contains(result.refused, "a state has no ports:") ||
+                                 contains(result.refused, "is neither an actuator nor a sensor"));
           const bool state =
               symbol.kind == SymbolKind::kState && (contains(result.refused, "does not declare") ||
                                                     contains(result.refused, "has no state"));
