@@ -1,0 +1,87 @@
+"""Arbiter, the data-driven behaviour engine, from Python (docs/python.md).
+
+    import arbiter
+    program = arbiter.load("configs/paper/walk_and_kick.yaml")
+    manager = program.manager()
+    manager.step(10)
+    manager.levels("kick_ball")   # {'activation': ..., 'requested': ..., 'active': ...}
+"""
+
+import os as _os
+
+from ._arbiter import Diagnostic, Manager, Program
+
+__all__ = ["ConfigError", "Diagnostic", "Manager", "Program", "load"]
+
+
+class ConfigError(Exception):
+    """A config that does not load. str() is what `arbiter validate` prints for it (every
+    diagnostic with its place, source line and notes, then the counts); `diagnostics` holds them
+    as Diagnostic objects (severity, code, file, line, column, message, notes)."""
+
+    def __init__(self, text, diagnostics):
+        super().__init__(text)
+        self.text = text
+        self.diagnostics = list(diagnostics)
+
+    def __str__(self):
+        return self.text
+
+
+def _path_argument(function, name, value):
+    if isinstance(value, (str, _os.PathLike)):
+        return _os.fspath(value)
+    raise TypeError(f"{function}(): {name} must be a path (str or os.PathLike), "
+                    f"not {type(value).__name__}")
+
+
+def _paths_argument(function, name, value):
+    if isinstance(value, (str, _os.PathLike)):
+        value = [value]
+    try:
+        items = list(value)
+    except TypeError:
+        raise TypeError(f"{function}(): {name} must be a list of directories, "
+                        f"not {type(value).__name__}") from None
+    return [_path_argument(function, name, item) for item in items]
+
+
+def load(path, *, plugin_path=(), strict=False):
+    """The program of the config at `path`, or ConfigError carrying every diagnostic.
+
+    `plugin_path` adds plugin directories (as `--plugin-path`; ARBITER_PLUGIN_PATH and the
+    default directories are searched too); `strict` makes warnings errors (as `--strict`)."""
+    path = _path_argument("load", "path", path)
+    plugin_path = _paths_argument("load", "plugin_path", plugin_path)
+    if not isinstance(strict, bool):
+        raise TypeError(f"load(): strict must be a bool, not {type(strict).__name__}")
+    return _arbiter._load(path, plugin_path, strict)
+
+
+def _manager(self):
+    """A new manager running this config (loaded again: the Program stays as it is)."""
+    return Manager(self)
+
+
+def _repr_svg_(self):
+    """The graph as SVG for Jupyter, through Graphviz's `dot` when it is installed (None
+    otherwise: Jupyter then shows the text)."""
+    import shutil
+    import subprocess
+
+    dot = shutil.which("dot")
+    if dot is None:
+        return None
+    done = subprocess.run([dot, "-Tsvg"], input=self.to_dot(), capture_output=True, text=True)
+    return done.stdout if done.returncode == 0 else None
+
+
+def _program_repr(self):
+    return f"<arbiter.Program {self.name!r} from {self.path!r}>"
+
+
+Program.manager = _manager
+Program._repr_svg_ = _repr_svg_
+Program.__repr__ = _program_repr
+
+from . import _arbiter  # noqa: E402  (after the names above: _arbiter raises ConfigError)

@@ -1,0 +1,7 @@
+#include "module.hpp"
+
+namespace arbiter::python {
+
+void bind_recording(py::module_&) {}
+
+}  // namespace arbiter::python
