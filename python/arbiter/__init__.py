@@ -9,9 +9,10 @@
 
 import os as _os
 
-from ._arbiter import Diagnostic, Manager, Program
+from ._arbiter import Diagnostic, Manager, Program, Recording
 
-__all__ = ["ConfigError", "Diagnostic", "Manager", "Program", "load"]
+__all__ = ["ConfigError", "Diagnostic", "Manager", "Program", "Recording", "load",
+           "open_recording"]
 
 
 class ConfigError(Exception):
@@ -80,6 +81,33 @@ def _program_repr(self):
     return f"<arbiter.Program {self.name!r} from {self.path!r}>"
 
 
+def open_recording(path):
+    """The trace (`arbiter run --trace`, Manager.trace()) or recording (`--record`, MCAP) at
+    `path`, read as `arbiter replay` and `diff` read it. A file that is not one raises
+    ValueError with the place and the reason."""
+    return Recording(_path_argument("open_recording", "path", path))
+
+
+def _to_dataframe(self):
+    """Every step of the file as a pandas DataFrame: one row per step (indexed by step), a column
+    per behaviour level (`layer/name.activation`, `.requested`, `.active`), per actuator
+    (`name`, or `name[i]` per component of a vector), per state machine (`name.state`,
+    `name.status`), and `t` when the run was timed. A level or value missing at a step (a
+    reload added it) is NaN, False or None. The file is read again from its start."""
+    import warnings
+
+    import numpy
+    import pandas
+
+    names, arrays, truncated = self._columns()
+    if truncated:
+        warnings.warn(f"{self.path}: {truncated}", stacklevel=2)
+    columns = dict(zip(names, arrays))
+    steps = columns.pop("step", numpy.zeros(0))
+    return pandas.DataFrame(columns, index=pandas.Index(steps.astype(numpy.int64), name="step"))
+
+
+Recording.to_dataframe = _to_dataframe
 Program.manager = _manager
 Program._repr_svg_ = _repr_svg_
 Program.__repr__ = _program_repr
