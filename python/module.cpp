@@ -30,12 +30,16 @@ std::shared_ptr<Session> make_session(const std::string& path,
 std::unique_ptr<PyProgram> load_checked(const std::string& path,
                                         const std::vector<std::string>& plugin_path, bool strict) {
   auto session = make_session(path, plugin_path, strict);
+  Diagnostics diagnostics;
+  register_python_plugins(session->registry, path, diagnostics);
   Loaded loaded = load_config(path, session->registry, session->options);
-  if (!loaded.program) raise_config_error(loaded.diagnostics);
+  diagnostics.append(loaded.diagnostics);
+  diagnostics.sort();
+  if (!loaded.program || diagnostics.has_errors()) raise_config_error(diagnostics);
   auto result = std::make_unique<PyProgram>();
   result->session = std::move(session);
   result->program = std::move(*loaded.program);
-  result->warnings = std::move(loaded.diagnostics);
+  result->warnings = std::move(diagnostics);
   return result;
 }
 
@@ -57,6 +61,7 @@ PYBIND11_MODULE(_arbiter, m) {
   m.doc() = "The Arbiter behaviour engine (docs/python.md). Use the package `arbiter`.";
 
   bind_diagnostics(m);
+  bind_plugins(m);
 
   py::class_<PyProgram>(m, "Program",
                         "A config loaded and compiled: its layers, behaviours, actuators and state "

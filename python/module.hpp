@@ -38,7 +38,13 @@ std::string validate_text(const Diagnostics& diagnostics);
 /// Raises arbiter.ConfigError carrying `diagnostics` (its text validate_text()).
 [[noreturn]] void raise_config_error(const Diagnostics& diagnostics);
 
+/// Imports the Python modules a config's `plugins:` names as `{python: MODULE}` and registers
+/// their behaviour classes (plugins.cpp); what fails is reported at the module's name.
+void register_python_plugins(Registry& registry, const std::string& config,
+                             Diagnostics& diagnostics);
+
 void bind_diagnostics(py::module_& m);
+void bind_plugins(py::module_& m);
 void bind_manager(py::module_& m);
 void bind_recording(py::module_& m);
 void bind_scenario(py::module_& m);

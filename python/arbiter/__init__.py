@@ -9,9 +9,9 @@
 
 import os as _os
 
-from ._arbiter import Diagnostic, Manager, Program, Recording
+from ._arbiter import Context, Diagnostic, Manager, Program, Recording
 
-__all__ = ["ConfigError", "Diagnostic", "Manager", "Program", "Recording", "load",
+__all__ = ["Behaviour", "ConfigError", "Context", "Diagnostic", "Manager", "Program", "Recording", "load",
            "open_recording"]
 
 
@@ -27,6 +27,37 @@ class ConfigError(Exception):
 
     def __str__(self):
         return self.text
+
+
+class Behaviour:
+    """The base of a behaviour class written in Python. A config uses it by `name` once its
+    module is listed as `plugins: [{python: MODULE}]` (docs/python.md).
+
+    Declare, as class attributes: `name` ("py.KickBall"); `params`, a dict of param names to a
+    default (bool, int, float, str or a list of floats; its type is the param's) or to one of
+    those types (a required param); `inputs` and `outputs`, dicts of port names to value types
+    ("bool", "int", "double", "string", "vec2", "vec3"), bound as a C++ class's ports are. The
+    docstring is the class's description. Params are set as attributes of each instance before
+    its first call.
+
+    Callbacks, each given a Context: activation(ctx) (required: the requested level),
+    update(ctx), execute(ctx) (ctx.write(port, value), ctx.activation) and inhibited(ctx).
+    An exception is a fault of the behaviour, as a C++ exception is (docs/robustness.md)."""
+
+    name = None
+    params = {}
+    inputs = {}
+    outputs = {}
+
+    def activation(self, ctx):
+        raise NotImplementedError(f"{type(self).__name__} must define activation(self, ctx)")
+
+
+def _classes_in(module):
+    """The Behaviour subclasses with a name that `module` defines, in definition order."""
+    return [value for value in vars(module).values()
+            if isinstance(value, type) and issubclass(value, Behaviour) and value is not Behaviour
+            and value.__module__ == module.__name__ and value.name]
 
 
 def _path_argument(function, name, value):
