@@ -59,6 +59,13 @@ class PyBehaviour final : public Behaviour {
     context_.owner = this;
   }
   ~PyBehaviour() override {
+    // A program may be freed by a thread that does not hold the GIL (a reload's retiring one),
+    // or after the interpreter is gone (then the objects go with it).
+    if (Py_IsInitialized() == 0) {
+      instance_.release();
+      context_object_.release();
+      return;
+    }
     py::gil_scoped_acquire gil;
     instance_ = py::object();
     context_object_ = py::object();
