@@ -19,9 +19,6 @@ namespace arbiter::python {
 
 namespace {
 
-// Ordered: the columns come in the trace's order, each layer's behaviours in execution order.
-using Json = nlohmann::ordered_json;
-
 [[noreturn]] void raise_bad_file(const TraceSource& source) {
   throw py::value_error(source.error() ? format(*source.error()) : "unreadable recording");
 }
@@ -78,24 +75,6 @@ class Columns {
     c.texts.push_back(std::move(value));
     c.has_text.push_back(1);
   }
-  /// A value of an actuator: a number or flag is one column, a vector one per component.
-  void value(const std::string& name, const Json& value) {
-    if (value.is_boolean()) {
-      flag(name, value.get<bool>());
-    } else if (value.is_number()) {
-      number(name, value.get<double>());
-    } else if (value.is_string()) {
-      text(name, value.get<std::string>());
-    } else if (value.is_array() && !value.empty() &&
-               std::all_of(value.begin(), value.end(),
-                           [](const Json& v) { return v.is_number(); })) {
-      for (std::size_t i = 0; i < value.size(); ++i) {
-        number(fmt::format("{}[{}]", name, i), value[i].get<double>());
-      }
-    } else {
-      text(name, value.dump());
-    }
-  }
   /// Ends a row: every column it did not set gets the missing value.
   void end_row() {
     ++rows_;
@@ -125,52 +104,97 @@ class Columns {
   std::size_t rows_ = 0;
 };
 
-void add_step(const Json& record, Columns& columns) {
-  columns.number("step", record.at("step").get<double>());
-  if (const auto t = record.find("t"); t != record.end() && t->is_number()) {
-    columns.number("t", t->get<double>());
+/// Fills one row of `columns` from a step record as it is parsed (a SAX handler: no tree is
+/// built): the record's fields in the order the trace writes them, docs/semantics.md.
+class StepHandler final : public nlohmann::json_sax<nlohmann::json> {
+ public:
+  explicit StepHandler(Columns& columns) : columns_(columns) {}
+
+  bool null() override { return element(); }
+  bool boolean(bool value) override {
+    if (const std::string* name = column_name()) {
+      columns_.flag(*name, value);
+    }
+    return element();
   }
-  if (const auto layers = record.find("layers"); layers != record.end() && layers->is_object()) {
-    std::string name;
-    for (const auto& [layer, behaviours] : layers->items()) {
-      if (!behaviours.is_object()) continue;
-      for (const auto& [behaviour, levels] : behaviours.items()) {
-        if (!levels.is_object()) continue;
-        name = layer + "/" + behaviour;
-        for (const char* level : {"activation", "requested"}) {
-          const auto found = levels.find(level);
-          if (found != levels.end() && found->is_number()) {
-            columns.number(name + "." + level, found->get<double>());
-          }
-        }
-        const auto active = levels.find("active");
-        if (active != levels.end() && active->is_boolean()) {
-          columns.flag(name + ".active", active->get<bool>());
-        }
+  bool number_integer(number_integer_t value) override {
+    return number(static_cast<double>(value));
+  }
+  bool number_unsigned(number_unsigned_t value) override {
+    return number(static_cast<double>(value));
+  }
+  bool number_float(number_float_t value, const string_t&) override { return number(value); }
+  bool string(string_t& value) override {
+    if (const std::string* name = column_name()) columns_.text(*name, std::move(value));
+    return element();
+  }
+  bool binary(binary_t&) override { return element(); }
+  bool start_object(std::size_t) override { return open(false); }
+  bool end_object() override { return close(); }
+  bool start_array(std::size_t) override { return open(true); }
+  bool end_array() override { return close(); }
+  bool key(string_t& key) override {
+    open_.back().key = std::move(key);
+    return true;
+  }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+    return false;  // the reader has checked the record: this does not happen
+  }
+
+ private:
+  struct Open {
+    bool array = false;
+    std::string key;          // in an object: the key of the value being read
+    std::size_t element = 0;  // in an array: the index of the value being read
+  };
+
+  bool number(double value) {
+    if (const std::string* name = column_name()) columns_.number(*name, value);
+    return element();
+  }
+  bool open(bool array) {
+    open_.push_back({array, {}, 0});
+    return true;
+  }
+  bool close() {
+    open_.pop_back();
+    return element();
+  }
+  /// After a value: the next one of an array has the next index.
+  bool element() {
+    if (!open_.empty() && open_.back().array) ++open_.back().element;
+    return true;
+  }
+  bool at(std::size_t depth, const char* key) const {
+    return !open_[depth].array && open_[depth].key == key;
+  }
+  /// The column of the scalar being read, or nullptr when it is no column.
+  const std::string* column_name() {
+    const std::size_t depth = open_.size();
+    if (depth == 1 && (at(0, "step") || at(0, "t"))) return &open_[0].key;
+    if (depth == 4 && at(0, "layers") && !open_[3].array &&
+        (at(3, "activation") || at(3, "requested") || at(3, "active"))) {
+      name_ = open_[1].key + '/' + open_[2].key + '.' + open_[3].key;
+      return &name_;
+    }
+    if (at(0, "actuators") && depth >= 3 && at(2, "value")) {
+      if (depth == 3) return &open_[1].key;
+      if (depth == 4 && open_[3].array) {
+        name_ = open_[1].key + '[' + std::to_string(open_[3].element) + ']';
+        return &name_;
       }
     }
-  }
-  if (const auto actuators = record.find("actuators");
-      actuators != record.end() && actuators->is_object()) {
-    for (const auto& [actuator, entry] : actuators->items()) {
-      const auto value = entry.find("value");
-      if (entry.is_object() && value != entry.end()) columns.value(actuator, *value);
+    if (depth == 3 && at(0, "controllers") && (at(2, "state") || at(2, "status"))) {
+      name_ = open_[1].key + '.' + open_[2].key;
+      return &name_;
     }
+    return nullptr;
   }
-  if (const auto controllers = record.find("controllers");
-      controllers != record.end() && controllers->is_object()) {
-    for (const auto& [controller, entry] : controllers->items()) {
-      if (!entry.is_object()) continue;
-      for (const char* field : {"state", "status"}) {
-        const auto found = entry.find(field);
-        if (found != entry.end() && found->is_string()) {
-          columns.text(controller + "." + field, found->get<std::string>());
-        }
-      }
-    }
-  }
-  columns.end_row();
-}
+
+  Columns& columns_;
+  std::vector<Open> open_;
+  std::string name_;
+};
 
 class PyRecording {
  public:
@@ -200,7 +224,9 @@ class PyRecording {
       py::gil_scoped_release released;
       while (source->next(record)) {
         if (record.kind != TraceRecord::Kind::kStep) continue;
-        add_step(Json::parse(record.text), columns);
+        StepHandler handler(columns);
+        nlohmann::json::sax_parse(record.text, &handler);
+        columns.end_row();
       }
     }
     if (source->error()) raise_bad_file(*source);

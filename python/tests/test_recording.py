@@ -36,8 +36,9 @@ def test_the_dataframe_has_a_row_per_step_and_a_column_per_level_and_component(t
     frame = arbiter.open_recording(path).to_dataframe()
     assert list(frame.index) == list(range(1, 21))
     assert frame.index.name == "step"
-    assert list(frame.columns[:3]) == ["control/kick_ball.activation",
-                                       "control/kick_ball.requested", "control/kick_ball.active"]
+    # In the trace's order: each layer's behaviours in execution order.
+    assert list(frame.columns[:3]) == ["control/kick_ball.requested",
+                                       "control/kick_ball.activation", "control/kick_ball.active"]
     assert frame["control/kick_ball.active"].dtype == bool
     for step, (levels, actuators) in enumerate(seen, start=1):
         row = frame.loc[step]
