@@ -60,9 +60,9 @@ layers:
 
 @pytest.fixture
 def soccer_with_python_kick(tmp_path, source):
-    (tmp_path / "kick.py").write_text(KICK_MODULE)
+    (tmp_path / "py_kick.py").write_text(KICK_MODULE)
     config = (source / "configs/soccer/walk_and_kick_inputs.yaml").read_text()
-    config = config.replace("plugins: [soccer]", "plugins: [soccer, {python: kick}]")
+    config = config.replace("plugins: [soccer]", "plugins: [soccer, {python: py_kick}]")
     config = config.replace("kick_ball: {type: soccer.KickBall}",
                             "kick_ball: {type: py.KickBall, params: {distance: 0.5, strength: 2}}")
     assert "py.KickBall" in config
@@ -148,7 +148,7 @@ def test_a_bad_port_type_is_reported(tmp_path):
 def test_outside_python_the_plugin_is_a_located_error(cli, soccer_with_python_kick):
     validate = cli("validate", soccer_with_python_kick)
     assert validate.returncode == 1
-    assert "error[python-plugin-unavailable]: plugin 'kick' is a Python module" in validate.stderr
+    assert "error[python-plugin-unavailable]: plugin 'py_kick' is a Python module" in validate.stderr
 
 
 def test_a_plugin_entry_that_is_neither_is_a_located_error(tmp_path):
