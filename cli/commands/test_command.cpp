@@ -49,18 +49,6 @@ bool expand(const std::string& path, std::vector<std::string>& files, std::ostre
   return true;
 }
 
-std::string indented(const std::string& text) {
-  std::string out;
-  bool line_start = true;
-  for (char c : text) {
-    if (line_start && c != '\n') out += "    ";
-    out += c;
-    line_start = c == '\n';
-  }
-  if (!out.empty() && out.back() != '\n') out += '\n';
-  return out;
-}
-
 }  // namespace
 
 std::string junit_xml(const std::vector<ScenarioResult>& results) {
@@ -143,11 +131,7 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
     }
     // Load warnings and the reasons a test could not run, as `arbiter validate` prints them, under
     // the test's line and in the same stream, so that they stay in order however it is read.
-    out << format(result.diagnostics, command.format);
-    for (const auto& failure : result.failures) {
-      out << format(failure.diagnostic, command.format);
-      out << indented(printable(failure.explanation, true));
-    }
+    out << format_failures(result, command.format);
     out.flush();
     results.push_back(std::move(result));
   }

@@ -144,7 +144,21 @@ void ModelBuilder::read_file(const Node& root, bool is_root) {
     }
     if (const Node* plugins = fields.optional("plugins")) {
       for_each_item(*plugins, "plugins", [&](const Node& item) {
-        if (auto text = read_string(item, "a plugin name or path")) {
+        // `{python: MODULE}`: a Python module's classes, which the Python module `arbiter`
+        // registers before the load (load_plugins() reports it anywhere else).
+        if (item.is_mapping()) {
+          const Node* module = item.find("python");
+          if (module == nullptr || item.size() != 1) {
+            diagnostics_.error(item.location(), "wrong-type",
+                               fmt::format("expected a plugin name or path, or {{python: MODULE}}, "
+                                           "found {}",
+                                           item.describe()));
+          } else {
+            read_string(*module, "a Python module name");
+          }
+          return;
+        }
+        if (auto text = read_string(item, "a plugin name or path, or {python: MODULE}")) {
           model_.plugins.push_back({*text, item.location()});
         }
       });

@@ -185,12 +185,36 @@ bool load_plugin(const std::string& name, const SourceLocation& where,
   return diagnostics.error_count() == errors;
 }
 
+namespace {
+
+/// A `{python: MODULE}` plugin is Python code: the Python module `arbiter` imports it and
+/// registers its classes under the library name "python:MODULE" (Registry::keep_loaded) before
+/// it loads the config (python/plugins.cpp). Anywhere else (the CLI) it is reported, at the
+/// module's name.
+bool python_plugin_loaded(const Node& module, const Registry& registry, Diagnostics& diagnostics) {
+  if (!module.is_scalar() || module.text().empty()) return true;  // validation reports it
+  if (registry.has_library("python:" + module.text())) return true;
+  diagnostics
+      .error(module.location(), "python-plugin-unavailable",
+             fmt::format("plugin '{}' is a Python module: its classes exist only when the config "
+                         "is loaded from Python",
+                         module.text()))
+      .notes.push_back("load it with the Python module: arbiter.load(\"CONFIG\") (docs/python.md)");
+  return false;
+}
+
+}  // namespace
+
 bool load_plugins(const Node& root, const PluginOptions& options, Registry& registry,
                   Diagnostics& diagnostics) {
   const Node* plugins = root.is_mapping() ? root.find("plugins") : nullptr;
   if (plugins == nullptr || !plugins->is_sequence()) return true;  // validation reports the rest
   bool ok = true;
   for (const auto& item : plugins->items()) {
+    if (const Node* module = item.is_mapping() ? item.find("python") : nullptr) {
+      ok = python_plugin_loaded(*module, registry, diagnostics) && ok;
+      continue;
+    }
     if (!item.is_scalar() || item.text().empty()) continue;
     ok = load_plugin(item.text(), item.location(), root.location().file, options, registry,
                      diagnostics) &&

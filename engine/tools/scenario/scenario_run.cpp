@@ -299,4 +299,29 @@ ScenarioResult run_scenario_file(const std::string& path, Registry& registry,
   return result;
 }
 
+namespace {
+
+std::string indented(const std::string& text) {
+  std::string out;
+  bool line_start = true;
+  for (char c : text) {
+    if (line_start && c != '\n') out += "    ";
+    out += c;
+    line_start = c == '\n';
+  }
+  if (!out.empty() && out.back() != '\n') out += '\n';
+  return out;
+}
+
+}  // namespace
+
+std::string format_failures(const ScenarioResult& result, const FormatOptions& options) {
+  std::string out = format(result.diagnostics, options);
+  for (const auto& failure : result.failures) {
+    out += format(failure.diagnostic, options);
+    out += indented(printable(failure.explanation, true));
+  }
+  return out;
+}
+
 }  // namespace arbiter

@@ -81,4 +81,8 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
 ScenarioResult run_scenario_file(const std::string& path, Registry& registry,
                                  const ScenarioOptions& options = {});
 
+/// What `arbiter test` prints under a test's PASS/FAIL/INVALID line: its diagnostics, then each
+/// failed expectation at its place followed by its explanation, indented.
+std::string format_failures(const ScenarioResult& result, const FormatOptions& options = {});
+
 }  // namespace arbiter
