@@ -16,6 +16,7 @@ const require = createRequire(path.join(process.env.NODE_MODULES, "noop.js"));
 const { McapIndexedReader } = require("@mcap/core");
 const { decompress } = require("fzstd");
 const Ajv2020 = require("ajv/dist/2020").default;
+const foxgloveSchemas = require("@foxglove/schemas/jsonschema");
 
 const work = mkdtempSync(path.join(tmpdir(), "arbiter-foxglove-"));
 test.after(() => rmSync(work, { recursive: true, force: true }));
@@ -92,7 +93,8 @@ for (const [demo, run] of Object.entries(demos)) {
   test(`${demo}: every schema passes Lichtblick's parser`, () => {
     const topics = [...run.channels.values()].map((c) => `${c.topic} ${c.schemaName}`).sort();
     assert.deepEqual(topics, ["/arbiter/header arbiter.Header", "/arbiter/inputs arbiter.Inputs",
-                              "/arbiter/log foxglove.Log", "/arbiter/step arbiter.Step"]);
+                              "/arbiter/log foxglove.Log", "/arbiter/scene foxglove.SceneUpdate",
+                              "/arbiter/step arbiter.Step"]);
     for (const channel of run.channels.values()) {
       assert.doesNotThrow(() => lichtblickFields(channel.schema, channel.schemaName), channel.topic);
     }
@@ -157,6 +159,75 @@ for (const [demo, run] of Object.entries(demos)) {
     }
   });
 }
+
+// The entity of the "field" frame in each scene message, with the step it was drawn in.
+function fieldScenes(run) {
+  const stepAt = new Map(run.of("/arbiter/step").map((m) => [m.logTime, m.data.step]));
+  return run.of("/arbiter/scene").map((m) => {
+    const entity = m.data.entities.find((e) => e.id === "field");
+    return { step: stepAt.get(m.logTime), entity, data: m.data };
+  });
+}
+
+function ballOf(entity) {
+  // The ball: the small filled disc.
+  const ball = entity.cylinders.find((c) => c.size.x < 0.2 && c.color.g < 0.6);
+  return ball.pose.position;
+}
+
+for (const [demo, run] of Object.entries(demos)) {
+  test(`${demo}: the scene is Foxglove's SceneUpdate, every message valid against @foxglove/schemas`, () => {
+    const scene = [...run.channels.values()].find((c) => c.topic === "/arbiter/scene");
+    // The channel's schema is Foxglove's own, as the package publishes it.
+    assert.deepEqual(scene.schema, foxgloveSchemas.SceneUpdate);
+    const ajv = new Ajv2020({ strict: false, allErrors: true });
+    const validate = ajv.compile(foxgloveSchemas.SceneUpdate);
+    const scenes = fieldScenes(run);
+    assert.equal(scenes.length, run.of("/arbiter/step").filter((m) => !m.data.safe).length);
+    for (const { data } of scenes) {
+      assert.ok(validate(data), `${ajv.errorsText(validate.errors)}`);
+      // A message replaces the whole picture.
+      assert.deepEqual(data.deletions.map((d) => d.type), [1]);
+    }
+  });
+
+  test(`${demo}: the scene draws the field, the goals, the robot and the ball, which moves`, () => {
+    const scenes = fieldScenes(run);
+    for (const { step, entity } of scenes) {
+      assert.ok(entity, `step ${step}: no field`);
+      assert.equal(entity.frame_id, "field");
+      const outline = entity.lines.find((l) => l.type === 1 && l.points.length === 4);
+      assert.deepEqual(outline.points.map((p) => [p.x, p.y]), [[-4.5, -3], [4.5, -3], [4.5, 3], [-4.5, 3]]);
+      const goals = entity.lines.filter((l) => l.type === 0 && l.points.length === 4);
+      assert.deepEqual(goals.map((g) => g.points[0].x).sort(), [-4.5, 4.5]);
+      assert.ok(entity.arrows.length >= 1, `step ${step}: no heading`);
+      assert.ok(entity.cylinders.length >= 2, `step ${step}: robot and ball`);
+    }
+    const balls = scenes.map((s) => ballOf(s.entity));
+    const moved = Math.hypot(balls.at(-1).x - balls[0].x, balls.at(-1).y - balls[0].y);
+    assert.ok(moved > 0.5, `the ball moved ${moved} m`);
+    console.log(`${demo}: ${scenes.length} scene messages, the ball moved ${moved.toFixed(2)} m`);
+  });
+}
+
+test("soccer: the scene shows the kick in the step the trace reports it", () => {
+  const kicked = demos.soccer.of("/arbiter/step")
+    .filter((m) => (m.data.reported ?? []).some((r) => r.text === "ball kicked")).map((m) => m.data.step);
+  assert.ok(kicked.length > 0);
+  const texts = fieldScenes(demos.soccer).filter((s) => s.entity.texts.some((t) => t.text === "kick"));
+  assert.deepEqual(texts.map((s) => s.step), kicked);
+  // The ball rolls away from the kick: an arrow from the ball along its motion.
+  const after = fieldScenes(demos.soccer).find((s) => s.step === kicked[0] + 1);
+  assert.ok(after.entity.arrows.length >= 2);
+});
+
+test("goalie: the scene shows the shot and the goalie down after its dive", () => {
+  const scenes = fieldScenes(demos.goalie);
+  const shot = scenes.find((s) => s.entity.texts.some((t) => t.text === "shot"));
+  assert.ok(shot, "no shot drawn");
+  // The goalie down: its body a thick line from its centre.
+  assert.ok(scenes.some((s) => s.step > shot.step && s.entity.lines.some((l) => l.thickness === 0.2)));
+});
 
 test("soccer: the step schema names each behaviour, actuator and their types", () => {
   const step = [...demos.soccer.channels.values()].find((c) => c.topic === "/arbiter/step");

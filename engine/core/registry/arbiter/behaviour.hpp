@@ -14,6 +14,7 @@
 
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/document.hpp"
+#include "arbiter/scene.hpp"
 #include "arbiter/value.hpp"
 
 namespace arbiter {
@@ -95,6 +96,8 @@ struct StepData {
   /// Counts what happens in the step, reports and state machine events alike (from 0 in every
   /// step), so that observers can tell them in the order they happened.
   std::uint32_t sequence = 0;
+  /// What code drew this step (StepContext::scene), in buffers sized at load.
+  SceneData scene;
 };
 
 template <typename T>
@@ -135,6 +138,8 @@ class StepContext {
     ++data_->event_count;
     ++data_->sequence;
   }
+  /// Draws the world this step, in `frame` (copied): see Scene. Allocation-free.
+  Scene scene(const char* frame) const { return Scene(data_->scene, frame); }
 
  protected:
   friend class Controller;  // numbers its events in the step's sequence
