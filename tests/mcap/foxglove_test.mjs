@@ -319,3 +319,44 @@ test("a hot reload that adds a behaviour adds a step channel with its schema", a
   assert.ok(on(after).every((m) => "wave" in m.data.layers.control));
   assert.ok(on(before).every((m) => !("wave" in m.data.layers.control)));
 });
+
+test("the shipped soccer layout's panels name topics, message paths and a frame of a soccer recording", () => {
+  const layout = JSON.parse(readFileSync(path.join(process.env.ARBITER_SOURCE, "docs/layouts/soccer.json"), "utf8"));
+  const run = demos.soccer;
+  const channel = (topic) => [...run.channels.values()].find((c) => c.topic === topic);
+  // Every panel the layout places has its config, and every config is placed.
+  const placed = [];
+  const walk = (node) => (typeof node === "string" ? placed.push(node) : (walk(node.first), walk(node.second)));
+  walk(layout.layout);
+  assert.deepEqual(placed.sort(), Object.keys(layout.configById).sort());
+  const kinds = placed.map((id) => id.split("!")[0]).sort();
+  assert.deepEqual(kinds, ["3D", "Plot", "Plot", "RosOut"]);
+
+  let plotted = 0;
+  for (const [id, config] of Object.entries(layout.configById)) {
+    if (id.startsWith("3D!")) {
+      for (const topic of Object.keys(config.topics)) {
+        assert.equal(channel(topic)?.schemaName, "foxglove.SceneUpdate", topic);
+      }
+      // The frame it follows is the one the soccer world draws in.
+      const frames = new Set(run.of("/arbiter/scene").flatMap((m) => m.data.entities.map((e) => e.frame_id)));
+      assert.ok(frames.has(config.followTf), `no frame ${config.followTf} in ${[...frames]}`);
+    } else if (id.startsWith("RosOut!")) {
+      assert.equal(channel(config.topicToRender)?.schemaName, "foxglove.Log");
+    } else {
+      for (const { value } of config.paths) {
+        const [, topic, field] = value.match(/^(\/[\w/]+)\.(.+)$/);
+        const c = channel(topic);
+        assert.ok(c, `${value}: no topic ${topic}`);
+        const type = lichtblickFields(c.schema, c.schemaName).get(field.replace(/\[\d+\]/g, "[]"));
+        assert.equal(type, "float64", `${value}: a ${type}`);
+        ++plotted;
+      }
+    }
+  }
+  assert.equal(plotted, 7);
+  // The activations plotted are the config's behaviours, all of them.
+  const step = run.of("/arbiter/step")[0].data;
+  const plots = layout.configById["Plot!activations"].paths.map((p) => p.value.split(".")[3]).sort();
+  assert.deepEqual(plots, Object.keys(step.layers.control).sort());
+});
