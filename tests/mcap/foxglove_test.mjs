@@ -227,6 +227,17 @@ test("goalie: the scene shows the shot and the goalie down after its dive", () =
   assert.ok(shot, "no shot drawn");
   // The goalie down: its body a thick line from its centre.
   assert.ok(scenes.some((s) => s.step > shot.step && s.entity.lines.some((l) => l.thickness === 0.2)));
+  // While it walks to its pose (walk_to_pose), the pose it walks to: a ring of 0.15 m.
+  const walking = demos.goalie.of("/arbiter/step")
+    .filter((m) => m.data.controllers.goalie.state === "walk_to_pose").map((m) => m.data.step);
+  assert.ok(walking.length > 0);
+  const ring = (l) => {
+    if (l.type !== 1 || l.points.length !== 32) return false;
+    const cx = l.points.reduce((a, p) => a + p.x, 0) / 32, cy = l.points.reduce((a, p) => a + p.y, 0) / 32;
+    return Math.abs(Math.hypot(l.points[0].x - cx, l.points[0].y - cy) - 0.15) < 1e-6;
+  };
+  const targeted = scenes.filter((s) => s.entity.lines.some(ring)).map((s) => s.step);
+  assert.deepEqual(targeted, walking);
 });
 
 test("soccer: the step schema names each behaviour, actuator and their types", () => {

@@ -376,6 +376,7 @@ void append_line(int type, double width, const SceneColor& color, std::size_t co
 
 // A circle's outline, as Foxglove has no circle: a loop of this many points.
 constexpr int kCirclePoints = 32;
+constexpr double kPi = 3.14159265358979323846;
 
 std::string_view cut(const char* text, std::size_t bytes) {
   return {text, strnlen(text, bytes)};
@@ -467,7 +468,7 @@ void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives
             append_line(
                 1, p.x1, p.color, kCirclePoints,
                 [&](std::size_t i) {
-                  const double angle = 2 * M_PI * static_cast<double>(i) / kCirclePoints;
+                  const double angle = 2 * kPi * static_cast<double>(i) / kCirclePoints;
                   return ScenePoint{p.x0 + p.size * std::cos(angle),
                                     p.y0 + p.size * std::sin(angle)};
                 },

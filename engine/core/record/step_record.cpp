@@ -273,11 +273,8 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
     construct_part<Controller::Event>(extras, s.events_at, s.events);
     construct_part<Controller::EventArg>(extras, s.event_args_at, s.event_args);
     construct_part<SnapshotShape::SceneCounts>(extras, s.scene_counts_at, 1);
-    // Left uninitialised (trivial types): only what a step drew is written, and read.
-    std::uninitialized_default_construct_n(reinterpret_cast<ScenePrimitive*>(extras + s.scene_at),
-                                           Manager::kScenePrimitivesPerStep);
-    std::uninitialized_default_construct_n(
-        reinterpret_cast<ScenePoint*>(extras + s.scene_points_at), Manager::kScenePointsPerStep);
+    construct_part<ScenePrimitive>(extras, s.scene_at, Manager::kScenePrimitivesPerStep);
+    construct_part<ScenePoint>(extras, s.scene_points_at, Manager::kScenePointsPerStep);
   }
   if (!s.plain_values) {
     for (const auto& actuator : layout.actuators) {
