@@ -412,3 +412,23 @@ TEST_CASE("drawing beyond a step's room drops and counts, without allocating", "
     CHECK(manager.scene().dropped == 1);  // a polyline of no points
   }
 }
+
+TEST_CASE("a text cut to its room is cut between characters", "[scene]") {
+  ScenePrimitive primitives[2];
+  ScenePoint points[1];
+  detail::SceneData data;
+  data.primitives = primitives;
+  data.primitive_capacity = 2;
+  data.points = points;
+  data.point_capacity = 1;
+  Scene scene(data, "field");
+  std::string long_text;
+  for (int i = 0; i < 30; ++i) long_text += "\xc3\xa9";  // é, two bytes
+  scene.text({0.0, 0.0}, long_text.c_str(), SceneColor{});
+  scene.text({0.0, 0.0}, "kick", SceneColor{});
+  std::string message;
+  append_scene_update(0, primitives, data.primitive_count, points, data.dropped, message);
+  // 39 bytes fit: 19 whole characters, the first byte of the 20th left out.
+  CHECK(message.find("\"text\": \"" + long_text.substr(0, 38) + "\"") != std::string::npos);
+  CHECK(message.find(R"("text": "kick")") != std::string::npos);
+}

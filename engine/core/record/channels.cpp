@@ -378,8 +378,17 @@ void append_line(int type, double width, const SceneColor& color, std::size_t co
 constexpr int kCirclePoints = 32;
 constexpr double kPi = 3.14159265358979323846;
 
+// A frame's or a text's bytes, as Scene copied them: cut to their room, perhaps inside a UTF-8
+// character, whose start is then left out too, so that the JSON stays valid UTF-8.
 std::string_view cut(const char* text, std::size_t bytes) {
-  return {text, strnlen(text, bytes)};
+  std::size_t size = strnlen(text, bytes);
+  if (size + 1 < bytes) return {text, size};
+  std::size_t start = size;  // of the last character
+  while (start > 0 && (static_cast<unsigned char>(text[start - 1]) & 0xC0) == 0x80) --start;
+  if (start == 0) return {text, size};
+  const auto lead = static_cast<unsigned char>(text[start - 1]);
+  const std::size_t length = lead >= 0xF0 ? 4 : lead >= 0xE0 ? 3 : lead >= 0xC0 ? 2 : 1;
+  return {text, start - 1 + length <= size ? size : start - 1};
 }
 
 }  // namespace
