@@ -72,6 +72,11 @@ export class SceneView {
       }
     }
     this.fit(seen);
+    // What did not fit in the step's room is said, not silently left out.
+    const dropped = update.entities[0]?.metadata.find((m) => m.key === 'dropped');
+    this.panel.querySelector('small').textContent =
+        dropped ? `${dropped.value} primitives dropped this step` : 'as the plugins drew it';
+    this.panel.classList.toggle('dropped', !!dropped);
   }
 
   fit(points) {
