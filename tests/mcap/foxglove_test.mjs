@@ -234,7 +234,7 @@ test("goalie: the scene shows the shot and the goalie down after its dive", () =
   const ring = (l) => {
     if (l.type !== 1 || l.points.length !== 32) return false;
     const cx = l.points.reduce((a, p) => a + p.x, 0) / 32, cy = l.points.reduce((a, p) => a + p.y, 0) / 32;
-    return Math.abs(Math.hypot(l.points[0].x - cx, l.points[0].y - cy) - 0.15) < 1e-6;
+    return Math.abs(Math.hypot(l.points[0].x - cx, l.points[0].y - cy) - 0.15) < 1e-5;
   };
   const targeted = scenes.filter((s) => s.entity.lines.some(ring)).map((s) => s.step);
   assert.deepEqual(targeted, walking);

@@ -345,12 +345,18 @@ bool finite_primitive(const ScenePrimitive& p, const ScenePoint* points) {
 
 using Out = std::back_insert_iterator<std::string>;
 
+// A length or a coordinate to the micrometre, a rotation's component to 1e-6: finer is noise
+// (a cosine's last bits), which would make each number twice as long in every message.
+double fine(double value) {
+  return std::round(value * 1e6) / 1e6 + 0.0;  // + 0.0: no "-0"
+}
+
 // foxglove.Pose: at (x, y) on the ground, turned by `yaw` about the vertical.
 void append_pose(double x, double y, double yaw, std::string& out) {
   fmt::format_to(Out(out),
                  R"("pose": {{"position": {{"x": {}, "y": {}, "z": 0}}, "orientation": )"
                  R"({{"x": 0, "y": 0, "z": {}, "w": {}}}}})",
-                 x, y, std::sin(yaw / 2), std::cos(yaw / 2));
+                 fine(x), fine(y), fine(std::sin(yaw / 2)), fine(std::cos(yaw / 2)));
 }
 
 void append_color(const SceneColor& c, std::string& out) {
@@ -364,10 +370,12 @@ void append_line(int type, double width, const SceneColor& color, std::size_t co
                  std::string& out) {
   fmt::format_to(Out(out), R"({{"type": {}, )", type);
   append_pose(0, 0, 0, out);
-  fmt::format_to(Out(out), R"(, "thickness": {}, "scale_invariant": false, "points": [)", width);
+  fmt::format_to(Out(out), R"(, "thickness": {}, "scale_invariant": false, "points": [)",
+                 fine(width));
   for (std::size_t i = 0; i < count; ++i) {
     const ScenePoint at = point(i);
-    fmt::format_to(Out(out), R"({}{{"x": {}, "y": {}, "z": 0}})", i > 0 ? ", " : "", at.x, at.y);
+    fmt::format_to(Out(out), R"({}{{"x": {}, "y": {}, "z": 0}})", i > 0 ? ", " : "", fine(at.x),
+                   fine(at.y));
   }
   out += "], ";
   append_color(color, out);
@@ -450,7 +458,7 @@ void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives
       fmt::format_to(Out(out),
                      R"(, "shaft_length": {}, "shaft_diameter": {}, "head_length": {}, )"
                      R"("head_diameter": {}, )",
-                     length - head, p.size, head, 2.5 * p.size);
+                     fine(length - head), fine(p.size), fine(head), fine(2.5 * p.size));
       append_color(p.color, out);
       out += "}";
     });
@@ -462,7 +470,7 @@ void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives
            fmt::format_to(Out(out),
                           R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
                           R"("top_scale": 1, )",
-                          2 * p.size, 2 * p.size);
+                          fine(2 * p.size), fine(2 * p.size));
            append_color(p.color, out);
            out += "}";
          });
@@ -493,7 +501,8 @@ void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives
       out += "{";
       append_pose(p.x0, p.y0, 0, out);
       fmt::format_to(Out(out),
-                     R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )", p.size);
+                     R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )",
+                     fine(p.size));
       append_color(p.color, out);
       out += R"(, "text": )";
       append_name(cut(p.text, ScenePrimitive::kTextBytes), out);
