@@ -141,7 +141,7 @@ struct FoxgloveServer::Impl {
   bool paced = false;  // set before the run starts: the log times' clock (detail::LogClock)
   std::uint64_t run_start = 0;
   detail::LogClock clock;
-  std::string record, inputs, log, frame;
+  std::string record, inputs, log, scene, frame;
 
   std::atomic<std::size_t> connected{0};
   std::atomic<std::uint64_t> opened{0}, sent{0}, dropped_for_clients{0}, dropped_steps{0};
@@ -246,10 +246,11 @@ struct FoxgloveServer::Impl {
     const auto* step = channel_at(kStepChannel);
     const auto* in = channel_at(kInputsChannel);
     const auto* log_channel = channel_at(kLogChannel);
+    const auto* scene_channel = channel_at(kSceneChannel);
     bool any = false;
     for (const auto& [handle, client] : clients) {
       for (const auto& [subscription, id] : client.subscriptions) {
-        for (const auto* fed : {step, in, log_channel})
+        for (const auto* fed : {step, in, log_channel, scene_channel})
           any = any || (fed != nullptr && id == fed->id);
       }
     }
@@ -381,6 +382,14 @@ struct FoxgloveServer::Impl {
         inputs.clear();
         detail::append_inputs_record(reading->layout, step, inputs);
         broadcast(advertised, time, inputs);
+      }
+      // Only steps that drew, as in a recording: a viewer keeps showing the last picture.
+      if (const auto* advertised = channel_at(kSceneChannel);
+          advertised != nullptr && (step.scene.size() > 0 || step.scene_dropped > 0)) {
+        scene.clear();
+        append_scene_update(time, step.scene.data(), step.scene.size(), step.scene_points.data(),
+                            step.scene_dropped, scene);
+        broadcast(advertised, time, scene);
       }
       detail::for_each_report_log(
           reading->layout, step, time, log,

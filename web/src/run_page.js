@@ -5,6 +5,7 @@ import {ExplainPanel} from './explain.js';
 import {GraphView} from './graph.js';
 import {Controllers, Reported} from './panels.js';
 import {WriteTracker} from './records.js';
+import {SceneView} from './scene.js';
 import {Timelines} from './timeline.js';
 
 export class RunPage {
@@ -20,6 +21,7 @@ export class RunPage {
     });
     this.controllers = new Controllers(document.getElementById('controllers'));
     this.reported = new Reported(document.getElementById('reported'), reportedKept);
+    this.scene = new SceneView(document.getElementById('scene-panel'), document.getElementById('scene'));
     this.timelines = new Timelines(document.getElementById('timeline-rows'), document.getElementById('timeline-range'));
   }
 
@@ -48,6 +50,7 @@ export class RunPage {
     this.graph.show(record);
     this.controllers.show(record);
     this.reported.show(record);
+    this.scene.show(record.scene, record.step);
     this.timelines.draw(this.records, record);
     this.explain.setStep(record.step);
   }

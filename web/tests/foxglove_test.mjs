@@ -103,7 +103,8 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   const advertised = [...channels.values()].sort((a, b) => a.id - b.id);
   assert.deepEqual(advertised.map((channel) => `${channel.topic} ${channel.schemaName}`),
                    ['/arbiter/header arbiter.Header', '/arbiter/step arbiter.Step',
-                    '/arbiter/inputs arbiter.Inputs', '/arbiter/log foxglove.Log']);
+                    '/arbiter/inputs arbiter.Inputs', '/arbiter/log foxglove.Log',
+                    '/arbiter/scene foxglove.SceneUpdate']);
   // The step schema is the config's own: each behaviour a typed field.
   const stepSchema = JSON.parse(advertised[1].schema);
   assert.equal(stepSchema.properties.layers.properties.control.properties.kick_ball
@@ -148,6 +149,8 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   assert.deepEqual(invalid, []);
   assert.ok(received.get('/arbiter/header') >= 1, 'the header is sent to a client that subscribes late');
   assert.ok(received.get('/arbiter/inputs') > 10);
+  // The soccer world draws every step: the picture goes out live as it is recorded.
+  assert.ok(received.get('/arbiter/scene') > 10, 'the scene is published live');
   // What the world reported (the kick) is on /arbiter/log too, at its step's log time: a paced
   // run's, the wall clock.
   await waitFor('the kick reported', () => logs.some((log) => /kick/.test(log.text)), 10000);

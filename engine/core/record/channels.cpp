@@ -2,10 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <typeinfo>
 #include <utility>
 
 #include "arbiter/trace.hpp"
+#include "core/record/scene_update_schema.hpp"
 #include "core/record/step_record.hpp"
 
 namespace arbiter {
@@ -303,6 +307,7 @@ std::vector<Channel> channels(const StepLayout& layout, const std::string& name)
   out[kStepChannel] = {"/arbiter/step", "arbiter.Step", step_schema(layout, name)};
   out[kInputsChannel] = {"/arbiter/inputs", "arbiter.Inputs", inputs_schema(layout, name)};
   out[kLogChannel] = {"/arbiter/log", "foxglove.Log", std::string(kLogSchema)};
+  out[kSceneChannel] = {"/arbiter/scene", "foxglove.SceneUpdate", std::string(kSceneUpdateSchema)};
   return out;
 }
 
@@ -324,6 +329,188 @@ void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view 
   out += R"(, "file": )";
   append_name(file, out);
   fmt::format_to(std::back_inserter(out), R"(, "line": {}}})", line);
+}
+
+namespace {
+
+bool finite_primitive(const ScenePrimitive& p, const ScenePoint* points) {
+  bool ok = std::isfinite(p.x0) && std::isfinite(p.y0) && std::isfinite(p.x1) &&
+            std::isfinite(p.y1) && std::isfinite(p.size) && std::isfinite(p.color.r) &&
+            std::isfinite(p.color.g) && std::isfinite(p.color.b) && std::isfinite(p.color.a);
+  for (std::uint32_t i = 0; ok && i < p.point_count; ++i) {
+    ok = std::isfinite(points[p.point_begin + i].x) && std::isfinite(points[p.point_begin + i].y);
+  }
+  return ok;
+}
+
+using Out = std::back_insert_iterator<std::string>;
+
+// A length or a coordinate to the micrometre, a rotation's component to 1e-6: finer is noise
+// (a cosine's last bits), which would make each number twice as long in every message.
+double fine(double value) {
+  return std::round(value * 1e6) / 1e6 + 0.0;  // + 0.0: no "-0"
+}
+
+// foxglove.Pose: at (x, y) on the ground, turned by `yaw` about the vertical.
+void append_pose(double x, double y, double yaw, std::string& out) {
+  fmt::format_to(Out(out),
+                 R"("pose": {{"position": {{"x": {}, "y": {}, "z": 0}}, "orientation": )"
+                 R"({{"x": 0, "y": 0, "z": {}, "w": {}}}}})",
+                 fine(x), fine(y), fine(std::sin(yaw / 2)), fine(std::cos(yaw / 2)));
+}
+
+void append_color(const SceneColor& c, std::string& out) {
+  fmt::format_to(Out(out), R"("color": {{"r": {}, "g": {}, "b": {}, "a": {}}})", c.r, c.g, c.b,
+                 c.a);
+}
+
+// foxglove.LinePrimitive: a strip (0) or a loop (1) through `count` points given by `point(i)`.
+template <typename Point>
+void append_line(int type, double width, const SceneColor& color, std::size_t count, Point point,
+                 std::string& out) {
+  fmt::format_to(Out(out), R"({{"type": {}, )", type);
+  append_pose(0, 0, 0, out);
+  fmt::format_to(Out(out), R"(, "thickness": {}, "scale_invariant": false, "points": [)",
+                 fine(width));
+  for (std::size_t i = 0; i < count; ++i) {
+    const ScenePoint at = point(i);
+    fmt::format_to(Out(out), R"({}{{"x": {}, "y": {}, "z": 0}})", i > 0 ? ", " : "", fine(at.x),
+                   fine(at.y));
+  }
+  out += "], ";
+  append_color(color, out);
+  out += R"(, "colors": [], "indices": []})";
+}
+
+// A circle's outline, as Foxglove has no circle: a loop of this many points.
+constexpr int kCirclePoints = 32;
+constexpr double kPi = 3.14159265358979323846;
+
+// A frame's or a text's bytes, as Scene copied them: cut to their room, perhaps inside a UTF-8
+// character, whose start is then left out too, so that the JSON stays valid UTF-8.
+std::string_view cut(const char* text, std::size_t bytes) {
+  std::size_t size = strnlen(text, bytes);
+  if (size + 1 < bytes) return {text, size};
+  std::size_t start = size;  // of the last character
+  while (start > 0 && (static_cast<unsigned char>(text[start - 1]) & 0xC0) == 0x80) --start;
+  if (start == 0) return {text, size};
+  const auto lead = static_cast<unsigned char>(text[start - 1]);
+  const std::size_t length = lead >= 0xF0 ? 4 : lead >= 0xE0 ? 3 : lead >= 0xC0 ? 2 : 1;
+  return {text, start - 1 + length <= size ? size : start - 1};
+}
+
+}  // namespace
+
+void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
+                         const ScenePoint* points, std::size_t dropped, std::string& out) {
+  const auto sec = time_ns / 1000000000u, nsec = time_ns % 1000000000u;
+  std::vector<bool> usable(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    usable[i] = finite_primitive(primitives[i], points);
+    if (!usable[i]) ++dropped;
+  }
+  fmt::format_to(
+      Out(out),
+      R"({{"deletions": [{{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 1, "id": ""}}], )"
+      R"("entities": [)",
+      sec, nsec);
+  // One entity per frame, in the order the frames were first drawn in.
+  std::vector<std::string_view> frames;
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto frame = cut(primitives[i].frame, ScenePrimitive::kFrameBytes);
+    if (usable[i] && std::find(frames.begin(), frames.end(), frame) == frames.end()) {
+      frames.push_back(frame);
+    }
+  }
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const auto frame = frames[f];
+    // The primitives of this frame that `wanted`, separated by commas.
+    const auto each = [&](auto wanted, auto append) {
+      bool first = true;
+      for (std::size_t i = 0; i < count; ++i) {
+        const ScenePrimitive& p = primitives[i];
+        if (!usable[i] || cut(p.frame, ScenePrimitive::kFrameBytes) != frame || !wanted(p)) {
+          continue;
+        }
+        if (!first) out += ", ";
+        first = false;
+        append(p);
+      }
+    };
+    const auto is = [](SceneShape shape) {
+      return [shape](const ScenePrimitive& p) { return p.shape == shape; };
+    };
+    out += f > 0 ? ", {" : "{";
+    fmt::format_to(Out(out), R"("timestamp": {{"sec": {}, "nsec": {}}}, "frame_id": )", sec, nsec);
+    append_name(frame, out);
+    out += R"(, "id": )";
+    append_name(frame, out);
+    out += R"(, "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [)";
+    if (f == 0 && dropped > 0) {
+      fmt::format_to(Out(out), R"({{"key": "dropped", "value": "{}"}})", dropped);
+    }
+    out += R"(], "arrows": [)";
+    each(is(SceneShape::kArrow), [&](const ScenePrimitive& p) {
+      const double length = std::hypot(p.x1 - p.x0, p.y1 - p.y0);
+      const double head = std::min(0.4 * length, 3 * p.size);
+      out += "{";
+      append_pose(p.x0, p.y0, std::atan2(p.y1 - p.y0, p.x1 - p.x0), out);
+      fmt::format_to(Out(out),
+                     R"(, "shaft_length": {}, "shaft_diameter": {}, "head_length": {}, )"
+                     R"("head_diameter": {}, )",
+                     fine(length - head), fine(p.size), fine(head), fine(2.5 * p.size));
+      append_color(p.color, out);
+      out += "}";
+    });
+    out += R"(], "cubes": [], "spheres": [], "cylinders": [)";
+    each([](const ScenePrimitive& p) { return p.shape == SceneShape::kCircle && p.filled; },
+         [&](const ScenePrimitive& p) {
+           out += "{";
+           append_pose(p.x0, p.y0, 0, out);
+           fmt::format_to(Out(out),
+                          R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
+                          R"("top_scale": 1, )",
+                          fine(2 * p.size), fine(2 * p.size));
+           append_color(p.color, out);
+           out += "}";
+         });
+    out += R"(], "lines": [)";
+    each(
+        [](const ScenePrimitive& p) {
+          return p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon ||
+                 (p.shape == SceneShape::kCircle && !p.filled);
+        },
+        [&](const ScenePrimitive& p) {
+          if (p.shape == SceneShape::kCircle) {
+            append_line(
+                1, p.x1, p.color, kCirclePoints,
+                [&](std::size_t i) {
+                  const double angle = 2 * kPi * static_cast<double>(i) / kCirclePoints;
+                  return ScenePoint{p.x0 + p.size * std::cos(angle),
+                                    p.y0 + p.size * std::sin(angle)};
+                },
+                out);
+          } else {
+            append_line(
+                p.shape == SceneShape::kPolygon ? 1 : 0, p.size, p.color, p.point_count,
+                [&](std::size_t i) { return points[p.point_begin + i]; }, out);
+          }
+        });
+    out += R"(], "triangles": [], "texts": [)";
+    each(is(SceneShape::kText), [&](const ScenePrimitive& p) {
+      out += "{";
+      append_pose(p.x0, p.y0, 0, out);
+      fmt::format_to(Out(out),
+                     R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )",
+                     fine(p.size));
+      append_color(p.color, out);
+      out += R"(, "text": )";
+      append_name(cut(p.text, ScenePrimitive::kTextBytes), out);
+      out += "}";
+    });
+    out += R"(], "models": []})";
+  }
+  out += "]}";
 }
 
 }  // namespace arbiter

@@ -73,12 +73,14 @@ struct Recorder::Output {
   std::uint16_t step = 0;
   std::uint16_t inputs = 0;
   std::uint16_t log = 0;
+  std::uint16_t scene = 0;
   std::uint64_t last_step = 0;
   std::uint64_t dropped = 0;
   detail::LogClock clock;  // made when the run starts
   std::string record;      // reused between messages
   std::string inputs_record;
   std::string log_record;
+  std::string scene_record;
   std::string step_schema, inputs_schema;  // of the channels written to last
   detail::StepImage image;                 // the writer's, as of the last slot it formatted
   // The stepping thread's: whether the last slot published is the one before the next (no step
@@ -176,6 +178,7 @@ void Recorder::on_start(const Manager& manager) {
   out_->inputs = add_channel(channels[kInputsChannel]);
   out_->log = add_channel(channels[kLogChannel]);
   out_->clock = detail::LogClock(info_.paced, wall_start_ns_, written_->rate_hz);
+  out_->scene = add_channel(channels[kSceneChannel]);
   out_->step_schema = channels[kStepChannel].schema;
   out_->inputs_schema = channels[kInputsChannel].schema;
   std::vector<std::pair<std::string, std::string>> config;
@@ -451,6 +454,13 @@ void Recorder::write_loop() {
         detail::append_inputs_record(written_->layout, step, out.inputs_record);
         out.writer.message(out.step, time, wall, out.record);
         out.writer.message(out.inputs, time, wall, out.inputs_record);
+      }
+      // Only steps that drew: a viewer keeps showing the last picture.
+      if (step.scene.size() > 0 || step.scene_dropped > 0) {
+        out.scene_record.clear();
+        append_scene_update(time, step.scene.data(), step.scene.size(), step.scene_points.data(),
+                            step.scene_dropped, out.scene_record);
+        out.writer.message(out.scene, time, wall, out.scene_record);
       }
       detail::for_each_report_log(
           written_->layout, step, time, out.log_record,

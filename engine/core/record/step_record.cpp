@@ -255,6 +255,9 @@ SnapshotShape::SnapshotShape(const StepLayout& layout, std::size_t text_bytes_)
   texts_at = place<char>(extra, text_bytes);
   events_at = place<Controller::Event>(extra, events);
   event_args_at = place<Controller::EventArg>(extra, event_args);
+  scene_counts_at = place<SceneCounts>(extra, 1);
+  scene_at = place<ScenePrimitive>(extra, Manager::kScenePrimitivesPerStep);
+  scene_points_at = place<ScenePoint>(extra, Manager::kScenePointsPerStep);
   extra_bytes = round_up(extra, kCacheLine);
 }
 
@@ -297,6 +300,9 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
     construct_part<char>(extras, s.texts_at, s.text_bytes);
     construct_part<Controller::Event>(extras, s.events_at, s.events);
     construct_part<Controller::EventArg>(extras, s.event_args_at, s.event_args);
+    construct_part<SnapshotShape::SceneCounts>(extras, s.scene_counts_at, 1);
+    construct_part<ScenePrimitive>(extras, s.scene_at, Manager::kScenePrimitivesPerStep);
+    construct_part<ScenePoint>(extras, s.scene_points_at, Manager::kScenePointsPerStep);
   }
   if (!s.plain_values) {
     for (const auto& actuator : layout.actuators) {
@@ -517,6 +523,16 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   header.input_reports =
       static_cast<std::uint32_t>(std::min(manager.input_pass_events(), report_count));
   header.text_size = text_size;
+  const auto& scene = manager.scene();
+  auto& scene_counts = *part_of<SnapshotShape::SceneCounts>(into.extras, shape.scene_counts_at);
+  scene_counts.primitives = static_cast<std::uint32_t>(manager.scene_primitive_count());
+  scene_counts.points =
+      static_cast<std::uint32_t>(std::min(scene.point_count, scene.point_capacity));
+  scene_counts.dropped = static_cast<std::uint32_t>(scene.dropped);
+  std::memcpy(part_of<ScenePrimitive>(into.extras, shape.scene_at), scene.primitives,
+              scene_counts.primitives * sizeof(ScenePrimitive));
+  std::memcpy(part_of<ScenePoint>(into.extras, shape.scene_points_at), scene.points,
+              scene_counts.points * sizeof(ScenePoint));
   if (shape.streamed) {
     stream_lines(block + shape.tracked_at[0], now, shape.tracked.allocated);
     stream_lines(block, reinterpret_cast<const std::byte*>(&header), sizeof header);
@@ -555,6 +571,10 @@ StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)
   reports = {part_of<Report>(extras, s.reports_at), header.report_count};
   input_reports = header.input_reports;
   texts = std::string_view(part_of<char>(extras, s.texts_at), header.text_size);
+  const auto& counts = *part_of<SnapshotShape::SceneCounts>(extras, s.scene_counts_at);
+  scene = {part_of<ScenePrimitive>(extras, s.scene_at), counts.primitives};
+  scene_points = {part_of<ScenePoint>(extras, s.scene_points_at), counts.points};
+  scene_dropped = counts.dropped;
 }
 
 void StepSnapshot::apply(StepImage& image) {

@@ -115,6 +115,9 @@ struct SnapshotShape {
     std::uint32_t text_begin = 0, text_size = 0;
   };
   using Arg = std::pair<std::uint32_t, ArgValue>;
+  struct SceneCounts {
+    std::uint32_t primitives = 0, points = 0, dropped = 0;
+  };
 
   std::size_t behaviours = 0, actuators = 0, machines = 0;
   std::size_t args = 0, queue = 0, events = 0, event_args = 0, text_bytes = 0;
@@ -148,6 +151,8 @@ struct SnapshotShape {
   std::size_t bytes = 0;  ///< a block's: whole cache lines, so that blocks share none
   /// Where the seldom written parts start in a block's extras, and their bytes.
   std::size_t reports_at = 0, texts_at = 0, events_at = 0, event_args_at = 0;
+  /// What code drew (StepContext::scene): its counts, primitives and points.
+  std::size_t scene_counts_at = 0, scene_at = 0, scene_points_at = 0;
   std::size_t extra_bytes = 0;
 };
 
@@ -256,6 +261,10 @@ struct StepSnapshot {
   Span<Report> reports;
   std::uint32_t input_reports = 0;  ///< how many of the reports the input pass made
   std::string_view texts;
+  /// What code drew (StepContext::scene), and how many primitives it dropped for want of room.
+  Span<ScenePrimitive> scene;
+  Span<ScenePoint> scene_points;
+  std::uint32_t scene_dropped = 0;
 
   const void* value(const StepLayout& layout, std::uint32_t actuator) const {
     return values + layout.actuators[actuator].offset;

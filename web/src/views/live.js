@@ -61,6 +61,13 @@ export function live(info) {
     safe = JSON.parse(event.data);
     if (!drawPending) showSafe();
   });
+  // What the step drew (foxglove.SceneUpdate) follows its step: kept with its record.
+  events.addEventListener('scene', (event) => {
+    const last = page.records[page.records.length - 1];
+    if (!last || String(last.step) !== event.lastEventId) return;
+    last.scene = JSON.parse(event.data);
+    if (page.current === last) page.scene.show(last.scene, last.step);  // drawn before it came
+  });
   events.addEventListener('status', (event) => {
     const status = JSON.parse(event.data);
     if (status.finished) {

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "arbiter/manager.hpp"
+#include "arbiter/scene.hpp"
 
 namespace arbiter {
 
@@ -36,6 +37,7 @@ enum ChannelIndex : std::size_t {
   kStepChannel,    ///< /arbiter/step: the trace's step record, one per step
   kInputsChannel,  ///< /arbiter/inputs: what interface layers read from the world, per step
   kLogChannel,     ///< /arbiter/log: foxglove.Log, what code reported and what went wrong
+  kSceneChannel,   ///< /arbiter/scene: foxglove.SceneUpdate, what code drew (StepContext::scene)
   kChannelCount
 };
 
@@ -59,5 +61,14 @@ enum class LogLevel : std::uint8_t {
 void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view name,
                         std::string_view message, std::string_view file, std::uint32_t line,
                         std::string& out);
+
+/// A message of the `/arbiter/scene` channel (Foxglove's foxglove.SceneUpdate) at `time_ns`: the
+/// `count` primitives a step drew (their points in `points`), an entity per frame, each with
+/// the frame's name as its id, after a deletion of all entities, so that each message is the
+/// whole picture. `dropped` primitives (for want of room, or with a coordinate that is not a
+/// finite number) are told in the first entity's metadata ("dropped"). Appended to `out`,
+/// without a newline. Allocates: off the stepping thread.
+void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
+                         const ScenePoint* points, std::size_t dropped, std::string& out);
 
 }  // namespace arbiter
