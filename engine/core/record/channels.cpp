@@ -399,118 +399,183 @@ std::string_view cut(const char* text, std::size_t bytes) {
   return {text, start - 1 + length <= size ? size : start - 1};
 }
 
+// One primitive as an entity of its own, so that a message need carry only what changed.
+void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame,
+                   std::uint32_t rank, const ScenePrimitive& p, const ScenePoint* points,
+                   std::size_t dropped, std::string& out) {
+  fmt::format_to(Out(out), R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "frame_id": )", sec, nsec);
+  append_name(frame, out);
+  out += R"(, "id": )";
+  append_entity_id(frame, rank, out);
+  out += R"(, "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [)";
+  if (dropped > 0) fmt::format_to(Out(out), R"({{"key": "dropped", "value": "{}"}})", dropped);
+  out += R"(], "arrows": [)";
+  if (p.shape == SceneShape::kArrow) {
+    const double length = std::hypot(p.x1 - p.x0, p.y1 - p.y0);
+    const double head = std::min(0.4 * length, 3 * p.size);
+    out += "{";
+    append_pose(p.x0, p.y0, std::atan2(p.y1 - p.y0, p.x1 - p.x0), out);
+    fmt::format_to(Out(out),
+                   R"(, "shaft_length": {}, "shaft_diameter": {}, "head_length": {}, )"
+                   R"("head_diameter": {}, )",
+                   fine(length - head), fine(p.size), fine(head), fine(2.5 * p.size));
+    append_color(p.color, out);
+    out += "}";
+  }
+  out += R"(], "cubes": [], "spheres": [], "cylinders": [)";
+  if (p.shape == SceneShape::kCircle && p.filled) {
+    out += "{";
+    append_pose(p.x0, p.y0, 0, out);
+    fmt::format_to(Out(out),
+                   R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
+                   R"("top_scale": 1, )",
+                   fine(2 * p.size), fine(2 * p.size));
+    append_color(p.color, out);
+    out += "}";
+  }
+  out += R"(], "lines": [)";
+  if (p.shape == SceneShape::kCircle && !p.filled) {
+    append_line(
+        1, p.x1, p.color, kCirclePoints,
+        [&](std::size_t i) {
+          const double angle = 2 * kPi * static_cast<double>(i) / kCirclePoints;
+          return ScenePoint{p.x0 + p.size * std::cos(angle), p.y0 + p.size * std::sin(angle)};
+        },
+        out);
+  } else if (p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon) {
+    append_line(
+        p.shape == SceneShape::kPolygon ? 1 : 0, p.size, p.color, p.point_count,
+        [&](std::size_t i) { return points[p.point_begin + i]; }, out);
+  }
+  out += R"(], "triangles": [], "texts": [)";
+  if (p.shape == SceneShape::kText) {
+    out += "{";
+    append_pose(p.x0, p.y0, 0, out);
+    fmt::format_to(Out(out), R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )",
+                   fine(p.size));
+    append_color(p.color, out);
+    out += R"(, "text": )";
+    append_name(cut(p.text, ScenePrimitive::kTextBytes), out);
+    out += "}";
+  }
+  out += R"(], "models": []})";
+}
+
+// Whether two primitives draw alike (their points compared by value, not by place).
+bool same(const ScenePrimitive& a, const ScenePoint* a_points, const ScenePrimitive& b,
+          const ScenePoint* b_points) {
+  if (a.shape != b.shape || a.filled != b.filled || a.point_count != b.point_count ||
+      a.x0 != b.x0 || a.y0 != b.y0 || a.x1 != b.x1 || a.y1 != b.y1 || a.size != b.size ||
+      a.color.r != b.color.r || a.color.g != b.color.g || a.color.b != b.color.b ||
+      a.color.a != b.color.a || std::strncmp(a.text, b.text, ScenePrimitive::kTextBytes) != 0) {
+    return false;
+  }
+  for (std::uint32_t i = 0; i < a.point_count; ++i) {
+    const ScenePoint& pa = a_points[a.point_begin + i];
+    const ScenePoint& pb = b_points[b.point_begin + i];
+    if (pa.x != pb.x || pa.y != pb.y) return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+void append_entity_id(std::string_view frame, std::uint32_t rank, std::string& out) {
+  fmt::memory_buffer id;  // on the stack: a frame name is short
+  fmt::format_to(std::back_inserter(id), "{}/{}", frame, rank);
+  append_name({id.data(), id.size()}, out);
+}
+
+void SceneUpdates::place(const ScenePrimitive* primitives, std::size_t count,
+                         const ScenePoint* points, std::vector<Placed>& placed,
+                         std::size_t& dropped) {
+  placed.clear();
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!finite_primitive(primitives[i], points)) {
+      ++dropped;
+      continue;
+    }
+    const auto frame = cut(primitives[i].frame, ScenePrimitive::kFrameBytes);
+    std::uint32_t rank = 0;
+    for (auto it = placed.rbegin(); it != placed.rend(); ++it) {
+      if (it->frame == frame) {
+        rank = it->rank + 1;
+        break;
+      }
+    }
+    placed.push_back({frame, rank, i});
+  }
+}
+
+void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitives,
+                          std::size_t count, const ScenePoint* points, std::size_t dropped,
+                          std::string& out) {
+  const auto sec = time_ns / 1000000000u, nsec = time_ns % 1000000000u;
+  place(primitives, count, points, now_, dropped);
+  // The whole picture now and then, so that a viewer that seeks (and shows the last message
+  // before the time it seeks to) soon has all of it; and whenever something was dropped, so that
+  // the count told in the first entity is never left on another one.
+  const bool whole = !started_ || time_ns < whole_at_ || time_ns - whole_at_ >= kWholeEveryNs ||
+                     dropped > 0 || dropped_ > 0;
+  const auto find = [&](const Placed& at) -> const Placed* {
+    for (const Placed& p : last_) {
+      if (p.rank == at.rank && p.frame == at.frame) return &p;
+    }
+    return nullptr;
+  };
+  out += R"({"deletions": [)";
+  if (whole) {
+    fmt::format_to(Out(out), R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 1, "id": ""}})",
+                   sec, nsec);
+    started_ = true;
+    whole_at_ = time_ns;
+  } else {
+    bool first = true;
+    for (const Placed& gone : last_) {
+      bool kept = false;
+      for (const Placed& p : now_) kept = kept || (p.rank == gone.rank && p.frame == gone.frame);
+      if (kept) continue;
+      fmt::format_to(Out(out), R"({}{{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 0, "id": )",
+                     first ? "" : ", ", sec, nsec);
+      append_entity_id(gone.frame, gone.rank, out);
+      out += "}";
+      first = false;
+    }
+  }
+  out += R"(], "entities": [)";
+  bool first = true;
+  for (std::size_t j = 0; j < now_.size(); ++j) {
+    const Placed& at = now_[j];
+    const ScenePrimitive& p = primitives[at.index];
+    if (!whole) {
+      const Placed* before = find(at);
+      if (before != nullptr && same(p, points, primitives_[before->index], points_.data())) {
+        continue;
+      }
+    }
+    if (!first) out += ", ";
+    first = false;
+    append_entity(sec, nsec, at.frame, at.rank, p, points, j == 0 ? dropped : 0, out);
+  }
+  out += "]}";
+
+  // What the viewer now shows, to compare the next step's drawing with.
+  primitives_.assign(primitives, primitives + count);
+  std::size_t point_end = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    point_end =
+        std::max<std::size_t>(point_end, primitives[i].point_begin + primitives[i].point_count);
+  }
+  points_.assign(points, points + point_end);
+  last_.swap(now_);
+  for (Placed& p : last_) p.frame = std::string_view(primitives_[p.index].frame, p.frame.size());
+  dropped_ = dropped;
+}
 
 void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
                          const ScenePoint* points, std::size_t dropped, std::string& out) {
-  const auto sec = time_ns / 1000000000u, nsec = time_ns % 1000000000u;
-  std::vector<bool> usable(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    usable[i] = finite_primitive(primitives[i], points);
-    if (!usable[i]) ++dropped;
-  }
-  fmt::format_to(
-      Out(out),
-      R"({{"deletions": [{{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 1, "id": ""}}], )"
-      R"("entities": [)",
-      sec, nsec);
-  // One entity per frame, in the order the frames were first drawn in.
-  std::vector<std::string_view> frames;
-  for (std::size_t i = 0; i < count; ++i) {
-    const auto frame = cut(primitives[i].frame, ScenePrimitive::kFrameBytes);
-    if (usable[i] && std::find(frames.begin(), frames.end(), frame) == frames.end()) {
-      frames.push_back(frame);
-    }
-  }
-  for (std::size_t f = 0; f < frames.size(); ++f) {
-    const auto frame = frames[f];
-    // The primitives of this frame that `wanted`, separated by commas.
-    const auto each = [&](auto wanted, auto append) {
-      bool first = true;
-      for (std::size_t i = 0; i < count; ++i) {
-        const ScenePrimitive& p = primitives[i];
-        if (!usable[i] || cut(p.frame, ScenePrimitive::kFrameBytes) != frame || !wanted(p)) {
-          continue;
-        }
-        if (!first) out += ", ";
-        first = false;
-        append(p);
-      }
-    };
-    const auto is = [](SceneShape shape) {
-      return [shape](const ScenePrimitive& p) { return p.shape == shape; };
-    };
-    out += f > 0 ? ", {" : "{";
-    fmt::format_to(Out(out), R"("timestamp": {{"sec": {}, "nsec": {}}}, "frame_id": )", sec, nsec);
-    append_name(frame, out);
-    out += R"(, "id": )";
-    append_name(frame, out);
-    out += R"(, "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [)";
-    if (f == 0 && dropped > 0) {
-      fmt::format_to(Out(out), R"({{"key": "dropped", "value": "{}"}})", dropped);
-    }
-    out += R"(], "arrows": [)";
-    each(is(SceneShape::kArrow), [&](const ScenePrimitive& p) {
-      const double length = std::hypot(p.x1 - p.x0, p.y1 - p.y0);
-      const double head = std::min(0.4 * length, 3 * p.size);
-      out += "{";
-      append_pose(p.x0, p.y0, std::atan2(p.y1 - p.y0, p.x1 - p.x0), out);
-      fmt::format_to(Out(out),
-                     R"(, "shaft_length": {}, "shaft_diameter": {}, "head_length": {}, )"
-                     R"("head_diameter": {}, )",
-                     fine(length - head), fine(p.size), fine(head), fine(2.5 * p.size));
-      append_color(p.color, out);
-      out += "}";
-    });
-    out += R"(], "cubes": [], "spheres": [], "cylinders": [)";
-    each([](const ScenePrimitive& p) { return p.shape == SceneShape::kCircle && p.filled; },
-         [&](const ScenePrimitive& p) {
-           out += "{";
-           append_pose(p.x0, p.y0, 0, out);
-           fmt::format_to(Out(out),
-                          R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
-                          R"("top_scale": 1, )",
-                          fine(2 * p.size), fine(2 * p.size));
-           append_color(p.color, out);
-           out += "}";
-         });
-    out += R"(], "lines": [)";
-    each(
-        [](const ScenePrimitive& p) {
-          return p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon ||
-                 (p.shape == SceneShape::kCircle && !p.filled);
-        },
-        [&](const ScenePrimitive& p) {
-          if (p.shape == SceneShape::kCircle) {
-            append_line(
-                1, p.x1, p.color, kCirclePoints,
-                [&](std::size_t i) {
-                  const double angle = 2 * kPi * static_cast<double>(i) / kCirclePoints;
-                  return ScenePoint{p.x0 + p.size * std::cos(angle),
-                                    p.y0 + p.size * std::sin(angle)};
-                },
-                out);
-          } else {
-            append_line(
-                p.shape == SceneShape::kPolygon ? 1 : 0, p.size, p.color, p.point_count,
-                [&](std::size_t i) { return points[p.point_begin + i]; }, out);
-          }
-        });
-    out += R"(], "triangles": [], "texts": [)";
-    each(is(SceneShape::kText), [&](const ScenePrimitive& p) {
-      out += "{";
-      append_pose(p.x0, p.y0, 0, out);
-      fmt::format_to(Out(out),
-                     R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )",
-                     fine(p.size));
-      append_color(p.color, out);
-      out += R"(, "text": )";
-      append_name(cut(p.text, ScenePrimitive::kTextBytes), out);
-      out += "}";
-    });
-    out += R"(], "models": []})";
-  }
-  out += "]}";
+  SceneUpdates fresh;
+  fresh.append(time_ns, primitives, count, points, dropped, out);
 }
 
 }  // namespace arbiter

@@ -62,13 +62,53 @@ void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view 
                         std::string_view message, std::string_view file, std::uint32_t line,
                         std::string& out);
 
-/// A message of the `/arbiter/scene` channel (Foxglove's foxglove.SceneUpdate) at `time_ns`: the
-/// `count` primitives a step drew (their points in `points`), an entity per frame, each with
-/// the frame's name as its id, after a deletion of all entities, so that each message is the
-/// whole picture. `dropped` primitives (for want of room, or with a coordinate that is not a
-/// finite number) are told in the first entity's metadata ("dropped"). Appended to `out`,
-/// without a newline. Allocates: off the stepping thread.
+/// A whole picture as a message of the `/arbiter/scene` channel (Foxglove's foxglove.SceneUpdate)
+/// at `time_ns`: a deletion of all entities, then the `count` primitives a step drew (their
+/// points in `points`), each an entity of its own (see SceneUpdates). `dropped` primitives (for
+/// want of room, or with a coordinate that is not a finite number) are told in the first
+/// entity's metadata ("dropped"). Appended to `out`, without a newline. Allocates: off the
+/// stepping thread.
 void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
                          const ScenePoint* points, std::size_t dropped, std::string& out);
+
+/// The id of the entity of the `rank`-th primitive drawn in `frame` in a step ("field/3"), as a
+/// JSON string appended to `out`.
+void append_entity_id(std::string_view frame, std::uint32_t rank, std::string& out);
+
+/// The `/arbiter/scene` messages of one recording, step after step. Each primitive is an entity
+/// of its own, with lifetime 0 (a viewer keeps it until it is replaced or deleted) and an id
+/// that stays while the code draws alike: its frame and its rank among that frame's primitives.
+/// A message carries only the entities that changed since the last one and deletes those that
+/// are gone, so that what does not move (a field's lines) is not written every step. The whole
+/// picture (a deletion of all, then every entity) comes first, at least once a second of log
+/// time after (a viewer that seeks shows the last message before the time it seeks to), after
+/// restart(), and while primitives are dropped.
+class SceneUpdates {
+ public:
+  static constexpr std::uint64_t kWholeEveryNs = 1000000000;
+
+  /// The message of a step at `time_ns`, as append_scene_update() takes it, appended to `out`.
+  void append(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
+              const ScenePoint* points, std::size_t dropped, std::string& out);
+  /// The next message gives the whole picture (a new program, a new file).
+  void restart() { started_ = false; }
+
+ private:
+  struct Placed {
+    std::string_view frame;  // cut to its room
+    std::uint32_t rank = 0;  // among its frame's primitives
+    std::size_t index = 0;   // in the step's primitives
+  };
+  static void place(const ScenePrimitive* primitives, std::size_t count, const ScenePoint* points,
+                    std::vector<Placed>& placed, std::size_t& dropped);
+
+  bool started_ = false;
+  std::uint64_t whole_at_ = 0;  // the last whole picture's time
+  std::size_t dropped_ = 0;
+  // The last message's step: what a viewer shows now. Reused: no allocation once grown.
+  std::vector<ScenePrimitive> primitives_;
+  std::vector<ScenePoint> points_;
+  std::vector<Placed> last_, now_;
+};
 
 }  // namespace arbiter
