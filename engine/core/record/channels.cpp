@@ -1,5 +1,6 @@
 #include "arbiter/channels.hpp"
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -343,7 +344,30 @@ bool finite_primitive(const ScenePrimitive& p, const ScenePoint* points) {
   return ok;
 }
 
-using Out = std::back_insert_iterator<std::string>;
+// Scene messages are formatted into a reused buffer: appending to it is a copy, where each
+// format_to() into a std::string resizes (and zeroes) it first.
+using Buffer = fmt::memory_buffer;
+using Out = fmt::appender;
+
+void put(Buffer& out, std::string_view text) {
+  out.append(text.data(), text.data() + text.size());
+}
+
+// A JSON string: a name as it is unless it holds a character JSON escapes.
+void put_name(Buffer& out, std::string_view name) {
+  const bool plain = std::all_of(name.begin(), name.end(), [](char c) {
+    return c != '"' && c != '\\' && static_cast<unsigned char>(c) >= 0x20;
+  });
+  if (plain) {
+    out.push_back('"');
+    put(out, name);
+    out.push_back('"');
+  } else {
+    std::string quoted;
+    detail::append_json_string(std::string(name), quoted);
+    put(out, quoted);
+  }
+}
 
 // A length or a coordinate to the micrometre, a rotation's component to 1e-6: finer is noise
 // (a cosine's last bits), which would make each number twice as long in every message.
@@ -352,34 +376,36 @@ double fine(double value) {
 }
 
 // foxglove.Pose: at (x, y) on the ground, turned by `yaw` about the vertical.
-void append_pose(double x, double y, double yaw, std::string& out) {
-  fmt::format_to(Out(out),
-                 R"("pose": {{"position": {{"x": {}, "y": {}, "z": 0}}, "orientation": )"
-                 R"({{"x": 0, "y": 0, "z": {}, "w": {}}}}})",
-                 fine(x), fine(y), fine(std::sin(yaw / 2)), fine(std::cos(yaw / 2)));
+void append_pose(double x, double y, double yaw, Buffer& out) {
+  fmt::format_to(
+      Out(out),
+      FMT_COMPILE(R"("pose": {{"position": {{"x": {}, "y": {}, "z": 0}}, "orientation": )"
+                  R"({{"x": 0, "y": 0, "z": {}, "w": {}}}}})"),
+      fine(x), fine(y), fine(std::sin(yaw / 2)), fine(std::cos(yaw / 2)));
 }
 
-void append_color(const SceneColor& c, std::string& out) {
-  fmt::format_to(Out(out), R"("color": {{"r": {}, "g": {}, "b": {}, "a": {}}})", c.r, c.g, c.b,
-                 c.a);
+void append_color(const SceneColor& c, Buffer& out) {
+  fmt::format_to(Out(out), FMT_COMPILE(R"("color": {{"r": {}, "g": {}, "b": {}, "a": {}}})"), c.r,
+                 c.g, c.b, c.a);
 }
 
 // foxglove.LinePrimitive: a strip (0) or a loop (1) through `count` points given by `point(i)`.
 template <typename Point>
 void append_line(int type, double width, const SceneColor& color, std::size_t count, Point point,
-                 std::string& out) {
-  fmt::format_to(Out(out), R"({{"type": {}, )", type);
+                 Buffer& out) {
+  fmt::format_to(Out(out), FMT_COMPILE(R"({{"type": {}, )"), type);
   append_pose(0, 0, 0, out);
-  fmt::format_to(Out(out), R"(, "thickness": {}, "scale_invariant": false, "points": [)",
+  fmt::format_to(Out(out),
+                 FMT_COMPILE(R"(, "thickness": {}, "scale_invariant": false, "points": [)"),
                  fine(width));
   for (std::size_t i = 0; i < count; ++i) {
     const ScenePoint at = point(i);
-    fmt::format_to(Out(out), R"({}{{"x": {}, "y": {}, "z": 0}})", i > 0 ? ", " : "", fine(at.x),
-                   fine(at.y));
+    fmt::format_to(Out(out), FMT_COMPILE(R"({}{{"x": {}, "y": {}, "z": 0}})"), i > 0 ? ", " : "",
+                   fine(at.x), fine(at.y));
   }
-  out += "], ";
+  put(out, "], ");
   append_color(color, out);
-  out += R"(, "colors": [], "indices": []})";
+  put(out, R"(, "colors": [], "indices": []})");
 }
 
 // A circle's outline, as Foxglove has no circle: a loop of this many points.
@@ -399,41 +425,45 @@ std::string_view cut(const char* text, std::size_t bytes) {
   return {text, start - 1 + length <= size ? size : start - 1};
 }
 
+void append_entity_id(std::string_view frame, std::uint32_t rank, Buffer& out);
+
 // One primitive as an entity of its own, so that a message need carry only what changed.
 void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame,
                    std::uint32_t rank, const ScenePrimitive& p, const ScenePoint* points,
-                   std::size_t dropped, std::string& out) {
-  fmt::format_to(Out(out), R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "frame_id": )", sec, nsec);
-  append_name(frame, out);
-  out += R"(, "id": )";
+                   std::size_t dropped, Buffer& out) {
+  fmt::format_to(Out(out), FMT_COMPILE(R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "frame_id": )"),
+                 sec, nsec);
+  put_name(out, frame);
+  put(out, R"(, "id": )");
   append_entity_id(frame, rank, out);
-  out += R"(, "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [)";
-  if (dropped > 0) fmt::format_to(Out(out), R"({{"key": "dropped", "value": "{}"}})", dropped);
-  out += R"(], "arrows": [)";
+  put(out, R"(, "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [)");
+  if (dropped > 0)
+    fmt::format_to(Out(out), FMT_COMPILE(R"({{"key": "dropped", "value": "{}"}})"), dropped);
+  put(out, R"(], "arrows": [)");
   if (p.shape == SceneShape::kArrow) {
     const double length = std::hypot(p.x1 - p.x0, p.y1 - p.y0);
     const double head = std::min(0.4 * length, 3 * p.size);
-    out += "{";
+    put(out, "{");
     append_pose(p.x0, p.y0, std::atan2(p.y1 - p.y0, p.x1 - p.x0), out);
     fmt::format_to(Out(out),
-                   R"(, "shaft_length": {}, "shaft_diameter": {}, "head_length": {}, )"
-                   R"("head_diameter": {}, )",
+                   FMT_COMPILE(R"(, "shaft_length": {}, "shaft_diameter": {}, "head_length": {}, )"
+                               R"("head_diameter": {}, )"),
                    fine(length - head), fine(p.size), fine(head), fine(2.5 * p.size));
     append_color(p.color, out);
-    out += "}";
+    put(out, "}");
   }
-  out += R"(], "cubes": [], "spheres": [], "cylinders": [)";
+  put(out, R"(], "cubes": [], "spheres": [], "cylinders": [)");
   if (p.shape == SceneShape::kCircle && p.filled) {
-    out += "{";
+    put(out, "{");
     append_pose(p.x0, p.y0, 0, out);
     fmt::format_to(Out(out),
-                   R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
-                   R"("top_scale": 1, )",
+                   FMT_COMPILE(R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
+                               R"("top_scale": 1, )"),
                    fine(2 * p.size), fine(2 * p.size));
     append_color(p.color, out);
-    out += "}";
+    put(out, "}");
   }
-  out += R"(], "lines": [)";
+  put(out, R"(], "lines": [)");
   if (p.shape == SceneShape::kCircle && !p.filled) {
     append_line(
         1, p.x1, p.color, kCirclePoints,
@@ -447,18 +477,20 @@ void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame
         p.shape == SceneShape::kPolygon ? 1 : 0, p.size, p.color, p.point_count,
         [&](std::size_t i) { return points[p.point_begin + i]; }, out);
   }
-  out += R"(], "triangles": [], "texts": [)";
+  put(out, R"(], "triangles": [], "texts": [)");
   if (p.shape == SceneShape::kText) {
-    out += "{";
+    put(out, "{");
     append_pose(p.x0, p.y0, 0, out);
-    fmt::format_to(Out(out), R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )",
-                   fine(p.size));
+    fmt::format_to(
+        Out(out),
+        FMT_COMPILE(R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )"),
+        fine(p.size));
     append_color(p.color, out);
-    out += R"(, "text": )";
-    append_name(cut(p.text, ScenePrimitive::kTextBytes), out);
-    out += "}";
+    put(out, R"(, "text": )");
+    put_name(out, cut(p.text, ScenePrimitive::kTextBytes));
+    put(out, "}");
   }
-  out += R"(], "models": []})";
+  put(out, R"(], "models": []})");
 }
 
 // Whether two primitives draw alike (their points compared by value, not by place).
@@ -478,13 +510,14 @@ bool same(const ScenePrimitive& a, const ScenePoint* a_points, const ScenePrimit
   return true;
 }
 
-}  // namespace
-
-void append_entity_id(std::string_view frame, std::uint32_t rank, std::string& out) {
-  fmt::memory_buffer id;  // on the stack: a frame name is short
-  fmt::format_to(std::back_inserter(id), "{}/{}", frame, rank);
-  append_name({id.data(), id.size()}, out);
+// The id of the entity of the `rank`-th primitive drawn in `frame` in a step: "field/3".
+void append_entity_id(std::string_view frame, std::uint32_t rank, Buffer& out) {
+  char id[ScenePrimitive::kFrameBytes + 12];  // the frame is cut to its room, the rank 10 digits
+  const char* end = fmt::format_to(id, FMT_COMPILE("{}/{}"), frame, rank);
+  put_name(out, {id, static_cast<std::size_t>(end - id)});
 }
+
+}  // namespace
 
 void SceneUpdates::place(const ScenePrimitive* primitives, std::size_t count,
                          const ScenePoint* points, std::vector<Placed>& placed,
@@ -509,7 +542,9 @@ void SceneUpdates::place(const ScenePrimitive* primitives, std::size_t count,
 
 void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitives,
                           std::size_t count, const ScenePoint* points, std::size_t dropped,
-                          std::string& out) {
+                          std::string& text) {
+  thread_local Buffer out;  // reused: no allocation once grown
+  out.clear();
   const auto sec = time_ns / 1000000000u, nsec = time_ns % 1000000000u;
   place(primitives, count, points, now_, dropped);
   // The whole picture now and then, so that a viewer that seeks (and shows the last message
@@ -523,10 +558,11 @@ void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitive
     }
     return nullptr;
   };
-  out += R"({"deletions": [)";
+  put(out, R"({"deletions": [)");
   if (whole) {
-    fmt::format_to(Out(out), R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 1, "id": ""}})",
-                   sec, nsec);
+    fmt::format_to(
+        Out(out), FMT_COMPILE(R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 1, "id": ""}})"),
+        sec, nsec);
     started_ = true;
     whole_at_ = time_ns;
   } else {
@@ -535,14 +571,15 @@ void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitive
       bool kept = false;
       for (const Placed& p : now_) kept = kept || (p.rank == gone.rank && p.frame == gone.frame);
       if (kept) continue;
-      fmt::format_to(Out(out), R"({}{{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 0, "id": )",
-                     first ? "" : ", ", sec, nsec);
+      fmt::format_to(
+          Out(out), FMT_COMPILE(R"({}{{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 0, "id": )"),
+          first ? "" : ", ", sec, nsec);
       append_entity_id(gone.frame, gone.rank, out);
-      out += "}";
+      put(out, "}");
       first = false;
     }
   }
-  out += R"(], "entities": [)";
+  put(out, R"(], "entities": [)");
   bool first = true;
   for (std::size_t j = 0; j < now_.size(); ++j) {
     const Placed& at = now_[j];
@@ -553,11 +590,12 @@ void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitive
         continue;
       }
     }
-    if (!first) out += ", ";
+    if (!first) put(out, ", ");
     first = false;
     append_entity(sec, nsec, at.frame, at.rank, p, points, j == 0 ? dropped : 0, out);
   }
-  out += "]}";
+  put(out, "]}");
+  text.append(out.data(), out.size());
 
   // What the viewer now shows, to compare the next step's drawing with.
   primitives_.assign(primitives, primitives + count);

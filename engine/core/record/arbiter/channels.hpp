@@ -71,10 +71,6 @@ void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view 
 void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
                          const ScenePoint* points, std::size_t dropped, std::string& out);
 
-/// The id of the entity of the `rank`-th primitive drawn in `frame` in a step ("field/3"), as a
-/// JSON string appended to `out`.
-void append_entity_id(std::string_view frame, std::uint32_t rank, std::string& out);
-
 /// The `/arbiter/scene` messages of one recording, step after step. Each primitive is an entity
 /// of its own, with lifetime 0 (a viewer keeps it until it is replaced or deleted) and an id
 /// that stays while the code draws alike: its frame and its rank among that frame's primitives.
