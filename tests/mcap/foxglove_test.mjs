@@ -161,8 +161,8 @@ for (const [demo, run] of Object.entries(demos)) {
 }
 
 // What a viewer shows of the "field" frame after each scene message, with the step it was drawn
-// in: the message's deletions and entities applied to what the messages before it left (each
-// primitive an entity), the field's primitives gathered into one entity-like object.
+// in: the message's deletions and entities applied to what the messages before it left (the
+// still and the moving entity), the field's primitives gathered into one entity-like object.
 function fieldScenes(run) {
   const stepAt = new Map(run.of("/arbiter/step").map((m) => [m.logTime, m.data.step]));
   const shown = new Map();
@@ -211,8 +211,10 @@ for (const [demo, run] of Object.entries(demos)) {
     for (const s of scenes) {
       if (whole(s)) wholeAt = s.logTime;
       assert.ok(s.logTime - wholeAt <= 1000000000n, `step ${s.step}: no whole picture for over 1 s`);
-      // Each primitive is an entity of its own, its id its frame and its rank in that frame.
-      for (const e of s.data.entities) assert.match(e.id, new RegExp(`^${e.frame_id}/\\d+$`));
+      // A frame's entities: what does not move, and what does.
+      for (const e of s.data.entities) assert.match(e.id, new RegExp(`^${e.frame_id}/(still|moving)$`));
+      // Between whole pictures only what moves is written (nothing, when nothing does).
+      if (!whole(s)) assert.ok(s.data.entities.every((e) => e.id === "field/moving"), `step ${s.step}`);
     }
     // The field's outline, which does not move, is written only with the whole pictures.
     const outlined = scenes.filter((s) => s.data.entities.some((e) => e.lines.some((l) => l.points.length === 4 && l.type === 1)));

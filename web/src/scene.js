@@ -28,7 +28,7 @@ export class SceneView {
       seen.push([x, y]);
       return `${x},${-y}`;
     };
-    // Each primitive is an entity of its own: drawn kind by kind, lines under discs under arrows
+    // A frame comes in more than one entity: drawn kind by kind, lines under discs under arrows
     // under texts, whatever order they came in.
     const all = (kind) => update.entities.flatMap((entity) => entity[kind]);
     for (const line of all('lines')) {

@@ -425,22 +425,37 @@ std::string_view cut(const char* text, std::size_t bytes) {
   return {text, start - 1 + length <= size ? size : start - 1};
 }
 
-void append_entity_id(std::string_view frame, std::uint32_t rank, Buffer& out);
+void append_entity_id(std::string_view frame, bool still, Buffer& out);
 
-// One primitive as an entity of its own, so that a message need carry only what changed.
-void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame,
-                   std::uint32_t rank, const ScenePrimitive& p, const ScenePoint* points,
-                   std::size_t dropped, Buffer& out) {
+// The entity of a frame's primitives that are `still` (unchanged since the step before the last
+// whole picture) or not: its id is the frame's name and "still" or "moving", "field/moving".
+template <typename Primitives>
+void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame, bool still,
+                   Primitives each, const ScenePoint* points, std::size_t dropped, Buffer& out) {
   fmt::format_to(Out(out), FMT_COMPILE(R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "frame_id": )"),
                  sec, nsec);
   put_name(out, frame);
   put(out, R"(, "id": )");
-  append_entity_id(frame, rank, out);
+  append_entity_id(frame, still, out);
   put(out, R"(, "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [)");
-  if (dropped > 0)
+  if (dropped > 0) {
     fmt::format_to(Out(out), FMT_COMPILE(R"({{"key": "dropped", "value": "{}"}})"), dropped);
+  }
+  // The primitives `wanted`, separated by commas.
+  const auto list = [&](auto wanted, auto append) {
+    bool first = true;
+    each([&](const ScenePrimitive& p) {
+      if (!wanted(p)) return;
+      if (!first) put(out, ", ");
+      first = false;
+      append(p);
+    });
+  };
+  const auto is = [](SceneShape shape) {
+    return [shape](const ScenePrimitive& p) { return p.shape == shape; };
+  };
   put(out, R"(], "arrows": [)");
-  if (p.shape == SceneShape::kArrow) {
+  list(is(SceneShape::kArrow), [&](const ScenePrimitive& p) {
     const double length = std::hypot(p.x1 - p.x0, p.y1 - p.y0);
     const double head = std::min(0.4 * length, 3 * p.size);
     put(out, "{");
@@ -451,34 +466,43 @@ void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame
                    fine(length - head), fine(p.size), fine(head), fine(2.5 * p.size));
     append_color(p.color, out);
     put(out, "}");
-  }
+  });
   put(out, R"(], "cubes": [], "spheres": [], "cylinders": [)");
-  if (p.shape == SceneShape::kCircle && p.filled) {
-    put(out, "{");
-    append_pose(p.x0, p.y0, 0, out);
-    fmt::format_to(Out(out),
-                   FMT_COMPILE(R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
-                               R"("top_scale": 1, )"),
-                   fine(2 * p.size), fine(2 * p.size));
-    append_color(p.color, out);
-    put(out, "}");
-  }
+  list([](const ScenePrimitive& p) { return p.shape == SceneShape::kCircle && p.filled; },
+       [&](const ScenePrimitive& p) {
+         put(out, "{");
+         append_pose(p.x0, p.y0, 0, out);
+         fmt::format_to(
+             Out(out),
+             FMT_COMPILE(R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
+                         R"("top_scale": 1, )"),
+             fine(2 * p.size), fine(2 * p.size));
+         append_color(p.color, out);
+         put(out, "}");
+       });
   put(out, R"(], "lines": [)");
-  if (p.shape == SceneShape::kCircle && !p.filled) {
-    append_line(
-        1, p.x1, p.color, kCirclePoints,
-        [&](std::size_t i) {
-          const double angle = 2 * kPi * static_cast<double>(i) / kCirclePoints;
-          return ScenePoint{p.x0 + p.size * std::cos(angle), p.y0 + p.size * std::sin(angle)};
-        },
-        out);
-  } else if (p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon) {
-    append_line(
-        p.shape == SceneShape::kPolygon ? 1 : 0, p.size, p.color, p.point_count,
-        [&](std::size_t i) { return points[p.point_begin + i]; }, out);
-  }
+  list(
+      [](const ScenePrimitive& p) {
+        return p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon ||
+               (p.shape == SceneShape::kCircle && !p.filled);
+      },
+      [&](const ScenePrimitive& p) {
+        if (p.shape == SceneShape::kCircle) {
+          append_line(
+              1, p.x1, p.color, kCirclePoints,
+              [&](std::size_t i) {
+                const double angle = 2 * kPi * static_cast<double>(i) / kCirclePoints;
+                return ScenePoint{p.x0 + p.size * std::cos(angle), p.y0 + p.size * std::sin(angle)};
+              },
+              out);
+        } else {
+          append_line(
+              p.shape == SceneShape::kPolygon ? 1 : 0, p.size, p.color, p.point_count,
+              [&](std::size_t i) { return points[p.point_begin + i]; }, out);
+        }
+      });
   put(out, R"(], "triangles": [], "texts": [)");
-  if (p.shape == SceneShape::kText) {
+  list(is(SceneShape::kText), [&](const ScenePrimitive& p) {
     put(out, "{");
     append_pose(p.x0, p.y0, 0, out);
     fmt::format_to(
@@ -489,7 +513,7 @@ void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame
     put(out, R"(, "text": )");
     put_name(out, cut(p.text, ScenePrimitive::kTextBytes));
     put(out, "}");
-  }
+  });
   put(out, R"(], "models": []})");
 }
 
@@ -510,10 +534,9 @@ bool same(const ScenePrimitive& a, const ScenePoint* a_points, const ScenePrimit
   return true;
 }
 
-// The id of the entity of the `rank`-th primitive drawn in `frame` in a step: "field/3".
-void append_entity_id(std::string_view frame, std::uint32_t rank, Buffer& out) {
-  char id[ScenePrimitive::kFrameBytes + 12];  // the frame is cut to its room, the rank 10 digits
-  const char* end = fmt::format_to(id, FMT_COMPILE("{}/{}"), frame, rank);
+void append_entity_id(std::string_view frame, bool still, Buffer& out) {
+  char id[ScenePrimitive::kFrameBytes + 8];  // the frame is cut to its room
+  const char* end = fmt::format_to(id, FMT_COMPILE("{}/{}"), frame, still ? "still" : "moving");
   put_name(out, {id, static_cast<std::size_t>(end - id)});
 }
 
@@ -547,17 +570,56 @@ void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitive
   out.clear();
   const auto sec = time_ns / 1000000000u, nsec = time_ns % 1000000000u;
   place(primitives, count, points, now_, dropped);
-  // The whole picture now and then, so that a viewer that seeks (and shows the last message
-  // before the time it seeks to) soon has all of it; and whenever something was dropped, so that
-  // the count told in the first entity is never left on another one.
-  const bool whole = !started_ || time_ns < whole_at_ || time_ns - whole_at_ >= kWholeEveryNs ||
-                     dropped > 0 || dropped_ > 0;
   const auto find = [&](const Placed& at) -> const Placed* {
     for (const Placed& p : last_) {
       if (p.rank == at.rank && p.frame == at.frame) return &p;
     }
     return nullptr;
   };
+  // The whole picture now and then, so that a viewer that seeks (and shows the last message
+  // before the time it seeks to) soon has all of it; whenever something was dropped, so that
+  // the count told in the first entity is never left on another one; and when a still
+  // primitive changed or went.
+  bool whole = !started_ || time_ns < whole_at_ || time_ns - whole_at_ >= kWholeEveryNs ||
+               dropped > 0 || dropped_ > 0;
+  std::size_t still_now = 0;
+  for (Placed& at : now_) {
+    const Placed* before = find(at);
+    at.same = before != nullptr &&
+              same(primitives[at.index], points, primitives_[before->index], points_.data());
+    at.still = before != nullptr && before->still;
+    if (at.still) ++still_now;
+    if (at.still && !at.same) whole = true;
+  }
+  std::size_t still_before = 0;
+  for (const Placed& p : last_) still_before += p.still ? 1 : 0;
+  if (still_now != still_before) whole = true;
+  if (whole) {
+    // Still: what the step before drew alike; at the start, all (the next step sorts it out).
+    const bool first = last_.empty();
+    for (Placed& at : now_) at.still = first || at.same;
+  }
+
+  // The frames, in the order first drawn in; whether each has a moving part now or had one.
+  const auto each_frame = [&](const std::vector<Placed>& placed, auto visit) {
+    for (std::size_t i = 0; i < placed.size(); ++i) {
+      bool seen = false;
+      for (std::size_t j = 0; j < i && !seen; ++j) seen = placed[j].frame == placed[i].frame;
+      if (!seen) visit(placed[i].frame);
+    }
+  };
+  const auto has = [](const std::vector<Placed>& placed, std::string_view frame, bool still) {
+    return std::any_of(placed.begin(), placed.end(),
+                       [&](const Placed& p) { return p.frame == frame && p.still == still; });
+  };
+  const auto part = [&](std::string_view frame, bool still) {
+    return [&, frame, still](auto visit) {
+      for (const Placed& p : now_) {
+        if (p.frame == frame && p.still == still) visit(primitives[p.index]);
+      }
+    };
+  };
+
   put(out, R"({"deletions": [)");
   if (whole) {
     fmt::format_to(
@@ -567,33 +629,26 @@ void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitive
     whole_at_ = time_ns;
   } else {
     bool first = true;
-    for (const Placed& gone : last_) {
-      bool kept = false;
-      for (const Placed& p : now_) kept = kept || (p.rank == gone.rank && p.frame == gone.frame);
-      if (kept) continue;
+    each_frame(last_, [&](std::string_view frame) {
+      if (!has(last_, frame, false) || has(now_, frame, false)) return;
       fmt::format_to(
           Out(out), FMT_COMPILE(R"({}{{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 0, "id": )"),
           first ? "" : ", ", sec, nsec);
-      append_entity_id(gone.frame, gone.rank, out);
+      append_entity_id(frame, false, out);
       put(out, "}");
       first = false;
-    }
+    });
   }
   put(out, R"(], "entities": [)");
   bool first = true;
-  for (std::size_t j = 0; j < now_.size(); ++j) {
-    const Placed& at = now_[j];
-    const ScenePrimitive& p = primitives[at.index];
-    if (!whole) {
-      const Placed* before = find(at);
-      if (before != nullptr && same(p, points, primitives_[before->index], points_.data())) {
-        continue;
-      }
+  each_frame(now_, [&](std::string_view frame) {
+    for (const bool still : {true, false}) {
+      if ((still && !whole) || !has(now_, frame, still)) continue;
+      if (!first) put(out, ", ");
+      append_entity(sec, nsec, frame, still, part(frame, still), points, first ? dropped : 0, out);
+      first = false;
     }
-    if (!first) put(out, ", ");
-    first = false;
-    append_entity(sec, nsec, at.frame, at.rank, p, points, j == 0 ? dropped : 0, out);
-  }
+  });
   put(out, "]}");
   text.append(out.data(), out.size());
 

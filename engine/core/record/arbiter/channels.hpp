@@ -64,21 +64,21 @@ void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view 
 
 /// A whole picture as a message of the `/arbiter/scene` channel (Foxglove's foxglove.SceneUpdate)
 /// at `time_ns`: a deletion of all entities, then the `count` primitives a step drew (their
-/// points in `points`), each an entity of its own (see SceneUpdates). `dropped` primitives (for
-/// want of room, or with a coordinate that is not a finite number) are told in the first
-/// entity's metadata ("dropped"). Appended to `out`, without a newline. Allocates: off the
-/// stepping thread.
+/// points in `points`), in the entities SceneUpdates gives them. `dropped` primitives (for want
+/// of room, or with a coordinate that is not a finite number) are told in the first entity's
+/// metadata ("dropped"). Appended to `out`, without a newline. Allocates: off the stepping
+/// thread.
 void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
                          const ScenePoint* points, std::size_t dropped, std::string& out);
 
-/// The `/arbiter/scene` messages of one recording, step after step. Each primitive is an entity
-/// of its own, with lifetime 0 (a viewer keeps it until it is replaced or deleted) and an id
-/// that stays while the code draws alike: its frame and its rank among that frame's primitives.
-/// A message carries only the entities that changed since the last one and deletes those that
-/// are gone, so that what does not move (a field's lines) is not written every step. The whole
+/// The `/arbiter/scene` messages of one recording, step after step. A frame's primitives are in
+/// two entities, with lifetime 0 (a viewer keeps them until they are replaced or deleted): what
+/// the step before a whole picture drew alike ("field/still") and the rest ("field/moving"). A
+/// message between whole pictures carries only the moving entity (or deletes it when nothing
+/// moves), so that what does not move (a field's lines) is not written every step. The whole
 /// picture (a deletion of all, then every entity) comes first, at least once a second of log
 /// time after (a viewer that seeks shows the last message before the time it seeks to), after
-/// restart(), and while primitives are dropped.
+/// restart(), when a still primitive changes or goes, and while primitives are dropped.
 class SceneUpdates {
  public:
   static constexpr std::uint64_t kWholeEveryNs = 1000000000;
@@ -94,6 +94,8 @@ class SceneUpdates {
     std::string_view frame;  // cut to its room
     std::uint32_t rank = 0;  // among its frame's primitives
     std::size_t index = 0;   // in the step's primitives
+    bool same = false;       // as the step before drew it
+    bool still = false;      // in the entity of what does not move
   };
   static void place(const ScenePrimitive* primitives, std::size_t count, const ScenePoint* points,
                     std::vector<Placed>& placed, std::size_t& dropped);
