@@ -160,12 +160,24 @@ for (const [demo, run] of Object.entries(demos)) {
   });
 }
 
-// The entity of the "field" frame in each scene message, with the step it was drawn in.
+// What a viewer shows of the "field" frame after each scene message, with the step it was drawn
+// in: the message's deletions and entities applied to what the messages before it left (the
+// still and the moving entity), the field's primitives gathered into one entity-like object.
 function fieldScenes(run) {
   const stepAt = new Map(run.of("/arbiter/step").map((m) => [m.logTime, m.data.step]));
+  const shown = new Map();
   return run.of("/arbiter/scene").map((m) => {
-    const entity = m.data.entities.find((e) => e.id === "field");
-    return { step: stepAt.get(m.logTime), entity, data: m.data };
+    for (const d of m.data.deletions) {
+      if (d.type === 1) shown.clear();
+      else shown.delete(d.id);
+    }
+    for (const e of m.data.entities) shown.set(e.id, e);
+    const field = [...shown.values()].filter((e) => e.frame_id === "field");
+    const entity = field.length === 0 ? undefined : { frame_id: "field" };
+    for (const kind of ["arrows", "cylinders", "lines", "texts"]) {
+      if (entity) entity[kind] = field.flatMap((e) => e[kind]);
+    }
+    return { step: stepAt.get(m.logTime), entity, data: m.data, logTime: m.logTime };
   });
 }
 
@@ -186,9 +198,28 @@ for (const [demo, run] of Object.entries(demos)) {
     assert.equal(scenes.length, run.of("/arbiter/step").filter((m) => !m.data.safe).length);
     for (const { data } of scenes) {
       assert.ok(validate(data), `${ajv.errorsText(validate.errors)}`);
-      // A message replaces the whole picture.
-      assert.deepEqual(data.deletions.map((d) => d.type), [1]);
     }
+  });
+
+  test(`${demo}: a scene message carries what changed, the whole picture at least once a second`, () => {
+    const scenes = fieldScenes(run);
+    const whole = (s) => s.data.deletions.some((d) => d.type === 1);
+    assert.ok(whole(scenes[0]), "the first message is the whole picture");
+    // A viewer that seeks shows the last message before the time it seeks to: a whole picture
+    // is never more than a second of log time behind.
+    let wholeAt = scenes[0].logTime;
+    for (const s of scenes) {
+      if (whole(s)) wholeAt = s.logTime;
+      assert.ok(s.logTime - wholeAt <= 1000000000n, `step ${s.step}: no whole picture for over 1 s`);
+      // A frame's entities: what does not move, and what does.
+      for (const e of s.data.entities) assert.match(e.id, new RegExp(`^${e.frame_id}/(still|moving)$`));
+      // Between whole pictures only what moves is written (nothing, when nothing does).
+      if (!whole(s)) assert.ok(s.data.entities.every((e) => e.id === "field/moving"), `step ${s.step}`);
+    }
+    // The field's outline, which does not move, is written only with the whole pictures.
+    const outlined = scenes.filter((s) => s.data.entities.some((e) => e.lines.some((l) => l.points.length === 4 && l.type === 1)));
+    assert.deepEqual(outlined.map((s) => s.step), scenes.filter(whole).map((s) => s.step));
+    assert.ok(outlined.length < scenes.length / 10, `${outlined.length} of ${scenes.length}`);
   });
 
   test(`${demo}: the scene draws the field, the goals, the robot and the ball, which moves`, () => {

@@ -28,48 +28,49 @@ export class SceneView {
       seen.push([x, y]);
       return `${x},${-y}`;
     };
-    for (const entity of update.entities) {
-      for (const line of entity.lines) {
-        const points = line.points.map((p) => point(p.x + line.pose.position.x, p.y + line.pose.position.y)).join(' ');
-        const shape = line.type === 1 ? 'polygon' : 'polyline';
-        this.root.append(el(shape, {
-          points, fill: 'none', stroke: rgba(line.color), 'stroke-width': line.thickness,
-          'stroke-linejoin': 'round', 'data-kind': line.type === 1 ? 'loop' : 'line',
-        }));
-      }
-      for (const disc of entity.cylinders) {
-        const {x, y} = disc.pose.position;
-        point(x, y);
-        this.root.append(el('circle', {
-          cx: x, cy: -y, r: disc.size.x / 2, fill: rgba(disc.color), 'data-kind': 'disc',
-        }));
-      }
-      for (const arrow of entity.arrows) {
-        const {x, y} = arrow.pose.position;
-        const angle = yaw(arrow.pose.orientation);
-        const length = arrow.shaft_length + arrow.head_length;
-        const at = (along, across) => point(x + along * Math.cos(angle) - across * Math.sin(angle),
-                                            y + along * Math.sin(angle) + across * Math.cos(angle));
-        const half = arrow.head_diameter / 2;
-        this.root.append(el('polyline', {
-          points: `${at(0, 0)} ${at(arrow.shaft_length, 0)}`, stroke: rgba(arrow.color),
-          'stroke-width': arrow.shaft_diameter, fill: 'none', 'data-kind': 'arrow',
-        }));
-        this.root.append(el('polygon', {
-          points: `${at(arrow.shaft_length, half)} ${at(length, 0)} ${at(arrow.shaft_length, -half)}`,
-          fill: rgba(arrow.color),
-        }));
-      }
-      for (const text of entity.texts) {
-        const {x, y} = text.pose.position;
-        point(x, y);
-        const node = el('text', {
-          x, y: -y, 'font-size': text.font_size, fill: rgba(text.color), 'text-anchor': 'middle',
-          'dominant-baseline': 'middle', 'data-kind': 'text',
-        });
-        node.textContent = text.text;
-        this.root.append(node);
-      }
+    // A frame comes in more than one entity: drawn kind by kind, lines under discs under arrows
+    // under texts, whatever order they came in.
+    const all = (kind) => update.entities.flatMap((entity) => entity[kind]);
+    for (const line of all('lines')) {
+      const points = line.points.map((p) => point(p.x + line.pose.position.x, p.y + line.pose.position.y)).join(' ');
+      const shape = line.type === 1 ? 'polygon' : 'polyline';
+      this.root.append(el(shape, {
+        points, fill: 'none', stroke: rgba(line.color), 'stroke-width': line.thickness,
+        'stroke-linejoin': 'round', 'data-kind': line.type === 1 ? 'loop' : 'line',
+      }));
+    }
+    for (const disc of all('cylinders')) {
+      const {x, y} = disc.pose.position;
+      point(x, y);
+      this.root.append(el('circle', {
+        cx: x, cy: -y, r: disc.size.x / 2, fill: rgba(disc.color), 'data-kind': 'disc',
+      }));
+    }
+    for (const arrow of all('arrows')) {
+      const {x, y} = arrow.pose.position;
+      const angle = yaw(arrow.pose.orientation);
+      const length = arrow.shaft_length + arrow.head_length;
+      const at = (along, across) => point(x + along * Math.cos(angle) - across * Math.sin(angle),
+                                          y + along * Math.sin(angle) + across * Math.cos(angle));
+      const half = arrow.head_diameter / 2;
+      this.root.append(el('polyline', {
+        points: `${at(0, 0)} ${at(arrow.shaft_length, 0)}`, stroke: rgba(arrow.color),
+        'stroke-width': arrow.shaft_diameter, fill: 'none', 'data-kind': 'arrow',
+      }));
+      this.root.append(el('polygon', {
+        points: `${at(arrow.shaft_length, half)} ${at(length, 0)} ${at(arrow.shaft_length, -half)}`,
+        fill: rgba(arrow.color),
+      }));
+    }
+    for (const text of all('texts')) {
+      const {x, y} = text.pose.position;
+      point(x, y);
+      const node = el('text', {
+        x, y: -y, 'font-size': text.font_size, fill: rgba(text.color), 'text-anchor': 'middle',
+        'dominant-baseline': 'middle', 'data-kind': 'text',
+      });
+      node.textContent = text.text;
+      this.root.append(node);
     }
     this.fit(seen);
     // What did not fit in the step's room is said, not silently left out.

@@ -81,6 +81,7 @@ struct Recorder::Output {
   std::string inputs_record;
   std::string log_record;
   std::string scene_record;
+  SceneUpdates scene_updates;
   std::string step_schema, inputs_schema;  // of the channels written to last
   detail::StepImage image;                 // the writer's, as of the last slot it formatted
   // The stepping thread's: whether the last slot published is the one before the next (no step
@@ -411,6 +412,7 @@ void Recorder::write_loop() {
       const auto time = out.clock.reload(slot.step, slot.wall_time, written_->rate_hz);
       if (!failed()) {
         out.writer.metadata("arbiter.reload", reload);
+        out.scene_updates.restart();  // the new program's picture whole, from its first step
         // A program laid out otherwise has channels of its own, on the same topics: each
         // message is checked against the schema of its program.
         const auto& channels = written_->channels;
@@ -458,8 +460,8 @@ void Recorder::write_loop() {
       // Only steps that drew: a viewer keeps showing the last picture.
       if (step.scene.size() > 0 || step.scene_dropped > 0) {
         out.scene_record.clear();
-        append_scene_update(time, step.scene.data(), step.scene.size(), step.scene_points.data(),
-                            step.scene_dropped, out.scene_record);
+        out.scene_updates.append(time, step.scene.data(), step.scene.size(),
+                                 step.scene_points.data(), step.scene_dropped, out.scene_record);
         out.writer.message(out.scene, time, wall, out.scene_record);
       }
       detail::for_each_report_log(
