@@ -142,6 +142,9 @@ struct FoxgloveServer::Impl {
   std::uint64_t run_start = 0;
   detail::LogClock clock;
   std::string record, inputs, log, scene, frame;
+  // The scene messages carry what changed since the message before (channels.hpp); the next one
+  // is the whole picture after a reload and when a client subscribes, which has seen none before.
+  SceneUpdates scene_updates;
 
   std::atomic<std::size_t> connected{0};
   std::atomic<std::uint64_t> opened{0}, sent{0}, dropped_for_clients{0}, dropped_steps{0};
@@ -352,6 +355,7 @@ struct FoxgloveServer::Impl {
           header_time = clock.reload(slot.step, slot.wall_time, reading->rate_hz);
         }
         take_channels(*reading);
+        scene_updates.restart();
         broadcast(channel_at(kHeaderChannel), header_time, header);
         slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
         headers_written.fetch_add(1, std::memory_order_release);
@@ -387,8 +391,8 @@ struct FoxgloveServer::Impl {
       if (const auto* advertised = channel_at(kSceneChannel);
           advertised != nullptr && (step.scene.size() > 0 || step.scene_dropped > 0)) {
         scene.clear();
-        append_scene_update(time, step.scene.data(), step.scene.size(), step.scene_points.data(),
-                            step.scene_dropped, scene);
+        scene_updates.append(time, step.scene.data(), step.scene.size(), step.scene_points.data(),
+                             step.scene_dropped, scene);
         broadcast(advertised, time, scene);
       }
       detail::for_each_report_log(
@@ -518,6 +522,7 @@ struct FoxgloveServer::Impl {
         if (advertised == channel_at(kHeaderChannel) && !header.empty()) {
           send_data(handle, client, id, header_time, header);
         }
+        if (advertised == channel_at(kSceneChannel)) scene_updates.restart();
       }
       update_wanted();
     } else if (*op == "unsubscribe") {
