@@ -59,7 +59,7 @@ struct Generation {
         channels(detail::channels(layout, program.name)),
         rate_hz(program.rate_hz) {
     blocks.reset(layout, kReportTextBytes, slots);
-    last.bytes.assign(blocks.shape().tracked.total, std::byte{0});
+    last.reset(blocks.shape());
   }
   std::uint64_t stage = 0;
   detail::StepLayout layout;

@@ -36,7 +36,7 @@ struct Recorder::Generation {
         channels(detail::channels(layout, program.name)),
         rate_hz(program.rate_hz) {
     blocks.reset(layout, kReportTextBytes, slots);
-    last.bytes.assign(blocks.shape().tracked.total, std::byte{0});
+    last.reset(blocks.shape());
   }
   std::uint64_t stage = 0;  // Manager::stage_number()
   detail::StepLayout layout;

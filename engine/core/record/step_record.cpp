@@ -256,8 +256,10 @@ SnapshotShape::SnapshotShape(const StepLayout& layout, std::size_t text_bytes_)
   events_at = place<Controller::Event>(extra, events);
   event_args_at = place<Controller::EventArg>(extra, event_args);
   scene_counts_at = place<SceneCounts>(extra, 1);
-  scene_at = place<ScenePrimitive>(extra, Manager::kScenePrimitivesPerStep);
-  scene_points_at = place<ScenePoint>(extra, Manager::kScenePointsPerStep);
+  scene_changed_at = place<std::uint32_t>(extra, kSceneBytes / kChunk);
+  // Whole lines, which a capture streams (stream_lines()).
+  scene_at = round_up(extra, kCacheLine);
+  extra = scene_at + kSceneBytes;
   extra_bytes = round_up(extra, kCacheLine);
 }
 
@@ -301,8 +303,11 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
     construct_part<Controller::Event>(extras, s.events_at, s.events);
     construct_part<Controller::EventArg>(extras, s.event_args_at, s.event_args);
     construct_part<SnapshotShape::SceneCounts>(extras, s.scene_counts_at, 1);
+    construct_part<std::uint32_t>(extras, s.scene_changed_at,
+                                  SnapshotShape::kSceneBytes / SnapshotShape::kChunk);
     construct_part<ScenePrimitive>(extras, s.scene_at, Manager::kScenePrimitivesPerStep);
-    construct_part<ScenePoint>(extras, s.scene_points_at, Manager::kScenePointsPerStep);
+    construct_part<ScenePoint>(extras, s.scene_at + SnapshotShape::kScenePrimitiveBytes,
+                               Manager::kScenePointsPerStep);
   }
   if (!s.plain_values) {
     for (const auto& actuator : layout.actuators) {
@@ -396,7 +401,39 @@ std::uint32_t copy_changed(const std::byte* now, std::byte* kept, std::byte* to,
   return count;
 }
 
+// Copies the first `used` bytes of one part of a step's picture (its primitives or its points,
+// `now`) into a block's `to` (cold; a cache line on), as whole lines streamed past the caches:
+// those that differ from `kept` (the capture before's, whose first `valid` bytes the reader has
+// too) when `chained`, else all. Lists the chunks copied in `changed` from `*count` on, numbered
+// from `first`. The lines are read whole from `now`, which has room for them (kSceneBytes);
+// a reader copies only what was used of them.
+void capture_scene_part(const std::byte* now, std::byte* kept, std::size_t& valid, std::byte* to,
+                        std::size_t used, bool chained, std::uint32_t first, std::uint32_t* changed,
+                        std::uint32_t& count) {
+  if (!chained) {
+    stream_lines(to, now, round_up(used, SnapshotShape::kChunk));
+    if (kept != nullptr) std::memcpy(kept, now, used);
+    valid = used;
+    return;
+  }
+  std::uint32_t chunk = first;
+  for (std::size_t at = 0; at < used; at += SnapshotShape::kChunk, ++chunk) {
+    const auto size = std::min(SnapshotShape::kChunk, used - at);
+    if (at + size <= valid && same_chunk(now + at, kept + at, size)) continue;
+    stream_lines(to + at, now + at, SnapshotShape::kChunk);
+    std::memcpy(kept + at, now + at, size);
+    changed[count++] = chunk;
+  }
+  valid = std::max(valid, used);
+}
+
 }  // namespace
+
+void StepImage::reset(const SnapshotShape& shape) {
+  bytes.assign(shape.tracked.total, std::byte{0});
+  scene.assign(SnapshotShape::kSceneBytes, std::byte{0});
+  scene_valid[0] = scene_valid[1] = 0;
+}
 
 bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
                   SnapshotBlock into, bool may_allocate, StepImage* last, bool chained) {
@@ -529,10 +566,24 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   scene_counts.points =
       static_cast<std::uint32_t>(std::min(scene.point_count, scene.point_capacity));
   scene_counts.dropped = static_cast<std::uint32_t>(scene.dropped);
-  std::memcpy(part_of<ScenePrimitive>(into.extras, shape.scene_at), scene.primitives,
-              scene_counts.primitives * sizeof(ScenePrimitive));
-  std::memcpy(part_of<ScenePoint>(into.extras, shape.scene_points_at), scene.points,
-              scene_counts.points * sizeof(ScenePoint));
+  // Most of a picture is drawn alike step after step (a field): compared where it is hot, and
+  // written to the block, cold, only by the lines that changed.
+  const bool scene_chained = !header.full && last != nullptr;
+  std::byte* kept = last != nullptr ? last->scene.data() : nullptr;
+  std::size_t unused[2] = {};
+  std::size_t* valid = last != nullptr ? last->scene_valid : unused;
+  auto* changed = part_of<std::uint32_t>(into.extras, shape.scene_changed_at);
+  std::uint32_t changed_count = 0;
+  std::byte* scene_to = into.extras + shape.scene_at;
+  capture_scene_part(reinterpret_cast<const std::byte*>(scene.primitives), kept, valid[0], scene_to,
+                     scene_counts.primitives * sizeof(ScenePrimitive), scene_chained, 0, changed,
+                     changed_count);
+  constexpr auto kPointsAt = SnapshotShape::kScenePrimitiveBytes;
+  capture_scene_part(reinterpret_cast<const std::byte*>(scene.points),
+                     kept != nullptr ? kept + kPointsAt : nullptr, valid[1], scene_to + kPointsAt,
+                     scene_counts.points * sizeof(ScenePoint), scene_chained,
+                     kPointsAt / SnapshotShape::kChunk, changed, changed_count);
+  scene_counts.changed = changed_count;
   if (shape.streamed) {
     stream_lines(block + shape.tracked_at[0], now, shape.tracked.allocated);
     stream_lines(block, reinterpret_cast<const std::byte*>(&header), sizeof header);
@@ -571,9 +622,11 @@ StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)
   reports = {part_of<Report>(extras, s.reports_at), header.report_count};
   input_reports = header.input_reports;
   texts = std::string_view(part_of<char>(extras, s.texts_at), header.text_size);
+  scene_block = extras;
   const auto& counts = *part_of<SnapshotShape::SceneCounts>(extras, s.scene_counts_at);
   scene = {part_of<ScenePrimitive>(extras, s.scene_at), counts.primitives};
-  scene_points = {part_of<ScenePoint>(extras, s.scene_points_at), counts.points};
+  scene_points = {part_of<ScenePoint>(extras, s.scene_at + SnapshotShape::kScenePrimitiveBytes),
+                  counts.points};
   scene_dropped = counts.dropped;
 }
 
@@ -596,6 +649,30 @@ void StepSnapshot::apply(StepImage& image) {
       std::copy(from + at, from + at + size, to + at);
     }
   }
+  // The picture: whole, or the lines that changed, each only as far as the step used it.
+  image.scene.resize(SnapshotShape::kSceneBytes);
+  const std::size_t used[2] = {scene.size() * sizeof(ScenePrimitive),
+                               scene_points.size() * sizeof(ScenePoint)};
+  const std::byte* scene_from = scene_block + s.scene_at;
+  const auto copy_scene = [&](std::size_t at, std::size_t size) {
+    std::copy(scene_from + at, scene_from + at + size, image.scene.data() + at);
+  };
+  constexpr auto kPointsAt = SnapshotShape::kScenePrimitiveBytes;
+  if (header.full) {
+    copy_scene(0, used[0]);
+    copy_scene(kPointsAt, used[1]);
+  } else {
+    const auto& counts = *part_of<SnapshotShape::SceneCounts>(scene_block, s.scene_counts_at);
+    const auto* changed = part_of<std::uint32_t>(scene_block, s.scene_changed_at);
+    for (std::uint32_t i = 0; i < counts.changed; ++i) {
+      const auto at = changed[i] * SnapshotShape::kChunk;
+      const bool points = at >= kPointsAt;
+      const auto end = points ? kPointsAt + used[1] : used[0];
+      copy_scene(at, std::min(SnapshotShape::kChunk, end - at));
+    }
+  }
+  scene = {part_of<ScenePrimitive>(image.scene.data(), 0), scene.size()};
+  scene_points = {part_of<ScenePoint>(image.scene.data(), kPointsAt), scene_points.size()};
   const std::byte* from = image.bytes.data();
   requested = {part_of<double>(from, s.tracked.at[TrackedLayout::kRequested]), s.behaviours};
   activation = {part_of<double>(from, s.tracked.at[TrackedLayout::kActivation]), s.behaviours};

@@ -117,7 +117,17 @@ struct SnapshotShape {
   using Arg = std::pair<std::uint32_t, ArgValue>;
   struct SceneCounts {
     std::uint32_t primitives = 0, points = 0, dropped = 0;
+    std::uint32_t changed = 0;  ///< chunks listed as changed, when the capture was chained
   };
+  /// A step's picture as a block (and a StepImage) holds it: the room for its primitives, then
+  /// for its points, each as the manager lays them out. A chained capture copies only the
+  /// chunks of them that changed, as it does a tracked part's: a step redraws the same field.
+  static constexpr std::size_t kScenePrimitiveBytes =
+      Manager::kScenePrimitivesPerStep * sizeof(ScenePrimitive);
+  static constexpr std::size_t kScenePointBytes = Manager::kScenePointsPerStep * sizeof(ScenePoint);
+  static constexpr std::size_t kSceneBytes = kScenePrimitiveBytes + kScenePointBytes;
+  static_assert(kScenePrimitiveBytes % kChunk == 0 && kScenePointBytes % kChunk == 0,
+                "the picture's parts are whole chunks, copied as whole cache lines");
 
   std::size_t behaviours = 0, actuators = 0, machines = 0;
   std::size_t args = 0, queue = 0, events = 0, event_args = 0, text_bytes = 0;
@@ -151,8 +161,9 @@ struct SnapshotShape {
   std::size_t bytes = 0;  ///< a block's: whole cache lines, so that blocks share none
   /// Where the seldom written parts start in a block's extras, and their bytes.
   std::size_t reports_at = 0, texts_at = 0, events_at = 0, event_args_at = 0;
-  /// What code drew (StepContext::scene): its counts, primitives and points.
-  std::size_t scene_counts_at = 0, scene_at = 0, scene_points_at = 0;
+  /// What code drew (StepContext::scene): its counts, then (a cache line on) its primitives and
+  /// points (kSceneBytes), and the list of the chunks of them a chained capture copied.
+  std::size_t scene_counts_at = 0, scene_at = 0, scene_changed_at = 0;
   std::size_t extra_bytes = 0;
 };
 
@@ -166,6 +177,12 @@ struct SnapshotBlock {
 /// its last capture left them, or a reader's, brought up to date by the snapshots in order.
 struct StepImage {
   std::vector<std::byte> bytes;
+  /// The step's picture as a block holds it (SnapshotShape::kSceneBytes): up to `scene_valid`
+  /// bytes of primitives and of points, those of the capture before, kept as the reader has them.
+  std::vector<std::byte> scene;
+  std::size_t scene_valid[2] = {};
+  /// Zeroed, sized for `shape`: the stepping side's, before its first capture.
+  void reset(const SnapshotShape& shape);
 };
 
 /// Blocks of one shape, one after another: one for a trace writer, a ring of them for a
@@ -265,6 +282,7 @@ struct StepSnapshot {
   Span<ScenePrimitive> scene;
   Span<ScenePoint> scene_points;
   std::uint32_t scene_dropped = 0;
+  const std::byte* scene_block = nullptr;  ///< the block's extras, which hold the picture
 
   const void* value(const StepLayout& layout, std::uint32_t actuator) const {
     return values + layout.actuators[actuator].offset;
