@@ -36,8 +36,6 @@ using Handle = websocketpp::connection_hdl;
 using Json = nlohmann::json;
 
 constexpr const char* kSubprotocol = "foxglove.websocket.v1";
-// Reported text a slot holds, as a recording's; a step that reported more is dropped.
-constexpr std::size_t kReportTextBytes = 4096;
 // How often the server's thread looks at the ring: a client sees a step at most this late.
 constexpr auto kPoll = std::chrono::milliseconds(5);
 // The Foxglove WebSocket protocol's status levels.
@@ -49,26 +47,8 @@ std::uint64_t wall_ns() {
                                         .count());
 }
 
-// The ring laid out for one program, as a recorder's (recording.cpp): made where the program is
-// staged, so that a hot reload does not allocate on the stepping thread.
-struct Generation {
-  Generation(const Program& program, std::uint64_t stage_, std::size_t slots)
-      : stage(stage_),
-        layout(program),
-        header(trace_header(program)),
-        channels(detail::channels(layout, program.name)),
-        rate_hz(program.rate_hz) {
-    blocks.reset(layout, kReportTextBytes, slots);
-    last.reset(blocks.shape());
-  }
-  std::uint64_t stage = 0;
-  detail::StepLayout layout;
-  detail::SnapshotBlocks blocks;
-  detail::StepImage last;  // the stepping thread's: the tracked parts as its last capture left them
-  std::string header;
-  std::vector<Channel> channels;  // channels(program), in ChannelIndex order
-  double rate_hz = 0.0;
-};
+// The ring laid out for one program, as a recorder's.
+using Generation = detail::SnapshotGeneration;
 
 // Who the server's own log messages are from.
 constexpr const char* kServerName = "Foxglove server";

@@ -23,29 +23,10 @@ void append_inputs_record(const Manager& manager, std::string& out) {
   detail::append_inputs_record(layout, detail::capture_growing(manager, layout, storage), out);
 }
 
-// Reported text a slot holds; a step that reported more is dropped.
-constexpr std::size_t kReportTextBytes = 4096;
-
-// The ring laid out for one program: made on the thread that stages it where it can be, so that
-// a hot reload neither allocates on the stepping thread nor waits there for the writer.
-struct Recorder::Generation {
-  Generation(const Program& program, std::uint64_t stage_, std::size_t slots)
-      : stage(stage_),
-        layout(program),
-        header(trace_header(program)),
-        channels(detail::channels(layout, program.name)),
-        rate_hz(program.rate_hz) {
-    blocks.reset(layout, kReportTextBytes, slots);
-    last.reset(blocks.shape());
-  }
-  std::uint64_t stage = 0;  // Manager::stage_number()
-  detail::StepLayout layout;
-  detail::SnapshotBlocks blocks;
-  // The stepping thread's: the tracked parts as the last slot published left them.
-  detail::StepImage last;
-  std::string header;  // the program's trace header, without the reload's number and step
-  std::vector<Channel> channels;  // their schemas, written for the program
-  double rate_hz = 0.0;
+// The ring laid out for one program (detail::SnapshotGeneration), and the files of the config it
+// was reloaded from.
+struct Recorder::Generation : detail::SnapshotGeneration {
+  using SnapshotGeneration::SnapshotGeneration;
   std::vector<std::pair<std::string, std::string>> files;  // the reloaded config's
 };
 

@@ -429,6 +429,17 @@ void capture_scene_part(const std::byte* now, std::byte* kept, std::size_t& vali
 
 }  // namespace
 
+SnapshotGeneration::SnapshotGeneration(const Program& program, std::uint64_t stage_,
+                                       std::size_t slots)
+    : stage(stage_),
+      layout(program),
+      header(trace_header(program)),
+      channels(detail::channels(layout, program.name)),
+      rate_hz(program.rate_hz) {
+  blocks.reset(layout, kReportTextBytes, slots);
+  last.reset(blocks.shape());
+}
+
 void StepImage::reset(const SnapshotShape& shape) {
   bytes.assign(shape.tracked.total, std::byte{0});
   scene.assign(SnapshotShape::kSceneBytes, std::byte{0});

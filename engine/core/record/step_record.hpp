@@ -213,6 +213,24 @@ class SnapshotBlocks {
   std::vector<std::pair<const ValueType*, std::size_t>> constructed_;
 };
 
+/// A ring of snapshots laid out for one program, as a recorder and the live Foxglove server
+/// keep them: made on the thread that stages the program where it can be, so that a hot reload
+/// neither allocates on the stepping thread nor waits there for the reader.
+struct SnapshotGeneration {
+  /// Reported text a slot holds; a step that reported more is dropped.
+  static constexpr std::size_t kReportTextBytes = 4096;
+
+  SnapshotGeneration(const Program& program, std::uint64_t stage, std::size_t slots);
+  std::uint64_t stage = 0;  ///< Manager::stage_number()
+  StepLayout layout;
+  SnapshotBlocks blocks;  ///< one per slot of the ring
+  /// The stepping thread's: what its last capture left, for the next one to copy what changed.
+  StepImage last;
+  std::string header;             ///< the program's trace header, without a reload's number
+  std::vector<Channel> channels;  ///< channels(program), in ChannelIndex order
+  double rate_hz = 0.0;
+};
+
 /// Copies the manager's last step (or safe pass) into `block`, of `shape`. False when something
 /// does not fit (more reported text than the block holds; without `may_allocate`, a string value
 /// longer than its reserve): the block is then incomplete and must not be read.
