@@ -128,6 +128,19 @@ struct SnapshotShape {
   static constexpr std::size_t kSceneBytes = kScenePrimitiveBytes + kScenePointBytes;
   static_assert(kScenePrimitiveBytes % kChunk == 0 && kScenePointBytes % kChunk == 0,
                 "the picture's parts are whole chunks, copied as whole cache lines");
+  /// The chunks of a chained capture's picture that go in the block itself, beside the step's
+  /// other values: the block is written on the pages the step before wrote, where the picture's
+  /// room (kSceneBytes, in the extras) spreads each step over pages of its own, and a page the
+  /// step has not touched lately costs it a TLB miss. More changed chunks go there.
+  static constexpr std::size_t kSceneInlineChunks = 8;
+  /// The picture's counts and the first of its changed chunks' list: one line of the block,
+  /// written whole (streamed) at every capture.
+  struct alignas(64) SceneLine {
+    SceneCounts counts;
+    static constexpr std::size_t kListed = (kChunk - sizeof(SceneCounts)) / sizeof(std::uint32_t);
+    std::uint32_t changed[kListed] = {};
+  };
+  static_assert(sizeof(SceneLine) == kChunk && SceneLine::kListed >= kSceneInlineChunks);
 
   std::size_t behaviours = 0, actuators = 0, machines = 0;
   std::size_t args = 0, queue = 0, events = 0, event_args = 0, text_bytes = 0;
@@ -161,9 +174,12 @@ struct SnapshotShape {
   std::size_t bytes = 0;  ///< a block's: whole cache lines, so that blocks share none
   /// Where the seldom written parts start in a block's extras, and their bytes.
   std::size_t reports_at = 0, texts_at = 0, events_at = 0, event_args_at = 0;
-  /// What code drew (StepContext::scene): its counts, then (a cache line on) its primitives and
-  /// points (kSceneBytes), and the list of the chunks of them a chained capture copied.
-  std::size_t scene_counts_at = 0, scene_at = 0, scene_changed_at = 0;
+  /// What code drew (StepContext::scene). In the block: its SceneLine and the first
+  /// kSceneInlineChunks chunks a chained capture copied. In the extras: the rest of the list of
+  /// those chunks (from SceneLine::kListed on), and its primitives and points (kSceneBytes, a
+  /// whole capture's, and the chunks of a chained one beyond those in the block, where they lie
+  /// in the picture).
+  std::size_t scene_line_at = 0, scene_inline_at = 0, scene_changed_at = 0, scene_at = 0;
   std::size_t extra_bytes = 0;
 };
 
@@ -300,7 +316,8 @@ struct StepSnapshot {
   Span<ScenePrimitive> scene;
   Span<ScenePoint> scene_points;
   std::uint32_t scene_dropped = 0;
-  const std::byte* scene_block = nullptr;  ///< the block's extras, which hold the picture
+  const std::byte* scene_block = nullptr;   ///< the block, with the picture's counts
+  const std::byte* scene_extras = nullptr;  ///< the block's extras, with the picture
 
   const void* value(const StepLayout& layout, std::uint32_t actuator) const {
     return values + layout.actuators[actuator].offset;
