@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <new>
@@ -27,6 +28,7 @@
 #include "arbiter/recording.hpp"
 #include "arbiter/substitute.hpp"
 #include "commands/timing.hpp"
+#include "core/record/step_record.hpp"
 #include "counting_new.hpp"
 #include "test_support.hpp"
 
@@ -556,4 +558,59 @@ TEST_CASE("a text cut to its room is cut between characters", "[scene]") {
   // 39 bytes fit: 19 whole characters, the first byte of the 20th left out.
   CHECK(message.find("\"text\": \"" + long_text.substr(0, 38) + "\"") != std::string::npos);
   CHECK(message.find(R"("text": "kick")") != std::string::npos);
+}
+
+namespace {
+
+// Draws a field that stays and `moving` discs that move with the step, `moving` changing with the
+// step: from nothing moving to more changed lines than a block holds.
+class Mover final : public Interface {
+ public:
+  void input(WriteContext& ctx) override {
+    Scene scene = ctx.scene("field");
+    for (int i = 0; i < 20; ++i) scene.circle({static_cast<double>(i), 0.0}, 0.5, SceneColor{});
+    const ScenePoint outline[] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    scene.polygon(outline, 4, SceneColor{});
+    const int moving = kMoving[steps_ % 4];
+    for (int i = 0; i < moving; ++i) {
+      const double at = static_cast<double>(steps_) + i;
+      scene.circle({at, -at}, 0.1, SceneColor{1.0f, 0.0f, 0.0f, 1.0f}, true);
+      const ScenePoint line[] = {{at, 0}, {0, at}, {at, at}};
+      scene.polyline(line, 3, SceneColor{});
+    }
+    ++steps_;
+  }
+  static constexpr int kMoving[] = {0, 1, 30, 2};
+  std::int64_t steps_ = 0;
+};
+
+}  // namespace
+
+TEST_CASE("a chained capture gives the reader every step's whole picture", "[record][scene]") {
+  Registry registry = test::make_test_registry();
+  registry.add_interface<Mover>("test.Mover");
+  Manager manager(test::compile_text(
+      "arbiter: 1\nname: moving\nlayers:\n  - name: world\n    interface: test.Mover\n", registry));
+  detail::SnapshotGeneration generation(manager.program(), 0, 3);
+  detail::StepImage image;  // the reader's
+  const auto& shape = generation.blocks.shape();
+  for (std::size_t i = 0; i < 40; ++i) {
+    manager.step();
+    // Step 10 is a whole capture again, as after a dropped step.
+    const bool chained = i > 0 && i != 10;
+    const auto block = generation.blocks[i % generation.blocks.size()];
+    REQUIRE(detail::capture_step(manager, generation.layout, shape, block, false, &generation.last,
+                                 chained));
+    detail::fence_streamed_stores();
+    detail::StepSnapshot step(shape, block);
+    step.apply(image);
+    const auto& drawn = manager.scene();
+    REQUIRE(step.scene.size() == manager.scene_primitive_count());
+    REQUIRE(step.scene_points.size() == drawn.point_count);
+    INFO("step " << manager.steps());
+    CHECK(std::memcmp(step.scene.data(), drawn.primitives,
+                      step.scene.size() * sizeof(ScenePrimitive)) == 0);
+    CHECK(std::memcmp(step.scene_points.data(), drawn.points,
+                      step.scene_points.size() * sizeof(ScenePoint)) == 0);
+  }
 }
