@@ -131,7 +131,8 @@ struct SnapshotShape {
   /// The chunks of a chained capture's picture that go in the block itself, beside the step's
   /// other values: the block is written on the pages the step before wrote, where the picture's
   /// room (kSceneBytes, in the extras) spreads each step over pages of its own, and a page the
-  /// step has not touched lately costs it a TLB miss. More changed chunks go there.
+  /// step has not touched lately costs it a TLB miss. Changed chunks beyond these go in the
+  /// extras.
   static constexpr std::size_t kSceneInlineChunks = 8;
   /// The picture's counts and the first of its changed chunks' list: one line of the block,
   /// written whole (streamed) at every capture.
