@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <new>
@@ -27,6 +28,7 @@
 #include "arbiter/recording.hpp"
 #include "arbiter/substitute.hpp"
 #include "commands/timing.hpp"
+#include "core/record/step_record.hpp"
 #include "counting_new.hpp"
 #include "test_support.hpp"
 
@@ -477,3 +479,138 @@ TEST_CASE("a step served to a subscribed Foxglove client allocates nothing on th
   CHECK(counts.dropped_steps == 0);
 }
 #endif
+namespace {
+
+// Draws more than a step has room for: as many circles as `circles`, and a polyline of
+// `points` points.
+class Painter final : public Interface {
+ public:
+  void input(WriteContext& ctx) override {
+    Scene scene = ctx.scene("a frame name longer than its room");
+    for (std::int64_t i = 0; i < circles_; ++i) {
+      scene.circle({static_cast<double>(i), 0.0}, 0.1, SceneColor{});
+    }
+    std::vector<ScenePoint>& line = line_;
+    scene.polyline(line.data(), line.size(), SceneColor{});
+  }
+  void init(InitContext&) override { line_.resize(static_cast<std::size_t>(points_)); }
+
+  std::int64_t circles_ = 0, points_ = 0;
+  std::vector<ScenePoint> line_;
+};
+
+}  // namespace
+
+TEST_CASE("drawing beyond a step's room drops and counts, without allocating", "[alloc][scene]") {
+  Registry registry = test::make_test_registry();
+  auto& info = registry.add_interface<Painter>("test.Painter");
+  info.param("circles", &Painter::circles_);
+  info.param("points", &Painter::points_);
+  const auto config = [](int circles, int points) {
+    return "arbiter: 1\nname: painted\nlayers:\n  - name: world\n    interface: test.Painter\n"
+           "    params: {circles: " +
+           std::to_string(circles) + ", points: " + std::to_string(points) + "}\n";
+  };
+  SECTION("more primitives than room: the first ones are kept") {
+    Manager manager(test::compile_text(config(200, 2), registry));
+    CHECK(allocations_in_steps(manager, 50) == 0);
+    REQUIRE(manager.scene_primitive_count() == Manager::kScenePrimitivesPerStep);
+    CHECK(manager.scene().dropped == 201 - Manager::kScenePrimitivesPerStep);
+    CHECK(manager.scene_dropped_total() == 49 * (201 - Manager::kScenePrimitivesPerStep));
+    CHECK(manager.scene().primitives[5].x0 == 5.0);
+    // The frame is copied, cut to its room.
+    CHECK(std::string(manager.scene().primitives[0].frame) == "a frame name lo");
+    std::string message;
+    append_scene_update(0, manager.scene().primitives, manager.scene_primitive_count(),
+                        manager.scene().points, manager.scene().dropped, message);
+    CHECK(message.find(R"("metadata": [{"key": "dropped", "value": "73"}])") != std::string::npos);
+  }
+  SECTION("more points than room: the line is dropped whole") {
+    Manager manager(test::compile_text(config(3, Manager::kScenePointsPerStep + 1), registry));
+    CHECK(allocations_in_steps(manager, 50) == 0);
+    CHECK(manager.scene_primitive_count() == 3);
+    CHECK(manager.scene().point_count == 0);
+    CHECK(manager.scene().dropped == 1);
+  }
+  SECTION("a step starts with an empty picture") {
+    Manager manager(test::compile_text(config(0, 0), registry));
+    manager.step();
+    CHECK(manager.scene_primitive_count() == 0);
+    CHECK(manager.scene().dropped == 1);  // a polyline of no points
+  }
+}
+
+TEST_CASE("a text cut to its room is cut between characters", "[scene]") {
+  ScenePrimitive primitives[2];
+  ScenePoint points[1];
+  detail::SceneData data;
+  data.primitives = primitives;
+  data.primitive_capacity = 2;
+  data.points = points;
+  data.point_capacity = 1;
+  Scene scene(data, "field");
+  std::string long_text;
+  for (int i = 0; i < 30; ++i) long_text += "\xc3\xa9";  // é, two bytes
+  scene.text({0.0, 0.0}, long_text.c_str(), SceneColor{});
+  scene.text({0.0, 0.0}, "kick", SceneColor{});
+  std::string message;
+  append_scene_update(0, primitives, data.primitive_count, points, data.dropped, message);
+  // 39 bytes fit: 19 whole characters, the first byte of the 20th left out.
+  CHECK(message.find("\"text\": \"" + long_text.substr(0, 38) + "\"") != std::string::npos);
+  CHECK(message.find(R"("text": "kick")") != std::string::npos);
+}
+
+namespace {
+
+// Draws a field that stays and `moving` discs that move with the step, `moving` changing with the
+// step: from nothing moving to more changed lines than a block holds.
+class Mover final : public Interface {
+ public:
+  void input(WriteContext& ctx) override {
+    Scene scene = ctx.scene("field");
+    for (int i = 0; i < 20; ++i) scene.circle({static_cast<double>(i), 0.0}, 0.5, SceneColor{});
+    const ScenePoint outline[] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    scene.polygon(outline, 4, SceneColor{});
+    const int moving = kMoving[steps_ % 4];
+    for (int i = 0; i < moving; ++i) {
+      const double at = static_cast<double>(steps_) + i;
+      scene.circle({at, -at}, 0.1, SceneColor{1.0f, 0.0f, 0.0f, 1.0f}, true);
+      const ScenePoint line[] = {{at, 0}, {0, at}, {at, at}};
+      scene.polyline(line, 3, SceneColor{});
+    }
+    ++steps_;
+  }
+  static constexpr int kMoving[] = {0, 1, 30, 2};
+  std::int64_t steps_ = 0;
+};
+
+}  // namespace
+
+TEST_CASE("a chained capture gives the reader every step's whole picture", "[record][scene]") {
+  Registry registry = test::make_test_registry();
+  registry.add_interface<Mover>("test.Mover");
+  Manager manager(test::compile_text(
+      "arbiter: 1\nname: moving\nlayers:\n  - name: world\n    interface: test.Mover\n", registry));
+  detail::SnapshotGeneration generation(manager.program(), 0, 3);
+  detail::StepImage image;  // the reader's
+  const auto& shape = generation.blocks.shape();
+  for (std::size_t i = 0; i < 40; ++i) {
+    manager.step();
+    // Step 10 is a whole capture again, as after a dropped step.
+    const bool chained = i > 0 && i != 10;
+    const auto block = generation.blocks[i % generation.blocks.size()];
+    REQUIRE(detail::capture_step(manager, generation.layout, shape, block, false, &generation.last,
+                                 chained));
+    detail::fence_streamed_stores();
+    detail::StepSnapshot step(shape, block);
+    step.apply(image);
+    const auto& drawn = manager.scene();
+    REQUIRE(step.scene.size() == manager.scene_primitive_count());
+    REQUIRE(step.scene_points.size() == drawn.point_count);
+    INFO("step " << manager.steps());
+    CHECK(std::memcmp(step.scene.data(), drawn.primitives,
+                      step.scene.size() * sizeof(ScenePrimitive)) == 0);
+    CHECK(std::memcmp(step.scene_points.data(), drawn.points,
+                      step.scene_points.size() * sizeof(ScenePoint)) == 0);
+  }
+}

@@ -36,8 +36,6 @@ using Handle = websocketpp::connection_hdl;
 using Json = nlohmann::json;
 
 constexpr const char* kSubprotocol = "foxglove.websocket.v1";
-// Reported text a slot holds, as a recording's; a step that reported more is dropped.
-constexpr std::size_t kReportTextBytes = 4096;
 // How often the server's thread looks at the ring: a client sees a step at most this late.
 constexpr auto kPoll = std::chrono::milliseconds(5);
 // The Foxglove WebSocket protocol's status levels.
@@ -49,26 +47,8 @@ std::uint64_t wall_ns() {
                                         .count());
 }
 
-// The ring laid out for one program, as a recorder's (recording.cpp): made where the program is
-// staged, so that a hot reload does not allocate on the stepping thread.
-struct Generation {
-  Generation(const Program& program, std::uint64_t stage_, std::size_t slots)
-      : stage(stage_),
-        layout(program),
-        header(trace_header(program)),
-        channels(detail::channels(layout, program.name)),
-        rate_hz(program.rate_hz) {
-    blocks.reset(layout, kReportTextBytes, slots);
-    last.bytes.assign(blocks.shape().tracked.total, std::byte{0});
-  }
-  std::uint64_t stage = 0;
-  detail::StepLayout layout;
-  detail::SnapshotBlocks blocks;
-  detail::StepImage last;  // the stepping thread's: the tracked parts as its last capture left them
-  std::string header;
-  std::vector<Channel> channels;  // channels(program), in ChannelIndex order
-  double rate_hz = 0.0;
-};
+// The ring laid out for one program, as a recorder's.
+using Generation = detail::SnapshotGeneration;
 
 // Who the server's own log messages are from.
 constexpr const char* kServerName = "Foxglove server";
@@ -141,7 +121,10 @@ struct FoxgloveServer::Impl {
   bool paced = false;  // set before the run starts: the log times' clock (detail::LogClock)
   std::uint64_t run_start = 0;
   detail::LogClock clock;
-  std::string record, inputs, log, frame;
+  std::string record, inputs, log, scene, frame;
+  // The scene messages carry what changed since the message before (channels.hpp); the next one
+  // is the whole picture after a reload and when a client subscribes, which has seen none before.
+  SceneUpdates scene_updates;
 
   std::atomic<std::size_t> connected{0};
   std::atomic<std::uint64_t> opened{0}, sent{0}, dropped_for_clients{0}, dropped_steps{0};
@@ -246,10 +229,11 @@ struct FoxgloveServer::Impl {
     const auto* step = channel_at(kStepChannel);
     const auto* in = channel_at(kInputsChannel);
     const auto* log_channel = channel_at(kLogChannel);
+    const auto* scene_channel = channel_at(kSceneChannel);
     bool any = false;
     for (const auto& [handle, client] : clients) {
       for (const auto& [subscription, id] : client.subscriptions) {
-        for (const auto* fed : {step, in, log_channel})
+        for (const auto* fed : {step, in, log_channel, scene_channel})
           any = any || (fed != nullptr && id == fed->id);
       }
     }
@@ -351,6 +335,7 @@ struct FoxgloveServer::Impl {
           header_time = clock.reload(slot.step, slot.wall_time, reading->rate_hz);
         }
         take_channels(*reading);
+        scene_updates.restart();
         broadcast(channel_at(kHeaderChannel), header_time, header);
         slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
         headers_written.fetch_add(1, std::memory_order_release);
@@ -381,6 +366,14 @@ struct FoxgloveServer::Impl {
         inputs.clear();
         detail::append_inputs_record(reading->layout, step, inputs);
         broadcast(advertised, time, inputs);
+      }
+      // Only steps that drew, as in a recording: a viewer keeps showing the last picture.
+      if (const auto* advertised = channel_at(kSceneChannel);
+          advertised != nullptr && (step.scene.size() > 0 || step.scene_dropped > 0)) {
+        scene.clear();
+        scene_updates.append(time, step.scene.data(), step.scene.size(), step.scene_points.data(),
+                             step.scene_dropped, scene);
+        broadcast(advertised, time, scene);
       }
       detail::for_each_report_log(
           reading->layout, step, time, log,
@@ -509,6 +502,7 @@ struct FoxgloveServer::Impl {
         if (advertised == channel_at(kHeaderChannel) && !header.empty()) {
           send_data(handle, client, id, header_time, header);
         }
+        if (advertised == channel_at(kSceneChannel)) scene_updates.restart();
       }
       update_wanted();
     } else if (*op == "unsubscribe") {

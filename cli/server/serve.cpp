@@ -13,6 +13,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "arbiter/channels.hpp"
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/trace.hpp"
@@ -543,7 +544,10 @@ void LiveView::on_start(const Manager& manager) {
   for (std::size_t i = 0; i < kRingSize; ++i) {
     std::lock_guard lock(ring_[i].mutex);
     ring_[i].record.reserve(2 * scratch_.size() + 256);
+    ring_[i].scene.reserve(2 * manager.scene_primitive_count() + 16);
+    ring_[i].scene_points.reserve(2 * manager.scene().point_count + 64);
   }
+  rate_hz_ = manager.program().rate_hz;
   {
     std::lock_guard lock(mutex_);
     safe_record_.reserve(2 * scratch_.size() + 256);
@@ -563,6 +567,7 @@ void LiveView::on_safe(const Manager& manager) {
 
 void LiveView::on_reload(const Manager& manager) {
   records_.reset(manager.program());
+  rate_hz_ = manager.program().rate_hz;
   publish_graph(manager);
 }
 
@@ -575,6 +580,10 @@ void LiveView::on_step(const Manager& manager) {
     std::lock_guard lock(slot.mutex);
     slot.step = step;
     slot.record.assign(scratch_);
+    const auto& scene = manager.scene();
+    slot.scene.assign(scene.primitives, scene.primitives + manager.scene_primitive_count());
+    slot.scene_points.assign(scene.points, scene.points + scene.point_count);
+    slot.scene_dropped = scene.dropped;
   }
   newest_ = step;
 }
@@ -589,6 +598,23 @@ bool LiveView::copy_record(std::uint64_t step, std::string& out) {
   std::lock_guard lock(slot.mutex);
   if (slot.step != step) return false;  // overwritten by a later step
   out += slot.record;
+  return true;
+}
+
+bool LiveView::copy_scene(std::uint64_t step, std::string& out) {
+  thread_local std::vector<ScenePrimitive> primitives;
+  thread_local std::vector<ScenePoint> points;
+  std::size_t dropped = 0;
+  {
+    Slot& slot = ring_[step % kRingSize];
+    std::lock_guard lock(slot.mutex);
+    if (slot.step != step || (slot.scene.empty() && slot.scene_dropped == 0)) return false;
+    primitives = slot.scene;
+    points = slot.scene_points;
+    dropped = slot.scene_dropped;
+  }
+  const auto time_ns = static_cast<std::uint64_t>(static_cast<double>(step) * 1e9 / rate_hz_);
+  append_scene_update(time_ns, primitives.data(), primitives.size(), points.data(), dropped, out);
   return true;
 }
 
@@ -682,6 +708,9 @@ bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint6
       record.clear();
       if (!copy_record(next, record)) continue;
       out += sse_frame("step", next, record);
+      // Right after its step: the page attaches it to the record it just received.
+      record.clear();
+      if (copy_scene(next, record)) out += sse_frame("scene", next, record);
       ++sent;
     }
   }

@@ -138,6 +138,10 @@ class LiveView : public Observer {
     std::mutex mutex;
     std::uint64_t step = 0;
     std::string record;
+    // What the step drew (StepContext::scene), formatted by the stream that sends it.
+    std::vector<ScenePrimitive> scene;
+    std::vector<ScenePoint> scene_points;
+    std::size_t scene_dropped = 0;
   };
   struct ExplainRequest {
     std::uint64_t step = 0;
@@ -152,6 +156,9 @@ class LiveView : public Observer {
   void answer_requests(const Manager& manager);
   /// Appends the record of `step` to `out`; false when the ring no longer holds it.
   bool copy_record(std::uint64_t step, std::string& out);
+  /// Appends the foxglove.SceneUpdate of what `step` drew to `out`; false when it drew nothing
+  /// or the ring no longer holds it.
+  bool copy_scene(std::uint64_t step, std::string& out);
   bool stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint64_t& status_seen,
               std::uint64_t& safe_seen, std::chrono::steady_clock::time_point& timing_sent,
               const std::function<bool(const std::string&)>& write);
@@ -166,11 +173,12 @@ class LiveView : public Observer {
   std::atomic<bool> finished_{false};
   StepRecordFormatter records_;
   std::string scratch_;  // the stepping thread's record, built before taking a slot's lock
-  std::mutex mutex_;     // guards what follows; held only to copy, never across I/O
-  std::condition_variable changed_;  // control from the page, explain requests, stopping
-  std::string graph_;                // the dump JSON of the current program
-  std::string header_;               // the trace header of the current program
-  std::string safe_record_;          // the record of the last safe-value pass
+  std::atomic<double> rate_hz_{1.0};  // of the running program: a scene's time is its step's
+  std::mutex mutex_;                  // guards what follows; held only to copy, never across I/O
+  std::condition_variable changed_;   // control from the page, explain requests, stopping
+  std::string graph_;                 // the dump JSON of the current program
+  std::string header_;                // the trace header of the current program
+  std::string safe_record_;           // the record of the last safe-value pass
   std::deque<ExplainRequest*> requests_;
   std::condition_variable answered_;
   std::atomic<bool> paused_{false};

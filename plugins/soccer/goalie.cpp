@@ -74,6 +74,7 @@ class WalkToPose final : public State, public WalkParams<StateParam<double>> {
     const Point relative = to_robot(robot, target_.position());
     const double distance = norm(relative);
     const double turn = wrap_angle(target_.theta - robot.theta);
+    draw(ctx, robot);
     if (distance <= ctx.param(position_tolerance_) &&
         std::abs(turn) <= ctx.param(angle_tolerance_)) {
       ctx.write(gait_velocity_, Vec3{});
@@ -89,6 +90,17 @@ class WalkToPose final : public State, public WalkParams<StateParam<double>> {
   }
 
  private:
+  // Where the walk goes, on the world's field: the pose, and the way there.
+  void draw(const StepContext& ctx, const Pose& robot) const {
+    constexpr SceneColor kTarget{0.3f, 0.9f, 1.0f, 0.9f};
+    const Point at = target_.position();
+    Scene scene = ctx.scene("field");
+    scene.line({robot.x, robot.y}, {at.x, at.y}, SceneColor{0.3f, 0.9f, 1.0f, 0.4f}, 0.02);
+    scene.circle({at.x, at.y}, 0.15, kTarget, false, 0.03);
+    const Point heading = at + 0.3 * unit(target_.theta);
+    scene.arrow({at.x, at.y}, {heading.x, heading.y}, kTarget, 0.03);
+  }
+
   friend void register_walk_to_pose(Registry& registry);
   Input<Vec3> pose_;
   Output<Vec3> gait_velocity_;

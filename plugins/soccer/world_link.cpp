@@ -4,10 +4,76 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "arbiter/init_context.hpp"
 
 namespace arbiter::soccer {
+
+namespace {
+
+constexpr SceneColor kLines{1.0f, 1.0f, 1.0f, 0.9f};
+constexpr SceneColor kGoalNegative{1.0f, 0.85f, 0.1f, 1.0f};  // the goal at x = -4.5
+constexpr SceneColor kGoalPositive{0.2f, 0.5f, 1.0f, 1.0f};
+constexpr SceneColor kRobot{0.1f, 0.2f, 0.7f, 1.0f};
+constexpr SceneColor kHeading{0.95f, 0.95f, 0.3f, 1.0f};
+constexpr SceneColor kView{1.0f, 1.0f, 1.0f, 0.35f};
+constexpr SceneColor kBall{1.0f, 0.45f, 0.0f, 1.0f};
+constexpr SceneColor kMotion{0.9f, 0.1f, 0.1f, 1.0f};
+
+ScenePoint at(Point p) {
+  return {p.x, p.y};
+}
+
+// The field as the world is at the start of the step, in the "field" frame: lines, goals, the
+// robot (its heading, what its camera sees, its body when down), the ball and where it rolls.
+void draw(const World& world, const Observation& seen, const StepContext& ctx) {
+  Scene scene = ctx.scene("field");
+  const auto& c = world.config();
+  const double x = 0.5 * c.field_length, y = 0.5 * c.field_width, goal = 0.5 * c.goal_width;
+  const ScenePoint outline[] = {{-x, -y}, {x, -y}, {x, y}, {-x, y}};
+  scene.polygon(outline, 4, kLines, 0.05);
+  scene.line({0.0, -y}, {0.0, y}, kLines, 0.05);
+  scene.circle({0.0, 0.0}, 0.75, kLines, false, 0.05);
+  for (const int side : {-1, 1}) {
+    const double depth = 0.6;
+    const ScenePoint net[] = {{side * x, -goal},
+                              {side * (x + depth), -goal},
+                              {side * (x + depth), goal},
+                              {side * x, goal}};
+    scene.polyline(net, 4, side < 0 ? kGoalNegative : kGoalPositive, 0.08);
+  }
+
+  const Pose& robot = world.robot();
+  const Point position = robot.position();
+  if (world.down()) {
+    const Point end = position + (world.dive_side() * c.dive_reach) * unit(robot.theta + 0.5 * kPi);
+    scene.line(at(position), at(end), kRobot, 0.2);
+  }
+  scene.circle(at(position), 0.15, kRobot, true);
+  scene.arrow(at(position), at(position + 0.45 * unit(robot.theta)), kHeading, 0.05);
+  const double gaze = robot.theta + world.head_yaw();
+  for (const double side : {-1.0, 1.0}) {
+    scene.line(at(position), at(position + 1.5 * unit(gaze + side * c.camera_half_fov)), kView,
+               0.02);
+  }
+
+  const Point ball = world.ball();
+  scene.circle(at(ball), 0.075, kBall, true);
+  const Point velocity = world.ball_velocity();
+  if (norm(velocity) > 0.2) scene.arrow(at(ball), at(ball + 0.5 * velocity), kMotion, 0.04);
+  const ScenePoint label{ball.x, ball.y + 0.35};
+  if (seen.ball_kicked) scene.text(label, "kick", kMotion);
+  if (seen.shot) scene.text(label, "shot", kMotion);
+  if (seen.ball_saved) scene.text(label, "saved", kMotion);
+  if (seen.goal != 0) scene.text(label, "goal!", kMotion);
+
+  char score[24];
+  std::snprintf(score, sizeof score, "%d : %d", world.goals_at(-1), world.goals_at(1));
+  scene.text({0.0, y + 0.4}, score, kLines, 0.4);
+}
+
+}  // namespace
 
 void WorldLink::init(InitContext& ctx) {
   WorldConfig config;
@@ -63,6 +129,7 @@ void WorldLink::input(WriteContext& ctx) {
   if (seen.ball_saved) ctx.report("ball saved");
   if (seen.goal != 0) ctx.report("goal!");
   if (seen.kick_off) ctx.report("kick-off");
+  draw(*world_, seen, ctx);
 }
 
 void WorldLink::output(const StepContext& ctx) {
@@ -90,7 +157,9 @@ void register_world_link(Registry& registry) {
               "publishes what the robot senses; the output pass applies the walk, head, kick and "
               "dive commands and advances the world by dt. Reports the events 'button pressed', "
               "'shot on goal', 'ball kicked', 'ball saved', 'goal!' and 'kick-off' (after a "
-              "goal: the ball back on the centre spot, the robot at robot_start).");
+              "goal: the ball back on the centre spot, the robot at robot_start). Draws the "
+              "field, the goals, the robot, its heading and view, the ball and its motion in "
+              "the frame 'field'.");
   info.param("seed", &WorldLink::seed_)
       .defaults_to(0)
       .range(0.0, 4294967295.0)

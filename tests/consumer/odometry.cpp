@@ -13,7 +13,12 @@ using arbiter::Vec2;
 /// drives at the commanded velocity (at most `max_speed`) for one step.
 class Odometry final : public arbiter::Interface {
  public:
-  void input(arbiter::WriteContext& ctx) override { ctx.write(position_, here_); }
+  void input(arbiter::WriteContext& ctx) override {
+    ctx.write(position_, here_);
+    // The robot on the live page and in a recording's 3D panel ("Drawing the world").
+    ctx.scene("map").circle({here_.x, here_.y}, 0.2, arbiter::SceneColor{0.1f, 0.2f, 0.7f, 1.0f},
+                            /*filled=*/true);
+  }
 
   void output(const arbiter::StepContext& ctx) override {
     // Values persist until overwritten: the base stops in a step in which nobody commands it.

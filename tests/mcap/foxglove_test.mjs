@@ -16,6 +16,7 @@ const require = createRequire(path.join(process.env.NODE_MODULES, "noop.js"));
 const { McapIndexedReader } = require("@mcap/core");
 const { decompress } = require("fzstd");
 const Ajv2020 = require("ajv/dist/2020").default;
+const foxgloveSchemas = require("@foxglove/schemas/jsonschema");
 
 const work = mkdtempSync(path.join(tmpdir(), "arbiter-foxglove-"));
 test.after(() => rmSync(work, { recursive: true, force: true }));
@@ -92,7 +93,8 @@ for (const [demo, run] of Object.entries(demos)) {
   test(`${demo}: every schema passes Lichtblick's parser`, () => {
     const topics = [...run.channels.values()].map((c) => `${c.topic} ${c.schemaName}`).sort();
     assert.deepEqual(topics, ["/arbiter/header arbiter.Header", "/arbiter/inputs arbiter.Inputs",
-                              "/arbiter/log foxglove.Log", "/arbiter/step arbiter.Step"]);
+                              "/arbiter/log foxglove.Log", "/arbiter/scene foxglove.SceneUpdate",
+                              "/arbiter/step arbiter.Step"]);
     for (const channel of run.channels.values()) {
       assert.doesNotThrow(() => lichtblickFields(channel.schema, channel.schemaName), channel.topic);
     }
@@ -157,6 +159,117 @@ for (const [demo, run] of Object.entries(demos)) {
     }
   });
 }
+
+// What a viewer shows of the "field" frame after each scene message, with the step it was drawn
+// in: the message's deletions and entities applied to what the messages before it left (the
+// still and the moving entity), the field's primitives gathered into one entity-like object.
+function fieldScenes(run) {
+  const stepAt = new Map(run.of("/arbiter/step").map((m) => [m.logTime, m.data.step]));
+  const shown = new Map();
+  return run.of("/arbiter/scene").map((m) => {
+    for (const d of m.data.deletions) {
+      if (d.type === 1) shown.clear();
+      else shown.delete(d.id);
+    }
+    for (const e of m.data.entities) shown.set(e.id, e);
+    const field = [...shown.values()].filter((e) => e.frame_id === "field");
+    const entity = field.length === 0 ? undefined : { frame_id: "field" };
+    for (const kind of ["arrows", "cylinders", "lines", "texts"]) {
+      if (entity) entity[kind] = field.flatMap((e) => e[kind]);
+    }
+    return { step: stepAt.get(m.logTime), entity, data: m.data, logTime: m.logTime };
+  });
+}
+
+function ballOf(entity) {
+  // The ball: the small filled disc.
+  const ball = entity.cylinders.find((c) => c.size.x < 0.2 && c.color.g < 0.6);
+  return ball.pose.position;
+}
+
+for (const [demo, run] of Object.entries(demos)) {
+  test(`${demo}: the scene is Foxglove's SceneUpdate, every message valid against @foxglove/schemas`, () => {
+    const scene = [...run.channels.values()].find((c) => c.topic === "/arbiter/scene");
+    // The channel's schema is Foxglove's own, as the package publishes it.
+    assert.deepEqual(scene.schema, foxgloveSchemas.SceneUpdate);
+    const ajv = new Ajv2020({ strict: false, allErrors: true });
+    const validate = ajv.compile(foxgloveSchemas.SceneUpdate);
+    const scenes = fieldScenes(run);
+    assert.equal(scenes.length, run.of("/arbiter/step").filter((m) => !m.data.safe).length);
+    for (const { data } of scenes) {
+      assert.ok(validate(data), `${ajv.errorsText(validate.errors)}`);
+    }
+  });
+
+  test(`${demo}: a scene message carries what changed, the whole picture at least once a second`, () => {
+    const scenes = fieldScenes(run);
+    const whole = (s) => s.data.deletions.some((d) => d.type === 1);
+    assert.ok(whole(scenes[0]), "the first message is the whole picture");
+    // A viewer that seeks shows the last message before the time it seeks to: a whole picture
+    // is never more than a second of log time behind.
+    let wholeAt = scenes[0].logTime;
+    for (const s of scenes) {
+      if (whole(s)) wholeAt = s.logTime;
+      assert.ok(s.logTime - wholeAt <= 1000000000n, `step ${s.step}: no whole picture for over 1 s`);
+      // A frame's entities: what does not move, and what does.
+      for (const e of s.data.entities) assert.match(e.id, new RegExp(`^${e.frame_id}/(still|moving)$`));
+      // Between whole pictures only what moves is written (nothing, when nothing does).
+      if (!whole(s)) assert.ok(s.data.entities.every((e) => e.id === "field/moving"), `step ${s.step}`);
+    }
+    // The field's outline, which does not move, is written only with the whole pictures.
+    const outlined = scenes.filter((s) => s.data.entities.some((e) => e.lines.some((l) => l.points.length === 4 && l.type === 1)));
+    assert.deepEqual(outlined.map((s) => s.step), scenes.filter(whole).map((s) => s.step));
+    assert.ok(outlined.length < scenes.length / 10, `${outlined.length} of ${scenes.length}`);
+  });
+
+  test(`${demo}: the scene draws the field, the goals, the robot and the ball, which moves`, () => {
+    const scenes = fieldScenes(run);
+    for (const { step, entity } of scenes) {
+      assert.ok(entity, `step ${step}: no field`);
+      assert.equal(entity.frame_id, "field");
+      const outline = entity.lines.find((l) => l.type === 1 && l.points.length === 4);
+      assert.deepEqual(outline.points.map((p) => [p.x, p.y]), [[-4.5, -3], [4.5, -3], [4.5, 3], [-4.5, 3]]);
+      const goals = entity.lines.filter((l) => l.type === 0 && l.points.length === 4);
+      assert.deepEqual(goals.map((g) => g.points[0].x).sort(), [-4.5, 4.5]);
+      assert.ok(entity.arrows.length >= 1, `step ${step}: no heading`);
+      assert.ok(entity.cylinders.length >= 2, `step ${step}: robot and ball`);
+    }
+    const balls = scenes.map((s) => ballOf(s.entity));
+    const moved = Math.hypot(balls.at(-1).x - balls[0].x, balls.at(-1).y - balls[0].y);
+    assert.ok(moved > 0.5, `the ball moved ${moved} m`);
+    console.log(`${demo}: ${scenes.length} scene messages, the ball moved ${moved.toFixed(2)} m`);
+  });
+}
+
+test("soccer: the scene shows the kick in the step the trace reports it", () => {
+  const kicked = demos.soccer.of("/arbiter/step")
+    .filter((m) => (m.data.reported ?? []).some((r) => r.text === "ball kicked")).map((m) => m.data.step);
+  assert.ok(kicked.length > 0);
+  const texts = fieldScenes(demos.soccer).filter((s) => s.entity.texts.some((t) => t.text === "kick"));
+  assert.deepEqual(texts.map((s) => s.step), kicked);
+  // The ball rolls away from the kick: an arrow from the ball along its motion.
+  const after = fieldScenes(demos.soccer).find((s) => s.step === kicked[0] + 1);
+  assert.ok(after.entity.arrows.length >= 2);
+});
+
+test("goalie: the scene shows the shot and the goalie down after its dive", () => {
+  const scenes = fieldScenes(demos.goalie);
+  const shot = scenes.find((s) => s.entity.texts.some((t) => t.text === "shot"));
+  assert.ok(shot, "no shot drawn");
+  // The goalie down: its body a thick line from its centre.
+  assert.ok(scenes.some((s) => s.step > shot.step && s.entity.lines.some((l) => l.thickness === 0.2)));
+  // While it walks to its pose (walk_to_pose), the pose it walks to: a ring of 0.15 m.
+  const walking = demos.goalie.of("/arbiter/step")
+    .filter((m) => m.data.controllers.goalie.state === "walk_to_pose").map((m) => m.data.step);
+  assert.ok(walking.length > 0);
+  const ring = (l) => {
+    if (l.type !== 1 || l.points.length !== 32) return false;
+    const cx = l.points.reduce((a, p) => a + p.x, 0) / 32, cy = l.points.reduce((a, p) => a + p.y, 0) / 32;
+    return Math.abs(Math.hypot(l.points[0].x - cx, l.points[0].y - cy) - 0.15) < 1e-5;
+  };
+  const targeted = scenes.filter((s) => s.entity.lines.some(ring)).map((s) => s.step);
+  assert.deepEqual(targeted, walking);
+});
 
 test("soccer: the step schema names each behaviour, actuator and their types", () => {
   const step = [...demos.soccer.channels.values()].find((c) => c.topic === "/arbiter/step");
@@ -247,4 +360,45 @@ test("a hot reload that adds a behaviour adds a step channel with its schema", a
   assert.ok(on(before).length > 0 && on(after).length > 0);
   assert.ok(on(after).every((m) => "wave" in m.data.layers.control));
   assert.ok(on(before).every((m) => !("wave" in m.data.layers.control)));
+});
+
+test("the shipped soccer layout's panels name topics, message paths and a frame of a soccer recording", () => {
+  const layout = JSON.parse(readFileSync(path.join(process.env.ARBITER_SOURCE, "docs/layouts/soccer.json"), "utf8"));
+  const run = demos.soccer;
+  const channel = (topic) => [...run.channels.values()].find((c) => c.topic === topic);
+  // Every panel the layout places has its config, and every config is placed.
+  const placed = [];
+  const walk = (node) => (typeof node === "string" ? placed.push(node) : (walk(node.first), walk(node.second)));
+  walk(layout.layout);
+  assert.deepEqual(placed.sort(), Object.keys(layout.configById).sort());
+  const kinds = placed.map((id) => id.split("!")[0]).sort();
+  assert.deepEqual(kinds, ["3D", "Plot", "Plot", "RosOut"]);
+
+  let plotted = 0;
+  for (const [id, config] of Object.entries(layout.configById)) {
+    if (id.startsWith("3D!")) {
+      for (const topic of Object.keys(config.topics)) {
+        assert.equal(channel(topic)?.schemaName, "foxglove.SceneUpdate", topic);
+      }
+      // The frame it follows is the one the soccer world draws in.
+      const frames = new Set(run.of("/arbiter/scene").flatMap((m) => m.data.entities.map((e) => e.frame_id)));
+      assert.ok(frames.has(config.followTf), `no frame ${config.followTf} in ${[...frames]}`);
+    } else if (id.startsWith("RosOut!")) {
+      assert.equal(channel(config.topicToRender)?.schemaName, "foxglove.Log");
+    } else {
+      for (const { value } of config.paths) {
+        const [, topic, field] = value.match(/^(\/[\w/]+)\.(.+)$/);
+        const c = channel(topic);
+        assert.ok(c, `${value}: no topic ${topic}`);
+        const type = lichtblickFields(c.schema, c.schemaName).get(field.replace(/\[\d+\]/g, "[]"));
+        assert.equal(type, "float64", `${value}: a ${type}`);
+        ++plotted;
+      }
+    }
+  }
+  assert.equal(plotted, 7);
+  // The activations plotted are the config's behaviours, all of them.
+  const step = run.of("/arbiter/step")[0].data;
+  const plots = layout.configById["Plot!activations"].paths.map((p) => p.value.split(".")[3]).sort();
+  assert.deepEqual(plots, Object.keys(step.layers.control).sort());
 });

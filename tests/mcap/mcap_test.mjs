@@ -38,7 +38,8 @@ test.after(() => rmSync(work, { recursive: true, force: true }));
 test("the channels are json messages with JSON Schemas", async () => {
   const reader = await indexed();
   const topics = [...reader.channelsById.values()].map((channel) => channel.topic).sort();
-  assert.deepEqual(topics, ["/arbiter/header", "/arbiter/inputs", "/arbiter/log", "/arbiter/step"]);
+  assert.deepEqual(topics, ["/arbiter/header", "/arbiter/inputs", "/arbiter/log", "/arbiter/scene",
+                            "/arbiter/step"]);
   for (const channel of reader.channelsById.values()) {
     assert.equal(channel.messageEncoding, "json");
     const schema = reader.schemasById.get(channel.schemaId);
@@ -59,9 +60,9 @@ test("the statistics and chunk indexes agree with the messages", async () => {
     assert.ok(message.logTime >= stats.messageStartTime && message.logTime <= stats.messageEndTime);
   }
   assert.equal(stats.messageCount, total);
-  // One header, 220 steps, 220 inputs, the safe pass at the end, and the two reports logged
-  // (the ball kicked, then the goal).
-  assert.equal(total, 444n);
+  // One header, 220 steps, 220 inputs, 220 pictures of the field, the safe pass at the end (which
+  // draws nothing), and the two reports logged (the ball kicked, then the goal).
+  assert.equal(total, 664n);
   for (const [channel, count] of stats.channelMessageCounts) assert.equal(counts.get(channel), count);
   assert.equal(BigInt(reader.chunkIndexes.length), BigInt(stats.chunkCount));
   assert.ok(reader.chunkIndexes.length >= 1);

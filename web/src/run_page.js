@@ -7,6 +7,7 @@ import {GraphView} from './graph.js';
 import {Plots} from './plots.js';
 import {Controllers, Reported} from './panels.js';
 import {WriteTracker} from './records.js';
+import {SceneView} from './scene.js';
 import {TimeView} from './time_view.js';
 import {Timelines} from './timeline.js';
 
@@ -34,6 +35,7 @@ export class RunPage {
     this.explain.onPin = (key) => this.graph.highlight(key);
     this.controllers = new Controllers(document.getElementById('controllers'));
     this.reported = new Reported(document.getElementById('reported'), reportedKept);
+    this.scene = new SceneView(document.getElementById('scene-panel'), document.getElementById('scene'));
     this.timelines = new Timelines(document.getElementById('timelines'), this.columns, this.time);
     this.timelines.queueAt = (machine) => this.current?.controllers?.[machine]?.queue ?? null;
     this.timelines.onLabel = (key) => this.explain.pin(key);
@@ -94,6 +96,7 @@ export class RunPage {
     this.controllers.show(record);
     this.reported.show(record);
     this.time.setCursor(record.step);
+    this.scene.show(record.scene, record.step);
     this.explain.setStep(record.step);
   }
 }

@@ -318,6 +318,46 @@ test('the soccer demo: interface and behaviour layers with their data flow', asy
   await page.close();
 });
 
+test('the soccer demo: the world beside the graph, the field and the ball moving with the step', async () => {
+  const {url} = await serve(['run', soccer, '--serve', '0', '--paused', '--steps', '100000', '-q']);
+  const page = await open(url);
+  // Nothing has run: no picture yet.
+  assert.equal(await page.locator('#scene-panel').isHidden(), true);
+  await page.click('#single-step');
+  await waitForStep(page, 1);
+  await page.waitForSelector('#scene-panel:not([hidden])');
+  const picture = () => page.$eval('#scene', (root) => ({
+    step: Number(root.dataset.step),
+    loops: [...root.querySelectorAll('[data-kind="loop"]')].map((n) => n.getAttribute('points')),
+    // The discs, smallest first: the ball (0.075 m), then the robot (0.15 m).
+    discs: [...root.querySelectorAll('[data-kind="disc"]')]
+      .map((n) => ({r: Number(n.getAttribute('r')), x: Number(n.getAttribute('cx')), y: -Number(n.getAttribute('cy'))}))
+      .sort((a, b) => a.r - b.r),
+    arrows: root.querySelectorAll('[data-kind="arrow"]').length,
+  }));
+  const first = await picture();
+  assert.equal(first.step, 1);
+  // The field's outline (y drawn downwards), the centre circle, the robot's heading.
+  assert.ok(first.loops.includes('-4.5,3 4.5,3 4.5,-3 -4.5,-3'), JSON.stringify(first.loops));
+  assert.equal(first.discs.length, 2);
+  assert.ok(first.arrows >= 1);
+  const [ball, robot] = first.discs;
+  assert.deepEqual([ball.x, ball.y], [0.5, 1]);  // the config's ball_start
+  assert.deepEqual([robot.x, robot.y], [-3, -1]);  // and robot_start
+  // Past the kick (step 172 of this config): the ball has gone, the robot walked to it.
+  await page.click('#resume');
+  await page.waitForFunction(() => Number(document.querySelector('#step').textContent) >= 185, null, {timeout: 40000});
+  await page.click('#pause');
+  await page.waitForSelector('#status.paused');
+  await page.waitForTimeout(300);
+  const later = await picture();
+  assert.equal(later.step, await stepShown(page), 'the picture is of the step shown');
+  const [movedBall, movedRobot] = later.discs;
+  assert.ok(Math.hypot(movedBall.x - ball.x, movedBall.y - ball.y) > 1, JSON.stringify(later.discs));
+  assert.ok(Math.hypot(movedRobot.x - robot.x, movedRobot.y - robot.y) > 1, JSON.stringify(later.discs));
+  await page.close();
+});
+
 // Every label of the graph (SVG text) against every inhibition arc and its bar, sampled along
 // the path, at each step of the trace; and every arc inside its own layer's box. Returns what
 // overlaps, as readable strings.

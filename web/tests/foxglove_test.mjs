@@ -103,7 +103,8 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   const advertised = [...channels.values()].sort((a, b) => a.id - b.id);
   assert.deepEqual(advertised.map((channel) => `${channel.topic} ${channel.schemaName}`),
                    ['/arbiter/header arbiter.Header', '/arbiter/step arbiter.Step',
-                    '/arbiter/inputs arbiter.Inputs', '/arbiter/log foxglove.Log']);
+                    '/arbiter/inputs arbiter.Inputs', '/arbiter/log foxglove.Log',
+                    '/arbiter/scene foxglove.SceneUpdate']);
   // The step schema is the config's own: each behaviour a typed field.
   const stepSchema = JSON.parse(advertised[1].schema);
   assert.equal(stepSchema.properties.layers.properties.control.properties.kick_ball
@@ -124,6 +125,7 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   let lastTime = 0n;
   const reports = [];  // [{by, text, time}] of the steps received
   const logs = [];
+  let firstScene = null;
   client.on('message', ({subscriptionId, timestamp, data}) => {
     const channel = subscriptions.get(subscriptionId);
     assert.ok(channel, `a message for the subscription ${subscriptionId}, which the client made`);
@@ -140,6 +142,7 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
       for (const {by, text} of message.reported || []) reports.push({by, text, time: timestamp});
     }
     if (channel.topic === '/arbiter/log') logs.push({by: message.name, text: message.message, time: timestamp, message});
+    if (channel.topic === '/arbiter/scene' && !firstScene) firstScene = message;
   });
   await waitFor('kick_ball to become active', () => kickedAt > 0);
   await waitFor('a few more steps', () => lastStep > kickedAt + 3, 5000);
@@ -148,6 +151,12 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   assert.deepEqual(invalid, []);
   assert.ok(received.get('/arbiter/header') >= 1, 'the header is sent to a client that subscribes late');
   assert.ok(received.get('/arbiter/inputs') > 10);
+  // The soccer world draws every step: the picture goes out live as it is recorded.
+  assert.ok(received.get('/arbiter/scene') > 10, 'the scene is published live');
+  // Scene messages carry what changed; a client that subscribes mid-run gets the whole picture
+  // first (everything deleted, then what does not move too), not just what moved.
+  assert.ok(firstScene.deletions.some((d) => d.type === 1), 'the first scene message deletes all');
+  assert.deepEqual(firstScene.entities.map((e) => e.id).sort(), ['field/moving', 'field/still']);
   // What the world reported (the kick) is on /arbiter/log too, at its step's log time: a paced
   // run's, the wall clock.
   await waitFor('the kick reported', () => logs.some((log) => /kick/.test(log.text)), 10000);

@@ -1,11 +1,16 @@
 #include "arbiter/channels.hpp"
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <typeinfo>
 #include <utility>
 
 #include "arbiter/trace.hpp"
+#include "core/record/scene_update_schema.hpp"
 #include "core/record/step_record.hpp"
 
 namespace arbiter {
@@ -303,6 +308,7 @@ std::vector<Channel> channels(const StepLayout& layout, const std::string& name)
   out[kStepChannel] = {"/arbiter/step", "arbiter.Step", step_schema(layout, name)};
   out[kInputsChannel] = {"/arbiter/inputs", "arbiter.Inputs", inputs_schema(layout, name)};
   out[kLogChannel] = {"/arbiter/log", "foxglove.Log", std::string(kLogSchema)};
+  out[kSceneChannel] = {"/arbiter/scene", "foxglove.SceneUpdate", std::string(kSceneUpdateSchema)};
   return out;
 }
 
@@ -324,6 +330,345 @@ void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view 
   out += R"(, "file": )";
   append_name(file, out);
   fmt::format_to(std::back_inserter(out), R"(, "line": {}}})", line);
+}
+
+namespace {
+
+bool finite_primitive(const ScenePrimitive& p, const ScenePoint* points) {
+  bool ok = std::isfinite(p.x0) && std::isfinite(p.y0) && std::isfinite(p.x1) &&
+            std::isfinite(p.y1) && std::isfinite(p.size) && std::isfinite(p.color.r) &&
+            std::isfinite(p.color.g) && std::isfinite(p.color.b) && std::isfinite(p.color.a);
+  for (std::uint32_t i = 0; ok && i < p.point_count; ++i) {
+    ok = std::isfinite(points[p.point_begin + i].x) && std::isfinite(points[p.point_begin + i].y);
+  }
+  return ok;
+}
+
+// Scene messages are formatted into a reused buffer: appending to it is a copy, where each
+// format_to() into a std::string resizes (and zeroes) it first.
+using Buffer = fmt::memory_buffer;
+using Out = fmt::appender;
+
+void put(Buffer& out, std::string_view text) {
+  out.append(text.data(), text.data() + text.size());
+}
+
+// A JSON string: a name as it is unless it holds a character JSON escapes.
+void put_name(Buffer& out, std::string_view name) {
+  const bool plain = std::all_of(name.begin(), name.end(), [](char c) {
+    return c != '"' && c != '\\' && static_cast<unsigned char>(c) >= 0x20;
+  });
+  if (plain) {
+    out.push_back('"');
+    put(out, name);
+    out.push_back('"');
+  } else {
+    std::string quoted;
+    detail::append_json_string(std::string(name), quoted);
+    put(out, quoted);
+  }
+}
+
+// A length or a coordinate to the micrometre, a rotation's component to 1e-6: finer is noise
+// (a cosine's last bits), which would make each number twice as long in every message.
+double fine(double value) {
+  return std::round(value * 1e6) / 1e6 + 0.0;  // + 0.0: no "-0"
+}
+
+// foxglove.Pose: at (x, y) on the ground, turned by `yaw` about the vertical.
+void append_pose(double x, double y, double yaw, Buffer& out) {
+  fmt::format_to(
+      Out(out),
+      FMT_COMPILE(R"("pose": {{"position": {{"x": {}, "y": {}, "z": 0}}, "orientation": )"
+                  R"({{"x": 0, "y": 0, "z": {}, "w": {}}}}})"),
+      fine(x), fine(y), fine(std::sin(yaw / 2)), fine(std::cos(yaw / 2)));
+}
+
+void append_color(const SceneColor& c, Buffer& out) {
+  fmt::format_to(Out(out), FMT_COMPILE(R"("color": {{"r": {}, "g": {}, "b": {}, "a": {}}})"), c.r,
+                 c.g, c.b, c.a);
+}
+
+// foxglove.LinePrimitive: a strip (0) or a loop (1) through `count` points given by `point(i)`.
+template <typename Point>
+void append_line(int type, double width, const SceneColor& color, std::size_t count, Point point,
+                 Buffer& out) {
+  fmt::format_to(Out(out), FMT_COMPILE(R"({{"type": {}, )"), type);
+  append_pose(0, 0, 0, out);
+  fmt::format_to(Out(out),
+                 FMT_COMPILE(R"(, "thickness": {}, "scale_invariant": false, "points": [)"),
+                 fine(width));
+  for (std::size_t i = 0; i < count; ++i) {
+    const ScenePoint at = point(i);
+    fmt::format_to(Out(out), FMT_COMPILE(R"({}{{"x": {}, "y": {}, "z": 0}})"), i > 0 ? ", " : "",
+                   fine(at.x), fine(at.y));
+  }
+  put(out, "], ");
+  append_color(color, out);
+  put(out, R"(, "colors": [], "indices": []})");
+}
+
+// A circle's outline, as Foxglove has no circle: a loop of this many points.
+constexpr int kCirclePoints = 32;
+constexpr double kPi = 3.14159265358979323846;
+
+// A frame's or a text's bytes, as Scene copied them: cut to their room, perhaps inside a UTF-8
+// character, whose start is then left out too, so that the JSON stays valid UTF-8.
+std::string_view cut(const char* text, std::size_t bytes) {
+  std::size_t size = strnlen(text, bytes);
+  if (size + 1 < bytes) return {text, size};
+  std::size_t start = size;  // of the last character
+  while (start > 0 && (static_cast<unsigned char>(text[start - 1]) & 0xC0) == 0x80) --start;
+  if (start == 0) return {text, size};
+  const auto lead = static_cast<unsigned char>(text[start - 1]);
+  const std::size_t length = lead >= 0xF0 ? 4 : lead >= 0xE0 ? 3 : lead >= 0xC0 ? 2 : 1;
+  return {text, start - 1 + length <= size ? size : start - 1};
+}
+
+void append_entity_id(std::string_view frame, bool still, Buffer& out);
+
+// The entity of a frame's primitives that are `still` (unchanged since the step before the last
+// whole picture) or not: its id is the frame's name and "still" or "moving", "field/moving".
+template <typename Primitives>
+void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame, bool still,
+                   Primitives each, const ScenePoint* points, std::size_t dropped, Buffer& out) {
+  fmt::format_to(Out(out), FMT_COMPILE(R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "frame_id": )"),
+                 sec, nsec);
+  put_name(out, frame);
+  put(out, R"(, "id": )");
+  append_entity_id(frame, still, out);
+  put(out, R"(, "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [)");
+  if (dropped > 0) {
+    fmt::format_to(Out(out), FMT_COMPILE(R"({{"key": "dropped", "value": "{}"}})"), dropped);
+  }
+  // The primitives `wanted`, separated by commas.
+  const auto list = [&](auto wanted, auto append) {
+    bool first = true;
+    each([&](const ScenePrimitive& p) {
+      if (!wanted(p)) return;
+      if (!first) put(out, ", ");
+      first = false;
+      append(p);
+    });
+  };
+  const auto is = [](SceneShape shape) {
+    return [shape](const ScenePrimitive& p) { return p.shape == shape; };
+  };
+  put(out, R"(], "arrows": [)");
+  list(is(SceneShape::kArrow), [&](const ScenePrimitive& p) {
+    const double length = std::hypot(p.x1 - p.x0, p.y1 - p.y0);
+    const double head = std::min(0.4 * length, 3 * p.size);
+    put(out, "{");
+    append_pose(p.x0, p.y0, std::atan2(p.y1 - p.y0, p.x1 - p.x0), out);
+    fmt::format_to(Out(out),
+                   FMT_COMPILE(R"(, "shaft_length": {}, "shaft_diameter": {}, "head_length": {}, )"
+                               R"("head_diameter": {}, )"),
+                   fine(length - head), fine(p.size), fine(head), fine(2.5 * p.size));
+    append_color(p.color, out);
+    put(out, "}");
+  });
+  put(out, R"(], "cubes": [], "spheres": [], "cylinders": [)");
+  list([](const ScenePrimitive& p) { return p.shape == SceneShape::kCircle && p.filled; },
+       [&](const ScenePrimitive& p) {
+         put(out, "{");
+         append_pose(p.x0, p.y0, 0, out);
+         fmt::format_to(
+             Out(out),
+             FMT_COMPILE(R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
+                         R"("top_scale": 1, )"),
+             fine(2 * p.size), fine(2 * p.size));
+         append_color(p.color, out);
+         put(out, "}");
+       });
+  put(out, R"(], "lines": [)");
+  list(
+      [](const ScenePrimitive& p) {
+        return p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon ||
+               (p.shape == SceneShape::kCircle && !p.filled);
+      },
+      [&](const ScenePrimitive& p) {
+        if (p.shape == SceneShape::kCircle) {
+          append_line(
+              1, p.x1, p.color, kCirclePoints,
+              [&](std::size_t i) {
+                const double angle = 2 * kPi * static_cast<double>(i) / kCirclePoints;
+                return ScenePoint{p.x0 + p.size * std::cos(angle), p.y0 + p.size * std::sin(angle)};
+              },
+              out);
+        } else {
+          append_line(
+              p.shape == SceneShape::kPolygon ? 1 : 0, p.size, p.color, p.point_count,
+              [&](std::size_t i) { return points[p.point_begin + i]; }, out);
+        }
+      });
+  put(out, R"(], "triangles": [], "texts": [)");
+  list(is(SceneShape::kText), [&](const ScenePrimitive& p) {
+    put(out, "{");
+    append_pose(p.x0, p.y0, 0, out);
+    fmt::format_to(
+        Out(out),
+        FMT_COMPILE(R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )"),
+        fine(p.size));
+    append_color(p.color, out);
+    put(out, R"(, "text": )");
+    put_name(out, cut(p.text, ScenePrimitive::kTextBytes));
+    put(out, "}");
+  });
+  put(out, R"(], "models": []})");
+}
+
+// Whether two primitives draw alike (their points compared by value, not by place).
+bool same(const ScenePrimitive& a, const ScenePoint* a_points, const ScenePrimitive& b,
+          const ScenePoint* b_points) {
+  if (a.shape != b.shape || a.filled != b.filled || a.point_count != b.point_count ||
+      a.x0 != b.x0 || a.y0 != b.y0 || a.x1 != b.x1 || a.y1 != b.y1 || a.size != b.size ||
+      a.color.r != b.color.r || a.color.g != b.color.g || a.color.b != b.color.b ||
+      a.color.a != b.color.a || std::strncmp(a.text, b.text, ScenePrimitive::kTextBytes) != 0) {
+    return false;
+  }
+  for (std::uint32_t i = 0; i < a.point_count; ++i) {
+    const ScenePoint& pa = a_points[a.point_begin + i];
+    const ScenePoint& pb = b_points[b.point_begin + i];
+    if (pa.x != pb.x || pa.y != pb.y) return false;
+  }
+  return true;
+}
+
+void append_entity_id(std::string_view frame, bool still, Buffer& out) {
+  char id[ScenePrimitive::kFrameBytes + 8];  // the frame is cut to its room
+  const char* end = fmt::format_to(id, FMT_COMPILE("{}/{}"), frame, still ? "still" : "moving");
+  put_name(out, {id, static_cast<std::size_t>(end - id)});
+}
+
+}  // namespace
+
+void SceneUpdates::place(const ScenePrimitive* primitives, std::size_t count,
+                         const ScenePoint* points, std::vector<Placed>& placed,
+                         std::size_t& dropped) {
+  placed.clear();
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!finite_primitive(primitives[i], points)) {
+      ++dropped;
+      continue;
+    }
+    const auto frame = cut(primitives[i].frame, ScenePrimitive::kFrameBytes);
+    std::uint32_t rank = 0;
+    for (auto it = placed.rbegin(); it != placed.rend(); ++it) {
+      if (it->frame == frame) {
+        rank = it->rank + 1;
+        break;
+      }
+    }
+    placed.push_back({frame, rank, i});
+  }
+}
+
+void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitives,
+                          std::size_t count, const ScenePoint* points, std::size_t dropped,
+                          std::string& text) {
+  thread_local Buffer out;  // reused: no allocation once grown
+  out.clear();
+  const auto sec = time_ns / 1000000000u, nsec = time_ns % 1000000000u;
+  place(primitives, count, points, now_, dropped);
+  const auto find = [&](const Placed& at) -> const Placed* {
+    for (const Placed& p : last_) {
+      if (p.rank == at.rank && p.frame == at.frame) return &p;
+    }
+    return nullptr;
+  };
+  // The whole picture now and then, so that a viewer that seeks (and shows the last message
+  // before the time it seeks to) soon has all of it; whenever something was dropped, so that
+  // the count told in the first entity is never left on another one; and when a still
+  // primitive changed or went.
+  bool whole = !started_ || time_ns < whole_at_ || time_ns - whole_at_ >= kWholeEveryNs ||
+               dropped > 0 || dropped_ > 0;
+  std::size_t still_now = 0;
+  for (Placed& at : now_) {
+    const Placed* before = find(at);
+    at.same = before != nullptr &&
+              same(primitives[at.index], points, primitives_[before->index], points_.data());
+    at.still = before != nullptr && before->still;
+    if (at.still) ++still_now;
+    if (at.still && !at.same) whole = true;
+  }
+  std::size_t still_before = 0;
+  for (const Placed& p : last_) still_before += p.still ? 1 : 0;
+  if (still_now != still_before) whole = true;
+  if (whole) {
+    // Still: what the step before drew alike; at the start, all (the next step sorts it out).
+    const bool first = last_.empty();
+    for (Placed& at : now_) at.still = first || at.same;
+  }
+
+  // The frames, in the order first drawn in; whether each has a moving part now or had one.
+  const auto each_frame = [&](const std::vector<Placed>& placed, auto visit) {
+    for (std::size_t i = 0; i < placed.size(); ++i) {
+      bool seen = false;
+      for (std::size_t j = 0; j < i && !seen; ++j) seen = placed[j].frame == placed[i].frame;
+      if (!seen) visit(placed[i].frame);
+    }
+  };
+  const auto has = [](const std::vector<Placed>& placed, std::string_view frame, bool still) {
+    return std::any_of(placed.begin(), placed.end(),
+                       [&](const Placed& p) { return p.frame == frame && p.still == still; });
+  };
+  const auto part = [&](std::string_view frame, bool still) {
+    return [&, frame, still](auto visit) {
+      for (const Placed& p : now_) {
+        if (p.frame == frame && p.still == still) visit(primitives[p.index]);
+      }
+    };
+  };
+
+  put(out, R"({"deletions": [)");
+  if (whole) {
+    fmt::format_to(
+        Out(out), FMT_COMPILE(R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 1, "id": ""}})"),
+        sec, nsec);
+    started_ = true;
+    whole_at_ = time_ns;
+  } else {
+    bool first = true;
+    each_frame(last_, [&](std::string_view frame) {
+      if (!has(last_, frame, false) || has(now_, frame, false)) return;
+      fmt::format_to(
+          Out(out), FMT_COMPILE(R"({}{{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 0, "id": )"),
+          first ? "" : ", ", sec, nsec);
+      append_entity_id(frame, false, out);
+      put(out, "}");
+      first = false;
+    });
+  }
+  put(out, R"(], "entities": [)");
+  bool first = true;
+  each_frame(now_, [&](std::string_view frame) {
+    for (const bool still : {true, false}) {
+      if ((still && !whole) || !has(now_, frame, still)) continue;
+      if (!first) put(out, ", ");
+      append_entity(sec, nsec, frame, still, part(frame, still), points, first ? dropped : 0, out);
+      first = false;
+    }
+  });
+  put(out, "]}");
+  text.append(out.data(), out.size());
+
+  // What the viewer now shows, to compare the next step's drawing with.
+  primitives_.assign(primitives, primitives + count);
+  std::size_t point_end = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    point_end =
+        std::max<std::size_t>(point_end, primitives[i].point_begin + primitives[i].point_count);
+  }
+  points_.assign(points, points + point_end);
+  last_.swap(now_);
+  for (Placed& p : last_) p.frame = std::string_view(primitives_[p.index].frame, p.frame.size());
+  dropped_ = dropped;
+}
+
+void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
+                         const ScenePoint* points, std::size_t dropped, std::string& out) {
+  SceneUpdates fresh;
+  fresh.append(time_ns, primitives, count, points, dropped, out);
 }
 
 }  // namespace arbiter

@@ -23,29 +23,10 @@ void append_inputs_record(const Manager& manager, std::string& out) {
   detail::append_inputs_record(layout, detail::capture_growing(manager, layout, storage), out);
 }
 
-// Reported text a slot holds; a step that reported more is dropped.
-constexpr std::size_t kReportTextBytes = 4096;
-
-// The ring laid out for one program: made on the thread that stages it where it can be, so that
-// a hot reload neither allocates on the stepping thread nor waits there for the writer.
-struct Recorder::Generation {
-  Generation(const Program& program, std::uint64_t stage_, std::size_t slots)
-      : stage(stage_),
-        layout(program),
-        header(trace_header(program)),
-        channels(detail::channels(layout, program.name)),
-        rate_hz(program.rate_hz) {
-    blocks.reset(layout, kReportTextBytes, slots);
-    last.bytes.assign(blocks.shape().tracked.total, std::byte{0});
-  }
-  std::uint64_t stage = 0;  // Manager::stage_number()
-  detail::StepLayout layout;
-  detail::SnapshotBlocks blocks;
-  // The stepping thread's: the tracked parts as the last slot published left them.
-  detail::StepImage last;
-  std::string header;  // the program's trace header, without the reload's number and step
-  std::vector<Channel> channels;  // their schemas, written for the program
-  double rate_hz = 0.0;
+// The ring laid out for one program (detail::SnapshotGeneration), and the files of the config it
+// was reloaded from.
+struct Recorder::Generation : detail::SnapshotGeneration {
+  using SnapshotGeneration::SnapshotGeneration;
   std::vector<std::pair<std::string, std::string>> files;  // the reloaded config's
 };
 
@@ -73,12 +54,15 @@ struct Recorder::Output {
   std::uint16_t step = 0;
   std::uint16_t inputs = 0;
   std::uint16_t log = 0;
+  std::uint16_t scene = 0;
   std::uint64_t last_step = 0;
   std::uint64_t dropped = 0;
   detail::LogClock clock;  // made when the run starts
   std::string record;      // reused between messages
   std::string inputs_record;
   std::string log_record;
+  std::string scene_record;
+  SceneUpdates scene_updates;
   std::string step_schema, inputs_schema;  // of the channels written to last
   detail::StepImage image;                 // the writer's, as of the last slot it formatted
   // The stepping thread's: whether the last slot published is the one before the next (no step
@@ -176,6 +160,7 @@ void Recorder::on_start(const Manager& manager) {
   out_->inputs = add_channel(channels[kInputsChannel]);
   out_->log = add_channel(channels[kLogChannel]);
   out_->clock = detail::LogClock(info_.paced, wall_start_ns_, written_->rate_hz);
+  out_->scene = add_channel(channels[kSceneChannel]);
   out_->step_schema = channels[kStepChannel].schema;
   out_->inputs_schema = channels[kInputsChannel].schema;
   std::vector<std::pair<std::string, std::string>> config;
@@ -408,6 +393,7 @@ void Recorder::write_loop() {
       const auto time = out.clock.reload(slot.step, slot.wall_time, written_->rate_hz);
       if (!failed()) {
         out.writer.metadata("arbiter.reload", reload);
+        out.scene_updates.restart();  // the new program's picture whole, from its first step
         // A program laid out otherwise has channels of its own, on the same topics: each
         // message is checked against the schema of its program.
         const auto& channels = written_->channels;
@@ -451,6 +437,13 @@ void Recorder::write_loop() {
         detail::append_inputs_record(written_->layout, step, out.inputs_record);
         out.writer.message(out.step, time, wall, out.record);
         out.writer.message(out.inputs, time, wall, out.inputs_record);
+      }
+      // Only steps that drew: a viewer keeps showing the last picture.
+      if (step.scene.size() > 0 || step.scene_dropped > 0) {
+        out.scene_record.clear();
+        out.scene_updates.append(time, step.scene.data(), step.scene.size(),
+                                 step.scene_points.data(), step.scene_dropped, out.scene_record);
+        out.writer.message(out.scene, time, wall, out.scene_record);
       }
       detail::for_each_report_log(
           written_->layout, step, time, out.log_record,

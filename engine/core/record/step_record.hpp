@@ -115,6 +115,33 @@ struct SnapshotShape {
     std::uint32_t text_begin = 0, text_size = 0;
   };
   using Arg = std::pair<std::uint32_t, ArgValue>;
+  struct SceneCounts {
+    std::uint32_t primitives = 0, points = 0, dropped = 0;
+    std::uint32_t changed = 0;  ///< chunks listed as changed, when the capture was chained
+  };
+  /// A step's picture as a block (and a StepImage) holds it: the room for its primitives, then
+  /// for its points, each as the manager lays them out. A chained capture copies only the
+  /// chunks of them that changed, as it does a tracked part's: a step redraws the same field.
+  static constexpr std::size_t kScenePrimitiveBytes =
+      Manager::kScenePrimitivesPerStep * sizeof(ScenePrimitive);
+  static constexpr std::size_t kScenePointBytes = Manager::kScenePointsPerStep * sizeof(ScenePoint);
+  static constexpr std::size_t kSceneBytes = kScenePrimitiveBytes + kScenePointBytes;
+  static_assert(kScenePrimitiveBytes % kChunk == 0 && kScenePointBytes % kChunk == 0,
+                "the picture's parts are whole chunks, copied as whole cache lines");
+  /// The chunks of a chained capture's picture that go in the block itself, beside the step's
+  /// other values: the block is written on the pages the step before wrote, where the picture's
+  /// room (kSceneBytes, in the extras) spreads each step over pages of its own, and a page the
+  /// step has not touched lately costs it a TLB miss. Changed chunks beyond these go in the
+  /// extras.
+  static constexpr std::size_t kSceneInlineChunks = 8;
+  /// The picture's counts and the first of its changed chunks' list: one line of the block,
+  /// written whole (streamed) at every capture.
+  struct alignas(64) SceneLine {
+    SceneCounts counts;
+    static constexpr std::size_t kListed = (kChunk - sizeof(SceneCounts)) / sizeof(std::uint32_t);
+    std::uint32_t changed[kListed] = {};
+  };
+  static_assert(sizeof(SceneLine) == kChunk && SceneLine::kListed >= kSceneInlineChunks);
 
   std::size_t behaviours = 0, actuators = 0, machines = 0;
   std::size_t args = 0, queue = 0, events = 0, event_args = 0, text_bytes = 0;
@@ -148,6 +175,12 @@ struct SnapshotShape {
   std::size_t bytes = 0;  ///< a block's: whole cache lines, so that blocks share none
   /// Where the seldom written parts start in a block's extras, and their bytes.
   std::size_t reports_at = 0, texts_at = 0, events_at = 0, event_args_at = 0;
+  /// What code drew (StepContext::scene). In the block: its SceneLine and the first
+  /// kSceneInlineChunks chunks a chained capture copied. In the extras: the rest of the list of
+  /// those chunks (from SceneLine::kListed on), and its primitives and points (kSceneBytes, a
+  /// whole capture's, and the chunks of a chained one beyond those in the block, where they lie
+  /// in the picture).
+  std::size_t scene_line_at = 0, scene_inline_at = 0, scene_changed_at = 0, scene_at = 0;
   std::size_t extra_bytes = 0;
 };
 
@@ -161,6 +194,12 @@ struct SnapshotBlock {
 /// its last capture left them, or a reader's, brought up to date by the snapshots in order.
 struct StepImage {
   std::vector<std::byte> bytes;
+  /// The step's picture as a block holds it (SnapshotShape::kSceneBytes): up to `scene_valid`
+  /// bytes of primitives and of points, those of the capture before, kept as the reader has them.
+  std::vector<std::byte> scene;
+  std::size_t scene_valid[2] = {};
+  /// Zeroed, sized for `shape`: the stepping side's, before its first capture.
+  void reset(const SnapshotShape& shape);
 };
 
 /// Blocks of one shape, one after another: one for a trace writer, a ring of them for a
@@ -189,6 +228,24 @@ class SnapshotBlocks {
   std::byte* data_ = nullptr;
   // The values that are not plain bytes: constructed per type at these offsets of each block.
   std::vector<std::pair<const ValueType*, std::size_t>> constructed_;
+};
+
+/// A ring of snapshots laid out for one program, as a recorder and the live Foxglove server
+/// keep them: made on the thread that stages the program where it can be, so that a hot reload
+/// neither allocates on the stepping thread nor waits there for the reader.
+struct SnapshotGeneration {
+  /// Reported text a slot holds; a step that reported more is dropped.
+  static constexpr std::size_t kReportTextBytes = 4096;
+
+  SnapshotGeneration(const Program& program, std::uint64_t stage, std::size_t slots);
+  std::uint64_t stage = 0;  ///< Manager::stage_number()
+  StepLayout layout;
+  SnapshotBlocks blocks;  ///< one per slot of the ring
+  /// The stepping thread's: what its last capture left, for the next one to copy what changed.
+  StepImage last;
+  std::string header;             ///< the program's trace header, without a reload's number
+  std::vector<Channel> channels;  ///< channels(program), in ChannelIndex order
+  double rate_hz = 0.0;
 };
 
 /// Copies the manager's last step (or safe pass) into `block`, of `shape`. False when something
@@ -256,6 +313,12 @@ struct StepSnapshot {
   Span<Report> reports;
   std::uint32_t input_reports = 0;  ///< how many of the reports the input pass made
   std::string_view texts;
+  /// What code drew (StepContext::scene), and how many primitives it dropped for want of room.
+  Span<ScenePrimitive> scene;
+  Span<ScenePoint> scene_points;
+  std::uint32_t scene_dropped = 0;
+  const std::byte* scene_block = nullptr;   ///< the block, with the picture's counts
+  const std::byte* scene_extras = nullptr;  ///< the block's extras, with the picture
 
   const void* value(const StepLayout& layout, std::uint32_t actuator) const {
     return values + layout.actuators[actuator].offset;

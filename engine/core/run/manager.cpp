@@ -122,6 +122,12 @@ Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
   data_.event_capacity = events_.size();
   report_text_.resize(kEventsPerStep * detail::kReportBytes);
   data_.report_text = report_text_.data();
+  scene_primitives_.resize(kScenePrimitivesPerStep);
+  scene_points_.resize(kScenePointsPerStep);
+  data_.scene.primitives = scene_primitives_.data();
+  data_.scene.primitive_capacity = scene_primitives_.size();
+  data_.scene.points = scene_points_.data();
+  data_.scene.point_capacity = scene_points_.size();
   data_.step = 0;
   const auto first = prepare(std::move(program), detail::Carryover{});
   swap_in(*first);
@@ -360,6 +366,7 @@ void Manager::safe_pass() {
   }
   data_.event_count = 0;
   data_.sequence = 0;
+  clear_scene();
   input_pass_events_ = 0;  // the safe pass has only an output pass
   for (const auto& controller : program_.controllers) controller->clear_events();
   for (const auto& layer : program_.layers) {
@@ -516,6 +523,7 @@ void Manager::step() {
   ++data_.step;
   data_.event_count = 0;
   data_.sequence = 0;
+  clear_scene();
   for (const auto& controller : program_.controllers) controller->clear_events();
   const auto interface_index = [&](const CompiledLayer& layer) {
     return static_cast<std::uint32_t>(program_.behaviours.size() +

@@ -31,6 +31,8 @@ export function live(info) {
     if (!safe || !shown || safe.step !== shown.step) return;
     // An actuator without a safe value keeps the last step's value, held as it was.
     safe.held = {...shown.held};
+    // The safe pass draws nothing: the world is as its step drew it.
+    safe.scene = shown.scene;
     for (const [name, value] of Object.entries(safe.actuators || {})) {
       if (value.written) delete safe.held[name];
     }
@@ -98,6 +100,17 @@ export function live(info) {
   events.addEventListener('safe', (event) => {
     safe = JSON.parse(event.data);
     if (!drawPending) showSafe();
+  });
+  // What the step drew (foxglove.SceneUpdate) follows its step: kept with its record.
+  events.addEventListener('scene', (event) => {
+    const last = page.records[page.records.length - 1];
+    if (!last || String(last.step) !== event.lastEventId) return;
+    last.scene = JSON.parse(event.data);
+    if (safe && safe.step === last.step) safe.scene = last.scene;
+    // Drawn before it came (the step, or the safe pass after it).
+    if (page.current === last || (page.current === safe && safe.step === last.step)) {
+      page.scene.show(last.scene, last.step);
+    }
   });
   events.addEventListener('status', (event) => {
     const status = JSON.parse(event.data);

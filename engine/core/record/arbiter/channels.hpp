@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "arbiter/manager.hpp"
+#include "arbiter/scene.hpp"
 
 namespace arbiter {
 
@@ -36,6 +37,7 @@ enum ChannelIndex : std::size_t {
   kStepChannel,    ///< /arbiter/step: the trace's step record, one per step
   kInputsChannel,  ///< /arbiter/inputs: what interface layers read from the world, per step
   kLogChannel,     ///< /arbiter/log: foxglove.Log, what code reported and what went wrong
+  kSceneChannel,   ///< /arbiter/scene: foxglove.SceneUpdate, what code drew (StepContext::scene)
   kChannelCount
 };
 
@@ -59,5 +61,52 @@ enum class LogLevel : std::uint8_t {
 void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view name,
                         std::string_view message, std::string_view file, std::uint32_t line,
                         std::string& out);
+
+/// A whole picture as a message of the `/arbiter/scene` channel (Foxglove's foxglove.SceneUpdate)
+/// at `time_ns`: a deletion of all entities, then the `count` primitives a step drew (their
+/// points in `points`), in the entities SceneUpdates gives them. `dropped` primitives (for want
+/// of room, or with a coordinate that is not a finite number) are told in the first entity's
+/// metadata ("dropped"). Appended to `out`, without a newline. Allocates: off the stepping
+/// thread.
+void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
+                         const ScenePoint* points, std::size_t dropped, std::string& out);
+
+/// The `/arbiter/scene` messages of one recording, step after step. A frame's primitives are in
+/// two entities, with lifetime 0 (a viewer keeps them until they are replaced or deleted): what
+/// the step before a whole picture drew alike ("field/still") and the rest ("field/moving"). A
+/// message between whole pictures carries only the moving entity (or deletes it when nothing
+/// moves), so that what does not move (a field's lines) is not written every step. The whole
+/// picture (a deletion of all, then every entity) comes first, at least once a second of log
+/// time after (a viewer that seeks shows the last message before the time it seeks to), after
+/// restart(), when a still primitive changes or goes, and while primitives are dropped.
+class SceneUpdates {
+ public:
+  static constexpr std::uint64_t kWholeEveryNs = 1000000000;
+
+  /// The message of a step at `time_ns`, as append_scene_update() takes it, appended to `out`.
+  void append(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
+              const ScenePoint* points, std::size_t dropped, std::string& out);
+  /// The next message gives the whole picture (a new program, a new file).
+  void restart() { started_ = false; }
+
+ private:
+  struct Placed {
+    std::string_view frame;  // cut to its room
+    std::uint32_t rank = 0;  // among its frame's primitives
+    std::size_t index = 0;   // in the step's primitives
+    bool same = false;       // as the step before drew it
+    bool still = false;      // in the entity of what does not move
+  };
+  static void place(const ScenePrimitive* primitives, std::size_t count, const ScenePoint* points,
+                    std::vector<Placed>& placed, std::size_t& dropped);
+
+  bool started_ = false;
+  std::uint64_t whole_at_ = 0;  // the last whole picture's time
+  std::size_t dropped_ = 0;
+  // The last message's step: what a viewer shows now. Reused: no allocation once grown.
+  std::vector<ScenePrimitive> primitives_;
+  std::vector<ScenePoint> points_;
+  std::vector<Placed> last_, now_;
+};
 
 }  // namespace arbiter

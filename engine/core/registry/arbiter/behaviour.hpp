@@ -18,6 +18,7 @@
 
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/document.hpp"
+#include "arbiter/scene.hpp"
 #include "arbiter/value.hpp"
 
 namespace arbiter {
@@ -101,6 +102,8 @@ struct StepData {
   std::uint32_t sequence = 0;
   /// The text of formatted reports: event_capacity slots of kReportBytes, laid out at load.
   char* report_text = nullptr;
+  /// What code drew this step (StepContext::scene), in buffers sized at load.
+  SceneData scene;
 };
 
 /// The bytes of a formatted report's text slot, its terminating NUL included.
@@ -181,6 +184,8 @@ class StepContext {
     ++data_->event_count;
     ++data_->sequence;
   }
+  /// Draws the world this step, in `frame` (copied): see Scene. Allocation-free.
+  Scene scene(const char* frame) const { return Scene(data_->scene, frame); }
 
  protected:
   friend class Controller;  // numbers its events in the step's sequence

@@ -66,6 +66,9 @@ class Manager {
  public:
   /// Reports (StepContext::report) kept per step; later ones are dropped.
   static constexpr std::size_t kEventsPerStep = 64;
+  /// Primitives and their points drawn per step (StepContext::scene); later ones are dropped.
+  static constexpr std::size_t kScenePrimitivesPerStep = 128;
+  static constexpr std::size_t kScenePointsPerStep = 512;
 
   /// Takes the program; run-time warnings go to `logger` (default: spdlog's default logger).
   explicit Manager(Program program, std::shared_ptr<spdlog::logger> logger = nullptr);
@@ -168,6 +171,14 @@ class Manager {
   const detail::StepData::Event& event(std::size_t index) const { return events_[index]; }
   /// Who reported an event: a behaviour's or an interface layer's name.
   const std::string& event_source(const detail::StepData::Event& event) const;
+  /// What code drew in the last step (StepContext::scene): its primitives, their points, and
+  /// how many were dropped for want of room.
+  const detail::SceneData& scene() const { return data_.scene; }
+  std::size_t scene_primitive_count() const {
+    return std::min(data_.scene.primitive_count, data_.scene.primitive_capacity);
+  }
+  /// Primitives dropped in all steps so far.
+  std::uint64_t scene_dropped_total() const { return scene_dropped_total_; }
 
   template <typename T>
   const T& actuator(std::uint32_t actuator) const {
@@ -195,6 +206,11 @@ class Manager {
   std::unique_ptr<Staged> prepare(Program program, detail::Carryover carryover) const;
   void swap_in(Staged& staged) noexcept;
   void point_step_data() noexcept;
+  /// Starts a step's picture afresh, counting what the last one dropped.
+  void clear_scene() noexcept {
+    scene_dropped_total_ += data_.scene.dropped;
+    data_.scene.primitive_count = data_.scene.point_count = data_.scene.dropped = 0;
+  }
   void apply(Staged& staged);
   void end_replaced(Staged& staged);
   /// Observer::on_retiring() for what a swap replaced, before it is freed.
@@ -219,6 +235,9 @@ class Manager {
   std::vector<Observer*> observers_;
   std::vector<detail::StepData::Event> events_;
   std::vector<char> report_text_;  ///< the text slots of formatted reports (StepContext::report)
+  std::vector<ScenePrimitive> scene_primitives_;
+  std::vector<ScenePoint> scene_points_;
+  std::uint64_t scene_dropped_total_ = 0;
   detail::StepData data_;
 };
 
