@@ -100,7 +100,18 @@ std::optional<Target> resolve(const Program& program, std::string_view target, E
   for (const auto& actuator : program.actuators) known.push_back(actuator.name);
   const auto not_found = [&](std::string text) {
     std::vector<Note> notes;
-    if (auto hint = suggest(target, known); !hint.empty()) notes.push_back(std::move(hint));
+    // `machine/stat` is meant within its machine (else `machine` itself, a prefix, would be
+    // suggested).
+    std::vector<std::string> scoped;
+    if (const auto slash = target.find('/'); slash != std::string_view::npos) {
+      const std::string scope(target.substr(0, slash + 1));
+      for (const auto& name : known) {
+        if (name.rfind(scope, 0) == 0) scoped.push_back(name);
+      }
+    }
+    if (auto hint = suggest(target, scoped.empty() ? known : scoped); !hint.empty()) {
+      notes.push_back(std::move(hint));
+    }
     error = failure(Status::kNotFound, std::move(text), std::move(notes));
     return std::nullopt;
   };
