@@ -125,6 +125,19 @@ TEST_CASE("explain tells which step's value a held actuator keeps", "[explain]")
   CHECK(contains(run.text_at(14, "kick"),
                  "written by kick_ball (activation 1): the most active writer"));
   CHECK(contains(run.text_at(3, "kick"), "held: nothing has written it yet"));
+  // The views give explain the steps around the one asked for: here the header and steps 16 to
+  // 18, which cannot tell which earlier step wrote the value held.
+  std::istringstream lines(run.trace);
+  std::string excerpt;
+  int line_number = 0;  // 0: the header, then the step of that number
+  for (std::string line; std::getline(lines, line); ++line_number) {
+    if (line_number == 0 || (line_number >= 16 && line_number <= 18)) excerpt += line + "\n";
+  }
+  CHECK(contains(run.on(excerpt, 16, "kick").text,
+                 "held: nobody wrote it in this step; the trace given starts here"));
+  CHECK(contains(run.on(excerpt, 17, "kick").text,
+                 "held: nobody wrote it in steps 16 to 17; the trace given starts at step 16, so "
+                 "the step it was written in is not known\n"));
 }
 
 TEST_CASE("explain tells why a state ran at a step", "[explain][scl]") {
@@ -147,6 +160,18 @@ TEST_CASE("explain tells why a state ran at a step", "[explain][scl]") {
                  "queued, position 3 of [walk_to_pose, obstacle_ahead, monitor_ball] "
                  "(behind wait_for_button)\n"));
   CHECK(contains(queued, "it runs next from step 18\n"));
+  // The views give explain the steps around the one asked for: steps 7 to 9 of walk_to_pose's
+  // run from step 6 to 12.
+  std::istringstream lines(run.trace);
+  std::string excerpt;
+  int line_number = 0;  // 0: the header, then the step of that number
+  for (std::string line; std::getline(lines, line); ++line_number) {
+    if (line_number == 0 || (line_number >= 7 && line_number <= 9)) excerpt += line + "\n";
+  }
+  const auto part = run.on(excerpt, 8, "goalie/walk_to_pose");
+  CHECK(contains(part.text,
+                 "at step 8: running (cycle 8)\n  started before step 7, the first of "
+                 "the trace given\n"));
   CHECK(contains(run.text_at(41, "goalie/monitor_ball"),
                  "not running and not queued\n  it last ran from step 34 to step 40, and ended: "
                  "pre-empted"));

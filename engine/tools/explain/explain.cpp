@@ -723,12 +723,25 @@ Explanation explain_actuator(const Program& program, std::uint32_t target, std::
         last_value = at(entry, "value");
       }
     }
-    text += last > 0 ? fmt::format(
-                           "  held: nobody wrote it in this step; it keeps the value written at "
-                           "step {} ({})\n",
-                           last, value_text(last_value))
-                     : "  held: nothing has written it yet; it holds its default (or its type's "
-                       "zero)\n";
+    // A trace given in part (the views give the steps around the one asked for) cannot tell
+    // which step older than its first wrote the value.
+    const std::uint64_t first = records.history.empty() ? step : records.history.front().first;
+    if (last == 0 && first > 1) {
+      text += first < step ? fmt::format(
+                                 "  held: nobody wrote it in steps {} to {}; the trace given "
+                                 "starts at step {}, so the step it was written in is not known\n",
+                                 first, step, first)
+                           : fmt::format(
+                                 "  held: nobody wrote it in this step; the trace given starts "
+                                 "here, so the step it was written in is not known\n");
+    } else {
+      text += last > 0 ? fmt::format(
+                             "  held: nobody wrote it in this step; it keeps the value written at "
+                             "step {} ({})\n",
+                             last, value_text(last_value))
+                       : "  held: nothing has written it yet; it holds its default (or its type's "
+                         "zero)\n";
+    }
     if (!active.empty()) {
       std::vector<std::string> names;
       for (const auto* writer : active) names.push_back(writer->name);
@@ -793,20 +806,26 @@ Explanation explain_state(const Program& program, std::uint32_t machine, std::ui
       break;
     }
   }
+  // A trace given in part (the views give the steps around the one asked for) may begin while
+  // the state runs: then its run started before the first step given.
+  const Json& at_step = entry(here);
+  const bool started_before =
+      !start && (state_of(at_step) == state || has_event(at_step, "execute " + state) ||
+                 has_event(at_step, "deactivate " + state));
   std::optional<std::size_t> end;
-  if (start) {
-    for (std::size_t i = *start; i < history.size(); ++i) {
+  if (start || started_before) {
+    for (std::size_t i = start ? *start : 0; i < history.size(); ++i) {
       const auto events = strings(at(entry(i), "events"));
       const auto activated = std::find(events.begin(), events.end(), "activate " + state);
       // In the step it started, only a deactivation after its activation ends it.
-      const auto from = i == *start ? activated : events.begin();
+      const auto from = start && i == *start ? activated : events.begin();
       if (std::find(from, events.end(), "deactivate " + state) != events.end()) {
         end = i;
         break;
       }
     }
   }
-  const bool running = start && (!end || *end >= here);
+  const bool running = (start || started_before) && (!end || *end >= here);
   const std::string name = controller.name() + "/" + state;
   const Json& now = entry(here);
   // Where it was planned: the first step of the stretch, just before `before`, in which it was
@@ -832,24 +851,28 @@ Explanation explain_state(const Program& program, std::uint32_t machine, std::ui
   if (running) {
     text =
         fmt::format("state {} at step {}: running (cycle {})\n", name, step, now.value("cycle", 0));
-    const Json& first = entry(*start);
-    std::string how;
-    const auto events = strings(at(first, "events"));
-    for (const auto& event : events) {
-      if (event == "activate " + state) break;
-      if (event.rfind("deactivate ", 0) == 0) {
-        const std::string previous = event.substr(std::string("deactivate ").size());
-        how = fmt::format("activated when {} ended: {}", previous, why_ended(first, previous));
+    if (started_before) {
+      text += fmt::format("  started before step {}, the first of the trace given\n", step_of(0));
+    } else {
+      const Json& first = entry(*start);
+      std::string how;
+      const auto events = strings(at(first, "events"));
+      for (const auto& event : events) {
+        if (event == "activate " + state) break;
+        if (event.rfind("deactivate ", 0) == 0) {
+          const std::string previous = event.substr(std::string("deactivate ").size());
+          how = fmt::format("activated when {} ended: {}", previous, why_ended(first, previous));
+        }
       }
+      if (how.empty()) how = "activated as the head of the queue";
+      text += fmt::format("  started at step {}: {}\n", step_of(*start), how);
+      const std::string plan = planned(*start);
+      text += "  planned: " +
+              (plan.empty()
+                   ? fmt::format("in step {} itself, as the state before it ended", step_of(*start))
+                   : plan) +
+              "\n";
     }
-    if (how.empty()) how = "activated as the head of the queue";
-    text += fmt::format("  started at step {}: {}\n", step_of(*start), how);
-    const std::string plan = planned(*start);
-    text += "  planned: " +
-            (plan.empty()
-                 ? fmt::format("in step {} itself, as the state before it ended", step_of(*start))
-                 : plan) +
-            "\n";
     text +=
         end ? fmt::format("  ended at step {}: {}\n", step_of(*end), why_ended(entry(*end), state))
             : fmt::format("  still running at step {}, the last of the trace\n",
@@ -870,7 +893,9 @@ Explanation explain_state(const Program& program, std::uint32_t machine, std::ui
       text += fmt::format("  it last ran from step {} to step {}, and ended: {}\n", step_of(*start),
                           step_of(*end), why_ended(entry(*end), state));
     } else {
-      text += "  it has not run yet\n";
+      text += step_of(0) > 1
+                  ? fmt::format("  it has not run in the trace given (from step {})\n", step_of(0))
+                  : std::string("  it has not run yet\n");
     }
   }
   std::optional<std::size_t> next;
