@@ -99,6 +99,27 @@ bool names(const Node& item, const InhibitionRef& which) {
          inhibitor->text() == which.inhibitor && inhibited->text() == which.inhibited;
 }
 
+/// A layer's declaration, in the config's file or an include that declares it.
+struct LayerSite {
+  const SourceFile* file;
+  const Node* layer;
+};
+
+/// Every declaration of the layer named `layer`, in the order of the config's files.
+std::vector<LayerSite> layers_named(const Loaded& loaded, const std::string& layer) {
+  std::vector<LayerSite> found;
+  for (const auto& file : loaded.files.files()) {
+    const Node* layers =
+        file->root && file->root->is_mapping() ? file->root->find("layers") : nullptr;
+    if (!layers || !layers->is_sequence()) continue;
+    for (const auto& item : layers->items()) {
+      const Node* name = item.is_mapping() ? item.find("name") : nullptr;
+      if (name && name->is_scalar() && name->text() == layer) found.push_back({file.get(), &item});
+    }
+  }
+  return found;
+}
+
 /// Where a declared inhibition is: its file, the layer's `inhibitions:` entry and the item.
 struct Site {
   const SourceFile* file;
@@ -108,18 +129,11 @@ struct Site {
 
 std::vector<Site> sites_of(const Loaded& loaded, const InhibitionRef& which) {
   std::vector<Site> sites;
-  for (const auto& file : loaded.files.files()) {
-    const Node* layers =
-        file->root && file->root->is_mapping() ? file->root->find("layers") : nullptr;
-    if (!layers || !layers->is_sequence()) continue;
-    for (const auto& layer : layers->items()) {
-      const Node* name = layer.is_mapping() ? layer.find("name") : nullptr;
-      if (!name || !name->is_scalar() || name->text() != which.layer) continue;
-      for (const auto& entry : layer.entries()) {
-        if (entry.key != "inhibitions" || !entry.value.is_sequence()) continue;
-        for (const auto& item : entry.value.items()) {
-          if (names(item, which)) sites.push_back({file.get(), &entry, &item});
-        }
+  for (const auto& [file, layer] : layers_named(loaded, which.layer)) {
+    for (const auto& entry : layer->entries()) {
+      if (entry.key != "inhibitions" || !entry.value.is_sequence()) continue;
+      for (const auto& item : entry.value.items()) {
+        if (names(item, which)) sites.push_back({file, &entry, &item});
       }
     }
   }
@@ -403,51 +417,45 @@ EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
 EditResult add_inhibition(const Loaded& loaded, const InhibitionRef& inhibition, bool chaining) {
   if (!sites_of(loaded, inhibition).empty())
     return {{}, fmt::format("the inhibition {} is already declared", describe(inhibition))};
-  for (const auto& file : loaded.files.files()) {
-    const Node* layers =
-        file->root && file->root->is_mapping() ? file->root->find("layers") : nullptr;
-    if (!layers || !layers->is_sequence()) continue;
-    for (const auto& layer : layers->items()) {
-      const Node* name = layer.is_mapping() ? layer.find("name") : nullptr;
-      if (!name || !name->is_scalar() || name->text() != inhibition.layer) continue;
-      const bool json = format_of(file->path) == DocumentFormat::kJson;
-      const std::string arrow = fmt::format("{} {} {}", inhibition.inhibitor,
-                                            chaining ? "=>" : "->", inhibition.inhibited);
-      const std::string item = json ? "\"" + arrow + "\"" : arrow;
-      const Node* list = layer.find("inhibitions");
-      if (!list || list->reads_as_null()) {
-        if (list) return {{}, "the layer's inhibitions: is empty but not a sequence"};
-        return add_entry(*file, layer,
-                         fmt::format("{}: [{}]", json ? "\"inhibitions\"" : "inhibitions", item));
-      }
-      if (!list->is_sequence()) return {{}, "the layer's inhibitions: is not a sequence"};
-      const std::string& text = file->text;
-      const std::size_t begin = offset_at(*file, list->location());
-      if (begin < text.size() && text[begin] == '[') {
-        const std::size_t close = flow_close(text, begin);
-        if (close == std::string::npos) return {{}, "the inhibitions' flow sequence has no ']'"};
-        std::size_t at = close;
-        while (at > begin + 1 && space(text[at - 1])) --at;
-        return {{{file->path, at, at, (at == begin + 1 ? "" : ", ") + item}}, {}};
-      }
-      if (list->items().empty()) return {{}, "the layer's inhibitions: has no item to follow"};
-      // A new line like the last item's, after it.
-      const std::size_t last = offset_at(*file, list->items().back().location());
-      std::size_t dash = last;
-      while (dash > 0 && text[dash - 1] == ' ') --dash;
-      if (dash == 0 || text[dash - 1] != '-')
-        return {{}, "the last inhibition is not a '- ' item on a line of its own"};
-      --dash;
-      const std::size_t start = line_start(text, dash);
-      const std::size_t end = block_end(text, last, last - start);
-      std::string line = text.substr(start, last - start) + item;
-      std::fill(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(dash - start), ' ');
-      if (end == text.size() && (text.empty() || text.back() != '\n'))
-        return {{{file->path, end, end, "\n" + line}}, {}};
-      return {{{file->path, end, end, line + "\n"}}, {}};
-    }
+  const std::vector<LayerSite> found = layers_named(loaded, inhibition.layer);
+  if (found.empty()) return {{}, fmt::format("no layer '{}'", inhibition.layer)};
+  const SourceFile& file = *found.front().file;
+  const Node& layer = *found.front().layer;
+  const bool json = format_of(file.path) == DocumentFormat::kJson;
+  const std::string arrow =
+      fmt::format("{} {} {}", inhibition.inhibitor, chaining ? "=>" : "->", inhibition.inhibited);
+  const std::string item = json ? "\"" + arrow + "\"" : arrow;
+  const Node* list = layer.find("inhibitions");
+  if (!list || list->reads_as_null()) {
+    if (list) return {{}, "the layer's inhibitions: is empty but not a sequence"};
+    return add_entry(file, layer,
+                     fmt::format("{}: [{}]", json ? "\"inhibitions\"" : "inhibitions", item));
   }
-  return {{}, fmt::format("no layer '{}'", inhibition.layer)};
+  if (!list->is_sequence()) return {{}, "the layer's inhibitions: is not a sequence"};
+  const std::string& text = file.text;
+  const std::size_t begin = offset_at(file, list->location());
+  if (begin < text.size() && text[begin] == '[') {
+    const std::size_t close = flow_close(text, begin);
+    if (close == std::string::npos) return {{}, "the inhibitions' flow sequence has no ']'"};
+    std::size_t at = close;
+    while (at > begin + 1 && space(text[at - 1])) --at;
+    return {{{file.path, at, at, (at == begin + 1 ? "" : ", ") + item}}, {}};
+  }
+  if (list->items().empty()) return {{}, "the layer's inhibitions: has no item to follow"};
+  // A new line like the last item's, after it.
+  const std::size_t last = offset_at(file, list->items().back().location());
+  std::size_t dash = last;
+  while (dash > 0 && text[dash - 1] == ' ') --dash;
+  if (dash == 0 || text[dash - 1] != '-')
+    return {{}, "the last inhibition is not a '- ' item on a line of its own"};
+  --dash;
+  const std::size_t start = line_start(text, dash);
+  const std::size_t end = block_end(text, last, last - start);
+  std::string line = text.substr(start, last - start) + item;
+  std::fill(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(dash - start), ' ');
+  if (end == text.size() && (text.empty() || text.back() != '\n'))
+    return {{{file.path, end, end, "\n" + line}}, {}};
+  return {{{file.path, end, end, line + "\n"}}, {}};
 }
 
 EditResult flip_chaining(const Loaded& loaded, const InhibitionRef& inhibition) {
@@ -486,54 +494,46 @@ EditResult flip_chaining(const Loaded& loaded, const InhibitionRef& inhibition) 
 
 EditResult set_param(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
                      const std::string& param, const std::string& value) {
-  for (const auto& file : loaded.files.files()) {
-    const Node* layers =
-        file->root && file->root->is_mapping() ? file->root->find("layers") : nullptr;
-    if (!layers || !layers->is_sequence()) continue;
-    for (const auto& item : layers->items()) {
-      const Node* name = item.is_mapping() ? item.find("name") : nullptr;
-      const Node* behaviours = name ? item.find("behaviours") : nullptr;
-      if (!name || !name->is_scalar() || name->text() != layer || !behaviours ||
-          !behaviours->is_mapping())
-        continue;
-      const Node* node = behaviours->find(behaviour);
-      if (!node) continue;
-      const bool json = format_of(file->path) == DocumentFormat::kJson;
-      auto key = [&](const std::string& word) { return json ? "\"" + word + "\"" : word; };
-      const std::string& text = file->text;
-      if (node->is_scalar()) {
-        // `kick_ball: soccer.KickBall` becomes a mapping, to hold its params.
-        const std::size_t begin = offset_at(*file, node->location());
-        const std::size_t end = scalar_end(text, begin, *node);
-        return {{{file->path, begin, end,
-                  fmt::format("{{{}: {}, {}: {{{}: {}}}}}", key("type"),
-                              text.substr(begin, end - begin), key("params"), key(param), value)}},
-                {}};
-      }
-      const Node* params = node->is_mapping() ? node->find("params") : nullptr;
-      if (!params || !params->is_mapping()) {
-        if (params) return {{}, fmt::format("the params of '{}' are not a mapping", behaviour)};
-        return add_entry(*file, *node,
-                         fmt::format("{}: {{{}: {}}}", key("params"), key(param), value));
-      }
-      const Node* current = params->find(param);
-      if (!current) return add_entry(*file, *params, key(param) + ": " + value);
-      const std::size_t begin = offset_at(*file, current->location());
-      std::size_t end = begin;
-      if (current->is_scalar()) {
-        end = scalar_end(text, begin, *current);
-      } else if (begin < text.size() && (text[begin] == '[' || text[begin] == '{')) {
-        end = flow_close(text, begin);
-        if (end == std::string::npos) return {{}, "the param's flow value has no closing bracket"};
-        ++end;
-      } else {
-        return {{},
-                fmt::format("param '{}' of '{}' is written as a block collection: edit its "
-                            "lines instead",
-                            param, behaviour)};
-      }
-      return {{{file->path, begin, end, value}}, {}};
+  for (const auto& [file, declaration] : layers_named(loaded, layer)) {
+    const Node* behaviours = declaration->find("behaviours");
+    if (!behaviours || !behaviours->is_mapping()) continue;
+    const Node* node = behaviours->find(behaviour);
+    if (!node) continue;
+    const bool json = format_of(file->path) == DocumentFormat::kJson;
+    auto key = [&](const std::string& word) { return json ? "\"" + word + "\"" : word; };
+    const std::string& text = file->text;
+    if (node->is_scalar()) {
+      // `kick_ball: soccer.KickBall` becomes a mapping, to hold its params.
+      const std::size_t begin = offset_at(*file, node->location());
+      const std::size_t end = scalar_end(text, begin, *node);
+      return {{{file->path, begin, end,
+                fmt::format("{{{}: {}, {}: {{{}: {}}}}}", key("type"),
+                            text.substr(begin, end - begin), key("params"), key(param), value)}},
+              {}};
     }
+    const Node* params = node->is_mapping() ? node->find("params") : nullptr;
+    if (!params || !params->is_mapping()) {
+      if (params) return {{}, fmt::format("the params of '{}' are not a mapping", behaviour)};
+      return add_entry(*file, *node,
+                       fmt::format("{}: {{{}: {}}}", key("params"), key(param), value));
+    }
+    const Node* current = params->find(param);
+    if (!current) return add_entry(*file, *params, key(param) + ": " + value);
+    const std::size_t begin = offset_at(*file, current->location());
+    std::size_t end = begin;
+    if (current->is_scalar()) {
+      end = scalar_end(text, begin, *current);
+    } else if (begin < text.size() && (text[begin] == '[' || text[begin] == '{')) {
+      end = flow_close(text, begin);
+      if (end == std::string::npos) return {{}, "the param's flow value has no closing bracket"};
+      ++end;
+    } else {
+      return {{},
+              fmt::format("param '{}' of '{}' is written as a block collection: edit its "
+                          "lines instead",
+                          param, behaviour)};
+    }
+    return {{{file->path, begin, end, value}}, {}};
   }
   return {{}, fmt::format("no behaviour '{}' in layer '{}'", behaviour, layer)};
 }
