@@ -337,13 +337,15 @@ int main(int argc, char** argv) {
       "Explain, from a trace of 'arbiter run', why a behaviour had its activation level at one\n"
       "step: its requested level, each inhibitor's level and factor (1 - a), the chain behind an\n"
       "implicit inhibition, the product and the normalisation. Naming a state machine instead\n"
-      "tells which state ran, what was queued and the events.");
+      "tells which state ran, what was queued and the events; an actuator, who wrote it with\n"
+      "which weight or which step's value it holds; a state, when and why it started and ended.");
   explain_cmd->add_option("FILE", options.file,
                           "the config the trace was written with; left out, a recording's own "
                           "(a recording given one says how it differs from its own)");
-  explain_cmd->add_option("BEHAVIOUR", options.target,
+  explain_cmd->add_option("NAME", options.target,
                           "a behaviour ('name', or 'layer/name' when several layers have one of "
-                          "that name) or a state machine ('name' or 'state_machines/name')");
+                          "that name), a state machine ('name' or 'state_machines/name'), an "
+                          "actuator ('name' or 'actuators/name') or a state ('machine/state')");
   explain_cmd->add_option("--trace", options.trace_path, kTraceHelp)
       ->required()
       ->check(CLI::ExistingFile);
@@ -357,9 +359,14 @@ int main(int argc, char** argv) {
                   "search_for_ball\n"
                   "  arbiter explain configs/paper/hierarchical.yaml --trace h.jsonl --step 6 "
                   "match\n"
+                  "  arbiter explain configs/paper/walk_and_kick.yaml --trace out.jsonl --step 16 "
+                  "kick   # held\n"
+                  "  arbiter run configs/paper/goalie_plan.yaml --steps 50 --trace g.jsonl -q\n"
+                  "  arbiter explain configs/paper/goalie_plan.yaml --trace g.jsonl --step 41 "
+                  "goalie/wait_for_button\n"
                   "  arbiter explain --trace run.mcap --step 171 kick_ball   # the recorded "
                   "config\n\n"
-                  "Exit codes: 0 ok, 1 invalid config or trace, 2 usage error (no such behaviour "
+                  "Exit codes: 0 ok, 1 invalid config or trace, 2 usage error (no such name "
                   "or step)."));
 
   auto* test_cmd = app.add_subcommand(

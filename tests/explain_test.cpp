@@ -98,6 +98,85 @@ TEST_CASE("explain tells what a state machine did in a step", "[explain]") {
                  "cycle 40); it had asked to proceed\n"));
 }
 
+TEST_CASE("explain tells how an aggregated actuator got its value", "[explain]") {
+  const Explained run(kWalkAndKick, 20);
+  // Step 5: go_behind_ball 0.3 and search_for_ball 0.5 × (1 - 0.3) = 0.35 both write
+  // gait_velocity: (0.3 · [0.3, 0.1, 0] + 0.35 · [0, 0, 0.6]) / 0.65.
+  const std::string text = run.text_at(5, "gait_velocity");
+  check_golden("explain_gait_velocity.txt", text);
+  CHECK(contains(text, "aggregated) at step 5: [0.1385, 0.04615, 0.3231], written\n"));
+  CHECK(contains(text, "go_behind_ball   activation 0.3   weight 0.3 / 0.65 = 0.461538\n"));
+  CHECK(contains(text, "search_for_ball  activation 0.35  weight 0.35 / 0.65 = 0.538462\n"));
+  // Step 9: search_for_ball is inhibited, so its writes are ignored.
+  const std::string alone = run.text_at(9, "actuators/gait_velocity");
+  CHECK(contains(alone, "go_behind_ball  activation 1  weight 1 / 1 = 1\n"));
+  CHECK(contains(alone,
+                 "inactive writers (activation 0, their writes are ignored): "
+                 "search_for_ball\n"));
+}
+
+TEST_CASE("explain tells which step's value a held actuator keeps", "[explain]") {
+  const Explained run(kWalkAndKick, 20);
+  // kick_ball kicks in steps 13 to 15 and is inactive from step 16.
+  const std::string held = run.text_at(16, "kick");
+  check_golden("explain_kick_held.txt", held);
+  CHECK(contains(held, "at step 16: true, held\n"));
+  CHECK(contains(held, "it keeps the value written at step 15 (true)\n"));
+  CHECK(contains(run.text_at(14, "kick"),
+                 "written by kick_ball (activation 1): the most active writer"));
+  CHECK(contains(run.text_at(3, "kick"), "held: nothing has written it yet"));
+  // The views give explain the steps around the one asked for: here the header and steps 16 to
+  // 18, which cannot tell which earlier step wrote the value held.
+  std::istringstream lines(run.trace);
+  std::string excerpt;
+  int line_number = 0;  // 0: the header, then the step of that number
+  for (std::string line; std::getline(lines, line); ++line_number) {
+    if (line_number == 0 || (line_number >= 16 && line_number <= 18)) excerpt += line + "\n";
+  }
+  CHECK(contains(run.on(excerpt, 16, "kick").text,
+                 "held: nobody wrote it in this step; the trace given starts here"));
+  CHECK(contains(run.on(excerpt, 17, "kick").text,
+                 "held: nobody wrote it in steps 16 to 17; the trace given starts at step 16, so "
+                 "the step it was written in is not known\n"));
+}
+
+TEST_CASE("explain tells why a state ran at a step", "[explain][scl]") {
+  const Explained run("configs/paper/goalie_plan.yaml", 50);
+  // The button pressed again at cycle 40 pre-empts the plan back to wait_for_button.
+  const std::string preempted = run.text_at(41, "goalie/wait_for_button");
+  check_golden("explain_goalie_wait_for_button.txt", preempted);
+  CHECK(contains(preempted, "at step 41: running (cycle 41)\n"));
+  CHECK(contains(preempted,
+                 "started at step 40: activated when monitor_ball ended: pre-empted by "
+                 "wait_for_button (preempt: at cycle 40)"));
+  CHECK(contains(preempted, "ended at step 45: proceeded, queue empty\n"));
+  // monitor_ball plans a walk and another monitor_ball behind it.
+  const std::string planned = run.text_at(38, "goalie/monitor_ball");
+  CHECK(contains(planned, "started at step 34: activated when walk_to_pose ended: proceeded\n"));
+  CHECK(contains(planned, "planned: entered the queue at step 31, while monitor_ball ran\n"));
+  CHECK(contains(planned, "ended at step 40: pre-empted by wait_for_button"));
+  const std::string queued = run.text_at(3, "goalie/monitor_ball");
+  CHECK(contains(queued,
+                 "queued, position 3 of [walk_to_pose, obstacle_ahead, monitor_ball] "
+                 "(behind wait_for_button)\n"));
+  CHECK(contains(queued, "it runs next from step 18\n"));
+  // The views give explain the steps around the one asked for: steps 7 to 9 of walk_to_pose's
+  // run from step 6 to 12.
+  std::istringstream lines(run.trace);
+  std::string excerpt;
+  int line_number = 0;  // 0: the header, then the step of that number
+  for (std::string line; std::getline(lines, line); ++line_number) {
+    if (line_number == 0 || (line_number >= 7 && line_number <= 9)) excerpt += line + "\n";
+  }
+  const auto part = run.on(excerpt, 8, "goalie/walk_to_pose");
+  CHECK(contains(part.text,
+                 "at step 8: running (cycle 8)\n  started before step 7, the first of "
+                 "the trace given\n"));
+  CHECK(contains(run.text_at(41, "goalie/monitor_ball"),
+                 "not running and not queued\n  it last ran from step 34 to step 40, and ended: "
+                 "pre-empted"));
+}
+
 namespace {
 
 /// A run of a config of one state machine `m`, with the test classes: its trace, run's report,
@@ -320,6 +399,16 @@ TEST_CASE("explain reports what it cannot explain", "[explain]") {
   CHECK(result.status == Explanation::Status::kNotFound);
   REQUIRE(!result.notes.empty());
   CHECK(contains(result.notes[0].text, "did you mean 'search_for_ball'?"));
+  result = run.at(8, "gait_velocty");
+  REQUIRE(!result.notes.empty());
+  CHECK(contains(result.notes[0].text, "did you mean 'gait_velocity'?"));
+  CHECK(result.text ==
+        "'gait_velocty' names no behaviour, state machine, state (machine/state) or "
+        "actuator of 'walk_and_kick'");
+  const auto state = Explained("configs/paper/goalie_plan.yaml", 3).at(2, "goalie/monitor_bal");
+  CHECK(state.status == Explanation::Status::kNotFound);
+  REQUIRE(!state.notes.empty());
+  CHECK(contains(state.notes[0].text, "did you mean 'goalie/monitor_ball'?"));
   result = run.at(21, "search_for_ball");
   CHECK(result.status == Explanation::Status::kNotFound);
   CHECK(result.text == "the trace has steps 1 to 20, not step 21");
@@ -342,6 +431,9 @@ TEST_CASE("arbiter explain runs from a trace file", "[explain][cli]") {
   CHECK(ok.exit_code == 0);
   CHECK(ok.out == read_text(kGoldenDir / "explain_search_for_ball.txt"));
   CHECK(run_cli(base + " --step 8 control/search_for_ball").exit_code == 0);
+  const auto held = run_cli(base + " --step 16 kick");
+  CHECK(held.exit_code == 0);
+  CHECK(held.out == read_text(kGoldenDir / "explain_kick_held.txt"));
   const auto unknown = run_cli(base + " --step 8 nobody");
   CHECK(unknown.exit_code == 2);
   CHECK(contains(unknown.err, "arbiter explain: 'nobody' names no behaviour"));

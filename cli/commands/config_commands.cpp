@@ -139,7 +139,8 @@ int explain_command(const Options& options) {
   if (target.empty()) std::swap(config, target);
   // A config given without a target is not a target: the target was forgotten.
   if (target.empty() || std::filesystem::is_regular_file(target)) {
-    std::cerr << "arbiter explain: name the behaviour or state machine to explain\n";
+    std::cerr
+        << "arbiter explain: name the behaviour, state machine, actuator or state to explain\n";
     return kExitUsage;
   }
   if (!std::ifstream(options.trace_path, std::ios::binary)) {

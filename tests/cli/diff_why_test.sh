@@ -108,7 +108,7 @@ grep -q "^config: not known: A is not a file (a pipe?), read once already by the
   fail "diff of a piped recording"
 # A config without a target: the target was forgotten, not the config.
 expect_exit 2 "$cli" explain walk_and_kick.yaml --trace run.mcap --step 171
-grep -q "name the behaviour or state machine to explain" "$work/err.txt" || fail "explain without a target"
+grep -q "name the behaviour, state machine, actuator or state to explain" "$work/err.txt" || fail "explain without a target"
 # A trace holds no config.
 expect_exit 2 "$cli" explain --trace run.jsonl --step 171 kick_ball
 grep -q "run.jsonl is a trace, which holds no config" "$work/err.txt" || fail "explain of a trace without a config"

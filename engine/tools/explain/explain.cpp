@@ -58,9 +58,28 @@ std::string listing(const std::vector<std::string>& items) {
 }
 
 struct Target {
-  bool controller = false;
-  std::uint32_t index = 0;
+  enum class Kind { kBehaviour, kController, kActuator, kState };
+  Kind kind = Kind::kBehaviour;
+  std::uint32_t index = 0;  ///< a behaviour, controller or actuator
+  std::uint32_t state = 0;  ///< kState: the state of controller `index`
 };
+
+/// How explain() names `target` in a list of candidates: enough to name it alone.
+std::string full_name(const Program& program, const Target& target) {
+  switch (target.kind) {
+    case Target::Kind::kController:
+      return "state_machines/" + program.controllers[target.index]->name();
+    case Target::Kind::kActuator:
+      return "actuators/" + program.actuators[target.index].name;
+    case Target::Kind::kState:
+      return program.controllers[target.index]->name() + "/" +
+             program.controllers[target.index]->states()[target.state].name;
+    case Target::Kind::kBehaviour:
+      break;
+  }
+  return program.layers[program.behaviours[target.index].layer].name + "/" +
+         program.behaviours[target.index].name;
+}
 
 std::optional<Target> resolve(const Program& program, std::string_view target, Explanation& error) {
   // Each behaviour once, by the name that is enough to name it.
@@ -72,10 +91,27 @@ std::optional<Target> resolve(const Program& program, std::string_view target, E
     known.push_back(shared ? program.layers[behaviour.layer].name + "/" + behaviour.name
                            : behaviour.name);
   }
-  for (const auto& controller : program.controllers) known.push_back(controller->name());
+  for (const auto& controller : program.controllers) {
+    known.push_back(controller->name());
+    for (const auto& state : controller->states()) {
+      known.push_back(controller->name() + "/" + state.name);
+    }
+  }
+  for (const auto& actuator : program.actuators) known.push_back(actuator.name);
   const auto not_found = [&](std::string text) {
     std::vector<Note> notes;
-    if (auto hint = suggest(target, known); !hint.empty()) notes.push_back(std::move(hint));
+    // `machine/stat` is meant within its machine (else `machine` itself, a prefix, would be
+    // suggested).
+    std::vector<std::string> scoped;
+    if (const auto slash = target.find('/'); slash != std::string_view::npos) {
+      const std::string scope(target.substr(0, slash + 1));
+      for (const auto& name : known) {
+        if (name.rfind(scope, 0) == 0) scoped.push_back(name);
+      }
+    }
+    if (auto hint = suggest(target, scoped.empty() ? known : scoped); !hint.empty()) {
+      notes.push_back(std::move(hint));
+    }
     error = failure(Status::kNotFound, std::move(text), std::move(notes));
     return std::nullopt;
   };
@@ -86,31 +122,42 @@ std::optional<Target> resolve(const Program& program, std::string_view target, E
     const auto name = target.substr(slash + 1);
     if (scope == "state_machines") {
       for (std::uint32_t c = 0; c < program.controllers.size(); ++c) {
-        if (program.controllers[c]->name() == name) found.push_back({true, c});
+        if (program.controllers[c]->name() == name) found.push_back({Target::Kind::kController, c});
+      }
+    } else if (scope == "actuators") {
+      if (const auto a = program.find_actuator(name)) {
+        found.push_back({Target::Kind::kActuator, *a});
       }
     } else if (const auto b = program.find_behaviour(scope, name)) {
-      found.push_back({false, *b});
+      found.push_back({Target::Kind::kBehaviour, *b});
+    }
+    // A state is named `machine/state`, as its reports name their source.
+    for (std::uint32_t c = 0; c < program.controllers.size(); ++c) {
+      if (program.controllers[c]->name() != scope) continue;
+      const auto& states = program.controllers[c]->states();
+      for (std::uint32_t s = 0; s < states.size(); ++s) {
+        if (states[s].name == name) found.push_back({Target::Kind::kState, c, s});
+      }
     }
   } else {
     for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
-      if (program.behaviours[b].name == target) found.push_back({false, b});
+      if (program.behaviours[b].name == target) found.push_back({Target::Kind::kBehaviour, b});
     }
     for (std::uint32_t c = 0; c < program.controllers.size(); ++c) {
-      if (program.controllers[c]->name() == target) found.push_back({true, c});
+      if (program.controllers[c]->name() == target) found.push_back({Target::Kind::kController, c});
+    }
+    for (std::uint32_t a = 0; a < program.actuators.size(); ++a) {
+      if (program.actuators[a].name == target) found.push_back({Target::Kind::kActuator, a});
     }
   }
   if (found.empty()) {
-    return not_found(
-        fmt::format("'{}' names no behaviour and no state machine of '{}'", target, program.name));
+    return not_found(fmt::format(
+        "'{}' names no behaviour, state machine, state (machine/state) or actuator of '{}'", target,
+        program.name));
   }
   if (found.size() > 1) {
     std::vector<std::string> candidates;
-    for (const auto& candidate : found) {
-      candidates.push_back(candidate.controller
-                               ? "state_machines/" + program.controllers[candidate.index]->name()
-                               : program.layers[program.behaviours[candidate.index].layer].name +
-                                     "/" + program.behaviours[candidate.index].name);
-    }
+    for (const auto& candidate : found) candidates.push_back(full_name(program, candidate));
     error = failure(Status::kNotFound, fmt::format("'{}' is ambiguous", target),
                     {"write one of: " + join(candidates, ", ")});
     return std::nullopt;
@@ -124,6 +171,12 @@ struct Records {
   Json current;
   Json next;
   std::uint64_t last_step = 0;
+  /// When `history_of` is set (a member of every step record, e.g. {"actuators", "kick"}): that
+  /// member of each step, from the first step to the step asked for, or to the end of the run
+  /// with `history_to_end`. An actuator's and a state's story is told from the steps around it.
+  std::optional<std::pair<std::string, std::string>> history_of;
+  bool history_to_end = false;
+  std::vector<std::pair<std::uint64_t, Json>> history;
 };
 
 std::optional<Explanation> check_header(const Program& program, const Json& header) {
@@ -179,6 +232,7 @@ std::optional<Explanation> read_trace(TraceSource& source, std::uint64_t step, R
       if (step <= record.step) break;
       header = Json::parse(record.text);
       records.previous = Json();  // written by the program before, with its own indices
+      records.history.clear();    // its actuators and states may not be this program's
       continue;
     }
     if (record.kind == TraceRecord::Kind::kSafe) continue;  // outputs values, steps nothing
@@ -187,6 +241,14 @@ std::optional<Explanation> read_trace(TraceSource& source, std::uint64_t step, R
                  : record.step == step     ? &records.current
                  : record.step == step + 1 ? &records.next
                                            : nullptr;
+    if (records.history_of) {
+      Json parsed = Json::parse(record.text);
+      records.history.emplace_back(
+          record.step, at(at(parsed, records.history_of->first), records.history_of->second));
+      if (slot != nullptr) *slot = std::move(parsed);
+      if (record.step > step && !records.history_to_end) break;
+      continue;
+    }
     if (slot != nullptr) *slot = Json::parse(record.text);
     if (record.step > step) break;
   }
@@ -557,6 +619,294 @@ Explanation explain_controller(const Program& program, std::uint32_t target, std
   return out;
 }
 
+/// A trace's value as `run` shows values: `[0.3, 0.1, 0]`, `true`, `-0.3`.
+std::string value_text(const Json& value) {
+  if (value.is_number_float()) return short_number(value.get<double>());
+  if (!value.is_array()) return value.dump();
+  std::vector<std::string> items;
+  for (const auto& item : value) items.push_back(value_text(item));
+  return "[" + join(items, ", ") + "]";
+}
+
+bool written_in(const Json& entry) {
+  return at(entry, "written").is_boolean() && at(entry, "written").get<bool>();
+}
+
+Explanation explain_actuator(const Program& program, std::uint32_t target, std::uint64_t step,
+                             const Records& records) {
+  const CompiledActuator& actuator = program.actuators[target];
+  const CompiledLayer& layer = program.layers[actuator.layer];
+  const Json& now = at(at(records.current, "actuators"), actuator.name);
+  if (!now.is_object()) {
+    return failure(
+        Status::kBadTrace,
+        fmt::format("step {} of the trace has no value of actuator {}", step, actuator.name));
+  }
+  const bool written = written_in(now);
+  Explanation out;
+  std::string& text = out.text;
+  text = fmt::format("actuator {} (layer {}, {}) at step {}: {}, {}\n", actuator.name, layer.name,
+                     actuator.aggregate ? "aggregated" : "the most active writer wins", step,
+                     value_text(at(now, "value")), written ? "written" : "held");
+  // The writers, each once, in execution order (the order ties are broken in).
+  struct Writer {
+    std::string name;
+    double activation = 0.0;
+    bool interface = false;
+  };
+  std::vector<Writer> writers;
+  std::vector<std::uint32_t> seen;
+  for (auto i = program.actuator_slot_begin[target]; i < program.actuator_slot_begin[target + 1];
+       ++i) {
+    const std::uint32_t owner = program.slots[program.actuator_slots[i]].owner;
+    if (std::find(seen.begin(), seen.end(), owner) != seen.end()) continue;
+    seen.push_back(owner);
+    if (owner == kNoBehaviour) {
+      writers.push_back({"the interface of layer " + layer.name, 1.0, true});
+      continue;
+    }
+    const auto& behaviour = program.behaviours[owner];
+    const Json& level = at(
+        at(at(at(records.current, "layers"), program.layers[behaviour.layer].name), behaviour.name),
+        "activation");
+    writers.push_back({behaviour.name, level.is_number() ? level.get<double>() : 0.0, false});
+  }
+  std::vector<const Writer*> active;
+  std::vector<std::string> inactive;
+  double sum = 0.0;
+  for (const auto& writer : writers) {
+    if (writer.interface || writer.activation > 0.0) {
+      active.push_back(&writer);
+      sum += writer.activation;
+    } else {
+      inactive.push_back(writer.name);
+    }
+  }
+  if (writers.empty()) text += "  no behaviour writes it\n";
+  if (written) {
+    if (actuator.aggregate && !active.empty() && !active.front()->interface) {
+      text += "  written by the active writers, weighted by activation (Σ aᵢ·vᵢ / Σ aᵢ):\n";
+      std::size_t width = 0;
+      std::size_t level_width = 0;
+      for (const auto* writer : active) {
+        width = std::max(width, writer->name.size());
+        level_width = std::max(level_width, number(writer->activation).size());
+      }
+      for (const auto* writer : active) {
+        text +=
+            fmt::format("    {:<{}}  activation {:<{}}  weight {} / {} = {}\n", writer->name, width,
+                        number(writer->activation), level_width, number(writer->activation),
+                        number(sum), number(writer->activation / sum));
+      }
+      text +=
+          "  (the trace records the mean, not each writer's value; an active writer that did not "
+          "write in this step is left out of it)\n";
+    } else if (!active.empty()) {
+      const Writer* winner = active.front();
+      for (const auto* writer : active) {
+        if (writer->activation > winner->activation) winner = writer;
+      }
+      text += winner->interface ? fmt::format("  written by {}\n", winner->name)
+                                : fmt::format(
+                                      "  written by {} (activation {}): the most active writer, "
+                                      "the earlier in "
+                                      "execution order on a tie\n",
+                                      winner->name, number(winner->activation));
+    }
+  } else {
+    std::uint64_t last = 0;
+    Json last_value;
+    for (const auto& [at_step, entry] : records.history) {
+      if (at_step >= step) break;
+      if (written_in(entry)) {
+        last = at_step;
+        last_value = at(entry, "value");
+      }
+    }
+    // A trace given in part (the views give the steps around the one asked for) cannot tell
+    // which step older than its first wrote the value.
+    const std::uint64_t first = records.history.empty() ? step : records.history.front().first;
+    if (last == 0 && first > 1) {
+      text += first < step ? fmt::format(
+                                 "  held: nobody wrote it in steps {} to {}; the trace given "
+                                 "starts at step {}, so the step it was written in is not known\n",
+                                 first, step, first)
+                           : fmt::format(
+                                 "  held: nobody wrote it in this step; the trace given starts "
+                                 "here, so the step it was written in is not known\n");
+    } else {
+      text += last > 0 ? fmt::format(
+                             "  held: nobody wrote it in this step; it keeps the value written at "
+                             "step {} ({})\n",
+                             last, value_text(last_value))
+                       : "  held: nothing has written it yet; it holds its default (or its type's "
+                         "zero)\n";
+    }
+    if (!active.empty()) {
+      std::vector<std::string> names;
+      for (const auto* writer : active) names.push_back(writer->name);
+      text += fmt::format("  {} {} active but did not write it\n", listing(names),
+                          names.size() == 1 ? "was" : "were");
+    }
+  }
+  if (!inactive.empty()) {
+    text += fmt::format("  inactive writers (activation 0, their writes are ignored): {}\n",
+                        listing(inactive));
+  }
+  return out;
+}
+
+bool has_event(const Json& entry, const std::string& event) {
+  const auto events = strings(at(entry, "events"));
+  return std::find(events.begin(), events.end(), event) != events.end();
+}
+
+bool queued(const Json& entry, const std::string& state) {
+  const auto queue = strings(at(entry, "queue"));
+  return std::find(queue.begin(), queue.end(), state) != queue.end();
+}
+
+/// Why `state` ended in the step of `entry`: the `ended` entry of its deactivation.
+std::string why_ended(const Json& entry, const std::string& state) {
+  const auto events = strings(at(entry, "events"));
+  const auto ended = ended_of(entry);
+  std::size_t index = 0;
+  for (const auto& event : events) {
+    if (event == "deactivate " + state) {
+      return index < ended.size()
+                 ? end_text(ended[index].end, entry.value("cycle", std::uint64_t{0}))
+                 : "(the trace does not say why)";
+    }
+    if (event.rfind("deactivate ", 0) == 0) ++index;
+  }
+  return "(the trace does not say why)";
+}
+
+Explanation explain_state(const Program& program, std::uint32_t machine, std::uint32_t target,
+                          std::uint64_t step, const Records& records) {
+  const Controller& controller = *program.controllers[machine];
+  const std::string& state = controller.states()[target].name;
+  const auto& history = records.history;
+  std::size_t here = history.size();
+  for (std::size_t i = 0; i < history.size(); ++i) {
+    if (history[i].first == step) here = i;
+  }
+  if (here == history.size() || !history[here].second.is_object()) {
+    return failure(Status::kBadTrace, fmt::format("step {} of the trace has no record of state "
+                                                  "machine {}",
+                                                  step, controller.name()));
+  }
+  const auto step_of = [&](std::size_t i) { return history[i].first; };
+  const auto entry = [&](std::size_t i) -> const Json& { return history[i].second; };
+  // The run of `state` that covers the step: its last activation up to here, and its end.
+  std::optional<std::size_t> start;
+  for (std::size_t i = here + 1; i-- > 0;) {
+    if (has_event(entry(i), "activate " + state)) {
+      start = i;
+      break;
+    }
+  }
+  // A trace given in part (the views give the steps around the one asked for) may begin while
+  // the state runs: then its run started before the first step given.
+  const Json& at_step = entry(here);
+  const bool started_before =
+      !start && (state_of(at_step) == state || has_event(at_step, "execute " + state) ||
+                 has_event(at_step, "deactivate " + state));
+  std::optional<std::size_t> end;
+  if (start || started_before) {
+    for (std::size_t i = start ? *start : 0; i < history.size(); ++i) {
+      const auto events = strings(at(entry(i), "events"));
+      const auto activated = std::find(events.begin(), events.end(), "activate " + state);
+      // In the step it started, only a deactivation after its activation ends it.
+      const auto from = start && i == *start ? activated : events.begin();
+      if (std::find(from, events.end(), "deactivate " + state) != events.end()) {
+        end = i;
+        break;
+      }
+    }
+  }
+  const bool running = (start || started_before) && (!end || *end >= here);
+  const std::string name = controller.name() + "/" + state;
+  const Json& now = entry(here);
+  // Where it was planned: the first step of the stretch, just before `before`, in which it was
+  // queued without a break.
+  const auto planned = [&](std::size_t before) {
+    std::size_t first = before;
+    while (first > 0 && queued(entry(first - 1), state)) --first;
+    if (first == before) return std::string();
+    if (first == 0) {
+      return fmt::format(
+          "queued since step {}, the first of the trace (the config's queue:, or "
+          "planned in that step)",
+          step_of(0));
+    }
+    const std::string was = state_of(entry(first - 1));
+    const std::string by = state_of(entry(first));
+    return fmt::format("entered the queue at step {}, while {} ran", step_of(first),
+                       by.empty() ? (was.empty() ? std::string("no state") : was) : by);
+  };
+
+  Explanation out;
+  std::string& text = out.text;
+  if (running) {
+    text =
+        fmt::format("state {} at step {}: running (cycle {})\n", name, step, now.value("cycle", 0));
+    if (started_before) {
+      text += fmt::format("  started before step {}, the first of the trace given\n", step_of(0));
+    } else {
+      const Json& first = entry(*start);
+      std::string how;
+      const auto events = strings(at(first, "events"));
+      for (const auto& event : events) {
+        if (event == "activate " + state) break;
+        if (event.rfind("deactivate ", 0) == 0) {
+          const std::string previous = event.substr(std::string("deactivate ").size());
+          how = fmt::format("activated when {} ended: {}", previous, why_ended(first, previous));
+        }
+      }
+      if (how.empty()) how = "activated as the head of the queue";
+      text += fmt::format("  started at step {}: {}\n", step_of(*start), how);
+      const std::string plan = planned(*start);
+      text += "  planned: " +
+              (plan.empty()
+                   ? fmt::format("in step {} itself, as the state before it ended", step_of(*start))
+                   : plan) +
+              "\n";
+    }
+    text +=
+        end ? fmt::format("  ended at step {}: {}\n", step_of(*end), why_ended(entry(*end), state))
+            : fmt::format("  still running at step {}, the last of the trace\n",
+                          step_of(history.size() - 1));
+    return out;
+  }
+  const auto queue = strings(at(now, "queue"));
+  const auto position = std::find(queue.begin(), queue.end(), state);
+  if (position != queue.end()) {
+    text = fmt::format("state {} at step {}: queued, position {} of [{}] (behind {})\n", name, step,
+                       position - queue.begin() + 1, join(queue, ", "),
+                       state_of(now).empty() ? std::string("no state") : state_of(now));
+    const std::string plan = planned(here + 1);
+    if (!plan.empty()) text += "  planned: " + plan + "\n";
+  } else {
+    text = fmt::format("state {} at step {}: not running and not queued\n", name, step);
+    if (start && end) {
+      text += fmt::format("  it last ran from step {} to step {}, and ended: {}\n", step_of(*start),
+                          step_of(*end), why_ended(entry(*end), state));
+    } else {
+      text += step_of(0) > 1
+                  ? fmt::format("  it has not run in the trace given (from step {})\n", step_of(0))
+                  : std::string("  it has not run yet\n");
+    }
+  }
+  std::optional<std::size_t> next;
+  for (std::size_t i = here + 1; i < history.size() && !next; ++i) {
+    if (has_event(entry(i), "activate " + state)) next = i;
+  }
+  text += next ? fmt::format("  it runs next from step {}\n", step_of(*next))
+               : "  it does not run again before the trace ends\n";
+  return out;
+}
+
 }  // namespace
 
 Explanation check_trace_header(const Program& program, const std::string& header_line) {
@@ -585,10 +935,24 @@ Explanation explain(const Program& program, TraceSource& trace, std::uint64_t st
   if (step == 0) return failure(Status::kNotFound, "steps count from 1");
   try {
     Records records;
+    if (resolved->kind == Target::Kind::kActuator) {
+      records.history_of.emplace("actuators", program.actuators[resolved->index].name);
+    } else if (resolved->kind == Target::Kind::kState) {
+      records.history_of.emplace("controllers", program.controllers[resolved->index]->name());
+      records.history_to_end = true;
+    }
     if (auto failed = read_trace(program, trace, step, records)) return *failed;
-    return resolved->controller
-               ? explain_controller(program, resolved->index, step, records)
-               : explain_behaviour(program, resolved->index, step, records.current);
+    switch (resolved->kind) {
+      case Target::Kind::kController:
+        return explain_controller(program, resolved->index, step, records);
+      case Target::Kind::kActuator:
+        return explain_actuator(program, resolved->index, step, records);
+      case Target::Kind::kState:
+        return explain_state(program, resolved->index, resolved->state, step, records);
+      case Target::Kind::kBehaviour:
+        break;
+    }
+    return explain_behaviour(program, resolved->index, step, records.current);
   } catch (const Json::exception& malformed) {  // a member of the wrong JSON type
     return failure(Status::kBadTrace, fmt::format("the trace is malformed: {}", malformed.what()));
   }

@@ -1,6 +1,6 @@
 #pragma once
 // engine/tools/explain: a Program and a run's trace in; why a behaviour had its activation at a
-// step out, in words (`arbiter explain`, the views' explain panel).
+// step out, in words (`arbiter explain`, the views' explain panel); also an actuator or a state.
 //
 // Why a behaviour had its activation level at one step of a run, told from the compiled program
 // (the closed inhibitor lists, the chains behind implicit inhibitions) and the run's trace
@@ -21,7 +21,7 @@ namespace arbiter {
 struct Explanation {
   enum class Status {
     kOk,
-    kNotFound,  ///< no such behaviour, state machine or step: the request is wrong
+    kNotFound,  ///< no such behaviour, state machine, state, actuator or step: the request is wrong
     kBadTrace,  ///< the trace is malformed, or was written for another config
   };
   Status status = Status::kOk;
@@ -40,7 +40,11 @@ struct Explanation {
 /// the product, and the normalisation when the layer normalises. Or it names a state machine
 /// (`name`, or `state_machines/name`): which state ran, what was queued before and after, the
 /// events and what they mean. Levels are recomputed from the trace's requested levels and checked
-/// against its recorded activations.
+/// against its recorded activations. Or it names an actuator (`name`, or `actuators/name`): its
+/// value, and either its writers with their activations and weights (aggregated) or the winning
+/// writer, or, when nobody wrote it, the step whose value it holds. Or it names a state
+/// (`machine/state`): whether it ran, was queued or neither at the step, when its run started and
+/// why (the end of the state before), where it was planned, and when and why it ended.
 Explanation explain(const Program& program, TraceSource& trace, std::uint64_t step,
                     std::string_view target);
 /// explain() of the JSON-lines trace in `trace`, named "trace" in errors.
