@@ -212,6 +212,12 @@ class PyManager {
 
   std::string status(const std::string& name) const { return to_string(controller(name).status()); }
 
+  py::object error(const std::string& name) const {
+    const Controller& c = controller(name);
+    if (c.status() != ControllerStatus::kError) return py::none();
+    return py::str(c.error());
+  }
+
   void set_input(const std::string& name, const py::object& value) {
     const auto found = table_->entries.find(name);
     if (found == table_->entries.end()) {
@@ -367,6 +373,9 @@ void bind_manager(py::module_& m) {
            "A state machine's current state, or None (before its first step, once finished).")
       .def("states", &PyManager::states, "state() of every state machine, by name.")
       .def("status", &PyManager::status, py::arg("machine"), "'running', 'finished' or 'error'.")
+      .def("error", &PyManager::error, py::arg("machine"),
+           "Why a state machine of status 'error' stopped (the controller, the state and the "
+           "reason, a Python state's traceback with it), else None.")
       .def("set_input", &PyManager::set_input, py::arg("name"), py::arg("value"),
            "Gives an actuator of an `interface: inputs` layer the value it holds from the next "
            "step on.")

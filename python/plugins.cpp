@@ -1,6 +1,7 @@
-// Behaviour classes written in Python (`plugins: [{python: MODULE}]`, docs/python.md): the
-// module is imported and each of its arbiter.Behaviour subclasses registered as a class whose
-// params and ports the config is checked against, as a C++ class's are. Every callback calls
+// Behaviour and state classes written in Python (`plugins: [{python: MODULE}]`, docs/python.md):
+// the module is imported and each of its arbiter.Behaviour and arbiter.State subclasses registered
+// as a class whose params (and a behaviour's ports) the config is checked against, as a C++
+// class's are. Every callback calls
 // into Python with the GIL held: this is for prototyping, not for the real-time path (no
 // zero-allocation guarantee). A Python exception is a C++ exception to the manager
 // (py::error_already_set, its message with the traceback), so it is handled as a C++ fault.
@@ -13,6 +14,7 @@
 #include <variant>
 
 #include "arbiter/init_context.hpp"
+#include "arbiter/state.hpp"
 #include "module.hpp"
 
 namespace arbiter::python {
@@ -187,6 +189,117 @@ void PyContext::write(const std::string& port, const py::object& value) {
   }
 }
 
+/// What every pooled object of one Python state class shares.
+struct PyStateClass {
+  py::object cls;
+  std::vector<std::string> params;
+  std::vector<ParamKind> kinds;
+};
+
+/// The context a Python state's callback gets, mirroring StateContext: the step and cycle, the
+/// instance's executions and params, terminate(). Pointed at each call's C++ context.
+class PyStateContext {
+ public:
+  StateContext* state = nullptr;
+  const PyStateClass* cls = nullptr;
+  const std::vector<std::uint32_t>* handles = nullptr;
+
+  StateContext& context() const {
+    if (state == nullptr)
+      throw py::attribute_error("a state's context is valid in its callbacks only");
+    return *state;
+  }
+  std::uint64_t step() const { return context().step(); }
+  std::uint64_t cycle() const { return context().cycle(); }
+  std::uint64_t executions() const { return context().executions(); }
+  void terminate() { context().terminate(); }
+  py::object param(const std::string& name) const {
+    StateContext& ctx = context();
+    for (std::size_t i = 0; i < cls->params.size(); ++i) {
+      if (cls->params[i] != name) continue;
+      const std::uint32_t index = (*handles)[i];
+      switch (cls->kinds[i]) {
+        case ParamKind::kBool:
+          return py::bool_(ctx.param(StateParam<bool>{index}));
+        case ParamKind::kInt:
+          return py::int_(ctx.param(StateParam<std::int64_t>{index}));
+        case ParamKind::kDouble:
+          return py::float_(ctx.param(StateParam<double>{index}));
+        case ParamKind::kString:
+          return py::str(ctx.param(StateParam<std::string>{index}));
+        default:
+          return py::cast(ctx.param(StateParam<std::vector<double>>{index}));
+      }
+    }
+    throw py::key_error(fmt::format(
+        "no param '{}'; {}", name,
+        cls->params.empty() ? std::string("the state declares none") : suggest(name, cls->params)));
+  }
+};
+
+class PyState final : public State {
+ public:
+  explicit PyState(std::shared_ptr<const PyStateClass> cls)
+      : class_(std::move(cls)), handles_(class_->params.size(), kNoIndex) {
+    context_.cls = class_.get();
+    context_.handles = &handles_;
+  }
+  ~PyState() override {
+    // As ~PyBehaviour: the GIL may not be held, or the interpreter may be gone.
+    if (Py_IsInitialized() == 0) {
+      instance_.release();
+      context_object_.release();
+      return;
+    }
+    py::gil_scoped_acquire gil;
+    instance_ = py::object();
+    context_object_ = py::object();
+  }
+
+  void set_handle(std::size_t param, std::uint32_t index) { handles_[param] = index; }
+
+  void init(StateInitContext&) override {
+    instance_ = class_->cls();
+    context_object_ = py::cast(&context_, py::return_value_policy::reference);
+    has_activate_ = py::hasattr(instance_, "activate");
+    has_deactivate_ = py::hasattr(instance_, "deactivate");
+  }
+  void activate(StateContext& ctx) override {
+    if (has_activate_) call("activate", ctx);
+  }
+  StateResult execute(StateContext& ctx) override {
+    const py::object result = call("execute", ctx);
+    if (py::isinstance<py::str>(result)) {
+      const std::string text = result.cast<std::string>();
+      if (text == "hold") return StateResult::kHold;
+      if (text == "proceed") return StateResult::kProceed;
+    }
+    throw py::type_error(
+        fmt::format("{}.execute() returned {}: it returns State.HOLD or State.PROCEED",
+                    py::str(class_->cls.attr("__name__")).cast<std::string>(),
+                    py::repr(result).cast<std::string>()));
+  }
+  void deactivate(StateContext& ctx) override {
+    if (has_deactivate_) call("deactivate", ctx);
+  }
+
+ private:
+  py::object call(const char* method, StateContext& ctx) {
+    context_.state = &ctx;
+    py::object result = instance_.attr(method)(context_object_);
+    context_.state = nullptr;
+    return result;
+  }
+
+  std::shared_ptr<const PyStateClass> class_;
+  std::vector<std::uint32_t> handles_;
+  py::object instance_;
+  PyStateContext context_;
+  py::object context_object_;
+  bool has_activate_ = false;
+  bool has_deactivate_ = false;
+};
+
 const std::type_info* value_type(const std::string& name) {
   if (name == "bool") return &typeid(bool);
   if (name == "int") return &typeid(std::int64_t);
@@ -272,6 +385,35 @@ void register_behaviour(Registry& registry, const py::handle& cls, const std::st
   };
 }
 
+/// Registers one arbiter.State subclass; throws std::invalid_argument with what is wrong.
+void register_state(Registry& registry, const py::handle& cls, const std::string& module) {
+  auto shared = std::make_shared<PyStateClass>();
+  shared->cls = py::reinterpret_borrow<py::object>(cls);
+  const std::string name = cls.attr("name").cast<std::string>();
+  ClassInfo& info = registry.add_class(name, ClassKind::kState);
+  info.origin = fmt::format("Python module {}", module);
+  if (py::object doc = cls.attr("__doc__"); !doc.is_none()) {
+    info.description = py::module_::import("inspect").attr("cleandoc")(doc).cast<std::string>();
+  }
+  for (const auto& [key, declared] : cls.attr("params").cast<py::dict>()) {
+    const std::size_t position = shared->params.size();
+    shared->params.push_back(key.cast<std::string>());
+    ParamSpec& spec = info.params.emplace_back();
+    spec.name = shared->params.back();
+    declare_param(spec, declared);
+    shared->kinds.push_back(spec.kind);
+    // Per planned instance, as a C++ state's StateParam: the object gets the param's index and
+    // reads the instance's value in a step.
+    spec.member_is_handle = true;
+    spec.bind = [position](void* instance, const ParamValue&, std::uint32_t index) {
+      static_cast<PyState*>(static_cast<State*>(instance))->set_handle(position, index);
+    };
+  }
+  info.make_state = [shared]() -> std::unique_ptr<State> {
+    return std::make_unique<PyState>(shared);
+  };
+}
+
 }  // namespace
 
 void register_python_plugins(Registry& registry, const std::string& config,
@@ -295,8 +437,15 @@ void register_python_plugins(Registry& registry, const std::string& config,
     path.insert(0, directory.empty() ? "." : directory);
     try {
       py::module_ imported = py::module_::import(module.c_str());
-      py::list classes = py::module_::import("arbiter").attr("_classes_in")(imported);
-      for (const auto& cls : classes) register_behaviour(registry, cls, module);
+      const py::module_ arbiter = py::module_::import("arbiter");
+      const py::object state = arbiter.attr("State");
+      for (const auto& cls : py::list(arbiter.attr("_classes_in")(imported))) {
+        if (PyObject_IsSubclass(cls.ptr(), state.ptr()) == 1) {
+          register_state(registry, cls, module);
+        } else {
+          register_behaviour(registry, cls, module);
+        }
+      }
     } catch (const py::error_already_set& error) {
       diagnostics.error(node->location(), "python-plugin-failed",
                         fmt::format("cannot load Python module '{}': {}", module, error.what()));
@@ -317,6 +466,18 @@ void bind_plugins(py::module_& m) {
                              "In execute(): this behaviour's refined activation level.")
       .def("read", &PyContext::read, py::arg("port"))
       .def("write", &PyContext::write, py::arg("port"), py::arg("value"));
+  py::class_<PyStateContext>(m, "StateContext",
+                             "What a Python state's callback may do, as a C++ state's "
+                             "StateContext: read the planned instance's params, terminate.")
+      .def_property_readonly("step", &PyStateContext::step, "The step, counting from 1.")
+      .def_property_readonly("cycle", &PyStateContext::cycle,
+                             "The controller's cycle (1 in its first step).")
+      .def_property_readonly("executions", &PyStateContext::executions,
+                             "How many times this instance executed before this call.")
+      .def("param", &PyStateContext::param, py::arg("name"),
+           "This instance's param: its planned value, else the state's, else the default.")
+      .def("terminate", &PyStateContext::terminate,
+           "Ends the state machine in this step (status 'finished').");
 }
 
 }  // namespace arbiter::python

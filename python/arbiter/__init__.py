@@ -9,10 +9,10 @@
 
 import os as _os
 
-from ._arbiter import Context, Diagnostic, Manager, Program, Recording
+from ._arbiter import Context, Diagnostic, Manager, Program, Recording, StateContext
 
-__all__ = ["Behaviour", "ConfigError", "Context", "Diagnostic", "Manager", "Program", "Recording", "load",
-           "open_recording"]
+__all__ = ["Behaviour", "ConfigError", "Context", "Diagnostic", "Manager", "Program", "Recording", "State",
+           "StateContext", "load", "open_recording"]
 
 
 class ConfigError(Exception):
@@ -53,11 +53,36 @@ class Behaviour:
         raise NotImplementedError(f"{type(self).__name__} must define activation(self, ctx)")
 
 
+class State:
+    """The base of a state class written in Python, for a config's `state_machines:`. A config
+    uses it by `name` once its module is listed as `plugins: [{python: MODULE}]` (docs/python.md).
+
+    Declare, as class attributes: `name` ("py.Wait"); `params`, as a Behaviour's (a state's
+    params may be set per planned instance in the queue: read them with ctx.param(name)). The
+    docstring is the class's description.
+
+    Callbacks, each given a StateContext, as a C++ state's: activate(ctx), execute(ctx)
+    (required: returns State.HOLD to stay or State.PROCEED to go to the next queued state) and
+    deactivate(ctx). An exception puts the state machine into status 'error', as a C++
+    state's exception does; Manager.error(machine) holds the message and traceback."""
+
+    HOLD = "hold"
+    PROCEED = "proceed"
+
+    name = None
+    params = {}
+
+    def execute(self, ctx):
+        raise NotImplementedError(f"{type(self).__name__} must define execute(self, ctx)")
+
+
 def _classes_in(module):
-    """The Behaviour subclasses with a name that `module` defines, in definition order."""
+    """The Behaviour and State subclasses with a name that `module` defines, in definition
+    order."""
     return [value for value in vars(module).values()
-            if isinstance(value, type) and issubclass(value, Behaviour) and value is not Behaviour
-            and value.__module__ == module.__name__ and value.name]
+            if isinstance(value, type) and issubclass(value, (Behaviour, State))
+            and value not in (Behaviour, State) and value.__module__ == module.__name__
+            and value.name]
 
 
 def _path_argument(function, name, value):

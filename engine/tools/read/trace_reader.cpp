@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "arbiter/document.hpp"
@@ -54,9 +55,97 @@ SourceLocation field_location(const TraceRecord& record, const std::string& key)
   return where;
 }
 
-bool is_header(const Json& json) {
-  return json.is_object() && json.value("arbiter_trace", Json()) == 1;
-}
+/// What accept() needs to know of a record, gathered by a SAX pass that builds no tree (a tree
+/// per record was most of the time of reading a long run): whether it is an object, and the kind
+/// and value of the top-level fields that say what record it is. A key given twice counts with
+/// its last value, as in a parsed tree.
+class RecordShape final : public nlohmann::json_sax<Json> {
+ public:
+  enum class Kind { kAbsent, kOther, kBool, kUnsigned, kInteger, kFloat, kArray, kObject };
+  struct Field {
+    Kind kind = Kind::kAbsent;
+    bool flag = false;
+    std::uint64_t unsigned_value = 0;
+    double number = 0;
+  };
+
+  bool object = false;
+  Field arbiter_trace, reload, after_step, layers, step, safe;
+  /// Set when the text is not JSON: the parser's error.
+  std::optional<std::string> error;
+  std::size_t error_byte = 0;
+  bool syntax_error = false;  ///< the text is not JSON, rather than JSON nlohmann refuses
+
+  /// `"arbiter_trace": 1`, compared as numbers as a parsed tree's `== 1` does.
+  bool is_header() const {
+    return object &&
+           ((arbiter_trace.kind == Kind::kUnsigned && arbiter_trace.unsigned_value == 1) ||
+            (arbiter_trace.kind == Kind::kInteger && arbiter_trace.number == 1) ||
+            (arbiter_trace.kind == Kind::kFloat && arbiter_trace.number == 1));
+  }
+
+  bool null() override { return scalar({Kind::kOther}); }
+  bool boolean(bool value) override { return scalar({Kind::kBool, value}); }
+  bool number_integer(number_integer_t value) override {
+    return scalar({Kind::kInteger, false, 0, static_cast<double>(value)});
+  }
+  bool number_unsigned(number_unsigned_t value) override {
+    return scalar({Kind::kUnsigned, false, value, static_cast<double>(value)});
+  }
+  bool number_float(number_float_t value, const string_t&) override {
+    return scalar({Kind::kFloat, false, 0, value});
+  }
+  bool string(string_t&) override { return scalar({Kind::kOther}); }
+  bool binary(binary_t&) override { return scalar({Kind::kOther}); }
+  bool start_object(std::size_t) override { return open(Kind::kObject); }
+  bool start_array(std::size_t) override { return open(Kind::kArray); }
+  bool end_object() override { return close(); }
+  bool end_array() override { return close(); }
+  bool key(string_t& key) override {
+    if (depth_ == 1) current_ = field(key);
+    return true;
+  }
+  bool parse_error(std::size_t, const std::string&,
+                   const nlohmann::detail::exception& bad) override {
+    if (const auto* syntax = dynamic_cast<const Json::parse_error*>(&bad)) {
+      syntax_error = true;
+      error_byte = syntax->byte;
+      error = parse_message(*syntax);
+    } else {
+      // Valid syntax the parser still refuses, such as a number too large for a double.
+      error = without_prefix(bad);
+    }
+    return false;
+  }
+
+ private:
+  Field* field(const std::string& key) {
+    if (key == "arbiter_trace") return &arbiter_trace;
+    if (key == "reload") return &reload;
+    if (key == "after_step") return &after_step;
+    if (key == "layers") return &layers;
+    if (key == "step") return &step;
+    if (key == "safe") return &safe;
+    return nullptr;
+  }
+  bool scalar(Field value) {
+    if (depth_ == 1 && current_ != nullptr) *current_ = value;
+    return true;
+  }
+  bool open(Kind kind) {
+    if (depth_ == 0) object = kind == Kind::kObject;
+    if (depth_ == 1 && current_ != nullptr) *current_ = Field{kind};
+    ++depth_;
+    return true;
+  }
+  bool close() {
+    --depth_;
+    return true;
+  }
+
+  std::size_t depth_ = 0;
+  Field* current_ = nullptr;
+};
 
 class JsonlSource : public TraceSource {
  public:
@@ -236,21 +325,21 @@ bool TraceSource::accept(TraceRecord& record) {
     fail(std::move(where), std::move(message));
     return false;
   }
-  Json parsed;
-  try {
-    parsed = Json::parse(record.text);
-  } catch (const Json::parse_error& bad) {
+  RecordShape shape;
+  if (!Json::sax_parse(record.text, &shape) && shape.error) {
     auto where = record.location;
-    if (where.line > 0) where.column = static_cast<int>(std::max<std::size_t>(bad.byte, 1));
-    fail(std::move(where), "not JSON: " + parse_message(bad));
-    return false;
-  } catch (const Json::exception& bad) {
-    // Valid syntax the parser still refuses, such as a number too large for a double.
-    fail(record.location, "not readable JSON: " + without_prefix(bad));
+    if (shape.syntax_error) {
+      if (where.line > 0)
+        where.column = static_cast<int>(std::max<std::size_t>(shape.error_byte, 1));
+      fail(std::move(where), "not JSON: " + *shape.error);
+    } else {
+      fail(std::move(where), "not readable JSON: " + *shape.error);
+    }
     return false;
   }
+  using Kind = RecordShape::Kind;
   if (!header_seen_) {
-    if (!is_header(parsed) || !parsed.value("layers", Json()).is_array()) {
+    if (!shape.is_header() || shape.layers.kind != Kind::kArray) {
       fail(record.location,
            "a trace starts with a header {\"arbiter_trace\": 1, \"name\": ..., \"layers\": "
            "[...]}; write one with 'arbiter run CONFIG --trace FILE.jsonl'");
@@ -261,24 +350,23 @@ bool TraceSource::accept(TraceRecord& record) {
     record.step = 0;
     return true;
   }
-  if (is_header(parsed) && parsed.contains("reload")) {
-    const Json& after = parsed.value("after_step", Json());
-    if (!after.is_number_unsigned() || !parsed.value("layers", Json()).is_array()) {
+  if (shape.is_header() && shape.reload.kind != Kind::kAbsent) {
+    if (shape.after_step.kind != Kind::kUnsigned || shape.layers.kind != Kind::kArray) {
       fail(record.location,
            "a reload header has \"after_step\" (the last step before it) and \"layers\"");
       return false;
     }
     record.kind = TraceRecord::Kind::kReload;
-    record.step = after.get<std::uint64_t>();
+    record.step = shape.after_step.unsigned_value;
     return true;
   }
-  if (!parsed.is_object() || !parsed.contains("step") || !parsed["step"].is_number_unsigned() ||
-      !parsed.contains("layers") || !parsed["layers"].is_object()) {
+  if (!shape.object || shape.step.kind != Kind::kUnsigned || shape.layers.kind != Kind::kObject) {
     fail(record.location, "not a step record (an object with \"step\" and \"layers\")");
     return false;
   }
-  const auto step = parsed["step"].get<std::uint64_t>();
-  if (step == last_step_ && parsed.value("safe", false) == true) {
+  const std::uint64_t step = shape.step.unsigned_value;
+  // A "safe" that is no bool is no safe-value pass.
+  if (step == last_step_ && shape.safe.kind == Kind::kBool && shape.safe.flag) {
     record.kind = TraceRecord::Kind::kSafe;
     record.step = step;
     return true;
