@@ -414,6 +414,37 @@ void register_state(Registry& registry, const py::handle& cls, const std::string
   };
 }
 
+/// The exception as Python prints its last line, and a note per frame of the module's own code
+/// (not the import machinery's): the user's file and line, where the import failed.
+void report_import_failure(const py::error_already_set& error, const SourceLocation& where,
+                           const std::string& module, Diagnostics& diagnostics) {
+  const py::module_ traceback = py::module_::import("traceback");
+  // Its last line ("SyntaxError: invalid syntax"); a SyntaxError's lines before it show the
+  // source, which its note gives with the place.
+  const py::list lines = traceback.attr("format_exception_only")(error.type(), error.value());
+  std::string text = lines.empty() ? std::string(error.what())
+                                   : py::str(lines[lines.size() - 1]).cast<std::string>();
+  while (!text.empty() && text.back() == '\n') text.pop_back();
+  Diagnostic& reported =
+      diagnostics.error(where, "python-plugin-failed",
+                        fmt::format("cannot load Python module '{}': {}", module, text));
+  if (error.matches(PyExc_SyntaxError)) {
+    const py::object value = error.value();
+    reported.notes.push_back(
+        fmt::format("{}:{}: {}", py::str(value.attr("filename")).cast<std::string>(),
+                    py::str(value.attr("lineno")).cast<std::string>(),
+                    py::str(value.attr("text")).attr("strip")().cast<std::string>()));
+  }
+  if (!error.trace()) return;
+  for (const auto& frame : traceback.attr("extract_tb")(error.trace())) {
+    const auto file = frame.attr("filename").cast<std::string>();
+    if (file.empty() || file.front() == '<') continue;  // <frozen importlib._bootstrap> and such
+    reported.notes.push_back(fmt::format(
+        "{}:{}: in {}: {}", file, frame.attr("lineno").cast<long>(),
+        frame.attr("name").cast<std::string>(), py::str(frame.attr("line")).cast<std::string>()));
+  }
+}
+
 }  // namespace
 
 void register_python_plugins(Registry& registry, const std::string& config,
@@ -447,8 +478,7 @@ void register_python_plugins(Registry& registry, const std::string& config,
         }
       }
     } catch (const py::error_already_set& error) {
-      diagnostics.error(node->location(), "python-plugin-failed",
-                        fmt::format("cannot load Python module '{}': {}", module, error.what()));
+      report_import_failure(error, node->location(), module, diagnostics);
     } catch (const std::exception& error) {
       diagnostics.error(node->location(), "python-plugin-failed",
                         fmt::format("Python module '{}': {}", module, error.what()));

@@ -65,3 +65,71 @@ def test_an_invalid_scenario_fails_with_its_diagnostics(scenarios):
     assert run.returncode == 1
     assert f"INVALID {broken}" in run.stdout
     assert f"{broken}:3:1: error[" in run.stdout
+
+
+WAVE_MODULE = '''
+import arbiter
+
+
+class Wave(arbiter.Behaviour):
+    """Active from step 3 on."""
+
+    name = "py.Wave"
+    outputs = {"speed": "double"}
+
+    def activation(self, ctx):
+        return 1.0 if ctx.step >= 3 else 0.0
+
+    def execute(self, ctx):
+        ctx.write("speed", 0.5)
+'''
+
+WAVE_CONFIG = """\
+arbiter: 1
+name: wave
+plugins: [{python: wave}]
+layers:
+  - name: control
+    actuators:
+      speed: {type: double, aggregate: true}
+    behaviours:
+      wave: {type: py.Wave}
+      walk: {type: scripted, params: {activation: 0.5, writes: {speed: 0.2}}}
+    inhibitions:
+      - wave => walk
+"""
+
+WAVE_TEST = """\
+arbiter_test: 1
+config: wave.yaml
+steps: 4
+expect:
+  - {step: 2, active: [walk], inactive: [wave]}
+  - {step: 4, active: [wave], inactive: [walk]}
+"""
+
+
+def test_a_scenario_of_a_config_with_python_classes_runs_them(tmp_path):
+    (tmp_path / "wave.py").write_text(WAVE_MODULE)
+    (tmp_path / "wave.yaml").write_text(WAVE_CONFIG)
+    (tmp_path / "wave.test.yaml").write_text(WAVE_TEST)
+    run = run_pytest(tmp_path, "-v")
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "wave.test.yaml::wave.test.yaml PASSED" in run.stdout
+
+
+def test_a_python_module_that_cannot_be_imported_makes_the_scenario_invalid(tmp_path):
+    (tmp_path / "wave.py").write_text("import arbiter\nfrom camera import driver\n")
+    (tmp_path / "camera.py").write_text("raise ImportError('no camera driver')\n")
+    (tmp_path / "wave.yaml").write_text(WAVE_CONFIG)
+    (tmp_path / "wave.test.yaml").write_text(WAVE_TEST)
+    run = run_pytest(tmp_path)
+    assert run.returncode == 1
+    assert f"INVALID {tmp_path / 'wave.test.yaml'}" in run.stdout
+    config = tmp_path / "wave.yaml"
+    assert (f"{config}:3:20: error[python-plugin-failed]: cannot load Python module 'wave': "
+            "ImportError: no camera driver\n") in run.stdout
+    # The traceback's frames in the user's files, each a note at the module's name.
+    assert f"{config}:3:20: note: {tmp_path / 'wave.py'}:2: in <module>: from camera import driver\n" in run.stdout
+    assert f"{config}:3:20: note: {tmp_path / 'camera.py'}:1: in <module>:" in run.stdout
+    assert "importlib" not in run.stdout

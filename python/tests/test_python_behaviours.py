@@ -132,7 +132,8 @@ def test_a_module_that_does_not_import_is_reported_at_its_name(tmp_path):
         arbiter.load(config)
     first = raised.value.diagnostics[0]
     assert (first.code, first.line, first.column) == ("python-plugin-failed", 3, 20)
-    assert "ImportError: no numpy here" in first.message
+    assert first.message == "cannot load Python module 'broken': ImportError: no numpy here"
+    assert first.notes == [f"{tmp_path / 'broken.py'}:2: in <module>: raise ImportError('no numpy here')"]
 
 
 def test_a_bad_port_type_is_reported(tmp_path):
