@@ -3,6 +3,7 @@
 #                    config schema
 #   arbiter-plugins  plugins: the plugins that were built (soccer, dds) and the demo configs
 #   arbiter-dev      dev: headers, the CMake package config and arbiter_add_plugin()
+#   python3-arbiter  python: the Python module (where it was built, ARBITER_PYTHON)
 # Library dependencies come from dpkg-shlibdeps (Debian's own package names: libyaml-cpp0.7,
 # libddsc0debian, ...); the packages depend on each other at this exact version.
 set(CPACK_PACKAGE_NAME arbiter)
@@ -11,6 +12,9 @@ set(CPACK_PACKAGE_CONTACT "Arbiter maintainers <arbiter@localhost>")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "${PROJECT_DESCRIPTION}")
 set(CPACK_PACKAGE_VERSION "${PROJECT_VERSION}")
 set(CPACK_COMPONENTS_ALL runtime plugins dev)
+if(ARBITER_PYTHON)
+  list(APPEND CPACK_COMPONENTS_ALL python)
+endif()
 set(CPACK_DEB_COMPONENT_INSTALL ON)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_RELEASE 1)
@@ -48,5 +52,20 @@ set(CPACK_COMPONENT_DEV_DESCRIPTION
  The engine's headers, the CMake package config (find_package(arbiter): the targets
  arbiter::core and arbiter::tools) and arbiter_add_plugin(), to build plugins against the
  installed core library.")
+
+# The extension module is built for one Python minor version (its file name says which:
+# _arbiter.cpython-311-...so) and links no libpython, so dpkg-shlibdeps cannot see that it needs
+# that Python: it is declared. pandas is what to_dataframe() needs.
+set(CPACK_DEBIAN_PYTHON_PACKAGE_NAME python3-arbiter)
+set(CPACK_DEBIAN_PYTHON_PACKAGE_SECTION python)
+math(EXPR next_minor_number "${Python_VERSION_MINOR} + 1")
+set(CPACK_DEBIAN_PYTHON_PACKAGE_DEPENDS
+    "arbiter (= ${version}), python3 (>= ${Python_VERSION_MAJOR}.${Python_VERSION_MINOR}), python3 (<< ${Python_VERSION_MAJOR}.${next_minor_number})")
+set(CPACK_DEBIAN_PYTHON_PACKAGE_RECOMMENDS "python3-pandas, python3-pytest")
+set(CPACK_COMPONENT_PYTHON_DESCRIPTION
+    "Python module for Arbiter
+ import arbiter: load and validate configs, step a program, read traces and recordings (as
+ pandas DataFrames), run scenario tests from pytest, and write behaviour and state classes in
+ Python.")
 
 include(CPack)

@@ -5,8 +5,9 @@
 #      P` as docs/plugins.md gives it; tests/consumer builds against P and its config runs;
 #   2. the Debian packages: the DDS plugin built too, then `cpack -G DEB` in build/release;
 #   3. a fresh Debian bookworm root (debootstrap --variant=minbase): `apt-get install
-#      ./arbiter*.deb` pulls in what the packages declare, the soccer demo runs from /usr, and
-#      tests/consumer builds against the installed arbiter-dev and runs.
+#      ./arbiter*.deb ./python3-arbiter*.deb` pulls in what the packages declare, the soccer demo
+#      runs from /usr, Debian's python3 imports the module and runs it, and tests/consumer builds
+#      against the installed arbiter-dev and runs.
 # Needs root (debootstrap, chroot) and the Debian mirror of this machine's apt sources. It takes
 # about 25 minutes on a busy 2-core machine (a release build, a Debian root the first time), so
 # it is not part of .ci/run.
@@ -69,10 +70,10 @@ if command -v systemd-analyze >/dev/null; then
 fi
 
 step "the Debian packages: cpack -G DEB"
-cmake --build --preset release --target arbiter soccer dds >/dev/null
+cmake --build --preset release --target arbiter soccer dds arbiter_python >/dev/null
 (cd build/release && cpack -G DEB >/dev/null)
-ls -l build/release/arbiter*.deb
-for deb in build/release/arbiter*.deb; do
+ls -l build/release/{,python3-}arbiter*.deb
+for deb in build/release/{,python3-}arbiter*.deb; do
   dpkg-deb --field "$deb" Package Depends
 done
 
@@ -88,21 +89,29 @@ for mount in proc sys dev; do
 done
 trap 'for m in dev sys proc; do umount "$root/$m" 2>/dev/null || true; done' EXIT
 # Start from a root without Arbiter, whatever an earlier run left.
-chroot "$root" dpkg --purge arbiter-dev arbiter-plugins arbiter >/dev/null 2>&1 || true
+chroot "$root" dpkg --purge python3-arbiter arbiter-dev arbiter-plugins arbiter >/dev/null 2>&1 ||
+    true
 rm -rf "$root/packages" "$root/consumer" "$root/consumer-build"
 mkdir -p "$root/packages"
-cp build/release/arbiter*.deb "$root/packages/"
+cp build/release/{,python3-}arbiter*.deb "$root/packages/"
 cp -r tests/consumer "$root/consumer"
 
 in_root() { chroot "$root" env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root bash -c "$1"; }
 step "apt-get install ./arbiter*.deb"
 in_root "apt-get -q update >/dev/null && cd /packages &&
-         DEBIAN_FRONTEND=noninteractive apt-get -q -y install ./arbiter*.deb >/dev/null"
+         DEBIAN_FRONTEND=noninteractive apt-get -q -y install ./*.deb >/dev/null"
 step "the demo from /usr"
 output=$(in_root "arbiter run /usr/share/arbiter/configs/soccer/walk_and_kick.yaml --steps 220" 2>&1)
 expect "the demo from /usr" "goal!" "$output"
 output=$(in_root "arbiter plugins" 2>&1)
 expect "the installed plugins" "dds.Bridge" "$output"
+step "the Python module from /usr"
+output=$(in_root "python3 -c 'import arbiter
+program = arbiter.load(\"/usr/share/arbiter/configs/soccer/walk_and_kick.yaml\")
+manager = program.manager()
+manager.step(220)
+print(\"stepped\", manager.steps, \"steps\")'" 2>&1)
+expect "the Python module from /usr" "stepped 220 steps" "$output"
 step "tests/consumer against the installed arbiter-dev"
 in_root "DEBIAN_FRONTEND=noninteractive apt-get -q -y install --no-install-recommends g++ make >/dev/null"
 output=$(in_root "cmake -S /consumer -B /consumer-build --log-level=WARNING &&
