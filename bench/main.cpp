@@ -23,6 +23,9 @@
 #include "benchmarks.hpp"
 #include "generator.hpp"
 #include "lsp_benchmarks.hpp"
+#if ARBITER_BENCH_PYTHON
+#include "python_benchmarks.hpp"
+#endif
 #include "support.hpp"
 
 namespace {
@@ -46,7 +49,8 @@ constexpr const char* kUsage = R"(usage:
 class Collector : public benchmark::BenchmarkReporter {
  public:
   struct Result {
-    double cpu_time = 0;  // in the benchmark's time unit
+    double cpu_time = 0;   // in the benchmark's time unit
+    double real_time = 0;  // likewise
     std::map<std::string, double> counters;
   };
 
@@ -67,6 +71,7 @@ class Collector : public benchmark::BenchmarkReporter {
       if (fastest) fastest_names_.insert({name, true});
       Result& result = results[name];
       result.cpu_time = run.GetAdjustedCPUTime();
+      result.real_time = run.GetAdjustedRealTime();
       for (const auto& [counter, value] : run.counters) result.counters[counter] = value.value;
     }
     display_->ReportRuns(runs);
@@ -146,6 +151,13 @@ int check_targets(const Collector& collector, std::ostream& out) {
   check("record/soccer: recording overhead per step", counter("record/soccer", "overhead"), 0.10,
         "x");
   check("record/soccer: bytes per step", counter("record/soccer", "bytes_per_step"), 200.0, "B");
+  check("python/step/1000: from Python against C++", counter("python/step/1000", "ratio"), 1.1,
+        "x");
+  check("python/behaviour: activation + execute in Python", counter("python/behaviour", "call_ns"),
+        1000.0, "ns");
+  if (const auto found = results.find("python/to_dataframe/100000"); found != results.end()) {
+    check("python/to_dataframe/100000: a trace into pandas", found->second.real_time, 2.0, "s");
+  }
   if (any) {
     out << (missed == 0 ? "every target that ran is met\n"
                         : fmt::format("{} target(s) missed\n", missed));
@@ -304,6 +316,9 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(count, forwarded.data())) return 2;
   arbiter::bench::register_benchmarks();
   arbiter::bench::register_lsp_benchmarks();
+#if ARBITER_BENCH_PYTHON
+  arbiter::bench::register_python_benchmarks();
+#endif
   Collector collector;
   benchmark::RunSpecifiedBenchmarks(&collector);
   benchmark::Shutdown();

@@ -1,6 +1,7 @@
 #include "support.hpp"
 
 #include <malloc.h>
+#include <time.h>
 
 #include <iostream>
 #include <vector>
@@ -112,6 +113,12 @@ std::optional<Program> load_timed(const std::string& path, Registry& registry,
   times.compile_ms = milliseconds_since(start);
   if (!program) return report();
   return program;
+}
+
+double cpu_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) + static_cast<double>(now.tv_nsec) * 1e-9;
 }
 
 }  // namespace arbiter::bench

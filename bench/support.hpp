@@ -37,6 +37,9 @@ struct LoadTimes {
 std::optional<Program> load_timed(const std::string& path, Registry& registry,
                                   const LoadOptions& options, LoadTimes& times);
 
+/// This thread's CPU time: on a shared machine, time spent descheduled is not the engine's.
+double cpu_seconds();
+
 inline double milliseconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
       .count();
