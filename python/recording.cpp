@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <unordered_map>
 
@@ -61,16 +62,28 @@ struct Column {
 
 class Columns {
  public:
-  void number(const std::string& name, double value) {
-    Column& c = column(name, Column::Kind::kNumber);
+  /// The column `name`, made on first use with the kind of its first value (index()).
+  std::size_t index(const std::string& name, Column::Kind kind) {
+    const auto found = index_.find(name);
+    if (found != index_.end()) return found->second;
+    index_.emplace(name, columns_.size());
+    Column& c = columns_.emplace_back();
+    c.name = name;
+    c.kind = kind;
+    c.pad(rows_);
+    return columns_.size() - 1;
+  }
+  // A value of another kind than the column's first (a reload that changed a type) is dropped.
+  void number(std::size_t column, double value) {
+    Column& c = columns_[column];
     if (c.kind == Column::Kind::kNumber) c.numbers.push_back(value);
   }
-  void flag(const std::string& name, bool value) {
-    Column& c = column(name, Column::Kind::kFlag);
+  void flag(std::size_t column, bool value) {
+    Column& c = columns_[column];
     if (c.kind == Column::Kind::kFlag) c.flags.push_back(value ? 1 : 0);
   }
-  void text(const std::string& name, std::string value) {
-    Column& c = column(name, Column::Kind::kText);
+  void text(std::size_t column, std::string value) {
+    Column& c = columns_[column];
     if (c.kind != Column::Kind::kText) return;
     c.texts.push_back(std::move(value));
     c.has_text.push_back(1);
@@ -86,35 +99,29 @@ class Columns {
   const std::vector<Column>& all() const { return columns_; }
 
  private:
-  /// The column `name`; a new one is filled with missing values up to this row. A value of
-  /// another kind than the column's first (a reload that changed a type) is dropped.
-  Column& column(const std::string& name, Column::Kind kind) {
-    const auto found = index_.find(name);
-    if (found != index_.end()) return columns_[found->second];
-    index_.emplace(name, columns_.size());
-    Column& c = columns_.emplace_back();
-    c.name = name;
-    c.kind = kind;
-    c.pad(rows_);
-    return c;
-  }
-
   std::vector<Column> columns_;
   std::unordered_map<std::string, std::size_t> index_;
   std::size_t rows_ = 0;
 };
 
 /// Fills one row of `columns` from a step record as it is parsed (a SAX handler: no tree is
-/// built): the record's fields in the order the trace writes them, docs/semantics.md.
+/// built): the record's fields in the order the trace writes them, docs/semantics.md. One handler
+/// reads every record of a file: the records have the same shape, so the n-th value of a record
+/// is looked for in the column the n-th value of the last record went to, which is checked by
+/// its keys, not found again by its name.
 class StepHandler final : public nlohmann::json_sax<nlohmann::json> {
  public:
   explicit StepHandler(Columns& columns) : columns_(columns) {}
 
+  /// Before each record.
+  void begin() {
+    depth_in_use_ = 0;
+    ordinal_ = 0;
+  }
+
   bool null() override { return element(); }
   bool boolean(bool value) override {
-    if (const std::string* name = column_name()) {
-      columns_.flag(*name, value);
-    }
+    if (const auto c = column(Column::Kind::kFlag)) columns_.flag(*c, value);
     return element();
   }
   bool number_integer(number_integer_t value) override {
@@ -125,7 +132,7 @@ class StepHandler final : public nlohmann::json_sax<nlohmann::json> {
   }
   bool number_float(number_float_t value, const string_t&) override { return number(value); }
   bool string(string_t& value) override {
-    if (const std::string* name = column_name()) columns_.text(*name, std::move(value));
+    if (const auto c = column(Column::Kind::kText)) columns_.text(*c, std::move(value));
     return element();
   }
   bool binary(binary_t&) override { return element(); }
@@ -134,7 +141,8 @@ class StepHandler final : public nlohmann::json_sax<nlohmann::json> {
   bool start_array(std::size_t) override { return open(true); }
   bool end_array() override { return close(); }
   bool key(string_t& key) override {
-    open_.back().key = std::move(key);
+    // A copy: the parser's buffer and ours keep their capacity.
+    open_[depth_in_use_ - 1].key.assign(key);
     return true;
   }
   bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
@@ -147,53 +155,127 @@ class StepHandler final : public nlohmann::json_sax<nlohmann::json> {
     std::string key;          // in an object: the key of the value being read
     std::size_t element = 0;  // in an array: the index of the value being read
   };
+  /// Where a column's value is in a record.
+  enum class Place { kTop, kLevel, kActuator, kActuatorElement, kController };
+  /// The column the n-th value of the last record went to, and where that value was.
+  struct Slot {
+    Place place = Place::kTop;
+    std::string keys[3];
+    std::size_t element = 0;
+    std::size_t column = 0;
+  };
 
   bool number(double value) {
-    if (const std::string* name = column_name()) columns_.number(*name, value);
+    if (const auto c = column(Column::Kind::kNumber)) columns_.number(*c, value);
     return element();
   }
   bool open(bool array) {
-    open_.push_back({array, {}, 0});
+    // The entries are kept from record to record, with their keys' capacity.
+    if (depth_in_use_ == open_.size()) open_.emplace_back();
+    open_[depth_in_use_].array = array;
+    open_[depth_in_use_].element = 0;
+    open_[depth_in_use_].key.clear();
+    ++depth_in_use_;
     return true;
   }
   bool close() {
-    open_.pop_back();
+    --depth_in_use_;
     return element();
   }
   /// After a value: the next one of an array has the next index.
   bool element() {
-    if (!open_.empty() && open_.back().array) ++open_.back().element;
+    if (depth_in_use_ > 0 && open_[depth_in_use_ - 1].array) ++open_[depth_in_use_ - 1].element;
     return true;
   }
   bool at(std::size_t depth, const char* key) const {
     return !open_[depth].array && open_[depth].key == key;
   }
-  /// The column of the scalar being read, or nullptr when it is no column.
-  const std::string* column_name() {
-    const std::size_t depth = open_.size();
-    if (depth == 1 && (at(0, "step") || at(0, "t"))) return &open_[0].key;
+  /// Where the scalar being read is, and the keys that name its column; nullopt: no column.
+  std::optional<Place> place() const {
+    const std::size_t depth = depth_in_use_;
+    if (depth == 1 && (at(0, "step") || at(0, "t"))) return Place::kTop;
     if (depth == 4 && at(0, "layers") && !open_[3].array &&
         (at(3, "activation") || at(3, "requested") || at(3, "active"))) {
-      name_ = open_[1].key + '/' + open_[2].key + '.' + open_[3].key;
-      return &name_;
+      return Place::kLevel;
     }
     if (at(0, "actuators") && depth >= 3 && at(2, "value")) {
-      if (depth == 3) return &open_[1].key;
-      if (depth == 4 && open_[3].array) {
-        name_ = open_[1].key + '[' + std::to_string(open_[3].element) + ']';
-        return &name_;
-      }
+      if (depth == 3) return Place::kActuator;
+      if (depth == 4 && open_[3].array) return Place::kActuatorElement;
     }
     if (depth == 3 && at(0, "controllers") && (at(2, "state") || at(2, "status"))) {
-      name_ = open_[1].key + '.' + open_[2].key;
-      return &name_;
+      return Place::kController;
     }
-    return nullptr;
+    return std::nullopt;
+  }
+  /// The keys of open_ that name a column at `where`, and the array index for an element.
+  void keys_of(Place where, const std::string* (&keys)[3], std::size_t& element) const {
+    keys[0] = keys[1] = keys[2] = nullptr;
+    element = 0;
+    switch (where) {
+      case Place::kTop:
+        keys[0] = &open_[0].key;
+        break;
+      case Place::kLevel:
+        keys[0] = &open_[1].key;
+        keys[1] = &open_[2].key;
+        keys[2] = &open_[3].key;
+        break;
+      case Place::kActuatorElement:
+        element = open_[3].element;
+        [[fallthrough]];
+      case Place::kActuator:
+        keys[0] = &open_[1].key;
+        break;
+      case Place::kController:
+        keys[0] = &open_[1].key;
+        keys[1] = &open_[2].key;
+        break;
+    }
+  }
+  static std::string column_name(Place where, const std::string* const (&keys)[3],
+                                 std::size_t element) {
+    switch (where) {
+      case Place::kTop:
+      case Place::kActuator:
+        return *keys[0];
+      case Place::kLevel:
+        return *keys[0] + '/' + *keys[1] + '.' + *keys[2];
+      case Place::kActuatorElement:
+        return *keys[0] + '[' + std::to_string(element) + ']';
+      case Place::kController:
+        return *keys[0] + '.' + *keys[1];
+    }
+    return {};
+  }
+  /// The column of the scalar being read, or nullopt when it is no column.
+  std::optional<std::size_t> column(Column::Kind kind) {
+    const auto where = place();
+    if (!where) return std::nullopt;
+    const std::string* keys[3];
+    std::size_t element = 0;
+    keys_of(*where, keys, element);
+    const std::size_t n = ordinal_++;
+    if (n < slots_.size()) {
+      const Slot& slot = slots_[n];
+      bool same = slot.place == *where && slot.element == element;
+      for (int i = 0; same && i < 3; ++i) same = keys[i] == nullptr || *keys[i] == slot.keys[i];
+      if (same) return slot.column;
+    } else {
+      slots_.resize(n + 1);
+    }
+    Slot& slot = slots_[n];
+    slot.place = *where;
+    slot.element = element;
+    for (int i = 0; i < 3; ++i) slot.keys[i] = keys[i] == nullptr ? std::string() : *keys[i];
+    slot.column = columns_.index(column_name(*where, keys, element), kind);
+    return slot.column;
   }
 
   Columns& columns_;
-  std::vector<Open> open_;
-  std::string name_;
+  std::vector<Open> open_;  // [0, depth_in_use_) are open
+  std::size_t depth_in_use_ = 0;
+  std::vector<Slot> slots_;
+  std::size_t ordinal_ = 0;
 };
 
 class PyRecording {
@@ -222,9 +304,10 @@ class PyRecording {
     TraceRecord record;
     {
       py::gil_scoped_release released;
+      StepHandler handler(columns);
       while (source->next(record)) {
         if (record.kind != TraceRecord::Kind::kStep) continue;
-        StepHandler handler(columns);
+        handler.begin();
         nlohmann::json::sax_parse(record.text, &handler);
         columns.end_row();
       }

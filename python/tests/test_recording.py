@@ -84,6 +84,24 @@ def test_a_level_missing_before_a_reload_is_nan(tmp_path):
     assert frame.loc[2, "l/b.activation"] == 0.5
 
 
+def test_columns_follow_their_names_when_a_reload_reorders_the_record(tmp_path):
+    config = tmp_path / "order.yaml"
+    a = "      a: {type: scripted, params: {activation: 1}}\n"
+    b = "      b: {type: scripted, params: {activation: 0.5}}\n"
+    head = "arbiter: 1\nname: order\nlayers:\n  - name: l\n    behaviours:\n"
+    config.write_text(head + a + b)
+    manager = arbiter.load(config).manager()
+    manager.trace(tmp_path / "run.jsonl")
+    manager.step(2)
+    config.write_text(head + b + a)  # b now executes, and is written, first
+    manager.reload()
+    manager.step(2)
+    manager.finish()
+    frame = arbiter.open_recording(tmp_path / "run.jsonl").to_dataframe()
+    assert list(frame["l/a.activation"]) == [1, 1, 1, 1]
+    assert list(frame["l/b.activation"]) == [0.5, 0.5, 0.5, 0.5]
+
+
 def test_a_file_that_is_no_trace_is_a_located_error(tmp_path):
     bad = tmp_path / "bad.jsonl"
     bad.write_text('{"arbiter_trace": 1, "name": "x", "layers": []}\n{"step": "one"}\n')
