@@ -14,6 +14,7 @@
 #include <variant>
 
 #include "arbiter/init_context.hpp"
+#include "arbiter/plugin.hpp"
 #include "arbiter/state.hpp"
 #include "module.hpp"
 
@@ -459,7 +460,7 @@ void register_python_plugins(Registry& registry, const std::string& config,
     const Node* node = item.is_mapping() ? item.find("python") : nullptr;
     if (node == nullptr || !node->is_scalar() || node->text().empty()) continue;
     const std::string module = node->text();
-    const std::string library = "python:" + module;
+    const std::string library = python_plugin_library(module);
     if (registry.has_library(library)) continue;
     // Registered as loaded even when it fails, so that the load reports this error only.
     registry.keep_loaded(library, nullptr);

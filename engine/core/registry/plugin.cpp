@@ -187,13 +187,11 @@ bool load_plugin(const std::string& name, const SourceLocation& where,
 
 namespace {
 
-/// A `{python: MODULE}` plugin is Python code: the Python module `arbiter` imports it and
-/// registers its classes under the library name "python:MODULE" (Registry::keep_loaded) before
-/// it loads the config (python/plugins.cpp). Anywhere else (the CLI) it is reported, at the
-/// module's name.
+/// A `{python: MODULE}` plugin is Python code (python_plugin_library()). Anywhere but the Python
+/// module (the CLI) it is reported, at the module's name.
 bool python_plugin_loaded(const Node& module, const Registry& registry, Diagnostics& diagnostics) {
   if (!module.is_scalar() || module.text().empty()) return true;  // validation reports it
-  if (registry.has_library("python:" + module.text())) return true;
+  if (registry.has_library(python_plugin_library(module.text()))) return true;
   diagnostics
       .error(module.location(), "python-plugin-unavailable",
              fmt::format("plugin '{}' is a Python module: its classes exist only when the config "

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "arbiter/diagnostics.hpp"
@@ -60,6 +61,13 @@ std::vector<std::string> plugin_search_path(const PluginOptions& options);
 bool load_plugin(const std::string& name, const SourceLocation& where,
                  const std::string& relative_to, const PluginOptions& options, Registry& registry,
                  Diagnostics& diagnostics);
+
+/// The library name under which the classes of a `{python: MODULE}` plugin are registered
+/// (Registry::keep_loaded) by the Python module, which imports it before loading the config;
+/// load_plugins() finds them there, and reports the module anywhere else.
+inline std::string python_plugin_library(std::string_view module) {
+  return "python:" + std::string(module);
+}
 
 /// Loads every plugin a parsed config's `plugins:` names.
 bool load_plugins(const Node& root, const PluginOptions& options, Registry& registry,
