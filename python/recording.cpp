@@ -9,8 +9,8 @@
 
 #include <filesystem>
 #include <limits>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <unordered_map>
 
 #include "arbiter/trace_reader.hpp"
@@ -104,50 +104,65 @@ class Columns {
   std::size_t rows_ = 0;
 };
 
-/// Fills one row of `columns` from a step record as it is parsed (a SAX handler: no tree is
-/// built): the record's fields in the order the trace writes them, docs/semantics.md. One handler
-/// reads every record of a file: the records have the same shape, so the n-th value of a record
-/// is looked for in the column the n-th value of the last record went to, which is checked by
-/// its keys, not found again by its name.
-class StepHandler final : public nlohmann::json_sax<nlohmann::json> {
+/// Fills one row of `columns` from a step record, from the events of the reader's own parse of
+/// it (TraceSource::listen(): no second parse, no tree): the record's fields in the order the
+/// trace writes them, docs/semantics.md. A record's values wait until the reader has said it is a
+/// step (commit()); those of a header are dropped (drop()). The records have the same shape, so
+/// the n-th value of a record is looked for in the column the n-th value of the last record went
+/// to, which is checked by its keys, not found again by its name.
+class StepHandler final : public RecordListener {
  public:
   explicit StepHandler(Columns& columns) : columns_(columns) {}
 
-  /// Before each record.
-  void begin() {
+  void begin_record() override {
     depth_in_use_ = 0;
     ordinal_ = 0;
+    pending_.clear();
   }
+  /// The record was a step: its values are a row.
+  void commit() {
+    for (auto& value : pending_) {
+      switch (value.kind) {
+        case Column::Kind::kNumber:
+          columns_.number(value.column, value.number);
+          break;
+        case Column::Kind::kFlag:
+          columns_.flag(value.column, value.number != 0);
+          break;
+        case Column::Kind::kText:
+          columns_.text(value.column, std::move(value.text));
+          break;
+      }
+    }
+    pending_.clear();
+    columns_.end_row();
+  }
+  void drop() { pending_.clear(); }
 
-  bool null() override { return element(); }
-  bool boolean(bool value) override {
-    if (const auto c = column(Column::Kind::kFlag)) columns_.flag(*c, value);
-    return element();
+  void null() override { element(); }
+  void boolean(bool value) override {
+    if (const auto c = column(Column::Kind::kFlag)) {
+      pending_.push_back({*c, Column::Kind::kFlag, value ? 1.0 : 0.0, {}});
+    }
+    element();
   }
-  bool number_integer(number_integer_t value) override {
-    return number(static_cast<double>(value));
+  void number(double value) override {
+    if (const auto c = column(Column::Kind::kNumber)) {
+      pending_.push_back({*c, Column::Kind::kNumber, value, {}});
+    }
+    element();
   }
-  bool number_unsigned(number_unsigned_t value) override {
-    return number(static_cast<double>(value));
+  void string(std::string_view value) override {
+    if (const auto c = column(Column::Kind::kText)) {
+      pending_.push_back({*c, Column::Kind::kText, 0.0, std::string(value)});
+    }
+    element();
   }
-  bool number_float(number_float_t value, const string_t&) override { return number(value); }
-  bool string(string_t& value) override {
-    if (const auto c = column(Column::Kind::kText)) columns_.text(*c, std::move(value));
-    return element();
-  }
-  bool binary(binary_t&) override { return element(); }
-  bool start_object(std::size_t) override { return open(false); }
-  bool end_object() override { return close(); }
-  bool start_array(std::size_t) override { return open(true); }
-  bool end_array() override { return close(); }
-  bool key(string_t& key) override {
-    // A copy: the parser's buffer and ours keep their capacity.
-    open_[depth_in_use_ - 1].key.assign(key);
-    return true;
-  }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
-    return false;  // the reader has checked the record: this does not happen
-  }
+  void start_object() override { open(false); }
+  void end_object() override { close(); }
+  void start_array() override { open(true); }
+  void end_array() override { close(); }
+  void key(std::string_view key) override { open_[depth_in_use_ - 1].key.assign(key); }
 
  private:
   struct Open {
@@ -164,28 +179,28 @@ class StepHandler final : public nlohmann::json_sax<nlohmann::json> {
     std::size_t element = 0;
     std::size_t column = 0;
   };
+  struct Pending {
+    std::size_t column;
+    Column::Kind kind;
+    double number;
+    std::string text;
+  };
 
-  bool number(double value) {
-    if (const auto c = column(Column::Kind::kNumber)) columns_.number(*c, value);
-    return element();
-  }
-  bool open(bool array) {
+  void open(bool array) {
     // The entries are kept from record to record, with their keys' capacity.
     if (depth_in_use_ == open_.size()) open_.emplace_back();
     open_[depth_in_use_].array = array;
     open_[depth_in_use_].element = 0;
     open_[depth_in_use_].key.clear();
     ++depth_in_use_;
-    return true;
   }
-  bool close() {
+  void close() {
     --depth_in_use_;
-    return element();
+    element();
   }
   /// After a value: the next one of an array has the next index.
-  bool element() {
+  void element() {
     if (depth_in_use_ > 0 && open_[depth_in_use_ - 1].array) ++open_[depth_in_use_ - 1].element;
-    return true;
   }
   bool at(std::size_t depth, const char* key) const {
     return !open_[depth].array && open_[depth].key == key;
@@ -276,6 +291,7 @@ class StepHandler final : public nlohmann::json_sax<nlohmann::json> {
   std::size_t depth_in_use_ = 0;
   std::vector<Slot> slots_;
   std::size_t ordinal_ = 0;
+  std::vector<Pending> pending_;
 };
 
 class PyRecording {
@@ -305,12 +321,15 @@ class PyRecording {
     {
       py::gil_scoped_release released;
       StepHandler handler(columns);
+      source->listen(&handler);
       while (source->next(record)) {
-        if (record.kind != TraceRecord::Kind::kStep) continue;
-        handler.begin();
-        nlohmann::json::sax_parse(record.text, &handler);
-        columns.end_row();
+        if (record.kind == TraceRecord::Kind::kStep) {
+          handler.commit();
+        } else {
+          handler.drop();
+        }
       }
+      source->listen(nullptr);
     }
     if (source->error()) raise_bad_file(*source);
     py::list names;

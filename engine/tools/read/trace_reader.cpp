@@ -147,6 +147,67 @@ class RecordShape final : public nlohmann::json_sax<Json> {
   Field* current_ = nullptr;
 };
 
+/// The check's parse, its events also given to a RecordListener.
+class ListenedShape final : public nlohmann::json_sax<Json> {
+ public:
+  ListenedShape(RecordShape& shape, RecordListener& listener)
+      : shape_(shape), listener_(listener) {}
+
+  bool null() override {
+    listener_.null();
+    return shape_.null();
+  }
+  bool boolean(bool value) override {
+    listener_.boolean(value);
+    return shape_.boolean(value);
+  }
+  bool number_integer(number_integer_t value) override {
+    listener_.number(static_cast<double>(value));
+    return shape_.number_integer(value);
+  }
+  bool number_unsigned(number_unsigned_t value) override {
+    listener_.number(static_cast<double>(value));
+    return shape_.number_unsigned(value);
+  }
+  bool number_float(number_float_t value, const string_t& text) override {
+    listener_.number(value);
+    return shape_.number_float(value, text);
+  }
+  bool string(string_t& value) override {
+    listener_.string(value);
+    return shape_.string(value);
+  }
+  bool binary(binary_t& value) override { return shape_.binary(value); }
+  bool start_object(std::size_t size) override {
+    listener_.start_object();
+    return shape_.start_object(size);
+  }
+  bool end_object() override {
+    listener_.end_object();
+    return shape_.end_object();
+  }
+  bool start_array(std::size_t size) override {
+    listener_.start_array();
+    return shape_.start_array(size);
+  }
+  bool end_array() override {
+    listener_.end_array();
+    return shape_.end_array();
+  }
+  bool key(string_t& key) override {
+    listener_.key(key);
+    return shape_.key(key);
+  }
+  bool parse_error(std::size_t position, const std::string& token,
+                   const nlohmann::detail::exception& bad) override {
+    return shape_.parse_error(position, token, bad);
+  }
+
+ private:
+  RecordShape& shape_;
+  RecordListener& listener_;
+};
+
 class JsonlSource : public TraceSource {
  public:
   JsonlSource(std::istream& in, std::string file) : in_(in), file_(std::move(file)) {}
@@ -326,7 +387,15 @@ bool TraceSource::accept(TraceRecord& record) {
     return false;
   }
   RecordShape shape;
-  if (!Json::sax_parse(record.text, &shape) && shape.error) {
+  bool parsed = false;
+  if (listener_ != nullptr) {
+    listener_->begin_record();
+    ListenedShape listened(shape, *listener_);
+    parsed = Json::sax_parse(record.text, &listened);
+  } else {
+    parsed = Json::sax_parse(record.text, &shape);
+  }
+  if (!parsed && shape.error) {
     auto where = record.location;
     if (shape.syntax_error) {
       if (where.line > 0)

@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "arbiter/diagnostics.hpp"
@@ -32,6 +33,26 @@ struct TraceRecord {
   SourceLocation location;
 };
 
+/// The JSON of each record, as the check parses it (TraceSource::listen()): a reader that builds
+/// its own structure from the records (the Python module's DataFrame) takes the events of that one
+/// parse instead of parsing every record again. Keys and strings are valid during the call only.
+/// The record's kind is known once next() returns: what a listener took from a record that is no
+/// step is its own to drop.
+class RecordListener {
+ public:
+  virtual ~RecordListener() = default;
+  virtual void begin_record() = 0;
+  virtual void null() = 0;
+  virtual void boolean(bool value) = 0;
+  virtual void number(double value) = 0;
+  virtual void string(std::string_view value) = 0;
+  virtual void key(std::string_view key) = 0;
+  virtual void start_object() = 0;
+  virtual void end_object() = 0;
+  virtual void start_array() = 0;
+  virtual void end_array() = 0;
+};
+
 /// The records of one trace or recording, read one at a time, so that a tool that needs a few
 /// steps need not hold a whole run. Every record is checked: the first is a header, later
 /// headers are reload headers, each step record is an object with an increasing "step" and a
@@ -50,6 +71,9 @@ class TraceSource {
   /// them is not (MCAP's data end CRC, summary, footer or closing magic): a warning, since other
   /// tools may refuse the file.
   const std::string& damaged() const { return damaged_; }
+  /// Every record accepted from now on is also parsed into `listener` (null: none), which must
+  /// outlive the reads.
+  void listen(RecordListener* listener) { listener_ = listener; }
 
  protected:
   /// Checks `record` (its kind still unknown) against the records before it; false, with
@@ -69,6 +93,7 @@ class TraceSource {
   std::string damaged_;
   bool header_seen_ = false;
   std::uint64_t last_step_ = 0;
+  RecordListener* listener_ = nullptr;
 };
 
 /// The JSON-lines trace in `in`, named `file` in errors. `in` must outlive the source.
