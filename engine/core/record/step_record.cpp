@@ -76,29 +76,6 @@ const std::string& report_source(const StepLayout& layout, std::uint32_t source)
   return state < layout.state_sources.size() ? layout.state_sources[state] : kStandalone;
 }
 
-std::uint64_t LogClock::time(std::uint64_t step, std::uint64_t wall_ns) const {
-  if (paced_) return wall_ns;
-  const auto since = step > clock_step_ ? step - clock_step_ : 0;
-  return start_ns_ + clock_ns_ +
-         static_cast<std::uint64_t>(static_cast<double>(since) * 1e9 / rate_hz_);
-}
-
-std::uint64_t LogClock::reload(std::uint64_t step, std::uint64_t wall_ns, double rate_hz) {
-  const auto at = time(step, wall_ns);
-  clock_ns_ = at > start_ns_ ? at - start_ns_ : 0;
-  clock_step_ = step;
-  rate_hz_ = rate_hz;
-  return at;
-}
-
-void append_dropped_log(std::uint64_t time, std::string_view who, std::uint64_t gap,
-                        std::uint64_t after, std::string_view why, std::string& out) {
-  append_log_message(time, LogLevel::kWarning, who,
-                     fmt::format("the {} dropped {} step{} after step {}: {}", who, gap,
-                                 gap == 1 ? "" : "s", after, why),
-                     {}, 0, out);
-}
-
 const char* event_verb(Controller::Event::Kind kind) {
   return kind == Controller::Event::Kind::kActivate  ? "activate"
          : kind == Controller::Event::Kind::kExecute ? "execute"

@@ -16,6 +16,7 @@
 #include "arbiter/channels.hpp"
 #include "arbiter/controller.hpp"
 #include "arbiter/manager.hpp"
+#include "arbiter/step_ring.hpp"
 #include "arbiter/trace.hpp"
 
 namespace arbiter::detail {
@@ -247,6 +248,7 @@ struct SnapshotGeneration {
   std::string header;             ///< the program's trace header, without a reload's number
   std::vector<Channel> channels;  ///< channels(program), in ChannelIndex order
   double rate_hz = 0.0;
+  std::vector<std::pair<std::string, std::string>> files;  ///< a reloaded config's (path, text)
 };
 
 /// Copies the manager's last step (or safe pass) into `block`, of `shape`. False when something
@@ -343,46 +345,6 @@ const std::string& report_source(const StepLayout& layout, std::uint32_t source)
 void append_step_record(const StepLayout& layout, const StepSnapshot& step, std::string& out);
 /// The `/arbiter/inputs` message of a snapshot (see append_inputs_record in recording.hpp).
 void append_inputs_record(const StepLayout& layout, const StepSnapshot& step, std::string& out);
-
-/// The log time of a run's messages, for a recorder and a live server alike: the wall clock for a
-/// paced run, else the run's own simulated time, step / rate_hz after `start_ns` (docs/replay.md,
-/// "Log time and publish time"). The formatting thread's.
-class LogClock {
- public:
-  LogClock() = default;
-  LogClock(bool paced, std::uint64_t start_ns, double rate_hz)
-      : paced_(paced), start_ns_(start_ns), rate_hz_(rate_hz) {}
-  /// The log time of step `step`, which was at `wall_ns` on the wall clock.
-  std::uint64_t time(std::uint64_t step, std::uint64_t wall_ns) const;
-  /// A hot reload after step `step` (at `wall_ns`): the steps after it come at `rate_hz`. Returns
-  /// the reload's log time.
-  std::uint64_t reload(std::uint64_t step, std::uint64_t wall_ns, double rate_hz);
-
- private:
-  bool paced_ = false;
-  std::uint64_t start_ns_ = 0;
-  double rate_hz_ = 1.0;
-  std::uint64_t clock_step_ = 0;  // the step that was at clock_ns_ after the start
-  std::uint64_t clock_ns_ = 0;
-};
-
-/// The `/arbiter/log` message (from `who`) saying that `who` dropped `gap` steps after step
-/// `after`, and `why`.
-void append_dropped_log(std::uint64_t time, std::string_view who, std::uint64_t gap,
-                        std::uint64_t after, std::string_view why, std::string& out);
-
-/// Calls `emit(message)` with the `/arbiter/log` message of each report of `step`, logged at
-/// `time`, formatted into `buffer`.
-template <typename Emit>
-void for_each_report_log(const StepLayout& layout, const StepSnapshot& step, std::uint64_t time,
-                         std::string& buffer, Emit&& emit) {
-  for (const auto& report : step.reports) {
-    buffer.clear();
-    append_log_message(time, LogLevel::kInfo, report_source(layout, report.source),
-                       step.texts.substr(report.text_begin, report.text_size), {}, 0, buffer);
-    emit(static_cast<const std::string&>(buffer));
-  }
-}
 
 /// Why a state ended, from a deactivation event and a function naming a state index.
 template <typename Name>
