@@ -614,3 +614,70 @@ TEST_CASE("a chained capture gives the reader every step's whole picture", "[rec
                       step.scene_points.size() * sizeof(ScenePoint)) == 0);
   }
 }
+
+namespace {
+
+// Draws pictures of many sizes, the largest as much as a step may draw.
+class Filler final : public Interface {
+ public:
+  void input(WriteContext& ctx) override {
+    static constexpr std::size_t kPrimitives[] = {Manager::kScenePrimitivesPerStep, 2,  90,
+                                                  Manager::kScenePrimitivesPerStep, 40, 127};
+    static constexpr std::size_t kPoints[] = {Manager::kScenePointsPerStep, 2,  300, 17,
+                                              Manager::kScenePointsPerStep, 511};
+    Scene scene = ctx.scene("field");
+    const auto at = static_cast<double>(steps_);
+    const std::size_t points = kPoints[steps_ % 6];
+    for (std::size_t i = 0; i < points; ++i) line_[i] = {at, static_cast<double>(i)};
+    scene.polyline(line_, points, SceneColor{});
+    for (std::size_t i = 1; i < kPrimitives[steps_ % 6]; ++i) {
+      scene.circle({at, static_cast<double>(i)}, 0.1, SceneColor{});
+    }
+    ++steps_;
+  }
+  std::size_t steps_ = 0;
+  ScenePoint line_[Manager::kScenePointsPerStep];
+};
+
+}  // namespace
+
+TEST_CASE("the pictures of steps not yet read are never written over", "[record][scene]") {
+  // Each step's picture goes after the one before in one ring of pictures, whatever it draws:
+  // with 3 blocks, 2 steps wait for the reader while the third is captured, and pictures of
+  // every size, up to the most a step may draw, make the ring start again at every place.
+  Registry registry = test::make_test_registry();
+  registry.add_interface<Filler>("test.Filler");
+  Manager manager(test::compile_text(
+      "arbiter: 1\nname: filling\nlayers:\n  - name: world\n    interface: test.Filler\n",
+      registry));
+  detail::SnapshotGeneration generation(manager.program(), 0, 3);
+  detail::StepImage image;  // the reader's
+  const auto& shape = generation.blocks.shape();
+  const auto count = generation.blocks.size();
+  struct Drawn {
+    std::vector<ScenePrimitive> primitives;
+    std::vector<ScenePoint> points;
+  };
+  std::vector<Drawn> drawn;
+  for (std::size_t i = 0; i < 200; ++i) {
+    manager.step();
+    REQUIRE(detail::capture_step(manager, generation.layout, shape, generation.blocks[i % count],
+                                 false, &generation.last, i > 0));
+    detail::fence_streamed_stores();
+    const auto& scene = manager.scene();
+    REQUIRE(scene.dropped == 0);
+    drawn.push_back({{scene.primitives, scene.primitives + manager.scene_primitive_count()},
+                     {scene.points, scene.points + scene.point_count}});
+    if (i + 1 < count) continue;
+    const auto read = i + 1 - count;  // the oldest step still waiting
+    detail::StepSnapshot step(shape, generation.blocks[read % count]);
+    step.apply(image);
+    INFO("step " << read + 1 << ", read after step " << i + 1);
+    REQUIRE(step.scene.size() == drawn[read].primitives.size());
+    REQUIRE(step.scene_points.size() == drawn[read].points.size());
+    CHECK(std::memcmp(step.scene.data(), drawn[read].primitives.data(),
+                      step.scene.size() * sizeof(ScenePrimitive)) == 0);
+    CHECK(std::memcmp(step.scene_points.data(), drawn[read].points.data(),
+                      step.scene_points.size() * sizeof(ScenePoint)) == 0);
+  }
+}

@@ -20,8 +20,8 @@
 #include "arbiter/channels.hpp"
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/recording.hpp"
+#include "arbiter/step_ring.hpp"
 #include "arbiter/trace.hpp"
-#include "core/record/step_record.hpp"
 
 namespace arbiter::cli {
 
@@ -47,25 +47,8 @@ std::uint64_t wall_ns() {
                                         .count());
 }
 
-// The ring laid out for one program, as a recorder's.
-using Generation = detail::SnapshotGeneration;
-
 // Who the server's own log messages are from.
 constexpr const char* kServerName = "Foxglove server";
-
-// A step's values are in the block of the same index of the generation it was captured with; the
-// stepping thread writes nothing here for a step, only for a reload's header.
-struct alignas(64) Slot {
-  enum class Kind { kSnapshot, kHeader };
-  Kind kind = Kind::kSnapshot;
-  std::uint64_t step = 0;
-  std::uint64_t reload = 0;
-  std::uint64_t wall_time = 0;  // kHeader: the wall clock when the run started or reloaded
-  // kSnapshot: the steps dropped just before this one. Written by the stepping thread only after
-  // a drop, and set back to 0 by the server's thread, so that a step writes nothing here.
-  std::uint64_t dropped = 0;
-  std::unique_ptr<Generation> next;
-};
 
 }  // namespace
 
@@ -89,90 +72,43 @@ struct FoxgloveServer::Impl {
   std::unique_ptr<asio::steady_timer> timer;
   std::atomic<bool> stopped{false};
 
-  // The ring: the stepping thread fills head, the server's thread reads tail.
-  std::unique_ptr<Slot[]> ring;
-  std::size_t ring_size = kSlots + 1;
-  alignas(64) std::atomic<std::size_t> head{0};
-  std::size_t tail_seen = 0;  // the stepping thread's view of tail
-  bool unpublished = false;
-  bool chained = false;
-  std::uint64_t pending_drops = 0;  // steps dropped since the last slot published
-  Generation* stepping = nullptr;
+  // The steps on their way from the stepping thread to the server's thread, which frees a slot
+  // within its poll. What waits for it gives up once the server has stopped.
+  struct Waiter : StepRing::Waiter {
+    explicit Waiter(const std::atomic<bool>& stopped) : stopped(stopped) {}
+    bool give_up() const override { return stopped.load(); }
+    const std::atomic<bool>& stopped;
+  };
+  Waiter waiter{stopped};
+  StepRing ring{kSlots, waiter};
   std::atomic<bool> started{false};
-  alignas(64) std::atomic<std::size_t> tail{0};
   // Some client is subscribed to a channel that steps feed: only then are steps captured.
   alignas(64) std::atomic<bool> wanted{false};
-  std::atomic<std::uint64_t> headers_published{0};
-  std::atomic<std::uint64_t> headers_written{0};
-  std::mutex staged_mutex;
-  std::unique_ptr<Generation> staged;  // by staged_mutex
-  // Generations the stepping thread swapped in after the server stopped: nobody reads them.
-  std::vector<std::unique_ptr<Generation>> orphans;
 
   // The server thread's.
-  std::unique_ptr<Generation> reading;
-  detail::StepImage image;
   std::vector<Advertised> channels;
   std::uint32_t next_channel = 1;
   std::map<Handle, Client, std::owner_less<Handle>> clients;
   std::string header;  // the last /arbiter/header message, for clients that subscribe later
   std::uint64_t header_time = 0;
   std::uint64_t wall_start = 0;
-  bool paced = false;  // set before the run starts: the log times' clock (detail::LogClock)
+  bool paced = false;  // set before the run starts: the log times' clock (LogClock)
   std::uint64_t run_start = 0;
-  detail::LogClock clock;
+  LogClock clock;
   std::string record, inputs, log, scene, frame;
   // The scene messages carry what changed since the message before (channels.hpp); the next one
   // is the whole picture after a reload and when a client subscribes, which has seen none before.
   SceneUpdates scene_updates;
 
   std::atomic<std::size_t> connected{0};
-  std::atomic<std::uint64_t> opened{0}, sent{0}, dropped_for_clients{0}, dropped_steps{0};
+  std::atomic<std::uint64_t> opened{0}, sent{0}, dropped_for_clients{0};
 
-  std::size_t after(std::size_t index) const { return index + 1 == ring_size ? 0 : index + 1; }
-  detail::SnapshotBlock block(const Generation& generation, const Slot* slot) const {
-    return generation.blocks[static_cast<std::size_t>(slot - ring.get())];
-  }
-
-  Slot* claim() {
-    const auto at = head.load(std::memory_order_relaxed);
-    const auto next = after(at);
-    if (next == tail_seen) {
-      tail_seen = tail.load(std::memory_order_acquire);
-      if (next == tail_seen) return nullptr;
-    }
-    return &ring[at];
-  }
-  void publish() {
-    head.store(after(head.load(std::memory_order_relaxed)), std::memory_order_release);
-  }
-  void settle() {
-    if (!unpublished) return;
-    detail::fence_streamed_stores();
-    publish();
-    unpublished = false;
-  }
   void capture(const Manager& manager) {
-    settle();
-    if (!wanted.load(std::memory_order_relaxed)) {
-      chained = false;  // the next capture copies every tracked part whole
-      return;
+    if (wanted.load(std::memory_order_relaxed)) {
+      ring.capture(manager);
+    } else {
+      ring.skip();
     }
-    Slot* slot = claim();
-    if (slot == nullptr ||
-        !detail::capture_step(manager, stepping->layout, stepping->blocks.shape(),
-                              block(*stepping, slot), false, &stepping->last, chained)) {
-      dropped_steps.fetch_add(1, std::memory_order_relaxed);
-      ++pending_drops;
-      chained = false;
-      return;
-    }
-    if (pending_drops > 0) {
-      slot->dropped = pending_drops;
-      pending_drops = 0;
-    }
-    chained = true;
-    unpublished = true;
   }
 
   // The server's thread from here on.
@@ -277,9 +213,9 @@ struct FoxgloveServer::Impl {
 
   /// Advertises `generation`'s channels: on a reload, those whose schema changed are
   /// unadvertised and advertised anew under a new id (a subscription to the old one ends).
-  void take_channels(const Generation& generation) {
+  void take_channels(const std::vector<Channel>& program_channels) {
     std::vector<Advertised> next;
-    for (const auto& channel : generation.channels) {
+    for (const auto& channel : program_channels) {
       const Advertised* known = topic(channel.topic);
       if (known != nullptr && known->channel.schema == channel.schema &&
           known->channel.schema_name == channel.schema_name) {
@@ -317,69 +253,62 @@ struct FoxgloveServer::Impl {
   }
 
   void pump() {
-    std::size_t at = tail.load(std::memory_order_relaxed);
-    const std::size_t end = head.load(std::memory_order_acquire);
-    for (; at != end; at = after(at)) {
-      Slot& slot = ring[at];
-      if (slot.kind == Slot::Kind::kHeader) {
-        reading = std::move(slot.next);
+    for (auto next = ring.next(); next != StepRing::Next::kNothing; next = ring.next()) {
+      if (next == StepRing::Next::kHeader) {
         // The run's first header is the program's as it is, a reload's says which and when (the
         // header schema has `reload` >= 1), as in a recording.
-        header = slot.reload == 0 ? reading->header
-                                  : reload_header(reading->header, slot.reload, slot.step);
-        if (slot.reload == 0) {
-          run_start = slot.wall_time;
-          clock = detail::LogClock(paced, run_start, reading->rate_hz);
+        const auto reload = ring.header_reload();
+        header =
+            reload == 0 ? ring.header() : reload_header(ring.header(), reload, ring.header_step());
+        if (reload == 0) {
+          run_start = ring.header_wall_time();
+          clock = LogClock(paced, run_start, ring.rate_hz());
           header_time = run_start;
         } else {
-          header_time = clock.reload(slot.step, slot.wall_time, reading->rate_hz);
+          header_time = clock.reload(ring.header_step(), ring.header_wall_time(), ring.rate_hz());
         }
-        take_channels(*reading);
+        take_channels(ring.channels());
         scene_updates.restart();
         broadcast(channel_at(kHeaderChannel), header_time, header);
-        slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
-        headers_written.fetch_add(1, std::memory_order_release);
-        continue;
+      } else if (next == StepRing::Next::kStep) {
+        send_step(ring.step());
       }
-      detail::StepSnapshot step(reading->blocks.shape(), block(*reading, &slot));
-      step.apply(image);
-      const auto wall =
-          step.timed ? run_start + static_cast<std::uint64_t>(step.t * 1e9) : wall_ns();
-      const auto time = clock.time(step.step, wall);
-      const auto* log_channel = channel_at(kLogChannel);
-      if (slot.dropped > 0) {
-        const auto gap = slot.dropped;
-        slot.dropped = 0;  // released to the stepping thread with the slot
-        log.clear();
-        detail::append_dropped_log(time, kServerName, gap,
-                                   step.step > gap ? step.step - gap - 1 : 0,
-                                   "its thread fell behind the steps", log);
-        broadcast(log_channel, time, log);
-      }
-      if (const auto* advertised = channel_at(kStepChannel)) {
-        record.clear();
-        detail::append_step_record(reading->layout, step, record);
-        broadcast(advertised, time, record);
-      }
-      if (const auto* advertised = channel_at(kInputsChannel);
-          advertised != nullptr && !step.safe) {
-        inputs.clear();
-        detail::append_inputs_record(reading->layout, step, inputs);
-        broadcast(advertised, time, inputs);
-      }
-      // Only steps that drew, as in a recording: a viewer keeps showing the last picture.
-      if (const auto* advertised = channel_at(kSceneChannel);
-          advertised != nullptr && (step.scene.size() > 0 || step.scene_dropped > 0)) {
-        scene.clear();
-        scene_updates.append(time, step.scene.data(), step.scene.size(), step.scene_points.data(),
-                             step.scene_dropped, scene);
-        broadcast(advertised, time, scene);
-      }
-      detail::for_each_report_log(
-          reading->layout, step, time, log,
-          [&](const std::string& message) { broadcast(log_channel, time, message); });
+      ring.release();
     }
-    tail.store(at, std::memory_order_release);
+  }
+  void send_step(const RingStep& step) {
+    const auto wall =
+        step.timed() ? run_start + static_cast<std::uint64_t>(step.time() * 1e9) : wall_ns();
+    const auto time = clock.time(step.step(), wall);
+    const auto* log_channel = channel_at(kLogChannel);
+    if (const auto gap = step.dropped_before(); gap > 0) {
+      log.clear();
+      append_dropped_log(time, kServerName, gap, step.step() > gap ? step.step() - gap - 1 : 0,
+                         "its thread fell behind the steps", log);
+      broadcast(log_channel, time, log);
+    }
+    if (const auto* advertised = channel_at(kStepChannel)) {
+      record.clear();
+      step.append_step_record(record);
+      broadcast(advertised, time, record);
+    }
+    if (const auto* advertised = channel_at(kInputsChannel);
+        advertised != nullptr && !step.safe()) {
+      inputs.clear();
+      step.append_inputs_record(inputs);
+      broadcast(advertised, time, inputs);
+    }
+    // Only steps that drew, as in a recording: a viewer keeps showing the last picture.
+    if (const auto* advertised = channel_at(kSceneChannel); advertised != nullptr && step.drew()) {
+      scene.clear();
+      step.append_scene(scene_updates, time, scene);
+      broadcast(advertised, time, scene);
+    }
+    for (std::size_t r = 0; r < step.report_count(); ++r) {
+      log.clear();
+      step.append_report_log(r, time, log);
+      broadcast(log_channel, time, log);
+    }
   }
   void schedule() {
     timer->expires_after(kPoll);
@@ -621,9 +550,7 @@ struct FoxgloveServer::Impl {
   }
 };
 
-FoxgloveServer::FoxgloveServer() : impl_(std::make_unique<Impl>()) {
-  impl_->ring = std::make_unique<Slot[]>(impl_->ring_size);
-}
+FoxgloveServer::FoxgloveServer() : impl_(std::make_unique<Impl>()) {}
 
 FoxgloveServer::~FoxgloveServer() {
   stop();
@@ -658,7 +585,7 @@ FoxgloveCounts FoxgloveServer::counts() const {
   counts.clients = impl_->opened.load();
   counts.sent = impl_->sent.load();
   counts.dropped_for_slow_clients = impl_->dropped_for_clients.load();
-  counts.dropped_steps = impl_->dropped_steps.load();
+  counts.dropped_steps = impl_->ring.dropped();
   counts.started = impl_->started.load();
   return counts;
 }
@@ -682,20 +609,9 @@ void FoxgloveServer::stop() {
 }
 
 void FoxgloveServer::on_start(const Manager& manager) {
-  auto& impl = *impl_;
-  auto generation =
-      std::make_unique<Generation>(manager.program(), manager.stage_number(), impl.ring_size);
-  impl.stepping = generation.get();
   // Handed to the server's thread as a reload would be: it advertises the channels then.
-  Slot* slot = impl.claim();
-  slot->kind = Slot::Kind::kHeader;
-  slot->step = manager.steps();
-  slot->reload = 0;
-  slot->wall_time = wall_ns();
-  slot->next = std::move(generation);
-  impl.headers_published.fetch_add(1, std::memory_order_release);
-  impl.publish();
-  impl.started = true;
+  impl_->ring.start(manager, wall_ns(), true);
+  impl_->started = true;
 }
 
 void FoxgloveServer::on_step(const Manager& manager) {
@@ -707,53 +623,21 @@ void FoxgloveServer::on_safe(const Manager& manager) {
 }
 
 void FoxgloveServer::on_staged(const Program& next, std::uint64_t stage) {
-  auto generation = std::make_unique<Generation>(next, stage, impl_->ring_size);
-  std::lock_guard<std::mutex> lock(impl_->staged_mutex);
-  std::swap(impl_->staged, generation);
+  impl_->ring.stage(next, stage);
 }
 
 void FoxgloveServer::on_reload(const Manager& manager) {
-  auto& impl = *impl_;
-  if (!impl.started) return;
-  impl.settle();
-  std::unique_ptr<Generation> next;
-  {
-    std::lock_guard<std::mutex> lock(impl.staged_mutex);
-    if (impl.staged && impl.staged->stage == manager.stage_number()) next = std::move(impl.staged);
-  }
-  if (!next) {
-    next = std::make_unique<Generation>(manager.program(), manager.stage_number(), impl.ring_size);
-  }
-  impl.stepping = next.get();
-  impl.chained = false;
-  // A header is never dropped: the steps after it are laid out by it. The server's thread frees
-  // a slot within its poll.
-  Slot* slot = nullptr;
-  while ((slot = impl.claim()) == nullptr && !impl.stopped) std::this_thread::yield();
-  if (slot == nullptr) {
-    impl.orphans.push_back(std::move(next));
-    return;
-  }
-  slot->kind = Slot::Kind::kHeader;
-  slot->step = manager.steps();
-  slot->reload = manager.reloads();
-  slot->wall_time = wall_ns();
-  slot->next = std::move(next);
-  impl.headers_published.fetch_add(1, std::memory_order_release);
-  impl.publish();
+  // A header is never dropped: the steps after it are laid out by it.
+  if (impl_->started) impl_->ring.reload(manager, wall_ns());
 }
 
 void FoxgloveServer::on_retiring(const Program&) {
   // The server's thread formats steps of the replaced program until it reaches the header.
-  auto& impl = *impl_;
-  const auto published = impl.headers_published.load(std::memory_order_acquire);
-  while (impl.headers_written.load(std::memory_order_acquire) < published && !impl.stopped) {
-    std::this_thread::sleep_for(std::chrono::microseconds(200));
-  }
+  impl_->ring.wait_for_headers();
 }
 
 void FoxgloveServer::on_finish(const Manager&) {
-  if (impl_->started) impl_->settle();
+  if (impl_->started) impl_->ring.settle();
 }
 
 }  // namespace arbiter::cli

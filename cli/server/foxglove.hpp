@@ -31,11 +31,10 @@ struct FoxgloveCounts {
 };
 
 /// The server. As an observer it only copies each step into a ring of slots laid out when the
-/// run starts (the recorder's snapshots, core/record/step_record.hpp), and only while a client is
-/// subscribed; the server's own thread formats the step records and sends them. The stepping
-/// thread never waits for a client: a step finding the ring full is dropped, and a client that
-/// reads too slowly misses messages (both counted, the second also logged) rather than holding
-/// anything up.
+/// run starts (StepRing, the recorder's), and only while a client is subscribed; the server's own
+/// thread formats the step records and sends them. The stepping thread never waits for a client: a
+/// step finding the ring full is dropped, and a client that reads too slowly misses messages (both
+/// counted, the second also logged) rather than holding anything up.
 class FoxgloveServer : public Observer {
  public:
   /// Steps that may wait for the server's thread.

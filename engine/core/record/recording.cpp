@@ -23,27 +23,6 @@ void append_inputs_record(const Manager& manager, std::string& out) {
   detail::append_inputs_record(layout, detail::capture_growing(manager, layout, storage), out);
 }
 
-// The ring laid out for one program (detail::SnapshotGeneration), and the files of the config it
-// was reloaded from.
-struct Recorder::Generation : detail::SnapshotGeneration {
-  using SnapshotGeneration::SnapshotGeneration;
-  std::vector<std::pair<std::string, std::string>> files;  // the reloaded config's
-};
-
-// Cache-line aligned: the stepping thread fills one slot while the writer reads an earlier one.
-// A step's values are in the block of the same index of the slot's generation (Generation).
-struct alignas(64) Recorder::Slot {
-  // A step or a safe pass is in the slot's block, which says which, and its step and time: the
-  // stepping thread writes nothing here for it. Only a reload header or the end is marked here,
-  // and the writer marks the slot back once it has written them.
-  enum class Kind { kSnapshot, kHeader, kEnd };
-  Kind kind = Kind::kSnapshot;
-  std::uint64_t step = 0;
-  std::uint64_t wall_time = 0;       // kHeader
-  std::uint64_t reload = 0;          // kHeader: Manager::reloads()
-  std::unique_ptr<Generation> next;  // kHeader: the slots after it are laid out by it
-};
-
 // Who the recorder's own log messages are from.
 constexpr const char* kRecorderName = "recorder";
 
@@ -57,18 +36,13 @@ struct Recorder::Output {
   std::uint16_t scene = 0;
   std::uint64_t last_step = 0;
   std::uint64_t dropped = 0;
-  detail::LogClock clock;  // made when the run starts
-  std::string record;      // reused between messages
+  LogClock clock;      // made when the run starts
+  std::string record;  // reused between messages
   std::string inputs_record;
   std::string log_record;
   std::string scene_record;
   SceneUpdates scene_updates;
   std::string step_schema, inputs_schema;  // of the channels written to last
-  detail::StepImage image;                 // the writer's, as of the last slot it formatted
-  // The stepping thread's: whether the last slot published is the one before the next (no step
-  // dropped since), so that the next copies what changed. On a cache line of its own: the
-  // writer writes the members above at every message.
-  alignas(64) bool chained = false;
 };
 
 Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots,
@@ -76,10 +50,10 @@ Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slot
     : path_(path),
       fd_(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)),
       info_(std::move(info)),
-      // One slot is always left empty, to tell a full ring from an empty one; at least one
-      // step may wait, or every step would drop and the end could never be written.
-      ring_(std::make_unique<Slot[]>(std::max<std::size_t>(slots, 1) + 1)),
-      ring_size_(std::max<std::size_t>(slots, 1) + 1),
+      // At least one step may wait, or every step would drop and the end could never be
+      // written.
+      slots_(std::max<std::size_t>(slots, 1)),
+      ring_(slots_, waiter_),
       ring_full_(ring_full),
       logger_(spdlog::default_logger()) {
   if (fd_ >= 0) out_ = std::make_unique<Output>(fd_);
@@ -87,10 +61,7 @@ Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slot
 
 Recorder::~Recorder() {
   if (started_ && !finished_) {
-    settle();
-    Slot* slot = claim_waiting();
-    slot->kind = Slot::Kind::kEnd;
-    publish();
+    ring_.end();
     wake_writer();
   }
   if (writer_.joinable()) writer_.join();
@@ -119,31 +90,6 @@ void Recorder::fail(int error, std::uint64_t step, const char* doing) {
   }
 }
 
-inline Recorder::Slot* Recorder::claim() {
-  const auto head = head_.load(std::memory_order_relaxed);
-  const auto next = after(head);
-  if (next == tail_seen_) {
-    tail_seen_ = tail_.load(std::memory_order_acquire);
-    if (next == tail_seen_) return nullptr;
-  }
-  return &ring_[head];
-}
-
-inline void Recorder::publish() {
-  head_.store(after(head_.load(std::memory_order_relaxed)), std::memory_order_release);
-}
-
-inline void Recorder::settle() {
-  if (!unpublished_) return;
-  detail::fence_streamed_stores();
-  publish();
-  unpublished_ = false;
-}
-
-inline detail::SnapshotBlock Recorder::block(const Generation& generation, const Slot* slot) const {
-  return generation.blocks[static_cast<std::size_t>(slot - ring_.get())];
-}
-
 void Recorder::on_start(const Manager& manager) {
   if (!out_) return;
   wall_start_ns_ =
@@ -152,14 +98,13 @@ void Recorder::on_start(const Manager& manager) {
                                      .count());
   auto& writer = out_->writer;
   writer.header("arbiter", "arbiter " + info_.version);
-  written_ = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
-  stepping_ = written_.get();
-  const auto& channels = written_->channels;
+  ring_.start(manager, wall_start_ns_, false);
+  const auto& channels = ring_.channels();
   out_->header = add_channel(channels[kHeaderChannel]);
   out_->step = add_channel(channels[kStepChannel]);
   out_->inputs = add_channel(channels[kInputsChannel]);
   out_->log = add_channel(channels[kLogChannel]);
-  out_->clock = detail::LogClock(info_.paced, wall_start_ns_, written_->rate_hz);
+  out_->clock = LogClock(info_.paced, wall_start_ns_, ring_.rate_hz());
   out_->scene = add_channel(channels[kSceneChannel]);
   out_->step_schema = channels[kStepChannel].schema;
   out_->inputs_schema = channels[kInputsChannel].schema;
@@ -172,7 +117,7 @@ void Recorder::on_start(const Manager& manager) {
   config.emplace_back("plugins", plugins);
   for (const auto& [file, text] : info_.files) config.emplace_back("file:" + file, text);
   writer.metadata("arbiter.config", config);
-  writer.message(out_->header, wall_start_ns_, written_->header);
+  writer.message(out_->header, wall_start_ns_, ring_.header());
   for (const auto& diagnostic : info_.diagnostics) {
     // As `arbiter validate` words it, without the location, which has fields of its own.
     std::string text =
@@ -213,37 +158,15 @@ void Recorder::set_writer_period(const Program& program) {
   // and compressing then seldom meet a step. Flat out, where the stepping thread waits for it,
   // it wakes every millisecond.
   constexpr double kFewest = 1e-3, kMost = 50e-3;  // seconds
-  const double fill = static_cast<double>(ring_size_ - 1) / program.rate_hz;
+  const double fill = static_cast<double>(slots_) / program.rate_hz;
   const double period =
       ring_full_ == RingFull::kWaitForWriter ? kFewest : std::clamp(fill / 4, kFewest, kMost);
   writer_period_us_.store(static_cast<std::int64_t>(period * 1e6));
 }
 
-inline void Recorder::capture(const Manager& manager, Slot* slot, bool may_allocate) {
-  if (slot == nullptr || !detail::capture_step(manager, stepping_->layout,
-                                               stepping_->blocks.shape(), block(*stepping_, slot),
-                                               may_allocate, &stepping_->last, out_->chained)) {
-    // No room, or more than a slot holds: the gap is recorded.
-    dropped_total_.fetch_add(1, std::memory_order_relaxed);
-    out_->chained = false;  // the next slot copies every tracked part whole
-    return;
-  }
-  out_->chained = true;
-  unpublished_ = true;
-}
-
 void Recorder::on_step(const Manager& manager) {
   if (!started_) return;
-  settle();
-  capture(manager, ring_full_ == RingFull::kWaitForWriter ? claim_waiting() : claim(), false);
-}
-
-Recorder::Slot* Recorder::claim_waiting() {
-  Slot* slot = claim();
-  if (slot != nullptr) return slot;
-  wake_writer();
-  while ((slot = claim()) == nullptr) std::this_thread::yield();
-  return slot;
+  ring_.capture(manager, false, ring_full_ == RingFull::kWaitForWriter);
 }
 
 void Recorder::wake_writer() {
@@ -256,16 +179,15 @@ void Recorder::wake_writer() {
 
 void Recorder::drain() {
   if (!started_ || finished_) return;
-  settle();
+  ring_.settle();
   wake_writer();
   while (backlog() > 0) std::this_thread::sleep_for(std::chrono::microseconds(50));
 }
 
 void Recorder::on_safe(const Manager& manager) {
   if (!started_) return;
-  settle();
   // The last values a stopping robot was given: not dropped for room.
-  capture(manager, claim_waiting(), true);
+  ring_.capture(manager, true, true);
 }
 
 void Recorder::stage_files(std::vector<std::pair<std::string, std::string>> files) {
@@ -280,62 +202,25 @@ std::vector<std::pair<std::string, std::string>> Recorder::take_staged_files() {
 
 void Recorder::on_staged(const Program& next, std::uint64_t stage) {
   if (!out_) return;
-  auto generation = std::make_unique<Generation>(next, stage, ring_size_);
-  generation->files = take_staged_files();
-  {
-    std::lock_guard<std::mutex> lock(staged_mutex_);
-    std::swap(staged_, generation);
-  }
-  // A generation staged before and never swapped in is freed here, outside the lock.
+  ring_.stage(next, stage, take_staged_files());
 }
 
 void Recorder::on_reload(const Manager& manager) {
   if (!started_) return;
-  settle();
-  // The slots still waiting for the writer keep the replaced program's generation (and their
-  // state machines' config params point into that program: Manager waits in on_retiring()
-  // before freeing it). The steps from here on go into the next one's blocks.
-  std::unique_ptr<Generation> next;
-  {
-    // The staging thread holds the lock only to move a pointer or two: never for long.
-    std::lock_guard<std::mutex> lock(staged_mutex_);
-    if (staged_ && staged_->stage == manager.stage_number()) next = std::move(staged_);
-  }
-  if (!next) {
-    // Staged without on_staged(), or raced by a later stage(): laid out here, allocating.
-    next = std::make_unique<Generation>(manager.program(), manager.stage_number(), ring_size_);
-    next->files = take_staged_files();
-  }
   set_writer_period(manager.program());
-  // A reload header is never dropped: without it the steps after it could not be read.
-  Slot* slot = claim_waiting();
-  slot->kind = Slot::Kind::kHeader;
-  slot->step = manager.steps();
-  slot->reload = manager.reloads();
-  slot->wall_time = wall_time(manager.timed(), manager.step_time());
-  stepping_ = next.get();
-  slot->next = std::move(next);
-  out_->chained = false;  // the next step copies every tracked part whole, into the new blocks
-  headers_published_.fetch_add(1, std::memory_order_release);
-  publish();
+  // A program staged without on_staged() has its files still here.
+  auto files = take_staged_files();
+  if (!files.empty()) ring_.stage(manager.program(), manager.stage_number(), std::move(files));
+  ring_.reload(manager, wall_time(manager.timed(), manager.step_time()));
 }
 
 void Recorder::on_retiring(const Program&) {
-  if (!started_) return;
-  const auto published = headers_published_.load(std::memory_order_acquire);
-  if (headers_written_.load(std::memory_order_acquire) >= published) return;
-  wake_writer();
-  while (headers_written_.load(std::memory_order_acquire) < published && !finished_) {
-    std::this_thread::sleep_for(std::chrono::microseconds(100));
-  }
+  if (started_) ring_.wait_for_headers();
 }
 
 void Recorder::on_finish(const Manager&) {
   if (!started_ || finished_) return;
-  settle();
-  Slot* slot = claim_waiting();
-  slot->kind = Slot::Kind::kEnd;
-  publish();
+  ring_.end();
   wake_writer();
   writer_.join();
   finished_ = true;
@@ -360,43 +245,37 @@ void Recorder::write_loop() {
     unsynced = false;
   };
   if (flushes) syncer_ = std::thread([this] { sync_loop(); });
-  std::size_t head_seen = 0;  // head_ is read again only once the writer has caught up with it
   while (true) {
-    const auto tail = tail_.load(std::memory_order_relaxed);
-    if (tail == head_seen) {
-      head_seen = head_.load(std::memory_order_acquire);
-      if (tail == head_seen) {
-        if (flushes && !failed()) flush_when_due(Clock::now());
-        std::unique_lock<std::mutex> lock(wake_mutex_);
-        wake_.wait_for(lock, std::chrono::microseconds(writer_period_us_.load()),
-                       [this] { return wake_requested_; });
-        wake_requested_ = false;
-        continue;
-      }
+    const auto next = ring_.next();
+    if (next == StepRing::Next::kNothing) {
+      if (flushes && !failed()) flush_when_due(Clock::now());
+      std::unique_lock<std::mutex> lock(wake_mutex_);
+      wake_.wait_for(lock, std::chrono::microseconds(writer_period_us_.load()),
+                     [this] { return wake_requested_; });
+      wake_requested_ = false;
+      continue;
     }
-    Slot& slot = ring_[tail];
-    if (slot.kind == Slot::Kind::kEnd) {
-      tail_.store(after(tail), std::memory_order_release);
+    if (next == StepRing::Next::kEnd) {
+      ring_.release();
       break;
     }
-    if (slot.kind == Slot::Kind::kHeader) {
-      // Every slot of the generation before has been written: it goes, the next one comes.
-      written_ = std::move(slot.next);
-      const auto header = reload_header(written_->header, slot.reload, slot.step);
+    if (next == StepRing::Next::kHeader) {
+      const auto after_step = ring_.header_step();
+      const auto wall_time = ring_.header_wall_time();
+      const auto header = reload_header(ring_.header(), ring_.header_reload(), after_step);
       std::vector<std::pair<std::string, std::string>> reload{
-          {"after_step", std::to_string(slot.step)}, {"header", header}};
-      for (auto& [file, text] : written_->files) {
+          {"after_step", std::to_string(after_step)}, {"header", header}};
+      for (auto& [file, text] : ring_.take_files()) {
         reload.emplace_back("file:" + file, std::move(text));
       }
-      written_->files.clear();
       // The steps before the reload came at the replaced program's rate, those after it at its.
-      const auto time = out.clock.reload(slot.step, slot.wall_time, written_->rate_hz);
+      const auto time = out.clock.reload(after_step, wall_time, ring_.rate_hz());
       if (!failed()) {
         out.writer.metadata("arbiter.reload", reload);
         out.scene_updates.restart();  // the new program's picture whole, from its first step
         // A program laid out otherwise has channels of its own, on the same topics: each
         // message is checked against the schema of its program.
-        const auto& channels = written_->channels;
+        const auto& channels = ring_.channels();
         if (channels[kStepChannel].schema != out.step_schema) {
           out.step = add_channel(channels[kStepChannel]);
           out.step_schema = channels[kStepChannel].schema;
@@ -405,49 +284,45 @@ void Recorder::write_loop() {
           out.inputs = add_channel(channels[kInputsChannel]);
           out.inputs_schema = channels[kInputsChannel].schema;
         }
-        out.writer.message(out.header, time, slot.wall_time, header);
+        out.writer.message(out.header, time, wall_time, header);
       }
-      out.last_step = slot.step;
-      slot.kind = Slot::Kind::kSnapshot;  // released to the stepping thread with the slot
-      headers_written_.fetch_add(1, std::memory_order_release);
+      out.last_step = after_step;
     } else if (!failed()) {
-      // The writer only reads the block: a line it wrote would have to come back to the
-      // stepping thread's core before that could fill the slot again.
-      detail::StepSnapshot step(written_->blocks.shape(), block(*written_, &slot));
-      step.apply(out.image);
-      const auto wall = wall_time(step.timed, step.t);
-      const auto time = log_time(step.step, wall);
+      const RingStep& step = ring_.step();
+      const auto wall = wall_time(step.timed(), step.time());
+      const auto time = log_time(step.step(), wall);
       out.record.clear();
-      detail::append_step_record(written_->layout, step, out.record);
-      if (step.safe) {
+      step.append_step_record(out.record);
+      if (step.safe()) {
         out.writer.message(out.step, time, wall, out.record);  // no inputs: nothing was read
       } else {
-        if (step.step > out.last_step + 1) {
-          const auto gap = step.step - out.last_step - 1;
+        if (step.step() > out.last_step + 1) {
+          const auto gap = step.step() - out.last_step - 1;
           out.dropped += gap;
           out.writer.metadata("arbiter.gap", {{"after_step", std::to_string(out.last_step)},
                                               {"dropped", std::to_string(gap)}});
           out.log_record.clear();
-          detail::append_dropped_log(time, kRecorderName, gap, out.last_step,
-                                     "the writer fell behind", out.log_record);
+          append_dropped_log(time, kRecorderName, gap, out.last_step, "the writer fell behind",
+                             out.log_record);
           out.writer.message(out.log, time, wall, out.log_record);
         }
-        out.last_step = step.step;
+        out.last_step = step.step();
         out.inputs_record.clear();
-        detail::append_inputs_record(written_->layout, step, out.inputs_record);
+        step.append_inputs_record(out.inputs_record);
         out.writer.message(out.step, time, wall, out.record);
         out.writer.message(out.inputs, time, wall, out.inputs_record);
       }
       // Only steps that drew: a viewer keeps showing the last picture.
-      if (step.scene.size() > 0 || step.scene_dropped > 0) {
+      if (step.drew()) {
         out.scene_record.clear();
-        out.scene_updates.append(time, step.scene.data(), step.scene.size(),
-                                 step.scene_points.data(), step.scene_dropped, out.scene_record);
+        step.append_scene(out.scene_updates, time, out.scene_record);
         out.writer.message(out.scene, time, wall, out.scene_record);
       }
-      detail::for_each_report_log(
-          written_->layout, step, time, out.log_record,
-          [&](const std::string& message) { out.writer.message(out.log, time, wall, message); });
+      for (std::size_t r = 0; r < step.report_count(); ++r) {
+        out.log_record.clear();
+        step.append_report_log(r, time, out.log_record);
+        out.writer.message(out.log, time, wall, out.log_record);
+      }
     }
     // After a failed write the writer only frees the slots: the run goes on, unrecorded.
     if (!failed()) {
@@ -463,7 +338,7 @@ void Recorder::write_loop() {
         flush_when_due(now);
       }
     }
-    tail_.store(after(tail), std::memory_order_release);
+    ring_.release();
   }
   if (!failed()) {
     out.writer.metadata("arbiter.summary", {{"steps", std::to_string(out.last_step)},

@@ -76,29 +76,6 @@ const std::string& report_source(const StepLayout& layout, std::uint32_t source)
   return state < layout.state_sources.size() ? layout.state_sources[state] : kStandalone;
 }
 
-std::uint64_t LogClock::time(std::uint64_t step, std::uint64_t wall_ns) const {
-  if (paced_) return wall_ns;
-  const auto since = step > clock_step_ ? step - clock_step_ : 0;
-  return start_ns_ + clock_ns_ +
-         static_cast<std::uint64_t>(static_cast<double>(since) * 1e9 / rate_hz_);
-}
-
-std::uint64_t LogClock::reload(std::uint64_t step, std::uint64_t wall_ns, double rate_hz) {
-  const auto at = time(step, wall_ns);
-  clock_ns_ = at > start_ns_ ? at - start_ns_ : 0;
-  clock_step_ = step;
-  rate_hz_ = rate_hz;
-  return at;
-}
-
-void append_dropped_log(std::uint64_t time, std::string_view who, std::uint64_t gap,
-                        std::uint64_t after, std::string_view why, std::string& out) {
-  append_log_message(time, LogLevel::kWarning, who,
-                     fmt::format("the {} dropped {} step{} after step {}: {}", who, gap,
-                                 gap == 1 ? "" : "s", after, why),
-                     {}, 0, out);
-}
-
 const char* event_verb(Controller::Event::Kind kind) {
   return kind == Controller::Event::Kind::kActivate  ? "activate"
          : kind == Controller::Event::Kind::kExecute ? "execute"
@@ -246,8 +223,7 @@ SnapshotShape::SnapshotShape(const StepLayout& layout, std::size_t text_bytes_)
   machines_at = place<Machine>(at, machines);
   args_at = place<Arg>(at, args);
   queue_at = place<std::uint32_t>(at, queue);
-  scene_line_at = place<SceneLine>(at, 1);  // whole lines, which a capture streams
-  scene_inline_at = place<SceneLine>(at, kSceneInlineChunks);
+  scene_line_at = place<SceneLine>(at, 1);  // a whole line, which a capture streams
   // Whole lines: the writer reads one block while the stepping thread fills the next.
   bytes = round_up(at, kCacheLine);
   // What a step seldom writes, or writes only the start of, apart: room for the most a step may
@@ -257,9 +233,6 @@ SnapshotShape::SnapshotShape(const StepLayout& layout, std::size_t text_bytes_)
   texts_at = place<char>(extra, text_bytes);
   events_at = place<Controller::Event>(extra, events);
   event_args_at = place<Controller::EventArg>(extra, event_args);
-  scene_changed_at = place<std::uint32_t>(extra, kSceneBytes / kChunk);
-  scene_at = round_up(extra, kCacheLine);
-  extra = scene_at + kSceneBytes;
   extra_bytes = round_up(extra, kCacheLine);
 }
 
@@ -283,8 +256,12 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
   shape_ = SnapshotShape(layout, text_bytes);
   const auto& s = shape_;
   data_ = static_cast<std::byte*>(
-      ::operator new ((s.bytes + s.extra_bytes) * count, std::align_val_t{kCacheLine}));
+      ::operator new ((s.bytes + s.extra_bytes) * count + (count + 1) * SnapshotShape::kSceneBytes,
+                      std::align_val_t{kCacheLine}));
   count_ = count;
+  // Written here, so that the stepping thread's first pass through the picture ring finds its
+  // pages mapped.
+  construct_part<std::byte>((*this)[0].scene, 0, scene_bytes());
   for (std::size_t i = 0; i < count; ++i) {
     std::byte* block = (*this)[i].main;
     std::byte* extras = (*this)[i].extras;
@@ -303,13 +280,6 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
     construct_part<Controller::Event>(extras, s.events_at, s.events);
     construct_part<Controller::EventArg>(extras, s.event_args_at, s.event_args);
     construct_part<SnapshotShape::SceneLine>(block, s.scene_line_at, 1);
-    construct_part<std::uint32_t>(extras, s.scene_changed_at,
-                                  SnapshotShape::kSceneBytes / SnapshotShape::kChunk);
-    construct_part<std::byte>(block, s.scene_inline_at,
-                              SnapshotShape::kSceneInlineChunks * SnapshotShape::kChunk);
-    construct_part<ScenePrimitive>(extras, s.scene_at, Manager::kScenePrimitivesPerStep);
-    construct_part<ScenePoint>(extras, s.scene_at + SnapshotShape::kScenePrimitiveBytes,
-                               Manager::kScenePointsPerStep);
   }
   if (!s.plain_values) {
     for (const auto& actuator : layout.actuators) {
@@ -403,36 +373,6 @@ std::uint32_t copy_changed(const std::byte* now, std::byte* kept, std::byte* to,
   return count;
 }
 
-// Copies the first `used` bytes of one part of a step's picture (its primitives or its points,
-// `now`) into a block's `to` (cold; a cache line on), as whole lines streamed past the caches:
-// those that differ from `kept` (the capture before's, whose first `valid` bytes the reader has
-// too) when `chained`, else all. Lists the chunks copied in `changed` from `*count` on, numbered
-// from `first`. The lines are read whole from `now`, which has room for them (kSceneBytes);
-// a reader copies only what was used of them.
-void capture_scene_part(const std::byte* now, std::byte* kept, std::size_t& valid, std::byte* to,
-                        std::byte* inline_to, std::size_t used, bool chained, std::uint32_t first,
-                        std::uint32_t* listed, std::uint32_t* changed, std::uint32_t& count) {
-  if (!chained) {
-    stream_lines(to, now, round_up(used, SnapshotShape::kChunk));
-    if (kept != nullptr) std::memcpy(kept, now, used);
-    valid = used;
-    return;
-  }
-  std::uint32_t chunk = first;
-  for (std::size_t at = 0; at < used; at += SnapshotShape::kChunk, ++chunk) {
-    const auto size = std::min(SnapshotShape::kChunk, used - at);
-    if (at + size <= valid && same_chunk(now + at, kept + at, size)) continue;
-    std::byte* line = count < SnapshotShape::kSceneInlineChunks
-                          ? inline_to + count * SnapshotShape::kChunk
-                          : to + at;
-    stream_lines(line, now + at, SnapshotShape::kChunk);
-    std::memcpy(kept + at, now + at, size);
-    (count < SnapshotShape::SceneLine::kListed ? listed : changed)[count] = chunk;
-    ++count;
-  }
-  valid = std::max(valid, used);
-}
-
 }  // namespace
 
 SnapshotGeneration::SnapshotGeneration(const Program& program, std::uint64_t stage_,
@@ -448,8 +388,7 @@ SnapshotGeneration::SnapshotGeneration(const Program& program, std::uint64_t sta
 
 void StepImage::reset(const SnapshotShape& shape) {
   bytes.assign(shape.tracked.total, std::byte{0});
-  scene.assign(SnapshotShape::kSceneBytes, std::byte{0});
-  scene_valid[0] = scene_valid[1] = 0;
+  scene_cursor = 0;
 }
 
 bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
@@ -585,25 +524,23 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   scene_counts.points =
       static_cast<std::uint32_t>(std::min(scene.point_count, scene.point_capacity));
   scene_counts.dropped = static_cast<std::uint32_t>(scene.dropped);
-  // Most of a picture is drawn alike step after step (a field): compared where it is hot, and
-  // written to the block, cold, only by the lines that changed.
-  const bool scene_chained = !header.full && last != nullptr;
-  std::byte* kept = last != nullptr ? last->scene.data() : nullptr;
-  std::size_t unused[2] = {};
-  std::size_t* valid = last != nullptr ? last->scene_valid : unused;
-  auto* changed = part_of<std::uint32_t>(into.extras, shape.scene_changed_at);
-  std::byte* inline_to = block + shape.scene_inline_at;
-  std::uint32_t changed_count = 0;
-  std::byte* scene_to = into.extras + shape.scene_at;
-  capture_scene_part(reinterpret_cast<const std::byte*>(scene.primitives), kept, valid[0], scene_to,
-                     inline_to, scene_counts.primitives * sizeof(ScenePrimitive), scene_chained, 0,
-                     scene_line.changed, changed, changed_count);
-  constexpr auto kPointsAt = SnapshotShape::kScenePrimitiveBytes;
-  capture_scene_part(reinterpret_cast<const std::byte*>(scene.points),
-                     kept != nullptr ? kept + kPointsAt : nullptr, valid[1], scene_to + kPointsAt,
-                     inline_to, scene_counts.points * sizeof(ScenePoint), scene_chained,
-                     kPointsAt / SnapshotShape::kChunk, scene_line.changed, changed, changed_count);
-  scene_counts.changed = changed_count;
+  // Copied as drawn, whole lines (the manager's buffers have room for them), streamed after the
+  // picture before: comparing it with that one is the reader's work (SceneUpdates), and the
+  // pictures of consecutive steps share pages, where each block's own room would put every step
+  // on pages of its own.
+  const auto primitive_bytes =
+      round_up(scene_counts.primitives * sizeof(ScenePrimitive), SnapshotShape::kChunk);
+  const auto point_bytes =
+      round_up(scene_counts.points * sizeof(ScenePoint), SnapshotShape::kChunk);
+  std::size_t scene_at = last != nullptr ? last->scene_cursor : 0;
+  if (scene_at + primitive_bytes + point_bytes > into.scene_bytes) scene_at = 0;
+  scene_line.primitives_at = scene_at;
+  scene_line.points_at = scene_at + primitive_bytes;
+  stream_lines(into.scene + scene_at, reinterpret_cast<const std::byte*>(scene.primitives),
+               primitive_bytes);
+  stream_lines(into.scene + scene_line.points_at, reinterpret_cast<const std::byte*>(scene.points),
+               point_bytes);
+  if (last != nullptr) last->scene_cursor = scene_line.points_at + point_bytes;
   stream_lines(block + shape.scene_line_at, reinterpret_cast<const std::byte*>(&scene_line),
                sizeof scene_line);
   if (shape.streamed) {
@@ -644,13 +581,10 @@ StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)
   reports = {part_of<Report>(extras, s.reports_at), header.report_count};
   input_reports = header.input_reports;
   texts = std::string_view(part_of<char>(extras, s.texts_at), header.text_size);
-  scene_block = b;
-  scene_extras = extras;
-  const auto& counts = part_of<SnapshotShape::SceneLine>(b, s.scene_line_at)->counts;
-  scene = {part_of<ScenePrimitive>(extras, s.scene_at), counts.primitives};
-  scene_points = {part_of<ScenePoint>(extras, s.scene_at + SnapshotShape::kScenePrimitiveBytes),
-                  counts.points};
-  scene_dropped = counts.dropped;
+  const auto& line = *part_of<SnapshotShape::SceneLine>(b, s.scene_line_at);
+  scene = {part_of<ScenePrimitive>(from.scene, line.primitives_at), line.counts.primitives};
+  scene_points = {part_of<ScenePoint>(from.scene, line.points_at), line.counts.points};
+  scene_dropped = line.counts.dropped;
 }
 
 void StepSnapshot::apply(StepImage& image) {
@@ -672,37 +606,6 @@ void StepSnapshot::apply(StepImage& image) {
       std::copy(from + at, from + at + size, to + at);
     }
   }
-  // The picture: whole, or the lines that changed, each only as far as the step used it.
-  image.scene.resize(SnapshotShape::kSceneBytes);
-  const std::size_t used[2] = {scene.size() * sizeof(ScenePrimitive),
-                               scene_points.size() * sizeof(ScenePoint)};
-  const std::byte* scene_from = scene_extras + s.scene_at;
-  const auto copy_scene = [&](std::size_t at, std::size_t size) {
-    std::copy(scene_from + at, scene_from + at + size, image.scene.data() + at);
-  };
-  constexpr auto kPointsAt = SnapshotShape::kScenePrimitiveBytes;
-  if (header.full) {
-    copy_scene(0, used[0]);
-    copy_scene(kPointsAt, used[1]);
-  } else {
-    const auto& line = *part_of<SnapshotShape::SceneLine>(scene_block, s.scene_line_at);
-    const auto* changed = part_of<std::uint32_t>(scene_extras, s.scene_changed_at);
-    for (std::uint32_t i = 0; i < line.counts.changed; ++i) {
-      const auto at = (i < SnapshotShape::SceneLine::kListed ? line.changed : changed)[i] *
-                      SnapshotShape::kChunk;
-      const bool points = at >= kPointsAt;
-      const auto end = points ? kPointsAt + used[1] : used[0];
-      const auto size = std::min(SnapshotShape::kChunk, end - at);
-      if (i < SnapshotShape::kSceneInlineChunks) {
-        const std::byte* line = scene_block + s.scene_inline_at + i * SnapshotShape::kChunk;
-        std::copy(line, line + size, image.scene.data() + at);
-      } else {
-        copy_scene(at, size);
-      }
-    }
-  }
-  scene = {part_of<ScenePrimitive>(image.scene.data(), 0), scene.size()};
-  scene_points = {part_of<ScenePoint>(image.scene.data(), kPointsAt), scene_points.size()};
   const std::byte* from = image.bytes.data();
   requested = {part_of<double>(from, s.tracked.at[TrackedLayout::kRequested]), s.behaviours};
   activation = {part_of<double>(from, s.tracked.at[TrackedLayout::kActivation]), s.behaviours};

@@ -16,6 +16,7 @@
 #include "arbiter/channels.hpp"
 #include "arbiter/controller.hpp"
 #include "arbiter/manager.hpp"
+#include "arbiter/step_ring.hpp"
 #include "arbiter/trace.hpp"
 
 namespace arbiter::detail {
@@ -117,31 +118,26 @@ struct SnapshotShape {
   using Arg = std::pair<std::uint32_t, ArgValue>;
   struct SceneCounts {
     std::uint32_t primitives = 0, points = 0, dropped = 0;
-    std::uint32_t changed = 0;  ///< chunks listed as changed, when the capture was chained
   };
-  /// A step's picture as a block (and a StepImage) holds it: the room for its primitives, then
-  /// for its points, each as the manager lays them out. A chained capture copies only the
-  /// chunks of them that changed, as it does a tracked part's: a step redraws the same field.
+  /// A step's picture as the manager lays it out: the room for its primitives, then for its
+  /// points. A capture copies only what was drawn, whole lines, into the blocks' picture ring
+  /// (SnapshotBlock::scene), each step's after the step before's: a reader compares it with the
+  /// picture before (SceneUpdates), not the stepping thread.
   static constexpr std::size_t kScenePrimitiveBytes =
       Manager::kScenePrimitivesPerStep * sizeof(ScenePrimitive);
   static constexpr std::size_t kScenePointBytes = Manager::kScenePointsPerStep * sizeof(ScenePoint);
   static constexpr std::size_t kSceneBytes = kScenePrimitiveBytes + kScenePointBytes;
   static_assert(kScenePrimitiveBytes % kChunk == 0 && kScenePointBytes % kChunk == 0,
                 "the picture's parts are whole chunks, copied as whole cache lines");
-  /// The chunks of a chained capture's picture that go in the block itself, beside the step's
-  /// other values: the block is written on the pages the step before wrote, where the picture's
-  /// room (kSceneBytes, in the extras) spreads each step over pages of its own, and a page the
-  /// step has not touched lately costs it a TLB miss. Changed chunks beyond these go in the
-  /// extras.
-  static constexpr std::size_t kSceneInlineChunks = 8;
-  /// The picture's counts and the first of its changed chunks' list: one line of the block,
+  /// The picture's counts and where it lies in the picture ring: one line of the block,
   /// written whole (streamed) at every capture.
   struct alignas(64) SceneLine {
     SceneCounts counts;
-    static constexpr std::size_t kListed = (kChunk - sizeof(SceneCounts)) / sizeof(std::uint32_t);
-    std::uint32_t changed[kListed] = {};
+    std::uint32_t unused = 0;                        // no padding: the line is copied whole
+    std::uint64_t primitives_at = 0, points_at = 0;  ///< bytes into the picture ring
+    std::uint64_t unused_rest[4] = {};
   };
-  static_assert(sizeof(SceneLine) == kChunk && SceneLine::kListed >= kSceneInlineChunks);
+  static_assert(sizeof(SceneLine) == kChunk);
 
   std::size_t behaviours = 0, actuators = 0, machines = 0;
   std::size_t args = 0, queue = 0, events = 0, event_args = 0, text_bytes = 0;
@@ -175,29 +171,32 @@ struct SnapshotShape {
   std::size_t bytes = 0;  ///< a block's: whole cache lines, so that blocks share none
   /// Where the seldom written parts start in a block's extras, and their bytes.
   std::size_t reports_at = 0, texts_at = 0, events_at = 0, event_args_at = 0;
-  /// What code drew (StepContext::scene). In the block: its SceneLine and the first
-  /// kSceneInlineChunks chunks a chained capture copied. In the extras: the rest of the list of
-  /// those chunks (from SceneLine::kListed on), and its primitives and points (kSceneBytes, a
-  /// whole capture's, and the chunks of a chained one beyond those in the block, where they lie
-  /// in the picture).
-  std::size_t scene_line_at = 0, scene_inline_at = 0, scene_changed_at = 0, scene_at = 0;
+  /// What code drew (StepContext::scene): its SceneLine, in the block.
+  std::size_t scene_line_at = 0;
   std::size_t extra_bytes = 0;
 };
 
-/// Where one snapshot is: its block, and the block's extras (SnapshotShape).
+/// Where one snapshot is: its block, the block's extras (SnapshotShape), and the picture ring
+/// of the blocks it is one of.
 struct SnapshotBlock {
   std::byte* main = nullptr;
   std::byte* extras = nullptr;
+  /// Room for one more picture (SnapshotShape::kSceneBytes) than there are blocks: a capture
+  /// writes its picture after the one before, and starts again at the beginning when the rest
+  /// would not hold the most a step draws. So the pictures of the blocks a reader has not
+  /// released yet (fewer than the blocks) are never written over, and the stepping thread never
+  /// reads the reader's progress to know it.
+  std::byte* scene = nullptr;
+  std::size_t scene_bytes = 0;
 };
 
 /// The tracked parts of a step in full, laid out by a shape's `tracked`: the stepping side's, as
 /// its last capture left them, or a reader's, brought up to date by the snapshots in order.
 struct StepImage {
   std::vector<std::byte> bytes;
-  /// The step's picture as a block holds it (SnapshotShape::kSceneBytes): up to `scene_valid`
-  /// bytes of primitives and of points, those of the capture before, kept as the reader has them.
-  std::vector<std::byte> scene;
-  std::size_t scene_valid[2] = {};
+  /// The stepping side's: where in the picture ring (SnapshotBlock::scene) the next capture's
+  /// picture goes.
+  std::size_t scene_cursor = 0;
   /// Zeroed, sized for `shape`: the stepping side's, before its first capture.
   void reset(const SnapshotShape& shape);
 };
@@ -218,8 +217,11 @@ class SnapshotBlocks {
   std::size_t size() const { return count_; }
   SnapshotBlock operator[](std::size_t index) const {
     return {data_ + index * shape_.bytes,
-            data_ + count_ * shape_.bytes + index * shape_.extra_bytes};
+            data_ + count_ * shape_.bytes + index * shape_.extra_bytes,
+            data_ + count_ * (shape_.bytes + shape_.extra_bytes), scene_bytes()};
   }
+  /// The picture ring's (SnapshotBlock::scene).
+  std::size_t scene_bytes() const { return (count_ + 1) * SnapshotShape::kSceneBytes; }
 
  private:
   void release();
@@ -246,6 +248,7 @@ struct SnapshotGeneration {
   std::string header;             ///< the program's trace header, without a reload's number
   std::vector<Channel> channels;  ///< channels(program), in ChannelIndex order
   double rate_hz = 0.0;
+  std::vector<std::pair<std::string, std::string>> files;  ///< a reloaded config's (path, text)
 };
 
 /// Copies the manager's last step (or safe pass) into `block`, of `shape`. False when something
@@ -317,8 +320,6 @@ struct StepSnapshot {
   Span<ScenePrimitive> scene;
   Span<ScenePoint> scene_points;
   std::uint32_t scene_dropped = 0;
-  const std::byte* scene_block = nullptr;   ///< the block, with the picture's counts
-  const std::byte* scene_extras = nullptr;  ///< the block's extras, with the picture
 
   const void* value(const StepLayout& layout, std::uint32_t actuator) const {
     return values + layout.actuators[actuator].offset;
@@ -344,46 +345,6 @@ const std::string& report_source(const StepLayout& layout, std::uint32_t source)
 void append_step_record(const StepLayout& layout, const StepSnapshot& step, std::string& out);
 /// The `/arbiter/inputs` message of a snapshot (see append_inputs_record in recording.hpp).
 void append_inputs_record(const StepLayout& layout, const StepSnapshot& step, std::string& out);
-
-/// The log time of a run's messages, for a recorder and a live server alike: the wall clock for a
-/// paced run, else the run's own simulated time, step / rate_hz after `start_ns` (docs/replay.md,
-/// "Log time and publish time"). The formatting thread's.
-class LogClock {
- public:
-  LogClock() = default;
-  LogClock(bool paced, std::uint64_t start_ns, double rate_hz)
-      : paced_(paced), start_ns_(start_ns), rate_hz_(rate_hz) {}
-  /// The log time of step `step`, which was at `wall_ns` on the wall clock.
-  std::uint64_t time(std::uint64_t step, std::uint64_t wall_ns) const;
-  /// A hot reload after step `step` (at `wall_ns`): the steps after it come at `rate_hz`. Returns
-  /// the reload's log time.
-  std::uint64_t reload(std::uint64_t step, std::uint64_t wall_ns, double rate_hz);
-
- private:
-  bool paced_ = false;
-  std::uint64_t start_ns_ = 0;
-  double rate_hz_ = 1.0;
-  std::uint64_t clock_step_ = 0;  // the step that was at clock_ns_ after the start
-  std::uint64_t clock_ns_ = 0;
-};
-
-/// The `/arbiter/log` message (from `who`) saying that `who` dropped `gap` steps after step
-/// `after`, and `why`.
-void append_dropped_log(std::uint64_t time, std::string_view who, std::uint64_t gap,
-                        std::uint64_t after, std::string_view why, std::string& out);
-
-/// Calls `emit(message)` with the `/arbiter/log` message of each report of `step`, logged at
-/// `time`, formatted into `buffer`.
-template <typename Emit>
-void for_each_report_log(const StepLayout& layout, const StepSnapshot& step, std::uint64_t time,
-                         std::string& buffer, Emit&& emit) {
-  for (const auto& report : step.reports) {
-    buffer.clear();
-    append_log_message(time, LogLevel::kInfo, report_source(layout, report.source),
-                       step.texts.substr(report.text_begin, report.text_size), {}, 0, buffer);
-    emit(static_cast<const std::string&>(buffer));
-  }
-}
 
 /// Why a state ended, from a deactivation event and a function naming a state index.
 template <typename Name>

@@ -18,12 +18,9 @@
 #include "arbiter/channels.hpp"
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/manager.hpp"
+#include "arbiter/step_ring.hpp"
 
 namespace arbiter {
-
-namespace detail {
-struct SnapshotBlock;
-}  // namespace detail
 
 /// What a recording keeps besides the steps, for replaying the run.
 struct RecordingInfo {
@@ -101,17 +98,13 @@ class Recorder : public Observer {
   void on_safe(const Manager& manager) override;
   void on_finish(const Manager& manager) override;
 
-  std::uint64_t dropped() const { return dropped_total_.load(); }
+  std::uint64_t dropped() const { return ring_.dropped(); }
   /// Wakes the writer and waits until it has written every step copied so far. Between steps,
   /// not while the manager steps: it makes system calls, and publishes the last step's slot.
   void drain();
   /// Steps handed to the writer and not yet written (any thread); the last step's slot is
   /// handed over at the next call (drain() does it).
-  std::size_t backlog() const {
-    const auto head = head_.load(std::memory_order_acquire);
-    const auto tail = tail_.load(std::memory_order_acquire);
-    return (head + ring_size_ - tail) % ring_size_;
-  }
+  std::size_t backlog() const { return ring_.backlog(); }
 
   /// The files (path, text) of a config about to be staged for a hot reload: on_staged() takes
   /// them, and the recording's reload record keeps them, so that a replay can reload it too.
@@ -119,14 +112,13 @@ class Recorder : public Observer {
   void stage_files(std::vector<std::pair<std::string, std::string>> files);
 
  private:
-  struct Slot;
-  struct Generation;
-  /// The slot after `index`: a compare, not a modulo, whose division would cost the stepping
-  /// thread more than the rest of publishing a step.
-  std::size_t after(std::size_t index) const { return index + 1 == ring_size_ ? 0 : index + 1; }
-  Slot* claim();
-  /// claim(), waiting for the writer to free a slot: for what must never be dropped.
-  Slot* claim_waiting();
+  // How the ring waits for the writer: woken early, never given up on before the end.
+  struct Waiter : StepRing::Waiter {
+    explicit Waiter(Recorder& recorder) : recorder(recorder) {}
+    void wake() override { recorder.wake_writer(); }
+    bool give_up() const override { return recorder.finished_; }
+    Recorder& recorder;
+  };
   /// Wakes the writer before its period is up: a system call, never made in a step that finds
   /// room.
   void wake_writer();
@@ -140,12 +132,6 @@ class Recorder : public Observer {
   std::uint16_t add_channel(const Channel& channel);
   /// The writer's period for a program's rate.
   void set_writer_period(const Program& program);
-  void publish();
-  /// Publishes the last step's slot, if it waits (see `unpublished_`).
-  void settle();
-  /// Copies the manager's step (or safe pass) into `slot`, to be published at the next call; a
-  /// null slot, or a step the slot cannot hold, is dropped.
-  void capture(const Manager& manager, Slot* slot, bool may_allocate);
   /// The files stage_files() left, taken.
   std::vector<std::pair<std::string, std::string>> take_staged_files();
   void write_loop();
@@ -158,36 +144,16 @@ class Recorder : public Observer {
   void request_sync(std::uint64_t step);
   /// The sync thread: fdatasync, whenever asked, until told to stop.
   void sync_loop();
-  /// Where the step values of `slot` are, in `generation`'s blocks.
-  detail::SnapshotBlock block(const Generation& generation, const Slot* slot) const;
-
   std::string path_;
   int fd_ = -1;
   RecordingInfo info_;
-  std::unique_ptr<Slot[]> ring_;
-  std::size_t ring_size_ = 0;
-  // Each on a cache line of its own, so that the two threads do not take the line from each
-  // other at every step; the stepping thread reads tail_ only when the ring looks full.
-  alignas(64) std::atomic<std::size_t> head_{0};  // next slot the stepping thread fills
-  std::size_t tail_seen_ = 0;                     // tail_ as the stepping thread last read it
-  // A step's slot is published at the next call from the stepping thread, not at once: its
-  // streamed stores must be fenced first, and by then the fence finds them done.
-  bool unpublished_ = false;
-  alignas(64) std::atomic<std::size_t> tail_{0};  // next slot the writer reads
-  alignas(64) std::atomic<std::uint64_t> dropped_total_{0};
-  // Reload headers handed to the writer (by the stepping thread) and written (by the writer):
-  // on_retiring() waits for the second to reach the first.
-  std::atomic<std::uint64_t> headers_published_{0};
-  alignas(64) std::atomic<std::uint64_t> headers_written_{0};
-  // The ring's layout, blocks and names for one program each: the stepping thread's is the
-  // running program's, the writer's that of the slots it reads. A reload header hands the next
-  // to the writer, which frees the one before: every slot of it has been written by then.
-  std::unique_ptr<Generation> written_;  // the writer's
-  Generation* stepping_ = nullptr;       // the stepping thread's
+  std::size_t slots_ = 0;
+  Waiter waiter_{*this};
+  // The steps on their way from the stepping thread to the writer, laid out for the running
+  // program and for those still being written.
+  StepRing ring_;
   std::mutex staged_mutex_;
-  // By staged_mutex_: the generation on_staged() prepared, and the files of the config staged
-  // next (stage_files()).
-  std::unique_ptr<Generation> staged_;
+  // By staged_mutex_: the files of the config staged next (stage_files()).
   std::vector<std::pair<std::string, std::string>> staged_files_;
   // The writer sleeps this long whenever it has caught up, unless woken (wake_writer()).
   std::atomic<std::int64_t> writer_period_us_{1000};
