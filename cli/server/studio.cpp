@@ -186,6 +186,13 @@ Reply Studio::edit(const std::string& body) {
     if (!missing.empty()) return refusal(400, fmt::format("{} needs '{}'", op, missing));
     // JSON is a YAML flow value too: one text serves both formats.
     result = set_param(loaded, layer, behaviour, param, dump(request["value"]));
+  } else if (op == "add_behaviour" || op == "remove_behaviour") {
+    const std::string layer = field(request, "layer", missing);
+    const std::string name = field(request, "name", missing);
+    const std::string type = op == "add_behaviour" ? field(request, "type", missing) : "";
+    if (!missing.empty()) return refusal(400, fmt::format("{} needs '{}'", op, missing));
+    result = op == "add_behaviour" ? add_behaviour(loaded, layer, name, type)
+                                   : remove_behaviour(loaded, layer, name);
   } else if (op == "rename") {
     const std::string kind_name = field(request, "kind", missing);
     const std::string name = field(request, "name", missing);
@@ -218,7 +225,8 @@ Reply Studio::edit(const std::string& body) {
     return refusal(400, "an operation needs 'op'");
   } else {
     return refusal(400, fmt::format("no operation '{}': add_inhibition, remove_inhibition, "
-                                    "flip_chaining, set_param or rename",
+                                    "flip_chaining, set_param, add_behaviour, "
+                                    "remove_behaviour or rename",
                                     op));
   }
   // The same check every operation gets: an edit that would leave an error the config did not

@@ -212,6 +212,19 @@ test('an edit in the text pane redraws the graph and shows its problems on the b
   await page.click('#inspector .inhibition-row[data-from="go_behind_ball"] .delete');
   await page.waitForFunction(() => !document.querySelector('g.edge[data-from="go_behind_ball"][data-to="search_for_ball"]'));
   assert.doesNotMatch(await text(page), /go_behind_ball -> search_for_ball/);
+
+  // A behaviour from the palette of registered classes; then removed with its inhibitions.
+  await page.selectOption('#add-class', 'scripted');
+  await page.fill('#add-name', 'blink');
+  await page.click('#add-behaviour');
+  await page.waitForSelector('.behaviour[data-name="control/blink"]');
+  assert.match(await text(page), /      head_control:\n        type: scripted\n        params:\n          activation: 1\n          writes: \{head_angle: -0\.5\}\n      blink: \{type: scripted\}\n/);
+  await drag(page, 'blink', 'kick_ball');
+  await page.waitForSelector('g.edge[data-from="blink"][data-to="kick_ball"]');
+  await selectBehaviour(page, 'blink');
+  await page.click('#remove-behaviour');
+  await page.waitForFunction(() => !document.querySelector('.behaviour[data-name="control/blink"]'));
+  assert.doesNotMatch(await text(page), /blink/);
   assert.equal(readFileSync(file, 'utf8'), original);
   assert.deepEqual(page.errors, []);
   await page.close();

@@ -75,6 +75,16 @@ function buildPanels() {
   }
   const review = html('button', {id: 'review', type: 'button', title: 'what saving changes, then Save'}, tools);
   review.textContent = 'Review and save…';
+  // The palette: a behaviour of a registered class, added to a layer.
+  const palette = html('form', {id: 'palette', class: 'studio-tools'}, aside);
+  palette.append('add ');
+  const paletteClass = html('select', {id: 'add-class', 'aria-label': 'the class of the new behaviour'}, palette);
+  palette.append(' as ');
+  const paletteName = html('input', {id: 'add-name', size: '14', placeholder: 'name', 'aria-label': 'the new behaviour\'s name'}, palette);
+  palette.append(' to ');
+  const paletteLayer = html('select', {id: 'add-layer', 'aria-label': 'the layer it joins'}, palette);
+  const paletteAdd = html('button', {id: 'add-behaviour', type: 'submit'}, palette);
+  paletteAdd.textContent = 'Add';
   const message = html('p', {id: 'studio-message', class: 'studio-message', role: 'status'}, aside);
   const reviewBox = html('div', {id: 'review-panel', class: 'review-panel', hidden: ''}, aside);
   html('h2', {}, reviewBox).textContent = 'Review';
@@ -92,7 +102,7 @@ function buildPanels() {
   const problems = html('ol', {id: 'problems', class: 'problems'}, aside);
   html('h2', {}, aside).textContent = 'Selected';
   const inspector = html('div', {id: 'inspector', class: 'inspector'}, aside);
-  return {undo, redo, chaining, review, message, reviewBox, reviewText, save, cancel, inspector,
+  return {undo, redo, chaining, review, message, palette, paletteClass, paletteName, paletteLayer, reviewBox, reviewText, save, cancel, inspector,
           fileSelect, textarea, problems};
 }
 
@@ -208,6 +218,13 @@ export async function studio(info) {
     ui.redo.disabled = !redoStack.length;
     if (state.graph) {
       shownGraph = state.graph;
+      const layers = state.graph.layers.filter((l) => !l.interface).map((l) => l.name);
+      if (layers.join() !== [...ui.paletteLayer.options].map((o) => o.value).join()) {
+        const chosen = ui.paletteLayer.value;
+        ui.paletteLayer.replaceChildren();
+        for (const name of layers) html('option', {value: name}, ui.paletteLayer).textContent = name;
+        if (layers.includes(chosen)) ui.paletteLayer.value = chosen;
+      }
       document.getElementById('title').textContent = `${state.graph.name} — studio`;
       if (!await graph.draw(state.graph)) return;
       svg.classList.remove('stale');
@@ -372,6 +389,15 @@ export async function studio(info) {
       if (await operation({op: 'rename', kind: 'behaviour', scope: layer.name, name: behaviour.name, to},
                           `renamed ${behaviour.name} to ${to}`)) {
         select({kind: 'behaviour', layer: layer.name, name: to, key: `${layer.name}/${to}`});
+      }
+    };
+    const remove = html('button', {type: 'button', id: 'remove-behaviour'}, box);
+    remove.textContent = `Remove ${behaviour.name}`;
+    remove.title = 'its declaration and the inhibitions that name it';
+    remove.onclick = async () => {
+      if (await operation({op: 'remove_behaviour', layer: layer.name, name: behaviour.name},
+                          `removed ${layer.name}/${behaviour.name}`)) {
+        select(null);
       }
     };
     // Inhibitions, by keyboard too: those it takes part in, and one to add.
@@ -544,9 +570,23 @@ export async function studio(info) {
     }
   };
 
+  ui.palette.onsubmit = async (event) => {
+    event.preventDefault();
+    const name = ui.paletteName.value.trim();
+    const layer = ui.paletteLayer.value;
+    if (await operation({op: 'add_behaviour', layer, name, type: ui.paletteClass.value},
+                        `added ${layer}/${name} (${ui.paletteClass.value})`)) {
+      ui.paletteName.value = '';
+      select({kind: 'behaviour', layer, name, key: `${layer}/${name}`});
+    }
+  };
+
   setStatus(info.live ? 'editing the running engine' : 'editing', 'live');
   const [catalog, first] = await Promise.all([call('studio/classes'), call('studio/state')]);
   classes = new Map(catalog.json.classes.map((c) => [c.name, c]));
+  for (const c of catalog.json.classes.filter((c) => c.kind === 'behaviour')) {
+    html('option', {value: c.name, title: c.description}, ui.paletteClass).textContent = c.name;
+  }
   await show(first.json);
   if (!state.graph) say('the config does not compile: its text and problems are below', 'error');
 }

@@ -124,6 +124,19 @@ EditResult flip_chaining(const Loaded& loaded, const InhibitionRef& inhibition);
 EditResult set_param(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
                      const std::string& param, const std::string& value);
 
+/// Declares behaviour `name` of class `type` in layer `layer`: `name: {type: TYPE}` after the last
+/// entry of the layer's `behaviours:` (the key added with it when the layer has none). Refused
+/// when `name` is not an identifier or is taken, or the layer is not declared.
+EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const std::string& name,
+                         const std::string& type);
+
+/// Removes behaviour `name` of layer `layer`: its lines (with the `behaviours:` key when it was
+/// the only one) and every inhibition of the layer that names it. Other uses (a port bound to it,
+/// a state machine's owner) are left for checked() to refuse. Refused when it is declared in a
+/// flow mapping.
+EditResult remove_behaviour(const Loaded& loaded, const std::string& layer,
+                            const std::string& name);
+
 /// Adds `entry` (`key: value`, as it is to be written) to the mapping `node` of `file`: before
 /// a flow mapping's closing brace, else as a line of its own after the last line of the block
 /// mapping, at its keys' indentation. Refused when the mapping's text is not where `node` says.
