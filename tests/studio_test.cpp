@@ -166,6 +166,12 @@ TEST_CASE(
   CHECK(read(path) == original + "# changed by hand\n");
   CHECK(Json::parse(studio.state().second)["files"][0]["changed_on_disk"] == true);
 
+  // Reloaded from the disk, the change made there is the new base, and the edits are gone.
+  const Json reverted = Json::parse(studio.revert().second);
+  CHECK(reverted["files"][0]["text"] == original + "# changed by hand\n");
+  CHECK(reverted["files"][0]["edited"] == false);
+  CHECK(reverted["files"][0]["changed_on_disk"] == false);
+
   std::ofstream(path, std::ios::binary) << original;
   const auto saved = studio.save(save_body(state));
   REQUIRE(saved.first == 200);

@@ -261,6 +261,19 @@ Reply Studio::set_texts(const std::string& body) {
   return {200, state_json()};
 }
 
+Reply Studio::revert() {
+  std::lock_guard lock(mutex_);
+  for (const auto& path : order_) {
+    if (auto on_disk = read_disk(path)) {
+      disk_[path] = *on_disk;
+      texts_[path] = std::move(*on_disk);
+    }
+  }
+  reload();
+  saved_ = load_texts(config_, disk_, registry_, options_);
+  return {200, state_json()};
+}
+
 Reply Studio::save(const std::string& body) {
   const Json request = Json::parse(body, nullptr, false);
   if (!request.is_object() || !request.contains("files") || !request["files"].is_array())
@@ -316,6 +329,9 @@ void Studio::attach(httplib::Server& http) {
             [this, send](const httplib::Request& request, httplib::Response& response) {
               send(response, set_texts(request.body));
             });
+  http.Post("/studio/revert", [this, send](const httplib::Request&, httplib::Response& response) {
+    send(response, revert());
+  });
   http.Post("/studio/save",
             [this, send](const httplib::Request& request, httplib::Response& response) {
               send(response, save(request.body));

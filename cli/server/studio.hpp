@@ -38,7 +38,7 @@ class Studio {
 
   void set_after_save(AfterSave hook) { after_save_ = std::move(hook); }
   /// Adds the API's routes to `http`, before it serves: GET /studio/state and /studio/classes,
-  /// POST /studio/edit, /studio/texts and /studio/save.
+  /// POST /studio/edit, /studio/texts, /studio/revert and /studio/save.
   void attach(httplib::Server& http);
 
   /// The files (text as edited and as on the disk), the graph of the texts (the dump, null when
@@ -52,6 +52,9 @@ class Studio {
   /// Replaces texts: {"texts": {PATH: TEXT, ...}} (an edit in the text pane, an undo); 403 for a
   /// path that is not one of the config's files.
   Reply set_texts(const std::string& body);
+  /// Reads the config's files from the disk again, in place of the texts edited: after a change
+  /// made on the disk (a save would be a conflict), or to drop the edits.
+  Reply revert();
   /// {"files": [{"path", "text", "base"}, ...]}: each written (temp file, then rename) when every
   /// path is one of the config's files (else 403) and every file still holds `base` (else 409);
   /// nothing is written otherwise.

@@ -258,3 +258,49 @@ test('on a running engine (run --serve --edit), Save reloads the graph; a reject
   assert.deepEqual(page.errors, []);
   await page.close();
 });
+
+test('two tabs on one studio see each other\'s edits and saves, and a file changed on the disk', async () => {
+  const file = copyOf('paper/walk_and_kick.yaml');
+  const original = readFileSync(file, 'utf8');
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const first = await open(url);
+  const second = await open(url);
+  // An inhibition added by keyboard in the first tab's inspector.
+  await selectBehaviour(first, 'kick_ball');
+  await first.selectOption('#inspector .add-inhibition select', 'head_control');
+  await first.click('#inspector .add-inhibition button');
+  await first.waitForSelector('g.edge[data-from="kick_ball"][data-to="head_control"]');
+  await second.waitForSelector('g.edge[data-from="kick_ball"][data-to="head_control"]');
+  await second.waitForSelector('body[data-edited="true"]');
+  await first.click('#review');
+  await first.click('#save');
+  await first.waitForSelector('#studio-message[data-kind="saved"]');
+  await second.waitForSelector('body[data-edited="false"]');
+  assert.match(readFileSync(file, 'utf8'), /      - kick_ball => head_control\n/);
+  // Changed by hand: the file's entry says so, and a save from the page would be refused.
+  writeFileSync(file, original);
+  await second.waitForFunction(() => /changed on the disk/.test(document.querySelector('#file').textContent));
+  await second.fill('#text', (await text(second)).replace('rate_hz: 15', 'rate_hz: 20'));
+  await second.waitForSelector('body[data-edited="true"]');
+  await settled(second);
+  await second.click('#review');
+  await second.click('#save');
+  await second.waitForSelector('#studio-message[data-kind="error"]');
+  assert.match(await second.textContent('#studio-message'), /conflict: .* changed on the disk since it was opened; nothing was written/);
+  assert.equal(readFileSync(file, 'utf8'), original);
+  // Reloaded from the disk: the hand's change is shown; Undo brings the edits back over it (the
+  // first tab's inhibition and this one's rate), and then they save.
+  const edited = await text(second);
+  assert.match(edited, /rate_hz: 20\n[^]*      - kick_ball => head_control\n/);
+  await second.click('#revert');
+  await second.waitForSelector('body[data-edited="false"]');
+  assert.equal(await text(second), original);
+  await second.click('#undo');
+  await second.waitForSelector('body[data-edited="true"]');
+  await second.click('#review');
+  await second.click('#save');
+  await second.waitForSelector('#studio-message[data-kind="saved"]');
+  assert.equal(readFileSync(file, 'utf8'), edited);
+  await first.close();
+  await second.close();
+});

@@ -8,6 +8,7 @@ import {GraphView} from '../graph.js';
 import {setStatus} from '../panels.js';
 
 const TYPING_PAUSE = 300;  // ms after the last key before the text is parsed again
+const POLL = 2000;         // ms between looks at the server's texts: another tab's edits and saves
 
 // Requests under way and graphs being laid out: `data-busy` on the body says when the page has
 // settled (tests, screenshots).
@@ -73,6 +74,9 @@ function buildPanels() {
   for (const [value, label] of [['true', 'drag adds =>  (chaining)'], ['false', 'drag adds ->  (non-chaining)']]) {
     html('option', {value}, chaining).textContent = label;
   }
+  const revert = html('button', {id: 'revert', type: 'button',
+                                 title: 'the files as they are on the disk now, in place of the edits (Undo brings the edits back)'}, tools);
+  revert.textContent = 'Reload from disk';
   const review = html('button', {id: 'review', type: 'button', title: 'what saving changes, then Save'}, tools);
   review.textContent = 'Review and save…';
   // The palette: a behaviour of a registered class, added to a layer.
@@ -102,7 +106,7 @@ function buildPanels() {
   const problems = html('ol', {id: 'problems', class: 'problems'}, aside);
   html('h2', {}, aside).textContent = 'Selected';
   const inspector = html('div', {id: 'inspector', class: 'inspector'}, aside);
-  return {undo, redo, chaining, review, message, palette, paletteClass, paletteName, paletteLayer, reviewBox, reviewText, save, cancel, inspector,
+  return {undo, redo, chaining, revert, review, message, palette, paletteClass, paletteName, paletteLayer, reviewBox, reviewText, save, cancel, inspector,
           fileSelect, textarea, problems};
 }
 
@@ -113,6 +117,7 @@ export async function studio(info) {
   let state = null;
   let shownGraph = null;  // the last graph that compiled: drawn while the text does not
   let classes = new Map();
+  let generation = 0;     // of the state shown: a look at the server's started before a change is stale
   let selected = null;    // {kind: 'behaviour', key, layer, name} or {kind: 'inhibition', layer, inhibitor, inhibited}
   let file = null;        // the path shown in the text pane
   const undoStack = [];
@@ -209,6 +214,7 @@ export async function studio(info) {
   }
 
   async function showState(next) {
+    ++generation;
     state = next;
     document.body.dataset.edited = state.files.some((f) => f.edited) ? 'true' : 'false';
     document.body.dataset.valid = state.graph ? 'true' : 'false';
@@ -269,6 +275,7 @@ export async function studio(info) {
     if (json.files) await show(json);
     say('', '');
   }
+  ui.revert.onclick = () => change(() => call('studio/revert', {}), 'the files as they are on the disk');
   ui.undo.onclick = () => step(undoStack, redoStack);
   ui.redo.onclick = () => step(redoStack, undoStack);
   document.addEventListener('keydown', (event) => {
@@ -569,6 +576,17 @@ export async function studio(info) {
       say(`saved, but ${applied.summary}:\n${applied.messages}`, 'error');
     }
   };
+
+  // Every tab edits the server's one copy of the texts: another tab's edits and saves (and a file
+  // changed on the disk) show here once this tab is idle.
+  const summary = (st) => JSON.stringify(st.files.map((f) => [f.path, f.text, f.base, f.changed_on_disk]));
+  setInterval(async () => {
+    if (busy > 0 || typedFrom !== null || document.hidden || !state) return;
+    const seen = generation;
+    const {json} = await request('studio/state');
+    if (seen !== generation || busy > 0 || typedFrom !== null || !json.files) return;
+    if (summary(json) !== summary(state)) await show(json);
+  }, POLL);
 
   ui.palette.onsubmit = async (event) => {
     event.preventDefault();
