@@ -239,3 +239,80 @@ TEST_CASE("the studio's API over HTTP needs the token, and edits and saves need 
   CHECK(read(path) == "arbiter: 1\nname: overwritten\n");
   server.stop();
 }
+
+TEST_CASE(
+    "the studio edits an included file where it declares the element, and a JSON config "
+    "as JSON",
+    "[studio]") {
+  TempDir dir;
+  const std::string main_text = R"(arbiter: 1
+name: included
+include: [parts/control.yaml]
+layers:
+  - name: top
+    behaviours:
+      watch: scripted
+)";
+  const std::string part_text = R"(# The control layer, in a file of its own.
+layers:
+  - name: control
+    behaviours:
+      a: scripted
+      b: scripted
+    inhibitions:
+      - a => b
+)";
+  const std::string main = dir.write("main.yaml", main_text);
+  std::filesystem::create_directories(dir / "parts");
+  const std::string part = dir.write("parts/control.yaml", part_text);
+  Registry registry = make_test_registry();
+  Studio studio(main, registry, with_lints());
+  const Json opened = Json::parse(studio.state().second);
+  REQUIRE(opened["files"].size() == 2);
+  const std::string part_path = opened["files"][1]["path"];
+  CHECK(std::filesystem::equivalent(part_path, part));
+
+  const auto renamed = studio.edit(
+      R"({"op": "rename", "kind": "behaviour", "scope": "control", "name": "b", "to": "c"})");
+  REQUIRE(renamed.first == 200);
+  const auto [status, body] = studio.edit(
+      R"({"op": "set_param", "layer": "control", "behaviour": "a", "param": "activation",
+          "value": 0.5})");
+  REQUIRE(status == 200);
+  const Json state = Json::parse(body);
+  CHECK(state["edits"][0]["file"] == part_path);
+  CHECK(state["files"][0]["edited"] == false);
+  CHECK(state["files"][1]["text"] == R"(# The control layer, in a file of its own.
+layers:
+  - name: control
+    behaviours:
+      a: {type: scripted, params: {activation: 0.5}}
+      c: scripted
+    inhibitions:
+      - a => c
+)");
+  REQUIRE(studio.save(save_body(state)).first == 200);
+  CHECK(read(main) == main_text);
+  CHECK(read(part) == state["files"][1]["text"]);
+
+  // JSON: the inhibition as a JSON string, the param as a JSON member; the result loads.
+  const std::string json =
+      dir.write("robot.json", read(ARBITER_SOURCE_DIR "/configs/paper/walk_and_kick.json"));
+  Studio json_studio(json, registry, with_lints());
+  REQUIRE(json_studio
+              .edit(R"({"op": "add_inhibition", "layer": "control", "inhibitor": "kick_ball",
+                        "inhibited": "head_control", "chaining": false})")
+              .first == 200);
+  const auto set = json_studio.edit(
+      R"({"op": "set_param", "layer": "control", "behaviour": "head_control",
+          "param": "activation", "value": 0.25})");
+  REQUIRE(set.first == 200);
+  const Json after = Json::parse(set.second);
+  const std::string text = after["files"][0]["text"];
+  CHECK(contains(text, R"("search_for_ball -> head_control", "kick_ball -> head_control")"));
+  CHECK(Json::parse(text).is_object());
+  CHECK(!after["graph"].is_null());
+  CHECK(after["review"] ==
+        "+ inhibition control: kick_ball -> head_control\n"
+        "~ behaviour control/head_control: params: activation [1.0] -> [0.25]\n");
+}
