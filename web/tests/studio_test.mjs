@@ -111,6 +111,11 @@ test('the soccer demo edited by mouse: an inhibition dragged, a param set in the
   await drag(page, 'kick_ball', 'search_for_ball');
   await page.waitForSelector('g.edge.chaining[data-from="kick_ball"][data-to="search_for_ball"]');
   assert.match(await text(page), /      - search_for_ball -> head_control\n      - kick_ball => search_for_ball\n/);
+  // The lint it gets (chaining implies it already) is drawn on that inhibition and no other.
+  await settled(page);
+  assert.deepEqual(await page.$$eval('g.edge.has-warning', (edges) => edges.map((e) => `${e.dataset.from} ${e.dataset.to}`)),
+                   ['kick_ball search_for_ball']);
+  assert.match(await page.textContent('#problems'), /warning\[redundant-inhibition\]: inhibition 'kick_ball => search_for_ball'/);
 
   // go_behind_ball's max_forward, in the form made from its class's params: a value out of range
   // is refused there with validate's message, and the text is unchanged; then a good one.

@@ -159,7 +159,8 @@ export async function studio(info) {
     }
     for (const edge of svg.querySelectorAll('g.edge')) {
       const {from, to} = edge.dataset;
-      const found = state.diagnostics.filter((d) => d.message.includes(`${from} => ${to}`) || d.message.includes(`${from} -> ${to}`));
+      // As the messages quote an inhibition: 'a => b' (a chain they cite names no one edge).
+      const found = state.diagnostics.filter((d) => d.message.includes(`'${from} => ${to}'`) || d.message.includes(`'${from} -> ${to}'`));
       edge.classList.toggle('has-warning', found.length > 0);
       if (found.length) edge.dataset.problems = found.map((d) => `${d.severity}: ${d.message}`).join('\n');
     }
