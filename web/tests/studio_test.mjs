@@ -101,6 +101,15 @@ async function selectBehaviour(page, name) {
 
 const text = (page) => page.inputValue('#text');
 
+/** Resolves once `condition()` holds (bounded: 10 s), else fails with `context()`. */
+async function until(condition, context) {
+  for (let i = 0; i < 200; ++i) {
+    if (condition()) return;
+    await new Promise((resolve) => setTimeout(resolve, 50));
+  }
+  assert.fail(`not within 10 s:\n${context()}`);
+}
+
 test('the soccer demo edited by mouse: an inhibition dragged, a param set in the form, a rename undone, saved with only those lines changed', async () => {
   const file = copyOf('soccer/walk_and_kick.yaml');
   const original = readFileSync(file, 'utf8');
@@ -249,6 +258,8 @@ test('on a running engine (run --serve --edit), Save reloads the graph; a reject
   assert.match(await page.textContent('#studio-message'), /reload of .*: 1 change, swapped in at the next step/);
   assert.match(await page.textContent('#studio-message'), /~ inhibition control: search_for_ball => head_control/);
   assert.match(run.output(), /reload of .*walk_and_kick\.yaml: 1 change, swapped in at the next step/);
+  // The running engine swapped it in at its next step, as the run's report says.
+  await until(() => /step +\d+  reloaded walk_and_kick: 1 layers, 4 behaviours/.test(run.output()), run.output);
 
   // An inhibition of a behaviour that does not exist: saved, refused by the reload.
   const current = await text(page);
