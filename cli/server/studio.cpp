@@ -112,7 +112,11 @@ Studio::Studio(std::string config, Registry& registry, LoadOptions options)
 }
 
 void Studio::reload() {
-  current_ = load_texts(config_, texts_, registry_, options_);
+  adopt(load_texts(config_, texts_, registry_, options_));
+}
+
+void Studio::adopt(EditedConfig loaded) {
+  current_ = std::move(loaded);
   for (const auto& file : current_.loaded.files.files()) {
     if (texts_.count(file->path) != 0) continue;
     order_.push_back(file->path);
@@ -136,8 +140,6 @@ std::string Studio::state_json(const std::string& extra_key, const std::string& 
   }
   state["files"] = std::move(files);
   const Loaded& loaded = current_.loaded;
-  state["graph"] = loaded.program ? Json::parse(dump_json(*loaded.program)) : Json();
-  state["diagnostics"] = Json::parse(format_json(loaded.diagnostics));
   state["messages"] = format(loaded.diagnostics);
   const Loaded& base = saved_.loaded;
   if (loaded.program && base.program) {
@@ -145,8 +147,16 @@ std::string Studio::state_json(const std::string& extra_key, const std::string& 
   } else {
     state["review"] = nullptr;
   }
-  if (!extra_key.empty()) state[extra_key] = Json::parse(extra);
-  return dump(state);
+  // The dump and the diagnostics are JSON already: spliced in as they are, not parsed again.
+  std::string out = dump(state);
+  out.pop_back();  // its closing brace
+  out += R"(,"graph":)";
+  out += loaded.program ? dump_json(*loaded.program) : "null";
+  out += R"(,"diagnostics":)";
+  out += format_json(loaded.diagnostics);
+  if (!extra_key.empty()) out += fmt::format(R"(,"{}":{})", extra_key, extra);
+  out += '}';
+  return out;
 }
 
 Reply Studio::state() {
@@ -231,7 +241,8 @@ Reply Studio::edit(const std::string& body) {
   }
   // The same check every operation gets: an edit that would leave an error the config did not
   // have is refused with that error, as `arbiter validate` words it.
-  result = checked(loaded, std::move(result), registry_, options_);
+  EditedConfig edited;
+  result = checked(loaded, std::move(result), registry_, options_, &edited);
   if (!result.ok()) {
     return {422, state_json("refused", dump(Json(result.refused)))};
   }
@@ -241,7 +252,12 @@ Reply Studio::edit(const std::string& body) {
         {{"file", edit.file}, {"begin", edit.begin}, {"end", edit.end}, {"text", edit.text}});
   }
   for (auto& [path, text] : texts_) text = apply_edits(text, path, result.edits);
-  reload();
+  // The check loaded the edited texts already (unless the texts had errors to begin with).
+  if (edited.texts) {
+    adopt(std::move(edited));
+  } else {
+    reload();
+  }
   return {200, state_json("edits", dump(edits))};
 }
 

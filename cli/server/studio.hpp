@@ -63,6 +63,8 @@ class Studio {
  private:
   /// Loads the texts again; files the load newly reads join them.
   void reload();
+  /// `loaded` (of the texts) as the current load; files it newly reads join the texts.
+  void adopt(EditedConfig loaded);
   std::string state_json(const std::string& extra_key = "", const std::string& extra = "");
 
   std::string config_;

@@ -402,9 +402,9 @@ EditResult rename_symbol(const Loaded& loaded, const ConfigIndex& index, const O
 }
 
 EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
-                   const LoadOptions& options) {
+                   const LoadOptions& options, EditedConfig* kept) {
   if (!result.ok() || loaded.diagnostics.has_errors()) return result;
-  const EditedConfig edited = load_edited(loaded, result.edits, registry, options);
+  EditedConfig edited = load_edited(loaded, result.edits, registry, options);
   for (const auto& diagnostic : edited.loaded.diagnostics.items()) {
     if (diagnostic.severity != Severity::kError) continue;
     const SourceLocation& at = diagnostic.location;
@@ -412,6 +412,7 @@ EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
             fmt::format("the edit would leave an error it does not know how to avoid: {}:{}:{}: {}",
                         at.file, at.line, at.column, diagnostic.message)};
   }
+  if (kept != nullptr) *kept = std::move(edited);
   return result;
 }
 

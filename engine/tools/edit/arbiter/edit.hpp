@@ -95,12 +95,16 @@ bool plans_states(const ParamSpec& param);
 EditResult rename_symbol(const Loaded& loaded, const ConfigIndex& index, const Occurrence& symbol,
                          const std::string& name);
 
+struct EditedConfig;
+
 /// `result` checked by loading the config with its edits (load_edited, into `registry`): when
 /// that reports an error and `loaded` had none, the edits are withdrawn and the result refused
 /// with the first error. It catches a use of a name no operation knows how to follow (an
 /// actuator named in a scripted behaviour's `writes:`), rather than leave a config that fails.
+/// With `edited`, the load of the accepted edits is kept there, for a caller that goes on with
+/// the edited config (left empty when `loaded` had errors: then nothing was loaded).
 EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
-                   const LoadOptions& options = {});
+                   const LoadOptions& options = {}, EditedConfig* edited = nullptr);
 
 /// The end of the token at `begin` of `text`: a quoted string with its quotes, or a name.
 std::size_t token_end(const std::string& text, std::size_t begin);
