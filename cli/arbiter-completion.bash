@@ -51,7 +51,7 @@ _arbiter() {
   local cur prev command word i
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
-  local commands="validate run dump explain test plugins schema view plot replay diff lsp new"
+  local commands="validate run dump explain test plugins schema view edit plot replay diff lsp new"
   local global="--help --version --log-level --plugin-path --max-file-bytes --color"
   local global_after="--log-level --plugin-path --max-file-bytes --color"  # after the command
 
@@ -103,11 +103,12 @@ _arbiter() {
   local options
   case "$command" in
     validate) options="--format --strict --help" ;;
-    run) options="--steps --trace --inputs --record --record-flush --quiet --realtime --strict --serve --foxglove --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --help" ;;
+    run) options="--steps --trace --inputs --record --record-flush --quiet --realtime --strict --serve --foxglove --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --edit --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
     test) options="--junit --tolerance --help" ;;
     view) options="--trace --serve --step --help" ;;
+    edit) options="--serve --serve-token --help" ;;
     plot) options="--output --actuators --compare --help" ;;
     replay) options="--config --trace --record --record-flush --foxglove --steps --help" ;;
     diff) options="--tolerance --format --help" ;;

@@ -285,6 +285,15 @@ int main(int argc, char** argv) {
                  "with --serve: watch only; the page cannot pause, step or resume the run")
       ->needs("--serve");
   run_cmd
+      ->add_flag("--edit", options.edit,
+                 "with --serve: the page is the studio (docs/studio.md), and saving an edit "
+                 "reloads the running graph as --watch does (a rejected edit leaves the previous "
+                 "graph running, and the page says why); without --steps, runs until Ctrl-C")
+      ->needs("--serve")
+      ->excludes("--serve-readonly")
+      ->excludes("--watch")
+      ->excludes("--inputs");
+  run_cmd
       ->add_option("--rt-priority", options.rt_priority,
                    "run the stepping thread under SCHED_FIFO at this priority (1-99) with memory "
                    "locked; needs CAP_SYS_NICE or RLIMIT_RTPRIO, and CAP_IPC_LOCK or "
@@ -450,6 +459,29 @@ int main(int argc, char** argv) {
           "  arbiter view --trace run.mcap                 # with the config it recorded\n\n"
           "Ctrl-C stops the server.\n") +
       kExitCodesTrace);
+
+  auto* edit_cmd = app.add_subcommand(
+      "edit",
+      "Serve the studio, a browser editor of a config: its graph beside its text, edited by\n"
+      "mouse or keyboard, every problem 'arbiter validate' finds shown as you edit, saved on\n"
+      "request (docs/studio.md).");
+  edit_cmd->add_option("FILE", options.file, "the config to edit")
+      ->required()
+      ->check(CLI::ExistingFile);
+  edit_cmd
+      ->add_option("--serve", options.edit_serve,
+                   "serve on [ADDR:]PORT (ADDR defaults to 127.0.0.1, PORT 0 picks a free one)")
+      ->check(check_serve_address, "")
+      ->type_name("[ADDR:]PORT")
+      ->capture_default_str();
+  add_serve_token_option(*edit_cmd, options,
+                         "the token the page and every request must carry (default: a random "
+                         "one, printed in the URL; also ARBITER_SERVE_TOKEN)");
+  edit_cmd->footer(examples +
+                   "  arbiter edit configs/soccer/walk_and_kick.yaml\n"
+                   "  arbiter edit robot.yaml --serve 0\n"
+                   "  arbiter run robot.yaml --serve 8080 --edit   # edit the running graph\n\n"
+                   "Ctrl-C stops the server. Nothing is written until Save.\n");
 
   auto* plot_cmd = app.add_subcommand(
       "plot",
@@ -678,13 +710,16 @@ int main(int argc, char** argv) {
     if (validate_cmd->parsed()) return validate_command(options);
     if (run_cmd->parsed()) {
       options.steps_given = run_cmd->count("--steps") > 0;
-      if (options.watch && !options.steps_given) options.steps = std::uint64_t{1} << 40;
+      if ((options.watch || options.edit) && !options.steps_given) {
+        options.steps = std::uint64_t{1} << 40;
+      }
       return run_command(options);
     }
     if (dump_cmd->parsed()) return dump_command(options);
     if (explain_cmd->parsed()) return explain_command(options);
     if (test_cmd->parsed()) return test_command(options);
     if (view_cmd->parsed()) return view_command(options);
+    if (edit_cmd->parsed()) return edit_command(options);
     if (plot_cmd->parsed()) return plot_command(options);
     if (replay_cmd->parsed()) {
       auto registry = make_registry();

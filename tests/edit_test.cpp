@@ -503,3 +503,100 @@ TEST_CASE("renaming each name of each shipped config renames every use and nothi
   CHECK(renamed > 0);
   CHECK(refused < renamed / 4);
 }
+
+TEST_CASE("a behaviour is added after the layer's last one, or with the behaviours: key",
+          "[edit]") {
+  const std::string yaml = R"(arbiter: 1
+name: add
+layers:
+  - name: block
+    behaviours:
+      a: scripted   # first
+      b:
+        type: scripted
+    inhibitions:
+      - a => b
+  - name: flow
+    behaviours: {c: scripted}
+  - name: none
+    actuators: {x: {type: double}}
+)";
+  test::TempDir dir;
+  Registry registry = builtin_registry();
+  const Loaded loaded = load_config(dir.write("add.yaml", yaml), registry);
+  REQUIRE_FALSE(loaded.diagnostics.has_errors());
+  auto add = [&](const std::string& layer, const std::string& name) {
+    const EditResult result =
+        checked(loaded, add_behaviour(loaded, layer, name, "scripted"), registry);
+    INFO(result.refused);
+    REQUIRE(result.ok());
+    return apply_edits(yaml, loaded.files.files().front()->path, result.edits);
+  };
+  CHECK(add("block", "wave") == replaced(yaml, "        type: scripted\n",
+                                         "        type: scripted\n      wave: {type: scripted}\n"));
+  CHECK(add("flow", "wave") ==
+        replaced(yaml, "{c: scripted}", "{c: scripted, wave: {type: scripted}}"));
+  CHECK(add("none", "wave") ==
+        replaced(yaml, "{x: {type: double}}\n",
+                 "{x: {type: double}}\n    behaviours: {wave: {type: scripted}}\n"));
+  CHECK(add_behaviour(loaded, "block", "a", "scripted").refused == "'a' is already taken");
+  CHECK(add_behaviour(loaded, "block", "A b", "scripted").refused ==
+        "'A b' is not a valid name: names are [a-z_][a-z0-9_]*");
+  CHECK(add_behaviour(loaded, "other", "w", "scripted").refused == "no layer 'other'");
+  // A class that does not exist: the check refuses it in validate's words.
+  CHECK_THAT(checked(loaded, add_behaviour(loaded, "block", "w", "no.Such"), registry).refused,
+             Catch::Contains("unknown"));
+}
+
+TEST_CASE("a behaviour is removed with its lines and the inhibitions that name it", "[edit]") {
+  const std::string yaml = R"(arbiter: 1
+name: remove
+layers:
+  - name: block
+    behaviours:
+      a: scripted   # first
+      b:
+        type: scripted
+        params: {activation: 1}
+      c: scripted
+    inhibitions:
+      - a => b
+      - b -> c   # second
+      - a => c
+  - name: pair
+    behaviours:
+      g: scripted
+      h: scripted
+    inhibitions: [g => h]
+  - name: flow
+    behaviours: {e: scripted, f: scripted}
+)";
+  test::TempDir dir;
+  Registry registry = builtin_registry();
+  const Loaded loaded = load_config(dir.write("remove.yaml", yaml), registry);
+  REQUIRE_FALSE(loaded.diagnostics.has_errors());
+  const std::string& text = yaml;
+  auto remove = [&](const std::string& layer, const std::string& name) {
+    const EditResult result = checked(loaded, remove_behaviour(loaded, layer, name), registry);
+    INFO(result.refused);
+    REQUIRE(result.ok());
+    return apply_edits(text, loaded.files.files().front()->path, result.edits);
+  };
+  CHECK(remove("block", "b") ==
+        replaced(
+            replaced(
+                replaced(text,
+                         "      b:\n        type: scripted\n        params: {activation: 1}\n", ""),
+                "      - a => b\n", ""),
+            "      - b -> c   # second\n", ""));
+  CHECK(remove("block", "a") ==
+        replaced(
+            replaced(replaced(text, "      a: scripted   # first\n", ""), "      - a => b\n", ""),
+            "      - a => c\n", ""));
+  // The only inhibition of a flow sequence, as remove_inhibition removes it.
+  CHECK(remove("pair", "h") == replaced(replaced(text, "      h: scripted\n", ""),
+                                        "    inhibitions: [g => h]\n", "    inhibitions: []\n"));
+  CHECK(remove_behaviour(loaded, "flow", "e").refused ==
+        "'e' is declared in a flow mapping: remove it in the text");
+  CHECK(remove_behaviour(loaded, "block", "z").refused == "no behaviour 'z' in layer 'block'");
+}

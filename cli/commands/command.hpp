@@ -49,6 +49,8 @@ struct Options {
   std::string serve;                          ///< `run --serve`: [ADDR:]PORT
   std::string foxglove;                       ///< `run --foxglove`, `replay --foxglove`
   std::string view_serve = "127.0.0.1:8080";  ///< `view --serve`
+  std::string edit_serve = "127.0.0.1:8080";  ///< `edit --serve`
+  bool edit = false;                          ///< `run --serve --edit`
   std::string output;                         ///< `plot -o`
   bool actuators = false;
   bool paused = false;      ///< `run --paused`
@@ -109,6 +111,7 @@ int lsp_command(const Options& options);
 int test_command(Options& options);
 int run_command(const Options& options);
 int view_command(const Options& options);
+int edit_command(const Options& options);
 int plot_command(const Options& options);
 
 }  // namespace arbiter::cli

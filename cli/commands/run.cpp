@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <thread>
 
@@ -24,6 +25,7 @@
 #include "commands/watch.hpp"
 #include "server/foxglove.hpp"
 #include "server/serve.hpp"
+#include "server/studio.hpp"
 
 namespace arbiter::cli {
 
@@ -33,7 +35,7 @@ int run_command(const Options& options) {
   arbiter::Diagnostics load_diagnostics;  // its warnings go into the recording's log
   arbiter::InputFeed inputs;              // --inputs
   std::optional<arbiter::Program> program;
-  if (options.watch) {
+  if (options.watch || options.edit) {
     program = load_watched(reloader, options.file, std::cerr, options.diagnostic_format);
   } else if (!options.inputs_path.empty()) {
     arbiter::LoadOptions load = load_options_of(options);
@@ -108,12 +110,43 @@ int run_command(const Options& options) {
   if (options.watch)
     watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
                     options.diagnostic_format, status ? &*status : nullptr);
+  std::optional<Studio> studio;  // --edit
+  if (options.edit) {
+    studio.emplace(options.file, registry, load_options_of(options));
+    // On a server thread, one save at a time: the one reloading thread a Reloader allows.
+    studio->set_after_save([&reloader, &manager] {
+      const ReloadResult result = reloader.reload(manager);
+      nlohmann::ordered_json applied;
+      applied["staged"] = result.staged;
+      applied["messages"] = format(result.diagnostics);
+      if (result.staged) {
+        applied["summary"] =
+            fmt::format("reload of {}: {} change{}, swapped in at the next step", reloader.path(),
+                        result.diff.changes.size(), result.diff.changes.size() == 1 ? "" : "s");
+        applied["diff"] = format(result.diff, "  ");
+        applied["restarted"] = result.restarted;
+      } else {
+        applied["summary"] =
+            fmt::format("reload of {} rejected: {} error(s); still running the previous config",
+                        reloader.path(), result.diagnostics.error_count());
+      }
+      // As --watch reports it, in one piece: the run's own lines come from the stepping thread.
+      const std::string summary = applied["summary"].get<std::string>() + "\n";
+      if (result.staged) {
+        std::cout << summary + applied["diff"].get<std::string>() << std::flush;
+      } else {
+        std::cerr << applied["messages"].get<std::string>() + summary << std::flush;
+      }
+      return applied.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+    });
+  }
   std::unique_ptr<LiveView> live;  // --serve
   if (!options.serve.empty()) {
     LiveAccess access;
     access.token = options.serve_token;
     access.readonly = options.serve_readonly;
-    live = LiveView::open(options.serve, options.paused, access, std::cout, std::cerr);
+    live = LiveView::open(options.serve, options.paused, access, std::cout, std::cerr,
+                          studio ? &*studio : nullptr);
     if (!live) return kExitUsage;
     manager.add_observer(*live);
   }

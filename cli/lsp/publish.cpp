@@ -238,6 +238,28 @@ json Server::code_actions(const json& params) const {
                       site->chaining ? "=>" : "->", which.inhibited),
           remove_inhibition(analysis->loaded, which));
   }
+  // On a behaviour's declaration: remove it, as the studio does, when nothing else names it.
+  const Occurrence* item =
+      analysis && !site
+          ? analysis->at(
+                path,
+                lines.offset(params.value("range", json::object()).value("start", json::object())))
+          : nullptr;
+  if (item && item->definition && item->kind == SymbolKind::kBehaviour) {
+    Registry registry = make_registry_();
+    const EditResult removed =
+        checked(analysis->loaded, remove_behaviour(analysis->loaded, item->scope, item->name),
+                registry, options_);
+    if (removed.ok()) {
+      json changes = json::object();
+      add_changes(*analysis, removed.edits, changes);
+      actions.push_back(
+          {{"title",
+            fmt::format("Remove the behaviour '{}' and the inhibitions that name it", item->name)},
+           {"kind", "refactor.rewrite"},
+           {"edit", {{"changes", changes}}}});
+    }
+  }
   return actions;
 }
 

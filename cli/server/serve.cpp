@@ -18,6 +18,7 @@
 #include "arbiter/explain.hpp"
 #include "arbiter/trace.hpp"
 #include "commands/timing.hpp"
+#include "server/studio.hpp"
 #include "server/web_assets.hpp"
 
 namespace arbiter::cli {
@@ -335,13 +336,14 @@ void WebServer::guard(const LiveAccess& access) {
       reply_text(response, 403, kTokenNeeded);
       return Handled::Handled;
     }
-    if (request.path.rfind("/control/", 0) == 0) {
+    // Every POST changes something: the run (/control/) or a config (/studio/).
+    if (request.method != "GET" && request.method != "HEAD") {
       if (access.readonly) {
         reply_text(response, 403, "refused: the live view is read-only (--serve-readonly)\n");
         return Handled::Handled;
       }
       // A page of another origin may send a form POST with the cookie's help (where the cookie
-      // is not SameSite) but cannot forge Origin: only this server's own page may control.
+      // is not SameSite) but cannot forge Origin: only this server's own page may change things.
       const std::string origin = request.get_header_value("Origin");
       if ((!origin.empty() && lowercase(origin) != "http://" + host) ||
           request.get_header_value("Sec-Fetch-Site") == "cross-site") {
@@ -398,11 +400,18 @@ std::string sse_frame(std::string_view event, std::uint64_t id, std::string_view
 
 std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused,
                                          const LiveAccess& access, std::ostream& out,
-                                         std::ostream& err) {
+                                         std::ostream& err, Studio* studio) {
   std::string error;
   const auto address = ServeAddress::parse(text, error);
   auto live = std::make_unique<LiveView>();
   live->readonly_ = access.readonly;
+  if (studio != nullptr) {
+    // Before the server starts: its routes are read by every server thread.
+    studio->attach(live->server_.http());
+    live->info_ = R"({"mode": "studio", "live": true})";
+  } else if (access.readonly) {
+    live->info_ = R"({"mode": "live", "readonly": true})";
+  }
   if (error.empty() && !live->server_.start(address, access, error)) {
     err << fmt::format("arbiter run: --serve: {}\n", error);
     return nullptr;
@@ -417,8 +426,8 @@ std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused,
                                                      "token)");
   live->paused_ = paused;
   live->out_ = &out;
-  out << fmt::format("serving the live view at {}{}{}\n", live->server_.page_url(),
-                     access.readonly ? " (read-only)" : "",
+  out << fmt::format("serving the {} at {}{}{}\n", studio ? "studio" : "live view",
+                     live->server_.page_url(), access.readonly ? " (read-only)" : "",
                      paused ? " (paused: press Step or Resume on the page)" : "")
       << std::flush;
   return live;
@@ -427,9 +436,7 @@ std::unique_ptr<LiveView> LiveView::open(const std::string& text, bool paused,
 LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
   auto& http = server_.http();
   http.Get("/info", [this](const httplib::Request&, httplib::Response& response) {
-    response.set_content(
-        readonly_ ? R"({"mode": "live", "readonly": true})" : R"({"mode": "live"})",
-        "application/json");
+    response.set_content(info_, "application/json");
   });
   http.Get("/events", [this](const httplib::Request& request, httplib::Response& response) {
     struct Cursor {

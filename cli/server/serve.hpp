@@ -30,6 +30,7 @@ class Server;
 namespace arbiter::cli {
 
 class RunTiming;
+class Studio;
 
 /// Where to listen: `[ADDR:]PORT`; port 0 picks a free port.
 struct ServeAddress {
@@ -43,8 +44,8 @@ struct ServeAddress {
 /// Who may use a server (docs/live_view.md): every request but the static page needs the
 /// token, from the cookie the page gets when opened with `?token=`, the `token` parameter or an
 /// `X-Arbiter-Token` header; the Host must be the bound address or localhost (against DNS
-/// rebinding); a control request must come from the server's own origin, and none is served
-/// when read-only.
+/// rebinding); a request that changes something (every POST: control of the run, the studio's
+/// edits and saves) must come from the server's own origin, and none is served when read-only.
 struct LiveAccess {
   std::string token;  ///< empty: open() picks a random one
   bool readonly = false;
@@ -105,10 +106,11 @@ class LiveView : public Observer {
 
   /// Serves on `address` (`[ADDR:]PORT`, checked by ServeAddress::parse) and prints the URL to
   /// `out`, or says to `err` why it cannot (nullptr then). With `paused`, the first step waits
-  /// for the page's Step or Resume.
+  /// for the page's Step or Resume. With `studio` (`run --serve --edit`), the page is the
+  /// studio and the server answers its API.
   static std::unique_ptr<LiveView> open(const std::string& address, bool paused,
                                         const LiveAccess& access, std::ostream& out,
-                                        std::ostream& err);
+                                        std::ostream& err, Studio* studio = nullptr);
   /// The run's timing, sent to the page about once a second (`paced`: with deadlines).
   void set_timing(const RunTiming* timing, bool paced) {
     timing_ = timing;
@@ -186,6 +188,7 @@ class LiveView : public Observer {
   const RunTiming* timing_ = nullptr;
   bool paced_ = false;
   bool readonly_ = false;
+  std::string info_ = R"({"mode": "live"})";  // the page's /info: which view it starts
 };
 
 /// The text of an SSE frame: `event`, optional `id`, and `data` split into `data:` lines.

@@ -31,7 +31,7 @@ expect() {
   fi
 }
 
-expect "" -- validate run dump explain test plugins schema view plot replay diff lsp new
+expect "" -- validate run dump explain test plugins schema view edit plot replay diff lsp new
 expect "n" -- new
 expect "new" "" -- plugin
 expect "new" "plugin" "rover" "configs/pa" -- configs/paper
@@ -58,6 +58,9 @@ expect "run" "configs/paper/walk_and_k" -- configs/paper/walk_and_kick.yaml \
 expect "plugins" "-" -- --format --load --builtin --help --log-level --plugin-path \
   --max-file-bytes --color
 expect "run" "x.yaml" "--se" -- --serve --serve-token --serve-readonly
+expect "edit" "-" -- --serve --serve-token --help --log-level --plugin-path --max-file-bytes --color
+expect "edit" "configs/paper/walk_and_k" -- configs/paper/walk_and_kick.yaml \
+  configs/paper/walk_and_kick.json
 expect "run" "x.yaml" "--rt" -- --rt-priority
 # Global options also after the command, as the parser takes them there.
 expect "run" "x.yaml" "--plu" -- --plugin-path

@@ -647,6 +647,24 @@ for (const [format, config] of [['YAML', yaml], ['JSON', json]]) {
   });
 }
 
+test('a code action on a behaviour\'s declaration removes it with the inhibitions that name it, as the studio does', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const at = positionOf(text, 'head_control: {type', { skip: 2 });
+    const actions = await client.request('textDocument/codeAction',
+      { textDocument: { uri }, range: { start: at, end: at }, context: { diagnostics: [] } });
+    const remove = actions.find((a) => a.title === "Remove the behaviour 'head_control' and the inhibitions that name it");
+    assert.ok(remove, JSON.stringify(actions.map((a) => a.title)));
+    const removed = applyEdits(text, remove.edit.changes[uri]);
+    assert.equal(removed, text.replace(/      head_control: \{type: soccer\.HeadControl\}\n/, '')
+      .replace('      - search_for_ball -> head_control\n', ''));
+    const file = path.join(tempDir(), path.basename(uri));
+    fs.writeFileSync(file, removed);
+    assert.deepEqual(validated(file), []);
+  });
+});
+
 test('completion items replace the word typed, a dotted prefix included', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();

@@ -1,15 +1,17 @@
 // Arbiter's web app. The server's /info says which view to start; each view draws a run with the
-// shared graph, timeline and explain modules (run_page.js). A new view (an editor of configs, a
-// comparison of two runs) is a module in views/ and an entry in VIEWS, with the mode its server
+// shared graph, timeline and explain modules (run_page.js); the studio edits a config. A new view
+// (a comparison of two runs) is a module in views/ and an entry in VIEWS, with the mode its server
 // reports in /info.
 import {setStatus} from './panels.js';
 import {holdLoad, snapshotAsked} from './snapshot.js';
 import {live} from './views/live.js';
+import {studio} from './views/studio.js';
 import {trace} from './views/trace.js';
 
 const VIEWS = {
   live: {badge: 'live', start: live},      // arbiter run --serve
   trace: {badge: 'recorded', start: trace},  // arbiter view
+  studio: {badge: 'studio', start: studio},  // arbiter edit, arbiter run --serve --edit
 };
 
 async function start() {

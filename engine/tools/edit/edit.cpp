@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <tuple>
 
 namespace arbiter {
 
@@ -401,9 +402,9 @@ EditResult rename_symbol(const Loaded& loaded, const ConfigIndex& index, const O
 }
 
 EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
-                   const LoadOptions& options) {
+                   const LoadOptions& options, EditedConfig* kept) {
   if (!result.ok() || loaded.diagnostics.has_errors()) return result;
-  const EditedConfig edited = load_edited(loaded, result.edits, registry, options);
+  EditedConfig edited = load_edited(loaded, result.edits, registry, options);
   for (const auto& diagnostic : edited.loaded.diagnostics.items()) {
     if (diagnostic.severity != Severity::kError) continue;
     const SourceLocation& at = diagnostic.location;
@@ -411,6 +412,7 @@ EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
             fmt::format("the edit would leave an error it does not know how to avoid: {}:{}:{}: {}",
                         at.file, at.line, at.column, diagnostic.message)};
   }
+  if (kept != nullptr) *kept = std::move(edited);
   return result;
 }
 
@@ -536,6 +538,104 @@ EditResult set_param(const Loaded& loaded, const std::string& layer, const std::
     return {{{file->path, begin, end, value}}, {}};
   }
   return {{}, fmt::format("no behaviour '{}' in layer '{}'", behaviour, layer)};
+}
+
+}  // namespace arbiter
+
+namespace arbiter {
+
+EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const std::string& name,
+                         const std::string& type) {
+  if (!is_identifier(name))
+    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  const std::vector<LayerSite> found = layers_named(loaded, layer);
+  if (found.empty()) return {{}, fmt::format("no layer '{}'", layer)};
+  for (const auto& site : found) {
+    const Node* behaviours = site.layer->find("behaviours");
+    if (behaviours && behaviours->is_mapping() && behaviours->find(name))
+      return {{}, fmt::format("'{}' is already taken", name)};
+  }
+  const SourceFile& file = *found.front().file;
+  const bool json = format_of(file.path) == DocumentFormat::kJson;
+  auto quoted = [&](const std::string& word) { return json ? "\"" + word + "\"" : word; };
+  const std::string value = fmt::format("{{{}: {}}}", quoted("type"), quoted(type));
+  const Node* behaviours = found.front().layer->find("behaviours");
+  if (!behaviours)
+    return add_entry(file, *found.front().layer,
+                     fmt::format("{}: {{{}: {}}}", quoted("behaviours"), quoted(name), value));
+  if (!behaviours->is_mapping()) return {{}, "the layer's behaviours: is not a mapping"};
+  return add_entry(file, *behaviours, fmt::format("{}: {}", quoted(name), value));
+}
+
+EditResult remove_behaviour(const Loaded& loaded, const std::string& layer,
+                            const std::string& name) {
+  EditResult result;
+  for (const auto& [file, declaration] : layers_named(loaded, layer)) {
+    const std::string& text = file->text;
+    for (const auto& entry : declaration->entries()) {
+      if (entry.key == "behaviours" && entry.value.is_mapping()) {
+        const auto& items = entry.value.entries();
+        const auto it = std::find_if(items.begin(), items.end(),
+                                     [&](const Node::Entry& item) { return item.key == name; });
+        if (it == items.end()) continue;
+        const std::size_t key = offset_at(*file, it->key_location);
+        const std::size_t start = line_start(text, key);
+        if (text.find_first_not_of(' ', start) != key)
+          return {{},
+                  fmt::format("'{}' is declared in a flow mapping: remove it in the text", name)};
+        // Its lines; with the key `behaviours:` when it was the only one.
+        const bool only = items.size() == 1;
+        const std::size_t from =
+            only ? line_start(text, offset_at(*file, entry.key_location)) : start;
+        // Its value: the lines indented deeper than its key.
+        result.edits.push_back({file->path, from, block_end(text, key, key - start + 1), {}});
+      } else if (entry.key == "inhibitions" && entry.value.is_sequence()) {
+        // The inhibitions that name it go with it: all of them at once when none is left.
+        std::vector<const Node*> naming;
+        for (const auto& item : entry.value.items()) {
+          std::string inhibitor, inhibited;
+          if (item.is_scalar()) {
+            const Arrow arrow = read_arrow(item.text());
+            inhibitor = arrow.inhibitor;
+            inhibited = arrow.inhibited;
+          } else if (const Node* a = item.find("inhibitor"), *b = item.find("inhibited");
+                     item.is_mapping() && a && b && a->is_scalar() && b->is_scalar()) {
+            inhibitor = a->text();
+            inhibited = b->text();
+          }
+          if (inhibitor == name || inhibited == name) naming.push_back(&item);
+        }
+        if (naming.empty()) continue;
+        if (naming.size() == entry.value.items().size()) {
+          result.edits.push_back(remove_item({file, &entry, naming.front()}));
+          // remove_item takes the key with an only item; with more, the key and the block.
+          if (naming.size() > 1) {
+            const std::size_t key = offset_at(*file, entry.key_location);
+            const std::size_t start = line_start(text, key);
+            result.edits.back() = {file->path, start, block_end(text, key, key - start + 1), {}};
+          }
+          continue;
+        }
+        for (const Node* item : naming) result.edits.push_back(remove_item({file, &entry, item}));
+      }
+    }
+  }
+  if (result.edits.empty()) {
+    result.refused = fmt::format("no behaviour '{}' in layer '{}'", name, layer);
+    return result;
+  }
+  std::sort(result.edits.begin(), result.edits.end(), [](const TextEdit& a, const TextEdit& b) {
+    return std::tie(a.file, a.begin) < std::tie(b.file, b.begin);
+  });
+  for (std::size_t i = 1; i < result.edits.size(); ++i) {
+    const TextEdit& before = result.edits[i - 1];
+    if (before.file == result.edits[i].file && before.end > result.edits[i].begin)
+      return {{},
+              fmt::format("the inhibitions naming '{}' are written too close together to be "
+                          "removed one by one: remove them in the text",
+                          name)};
+  }
+  return result;
 }
 
 }  // namespace arbiter

@@ -95,12 +95,16 @@ bool plans_states(const ParamSpec& param);
 EditResult rename_symbol(const Loaded& loaded, const ConfigIndex& index, const Occurrence& symbol,
                          const std::string& name);
 
+struct EditedConfig;
+
 /// `result` checked by loading the config with its edits (load_edited, into `registry`): when
 /// that reports an error and `loaded` had none, the edits are withdrawn and the result refused
 /// with the first error. It catches a use of a name no operation knows how to follow (an
 /// actuator named in a scripted behaviour's `writes:`), rather than leave a config that fails.
+/// With `edited`, the load of the accepted edits is kept there, for a caller that goes on with
+/// the edited config (left empty when `loaded` had errors: then nothing was loaded).
 EditResult checked(const Loaded& loaded, EditResult result, Registry& registry,
-                   const LoadOptions& options = {});
+                   const LoadOptions& options = {}, EditedConfig* edited = nullptr);
 
 /// The end of the token at `begin` of `text`: a quoted string with its quotes, or a name.
 std::size_t token_end(const std::string& text, std::size_t begin);
@@ -123,6 +127,19 @@ EditResult flip_chaining(const Loaded& loaded, const InhibitionRef& inhibition);
 /// a block collection is refused: replacing its lines is not an edit of one value.
 EditResult set_param(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
                      const std::string& param, const std::string& value);
+
+/// Declares behaviour `name` of class `type` in layer `layer`: `name: {type: TYPE}` after the last
+/// entry of the layer's `behaviours:` (the key added with it when the layer has none). Refused
+/// when `name` is not an identifier or is taken, or the layer is not declared.
+EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const std::string& name,
+                         const std::string& type);
+
+/// Removes behaviour `name` of layer `layer`: its lines (with the `behaviours:` key when it was
+/// the only one) and every inhibition of the layer that names it. Other uses (a port bound to it,
+/// a state machine's owner) are left for checked() to refuse. Refused when it is declared in a
+/// flow mapping.
+EditResult remove_behaviour(const Loaded& loaded, const std::string& layer,
+                            const std::string& name);
 
 /// Adds `entry` (`key: value`, as it is to be written) to the mapping `node` of `file`: before
 /// a flow mapping's closing brace, else as a line of its own after the last line of the block

@@ -1,0 +1,318 @@
+// The studio's API (cli/server/studio.cpp, docs/studio.md): operations answer with their edits,
+// the new texts and validate's messages and write nothing; Save writes only the config's own
+// files, refuses another path (403) and a file changed on the disk since it was opened (409),
+// writing nothing then; over HTTP, the server's token and Origin checks guard it.
+
+#include <httplib.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "server/serve.hpp"
+#include "server/studio.hpp"
+#include "test_support.hpp"
+
+using namespace arbiter;
+using namespace arbiter::cli;
+using namespace arbiter::test;
+using Json = nlohmann::json;
+
+namespace {
+
+std::string read(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+std::string config_copy(const TempDir& dir) {
+  return dir.write("robot.yaml", read(ARBITER_SOURCE_DIR "/configs/paper/walk_and_kick.yaml"));
+}
+
+/// The save request for the studio's texts as they are now.
+std::string save_body(const Json& state) {
+  Json files = Json::array();
+  for (const auto& file : state["files"]) {
+    files.push_back({{"path", file["path"]}, {"text", file["text"]}, {"base", file["base"]}});
+  }
+  return Json{{"files", files}}.dump();
+}
+
+}  // namespace
+
+TEST_CASE(
+    "a studio operation answers with its edits, the texts and the diagnostics, and writes "
+    "nothing",
+    "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  const std::string original = read(path);
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+
+  const auto [status, body] = studio.edit(
+      R"({"op": "add_inhibition", "layer": "control", "inhibitor": "kick_ball",
+          "inhibited": "search_for_ball", "chaining": false})");
+  REQUIRE(status == 200);
+  const Json reply = Json::parse(body);
+  REQUIRE(reply["edits"].size() == 1);
+  CHECK(reply["edits"][0]["text"] == "      - kick_ball -> search_for_ball\n");
+  const std::string text = reply["files"][0]["text"];
+  CHECK(contains(text,
+                 "      - search_for_ball -> head_control\n"
+                 "      - kick_ball -> search_for_ball\n"));
+  CHECK(reply["files"][0]["edited"] == true);
+  CHECK(reply["review"] == "+ inhibition control: kick_ball -> search_for_ball\n");
+  // The graph of the edited texts.
+  bool drawn = false;
+  for (const auto& inhibition : reply["graph"]["layers"][0]["inhibitions"]) {
+    drawn = drawn || (inhibition["inhibitor"] == "kick_ball" &&
+                      inhibition["inhibited"] == "search_for_ball" && !inhibition["implicit"]);
+  }
+  CHECK(drawn);
+  CHECK(read(path) == original);
+
+  // Then flipped, and the rename follows every reference.
+  REQUIRE(studio
+              .edit(R"({"op": "flip_chaining", "layer": "control", "inhibitor": "kick_ball",
+                        "inhibited": "search_for_ball"})")
+              .first == 200);
+  const auto renamed = studio.edit(
+      R"({"op": "rename", "kind": "behaviour", "scope": "control", "name": "head_control",
+          "to": "look_around"})");
+  REQUIRE(renamed.first == 200);
+  const std::string after = Json::parse(renamed.second)["files"][0]["text"];
+  CHECK(contains(after, "      - kick_ball => search_for_ball\n"));
+  CHECK(contains(after, "      look_around:\n"));
+  CHECK(contains(after, "      - search_for_ball -> look_around\n"));
+  CHECK(!contains(after, "head_control"));
+  CHECK(read(path) == original);
+}
+
+TEST_CASE("a studio edit that validate would reject is refused with validate's message",
+          "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+  const auto [status, body] = studio.edit(
+      R"({"op": "set_param", "layer": "control", "behaviour": "head_control",
+          "param": "activation", "value": 3})");
+  CHECK(status == 422);
+  const Json reply = Json::parse(body);
+  CHECK(contains(reply["refused"],
+                 "param 'activation' of behaviour 'head_control' is 3; it must "
+                 "be a number in [0, 1]"));
+  CHECK(reply["files"][0]["edited"] == false);
+
+  CHECK(
+      studio.edit(R"({"op": "rename", "kind": "behaviour", "name": "nobody", "to": "x"})").first ==
+      422);
+  CHECK(studio.edit(R"({"op": "explode"})").first == 400);
+  CHECK(studio.edit(R"({"op": "add_inhibition", "layer": "control"})").first == 400);
+  CHECK(studio.edit("not json").first == 400);
+
+  // A text that does not parse is held all the same, with its errors and no graph.
+  const auto broken = studio.set_texts(Json{{"texts", {{path, "layers: [\n"}}}}.dump());
+  REQUIRE(broken.first == 200);
+  const Json state = Json::parse(broken.second);
+  CHECK(state["graph"].is_null());
+  CHECK(!state["diagnostics"].empty());
+  CHECK(state["files"][0]["text"] == "layers: [\n");
+}
+
+TEST_CASE(
+    "studio save writes only the config's own files, atomically, and never over a change "
+    "made on the disk",
+    "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  const std::string original = read(path);
+  const std::string other = dir.write("other.yaml", "kept: true\n");
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+  const auto edited = studio.edit(
+      R"({"op": "set_param", "layer": "control", "behaviour": "head_control",
+          "param": "activation", "value": 0.5})");
+  REQUIRE(edited.first == 200);
+  const Json state = Json::parse(edited.second);
+
+  // Another file, by any name, is refused, and nothing is written, the config's own included.
+  for (const std::string& name :
+       {other, dir.file("new.yaml"), dir.file("./robot.yaml"), std::string("/etc/hostname")}) {
+    Json body = Json::parse(save_body(state));
+    body["files"].push_back({{"path", name}, {"text", "x: 1\n"}, {"base", read(name)}});
+    INFO(name);
+    const auto [status, reply] = studio.save(body.dump());
+    CHECK(status == 403);
+    CHECK(contains(reply, "is not one of the config's files"));
+  }
+  CHECK(read(other) == "kept: true\n");
+  CHECK(!std::filesystem::exists(dir / "new.yaml"));
+  CHECK(read(path) == original);
+
+  // A change on the disk since the studio read the file: a conflict, never overwritten.
+  std::ofstream(path, std::ios::binary) << original << "# changed by hand\n";
+  const auto conflict = studio.save(save_body(state));
+  CHECK(conflict.first == 409);
+  CHECK(contains(conflict.second, "changed on the disk"));
+  CHECK(read(path) == original + "# changed by hand\n");
+  CHECK(Json::parse(studio.state().second)["files"][0]["changed_on_disk"] == true);
+
+  // Reloaded from the disk, the change made there is the new base, and the edits are gone.
+  const Json reverted = Json::parse(studio.revert().second);
+  CHECK(reverted["files"][0]["text"] == original + "# changed by hand\n");
+  CHECK(reverted["files"][0]["edited"] == false);
+  CHECK(reverted["files"][0]["changed_on_disk"] == false);
+
+  std::ofstream(path, std::ios::binary) << original;
+  const auto saved = studio.save(save_body(state));
+  REQUIRE(saved.first == 200);
+  CHECK(read(path) == state["files"][0]["text"]);
+  const Json after = Json::parse(saved.second);
+  CHECK(after["files"][0]["edited"] == false);
+  CHECK(after["review"] == "");  // nothing left to save
+  // The temporary file was renamed over the config: none is left beside it.
+  std::size_t entries = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    (void)entry;
+    ++entries;
+  }
+  CHECK(entries == 2);
+}
+
+TEST_CASE("the studio's API over HTTP needs the token, and edits and saves need its own origin",
+          "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  const std::string original = read(path);
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+  WebServer server;
+  studio.attach(server.http());
+  std::string error;
+  REQUIRE(server.start(ServeAddress{}, LiveAccess{"studio-token", false}, error));
+  const std::string url = server.url();
+  const int port = std::stoi(url.substr(url.rfind(':') + 1));
+  httplib::Client client("127.0.0.1", port);
+  const httplib::Headers token{{"X-Arbiter-Token", "studio-token"}};
+  const std::string origin = "http://127.0.0.1:" + std::to_string(port);
+
+  CHECK(client.Get("/studio/state")->status == 403);
+  const auto state = client.Get("/studio/state", token);
+  REQUIRE(state);
+  REQUIRE(state->status == 200);
+  Json body = Json::parse(save_body(Json::parse(state->body)));
+  body["files"][0]["text"] = "arbiter: 1\nname: overwritten\n";
+  const std::string save = body.dump();
+  CHECK(client.Post("/studio/save", save, "application/json")->status == 403);
+  CHECK(client
+            .Post("/studio/save",
+                  {{"X-Arbiter-Token", "studio-token"}, {"Origin", "http://evil.example"}}, save,
+                  "application/json")
+            ->status == 403);
+  CHECK(client
+            .Post("/studio/save",
+                  {{"X-Arbiter-Token", "studio-token"}, {"Sec-Fetch-Site", "cross-site"}}, save,
+                  "application/json")
+            ->status == 403);
+  CHECK(client
+            .Post("/studio/edit",
+                  {{"X-Arbiter-Token", "studio-token"}, {"Origin", "http://evil.example"}},
+                  R"({"op": "remove_inhibition", "layer": "control", "inhibitor": "kick_ball",
+                        "inhibited": "go_behind_ball"})",
+                  "application/json")
+            ->status == 403);
+  CHECK(read(path) == original);
+  const auto own =
+      client.Post("/studio/save", {{"X-Arbiter-Token", "studio-token"}, {"Origin", origin}}, save,
+                  "application/json");
+  REQUIRE(own);
+  CHECK(own->status == 200);
+  CHECK(read(path) == "arbiter: 1\nname: overwritten\n");
+  server.stop();
+}
+
+TEST_CASE(
+    "the studio edits an included file where it declares the element, and a JSON config "
+    "as JSON",
+    "[studio]") {
+  TempDir dir;
+  const std::string main_text = R"(arbiter: 1
+name: included
+include: [parts/control.yaml]
+layers:
+  - name: top
+    behaviours:
+      watch: scripted
+)";
+  const std::string part_text = R"(# The control layer, in a file of its own.
+layers:
+  - name: control
+    behaviours:
+      a: scripted
+      b: scripted
+    inhibitions:
+      - a => b
+)";
+  const std::string main = dir.write("main.yaml", main_text);
+  std::filesystem::create_directories(dir / "parts");
+  const std::string part = dir.write("parts/control.yaml", part_text);
+  Registry registry = make_test_registry();
+  Studio studio(main, registry, with_lints());
+  const Json opened = Json::parse(studio.state().second);
+  REQUIRE(opened["files"].size() == 2);
+  const std::string part_path = opened["files"][1]["path"];
+  CHECK(std::filesystem::equivalent(part_path, part));
+
+  const auto renamed = studio.edit(
+      R"({"op": "rename", "kind": "behaviour", "scope": "control", "name": "b", "to": "c"})");
+  REQUIRE(renamed.first == 200);
+  const auto [status, body] = studio.edit(
+      R"({"op": "set_param", "layer": "control", "behaviour": "a", "param": "activation",
+          "value": 0.5})");
+  REQUIRE(status == 200);
+  const Json state = Json::parse(body);
+  CHECK(state["edits"][0]["file"] == part_path);
+  CHECK(state["files"][0]["edited"] == false);
+  CHECK(state["files"][1]["text"] == R"(# The control layer, in a file of its own.
+layers:
+  - name: control
+    behaviours:
+      a: {type: scripted, params: {activation: 0.5}}
+      c: scripted
+    inhibitions:
+      - a => c
+)");
+  REQUIRE(studio.save(save_body(state)).first == 200);
+  CHECK(read(main) == main_text);
+  CHECK(read(part) == state["files"][1]["text"]);
+
+  // JSON: the inhibition as a JSON string, the param as a JSON member; the result loads.
+  const std::string json =
+      dir.write("robot.json", read(ARBITER_SOURCE_DIR "/configs/paper/walk_and_kick.json"));
+  Studio json_studio(json, registry, with_lints());
+  REQUIRE(json_studio
+              .edit(R"({"op": "add_inhibition", "layer": "control", "inhibitor": "kick_ball",
+                        "inhibited": "head_control", "chaining": false})")
+              .first == 200);
+  const auto set = json_studio.edit(
+      R"({"op": "set_param", "layer": "control", "behaviour": "head_control",
+          "param": "activation", "value": 0.25})");
+  REQUIRE(set.first == 200);
+  const Json after = Json::parse(set.second);
+  const std::string text = after["files"][0]["text"];
+  CHECK(contains(text, R"("search_for_ball -> head_control", "kick_ball -> head_control")"));
+  CHECK(Json::parse(text).is_object());
+  CHECK(!after["graph"].is_null());
+  CHECK(after["review"] ==
+        "+ inhibition control: kick_ball -> head_control\n"
+        "~ behaviour control/head_control: params: activation [1.0] -> [0.25]\n");
+}
