@@ -87,7 +87,7 @@ class Wave(arbiter.Behaviour):
 WAVE_CONFIG = """\
 arbiter: 1
 name: wave
-plugins: [{python: wave}]
+plugins: [{python: waving}]
 layers:
   - name: control
     actuators:
@@ -110,7 +110,7 @@ expect:
 
 
 def test_a_scenario_of_a_config_with_python_classes_runs_them(tmp_path):
-    (tmp_path / "wave.py").write_text(WAVE_MODULE)
+    (tmp_path / "waving.py").write_text(WAVE_MODULE)
     (tmp_path / "wave.yaml").write_text(WAVE_CONFIG)
     (tmp_path / "wave.test.yaml").write_text(WAVE_TEST)
     run = run_pytest(tmp_path, "-v")
@@ -119,7 +119,7 @@ def test_a_scenario_of_a_config_with_python_classes_runs_them(tmp_path):
 
 
 def test_a_python_module_that_cannot_be_imported_makes_the_scenario_invalid(tmp_path):
-    (tmp_path / "wave.py").write_text("import arbiter\nfrom camera import driver\n")
+    (tmp_path / "waving.py").write_text("import arbiter\nfrom camera import driver\n")
     (tmp_path / "camera.py").write_text("raise ImportError('no camera driver')\n")
     (tmp_path / "wave.yaml").write_text(WAVE_CONFIG)
     (tmp_path / "wave.test.yaml").write_text(WAVE_TEST)
@@ -127,9 +127,9 @@ def test_a_python_module_that_cannot_be_imported_makes_the_scenario_invalid(tmp_
     assert run.returncode == 1
     assert f"INVALID {tmp_path / 'wave.test.yaml'}" in run.stdout
     config = tmp_path / "wave.yaml"
-    assert (f"{config}:3:20: error[python-plugin-failed]: cannot load Python module 'wave': "
+    assert (f"{config}:3:20: error[python-plugin-failed]: cannot load Python module 'waving': "
             "ImportError: no camera driver\n") in run.stdout
     # The traceback's frames in the user's files, each a note at the module's name.
-    assert f"{config}:3:20: note: {tmp_path / 'wave.py'}:2: in <module>: from camera import driver\n" in run.stdout
+    assert f"{config}:3:20: note: {tmp_path / 'waving.py'}:2: in <module>: from camera import driver\n" in run.stdout
     assert f"{config}:3:20: note: {tmp_path / 'camera.py'}:1: in <module>:" in run.stdout
     assert "importlib" not in run.stdout
