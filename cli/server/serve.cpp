@@ -475,6 +475,10 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
         path, [this, pause, single_step](const httplib::Request&, httplib::Response& response) {
           if (single_step) ++single_steps_;
           paused_ = pause;
+          if (!pause || single_step) {
+            std::lock_guard lock(mutex_);
+            break_text_.clear();  // the run goes on from the break
+          }
           publish_status();
           response.set_content(R"({"ok": true})", "application/json");
         });
@@ -526,6 +530,16 @@ void LiveView::publish_graph(const Manager& manager) {
     header_ = std::move(header);
   }
   ++graph_version_;
+}
+
+void LiveView::pause_at_break(std::uint64_t step, const char* breakpoint) {
+  {
+    std::lock_guard lock(mutex_);
+    break_text_ = breakpoint;
+    break_step_ = step;
+  }
+  paused_ = true;
+  publish_status();
 }
 
 void LiveView::publish_status() {
@@ -721,10 +735,18 @@ bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint6
     safe_seen = version;
   }
   if (const std::uint64_t version = status_version_; version != status_seen) {
-    out += sse_frame(
-        "status", 0,
-        fmt::format(R"({{"paused": {}, "finished": {}, "step": {}}})", paused_ ? "true" : "false",
-                    finished_ ? "true" : "false", newest_.load()));
+    std::string status =
+        fmt::format(R"({{"paused": {}, "finished": {}, "step": {})", paused_ ? "true" : "false",
+                    finished_ ? "true" : "false", newest_.load());
+    {
+      std::lock_guard lock(mutex_);
+      if (!break_text_.empty()) {
+        status += fmt::format(R"(, "break": {{"step": {}, "condition": )", break_step_);
+        detail::append_json_string(break_text_, status);
+        status += "}";
+      }
+    }
+    out += sse_frame("status", 0, status + "}");
     status_seen = version;
   }
   if (const auto now = std::chrono::steady_clock::now();

@@ -116,6 +116,9 @@ class LiveView : public Observer {
   }
   /// True when the next hold() will wait: the page has paused the run and asked for no step.
   bool will_hold() const { return paused_ && single_steps_ == 0; }
+  /// A breakpoint (`run --break`) fired after `step`: the run pauses as the page's Pause pauses
+  /// it, and the page's status names the breakpoint until the run goes on.
+  void pause_at_break(std::uint64_t step, const char* breakpoint);
 
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
@@ -182,6 +185,8 @@ class LiveView : public Observer {
   std::deque<ExplainRequest*> requests_;
   std::condition_variable answered_;
   std::atomic<bool> paused_{false};
+  std::string break_text_;        // by mutex_: the breakpoint the run is paused at, "" when none
+  std::uint64_t break_step_ = 0;  // by mutex_
   std::atomic<std::uint64_t> single_steps_{0};
   const RunTiming* timing_ = nullptr;
   bool paced_ = false;
