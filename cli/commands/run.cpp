@@ -73,7 +73,8 @@ int run_command(const Options& options) {
   }
   arbiter::Manager manager(std::move(*program), spdlog::default_logger());
   // First among the observers: a reload re-resolves the breakpoints before the others see it.
-  if (!breakpoints.empty()) {
+  // With the page, always: it may set some.
+  if (!breakpoints.empty() || !options.serve.empty()) {
     manager.set_check(&breakpoints);
     manager.add_observer(breakpoints);
   }
@@ -130,6 +131,7 @@ int run_command(const Options& options) {
     live = LiveView::open(options.serve, options.paused, access, std::cout, std::cerr);
     if (!live) return kExitUsage;
     manager.add_observer(*live);
+    live->set_breakpoints(&breakpoints);
   }
   std::unique_ptr<FoxgloveServer> foxglove;  // --foxglove
   if (!options.foxglove.empty()) {

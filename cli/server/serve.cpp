@@ -17,6 +17,7 @@
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/trace.hpp"
+#include "commands/command.hpp"
 #include "commands/timing.hpp"
 #include "server/web_assets.hpp"
 
@@ -497,6 +498,25 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
     ExplainRequest pending;
     pending.step = *step;
     pending.target = target;
+    submit(pending, response);
+  });
+  // Breakpoints set and removed from the page: conditions as `run --break` takes them, checked
+  // against the running program by the stepping thread.
+  http.Post("/control/break", [this](const httplib::Request& request, httplib::Response& response) {
+    ExplainRequest pending;
+    const bool add = request.has_param("add");
+    if (add == request.has_param("remove")) {
+      reply_text(response, 400, "break needs ?add=CONDITION or ?remove=CONDITION\n");
+      return;
+    }
+    pending.kind = add ? ExplainRequest::Kind::kAddBreak : ExplainRequest::Kind::kRemoveBreak;
+    pending.target = request.get_param_value(add ? "add" : "remove");
+    submit(pending, response);
+  });
+}
+
+void LiveView::submit(ExplainRequest& pending, httplib::Response& response) {
+  {
     std::unique_lock lock(mutex_);
     requests_.push_back(&pending);
     changed_.notify_all();
@@ -512,8 +532,8 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
       reply_text(response, 503, "the server is stopping\n");
       return;
     }
-    reply_text(response, pending.status, pending.answer);
-  });
+  }
+  reply_text(response, pending.status, pending.answer);
 }
 
 LiveView::~LiveView() {
@@ -638,6 +658,11 @@ void LiveView::answer_requests(const Manager& manager) {
   while (!requests_.empty()) {
     ExplainRequest& request = *requests_.front();
     requests_.pop_front();
+    if (request.kind != ExplainRequest::Kind::kExplain) {
+      change_breakpoints(manager, request);
+      request.done = true;
+      continue;
+    }
     const std::uint64_t newest = newest_;
     const std::uint64_t oldest = newest >= kRingSize ? newest - kRingSize + 1 : 1;
     if (request.step > newest || request.step < oldest) {
@@ -660,6 +685,51 @@ void LiveView::answer_requests(const Manager& manager) {
   }
   lock.unlock();
   answered_.notify_all();
+}
+
+void LiveView::change_breakpoints(const Manager& manager, ExplainRequest& request) {
+  if (breakpoints_ == nullptr) {
+    request.status = 404;
+    request.answer = "this run takes no breakpoints\n";
+    return;
+  }
+  if (request.kind == ExplainRequest::Kind::kRemoveBreak) {
+    if (!breakpoints_->remove(request.target)) {
+      request.status = 404;
+      request.answer = fmt::format("no breakpoint '{}' is set\n", request.target);
+      return;
+    }
+  } else {
+    std::vector<Breakpoint> set;
+    std::ostringstream errors;
+    if (!cli::set_breakpoints({request.target}, manager.program(), "break",
+                              FormatOptions::readable(), errors, set)) {
+      request.status = 400;
+      request.answer = errors.str();
+      return;
+    }
+    breakpoints_->add(std::move(set.front()));
+  }
+  request.status = 200;
+  request.answer = "ok\n";
+  breakpoints_json_ = "[";
+  for (const auto& breakpoint : breakpoints_->items()) {
+    if (breakpoints_json_.size() > 1) breakpoints_json_ += ", ";
+    detail::append_json_string(breakpoint.condition.text, breakpoints_json_);
+  }
+  breakpoints_json_ += "]";
+  ++status_version_;
+}
+
+void LiveView::set_breakpoints(Breakpoints* breakpoints) {
+  breakpoints_ = breakpoints;
+  std::lock_guard lock(mutex_);
+  breakpoints_json_ = "[";
+  for (const auto& breakpoint : breakpoints->items()) {
+    if (breakpoints_json_.size() > 1) breakpoints_json_ += ", ";
+    detail::append_json_string(breakpoint.condition.text, breakpoints_json_);
+  }
+  breakpoints_json_ += "]";
 }
 
 bool LiveView::hold(const Manager& manager, const std::atomic<bool>& interrupted) {
@@ -740,6 +810,7 @@ bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint6
                     finished_ ? "true" : "false", newest_.load());
     {
       std::lock_guard lock(mutex_);
+      if (!breakpoints_json_.empty()) status += R"(, "breakpoints": )" + breakpoints_json_;
       if (!break_text_.empty()) {
         status += fmt::format(R"(, "break": {{"step": {}, "condition": )", break_step_);
         detail::append_json_string(break_text_, status);

@@ -508,6 +508,15 @@ const char* Breakpoints::check(const Manager& manager) {
   return fired;
 }
 
+bool Breakpoints::remove(std::string_view text) {
+  const auto found = std::find_if(items_.begin(), items_.end(), [&](const Breakpoint& item) {
+    return item.condition.text == text;
+  });
+  if (found == items_.end()) return false;
+  items_.erase(found);
+  return true;
+}
+
 void Breakpoints::on_reload(const Manager& manager) {
   for (auto& breakpoint : items_) {
     ConditionError ignored;

@@ -88,7 +88,10 @@ std::optional<Breakpoint> resolve_breakpoint(const Program& program, Condition c
 /// observer too, and keep it alive while the manager runs: the break's text is its own.
 class Breakpoints : public StepCheck, public Observer {
  public:
+  /// Between two steps only: the manager may hold the text of the last step's break.
   void add(Breakpoint breakpoint) { items_.push_back(std::move(breakpoint)); }
+  /// Removes the breakpoint of this condition text; false when none has it.
+  bool remove(std::string_view text);
   const std::vector<Breakpoint>& items() const { return items_; }
   bool empty() const { return items_.empty(); }
   /// The first breakpoint that fires at the manager's last step (every one's state is kept).
