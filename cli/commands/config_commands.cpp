@@ -4,7 +4,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -180,18 +179,10 @@ bool set_breakpoints(const std::vector<std::string>& conditions, const Program& 
                      std::vector<Breakpoint>& out) {
   bool ok = true;
   for (const auto& text : conditions) {
-    arbiter::ConditionError error;
-    auto condition = arbiter::parse_condition(text, error);
-    std::optional<arbiter::Breakpoint> breakpoint;
-    if (condition) breakpoint = arbiter::resolve_breakpoint(program, std::move(*condition), error);
+    std::string error;
+    auto breakpoint = arbiter::make_breakpoint(program, text, option, format, error);
     if (!breakpoint) {
-      // Located in the argument as a config error is in its file: columns count in the trimmed
-      // condition, which is what is shown.
-      std::string_view shown = text;
-      while (!shown.empty() && std::isspace(static_cast<unsigned char>(shown.front())) != 0) {
-        shown.remove_prefix(1);
-      }
-      err << arbiter::format(arbiter::condition_diagnostic(error, option), shown, format);
+      err << error;
       ok = false;
       continue;
     }

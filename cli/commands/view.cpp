@@ -153,14 +153,15 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
                            "text/plain; charset=utf-8");
       return;
     }
-    std::vector<Breakpoint> breakpoints;
-    std::ostringstream errors;
-    if (!set_breakpoints({condition}, program, "seek", FormatOptions::readable(), errors,
-                         breakpoints)) {
+    std::string refused;
+    auto breakpoint =
+        make_breakpoint(program, condition, "seek", FormatOptions::readable(), refused);
+    if (!breakpoint) {
       response.status = 400;
-      response.set_content(errors.str(), "text/plain; charset=utf-8");
+      response.set_content(refused, "text/plain; charset=utf-8");
       return;
     }
+    std::vector<Breakpoint> breakpoints{std::move(*breakpoint)};
     std::istringstream in(text);
     const auto source = jsonl_trace_source(in, trace_path);
     std::optional<Diagnostic> failed;

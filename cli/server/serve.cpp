@@ -17,7 +17,6 @@
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/trace.hpp"
-#include "commands/command.hpp"
 #include "commands/timing.hpp"
 #include "server/web_assets.hpp"
 
@@ -700,36 +699,35 @@ void LiveView::change_breakpoints(const Manager& manager, ExplainRequest& reques
       return;
     }
   } else {
-    std::vector<Breakpoint> set;
-    std::ostringstream errors;
-    if (!cli::set_breakpoints({request.target}, manager.program(), "break",
-                              FormatOptions::readable(), errors, set)) {
+    std::string error;
+    auto breakpoint = make_breakpoint(manager.program(), request.target, "break",
+                                      FormatOptions::readable(), error);
+    if (!breakpoint) {
       request.status = 400;
-      request.answer = errors.str();
+      request.answer = std::move(error);
       return;
     }
-    breakpoints_->add(std::move(set.front()));
+    breakpoints_->add(std::move(*breakpoint));
   }
   request.status = 200;
   request.answer = "ok\n";
+  list_breakpoints();
+  ++status_version_;
+}
+
+void LiveView::list_breakpoints() {
   breakpoints_json_ = "[";
   for (const auto& breakpoint : breakpoints_->items()) {
     if (breakpoints_json_.size() > 1) breakpoints_json_ += ", ";
     detail::append_json_string(breakpoint.condition.text, breakpoints_json_);
   }
   breakpoints_json_ += "]";
-  ++status_version_;
 }
 
 void LiveView::set_breakpoints(Breakpoints* breakpoints) {
   breakpoints_ = breakpoints;
   std::lock_guard lock(mutex_);
-  breakpoints_json_ = "[";
-  for (const auto& breakpoint : breakpoints->items()) {
-    if (breakpoints_json_.size() > 1) breakpoints_json_ += ", ";
-    detail::append_json_string(breakpoint.condition.text, breakpoints_json_);
-  }
-  breakpoints_json_ += "]";
+  list_breakpoints();
 }
 
 bool LiveView::hold(const Manager& manager, const std::atomic<bool>& interrupted) {

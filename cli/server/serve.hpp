@@ -169,6 +169,8 @@ class LiveView : public Observer {
   /// Queues `request` for the stepping thread and replies with its answer (or why none came).
   void submit(ExplainRequest& request, httplib::Response& response);
   void change_breakpoints(const Manager& manager, ExplainRequest& request);
+  /// breakpoints_json_ from breakpoints_; the caller holds mutex_.
+  void list_breakpoints();
   /// Appends the record of `step` to `out`; false when the ring no longer holds it.
   bool copy_record(std::uint64_t step, std::string& out);
   /// Appends the foxglove.SceneUpdate of what `step` drew to `out`; false when it drew nothing

@@ -413,6 +413,23 @@ std::optional<Breakpoint> resolve_breakpoint(const Program& program, Condition c
   return out;
 }
 
+std::optional<Breakpoint> make_breakpoint(const Program& program, std::string_view text,
+                                          std::string_view option, const FormatOptions& format,
+                                          std::string& error) {
+  ConditionError failed;
+  auto condition = parse_condition(text, failed);
+  std::optional<Breakpoint> breakpoint;
+  if (condition) breakpoint = resolve_breakpoint(program, std::move(*condition), failed);
+  if (!breakpoint) {
+    // Columns count in the trimmed condition: that is what is shown.
+    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front())) != 0) {
+      text.remove_prefix(1);
+    }
+    error = arbiter::format(condition_diagnostic(failed, option), text, format);
+  }
+  return breakpoint;
+}
+
 namespace {
 
 double live_value(const Manager& manager, const Breakpoint& breakpoint) {

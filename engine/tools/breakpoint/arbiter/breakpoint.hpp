@@ -83,6 +83,13 @@ struct Breakpoint {
 std::optional<Breakpoint> resolve_breakpoint(const Program& program, Condition condition,
                                              ConditionError& error);
 
+/// parse_condition() and resolve_breakpoint() of `text`, the argument of `option` (`--break`):
+/// nothing when it cannot be set, with `error` holding the diagnostic as format() prints it, the
+/// argument shown as its source line.
+std::optional<Breakpoint> make_breakpoint(const Program& program, std::string_view text,
+                                          std::string_view option, const FormatOptions& format,
+                                          std::string& error);
+
 /// The breakpoints of a live run: the manager's StepCheck (by index, allocation-free), and an
 /// observer that resolves them again when a hot reload swaps a new program in. Add it as an
 /// observer too, and keep it alive while the manager runs: the break's text is its own.
