@@ -298,6 +298,26 @@ TEST_CASE("arbiter run --break stops the soccer demo at the kick: its trace ends
   CHECK(safe["actuators"]["gait_velocity"]["value"] == Json::array({0.0, 0.0, 0.0}));
 }
 
+TEST_CASE("a recording of a run stopped at a break ends with the break's step, marked",
+          "[breakpoint][cli]") {
+  TempDir dir;
+  const auto recording = (dir.path() / "run.mcap").string();
+  const auto result =
+      run_cli(std::string("run ") + kSoccer +
+              " --steps 400 -q --break 'kick_ball activates' --record " + test::quoted(recording));
+  REQUIRE(result.exit_code == 0);
+  const auto source = open_trace(recording);
+  TraceRecord record;
+  Json last_step;
+  while (source->next(record)) {
+    if (record.kind == TraceRecord::Kind::kStep) last_step = Json::parse(record.text);
+  }
+  REQUIRE_FALSE(source->error());
+  REQUIRE(last_step.is_object());
+  CHECK(last_step["layers"]["control"]["kick_ball"]["active"] == true);
+  CHECK(last_step["reported"].back() == Json({{"by", "break"}, {"text", "kick_ball activates"}}));
+}
+
 TEST_CASE("arbiter run --break with an event and a value condition stops where they become true",
           "[breakpoint][cli]") {
   TempDir dir;
@@ -378,4 +398,49 @@ TEST_CASE("arbiter seek reads a JSON-lines trace with its config: a state's star
   result = run_cli(std::string("seek ") + kGoaliePlan + " --trace " + test::quoted(trace) +
                    " 'goalie/monitor_ball ends'");
   CHECK(result.out == "24\n");
+}
+
+TEST_CASE("a reload resolves the breakpoints again by name; one whose name is gone no longer fires",
+          "[breakpoint]") {
+  const Set paper(kWalkAndKick);
+  Breakpoints breakpoints;
+  breakpoints.add(paper.breakpoint("kick_ball activates"));
+  // kick_ball has another index here: a breakpoint still keyed by the old one would watch
+  // `other`, active from step 1.
+  Registry registry = tooling_registry();
+  Manager moved(test::compile_text(R"(arbiter: 1
+name: moved
+layers:
+  - name: control
+    behaviours:
+      other: {type: scripted, params: {activation: 1}}
+      kick_ball: {type: scripted, params: {activation: [0, 0, 1, 0]}}
+)",
+                                   registry));
+  REQUIRE(*paper.program.find_behaviour("control", "kick_ball") !=
+          *moved.program().find_behaviour("control", "kick_ball"));
+  breakpoints.on_reload(moved);
+  moved.set_check(&breakpoints);
+  std::vector<std::uint64_t> fired;
+  for (int i = 0; i < 5; ++i) {
+    moved.step();
+    if (moved.break_text() != nullptr) fired.push_back(moved.steps());
+  }
+  CHECK(fired == std::vector<std::uint64_t>{3});
+
+  Manager gone(test::compile_text(R"(arbiter: 1
+name: gone
+layers:
+  - name: control
+    behaviours:
+      other: {type: scripted, params: {activation: [0, 1]}}
+)",
+                                  registry));
+  breakpoints.on_reload(gone);
+  gone.set_check(&breakpoints);
+  for (int i = 0; i < 3; ++i) {
+    gone.step();
+    CHECK(gone.break_text() == nullptr);
+  }
+  CHECK_FALSE(breakpoints.items().front().enabled);
 }
