@@ -1,6 +1,7 @@
 // Breakpoints on the page: a condition as `arbiter run --break` takes it (docs/cli.md,
-// "Breakpoints"), typed or picked: clicking a behaviour in the graph offers "NAME activates", and
-// the field's list offers one for every behaviour, state and value of the graph. Live, Break sets
+// "Breakpoints"), typed or picked: clicking a behaviour in the graph offers "NAME activates", an
+// actuator's value "NAME > VALUE", a state machine's state "MACHINE/STATE ends", and the field's
+// list offers one for every behaviour, state and value of the graph. Live, Break sets
 // it on the engine, which pauses at the step where it becomes true; in a recorded run, Next shows
 // the next step where it does.
 import {html} from './dom.js';
@@ -64,10 +65,30 @@ export class BreakBar {
     this.input.addEventListener('keydown', (event) => {
       if (event.key === 'Enter') submit();
     });
+    this.types = new Map();  // actuator → its type, for the condition a click on its value offers
+    document.addEventListener('click', (event) => {
+      const port = event.target.closest?.('.port.actuator[data-actuator]');
+      if (port) this.pickValue(port.dataset.actuator, port.querySelector('.value')?.textContent || '');
+      const state = event.target.closest?.('.controller[data-controller] .state');
+      if (state && state.textContent !== '(none)') {
+        const machine = state.closest('.controller').dataset.controller;
+        this.input.value = `${machine}/${state.textContent} ends`;
+      }
+    });
+  }
+
+  /** An actuator's value clicked: break when it rises above what it shows now. */
+  pickValue(name, shown) {
+    const size = VECTOR_SIZE[this.types.get(name)] || 0;
+    const numbers = (shown.match(/-?\d+(\.\d+)?(e-?\d+)?/g) || []).map(Number);
+    const now = /^true/.test(shown) ? 1 : numbers.length ? numbers[0] : 0;
+    this.input.value = `${name}${size ? '[0]' : ''} > ${now}`;
   }
 
   /** Offers the graph's conditions in the field's list. */
   setGraph(graph) {
+    this.types.clear();
+    for (const layer of graph.layers) for (const actuator of layer.actuators) this.types.set(actuator.name, actuator.type);
     this.options.replaceChildren();
     for (const condition of conditionsOf(graph)) html('option', {value: condition}, this.options);
   }

@@ -1125,6 +1125,11 @@ test('the recorded view shows the next step where a condition becomes true', asy
   const {url} = await serve(['view', soccer, '--trace', trace, '--serve', '0', '--step', '1']);
   const page = await open(url);
   assert.equal(await page.locator('#break-add').isVisible(), false);
+  // A value clicked offers "break when it rises above what it shows"; a behaviour, its activation.
+  await page.click('.port.actuator[data-actuator="gait_velocity"] .value');
+  assert.equal(await page.inputValue('#break-condition'), 'gait_velocity[0] > 0');
+  await behaviour(page, 'go_behind_ball').click();
+  assert.equal(await page.inputValue('#break-condition'), 'control/go_behind_ball activates');
   await page.fill('#break-condition', 'kick_ball activates');
   await page.click('#break-next');
   await waitForStep(page, kick);
