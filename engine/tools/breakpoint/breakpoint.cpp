@@ -175,9 +175,8 @@ std::optional<Condition> parse_condition(std::string_view whole, ConditionError&
     if (in.peek() != '"') return fail(error, quote_column, 0, "expected a quoted text after '~'");
     in.advance(1);
     bool closed = false;
-    for (const auto rest = in.rest(); !rest.empty();) {
+    while (!in.rest().empty()) {
       const char c = in.peek();
-      if (c == '\0') break;
       in.advance(1);
       if (c == '"') {
         closed = true;

@@ -55,7 +55,8 @@ class Observer {
 class StepCheck {
  public:
   virtual ~StepCheck() = default;
-  /// What made the step a break (a text that outlives the run), or nullptr.
+  /// What made the step a break, or nullptr: a text that stays valid at least until the next
+  /// step (the step's event and break_text() point at it).
   virtual const char* check(const Manager& manager) = 0;
 };
 
