@@ -307,6 +307,8 @@ int main(int argc, char** argv) {
                   "  arbiter run configs/paper/walk_and_kick.yaml --trace out.jsonl -q\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --realtime   # Ctrl-C "
                   "stops cleanly\n"
+                  "  arbiter run configs/soccer/walk_and_kick.yaml --steps 400 --break "
+                  "'kick_ball activates' --trace kick.jsonl   # ends at the kick's step\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --steps 300 --serve 8080   "
                   "# then open the printed URL (it carries the token)\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --foxglove 8765   "
