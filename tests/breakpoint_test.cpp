@@ -444,3 +444,40 @@ layers:
   }
   CHECK_FALSE(breakpoints.items().front().enabled);
 }
+
+TEST_CASE("a behaviour two layers have is named with its layer; alone it is ambiguous",
+          "[breakpoint]") {
+  Registry registry = tooling_registry();
+  Manager manager(test::compile_text(R"(arbiter: 1
+name: twin
+layers:
+  - name: upper
+    behaviours:
+      walk: {type: scripted, params: {activation: [0, 1]}}
+  - name: lower
+    behaviours:
+      walk: {type: scripted, params: {activation: [0, 0, 0, 1]}}
+)",
+                                     registry));
+  ConditionError error;
+  auto condition = parse_condition("walk activates", error);
+  REQUIRE(condition);
+  CHECK_FALSE(resolve_breakpoint(manager.program(), *condition, error));
+  CHECK(error.message == "'walk' is ambiguous");
+  CHECK(error.column == 1);
+  REQUIRE(error.notes.size() == 1);
+  CHECK(error.notes[0].text == "write one of: upper/walk, lower/walk");
+  condition = parse_condition("lower/walk activates", error);
+  REQUIRE(condition);
+  auto breakpoint = resolve_breakpoint(manager.program(), *condition, error);
+  REQUIRE(breakpoint);
+  Breakpoints breakpoints;
+  breakpoints.add(std::move(*breakpoint));
+  manager.set_check(&breakpoints);
+  std::vector<std::uint64_t> fired;
+  for (int i = 0; i < 5; ++i) {
+    manager.step();
+    if (manager.break_text() != nullptr) fired.push_back(manager.steps());
+  }
+  CHECK(fired == std::vector<std::uint64_t>{4});
+}
