@@ -51,7 +51,7 @@ _arbiter() {
   local cur prev command word i
   cur=${COMP_WORDS[COMP_CWORD]}
   prev=${COMP_WORDS[COMP_CWORD - 1]}
-  local commands="validate run dump explain test plugins schema view edit plot replay diff lsp new"
+  local commands="validate run dump explain seek test plugins schema view edit plot replay diff lsp new"
   local global="--help --version --log-level --plugin-path --max-file-bytes --color"
   local global_after="--log-level --plugin-path --max-file-bytes --color"  # after the command
 
@@ -77,7 +77,7 @@ _arbiter() {
       return ;;
     --trace)
       case "$command" in
-        explain | view) mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$') ;;
+        explain | seek | view) mapfile -t COMPREPLY < <(_arbiter_files '\.(jsonl|mcap)$') ;;
         *) mapfile -t COMPREPLY < <(_arbiter_files '\.jsonl$') ;;
       esac
       return ;;
@@ -86,7 +86,7 @@ _arbiter() {
     --config | --inputs) mapfile -t COMPREPLY < <(_arbiter_files '\.(yaml|yml|json)$'); return ;;
     --tolerance) return ;;
     --layer) mapfile -t COMPREPLY < <(compgen -W "$(_arbiter_names layers)" -- "$cur"); return ;;
-    --steps | --step | --load | --serve | --serve-token | --foxglove | --rt-priority | --record-flush) return ;;
+    --steps | --step | --from | --break | --load | --serve | --serve-token | --foxglove | --rt-priority | --record-flush) return ;;
     --junit) mapfile -t COMPREPLY < <(_arbiter_files '\.xml$'); return ;;
     --output | -o) mapfile -t COMPREPLY < <(_arbiter_files '\.svg$'); return ;;
   esac
@@ -103,9 +103,10 @@ _arbiter() {
   local options
   case "$command" in
     validate) options="--format --strict --help" ;;
-    run) options="--steps --trace --inputs --record --record-flush --quiet --realtime --strict --serve --foxglove --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --edit --help" ;;
+    run) options="--steps --trace --inputs --record --record-flush --quiet --realtime --strict --serve --foxglove --paused --watch --serve-token --serve-readonly --rt-priority --full-speed --edit --break --help" ;;
     dump) options="--format --layer --help" ;;
     explain) options="--trace --step --help" ;;
+    seek) options="--trace --from --help" ;;
     test) options="--junit --tolerance --help" ;;
     view) options="--trace --serve --step --help" ;;
     edit) options="--serve --serve-token --help" ;;

@@ -294,6 +294,16 @@ int main(int argc, char** argv) {
       ->excludes("--watch")
       ->excludes("--inputs");
   run_cmd
+      ->add_option("--break", options.breaks,
+                   "stop at the step after which CONDITION becomes true, repeatable "
+                   "(docs/cli.md, \"Breakpoints\"): 'NAME activates', 'NAME deactivates', "
+                   "'MACHINE/STATE starts', 'MACHINE/STATE ends', 'NAME[i] > X', 'NAME[i] < X', "
+                   "'event ~ \"TEXT\"', 'step N', 'step >= N'. The step's record carries the "
+                   "break as an event reported by 'break'. With --serve the run pauses there as "
+                   "the page's Pause does (safe values out); without it the run ends with that "
+                   "step")
+      ->type_name("CONDITION");
+  run_cmd
       ->add_option("--rt-priority", options.rt_priority,
                    "run the stepping thread under SCHED_FIFO at this priority (1-99) with memory "
                    "locked; needs CAP_SYS_NICE or RLIMIT_RTPRIO, and CAP_IPC_LOCK or "
@@ -306,6 +316,8 @@ int main(int argc, char** argv) {
                   "  arbiter run configs/paper/walk_and_kick.yaml --trace out.jsonl -q\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --realtime   # Ctrl-C "
                   "stops cleanly\n"
+                  "  arbiter run configs/soccer/walk_and_kick.yaml --steps 400 --break "
+                  "'kick_ball activates' --trace kick.jsonl   # ends at the kick's step\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --steps 300 --serve 8080   "
                   "# then open the printed URL (it carries the token)\n"
                   "  arbiter run configs/soccer/walk_and_kick.yaml --foxglove 8765   "
@@ -377,6 +389,35 @@ int main(int argc, char** argv) {
                   "config\n\n"
                   "Exit codes: 0 ok, 1 invalid config or trace, 2 usage error (no such name "
                   "or step)."));
+
+  auto* seek_cmd = app.add_subcommand(
+      "seek",
+      "Find, in a trace or recording, the first step after --from at which a breakpoint's\n"
+      "condition becomes true (as 'arbiter run --break' would have stopped there), and print\n"
+      "its number.");
+  seek_cmd->add_option("FILE", options.file,
+                       "the config the trace was written with; left out, a recording's own");
+  seek_cmd->add_option("CONDITION", options.target,
+                       "a condition as 'arbiter run --break' takes it (docs/cli.md, "
+                       "\"Breakpoints\")");
+  seek_cmd->add_option("--trace", options.trace_path, kTraceHelp)
+      ->required()
+      ->check(CLI::ExistingFile);
+  seek_cmd
+      ->add_option("--from", options.step,
+                   "seek after this step (default 0: from the start); the steps before it "
+                   "still count for a crossing")
+      ->type_name("N");
+  seek_cmd->footer(
+      std::string(examples +
+                  "  arbiter run configs/soccer/walk_and_kick.yaml --steps 400 --record run.mcap "
+                  "-q\n"
+                  "  arbiter seek --trace run.mcap 'kick_ball activates'              # 171\n"
+                  "  arbiter seek --trace run.mcap 'kick_ball activates' --from 171   # 356\n"
+                  "  arbiter seek configs/paper/goalie_plan.yaml --trace g.jsonl "
+                  "'goalie/monitor_ball ends'\n\n"
+                  "Exit codes: 0 found, 1 no such step (or an invalid config or trace), 2 usage "
+                  "error (a condition that names nothing)."));
 
   auto* test_cmd = app.add_subcommand(
       "test",
@@ -717,6 +758,7 @@ int main(int argc, char** argv) {
     }
     if (dump_cmd->parsed()) return dump_command(options);
     if (explain_cmd->parsed()) return explain_command(options);
+    if (seek_cmd->parsed()) return seek_command(options);
     if (test_cmd->parsed()) return test_command(options);
     if (view_cmd->parsed()) return view_command(options);
     if (edit_cmd->parsed()) return edit_command(options);

@@ -24,6 +24,7 @@
 #include "server/foxglove.hpp"
 #endif
 
+#include "arbiter/breakpoint.hpp"
 #include "arbiter/load.hpp"
 #include "arbiter/recording.hpp"
 #include "arbiter/substitute.hpp"
@@ -302,6 +303,43 @@ layers:
     actuators: {measured: double}
     sensors: [gait, label, speed]
 )";
+
+TEST_CASE("a step checked against breakpoints of every kind allocates nothing",
+          "[alloc][breakpoint]") {
+  // The soccer demo: behaviours, values and reported events; 400 steps reach two kicks.
+  Registry registry = test::make_test_registry();
+  LoadOptions options;
+  options.plugins.path.push_back(ARBITER_PLUGIN_DIR);
+  Diagnostics diagnostics;
+  auto program = load(std::string(ARBITER_SOURCE_DIR) + "/configs/soccer/walk_and_kick.yaml",
+                      registry, diagnostics, options);
+  INFO(format(diagnostics));
+  REQUIRE(program);
+  Breakpoints breakpoints;
+  for (const char* text :
+       {"kick_ball activates", "control/kick_ball deactivates", "gait_velocity[0] > 0.2",
+        "head_angle < -0.1", "kick > 0.5", "event ~ \"kicked\"", "step >= 1000"}) {
+    ConditionError error;
+    auto condition = parse_condition(text, error);
+    REQUIRE(condition);
+    auto breakpoint = resolve_breakpoint(*program, std::move(*condition), error);
+    INFO(text << ": " << error.message);
+    REQUIRE(breakpoint);
+    breakpoints.add(std::move(*breakpoint));
+  }
+  Manager manager(std::move(*program));
+  manager.set_check(&breakpoints);
+  std::uint64_t breaks = 0;
+  allocations = 0;
+  counting = true;
+  for (int i = 0; i < 400; ++i) {
+    manager.step();
+    if (manager.break_text() != nullptr) ++breaks;
+  }
+  counting = false;
+  CHECK(allocations.load() == 0);
+  CHECK(breaks >= 4);
+}
 
 TEST_CASE("a timed step and the safe pass allocate nothing", "[alloc][safe]") {
   static const Registry registry = test::make_test_registry();

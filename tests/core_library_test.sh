@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The core library (arbiter::core, the one a plugin links) holds what runs on the robot, and the
 # tools library the rest: checked on the dynamic symbols of the two built libraries.
-#   1. each entry point of the tools (dumps, lints, explain, the schema, the class catalog, trace
+#   1. each entry point of the tools (dumps, lints, explain, breakpoints, the schema, the class catalog, trace
 #      reading and diffing, reading recordings and their MCAP container, scenario tests, class
 #      substitution) is defined in the tools library and not in the core one: a robot writes
 #      recordings, it does not read them;
@@ -18,7 +18,7 @@ tools_defined=$(symbols "$tools" --defined-only)
 core_undefined=$(symbols "$core" --undefined-only)
 
 failed=0
-for entry in dump_text dump_dot dump_json explain check_trace_header lint lint_codes \
+for entry in dump_text dump_dot dump_json explain check_trace_header parse_condition seek lint lint_codes \
     config_schema catalog_text catalog_json read_trace open_trace diff_traces read_scenario \
     run_scenario substitute read_recorded_run mcap::Reader::next; do
   pattern="^arbiter::$entry(\[abi:[a-z0-9]+\])?\("  # functions returning std::string carry a tag

@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "arbiter/breakpoint.hpp"
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/load.hpp"
 #include "arbiter/program.hpp"
@@ -53,9 +54,10 @@ struct Options {
   bool edit = false;                          ///< `run --serve --edit`
   std::string output;                         ///< `plot -o`
   bool actuators = false;
-  bool paused = false;      ///< `run --paused`
-  TestCommand test;         ///< `test`
-  int rt_priority = 0;      ///< `run --rt-priority`; 0: normal scheduling
+  bool paused = false;              ///< `run --paused`
+  std::vector<std::string> breaks;  ///< `run --break`
+  TestCommand test;                 ///< `test`
+  int rt_priority = 0;              ///< `run --rt-priority`; 0: normal scheduling
   std::string serve_token;  ///< `run --serve-token` (or ARBITER_SERVE_TOKEN); empty: a random one
   bool serve_readonly = false;
   std::string record_path;                                  ///< `run --record`, `replay --record`
@@ -110,6 +112,13 @@ int explain_command(const Options& options);
 int lsp_command(const Options& options);
 int test_command(Options& options);
 int run_command(const Options& options);
+int seek_command(const Options& options);
+
+/// The conditions of `option` (`--break`) set on `program`'s run: false, each error printed on
+/// `err` located in its argument, when one cannot be set.
+bool set_breakpoints(const std::vector<std::string>& conditions, const Program& program,
+                     std::string_view option, const FormatOptions& format, std::ostream& err,
+                     std::vector<Breakpoint>& out);
 int view_command(const Options& options);
 int edit_command(const Options& options);
 int plot_command(const Options& options);

@@ -9,6 +9,7 @@
 #include <iostream>
 #include <set>
 
+#include "arbiter/breakpoint.hpp"
 #include "arbiter/catalog.hpp"
 #include "arbiter/dump.hpp"
 #include "arbiter/explain.hpp"
@@ -171,6 +172,63 @@ int explain_command(const Options& options) {
     std::cerr << fmt::format("  note: {}\n", arbiter::printable(note.text));
   }
   return explanation.status == arbiter::Explanation::Status::kNotFound ? kExitUsage : kExitInvalid;
+}
+
+bool set_breakpoints(const std::vector<std::string>& conditions, const Program& program,
+                     std::string_view option, const FormatOptions& format, std::ostream& err,
+                     std::vector<Breakpoint>& out) {
+  bool ok = true;
+  for (const auto& text : conditions) {
+    std::string error;
+    auto breakpoint = arbiter::make_breakpoint(program, text, option, format, error);
+    if (!breakpoint) {
+      err << error;
+      ok = false;
+      continue;
+    }
+    out.push_back(std::move(*breakpoint));
+  }
+  return ok;
+}
+
+int seek_command(const Options& options) {
+  // With one positional the config is left out, as explain's: it is the condition.
+  std::string config = options.file;
+  std::string condition = options.target;
+  if (condition.empty()) std::swap(config, condition);
+  if (condition.empty()) {
+    std::cerr << "arbiter seek: give the condition to seek, e.g. 'kick_ball activates'\n";
+    return kExitUsage;
+  }
+  if (!std::ifstream(options.trace_path, std::ios::binary)) {
+    std::cerr << fmt::format("arbiter seek: cannot read trace '{}'\n", options.trace_path);
+    return kExitUsage;
+  }
+  auto registry = make_registry();
+  int exit = kExitInvalid;
+  auto program = program_of_run(config, options.trace_path, registry, load_options_of(options),
+                                "seek", options.diagnostic_format, std::cerr, exit);
+  if (!program) return exit;
+  std::vector<arbiter::Breakpoint> breakpoints;
+  if (!set_breakpoints({condition}, *program, "CONDITION", options.diagnostic_format, std::cerr,
+                       breakpoints)) {
+    return kExitUsage;
+  }
+  const auto trace = arbiter::open_trace(options.trace_path);
+  std::optional<arbiter::Diagnostic> error;
+  const auto hit = arbiter::seek(*trace, breakpoints, options.step, error);
+  if (error) {
+    std::cerr << arbiter::format(*error, options.diagnostic_format);
+    return kExitInvalid;
+  }
+  if (!hit) {
+    std::cerr << fmt::format("arbiter seek: no step{} where {}\n",
+                             options.step > 0 ? fmt::format(" after step {}", options.step) : "",
+                             arbiter::printable(breakpoints.front().condition.text));
+    return kExitInvalid;
+  }
+  std::cout << hit->step << "\n";
+  return kExitOk;
 }
 
 int lsp_command(const Options& options) {

@@ -52,6 +52,15 @@ int run_command(const Options& options) {
     program = load_or_report(options.file, registry, options, &load_diagnostics);
   }
   if (!program) return kExitInvalid;
+  arbiter::Breakpoints breakpoints;  // --break
+  {
+    std::vector<arbiter::Breakpoint> set;
+    if (!set_breakpoints(options.breaks, *program, "--break", options.diagnostic_format, std::cerr,
+                         set)) {
+      return kExitUsage;
+    }
+    for (auto& breakpoint : set) breakpoints.add(std::move(breakpoint));
+  }
   const double rate_hz = program->rate_hz;
   const std::uint64_t steps =
       options.steps_given || options.watch || program->steps == 0 ? options.steps : program->steps;
@@ -65,6 +74,12 @@ int run_command(const Options& options) {
     }
   }
   arbiter::Manager manager(std::move(*program), spdlog::default_logger());
+  // First among the observers: a reload re-resolves the breakpoints before the others see it.
+  // With the page, always: it may set some.
+  if (!breakpoints.empty() || !options.serve.empty()) {
+    manager.set_check(&breakpoints);
+    manager.add_observer(breakpoints);
+  }
   arbiter::TraceWriter trace(trace_file);
   if (trace_file.is_open()) manager.add_observer(trace);
   RunReport report(std::cout, options.quiet);
@@ -149,6 +164,7 @@ int run_command(const Options& options) {
                           studio ? &*studio : nullptr);
     if (!live) return kExitUsage;
     manager.add_observer(*live);
+    live->set_breakpoints(&breakpoints);
   }
   std::unique_ptr<FoxgloveServer> foxglove;  // --foxglove
   if (!options.foxglove.empty()) {
@@ -179,6 +195,7 @@ int run_command(const Options& options) {
   // a burst of catch-up steps: the next one waits for the next period boundary, and the periods
   // skipped are counted.
   auto next = started;
+  const char* stopped_at_break = nullptr;
   for (std::uint64_t i = 0; i < steps && !interrupted; ++i) {
     if (live && live->will_hold()) manager.safe_pass();  // paused from the page: make it safe
     if (live && live->hold(manager, interrupted)) {
@@ -193,6 +210,15 @@ int run_command(const Options& options) {
     if (watcher) watcher->set_step(manager.steps());
     timing.record_step(manager.step_duration());
     if (manager.stopped()) break;  // on_exception: stop — the run ends with this step
+    if (const char* hit = manager.break_text()) {
+      // With the page, the run pauses as its Pause does (the next loop makes it safe); without
+      // it nobody could resume the run, so the run ends with this step.
+      if (!live) {
+        stopped_at_break = hit;
+        break;
+      }
+      live->pause_at_break(manager.steps(), hit);
+    }
     if (options.realtime) {
       next += period;
       if (const auto now = Clock::now(); now > next) {
@@ -221,6 +247,13 @@ int run_command(const Options& options) {
                              static_cast<double>(manager.steps()) / rate_hz, rate_hz,
                              wall_time(wall), options.realtime ? " (real time)" : "");
     std::cout << timing.text(options.realtime) << std::flush;
+  }
+  if (stopped_at_break != nullptr && !options.quiet) {
+    std::cout << fmt::format(
+                     "stopped at the break after step {}: {} (without --serve nothing can resume "
+                     "the run)\n",
+                     manager.steps(), arbiter::printable(stopped_at_break))
+              << std::flush;
   }
   if (live) live->serve_until(manager, interrupted);
   if (foxglove) foxglove_after_run(*foxglove, "run", std::cout, std::cerr);

@@ -142,6 +142,43 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     response.set_content(answer, "text/plain; charset=utf-8");
   });
 
+  // The page's "next step where": `arbiter seek` over the trace served.
+  http.Get("/seek", [&](const httplib::Request& request, httplib::Response& response) {
+    const std::string condition = request.get_param_value("condition");
+    const std::string from_text = request.get_param_value("from");
+    if (condition.empty() || from_text.size() > 19 ||
+        from_text.find_first_not_of("0123456789") != std::string::npos) {
+      response.status = 400;
+      response.set_content("seek needs ?condition=CONDITION and &from=N\n",
+                           "text/plain; charset=utf-8");
+      return;
+    }
+    std::string refused;
+    auto breakpoint =
+        make_breakpoint(program, condition, "seek", FormatOptions::readable(), refused);
+    if (!breakpoint) {
+      response.status = 400;
+      response.set_content(refused, "text/plain; charset=utf-8");
+      return;
+    }
+    std::vector<Breakpoint> breakpoints{std::move(*breakpoint)};
+    std::istringstream in(text);
+    const auto source = jsonl_trace_source(in, trace_path);
+    std::optional<Diagnostic> failed;
+    const auto hit =
+        seek(*source, breakpoints, from_text.empty() ? 0 : std::stoull(from_text), failed);
+    if (!hit) {
+      response.status = 404;
+      response.set_content(failed ? format(*failed)
+                                  : fmt::format("no step after step {} where {}\n",
+                                                from_text.empty() ? "0" : from_text,
+                                                printable(breakpoints.front().condition.text)),
+                           "text/plain; charset=utf-8");
+      return;
+    }
+    response.set_content(fmt::format(R"({{"step": {}}})", hit->step), "application/json");
+  });
+
   if (!server.start(address, access, error)) {
     err << fmt::format("arbiter view: {}\n", error);
     return 2;

@@ -482,6 +482,10 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
         path, [this, pause, single_step](const httplib::Request&, httplib::Response& response) {
           if (single_step) ++single_steps_;
           paused_ = pause;
+          if (!pause || single_step) {
+            std::lock_guard lock(mutex_);
+            break_text_.clear();  // the run goes on from the break
+          }
           publish_status();
           response.set_content(R"({"ok": true})", "application/json");
         });
@@ -500,6 +504,25 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
     ExplainRequest pending;
     pending.step = *step;
     pending.target = target;
+    submit(pending, response);
+  });
+  // Breakpoints set and removed from the page: conditions as `run --break` takes them, checked
+  // against the running program by the stepping thread.
+  http.Post("/control/break", [this](const httplib::Request& request, httplib::Response& response) {
+    ExplainRequest pending;
+    const bool add = request.has_param("add");
+    if (add == request.has_param("remove")) {
+      reply_text(response, 400, "break needs ?add=CONDITION or ?remove=CONDITION\n");
+      return;
+    }
+    pending.kind = add ? ExplainRequest::Kind::kAddBreak : ExplainRequest::Kind::kRemoveBreak;
+    pending.target = request.get_param_value(add ? "add" : "remove");
+    submit(pending, response);
+  });
+}
+
+void LiveView::submit(ExplainRequest& pending, httplib::Response& response) {
+  {
     std::unique_lock lock(mutex_);
     requests_.push_back(&pending);
     changed_.notify_all();
@@ -515,8 +538,8 @@ LiveView::LiveView() : ring_(std::make_unique<Slot[]>(kRingSize)) {
       reply_text(response, 503, "the server is stopping\n");
       return;
     }
-    reply_text(response, pending.status, pending.answer);
-  });
+  }
+  reply_text(response, pending.status, pending.answer);
 }
 
 LiveView::~LiveView() {
@@ -533,6 +556,16 @@ void LiveView::publish_graph(const Manager& manager) {
     header_ = std::move(header);
   }
   ++graph_version_;
+}
+
+void LiveView::pause_at_break(std::uint64_t step, const char* breakpoint) {
+  {
+    std::lock_guard lock(mutex_);
+    break_text_ = breakpoint;
+    break_step_ = step;
+  }
+  paused_ = true;
+  publish_status();
 }
 
 void LiveView::publish_status() {
@@ -631,6 +664,11 @@ void LiveView::answer_requests(const Manager& manager) {
   while (!requests_.empty()) {
     ExplainRequest& request = *requests_.front();
     requests_.pop_front();
+    if (request.kind != ExplainRequest::Kind::kExplain) {
+      change_breakpoints(manager, request);
+      request.done = true;
+      continue;
+    }
     const std::uint64_t newest = newest_;
     const std::uint64_t oldest = newest >= kRingSize ? newest - kRingSize + 1 : 1;
     if (request.step > newest || request.step < oldest) {
@@ -653,6 +691,50 @@ void LiveView::answer_requests(const Manager& manager) {
   }
   lock.unlock();
   answered_.notify_all();
+}
+
+void LiveView::change_breakpoints(const Manager& manager, ExplainRequest& request) {
+  if (breakpoints_ == nullptr) {
+    request.status = 404;
+    request.answer = "this run takes no breakpoints\n";
+    return;
+  }
+  if (request.kind == ExplainRequest::Kind::kRemoveBreak) {
+    if (!breakpoints_->remove(request.target)) {
+      request.status = 404;
+      request.answer = fmt::format("no breakpoint '{}' is set\n", request.target);
+      return;
+    }
+  } else {
+    std::string error;
+    auto breakpoint = make_breakpoint(manager.program(), request.target, "break",
+                                      FormatOptions::readable(), error);
+    if (!breakpoint) {
+      request.status = 400;
+      request.answer = std::move(error);
+      return;
+    }
+    breakpoints_->add(std::move(*breakpoint));
+  }
+  request.status = 200;
+  request.answer = "ok\n";
+  list_breakpoints();
+  ++status_version_;
+}
+
+void LiveView::list_breakpoints() {
+  breakpoints_json_ = "[";
+  for (const auto& breakpoint : breakpoints_->items()) {
+    if (breakpoints_json_.size() > 1) breakpoints_json_ += ", ";
+    detail::append_json_string(breakpoint.condition.text, breakpoints_json_);
+  }
+  breakpoints_json_ += "]";
+}
+
+void LiveView::set_breakpoints(Breakpoints* breakpoints) {
+  breakpoints_ = breakpoints;
+  std::lock_guard lock(mutex_);
+  list_breakpoints();
 }
 
 bool LiveView::hold(const Manager& manager, const std::atomic<bool>& interrupted) {
@@ -728,10 +810,19 @@ bool LiveView::stream(std::uint64_t& next, std::uint64_t& graph_seen, std::uint6
     safe_seen = version;
   }
   if (const std::uint64_t version = status_version_; version != status_seen) {
-    out += sse_frame(
-        "status", 0,
-        fmt::format(R"({{"paused": {}, "finished": {}, "step": {}}})", paused_ ? "true" : "false",
-                    finished_ ? "true" : "false", newest_.load()));
+    std::string status =
+        fmt::format(R"({{"paused": {}, "finished": {}, "step": {})", paused_ ? "true" : "false",
+                    finished_ ? "true" : "false", newest_.load());
+    {
+      std::lock_guard lock(mutex_);
+      if (!breakpoints_json_.empty()) status += R"(, "breakpoints": )" + breakpoints_json_;
+      if (!break_text_.empty()) {
+        status += fmt::format(R"(, "break": {{"step": {}, "condition": )", break_step_);
+        detail::append_json_string(break_text_, status);
+        status += "}";
+      }
+    }
+    out += sse_frame("status", 0, status + "}");
     status_seen = version;
   }
   if (const auto now = std::chrono::steady_clock::now();

@@ -19,13 +19,15 @@
 #include <utility>
 #include <vector>
 
+#include "arbiter/breakpoint.hpp"
 #include "arbiter/explain.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/trace.hpp"
 
 namespace httplib {
 class Server;
-}
+struct Response;
+}  // namespace httplib
 
 namespace arbiter::cli {
 
@@ -118,6 +120,12 @@ class LiveView : public Observer {
   }
   /// True when the next hold() will wait: the page has paused the run and asked for no step.
   bool will_hold() const { return paused_ && single_steps_ == 0; }
+  /// A breakpoint (`run --break`) fired after `step`: the run pauses as the page's Pause pauses
+  /// it, and the page's status names the breakpoint until the run goes on.
+  void pause_at_break(std::uint64_t step, const char* breakpoint);
+  /// The run's breakpoints, which the page lists, adds to and removes from (between two steps,
+  /// on the stepping thread); not owned.
+  void set_breakpoints(Breakpoints* breakpoints);
 
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
@@ -145,7 +153,11 @@ class LiveView : public Observer {
     std::vector<ScenePoint> scene_points;
     std::size_t scene_dropped = 0;
   };
+  /// A request the stepping thread answers, as it reads the program: an explanation, or a
+  /// breakpoint set or removed from the page.
   struct ExplainRequest {
+    enum class Kind { kExplain, kAddBreak, kRemoveBreak };
+    Kind kind = Kind::kExplain;
     std::uint64_t step = 0;
     std::string target;
     std::string answer;
@@ -156,6 +168,11 @@ class LiveView : public Observer {
   void publish_graph(const Manager& manager);
   void publish_status();
   void answer_requests(const Manager& manager);
+  /// Queues `request` for the stepping thread and replies with its answer (or why none came).
+  void submit(ExplainRequest& request, httplib::Response& response);
+  void change_breakpoints(const Manager& manager, ExplainRequest& request);
+  /// breakpoints_json_ from breakpoints_; the caller holds mutex_.
+  void list_breakpoints();
   /// Appends the record of `step` to `out`; false when the ring no longer holds it.
   bool copy_record(std::uint64_t step, std::string& out);
   /// Appends the foxglove.SceneUpdate of what `step` drew to `out`; false when it drew nothing
@@ -184,6 +201,10 @@ class LiveView : public Observer {
   std::deque<ExplainRequest*> requests_;
   std::condition_variable answered_;
   std::atomic<bool> paused_{false};
+  Breakpoints* breakpoints_ = nullptr;
+  std::string breakpoints_json_;  // by mutex_: their conditions, a JSON array
+  std::string break_text_;        // by mutex_: the breakpoint the run is paused at, "" when none
+  std::uint64_t break_step_ = 0;  // by mutex_
   std::atomic<std::uint64_t> single_steps_{0};
   const RunTiming* timing_ = nullptr;
   bool paced_ = false;

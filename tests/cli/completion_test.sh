@@ -31,7 +31,7 @@ expect() {
   fi
 }
 
-expect "" -- validate run dump explain test plugins schema view edit plot replay diff lsp new
+expect "" -- validate run dump explain seek test plugins schema view edit plot replay diff lsp new
 expect "n" -- new
 expect "new" "" -- plugin
 expect "new" "plugin" "rover" "configs/pa" -- configs/paper
@@ -40,6 +40,8 @@ expect "new" "plugin" "" --
 expect "replay" "--c" -- --config --color
 expect "diff" "--t" -- --tolerance
 expect "ex" -- explain
+expect "seek" "--f" -- --from
+expect "run" "--br" -- --break
 expect "--log-level" "warn" "du" -- dump
 expect "--plu" -- --plugin-path
 expect "--max" -- --max-file-bytes

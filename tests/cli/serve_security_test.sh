@@ -77,6 +77,14 @@ check "pause, cross-site fetch" 403 \
 check "pause from the page's origin" 200 \
   "$(code -d '' -H "Origin: http://$host" -b "$work/cookies" "${base}control/pause")"
 check "resume with the token" 200 "$(code -d '' -H "X-Arbiter-Token: $token" "${base}control/resume")"
+# A breakpoint is a control too: set only with the token, from the page's own origin.
+check "break without a token" 403 "$(code -d '' "${base}control/break?add=step%20100000000")"
+check "break from another origin" 403 \
+  "$(code -d '' -H "Origin: http://evil.example" -H "X-Arbiter-Token: $token" "${base}control/break?add=step%20100000000")"
+check "break from the page's origin" 200 \
+  "$(code -d '' -H "Origin: http://$host" -b "$work/cookies" "${base}control/break?add=step%20100000000")"
+check "break that names nothing" 400 \
+  "$(code -d '' -H "X-Arbiter-Token: $token" "${base}control/break?add=no_such%20activates")"
 
 # Hostile clients while the run steps at its rate (loopback only, every loop bounded).
 "$cli" run "$config" --serve 127.0.0.1:0 --steps 100000000 --trace "$work/load.jsonl" -q \
@@ -123,6 +131,7 @@ start readonly --serve-readonly
 rtoken=${url#*token=}
 check "read-only info" 200 "$(code -H "X-Arbiter-Token: $rtoken" "${base}info")"
 check "read-only pause" 403 "$(code -d '' -H "X-Arbiter-Token: $rtoken" "${base}control/pause")"
+check "read-only break" 403 "$(code -d '' -H "X-Arbiter-Token: $rtoken" "${base}control/break?add=step%201")"
 case "$(curl -s --max-time 10 -H "X-Arbiter-Token: $rtoken" "${base}info")" in *'"readonly": true'*) passed=$((passed + 1)) ;; *) failed=$((failed + 1)); echo "FAIL: info does not say read-only" ;; esac
 
 # The token from the environment, and a token that cannot be one.

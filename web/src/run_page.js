@@ -31,7 +31,12 @@ export class RunPage {
       this.graph.highlight(key || this.explain.pinned);
       this.explain.hover(key);
     });
-    this.graph.onClick = (key) => this.explain.pin(key);
+    /** A behaviour clicked in the graph (`layer/name`), after the explain panel pinned it. */
+    this.onPick = (key) => {};
+    this.graph.onClick = (key) => {
+      this.explain.pin(key);
+      this.onPick(key);
+    };
     this.explain.onPin = (key) => this.graph.highlight(key);
     this.controllers = new Controllers(document.getElementById('controllers'));
     this.reported = new Reported(document.getElementById('reported'), reportedKept);

@@ -314,8 +314,10 @@ export class Timelines {
     let freeFrom = -Infinity;  // a label is written only where the one before it has ended
     for (; i < events.length && events[i].step <= this.view.to; ++i) {
       const x = this.view.x(events[i].step, w);
-      context.fillStyle = '#a63603';
-      context.fillRect(x, 2, 2, h - 4);
+      // A breakpoint's stop stands out from what code reported.
+      const isBreak = events[i].by === 'break';
+      context.fillStyle = isBreak ? '#7a0bc0' : '#a63603';
+      context.fillRect(x, 2, isBreak ? 3 : 2, h - 4);
       const label = `${events[i].by}: ${events[i].text}`;
       if (x + 4 >= freeFrom) {
         context.fillText(label, x + 5, h / 2);

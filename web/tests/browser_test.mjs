@@ -1065,3 +1065,81 @@ test('live: a step clicked in the timelines stays shown while the run goes on, u
   assert.equal(await page.isVisible('#follow'), false);
   await page.close();
 });
+
+/// The first step of a plain run of the soccer demo at which kick_ball is active: the kick.
+function kickStep() {
+  const trace = path.join(scratch, 'kick.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '400', '--trace', trace, '-q'], {cwd: source});
+  for (const line of readFileSync(trace, 'utf8').split('\n').slice(1)) {
+    if (!line) continue;
+    const record = JSON.parse(line);
+    if (!record.safe && record.layers.control.kick_ball.active) return record.step;
+  }
+  throw new Error('the soccer demo never kicked');
+}
+
+test('a breakpoint set on the page pauses the live soccer demo at the kick', async () => {
+  const kick = kickStep();
+  const run = await serve(['run', soccer, '--serve', '0', '--paused', '--full-speed', '--steps', '100000']);
+  const page = await open(run.url);
+  // A condition that names nothing is refused with the place and the closest name.
+  await page.fill('#break-condition', 'kick_bal activates');
+  await page.click('#break-add');
+  await page.waitForSelector('#break-message.error:not([hidden])');
+  assert.match(await page.textContent('#break-message'), /break:1:1: error\[unknown-name\]: 'kick_bal' names no behaviour[\s\S]*did you mean 'kick_ball'\?/);
+  // Clicking the behaviour offers "break when it activates".
+  await behaviour(page, 'kick_ball').click();
+  assert.equal(await page.inputValue('#break-condition'), 'control/kick_ball activates');
+  await page.click('#break-add');
+  await page.waitForSelector('.breakpoint[data-condition="control/kick_ball activates"]');
+  assert.equal(await page.locator('#break-message').isHidden(), true);
+  await page.click('#resume');
+  await page.waitForSelector('body[data-break]');
+  // Paused at the kick's step, named; the last step the engine ran is the kick's.
+  assert.equal(await page.getAttribute('body', 'data-break'), String(kick));
+  assert.equal(await page.textContent('#status'), `paused at step ${kick}: break control/kick_ball activates`);
+  await waitForStep(page, kick);
+  await page.waitForTimeout(300);
+  assert.equal(await stepShown(page), kick, 'no step after the break ran');
+  // Paused as Pause pauses: the safe values are out.
+  await page.waitForSelector('body[data-safe="true"]');
+  assert.equal(await page.locator('.port.actuator[data-actuator="gait_velocity"] .value').textContent(), '[0, 0, 0]');
+  assert.equal(await behaviour(page, 'kick_ball').getAttribute('data-active'), 'true');
+  // Reported at that step, as the trace and the recording carry it.
+  assert.ok((await page.locator('#reported li.event').allTextContents())
+      .includes(`step ${kick}  break: control/kick_ball activates`));
+  assert.match(run.output(), new RegExp(`step\\s+${kick}  break: control/kick_ball activates`));
+  // Removed, the run goes on past the next kick.
+  await page.click('.breakpoint[data-condition="control/kick_ball activates"] .break-remove');
+  await page.waitForFunction(() => !document.querySelector('.breakpoint'));
+  await page.click('#resume');
+  await page.waitForFunction(() => document.body.dataset.break === undefined);
+  await page.waitForFunction((n) => Number(document.querySelector('#step').textContent) > n + 250, kick);
+  await page.close();
+});
+
+test('the recorded view shows the next step where a condition becomes true', async () => {
+  const kick = kickStep();
+  const trace = path.join(scratch, 'seek.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '400', '--trace', trace, '-q'], {cwd: source});
+  const {url} = await serve(['view', soccer, '--trace', trace, '--serve', '0', '--step', '1']);
+  const page = await open(url);
+  assert.equal(await page.locator('#break-add').isVisible(), false);
+  // A value clicked offers "break when it rises above what it shows"; a behaviour, its activation.
+  await page.click('.port.actuator[data-actuator="gait_velocity"] .value');
+  assert.equal(await page.inputValue('#break-condition'), 'gait_velocity[0] > 0');
+  await behaviour(page, 'go_behind_ball').click();
+  assert.equal(await page.inputValue('#break-condition'), 'control/go_behind_ball activates');
+  await page.fill('#break-condition', 'kick_ball activates');
+  await page.click('#break-next');
+  await waitForStep(page, kick);
+  assert.equal(await page.textContent('#break-message'), `step ${kick}: kick_ball activates`);
+  await page.press('#break-condition', 'Enter');
+  await page.waitForFunction((n) => Number(document.querySelector('#step').textContent) > n, kick);
+  const second = await stepShown(page);
+  await page.press('#break-condition', 'Enter');
+  await page.waitForSelector('#break-message:not(.error)');
+  await page.waitForFunction(() => document.querySelector('#break-message').textContent.startsWith('no step after'));
+  assert.equal(await stepShown(page), second, 'no later kick: the step shown stays');
+  await page.close();
+});

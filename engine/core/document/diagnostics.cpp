@@ -243,7 +243,7 @@ std::string source_excerpt(std::string_view line, const SourceLocation& where, P
 }
 
 std::string format_one(const Diagnostic& diagnostic, const FormatOptions& options,
-                       SourceLines& sources) {
+                       SourceLines* sources, std::string_view given = {}) {
   const Paint paint{options.color};
   // Every part may quote input: a file name, a key, a trace line.
   const std::string where = printable(to_string(diagnostic.location));
@@ -253,7 +253,10 @@ std::string format_one(const Diagnostic& diagnostic, const FormatOptions& option
   std::string out = fmt::format("{}: {}: {}\n", paint(kBold, where), paint(colour, label),
                                 paint(kBold, printable(diagnostic.message)));
   if (options.source && diagnostic.location.line > 0) {
-    if (const auto line = sources.line(diagnostic.location.file, diagnostic.location.line)) {
+    if (sources == nullptr) {
+      out += source_excerpt(given, diagnostic.location, paint);
+    } else if (const auto line =
+                   sources->line(diagnostic.location.file, diagnostic.location.line)) {
       out += source_excerpt(*line, diagnostic.location, paint);
     }
   }
@@ -268,13 +271,18 @@ std::string format_one(const Diagnostic& diagnostic, const FormatOptions& option
 
 std::string format(const Diagnostic& diagnostic, const FormatOptions& options) {
   SourceLines sources;
-  return format_one(diagnostic, options, sources);
+  return format_one(diagnostic, options, &sources);
+}
+
+std::string format(const Diagnostic& diagnostic, std::string_view source,
+                   const FormatOptions& options) {
+  return format_one(diagnostic, options, nullptr, source);
 }
 
 std::string format(const Diagnostics& diagnostics, const FormatOptions& options) {
   SourceLines sources;
   std::string out;
-  for (const auto& item : diagnostics.items()) out += format_one(item, options, sources);
+  for (const auto& item : diagnostics.items()) out += format_one(item, options, &sources);
   return out;
 }
 

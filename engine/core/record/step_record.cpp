@@ -68,7 +68,9 @@ ParamValue param_value(const ArgValue& value) {
 // machine's code outside its states (kNoBehaviour).
 const std::string& report_source(const StepLayout& layout, std::uint32_t source) {
   static const std::string kStandalone = "state machines";
+  static const std::string kBreak = "break";
   if (source == kNoBehaviour) return kStandalone;
+  if (source == Manager::kBreakSource) return kBreak;
   if (source < layout.behaviours.size()) return layout.behaviours[source];
   const std::size_t layer = source - layout.behaviours.size();
   if (layer < layout.layers.size()) return layout.layers[layer].name;

@@ -326,7 +326,9 @@ void Manager::carry_values(const Staged& staged) {
 
 const std::string& Manager::event_source(const detail::StepData::Event& event) const {
   static const std::string kStandalone = "state machines";
+  static const std::string kBreak = "break";
   if (event.source == kNoBehaviour) return kStandalone;
+  if (event.source == kBreakSource) return kBreak;
   if (event.source < program_.behaviours.size()) return program_.behaviours[event.source].name;
   if (event.source - program_.behaviours.size() < program_.layers.size()) {
     return program_.layers[event.source - program_.behaviours.size()].name;
@@ -565,6 +567,14 @@ void Manager::step() {
   }
   finish_faults();
   if (clock_ != nullptr) step_duration_ = clock_->now() - step_time_;
+  break_text_ = check_ != nullptr ? check_->check(*this) : nullptr;
+  if (break_text_ != nullptr) {
+    if (data_.event_count < data_.event_capacity) {
+      events_[data_.event_count] = {kBreakSource, break_text_, data_.sequence};
+    }
+    ++data_.event_count;
+    ++data_.sequence;
+  }
 
   for (Observer* observer : observers_) observer->on_step(*this);
 }

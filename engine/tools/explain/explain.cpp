@@ -57,12 +57,7 @@ std::string listing(const std::vector<std::string>& items) {
   return out;
 }
 
-struct Target {
-  enum class Kind { kBehaviour, kController, kActuator, kState };
-  Kind kind = Kind::kBehaviour;
-  std::uint32_t index = 0;  ///< a behaviour, controller or actuator
-  std::uint32_t state = 0;  ///< kState: the state of controller `index`
-};
+using Target = ExplainTarget;
 
 /// How explain() names `target` in a list of candidates: enough to name it alone.
 std::string full_name(const Program& program, const Target& target) {
@@ -956,6 +951,15 @@ Explanation explain(const Program& program, TraceSource& trace, std::uint64_t st
   } catch (const Json::exception& malformed) {  // a member of the wrong JSON type
     return failure(Status::kBadTrace, fmt::format("the trace is malformed: {}", malformed.what()));
   }
+}
+
+std::optional<ExplainTarget> resolve_target(const Program& program, std::string_view name,
+                                            Explanation& error) {
+  return resolve(program, name, error);
+}
+
+std::string target_name(const Program& program, const ExplainTarget& target) {
+  return full_name(program, target);
 }
 
 }  // namespace arbiter

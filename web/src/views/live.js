@@ -1,5 +1,6 @@
 // The live view: the stream of a running engine (`arbiter run --serve`), with Pause, Step and
 // Resume while it runs, and the safe values it output while paused.
+import {BreakBar, replyText} from '../breaks.js';
 import {setStatus, showTiming} from '../panels.js';
 import {HISTORY} from '../records.js';
 import {RunPage} from '../run_page.js';
@@ -22,6 +23,18 @@ export function live(info) {
   buttons[0].onclick = () => control('pause');
   buttons[1].onclick = () => control('step');
   buttons[2].onclick = () => control('resume');
+  // Breakpoints: set and removed on the engine, which answers between two steps; the status
+  // lists them and names the one the run is paused at.
+  const breaks = controls.hidden ? null : new BreakBar({live: true});
+  if (breaks) {
+    const change = async (kind, condition) => {
+      const reply = await fetch(`control/break?${kind}=${encodeURIComponent(condition)}`, {method: 'POST'});
+      breaks.say(reply.ok ? '' : await replyText(reply), !reply.ok);
+    };
+    breaks.onAdd = (condition) => change('add', condition);
+    breaks.onRemove = (condition) => change('remove', condition);
+    page.onPick = (key) => breaks.pick(key);
+  }
   // The safe-value pass of the engine that paused: shown instead of its last step's commands
   // (that is what its interface layers output), until the next step.
   let safe = null;
@@ -75,7 +88,9 @@ export function live(info) {
     // A reload swaps the program in: draw the new graph; the history is kept by name.
     if (event.data === graphText) return;
     graphText = event.data;
-    graphDrawn = page.setGraph(JSON.parse(event.data));
+    const graph = JSON.parse(event.data);
+    graphDrawn = page.setGraph(graph);
+    if (breaks) breaks.setGraph(graph);
   });
   events.addEventListener('step', (event) => {
     const record = JSON.parse(event.data);
@@ -119,9 +134,14 @@ export function live(info) {
       setStatus('finished', 'finished');
       for (const button of buttons) button.disabled = true;
       controls.hidden = true;
+    } else if (status.paused && status.break) {
+      setStatus(`paused at step ${status.break.step}: break ${status.break.condition}`, 'break');
     } else {
       setStatus(status.paused ? 'paused' : 'running', status.paused ? 'paused' : 'running');
     }
+    if (breaks && status.breakpoints) breaks.show(status.breakpoints);
+    if (status.break && !status.finished) document.body.dataset.break = String(status.break.step);
+    else delete document.body.dataset.break;
   });
   events.addEventListener('timing', (event) => showTiming(JSON.parse(event.data)));
   events.onerror = () => setStatus('connection lost: reconnecting…', 'lost');

@@ -1,4 +1,5 @@
 // The trace view: a recorded run (`arbiter view`), with a slider through its steps.
+import {BreakBar, replyText} from '../breaks.js';
 import {setStatus} from '../panels.js';
 import {RunPage} from '../run_page.js';
 
@@ -36,6 +37,21 @@ export async function trace(info) {
   scrub.oninput = () => go(Number(scrub.value));
   document.getElementById('previous').onclick = () => go(Number(scrub.value) - 1);
   document.getElementById('next').onclick = () => go(Number(scrub.value) + 1);
+  // "Next step where": the server seeks the trace from the step shown.
+  const breaks = new BreakBar({live: false});
+  breaks.setGraph(graph);
+  page.onPick = (key) => breaks.pick(key);
+  breaks.onNext = async (condition) => {
+    const from = records[Number(scrub.value)]?.step ?? 0;
+    const reply = await fetch(`seek?condition=${encodeURIComponent(condition)}&from=${from}`);
+    if (!reply.ok) {
+      breaks.say(await replyText(reply), reply.status === 400);
+      return;
+    }
+    const {step} = await reply.json();
+    breaks.say(`step ${step}: ${condition}`);
+    go(indexOfStep(page.columns, step));
+  };
   // A step clicked in the timelines or plots.
   page.onSeek = (step) => go(indexOfStep(page.columns, step));
   document.addEventListener('keydown', (event) => {

@@ -102,6 +102,10 @@ struct FormatOptions {
 /// underlined (`^~~~`); a file that cannot be read again simply gets no source line.
 std::string format(const Diagnostic& diagnostic, const FormatOptions& options = {});
 std::string format(const Diagnostics& diagnostics, const FormatOptions& options = {});
+/// The same for a diagnostic about a text that is no file (a command-line argument, whose
+/// location names the option, line 1): `source` is that text, shown as a file's line would be.
+std::string format(const Diagnostic& diagnostic, std::string_view source,
+                   const FormatOptions& options);
 
 /// `text` made safe to print on a terminal, for every message that quotes input (format() does
 /// this to what it prints): a control character (U+0000 to U+001F but the tab, U+007F) is written

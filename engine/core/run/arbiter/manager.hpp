@@ -49,6 +49,17 @@ class Observer {
   virtual void on_safe(const Manager& /*manager*/) {}
 };
 
+/// Decides after each step, before the observers see it, whether the run should stop there
+/// (`arbiter run --break`, docs/cli.md "Breakpoints"). Called on the stepping thread: it must not
+/// allocate, look up a name or throw.
+class StepCheck {
+ public:
+  virtual ~StepCheck() = default;
+  /// What made the step a break, or nullptr: a text that stays valid at least until the next
+  /// step (the step's event and break_text() point at it).
+  virtual const char* check(const Manager& manager) = 0;
+};
+
 /// Seconds since the run started, for the step records' `"t"` and `"duration"`. The host injects
 /// it (`arbiter run`: the steady clock); tests use a manual one, so their traces stay exact.
 /// now() is called twice per step on the stepping thread: it must not allocate.
@@ -101,6 +112,15 @@ class Manager {
   bool in_safe_pass() const { return in_safe_pass_; }
   /// How many safe-value passes ran.
   std::uint64_t safe_passes() const { return safe_passes_; }
+
+  /// Asks `check` after every step from now on (nullptr: none); not owned. A step it stops at
+  /// carries the text it returned as an event reported by kBreakSource, so that traces,
+  /// recordings and views mark it.
+  void set_check(StepCheck* check) { check_ = check; }
+  /// The text of the check that fired in the last step, or nullptr.
+  const char* break_text() const { return break_text_; }
+  /// The source of a break's event: event_source() names it "break".
+  static constexpr std::uint32_t kBreakSource = kNoIndex - 1;
 
   /// Times every step from now on (nullptr: none); not owned.
   void set_clock(StepClock* clock) { clock_ = clock; }
@@ -228,6 +248,8 @@ class Manager {
   bool in_safe_pass_ = false;
   std::uint64_t safe_passes_ = 0;
   StepClock* clock_ = nullptr;
+  StepCheck* check_ = nullptr;
+  const char* break_text_ = nullptr;
   double step_time_ = 0.0;
   double step_duration_ = 0.0;
   std::size_t input_pass_events_ = 0;

@@ -31,6 +31,22 @@ struct Explanation {
   std::optional<SourceLocation> where;
 };
 
+/// What a name as explain() takes it names in a program.
+struct ExplainTarget {
+  enum class Kind { kBehaviour, kController, kActuator, kState };
+  Kind kind = Kind::kBehaviour;
+  std::uint32_t index = 0;  ///< a behaviour, controller or actuator
+  std::uint32_t state = 0;  ///< kState: the state of controller `index`
+};
+
+/// The behaviour, state machine, actuator or state `name` names, as explain() resolves it; else
+/// nothing, with `error` (kNotFound) saying why: no such name (with a did-you-mean note), or
+/// ambiguous (with the names to write instead).
+std::optional<ExplainTarget> resolve_target(const Program& program, std::string_view name,
+                                            Explanation& error);
+/// The name that names `target` alone (`control/kick_ball`, `actuators/kick`, `goalie/dive`).
+std::string target_name(const Program& program, const ExplainTarget& target);
+
 /// Explains `target` at step `step` (counting from 1) of `trace`, a trace written by running
 /// `program`'s config.
 ///
