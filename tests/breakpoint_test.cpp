@@ -400,8 +400,9 @@ TEST_CASE("arbiter seek reads a JSON-lines trace with its config: a state's star
   CHECK(result.out == "24\n");
 }
 
-TEST_CASE("a reload resolves the breakpoints again by name; one whose name is gone no longer fires",
-          "[breakpoint]") {
+TEST_CASE(
+    "a reload resolves the breakpoints again by name and one whose name is gone no longer fires",
+    "[breakpoint]") {
   const Set paper(kWalkAndKick);
   Breakpoints breakpoints;
   breakpoints.add(paper.breakpoint("kick_ball activates"));
@@ -445,7 +446,7 @@ layers:
   CHECK_FALSE(breakpoints.items().front().enabled);
 }
 
-TEST_CASE("a behaviour two layers have is named with its layer; alone it is ambiguous",
+TEST_CASE("a behaviour two layers have is named with its layer and alone it is ambiguous",
           "[breakpoint]") {
   Registry registry = tooling_registry();
   Manager manager(test::compile_text(R"(arbiter: 1
