@@ -9,62 +9,39 @@
 //                   within (default 60; the target, 16, on a quiet machine)
 import {test as nodeTest, before, after} from 'node:test';
 import assert from 'node:assert/strict';
-import {spawn, execFile, execFileSync} from 'node:child_process';
-import {createRequire} from 'node:module';
+import {execFile, execFileSync} from 'node:child_process';
 import {copyFileSync, existsSync, mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import path from 'node:path';
 
+import {arbiter, launchChromium, source, startArbiter, stopAll} from './support.mjs';
+
 // A minute per test, set here: Debian's node 18 has no --test-timeout.
 const test = (name, fn, timeout = 60000) => nodeTest(name, {timeout}, fn);
 
-const require = createRequire(path.join(process.env.NODE_MODULES, 'package.json'));
-const {chromium} = require('playwright-core');
-
-const arbiter = process.env.ARBITER;
-const source = process.env.ARBITER_SOURCE;
 // Relative to the source tree, where arbiter runs: the explain answers name them so.
 const paper = 'configs/paper/walk_and_kick.yaml';
 const soccer = 'configs/soccer/walk_and_kick.yaml';
 const scratch = mkdtempSync(path.join(tmpdir(), 'arbiter-web-'));
-const children = [];
 let browser;
 
 before(async () => {
-  browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-           '--disable-background-networking', '--disable-component-update', '--disable-sync'],
-  });
+  browser = await launchChromium();
 });
 
 after(async () => {
   if (browser) await browser.close();
-  for (const child of children) child.kill('SIGINT');
+  stopAll();
   rmSync(scratch, {recursive: true, force: true});
 });
 
 /// Starts `arbiter ARGS` and resolves with the URL it prints (with the live view's token, if
 /// any), the server's base URL and the token, the process and what it printed so far
 /// (`output()`: stdout and stderr).
-function serve(args) {
-  return new Promise((resolve, reject) => {
-    const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
-    children.push(child);
-    let out = '';
-    let err = '';
-    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 15000);
-    child.stdout.on('data', (data) => {
-      out += data;
-      const found = out.match(/(http:\/\/127\.0\.0\.1:\d+\/)(\?token=([\w.-]+))?/);
-      if (found) {
-        clearTimeout(timer);
-        resolve({url: found[0], base: found[1], token: found[3], child, output: () => out + err});
-      }
-    });
-    child.stderr.on('data', (data) => { err += data; });
-    child.on('exit', (code) => reject(new Error(`arbiter exited with ${code}:\n${out}${err}`)));
-  });
+async function serve(args) {
+  const {found, child, output} =
+      await startArbiter(args, /(http:\/\/127\.0\.0\.1:\d+\/)(\?token=([\w.-]+))?/);
+  return {url: found[0], base: found[1], token: found[3], child, output};
 }
 
 async function open(url, timeout = 10000) {

@@ -7,51 +7,33 @@
 import {test as nodeTest, after} from 'node:test';
 import assert from 'node:assert/strict';
 import {execFileSync, spawn, spawnSync} from 'node:child_process';
-import {createRequire} from 'node:module';
 import {mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import path from 'node:path';
 import net from 'node:net';
 
+import {arbiter, children, requireModule, source, startArbiter, stopAll} from './support.mjs';
+
 const test = (name, fn) => nodeTest(name, {timeout: 90000}, fn);
 
-const require = createRequire(path.join(process.env.NODE_MODULES, 'package.json'));
+const require = requireModule;
 const {FoxgloveClient} = require('@foxglove/ws-protocol');
 const WebSocket = require('ws');
 const Ajv2020 = require('ajv/dist/2020').default;
 
-const arbiter = process.env.ARBITER;
-const source = process.env.ARBITER_SOURCE;
 const soccer = 'configs/soccer/walk_and_kick.yaml';
 const scratch = mkdtempSync(path.join(tmpdir(), 'arbiter-foxglove-'));
-const children = [];
 
 after(() => {
-  for (const child of children) child.kill('SIGINT');
+  stopAll();
   rmSync(scratch, {recursive: true, force: true});
 });
 
 /// Starts `arbiter ARGS`; resolves with the ws:// URL it prints, the child, and a function that
 /// resolves with all it printed once it exited (after a SIGINT, as the server stays up).
-function serve(args) {
-  return new Promise((resolve, reject) => {
-    const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
-    children.push(child);
-    let out = '';
-    let err = '';
-    const exited = new Promise((done) => child.on('exit', (code) => done({code, out, err})));
-    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 15000);
-    child.stdout.on('data', (data) => {
-      out += data;
-      const found = out.match(/ws:\/\/127\.0\.0\.1:\d+/);
-      if (found) {
-        clearTimeout(timer);
-        resolve({url: found[0], child, exited, output: () => ({out, err})});
-      }
-    });
-    child.stderr.on('data', (data) => { err += data; });
-    child.on('exit', (code) => reject(new Error(`arbiter exited with ${code}:\n${out}${err}`)));
-  });
+async function serve(args) {
+  const {found, child, exited, streams} = await startArbiter(args, /ws:\/\/127\.0\.0\.1:\d+/);
+  return {url: found[0], child, exited, output: streams};
 }
 
 /// A Foxglove client on `url`: resolves once the server advertised its channels.

@@ -2,34 +2,25 @@
 // driven by playwright-core, run as web/tests/run.sh runs browser_test.mjs (the same variables).
 import {test as nodeTest, before, after} from 'node:test';
 import assert from 'node:assert/strict';
-import {spawn, spawnSync} from 'node:child_process';
-import {createRequire} from 'node:module';
+import {spawnSync} from 'node:child_process';
 import {mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import path from 'node:path';
 
+import {arbiter, launchChromium, source, startArbiter, stopAll} from './support.mjs';
+
 const test = (name, fn, timeout = 90000) => nodeTest(name, {timeout}, fn);
 
-const require = createRequire(path.join(process.env.NODE_MODULES, 'package.json'));
-const {chromium} = require('playwright-core');
-
-const arbiter = process.env.ARBITER;
-const source = process.env.ARBITER_SOURCE;
 const scratch = mkdtempSync(path.join(tmpdir(), 'arbiter-studio-'));
-const children = [];
 let browser;
 
 before(async () => {
-  browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--no-first-run',
-           '--disable-background-networking', '--disable-component-update', '--disable-sync'],
-  });
+  browser = await launchChromium();
 });
 
 after(async () => {
   if (browser) await browser.close();
-  for (const child of children) child.kill('SIGINT');
+  stopAll();
   rmSync(scratch, {recursive: true, force: true});
 });
 
@@ -42,24 +33,10 @@ function copyOf(name) {
 }
 
 /** Starts `arbiter ARGS`; resolves with the URL it prints and what it printed (`output()`). */
-function serve(args) {
-  return new Promise((resolve, reject) => {
-    const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
-    children.push(child);
-    let out = '';
-    let err = '';
-    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 15000);
-    child.stdout.on('data', (data) => {
-      out += data;
-      const found = out.match(/http:\/\/127\.0\.0\.1:\d+\/\?token=[\w.-]+/);
-      if (found) {
-        clearTimeout(timer);
-        resolve({url: found[0], child, output: () => out + err});
-      }
-    });
-    child.stderr.on('data', (data) => { err += data; });
-    child.on('exit', (code) => reject(new Error(`arbiter exited with ${code}:\n${out}${err}`)));
-  });
+async function serve(args) {
+  const {found, child, output} =
+      await startArbiter(args, /http:\/\/127\.0\.0\.1:\d+\/\?token=[\w.-]+/);
+  return {url: found[0], child, output};
 }
 
 async function open(url) {

@@ -1,0 +1,52 @@
+// What the web app's node tests share: starting `arbiter` until it prints where it serves, and
+// headless Chromium. The environment is web/tests/run.sh's (ARBITER, ARBITER_SOURCE, CHROMIUM,
+// NODE_MODULES).
+import {spawn} from 'node:child_process';
+import {createRequire} from 'node:module';
+import path from 'node:path';
+
+export const arbiter = process.env.ARBITER;
+export const source = process.env.ARBITER_SOURCE;
+export const requireModule = createRequire(path.join(process.env.NODE_MODULES, 'package.json'));
+
+/// Every arbiter started here, for the tests' `after` to stop.
+export const children = [];
+
+/// Starts `arbiter ARGS` in the source tree and resolves, once its stdout matches `pattern`, with
+/// the match, the child, `output()` (stdout and stderr so far) and `exited` (resolves with the exit
+/// code and all it printed). Rejects when it exits first or prints no match within 15 s.
+export function startArbiter(args, pattern) {
+  return new Promise((resolve, reject) => {
+    const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
+    children.push(child);
+    let out = '';
+    let err = '';
+    const exited = new Promise((done) => child.on('exit', (code) => done({code, out, err})));
+    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 15000);
+    child.stdout.on('data', (data) => {
+      out += data;
+      const found = out.match(pattern);
+      if (found) {
+        clearTimeout(timer);
+        resolve({found, child, exited, output: () => out + err, streams: () => ({out, err})});
+      }
+    });
+    child.stderr.on('data', (data) => { err += data; });
+    child.on('exit', (code) => reject(new Error(`arbiter exited with ${code}:\n${out}${err}`)));
+  });
+}
+
+/// Stops every arbiter started here.
+export function stopAll() {
+  for (const child of children) child.kill('SIGINT');
+}
+
+/// Debian's headless Chromium, through playwright-core.
+export function launchChromium() {
+  const {chromium} = requireModule('playwright-core');
+  return chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+           '--disable-background-networking', '--disable-component-update', '--disable-sync'],
+  });
+}
