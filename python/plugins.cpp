@@ -36,6 +36,28 @@ struct PyClass {
   std::vector<PyPort> ports;
 };
 
+/// A Python class's instance and the context object its callbacks get, owned by a behaviour or
+/// state. A program may be freed by a thread that does not hold the GIL (a reload's retiring
+/// one), or after the interpreter is gone (then the objects go with it).
+struct PyInstance {
+  py::object instance;
+  py::object context;
+
+  PyInstance() = default;
+  PyInstance(const PyInstance&) = delete;
+  PyInstance& operator=(const PyInstance&) = delete;
+  ~PyInstance() {
+    if (Py_IsInitialized() == 0) {
+      instance.release();
+      context.release();
+      return;
+    }
+    py::gil_scoped_acquire gil;
+    instance = py::object();
+    context = py::object();
+  }
+};
+
 class PyBehaviour;
 
 /// The context a Python callback gets: reads its inputs and, in execute(), writes its outputs, by
@@ -61,24 +83,12 @@ class PyBehaviour final : public Behaviour {
       : class_(std::move(cls)), params_(class_->params.size()), handles_(class_->ports.size()) {
     context_.owner = this;
   }
-  ~PyBehaviour() override {
-    // A program may be freed by a thread that does not hold the GIL (a reload's retiring one),
-    // or after the interpreter is gone (then the objects go with it).
-    if (Py_IsInitialized() == 0) {
-      instance_.release();
-      context_object_.release();
-      return;
-    }
-    py::gil_scoped_acquire gil;
-    instance_ = py::object();
-    context_object_ = py::object();
-  }
 
   void set_param(std::size_t index, const ParamValue& value) { params_[index] = value; }
   void set_handle(std::size_t index, std::uint32_t handle) { handles_[index] = handle; }
 
   void init(BehaviourInitContext&) override {
-    instance_ = class_->cls();
+    python_.instance = class_->cls();
     for (std::size_t i = 0; i < params_.size(); ++i) {
       py::object value = std::visit(
           [](const auto& v) -> py::object {
@@ -93,12 +103,12 @@ class PyBehaviour final : public Behaviour {
               return py::cast(v);
           },
           params_[i]);
-      py::setattr(instance_, class_->params[i].c_str(), value);
+      py::setattr(python_.instance, class_->params[i].c_str(), value);
     }
-    context_object_ = py::cast(&context_, py::return_value_policy::reference);
-    has_update_ = py::hasattr(instance_, "update");
-    has_execute_ = py::hasattr(instance_, "execute");
-    has_inhibited_ = py::hasattr(instance_, "inhibited");
+    python_.context = py::cast(&context_, py::return_value_policy::reference);
+    has_update_ = py::hasattr(python_.instance, "update");
+    has_execute_ = py::hasattr(python_.instance, "execute");
+    has_inhibited_ = py::hasattr(python_.instance, "inhibited");
   }
 
   void update(const StepContext& ctx) override {
@@ -121,15 +131,14 @@ class PyBehaviour final : public Behaviour {
   py::object call(const char* method, const StepContext& ctx, ExecuteContext* execute) {
     context_.step = &ctx;
     context_.execute = execute;
-    return instance_.attr(method)(context_object_);
+    return python_.instance.attr(method)(python_.context);
   }
 
   std::shared_ptr<const PyClass> class_;
   std::vector<ParamValue> params_;
   std::vector<std::uint32_t> handles_;
-  py::object instance_;
   PyContext context_;
-  py::object context_object_;
+  PyInstance python_;  // after context_, which its context object points to: destroyed first
   bool has_update_ = false;
   bool has_execute_ = false;
   bool has_inhibited_ = false;
@@ -245,25 +254,14 @@ class PyState final : public State {
     context_.cls = class_.get();
     context_.handles = &handles_;
   }
-  ~PyState() override {
-    // As ~PyBehaviour: the GIL may not be held, or the interpreter may be gone.
-    if (Py_IsInitialized() == 0) {
-      instance_.release();
-      context_object_.release();
-      return;
-    }
-    py::gil_scoped_acquire gil;
-    instance_ = py::object();
-    context_object_ = py::object();
-  }
 
   void set_handle(std::size_t param, std::uint32_t index) { handles_[param] = index; }
 
   void init(StateInitContext&) override {
-    instance_ = class_->cls();
-    context_object_ = py::cast(&context_, py::return_value_policy::reference);
-    has_activate_ = py::hasattr(instance_, "activate");
-    has_deactivate_ = py::hasattr(instance_, "deactivate");
+    python_.instance = class_->cls();
+    python_.context = py::cast(&context_, py::return_value_policy::reference);
+    has_activate_ = py::hasattr(python_.instance, "activate");
+    has_deactivate_ = py::hasattr(python_.instance, "deactivate");
   }
   void activate(StateContext& ctx) override {
     if (has_activate_) call("activate", ctx);
@@ -287,16 +285,15 @@ class PyState final : public State {
  private:
   py::object call(const char* method, StateContext& ctx) {
     context_.state = &ctx;
-    py::object result = instance_.attr(method)(context_object_);
+    py::object result = python_.instance.attr(method)(python_.context);
     context_.state = nullptr;
     return result;
   }
 
   std::shared_ptr<const PyStateClass> class_;
   std::vector<std::uint32_t> handles_;
-  py::object instance_;
   PyStateContext context_;
-  py::object context_object_;
+  PyInstance python_;  // after context_, which its context object points to: destroyed first
   bool has_activate_ = false;
   bool has_deactivate_ = false;
 };
