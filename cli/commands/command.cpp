@@ -10,8 +10,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
-#include <utility>
 #include <thread>
+#include <utility>
 
 #include "arbiter/lint.hpp"
 #include "builtins.hpp"

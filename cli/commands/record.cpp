@@ -405,6 +405,11 @@ std::optional<Program> program_of_run(const std::string& config, const std::stri
                                       std::string_view command, const FormatOptions& format_options,
                                       std::ostream& err, int& exit) {
   exit = 1;
+  if (!std::ifstream(run, std::ios::binary)) {
+    err << fmt::format("arbiter {}: cannot read trace '{}'\n", command, run);
+    exit = 2;
+    return std::nullopt;
+  }
   // A pipe is read once, by the command itself: its config is not read first.
   const bool again = readable_again(run);
   const bool recording = again && is_recording(run);

@@ -73,8 +73,8 @@ RecordedProgram load_recorded_program(const std::string& recording, Registry& re
 
 /// The program a run (trace or recording) is read against by `command` (explain, view): `config`
 /// when given, checked against the config a recording holds; else the one the recording holds.
-/// nullopt when there is none, or the given config is not the recording's: said on `err`, with
-/// the exit code in `exit`.
+/// nullopt when the run cannot be read (exit 2), when there is no config, or the given config is
+/// not the recording's: said on `err`, with the exit code in `exit`.
 std::optional<Program> program_of_run(const std::string& config, const std::string& run,
                                       Registry& registry, const LoadOptions& options,
                                       std::string_view command, const FormatOptions& format,
