@@ -1025,12 +1025,14 @@ test('live: a step clicked in the timelines stays shown while the run goes on, u
   await page.waitForFunction(() => Number(document.querySelector('#step').textContent) >= 30);
   await nextFrame(page);
   // The timelines' scale grows with the run between measuring and clicking, so the step clicked
-  // is step 10 or one next to it: the page must show the one it pinned.
+  // is step 10 or one after it: 10 × (steps at the click / steps at the measure), which a busy
+  // machine can make large, but not past 20 unless the run doubled meanwhile (two seconds at
+  // least). The page must show the one it pinned.
   const {x} = await xOfStep(page, 10);
   await page.mouse.click(x, await yOfRow(page, '.timeline[data-name="control/go_behind_ball"]'));
   await page.waitForSelector('body[data-pinned]');
   const pinned = Number(await page.getAttribute('body', 'data-pinned'));
-  assert.ok(Math.abs(pinned - 10) <= 2, `pinned step ${pinned}, clicked at step 10`);
+  assert.ok(pinned >= 8 && pinned <= 20, `pinned step ${pinned}, clicked at step 10`);
   await waitForStep(page, pinned);
   assert.equal(await page.isVisible('#follow'), true);
   // The run goes on (the timelines grow), the page stays at the step clicked.
@@ -1069,7 +1071,9 @@ test('a breakpoint set on the page pauses the live soccer demo at the kick', asy
   assert.equal(await page.inputValue('#break-condition'), 'control/kick_ball activates');
   await page.click('#break-add');
   await page.waitForSelector('.breakpoint[data-condition="control/kick_ball activates"]');
-  assert.equal(await page.locator('#break-message').isHidden(), true);
+  // The refusal's message goes once the accepted breakpoint is listed (on a busy machine, a frame
+  // after it).
+  await page.waitForSelector('#break-message', {state: 'hidden'});
   await page.click('#resume');
   await page.waitForSelector('body[data-break]');
   // Paused at the kick's step, named; the last step the engine ran is the kick's.
