@@ -14,7 +14,8 @@ export const children = [];
 
 /// Starts `arbiter ARGS` in the source tree and resolves, once its stdout matches `pattern`, with
 /// the match, the child, `output()` (stdout and stderr so far) and `exited` (resolves with the exit
-/// code and all it printed). Rejects when it exits first or prints no match within 15 s.
+/// code and all it printed). Rejects when it exits first or prints no match within 30 s (a debug
+/// build loading a 1000-behaviour config on a busy machine takes more than 15).
 export function startArbiter(args, pattern) {
   return new Promise((resolve, reject) => {
     const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
@@ -22,7 +23,7 @@ export function startArbiter(args, pattern) {
     let out = '';
     let err = '';
     const exited = new Promise((done) => child.on('exit', (code) => done({code, out, err})));
-    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 15000);
+    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 30000);
     child.stdout.on('data', (data) => {
       out += data;
       const found = out.match(pattern);
