@@ -563,10 +563,6 @@ void memory(benchmark::State& state, Graph graph) {
 
 constexpr Graph kGraphs[] = {Graph::kNone, Graph::kChain, Graph::kDag, Graph::kLayers};
 
-double fastest(const std::vector<double>& values) {
-  return values.empty() ? 0.0 : *std::min_element(values.begin(), values.end());
-}
-
 }  // namespace
 
 void register_benchmarks() {

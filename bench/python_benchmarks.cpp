@@ -142,8 +142,7 @@ std::pair<double, double> fastest_batches(benchmark::State& state, std::size_t b
     timed(a_first ? 1 : 0);
     a_first = !a_first;
   }
-  return {*std::min_element(times[0].begin(), times[0].end()),
-          *std::min_element(times[1].begin(), times[1].end())};
+  return {fastest(times[0]), fastest(times[1])};
 }
 
 /// A 1000-behaviour graph stepped one Manager.step() call per step from a Python loop, against
@@ -189,10 +188,6 @@ void to_dataframe(benchmark::State& state) {
   state.counters["columns"] = static_cast<double>(columns);
   state.counters["trace_mb"] = static_cast<double>(std::filesystem::file_size(trace)) / 1e6;
   std::filesystem::remove(trace);
-}
-
-double fastest(const std::vector<double>& values) {
-  return values.empty() ? 0.0 : *std::min_element(values.begin(), values.end());
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <malloc.h>
 #include <time.h>
 
+#include <algorithm>
 #include <iostream>
 #include <vector>
 
@@ -113,6 +114,10 @@ std::optional<Program> load_timed(const std::string& path, Registry& registry,
   times.compile_ms = milliseconds_since(start);
   if (!program) return report();
   return program;
+}
+
+double fastest(const std::vector<double>& values) {
+  return values.empty() ? 0.0 : *std::min_element(values.begin(), values.end());
 }
 
 double cpu_seconds() {

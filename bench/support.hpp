@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "arbiter/load.hpp"
 #include "arbiter/program.hpp"
@@ -36,6 +37,10 @@ struct LoadTimes {
 /// when it is invalid.
 std::optional<Program> load_timed(const std::string& path, Registry& registry,
                                   const LoadOptions& options, LoadTimes& times);
+
+/// The smallest of `values` (0 when there are none): on a shared machine other load only ever
+/// adds time, so the fastest repetition is the benchmark's figure (ComputeStatistics("min")).
+double fastest(const std::vector<double>& values);
 
 /// This thread's CPU time: on a shared machine, time spent descheduled is not the engine's.
 double cpu_seconds();
