@@ -2,10 +2,12 @@
 // sensors on top, its behaviours laid out by ELK's layered algorithm with the inhibitions as
 // edges (inhibitor above inhibited), and its actuators below; actuator -> sensor flows between
 // the columns. Boxes are sized to the text they hold, measured in the page's font, and ELK keeps
-// edges off the boxes, so no label lies under an edge.
+// edges off the boxes, so no label lies under an edge. A click on a layer's title folds its
+// behaviours away (folds.js); graph_nav.js adds zoom, pan and search.
 import ELK from 'elkjs/lib/elk.bundled.js';
 
 import {colour, el, formatValue, text} from './dom.js';
+import {Folds} from './folds.js';
 import {levelsOf} from './records.js';
 
 const COLUMN = 270;   // the narrowest width of a layer's column
@@ -19,6 +21,7 @@ const TYPICAL_VALUE = {bool: 'false', int: '-12345', double: '-12.345', vec2: '[
 const INHIBITORS_ROOM = 260;  // a list of inhibitors wider than this is wrapped
 const LARGE = 200;            // behaviours: from here, only those on the screen are redrawn,
 const LARGE_PERIOD = 100;     // and at most every this many ms
+const FOLD_MARK = 14;         // room for the ▾ before a layer's title
 
 // ELK's own build without a web worker: layouts of a few dozen boxes take milliseconds.
 const elk = new ELK();
@@ -147,12 +150,22 @@ export class GraphView {
   /**
    * @param {SVGSVGElement} svg
    * @param {(key: string | null) => void} onHover called with 'layer/name' or null
+   * @param {Folds} [folds] the layers folded away (shared with the timelines)
    */
-  constructor(svg, onHover) {
+  constructor(svg, onHover, folds = new Folds()) {
     this.svg = svg;
     this.onHover = onHover;
     /** Called with 'layer/name' when a behaviour is clicked. */
     this.onClick = (key) => {};
+    /** Called after every drawing of the SVG (a new graph, a layer folded or unfolded). */
+    this.onBuilt = () => {};
+    /** The zoom and pan (graph_nav.js), when the view has them; else the page scrolls. */
+    this.view = null;
+    this.folds = folds;
+    folds.subscribe(() => this.rebuild());
+    this.drawn = null;  // {graph, sizes, layouts}: what the SVG shows, to draw again when a layer folds
+    this.words = '';    // marked (mark())
+    this.highlighted = null;
     this.behaviours = new Map();  // 'layer/name' -> {group, rect, level, mark, name, inhibitors, ...}
     this.ports = new Map();       // actuator name -> {group, value, title, about}
     this.drawing = 0;
@@ -166,14 +179,31 @@ export class GraphView {
    */
   async draw(graph) {
     const drawing = ++this.drawing;
+    // The layout's time, for the benchmark (web/bench/studio_frames.mjs): measured up to the SVG
+    // built, not painted.
+    const started = performance.now();
     const measure = textMeasure(this.svg);
     const sizes = graph.layers.map((layer) => sizeLayer(layer, measure));
     measure.done();
     const layouts = await Promise.all(graph.layers.map((layer, index) => layoutLayer(layer, sizes[index])));
     if (drawing !== this.drawing) return false;
+    this.drawn = {graph, sizes, layouts};
+    this.rebuild();
+    performance.measure('arbiter:layout', {start: started, detail: {behaviours: this.behaviours.size}});
+    return true;
+  }
+
+  /** Draws what draw() laid out again, as the folds are now. */
+  rebuild() {
+    if (!this.drawn) return;
+    const {graph, sizes, layouts} = this.drawn;
     this.build(graph, sizes, layouts);
     this.watchScreen();
-    return true;
+    this.mark(this.words);
+    this.highlight(this.highlighted);
+    if (this.record) this.show(this.record);
+    this.view?.contentChanged();
+    this.onBuilt();
   }
 
   build(graph, sizes, layouts) {
@@ -191,11 +221,32 @@ export class GraphView {
     graph.layers.forEach((layer, index) => {
       const size = sizes[index];
       const layout = layouts[index];
-      const inner = Math.max(size.sensorW, layout.width || 0, size.actuatorW + 16, size.titleW);
-      const width = Math.max(COLUMN - 20, 12 + inner + 12);
-      const column = el('g', {class: 'layer', 'data-layer': layer.name}, svg);
+      const foldable = layer.behaviours.length > 0;
+      const folded = foldable && this.folds.has(layer.name);
+      const foldedNote = `${layer.behaviours.length} behaviour${layer.behaviours.length === 1 ? '' : 's'} folded away`;
+      const inner = Math.max(size.sensorW, folded ? measure(foldedNote, null, 'section-label') : layout.width || 0,
+                             size.actuatorW + 16, size.titleW + (foldable ? FOLD_MARK : 0));
+      const width = Math.max(folded ? 0 : COLUMN - 20, 12 + inner + 12);
+      const column = el('g', {class: `layer${folded ? ' folded' : ''}`, 'data-layer': layer.name}, svg);
       const box = el('rect', {class: 'layer-box', x, y: 4, width, rx: 8}, column);
-      text('text', {class: 'layer-title', x: x + 12, y: 24}, layer.name, column);
+      if (foldable) {
+        // The title folds the layer away and back, by click or by key (Enter, Space).
+        const head = el('g', {class: 'layer-head', tabindex: 0, role: 'button', 'aria-expanded': String(!folded),
+                              'aria-label': `${folded ? 'unfold' : 'fold'} layer ${layer.name}`}, column);
+        text('text', {class: 'fold-mark', x: x + 12, y: 24}, folded ? '▸' : '▾', head);
+        text('text', {class: 'layer-title', x: x + 12 + FOLD_MARK, y: 24}, layer.name, head);
+        const toggle = () => this.folds.set(layer.name);
+        head.addEventListener('click', toggle);
+        head.addEventListener('keydown', (event) => {
+          if (event.key !== 'Enter' && event.key !== ' ') return;
+          event.preventDefault();
+          toggle();
+          // The new drawing's head keeps the focus, for the next key.
+          this.svg.querySelector(`g.layer[data-layer="${CSS.escape(layer.name)}"] .layer-head`)?.focus({preventScroll: true});
+        });
+      } else {
+        text('text', {class: 'layer-title', x: x + 12, y: 24}, layer.name, column);
+      }
       if (layer.interface) text('text', {class: 'layer-class', x: x + 12, y: 40}, `interface ${layer.interface}`, column);
       else if (layer.normalise) text('text', {class: 'layer-class', x: x + 12, y: 40}, 'normalised', column);
       let y = 50;
@@ -212,7 +263,10 @@ export class GraphView {
         }
         y += 6;
       }
-      if (layer.behaviours.length) {
+      if (folded) {
+        text('text', {class: 'section-label folded-note', x: x + 12, y: y + 8}, foldedNote, column);
+        y += 20;
+      } else if (layer.behaviours.length) {
         y += 4;
         this.buildBehaviours(layer, size, layout, x + 12, y, column, edges);
         y += layout.height + 8;
@@ -324,27 +378,56 @@ export class GraphView {
   }
 
   /**
-   * Marks the behaviours whose 'layer/name' holds `words` and dims the others (none when empty).
+   * The behaviours whose 'layer/name' holds `words` (lower case), folded away or not, in
+   * execution order; none when `words` is empty.
+   */
+  matches(words) {
+    if (!words || !this.drawn) return [];
+    const found = [];
+    for (const layer of this.drawn.graph.layers) {
+      for (const behaviour of layer.behaviours) {
+        const key = `${layer.name}/${behaviour.name}`;
+        if (key.toLowerCase().includes(words)) found.push(key);
+      }
+    }
+    return found;
+  }
+
+  /**
+   * Marks the behaviours whose 'layer/name' holds `words` (lower case) and dims the others (none
+   * when empty); a folded layer that holds some says how many.
    * @returns {string | null} the first match, in execution order
    */
   mark(words) {
-    let first = null;
+    this.words = words;
+    const found = this.matches(words);
+    const matched = new Set(found);
     for (const [key, item] of this.behaviours) {
-      const match = !!words && key.toLowerCase().includes(words);
-      if (match && !first) first = key;
-      item.group.classList.toggle('matched', match);
-      item.group.classList.toggle('unmatched', !!words && !match);
+      item.group.classList.toggle('matched', matched.has(key));
+      item.group.classList.toggle('unmatched', !!words && !matched.has(key));
     }
-    return first;
+    for (const column of this.svg.querySelectorAll('g.layer.folded')) {
+      const count = found.filter((key) => key.startsWith(`${column.dataset.layer}/`)).length;
+      column.classList.toggle('has-matches', count > 0);
+      if (count) column.dataset.matches = String(count);
+      else delete column.dataset.matches;
+    }
+    return found[0] ?? null;
   }
 
-  /** Scrolls `key`'s box into view. */
+  /** Brings `key`'s box into view, unfolding its layer if it is folded away. */
   reveal(key) {
-    this.behaviours.get(key)?.group.scrollIntoView({block: 'center', inline: 'center'});
+    const layer = key.slice(0, key.indexOf('/'));
+    if (this.folds.has(layer)) this.folds.set(layer, false);
+    const item = this.behaviours.get(key);
+    if (!item) return;
+    if (this.view) this.view.show(item.rect.getBBox());
+    else item.group.scrollIntoView({block: 'center', inline: 'center'});
   }
 
   /** Marks the hovered behaviour ('layer/name', or null). */
   highlight(key) {
+    this.highlighted = key;
     for (const [name, item] of this.behaviours) item.group.classList.toggle('hovered', name === key);
   }
 

@@ -41,7 +41,8 @@ export class RunPage {
     this.controllers = new Controllers(document.getElementById('controllers'));
     this.reported = new Reported(document.getElementById('reported'), reportedKept);
     this.scene = new SceneView(document.getElementById('scene-panel'), document.getElementById('scene'));
-    this.timelines = new Timelines(document.getElementById('timelines'), this.columns, this.time);
+    // A layer folded in the timelines is folded in the graph, and the other way round.
+    this.timelines = new Timelines(document.getElementById('timelines'), this.columns, this.time, this.graph.folds);
     this.timelines.queueAt = (machine) => this.current?.controllers?.[machine]?.queue ?? null;
     this.timelines.onLabel = (key) => this.explain.pin(key);
     // The filter by name finds behaviours in the graph too.

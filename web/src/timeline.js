@@ -5,6 +5,7 @@
 // shown; hovering tells the values at a step; a filter keeps the rows whose name matches.
 import {ACTIVE, INHIBITED, lowerBound} from './columns.js';
 import {colour, html} from './dom.js';
+import {Folds} from './folds.js';
 import {attachKeys, attachPointer} from './time_view.js';
 
 const ROW_HEIGHT = 22;
@@ -39,8 +40,9 @@ export class Timelines {
    * @param {HTMLElement} section the timelines' section (it takes the keys when focused)
    * @param {import('./columns.js').Columns} columns
    * @param {import('./time_view.js').TimeView} view
+   * @param {Folds} [folds] the layers folded away, shared with the graph
    */
-  constructor(section, columns, view) {
+  constructor(section, columns, view, folds = new Folds()) {
     this.section = section;
     this.rows = section.querySelector('#timeline-rows');
     this.range = section.querySelector('#timeline-range');
@@ -50,7 +52,8 @@ export class Timelines {
     this.view = view;
     /** @type {{kind: string, key: string, row: HTMLElement, canvas: HTMLCanvasElement, note?: HTMLElement}[]} */
     this.strips = [];
-    this.collapsed = new Set();  // layers folded away
+    this.folds = folds;
+    this.groups = new Map();     // layer -> {group, head}
     this.visible = new Set();    // rows on the screen
     this.pointer = null;         // {strip, x, y}: where the pointer is, for the tip
     this.queueAt = () => null;   // the queue of a state machine at the cursor (from the record)
@@ -67,6 +70,7 @@ export class Timelines {
       this.view.changed();
     });
     view.subscribe(() => this.draw());
+    folds.subscribe((layer) => this.showFold(layer));
     attachPointer(this.rows, view, () => this.strip());
     attachKeys(section, view);
     this.rows.addEventListener('pointermove', (event) => {
@@ -115,6 +119,7 @@ export class Timelines {
     for (const strip of this.strips) this.observer.unobserve(strip.row);
     this.rows.replaceChildren();
     this.strips = [];
+    this.groups.clear();
     this.visible.clear();
     this.add('timeline-axis', '', 'step · t', this.rows, AXIS_HEIGHT);
     for (const layer of graph.layers) {
@@ -122,8 +127,9 @@ export class Timelines {
       const group = html('div', {class: 'timeline-group', 'data-layer': layer.name}, this.rows);
       const head = html('button', {type: 'button', class: 'timeline-layer', 'aria-expanded': 'true'}, group);
       head.textContent = `${layer.name} (${layer.behaviours.length})`;
-      head.onclick = () => this.toggle(layer.name, group, head);
-      if (this.collapsed.has(layer.name)) this.toggle(layer.name, group, head, true);
+      head.onclick = () => this.folds.set(layer.name);
+      this.groups.set(layer.name, {group, head});
+      this.showFold(layer.name);
       for (const behaviour of layer.behaviours) {
         const key = `${layer.name}/${behaviour.name}`;
         const strip = this.add('timeline', key, key, group, ROW_HEIGHT, {'data-name': key});
@@ -139,11 +145,12 @@ export class Timelines {
     this.applyFilter();
   }
 
-  toggle(layer, group, head, collapse = !this.collapsed.has(layer)) {
-    if (collapse) this.collapsed.add(layer);
-    else this.collapsed.delete(layer);
-    group.classList.toggle('collapsed', collapse);
-    head.setAttribute('aria-expanded', String(!collapse));
+  showFold(layer) {
+    const shown = this.groups.get(layer);
+    if (!shown) return;
+    const folded = this.folds.has(layer);
+    shown.group.classList.toggle('collapsed', folded);
+    shown.head.setAttribute('aria-expanded', String(!folded));
     this.view.changed();
   }
 

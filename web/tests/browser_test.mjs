@@ -14,7 +14,7 @@ import {copyFileSync, existsSync, mkdtempSync, readFileSync, rmSync, writeFileSy
 import {tmpdir} from 'node:os';
 import path from 'node:path';
 
-import {arbiter, launchChromium, source, startArbiter, stopAll} from './support.mjs';
+import {arbiter, largeConfig, launchChromium, source, startArbiter, stopAll} from './support.mjs';
 
 // A minute per test, set here: Debian's node 18 has no --test-timeout.
 const test = (name, fn, timeout = 60000) => nodeTest(name, {timeout}, fn);
@@ -932,23 +932,6 @@ test('the explain panel is pinned to a behaviour, readable, and follows the curs
   await page.close();
 });
 
-/// A config of `layers` × `perLayer` scripted behaviours at `rateHz`, each switching its level
-/// every few steps, with an inhibition between neighbours: a large graph that keeps changing.
-function largeConfig(layers, perLayer, rateHz) {
-  const lines = ['arbiter: 1', 'name: large', `rate_hz: ${rateHz}`, 'layers:'];
-  for (let l = 0; l < layers; ++l) {
-    lines.push(`  - name: layer_${l}`, '    actuators:', `      out_${l}: {type: double, aggregate: true}`, '    behaviours:');
-    for (let b = 0; b < perLayer; ++b) {
-      const period = 7 + ((l * perLayer + b) % 23);
-      const items = [];
-      for (let k = 0; k < 40; ++k) items.push(`{from: ${1 + k * period}, level: ${[1, 0, 0.5, 0.2][(k + b) % 4]}}`);
-      lines.push(`      b_${l}_${b}: {type: scripted, params: {activation: [${items.join(', ')}], writes: {out_${l}: ${b / perLayer}}}}`);
-    }
-    lines.push('    inhibitions:');
-    for (let b = 0; b + 1 < perLayer; b += 2) lines.push(`      - b_${l}_${b} => b_${l}_${b + 1}`);
-  }
-  return lines.join('\n') + '\n';
-}
 
 test('1000 behaviours streamed live at 100 Hz: the page stays responsive (median frame work within budget)', async () => {
   const config = path.join(scratch, 'large.yaml');
@@ -1016,6 +999,12 @@ test('1000 behaviours streamed live at 100 Hz: the page stays responsive (median
   await page.fill('#timeline-filter', '');
   await page.click('.timeline-group[data-layer="layer_0"] .timeline-layer');
   assert.equal(await page.locator('.timeline:visible').count(), 900);
+  // Folded in the graph too (one set of folds); its title there unfolds both.
+  await page.waitForSelector('#graph .layer.folded[data-layer="layer_0"]');
+  assert.equal(await page.locator('#graph .behaviour').count(), 900);
+  await page.click('#graph .layer[data-layer="layer_0"] .layer-head');
+  await page.waitForSelector('.timeline-group:not(.collapsed)[data-layer="layer_0"]');
+  assert.equal(await page.locator('#graph .behaviour').count(), 1000);
   await page.close();
 }, 120000);
 

@@ -7,7 +7,7 @@ import {mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import path from 'node:path';
 
-import {arbiter, launchChromium, source, startArbiter, stopAll} from './support.mjs';
+import {arbiter, largeConfig, launchChromium, source, startArbiter, stopAll} from './support.mjs';
 
 const test = (name, fn, timeout = 90000) => nodeTest(name, {timeout}, fn);
 
@@ -296,4 +296,118 @@ test('two tabs on one studio see each other\'s edits and saves, and a file chang
   assert.equal(readFileSync(file, 'utf8'), edited);
   await first.close();
   await second.close();
+});
+
+test('a 200-behaviour graph: zoomed about the pointer, panned, a layer folded and unfolded, a behaviour found by name', async () => {
+  const file = path.join(scratch, 'large.yaml');
+  writeFileSync(file, largeConfig(4, 50, 10));
+  const original = readFileSync(file, 'utf8');
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  await settled(page);
+  assert.equal(await page.locator('.behaviour').count(), 200);
+  const stage = await page.locator('.graph-stage').boundingBox();
+  const scale = () => page.evaluate(() => Number(document.querySelector('.graph-stage').dataset.scale));
+  const boxOf = (key) => page.locator(`.behaviour[data-name="${key}"] rect`).boundingBox();
+  const centre = (b) => ({x: b.x + b.width / 2, y: b.y + b.height / 2});
+  const inStage = (b) => b.x >= stage.x && b.y >= stage.y && b.x + b.width <= stage.x + stage.width &&
+                         b.y + b.height <= stage.y + stage.height;
+  const near = (a, b, what) => assert.ok(Math.abs(a.x - b.x) < 1.5 && Math.abs(a.y - b.y) < 1.5,
+                                         `${what}: ${JSON.stringify(a)} against ${JSON.stringify(b)}`);
+
+  // Opened fitted: the whole graph in the stage, smaller than its own size.
+  const fitted = await scale();
+  assert.ok(fitted < 1, `fitted at ${fitted}`);
+  assert.ok(inStage(await page.locator('#graph').boundingBox()), 'the whole graph in view');
+
+  // The wheel zooms in about the pointer: the point under it stays where it is.
+  const before = centre(await boxOf('layer_1/b_1_10'));
+  await page.mouse.move(before.x, before.y);
+  await page.mouse.wheel(0, -300);
+  await page.waitForFunction((s) => Number(document.querySelector('.graph-stage').dataset.scale) > s * 1.5, fitted);
+  near(centre(await boxOf('layer_1/b_1_10')), before, 'the point under the pointer');
+  const zoomed = await scale();
+  const wider = await boxOf('layer_1/b_1_10');
+  assert.ok(Math.abs(wider.width / (await page.evaluate(() => document.querySelector('.behaviour rect').getBBox().width)) - zoomed) < 0.01);
+  // The keys: − zooms out about the middle, 0 fits the graph again.
+  await page.focus('.graph-stage');
+  await page.keyboard.press('-');
+  assert.ok(Math.abs(await scale() - zoomed / 1.25) < 1e-9);
+  await page.keyboard.press('0');
+  assert.equal(await scale(), fitted);
+
+  // A drag on the background pans: the graph moves with the pointer, nothing is selected or
+  // added; the arrow keys pan by a part of the stage.
+  const still = await boxOf('layer_0/b_0_0');
+  await page.mouse.move(stage.x + 6, stage.y + 6);
+  await page.mouse.down();
+  for (let i = 1; i <= 8; ++i) await page.mouse.move(stage.x + 6 + 15 * i, stage.y + 6 + 10 * i);
+  await page.mouse.up();
+  const moved = await boxOf('layer_0/b_0_0');
+  near({x: moved.x, y: moved.y}, {x: still.x + 120, y: still.y + 80}, 'panned by the drag');
+  assert.equal(await page.textContent('#inspector p'), 'Click a behaviour or an inhibition. Drag from one behaviour to another to add an inhibition.');
+  await page.focus('.graph-stage');
+  await page.keyboard.press('ArrowRight');
+  const keyed = await boxOf('layer_0/b_0_0');
+  near({x: keyed.x, y: keyed.y}, {x: moved.x - 0.15 * (stage.width - 2), y: moved.y}, 'panned by the key');
+  await page.keyboard.press('0');
+
+  // A layer folds away by a click on its title: its behaviours are not drawn, the others are;
+  // Enter on the title unfolds it.
+  await page.click('.layer[data-layer="layer_1"] .layer-head');
+  await page.waitForSelector('.layer.folded[data-layer="layer_1"]');
+  assert.equal(await page.locator('.behaviour[data-name^="layer_1/"]').count(), 0);
+  assert.equal(await page.locator('.behaviour').count(), 150);
+  assert.equal(await page.getAttribute('.layer[data-layer="layer_1"] .layer-head', 'aria-expanded'), 'false');
+  assert.match(await page.textContent('.layer[data-layer="layer_1"]'), /50 behaviours folded away/);
+  await page.focus('.layer[data-layer="layer_1"] .layer-head');
+  await page.keyboard.press('Enter');
+  await page.waitForSelector('.layer:not(.folded)[data-layer="layer_1"]');
+  assert.equal(await page.locator('.behaviour').count(), 200);
+  assert.equal(await page.getAttribute('.layer[data-layer="layer_1"] .layer-head', 'aria-expanded'), 'true');
+
+  // Search by name: the matches are marked; Enter brings the first into view at a readable
+  // scale and selects it, Enter again the next.
+  await page.fill('#graph-search', 'b_3_4');
+  assert.equal(await page.locator('.behaviour.matched').count(), 11);  // b_3_4, b_3_40 ... b_3_49
+  assert.equal(await page.locator('.behaviour.unmatched').count(), 189);
+  assert.equal(await page.textContent('#graph-matches'), '11 found');
+  await page.press('#graph-search', 'Enter');
+  await page.waitForFunction(() => document.querySelector('#inspector').textContent.includes('layer_3/b_3_4 ('));
+  assert.ok(await scale() >= 0.8);
+  assert.ok(inStage(await boxOf('layer_3/b_3_4')), 'the first match in view');
+  await page.press('#graph-search', 'Enter');
+  await page.waitForFunction(() => document.querySelector('#inspector').textContent.includes('layer_3/b_3_40 ('));
+  assert.ok(inStage(await boxOf('layer_3/b_3_40')), 'the next match in view');
+  assert.equal(await page.textContent('#graph-matches'), '2 of 11');
+  // One in a folded layer: the layer unfolds to show it.
+  await page.keyboard.press('Escape');
+  assert.equal(await page.locator('.behaviour.matched').count(), 0);
+  await page.focus('.graph-stage');
+  await page.keyboard.press('0');
+  await page.click('.layer[data-layer="layer_2"] .layer-head');
+  await page.waitForSelector('.layer.folded[data-layer="layer_2"]');
+  await page.fill('#graph-search', 'b_2_33');
+  assert.equal(await page.getAttribute('.layer[data-layer="layer_2"]', 'data-matches'), '1');
+  await page.press('#graph-search', 'Enter');
+  await page.waitForSelector('.layer:not(.folded)[data-layer="layer_2"]');
+  assert.ok(inStage(await boxOf('layer_2/b_2_33')), 'found in a folded layer, in view');
+
+  // Zoomed in, a drag from one behaviour to another still draws an inhibition, and the view
+  // stays where it was when the graph is drawn again.
+  const from = await boxOf('layer_2/b_2_33');
+  const onto = await boxOf('layer_2/b_2_35');
+  assert.ok(inStage(onto), `b_2_35 in view: ${JSON.stringify(onto)}`);
+  await page.mouse.move(from.x + from.width / 2, from.y + from.height / 2);
+  await page.mouse.down();
+  for (let i = 1; i <= 10; ++i) {
+    await page.mouse.move(from.x + from.width / 2 + (onto.x - from.x) * i / 10, from.y + from.height / 2 + (onto.y - from.y) * i / 10);
+  }
+  await page.mouse.up();
+  await page.waitForSelector('g.edge[data-from="b_2_33"][data-to="b_2_35"]');
+  assert.match(await text(page), /      - b_2_32 => b_2_33\n      - b_2_34 => b_2_35\n[^]*- b_2_33 => b_2_35\n/);
+  assert.ok(await scale() >= 0.8);
+  assert.equal(readFileSync(file, 'utf8'), original);
+  assert.deepEqual(page.errors, []);
+  await page.close();
 });

@@ -51,3 +51,21 @@ export function launchChromium() {
            '--disable-background-networking', '--disable-component-update', '--disable-sync'],
   });
 }
+
+/// A config of `layers` × `perLayer` scripted behaviours at `rateHz`, each switching its level
+/// every few steps, with an inhibition between neighbours: a large graph that keeps changing.
+export function largeConfig(layers, perLayer, rateHz) {
+  const lines = ['arbiter: 1', 'name: large', `rate_hz: ${rateHz}`, 'layers:'];
+  for (let l = 0; l < layers; ++l) {
+    lines.push(`  - name: layer_${l}`, '    actuators:', `      out_${l}: {type: double, aggregate: true}`, '    behaviours:');
+    for (let b = 0; b < perLayer; ++b) {
+      const period = 7 + ((l * perLayer + b) % 23);
+      const items = [];
+      for (let k = 0; k < 40; ++k) items.push(`{from: ${1 + k * period}, level: ${[1, 0, 0.5, 0.2][(k + b) % 4]}}`);
+      lines.push(`      b_${l}_${b}: {type: scripted, params: {activation: [${items.join(', ')}], writes: {out_${l}: ${b / perLayer}}}}`);
+    }
+    lines.push('    inhibitions:');
+    for (let b = 0; b + 1 < perLayer; b += 2) lines.push(`      - b_${l}_${b} => b_${l}_${b + 1}`);
+  }
+  return lines.join('\n') + '\n';
+}

@@ -5,6 +5,7 @@
 // diagnostics. Nothing is written until Save, after a review of what it changes.
 import {el, html} from '../dom.js';
 import {GraphView} from '../graph.js';
+import {navigate} from '../graph_nav.js';
 import {setStatus} from '../panels.js';
 
 const TYPING_PAUSE = 300;  // ms after the last key before the text is parsed again
@@ -114,6 +115,12 @@ export async function studio(info) {
   const ui = buildPanels();
   const svg = document.getElementById('graph');
   const graph = new GraphView(svg, (key) => graph.highlight(key || selected?.key));
+  // Zoom, pan, fold and search; a behaviour found is selected, as if clicked.
+  navigate(graph, document.getElementById('graph-panel'), (key) => {
+    const [layer, name] = key.split('/');
+    select({kind: 'behaviour', layer, name, key});
+  });
+  graph.onBuilt = decorate;
   let state = null;
   let shownGraph = null;  // the last graph that compiled: drawn while the text does not
   let classes = new Map();
@@ -235,16 +242,22 @@ export async function studio(info) {
       document.getElementById('title').textContent = `${state.graph.name} — studio`;
       if (!await graph.draw(state.graph)) return;
       svg.classList.remove('stale');
-      // An inhibition is clicked to edit it: a wider, unpainted copy of its line takes the clicks.
-      for (const edge of svg.querySelectorAll('g.edge:not(.implicit)')) {
-        const line = edge.querySelector('path');
-        if (line) el('path', {class: 'edge-hit', d: line.getAttribute('d')}, edge);
-      }
     } else {
       svg.classList.add('stale');
     }
     markProblems();
     inspect();
+  }
+
+  // What the studio adds to each drawing of the graph (a new one, a layer folded).
+  function decorate() {
+    // An inhibition is clicked to edit it: a wider, unpainted copy of its line takes the clicks.
+    for (const edge of svg.querySelectorAll('g.edge:not(.implicit)')) {
+      const line = edge.querySelector('path');
+      if (line) el('path', {class: 'edge-hit', d: line.getAttribute('d')}, edge);
+    }
+    markSelected();
+    markProblems();
   }
 
   // Runs a change: `request()` resolves with the server's answer; the texts before it go on the
@@ -327,13 +340,17 @@ export async function studio(info) {
   // Selection and the inspector.
   function select(item) {
     selected = item;
-    for (const edge of svg.querySelectorAll('g.edge.selected')) edge.classList.remove('selected');
-    if (item?.kind === 'inhibition') {
-      svg.querySelector(`g.edge[data-layer="${item.layer}"][data-from="${item.inhibitor}"][data-to="${item.inhibited}"]`)
-          ?.classList.add('selected');
-    }
+    markSelected();
     graph.highlight(item?.kind === 'behaviour' ? item.key : null);
     inspect();
+  }
+
+  function markSelected() {
+    for (const edge of svg.querySelectorAll('g.edge.selected')) edge.classList.remove('selected');
+    if (selected?.kind === 'inhibition') {
+      svg.querySelector(`g.edge[data-layer="${selected.layer}"][data-from="${selected.inhibitor}"][data-to="${selected.inhibited}"]`)
+          ?.classList.add('selected');
+    }
   }
 
   const declared = (layer) => layer.inhibitions.filter((i) => !i.implicit);
