@@ -40,15 +40,33 @@ const LAYOUT = {
 };
 
 // Widths of text as the page draws it: a hidden probe inside `svg` carries the classes the CSS
-// sizes text by (`.behaviour .name`, `.port text`, ...).
+// sizes text by (`.behaviour .name`, `.port text`, ...). Each text is measured once, and the
+// texts prepare()d before the first width is read are laid out together: one layout of the page
+// for all of them, where one per text cost most of a large graph's drawing.
 function textMeasure(svg) {
   const probe = el('g', {visibility: 'hidden'}, svg);
+  const known = new Map();  // class, class, text -> its node, then its width once read
+  const prepare = (content, groupClass, textClass) => {
+    const key = `${groupClass ?? ''}\n${textClass ?? ''}\n${content}`;
+    if (!known.has(key)) {
+      const group = el('g', groupClass ? {class: groupClass} : {}, probe);
+      known.set(key, text('text', textClass ? {class: textClass, x: 0, y: 0} : {x: 0, y: 0}, content, group));
+    }
+    return key;
+  };
   const measure = (content, groupClass, textClass) => {
-    const group = el('g', groupClass ? {class: groupClass} : {}, probe);
-    const node = text('text', textClass ? {class: textClass, x: 0, y: 0} : {x: 0, y: 0}, content, group);
-    const width = node.getComputedTextLength();
-    group.remove();
+    const key = prepare(content, groupClass, textClass);
+    let width = known.get(key);
+    if (typeof width !== 'number') {
+      width = width.getComputedTextLength();
+      known.set(key, width);
+    }
     return width;
+  };
+  /** Adds a text to be measured with the others; its width is 0 until measured. */
+  measure.prepare = (content, groupClass, textClass) => {
+    prepare(content, groupClass, textClass);
+    return 0;
   };
   measure.done = () => probe.remove();
   return measure;
@@ -123,16 +141,33 @@ function sizeLayer(layer, measure) {
   return {rowIndex, wrap, room, boxW, sensorW, actuatorW, titleW, heights, nameW};
 }
 
-// ELK's layout of a layer's behaviours and inhibitions, at (0, 0).
-function layoutLayer(layer, size) {
-  return elk.layout({
+// ELK's layout of a layer's behaviours and inhibitions, at (0, 0): the one in `laid` (key ->
+// layout) when the layer has the same boxes and edges as one laid out before, else a new one.
+// ELK takes tens of milliseconds for a layer of 50 behaviours: an edit lays out the layers it
+// changed, not all.
+function layoutLayer(layer, size, laid) {
+  const graph = {
     id: 'layer',
     layoutOptions: LAYOUT,
     children: layer.behaviours.map((behaviour) =>
       ({id: `b:${behaviour.name}`, width: size.boxW, height: size.heights.get(behaviour.name)})),
     edges: layer.inhibitions.map((inhibition, index) =>
       ({id: `i:${index}`, sources: [`b:${inhibition.inhibitor}`], targets: [`b:${inhibition.inhibited}`]})),
-  });
+  };
+  const key = JSON.stringify(graph);
+  return {key, layout: laid.get(key) ?? elk.layout(graph)};
+}
+
+// ELK's code is compiled as it first runs, which makes a page's first layout cost more than twice
+// a later one: a view starts ELK on a graph of two boxes while it waits for its own graph.
+let warmed = null;
+function warmUp() {
+  if (warmed) return;
+  const started = performance.now();
+  warmed = elk.layout({id: 'warm-up', layoutOptions: LAYOUT,
+                       children: [{id: 'a', width: 10, height: 10}, {id: 'b', width: 10, height: 10}],
+                       edges: [{id: 'e', sources: ['a'], targets: ['b']}]})
+      .then(() => performance.measure('arbiter:layout:warm-up', {start: started}));
 }
 
 // The points of an ELK edge, offset by (dx, dy).
@@ -164,6 +199,8 @@ export class GraphView {
     this.folds = folds;
     folds.subscribe(() => this.rebuild());
     this.drawn = null;  // {graph, sizes, layouts}: what the SVG shows, to draw again when a layer folds
+    this.laid = new Map();  // the layers' layouts of the last drawing, by their ELK graphs (layoutLayer())
+    warmUp();
     this.words = '';    // marked (mark())
     this.highlighted = null;
     this.behaviours = new Map();  // 'layer/name' -> {group, rect, level, mark, name, inhibitors, ...}
@@ -183,13 +220,26 @@ export class GraphView {
     // built, not painted.
     const started = performance.now();
     const measure = textMeasure(this.svg);
+    // Sized twice: first to gather the texts to measure, which are then measured together.
+    for (const layer of graph.layers) sizeLayer(layer, measure.prepare);
     const sizes = graph.layers.map((layer) => sizeLayer(layer, measure));
     measure.done();
-    const layouts = await Promise.all(graph.layers.map((layer, index) => layoutLayer(layer, sizes[index])));
+    const measured = performance.now();
+    const laid = new Map();
+    const layouts = await Promise.all(graph.layers.map((layer, index) => {
+      const {key, layout} = layoutLayer(layer, sizes[index], this.laid);
+      laid.set(key, layout);
+      return layout;
+    }));
     if (drawing !== this.drawing) return false;
+    this.laid = laid;
+    const laidOut = performance.now();
     this.drawn = {graph, sizes, layouts};
     this.rebuild();
-    performance.measure('arbiter:layout', {start: started, detail: {behaviours: this.behaviours.size}});
+    performance.measure('arbiter:layout', {start: started});
+    performance.measure('arbiter:layout:text', {start: started, end: measured});
+    performance.measure('arbiter:layout:elk', {start: measured, end: laidOut});
+    performance.measure('arbiter:layout:svg', {start: laidOut});
     return true;
   }
 

@@ -1,0 +1,188 @@
+// The studio's speed in headless Chromium (docs/performance.md, "Studio"): the layout of a
+// generated graph (the page's `arbiter:layout` measures: text measured, ELK's layout, the SVG
+// built), as the page opens and after an edit, in wall time and in CPU time of the page's main
+// thread (from a Chrome trace); and the frames while the pointer drags on it, drawing an
+// inhibition from a behaviour and panning the background, at the scale the page opens at and at
+// the scale a search shows a behaviour at. A benchmark, run by hand (under a minute with the
+// defaults); it prints medians and 95th percentiles and checks nothing. CTest's
+// `bench.studio_frames` runs it briefly, to keep it working.
+//
+//   node web/bench/studio_frames.mjs [--behaviours 200] [--layers 4] [--runs 3] [--seconds 2]
+//
+// The environment is web/tests/run.sh's; ARBITER and NODE_MODULES default to the dev build's
+// (build/dev/cli/arbiter, build/dev/web/node_modules), CHROMIUM to /usr/bin/chromium.
+import {mkdtempSync, rmSync, writeFileSync} from 'node:fs';
+import {loadavg, tmpdir} from 'node:os';
+import path from 'node:path';
+import {fileURLToPath} from 'node:url';
+import {parseArgs} from 'node:util';
+
+const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+process.env.ARBITER ??= path.join(root, 'build/dev/cli/arbiter');
+process.env.ARBITER_SOURCE ??= root;
+process.env.NODE_MODULES ??= path.join(root, 'build/dev/web/node_modules');
+// support.mjs reads the environment as it is imported.
+const {largeConfig, launchChromium, startArbiter, stopAll} = await import('../tests/support.mjs');
+
+const {values: options} = parseArgs({options: {
+  behaviours: {type: 'string', default: '200'},
+  layers: {type: 'string', default: '4'},
+  runs: {type: 'string', default: '3'},
+  seconds: {type: 'string', default: '2'},
+}});
+const layers = Number(options.layers);
+const perLayer = Math.round(Number(options.behaviours) / layers);
+const runs = Number(options.runs);
+const seconds = Number(options.seconds);
+
+const quantile = (values, q) => [...values].sort((a, b) => a - b)[Math.min(values.length - 1, Math.floor(q * values.length))];
+const figures = (values) => `median ${quantile(values, 0.5).toFixed(1)} ms, p95 ${quantile(values, 0.95).toFixed(1)} ms, ` +
+                            `max ${Math.max(...values).toFixed(1)} ms (${values.length})`;
+
+// Each frame, while `act()` runs: the interval since the last one, and its work on the main thread
+// (from its first animation callback to the end of its rendering: a message posted then runs after
+// it), as web/tests/browser_test.mjs measures the live page.
+async function framesDuring(page, act) {
+  await page.evaluate(() => {
+    const frames = window.frames_ = {work: [], intervals: [], running: true};
+    const channel = new MessageChannel();
+    let start = 0;
+    let last = null;
+    channel.port1.onmessage = () => frames.work.push(performance.now() - start);
+    const frame = (now) => {
+      start = performance.now();
+      if (last !== null) frames.intervals.push(now - last);
+      last = now;
+      channel.port2.postMessage(0);
+      if (frames.running) requestAnimationFrame(frame);
+    };
+    requestAnimationFrame(frame);
+  });
+  await act();
+  return page.evaluate(() => {
+    window.frames_.running = false;
+    return window.frames_;
+  });
+}
+
+/**
+ * The CPU time of the page's main thread within each `name` measure of the trace `events` (in ms):
+ * the thread time of its tasks in that span, a task that overlaps the span in part counted in
+ * proportion. On a shared machine the wall time of a measure includes the time the thread waited
+ * for a core; its CPU time does not.
+ */
+function cpuWithin(events, name) {
+  const main = events.find((e) => e.name === 'thread_name' && e.args?.name === 'CrRendererMain');
+  const tasks = events.filter((e) => e.ph === 'X' && e.pid === main.pid && e.tid === main.tid &&
+                                     e.cat.includes('toplevel') && e.tdur !== undefined);
+  const spans = [];
+  const open = new Map();
+  for (const e of events.filter((x) => x.name === name && x.cat.includes('blink.user_timing'))) {
+    if (e.ph === 'b') open.set(e.id2?.local ?? e.id, e.ts);
+    else if (e.ph === 'e') spans.push([open.get(e.id2?.local ?? e.id), e.ts]);
+  }
+  return spans.map(([from, to]) => {
+    let cpu = 0;
+    for (const task of tasks) {
+      const overlap = Math.min(to, task.ts + task.dur) - Math.max(from, task.ts);
+      if (overlap > 0) cpu += task.tdur * (task.dur ? overlap / task.dur : 1);
+    }
+    return cpu / 1000;
+  });
+}
+
+/** Moves the pressed pointer from (x, y) round a circle of `radius` and back, for `seconds`. */
+async function dragAbout(page, x, y, radius) {
+  await page.mouse.move(x, y);
+  await page.mouse.down();
+  const end = Date.now() + seconds * 1000;
+  for (let i = 0; Date.now() < end; ++i) {
+    const angle = i / 20;
+    await page.mouse.move(x + radius * Math.sin(angle), y + radius * (1 - Math.cos(angle)) / 2);
+    await new Promise((resolve) => setTimeout(resolve, 4));
+  }
+  await page.mouse.move(x, y);
+  await page.mouse.up();
+}
+
+const scratch = mkdtempSync(path.join(tmpdir(), 'arbiter-studio-bench-'));
+const browser = await launchChromium();
+try {
+  const config = path.join(scratch, 'graph.yaml');
+  writeFileSync(config, largeConfig(layers, perLayer, 10));
+  const {found} = await startArbiter(['edit', config, '--serve', '127.0.0.1:0'], /http:\/\/127\.0\.0\.1:\d+\/\?token=[\w.-]+/);
+  const page = await browser.newPage({viewport: {width: 1500, height: 1000}});
+  const PARTS = [['', 'layout'], [':text', '  of which text measured'], [':elk', '  of which ELK'],
+                 [':svg', '  of which SVG built']];
+  // 'open' (the page opened) and 'edit' (an inhibition added) -> part -> ms, per run
+  const wall = {open: {}, edit: {}};
+  const cpu = {open: {}, edit: {}};
+  const warmUp = [];
+  const drags = {inhibition: {work: [], intervals: []}, pan: {work: [], intervals: []}};
+  // The page's last layout while `act()` runs: its wall time (the page's measures) and its CPU time.
+  const layoutDuring = async (when, act) => {
+    await browser.startTracing(page, {categories: ['toplevel', 'blink.user_timing', '__metadata']});
+    await act();
+    await page.waitForSelector('body[data-busy="false"]');
+    const {traceEvents} = JSON.parse(String(await browser.stopTracing()));
+    for (const [part] of PARTS) {
+      (cpu[when][part] ??= []).push(cpuWithin(traceEvents, `arbiter:layout${part}`).at(-1));
+      (wall[when][part] ??= []).push(await page.evaluate((name) => performance.getEntriesByName(name).at(-1).duration,
+                                                         `arbiter:layout${part}`));
+    }
+  };
+  const middle = Math.floor(perLayer / 2);
+  let url = found[0];
+  for (let run = 0; run < runs; ++run) {
+    await layoutDuring('open', async () => {
+      await page.goto(url);
+      await page.waitForSelector('body[data-ready="true"]');
+    });
+    url = url.replace(/\?token=.*/, '');  // the cookie holds it now
+    warmUp.push(await page.evaluate(() => performance.getEntriesByName('arbiter:layout:warm-up')[0].duration));
+    const count = await page.locator('.behaviour').count();
+    if (count !== layers * perLayer) throw new Error(`${count} behaviours drawn, not ${layers * perLayer}`);
+    // At the scale the studio opens it (the whole graph fitted), then at the scale a search shows
+    // a behaviour at (0.8).
+    for (const zoom of ['fit', 'search']) {
+      if (zoom === 'search') {
+        await page.fill('#graph-search', `b_1_${middle}`);
+        await page.press('#graph-search', 'Enter');
+      }
+      const stage = await page.locator('.graph-stage').boundingBox();
+      const target = await page.locator(`.behaviour[data-name="layer_1/b_1_${middle}"] rect`).boundingBox();
+      const from = {x: target.x + target.width / 2, y: target.y + target.height / 2};
+      const inhibition = await framesDuring(page, () => dragAbout(page, from.x, from.y, 200));
+      const pan = await framesDuring(page, () => dragAbout(page, stage.x + 4, stage.y + 4, 200));
+      for (const [name, frames] of [['inhibition', inhibition], ['pan', pan]]) {
+        drags[name].work.push(...frames.work.slice(1));
+        drags[name].intervals.push(...frames.intervals.slice(1));
+      }
+    }
+    // An edit: an inhibition added in one layer (by the selected behaviour's form), another each run.
+    const inhibited = `b_1_${middle + 2 + 2 * run}`;
+    await layoutDuring('edit', async () => {
+      await page.selectOption('#inspector .add-inhibition select', inhibited);
+      await page.click('#inspector .add-inhibition button');
+      await page.waitForSelector(`g.edge[data-from="b_1_${middle}"][data-to="${inhibited}"]`);
+    });
+  }
+  const [one, five, fifteen] = loadavg();
+  console.log(`studio, ${layers} layers of ${perLayer} behaviours (${layers * perLayer}), ${runs} runs; ` +
+              `load average ${one.toFixed(2)} ${five.toFixed(2)} ${fifteen.toFixed(2)}`);
+  console.log(`ELK's warm-up while the page waits for its graph: wall ${figures(warmUp)}`);
+  for (const [when, title] of [['open', 'the page opened'], ['edit', 'an inhibition added in one layer']]) {
+    console.log(`${title}:`);
+    for (const [part, label] of PARTS) {
+      console.log(`  ${label}: CPU time of the page's main thread ${figures(cpu[when][part])}; wall ${figures(wall[when][part])}`);
+    }
+  }
+  for (const [name, label] of [['inhibition', 'drawing an inhibition'], ['pan', 'panning']]) {
+    console.log(`dragging, ${label}: frame interval ${figures(drags[name].intervals)}; frame work ${figures(drags[name].work)}`);
+  }
+  await page.close();
+} finally {
+  await browser.close();
+  stopAll();
+  rmSync(scratch, {recursive: true, force: true});
+}
