@@ -7,7 +7,7 @@
 // defaults); it prints medians and 95th percentiles and checks nothing. CTest's
 // `bench.studio_frames` runs it briefly, to keep it working.
 //
-//   node web/bench/studio_frames.mjs [--behaviours 200] [--layers 4] [--runs 3] [--seconds 2]
+//   node web/bench/studio_frames.mjs [--behaviours 200] [--layers 4] [--runs 3] [--seconds 1]
 //
 // The environment is web/tests/run.sh's; ARBITER and NODE_MODULES default to the dev build's
 // (build/dev/cli/arbiter, build/dev/web/node_modules), CHROMIUM to /usr/bin/chromium.
@@ -28,7 +28,7 @@ const {values: options} = parseArgs({options: {
   behaviours: {type: 'string', default: '200'},
   layers: {type: 'string', default: '4'},
   runs: {type: 'string', default: '3'},
-  seconds: {type: 'string', default: '2'},
+  seconds: {type: 'string', default: '1'},
 }});
 const layers = Number(options.layers);
 const perLayer = Math.round(Number(options.behaviours) / layers);

@@ -187,7 +187,7 @@ export function navigate(graph, panel, onFind = () => {}) {
   button('zoom-in', '+', 'zoom in (+)', () => view.zoom(STEP));
   button('zoom-fit', 'Fit', 'the whole graph (0)', () => view.fit());
   html('span', {class: 'hint'}, tools).textContent =
-      'wheel: zoom · drag the background or arrow keys: pan · click a layer\'s title: fold it';
+      'wheel, + −: zoom · drag, arrows: pan · 0: fit · a layer\'s title: fold';
 
   let found = [];
   let at = -1;  // the match shown last
