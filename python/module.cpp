@@ -22,6 +22,7 @@ std::shared_ptr<Session> make_session(const std::string& path,
   session->options.strict = strict;
   session->options.lint = lint;
   session->options.plugins.path = plugin_path;
+  session->options.plugins.import_python = import_python_plugin;
   session->path = path;
   return session;
 }
@@ -30,10 +31,8 @@ std::shared_ptr<Session> make_session(const std::string& path,
 std::unique_ptr<PyProgram> load_checked(const std::string& path,
                                         const std::vector<std::string>& plugin_path, bool strict) {
   auto session = make_session(path, plugin_path, strict);
-  Diagnostics diagnostics;
-  register_python_plugins(session->registry, path, diagnostics);
   Loaded loaded = load_config(path, session->registry, session->options);
-  diagnostics.append(loaded.diagnostics);
+  Diagnostics diagnostics = std::move(loaded.diagnostics);
   diagnostics.sort();
   if (!loaded.program || diagnostics.has_errors()) raise_config_error(diagnostics);
   auto result = std::make_unique<PyProgram>();

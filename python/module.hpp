@@ -38,10 +38,11 @@ std::string validate_text(const Diagnostics& diagnostics);
 /// Raises arbiter.ConfigError carrying `diagnostics` (its text validate_text()).
 [[noreturn]] void raise_config_error(const Diagnostics& diagnostics);
 
-/// Imports the Python modules a config's `plugins:` names as `{python: MODULE}` and registers
-/// their behaviour classes (plugins.cpp); what fails is reported at the module's name.
-void register_python_plugins(Registry& registry, const std::string& config,
-                             Diagnostics& diagnostics);
+/// Imports the Python module a config's `plugins:` names as `{python: MODULE}` (`node`, in the
+/// file `config`) and registers its behaviour and state classes (plugins.cpp); what fails is
+/// reported at the module's name. PluginOptions::import_python, for every load from Python.
+bool import_python_plugin(const Node& node, const std::string& config, Registry& registry,
+                          Diagnostics& diagnostics);
 
 void bind_diagnostics(py::module_& m);
 void bind_plugins(py::module_& m);

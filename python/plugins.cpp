@@ -445,44 +445,37 @@ void report_import_failure(const py::error_already_set& error, const SourceLocat
 
 }  // namespace
 
-void register_python_plugins(Registry& registry, const std::string& config,
-                             Diagnostics& diagnostics) {
-  Diagnostics unread;  // the load reads the config again and reports what is wrong with it
-  const auto root = read_document(config, unread);
-  const Node* plugins = root && root->is_mapping() ? root->find("plugins") : nullptr;
-  if (plugins == nullptr || !plugins->is_sequence()) return;
+bool import_python_plugin(const Node& node, const std::string& config, Registry& registry,
+                          Diagnostics& diagnostics) {
+  const std::string module = node.text();
+  // Registered as loaded even when it fails: a config names a module once, and a reload does
+  // not import it again (docs/python.md).
+  registry.keep_loaded(python_plugin_library(module), nullptr);
+  // A module beside the config is found as a plugin library beside it is.
   const py::module_ sys = py::module_::import("sys");
   const std::string directory = std::filesystem::path(config).parent_path().string();
-  for (const auto& item : plugins->items()) {
-    const Node* node = item.is_mapping() ? item.find("python") : nullptr;
-    if (node == nullptr || !node->is_scalar() || node->text().empty()) continue;
-    const std::string module = node->text();
-    const std::string library = python_plugin_library(module);
-    if (registry.has_library(library)) continue;
-    // Registered as loaded even when it fails, so that the load reports this error only.
-    registry.keep_loaded(library, nullptr);
-    // A module beside the config is found as a plugin library beside it is.
-    py::list path = sys.attr("path");
-    path.insert(0, directory.empty() ? "." : directory);
-    try {
-      py::module_ imported = py::module_::import(module.c_str());
-      const py::module_ arbiter = py::module_::import("arbiter");
-      const py::object state = arbiter.attr("State");
-      for (const auto& cls : py::list(arbiter.attr("_classes_in")(imported))) {
-        if (PyObject_IsSubclass(cls.ptr(), state.ptr()) == 1) {
-          register_state(registry, cls, module);
-        } else {
-          register_behaviour(registry, cls, module);
-        }
+  py::list path = sys.attr("path");
+  path.insert(0, directory.empty() ? "." : directory);
+  const std::size_t errors = diagnostics.error_count();
+  try {
+    py::module_ imported = py::module_::import(module.c_str());
+    const py::module_ arbiter = py::module_::import("arbiter");
+    const py::object state = arbiter.attr("State");
+    for (const auto& cls : py::list(arbiter.attr("_classes_in")(imported))) {
+      if (PyObject_IsSubclass(cls.ptr(), state.ptr()) == 1) {
+        register_state(registry, cls, module);
+      } else {
+        register_behaviour(registry, cls, module);
       }
-    } catch (const py::error_already_set& error) {
-      report_import_failure(error, node->location(), module, diagnostics);
-    } catch (const std::exception& error) {
-      diagnostics.error(node->location(), "python-plugin-failed",
-                        fmt::format("Python module '{}': {}", module, error.what()));
     }
-    path.attr("pop")(0);
+  } catch (const py::error_already_set& error) {
+    report_import_failure(error, node.location(), module, diagnostics);
+  } catch (const std::exception& error) {
+    diagnostics.error(node.location(), "python-plugin-failed",
+                      fmt::format("Python module '{}': {}", module, error.what()));
   }
+  path.attr("pop")(0);
+  return diagnostics.error_count() == errors;
 }
 
 void bind_plugins(py::module_& m) {

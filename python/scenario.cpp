@@ -34,22 +34,10 @@ py::dict run_scenario(const std::filesystem::path& path,
   ScenarioOptions options;
   options.plugins.path = plugin_path;
   options.tolerance = tolerance;
-  // The config's Python classes exist only once this process has imported them: register them
-  // before the run loads the config, as arbiter.load() does. The run reads the test file again
-  // and reports what is wrong with it; here only the modules' own failures are kept.
-  Diagnostics imported;
-  {
-    Diagnostics unread;
-    if (const auto scenario = read_scenario(path.string(), unread, options.limits)) {
-      register_python_plugins(registry, scenario->config_path, imported);
-    }
-  }
-  ScenarioResult result = run_scenario_file(path.string(), registry, options);
-  if (imported.has_errors()) {
-    result.diagnostics.append(imported);
-    result.diagnostics.sort();
-    result.status = ScenarioResult::Status::kInvalid;
-  }
+  // The config's Python classes exist only once this process has imported them, as
+  // arbiter.load() does.
+  options.plugins.import_python = import_python_plugin;
+  const ScenarioResult result = run_scenario_file(path.string(), registry, options);
   py::dict out;
   out["status"] = status_name(result.status);
   out["name"] = result.name;

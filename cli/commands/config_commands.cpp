@@ -132,21 +132,37 @@ int schema_command(const Options& options) {
   return ok ? kExitOk : kExitInvalid;
 }
 
-int explain_command(const Options& options) {
-  // With one positional the config is left out: it names what to explain.
+namespace {
+
+// What explain and seek ask of a run: the program its config compiles to and the question's
+// subject (what to explain, the condition to seek). With one positional the config is left out
+// (a recording carries its own): the positional is the subject. A config file given alone is not
+// a subject: the subject was forgotten, and `missing` says what to give.
+std::optional<Program> program_for_question(const Options& options, const char* command,
+                                            const char* missing, Registry& registry,
+                                            std::string& subject, int& exit) {
   std::string config = options.file;
-  std::string target = options.target;
-  if (target.empty()) std::swap(config, target);
-  // A config given without a target is not a target: the target was forgotten.
-  if (target.empty() || std::filesystem::is_regular_file(target)) {
-    std::cerr
-        << "arbiter explain: name the behaviour, state machine, actuator or state to explain\n";
-    return kExitUsage;
+  subject = options.target;
+  if (subject.empty()) std::swap(config, subject);
+  if (subject.empty() || std::filesystem::is_regular_file(subject)) {
+    std::cerr << fmt::format("arbiter {}: {}\n", command, missing);
+    exit = kExitUsage;
+    return std::nullopt;
   }
+  exit = kExitInvalid;
+  return program_of_run(config, options.trace_path, registry, load_options_of(options), command,
+                        options.diagnostic_format, std::cerr, exit);
+}
+
+}  // namespace
+
+int explain_command(const Options& options) {
   auto registry = make_registry();
+  std::string target;
   int exit = kExitInvalid;
-  auto program = program_of_run(config, options.trace_path, registry, load_options_of(options),
-                                "explain", options.diagnostic_format, std::cerr, exit);
+  auto program = program_for_question(
+      options, "explain", "name the behaviour, state machine, actuator or state to explain",
+      registry, target, exit);
   if (!program) return exit;
   const auto trace = arbiter::open_trace(options.trace_path);
   const auto explanation = arbiter::explain(*program, *trace, options.step, target);
@@ -187,18 +203,12 @@ bool set_breakpoints(const std::vector<std::string>& conditions, const Program& 
 }
 
 int seek_command(const Options& options) {
-  // With one positional the config is left out, as explain's: it is the condition.
-  std::string config = options.file;
-  std::string condition = options.target;
-  if (condition.empty()) std::swap(config, condition);
-  if (condition.empty()) {
-    std::cerr << "arbiter seek: give the condition to seek, e.g. 'kick_ball activates'\n";
-    return kExitUsage;
-  }
   auto registry = make_registry();
+  std::string condition;
   int exit = kExitInvalid;
-  auto program = program_of_run(config, options.trace_path, registry, load_options_of(options),
-                                "seek", options.diagnostic_format, std::cerr, exit);
+  auto program = program_for_question(options, "seek",
+                                      "give the condition to seek, e.g. 'kick_ball activates'",
+                                      registry, condition, exit);
   if (!program) return exit;
   std::vector<arbiter::Breakpoint> breakpoints;
   if (!set_breakpoints({condition}, *program, "CONDITION", options.diagnostic_format, std::cerr,

@@ -97,6 +97,25 @@ def test_its_params_are_checked_as_a_cpp_classs_are(soccer_with_python_kick):
     assert any(code == "wrong-type" and at == line for code, at in codes)
 
 
+def test_a_reload_imports_a_module_the_edited_config_newly_names(soccer_with_python_kick, source):
+    with_python = soccer_with_python_kick.read_text()
+    soccer_with_python_kick.write_text(
+        (source / "configs/soccer/walk_and_kick_inputs.yaml").read_text())
+    manager = arbiter.load(soccer_with_python_kick).manager()
+    manager.set_input("robot_pose", [0.0, 0.0, 0.0])
+    manager.set_input("ball_visible", True)
+    manager.set_input("ball_position", [2.0, 0.0])
+    manager.step(2)
+    soccer_with_python_kick.write_text(with_python)
+    result = manager.reload()
+    assert [change.split(":")[0] for change in result["changes"]] == [
+        "~ behaviour control/kick_ball"]
+    manager.set_input("ball_position", [0.4, 0.0])   # within the Python class's distance, 0.5
+    manager.step()
+    assert manager.active("kick_ball")
+    assert manager.actuator("kick") is True
+
+
 def test_an_exception_is_a_fault_with_the_python_traceback(tmp_path):
     (tmp_path / "faulty.py").write_text(FAULTY_MODULE)
     config = tmp_path / "faulty.yaml"

@@ -18,32 +18,14 @@ unset(ENV{CMAKE_PREFIX_PATH})
 unset(ENV{ARBITER_PLUGIN_PATH})
 get_filename_component(cmake_bin "${CMAKE_COMMAND}" DIRECTORY)
 
-# Runs a command in WORK_DIR; fails the test, with what it printed, unless it exits 0. The
-# output (stdout and stderr together) is left in `out_var`.
-function(run_checked out_var)
-  execute_process(COMMAND ${ARGN} WORKING_DIRECTORY "${WORK_DIR}" RESULT_VARIABLE result
-                  OUTPUT_VARIABLE output ERROR_VARIABLE output)
-  if(NOT result EQUAL 0)
-    string(REPLACE ";" " " command "${ARGN}")
-    message(FATAL_ERROR "`${command}` exited with ${result}:\n${output}")
-  endif()
-  set(${out_var} "${output}" PARENT_SCOPE)
-endfunction()
+include("${CMAKE_CURRENT_LIST_DIR}/../support/run_checked.cmake")
 
-function(expect_in output description)
-  foreach(pattern IN LISTS ARGN)
-    if(NOT output MATCHES "${pattern}")
-      message(FATAL_ERROR "${description}: expected to match '${pattern}' in:\n${output}")
-    endif()
-  endforeach()
-endfunction()
-
-run_checked(output "${PREFIX}/bin/arbiter" new plugin probe)
-run_checked(output "${CMAKE_COMMAND}" -S probe -B probe/build -DCMAKE_BUILD_TYPE=Debug
+run_checked(output 0 "${PREFIX}/bin/arbiter" new plugin probe)
+run_checked(output 0 "${CMAKE_COMMAND}" -S probe -B probe/build -DCMAKE_BUILD_TYPE=Debug
             "-DCMAKE_CXX_COMPILER=${CXX_COMPILER}"
             "-DCMAKE_CXX_FLAGS=-Wall -Wextra -Wpedantic -Werror")
 file(REAL_PATH "${PREFIX}" real_prefix)
-run_checked(output "${CMAKE_COMMAND}" --build probe/build -j2)
+run_checked(output 0 "${CMAKE_COMMAND}" --build probe/build -j2)
 if(NOT EXISTS "${WORK_DIR}/probe/build/arbiter_probe.so")
   message(FATAL_ERROR "the starter project built no arbiter_probe.so:\n${output}")
 endif()
@@ -51,19 +33,19 @@ file(READ "${WORK_DIR}/probe/build/CMakeCache.txt" cache)
 string(REGEX MATCH "arbiter_DIR:PATH=[^\n]*" found "${cache}")
 expect_in("${found}" "the SDK the starter project found" "^arbiter_DIR:PATH=${real_prefix}/")
 
-run_checked(output "${cmake_bin}/ctest" --test-dir probe/build --output-on-failure)
+run_checked(output 0 "${cmake_bin}/ctest" --test-dir probe/build --output-on-failure)
 expect_in("${output}" "ctest in the starter project" "probe_scenarios/probe[ .]*Passed"
           "100% tests passed, 0 tests failed out of 1")
-run_checked(output "${PREFIX}/bin/arbiter" test probe/tests --plugin-path probe/build)
+run_checked(output 0 "${PREFIX}/bin/arbiter" test probe/tests --plugin-path probe/build)
 expect_in("${output}" "arbiter test in the starter project"
           "PASS probe/tests/probe.test.yaml \\([0-9]+ expectations, 30 steps\\)")
 
-run_checked(output "${PREFIX}/bin/arbiter" --plugin-path probe/build run probe/probe.yaml
+run_checked(output 0 "${PREFIX}/bin/arbiter" --plugin-path probe/build run probe/probe.yaml
             --steps 50)
 expect_in("${output}" "arbiter run probe.yaml"
   "running probe: 2 layers, 2 behaviours, 1 state machines"
   "step    1  route: out \\(cycle 1; queued: back\\)"
   "State machine route: finished")
-run_checked(output "${PREFIX}/bin/arbiter" --plugin-path probe/build plugins --load probe)
+run_checked(output 0 "${PREFIX}/bin/arbiter" --plugin-path probe/build plugins --load probe)
 expect_in("${output}" "arbiter plugins --load probe" "probe\\.Stop" "probe\\.Drive")
 message(STATUS "the starter project built against ${PREFIX} and its test passed")

@@ -25,25 +25,7 @@ set(arbiter "${prefix}/bin/arbiter")
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}")
 
-# Runs a command; fails the test, with everything it printed, unless it exits with `expected`.
-# The output (stdout and stderr together) is left in `out_var`.
-function(run_checked out_var expected)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE result OUTPUT_VARIABLE output
-                  ERROR_VARIABLE output)
-  if(NOT "${result}" STREQUAL "${expected}")
-    string(REPLACE ";" " " command "${ARGN}")
-    message(FATAL_ERROR "`${command}` exited with ${result}, not ${expected}:\n${output}")
-  endif()
-  set(${out_var} "${output}" PARENT_SCOPE)
-endfunction()
-
-function(expect_in output description)
-  foreach(pattern IN LISTS ARGN)
-    if(NOT output MATCHES "${pattern}")
-      message(FATAL_ERROR "${description}: expected to match '${pattern}' in:\n${output}")
-    endif()
-  endforeach()
-endfunction()
+include("${CMAKE_CURRENT_LIST_DIR}/../support/run_checked.cmake")
 
 message(STATUS "installing ${BUILD_DIR} to ${prefix}")
 run_checked(output 0 "${CMAKE_COMMAND}" --install "${BUILD_DIR}" --prefix "${prefix}")

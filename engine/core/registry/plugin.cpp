@@ -187,11 +187,13 @@ bool load_plugin(const std::string& name, const SourceLocation& where,
 
 namespace {
 
-/// A `{python: MODULE}` plugin is Python code (python_plugin_library()). Anywhere but the Python
-/// module (the CLI) it is reported, at the module's name.
-bool python_plugin_loaded(const Node& module, const Registry& registry, Diagnostics& diagnostics) {
+/// A `{python: MODULE}` plugin is Python code (python_plugin_library()): imported by the Python
+/// module's hook, and reported, at the module's name, anywhere else (the CLI).
+bool load_python_plugin(const Node& module, const std::string& config, const PluginOptions& options,
+                        Registry& registry, Diagnostics& diagnostics) {
   if (!module.is_scalar() || module.text().empty()) return true;  // validation reports it
   if (registry.has_library(python_plugin_library(module.text()))) return true;
+  if (options.import_python) return options.import_python(module, config, registry, diagnostics);
   diagnostics
       .error(module.location(), "python-plugin-unavailable",
              fmt::format("plugin '{}' is a Python module: its classes exist only when the config "
@@ -210,7 +212,7 @@ bool load_plugins(const Node& root, const PluginOptions& options, Registry& regi
   bool ok = true;
   for (const auto& item : plugins->items()) {
     if (const Node* module = item.is_mapping() ? item.find("python") : nullptr) {
-      ok = python_plugin_loaded(*module, registry, diagnostics) && ok;
+      ok = load_python_plugin(*module, root.location().file, options, registry, diagnostics) && ok;
       continue;
     }
     if (!item.is_scalar() || item.text().empty()) continue;

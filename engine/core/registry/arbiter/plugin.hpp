@@ -5,6 +5,7 @@
 // A plugin named `soccer` is the file `arbiter_soccer.so` on the plugin path.
 
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -50,6 +51,13 @@ struct PluginOptions {
   bool use_environment = true;
   /// Last, the plugins that came with this engine (found next to the engine library).
   bool use_default_path = true;
+  /// Imports a `{python: MODULE}` plugin (`module` is its name's node, `config` the file that
+  /// names it) and registers its classes under python_plugin_library(), reporting what fails at
+  /// the module's name; false when it failed. Set by the Python module, the one place where
+  /// Python classes can exist: without it such a plugin is reported as unavailable.
+  std::function<bool(const Node& module, const std::string& config, Registry& registry,
+                     Diagnostics& diagnostics)>
+      import_python;
 };
 
 /// The directories a plugin name is looked up in, in order.
@@ -63,8 +71,7 @@ bool load_plugin(const std::string& name, const SourceLocation& where,
                  Diagnostics& diagnostics);
 
 /// The library name under which the classes of a `{python: MODULE}` plugin are registered
-/// (Registry::keep_loaded) by the Python module, which imports it before loading the config;
-/// load_plugins() finds them there, and reports the module anywhere else.
+/// (Registry::keep_loaded) by PluginOptions::import_python; load_plugins() imports a module once.
 inline std::string python_plugin_library(std::string_view module) {
   return "python:" + std::string(module);
 }
