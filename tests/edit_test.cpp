@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -599,4 +600,210 @@ layers:
   CHECK(remove_behaviour(loaded, "flow", "e").refused ==
         "'e' is declared in a flow mapping: remove it in the text");
   CHECK(remove_behaviour(loaded, "block", "z").refused == "no behaviour 'z' in layer 'block'");
+}
+
+namespace {
+
+/// A config written in a temporary directory (its first file the config, the others its
+/// includes), loaded with the test classes, for an operation's edits to be checked against.
+class Workspace {
+ public:
+  explicit Workspace(const std::vector<std::pair<std::string, std::string>>& files)
+      : registry_(make_test_registry()) {
+    for (const auto& [name, text] : files) {
+      paths_[name] = dir_.write(name, text);
+      texts_[name] = text;
+    }
+    loaded_ = load_config(paths_.at(files.front().first), registry_);
+    INFO(format(loaded_.diagnostics));
+    REQUIRE_FALSE(loaded_.diagnostics.has_errors());
+  }
+
+  const Loaded& loaded() const { return loaded_; }
+
+  /// The text of file `name` after the edits `proposed` makes, which checked() accepts.
+  std::string edited(const EditResult& proposed, const std::string& name) {
+    const EditResult result = checked(loaded_, proposed, registry_);
+    INFO(result.refused);
+    REQUIRE(result.ok());
+    REQUIRE_FALSE(result.edits.empty());
+    return apply_edits(texts_.at(name), loaded_.files.find(paths_.at(name))->path, result.edits);
+  }
+
+  /// Why `proposed` (checked) is refused; "" when it is not.
+  std::string refused(const EditResult& proposed) {
+    return checked(loaded_, proposed, registry_).refused;
+  }
+
+  const std::string& text(const std::string& name) const { return texts_.at(name); }
+
+ private:
+  test::TempDir dir_;
+  Registry registry_;
+  std::map<std::string, std::string> paths_, texts_;
+  Loaded loaded_;
+};
+
+const std::string kOpsYaml = R"(arbiter: 1
+name: ops
+include: [part.yaml]
+layers:
+  - name: top   # first
+    actuators:
+      speed: {type: double}
+      # not read by anyone
+      spare: {type: double}
+    behaviours:
+      a: scripted   # the first
+      b:
+        type: scripted
+        params: {activation: 0.5}
+      c: scripted
+    inhibitions:
+      - a => b
+
+  # the lower layer
+  - name: low
+    sensors: [speed]
+    actuators: {out: {type: double}}
+    behaviours: {d: scripted, e: test.Probe}
+
+state_machines:
+  plan:
+    states:
+      one: {type: scripted, params: {hold: 2}}
+      two: scripted
+    queue:
+      - one
+      - two: {hold: 3}   # the second
+      - one
+  flat:
+    states: {x: scripted, y: scripted}
+    queue: [x, y]
+)";
+
+const std::string kOpsPart = R"(# The included layers.
+layers:
+  - name: inc
+    behaviours:
+      p: scripted
+      q: scripted
+  - name: inc2
+    behaviours:
+      r: scripted
+)";
+
+const std::string kOpsJson = R"({
+  "arbiter": 1,
+  "name": "ops",
+  "layers": [
+    {
+      "name": "top",
+      "actuators": {"speed": {"type": "double"}},
+      "behaviours": {
+        "a": "scripted",
+        "b": {"type": "scripted", "params": {"activation": 0.5}},
+        "c": "test.Probe"
+      }
+    },
+    {"name": "low", "sensors": ["speed"], "behaviours": {"d": "scripted"}}
+  ],
+  "state_machines": {
+    "plan": {"states": {"one": "scripted", "two": "scripted"}, "queue": ["one", "two"]}
+  }
+}
+)";
+
+}  // namespace
+
+TEST_CASE("a behaviour moves within its layer, to another layer, and into an include", "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const Loaded& loaded = yaml.loaded();
+  const std::string& text = yaml.text("ops.yaml");
+  const std::string abc =
+      "      a: scripted   # the first\n      b:\n        type: scripted\n        params: "
+      "{activation: 0.5}\n      c: scripted\n";
+  CHECK(yaml.edited(move_behaviour(loaded, "top", "c", "", 0), "ops.yaml") ==
+        replaced(text, abc,
+                 "      c: scripted\n      a: scripted   # the first\n      b:\n        type: "
+                 "scripted\n        params: {activation: 0.5}\n"));
+  CHECK(yaml.edited(move_behaviour(loaded, "top", "b", "top", 2), "ops.yaml") ==
+        replaced(text, abc,
+                 "      a: scripted   # the first\n      c: scripted\n      b:\n        type: "
+                 "scripted\n        params: {activation: 0.5}\n"));
+  CHECK(yaml.edited(move_behaviour(loaded, "low", "d", "", 1), "ops.yaml") ==
+        replaced(text, "{d: scripted, e: test.Probe}", "{e: test.Probe, d: scripted}"));
+  // To a flow mapping of another layer, and to the included file that declares the layer.
+  CHECK(yaml.edited(move_behaviour(loaded, "top", "c", "low", 0), "ops.yaml") ==
+        replaced(replaced(text, "      c: scripted\n", ""), "{d: scripted,",
+                 "{c: scripted, d: scripted,"));
+  const EditResult into_include = move_behaviour(loaded, "top", "c", "inc", 1);
+  CHECK(yaml.edited(into_include, "ops.yaml") == replaced(text, "      c: scripted\n", ""));
+  CHECK(yaml.edited(into_include, "part.yaml") ==
+        replaced(kOpsPart, "      q: scripted\n", "      c: scripted\n      q: scripted\n"));
+  CHECK(yaml.edited(move_behaviour(loaded, "inc", "q", "inc2", 1), "part.yaml") ==
+        replaced(replaced(kOpsPart, "      q: scripted\n", ""), "      r: scripted\n",
+                 "      r: scripted\n      q: scripted\n"));
+
+  CHECK(move_behaviour(loaded, "top", "b", "low", 0).refused ==
+        "'b' is named by the inhibition 'a -> b' of layer 'top', which cannot follow it to another "
+        "layer: remove it first");
+  CHECK(move_behaviour(loaded, "top", "c", "", 3).refused ==
+        "position 3 is past the end of layer 'top', which has 3 behaviour(s): positions count "
+        "from 0");
+  CHECK(move_behaviour(loaded, "top", "c", "", 2).refused == "'c' is at position 2 already");
+  CHECK(move_behaviour(loaded, "top", "z", "", 0).refused == "no behaviour 'z' in layer 'top'");
+  CHECK(move_behaviour(loaded, "top", "c", "nowhere", 0).refused == "no layer 'nowhere'");
+
+  Workspace json({{"ops.json", kOpsJson}});
+  const std::string& json_text = json.text("ops.json");
+  CHECK(json.edited(move_behaviour(json.loaded(), "top", "a", "", 2), "ops.json") ==
+        replaced(json_text,
+                 R"("a": "scripted",
+        "b": {"type": "scripted", "params": {"activation": 0.5}},
+        "c": "test.Probe")",
+                 R"("b": {"type": "scripted", "params": {"activation": 0.5}},
+        "c": "test.Probe",
+        "a": "scripted")"));
+  CHECK(json.edited(move_behaviour(json.loaded(), "top", "c", "low", 1), "ops.json") ==
+        replaced(replaced(json_text, ",\n        \"c\": \"test.Probe\"", ""),
+                 R"({"d": "scripted"})", R"({"d": "scripted", "c": "test.Probe"})"));
+}
+
+TEST_CASE("a layer moves among its file's layers, its comments and blank lines kept", "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const Loaded& loaded = yaml.loaded();
+  const std::string& text = yaml.text("ops.yaml");
+  // The config's order: inc and inc2 (the include's), then top and low.
+  const std::string top = text.substr(text.find("  - name: top"),
+                                      text.find("\n\n  # the lower") - text.find("  - name: top"));
+  const std::string low = text.substr(text.find("  # the lower"),
+                                      text.find("\n\nstate_machines") - text.find("  # the lower"));
+  CHECK(yaml.edited(move_layer(loaded, "low", 2), "ops.yaml") ==
+        replaced(text, top + "\n\n" + low, low + "\n\n" + top));
+  CHECK(yaml.edited(move_layer(loaded, "inc2", 0), "part.yaml") ==
+        replaced(kOpsPart,
+                 "  - name: inc\n    behaviours:\n      p: scripted\n      q: scripted\n"
+                 "  - name: inc2\n    behaviours:\n      r: scripted\n",
+                 "  - name: inc2\n    behaviours:\n      r: scripted\n"
+                 "  - name: inc\n    behaviours:\n      p: scripted\n      q: scripted\n"));
+  CHECK(move_layer(loaded, "top", 0).refused ==
+        fmt::format("position 0 holds layer 'inc' of {}, and layer 'top' is declared in {}: a "
+                    "file's layers keep their place among the included ones, so move it between "
+                    "the files in the text",
+                    loaded.files.files()[1]->path, loaded.files.files()[0]->path));
+  CHECK(move_layer(loaded, "top", 4).refused ==
+        "position 4 is past the last layer: the config has 4 layer(s), positions count from 0");
+  CHECK(move_layer(loaded, "top", 2).refused == "layer 'top' is at position 2 already");
+  CHECK(move_layer(loaded, "none", 0).refused == "no layer 'none'");
+
+  Workspace json({{"ops.json", kOpsJson}});
+  const std::string& json_text = json.text("ops.json");
+  const std::string json_top = json_text.substr(
+      json_text.find("    {\n      \"name\": \"top\"") + 4,
+      json_text.find("\n    },\n") + 6 - json_text.find("    {\n      \"name\": \"top\"") - 4);
+  const std::string json_low =
+      R"({"name": "low", "sensors": ["speed"], "behaviours": {"d": "scripted"}})";
+  CHECK(json.edited(move_layer(json.loaded(), "top", 1), "ops.json") ==
+        replaced(json_text, json_top + ",\n    " + json_low, json_low + ",\n    " + json_top));
 }

@@ -316,3 +316,37 @@ layers:
         "+ inhibition control: kick_ball -> head_control\n"
         "~ behaviour control/head_control: params: activation [1.0] -> [0.25]\n");
 }
+
+TEST_CASE("the studio moves a behaviour and a layer, and refuses a move it cannot make",
+          "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  const std::string original = read(path);
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+
+  const auto moved =
+      studio.edit(R"({"op": "move_behaviour", "layer": "control", "name": "head_control",
+                      "index": 0})");
+  REQUIRE(moved.first == 200);
+  const Json reply = Json::parse(moved.second);
+  const std::string text = reply["files"][0]["text"];
+  CHECK(contains(text, "    behaviours:\n      head_control:\n        type: scripted\n"));
+  CHECK(reply["files"][0]["edited"] == true);
+  CHECK(read(path) == original);
+
+  const auto layer = studio.edit(R"({"op": "move_layer", "layer": "control", "index": 0})");
+  CHECK(layer.first == 422);
+  CHECK(Json::parse(layer.second)["refused"] == "layer 'control' is at position 0 already");
+  const auto across =
+      studio.edit(R"({"op": "move_behaviour", "layer": "control", "name": "kick_ball",
+                      "to_layer": "control", "index": 9})");
+  CHECK(across.first == 422);
+  CHECK(contains(Json::parse(across.second)["refused"], "position 9 is past the end"));
+  const auto no_index =
+      studio.edit(R"({"op": "move_behaviour", "layer": "control", "name": "kick_ball",
+                      "index": -1})");
+  CHECK(no_index.first == 400);
+  CHECK(contains(no_index.second,
+                 "move_behaviour needs 'index' (names as strings, positions as integers from 0)"));
+}
