@@ -706,7 +706,7 @@ const std::string kOpsJson = R"({
         "c": "test.Probe"
       }
     },
-    {"name": "low", "sensors": ["speed"], "behaviours": {"d": "scripted"}}
+    {"name": "low", "sensors": ["speed"], "actuators": {"spare": {"type": "int"}}, "behaviours": {"d": "scripted"}}
   ],
   "state_machines": {
     "plan": {"states": {"one": "scripted", "two": "scripted"}, "queue": ["one", "two"]}
@@ -803,7 +803,110 @@ TEST_CASE("a layer moves among its file's layers, its comments and blank lines k
       json_text.find("    {\n      \"name\": \"top\"") + 4,
       json_text.find("\n    },\n") + 6 - json_text.find("    {\n      \"name\": \"top\"") - 4);
   const std::string json_low =
-      R"({"name": "low", "sensors": ["speed"], "behaviours": {"d": "scripted"}})";
+      R"({"name": "low", "sensors": ["speed"], "actuators": {"spare": {"type": "int"}}, "behaviours": {"d": "scripted"}})";
   CHECK(json.edited(move_layer(json.loaded(), "top", 1), "ops.json") ==
         replaced(json_text, json_top + ",\n    " + json_low, json_low + ",\n    " + json_top));
+}
+
+TEST_CASE("an actuator is added and removed in its layer's actuators:, and refused while used",
+          "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const Loaded& loaded = yaml.loaded();
+  const std::string& text = yaml.text("ops.yaml");
+  CHECK(yaml.edited(add_actuator(loaded, "top", "gain", "int"), "ops.yaml") ==
+        replaced(text, "      spare: {type: double}\n",
+                 "      spare: {type: double}\n      gain: {type: int}\n"));
+  CHECK(yaml.edited(add_actuator(loaded, "low", "gain", "vec2"), "ops.yaml") ==
+        replaced(text, "{out: {type: double}}", "{out: {type: double}, gain: {type: vec2}}"));
+  CHECK(yaml.edited(add_actuator(loaded, "inc2", "gain", "bool"), "part.yaml") ==
+        kOpsPart + "    actuators: {gain: {type: bool}}\n");
+  CHECK(add_actuator(loaded, "low", "speed", "double").refused ==
+        "'speed' is already taken: layer 'top' declares an actuator of that name");
+  CHECK(add_actuator(loaded, "low", "Speed", "double").refused ==
+        "'Speed' is not a valid name: names are [a-z_][a-z0-9_]*");
+  CHECK_THAT(yaml.refused(add_actuator(loaded, "low", "gain", "quaternion")),
+             Catch::Contains("quaternion"));
+
+  // Removed with the comment above it (the only one of a flow mapping leaves `{}`, below).
+  CHECK(yaml.edited(remove_actuator(loaded, "top", "spare"), "ops.yaml") ==
+        replaced(text, "      # not read by anyone\n      spare: {type: double}\n", ""));
+  CHECK(remove_actuator(loaded, "low", "out").refused ==
+        "actuator 'out' is still used: port 'out' of 'e' is bound to it. Remove or rebind those "
+        "first");
+  CHECK(remove_actuator(loaded, "top", "speed").refused ==
+        "actuator 'speed' is still used: layer 'low' reads it. Remove or rebind those first");
+  CHECK(remove_actuator(loaded, "top", "out").refused == "no actuator 'out' in layer 'top'");
+
+  // A port bound to it, by a ports: entry or by its name, is a use too.
+  const std::string bound = R"(arbiter: 1
+name: ports
+layers:
+  - name: l
+    actuators:
+      out: {type: double}
+      level: {type: double}
+    behaviours:
+      probe: test.Probe
+      other: {type: test.Probe, ports: {out: level}}
+)";
+  Workspace ports({{"ports.yaml", bound}});
+  CHECK(remove_actuator(ports.loaded(), "l", "out").refused ==
+        "actuator 'out' is still used: port 'out' of 'probe' is bound to it. Remove or rebind "
+        "those first");
+  CHECK(remove_actuator(ports.loaded(), "l", "level").refused ==
+        "actuator 'level' is still used: port 'out' of 'other' is bound to it. Remove or rebind "
+        "those first");
+
+  Workspace json({{"ops.json", kOpsJson}});
+  CHECK(json.edited(add_actuator(json.loaded(), "low", "gain", "double"), "ops.json") ==
+        replaced(json.text("ops.json"), R"({"spare": {"type": "int"}})",
+                 R"({"spare": {"type": "int"}, "gain": {"type": "double"}})"));
+  CHECK(json.edited(remove_actuator(json.loaded(), "low", "spare"), "ops.json") ==
+        replaced(json.text("ops.json"), R"({"spare": {"type": "int"}})", "{}"));
+}
+
+TEST_CASE("a port is wired by its behaviour's ports: entry, added or replaced", "[edit]") {
+  const std::string yaml = R"(arbiter: 1
+name: ports
+layers:
+  - name: l
+    sensors: [feed]
+    actuators:
+      out: {type: double}
+      level: {type: double}
+    behaviours:
+      probe: test.Probe
+      other: {type: test.Probe, ports: {out: level}}
+      third:
+        type: test.Probe   # no ports yet
+  - name: m
+    actuators: {feed: {type: double}}
+)";
+  Workspace ports({{"ports.yaml", yaml}});
+  const Loaded& loaded = ports.loaded();
+  CHECK(ports.edited(wire_port(loaded, "l", "probe", "out", "level"), "ports.yaml") ==
+        replaced(yaml, "probe: test.Probe", "probe: {type: test.Probe, ports: {out: level}}"));
+  CHECK(ports.edited(wire_port(loaded, "l", "other", "out", "out"), "ports.yaml") ==
+        replaced(yaml, "{out: level}", "{out: out}"));
+  CHECK(ports.edited(wire_port(loaded, "l", "other", "in", "feed"), "ports.yaml") ==
+        replaced(yaml, "{out: level}", "{out: level, in: feed}"));
+  CHECK(ports.edited(wire_port(loaded, "l", "third", "in", "feed"), "ports.yaml") ==
+        replaced(yaml, "# no ports yet\n", "# no ports yet\n        ports: {in: feed}\n"));
+  CHECK(wire_port(loaded, "l", "other", "out", "level").refused ==
+        "port 'out' of 'other' is bound to 'level' already");
+  CHECK(wire_port(loaded, "l", "nobody", "out", "level").refused ==
+        "no behaviour 'nobody' in layer 'l'");
+  CHECK(wire_port(loaded, "l", "probe", "out", "Level").refused ==
+        "'out: Level' is not a port binding: names are [a-z_][a-z0-9_]*");
+  // What validate refuses (a port the class does not have, a name the layer cannot bind) is
+  // refused in its words.
+  CHECK_THAT(ports.refused(wire_port(loaded, "l", "probe", "nope", "level")),
+             Catch::Contains("nope"));
+  CHECK_THAT(ports.refused(wire_port(loaded, "l", "probe", "out", "missing")),
+             Catch::Contains("missing"));
+
+  Workspace json({{"ops.json", kOpsJson}});
+  CHECK(json.edited(wire_port(json.loaded(), "top", "c", "out", "speed"), "ops.json") ==
+        replaced(json.text("ops.json"), R"("c": "test.Probe")",
+                 R"("c": {"type": "test.Probe", "ports": {"out": "speed"}})"));
 }

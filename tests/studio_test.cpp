@@ -350,3 +350,41 @@ TEST_CASE("the studio moves a behaviour and a layer, and refuses a move it canno
   CHECK(contains(no_index.second,
                  "move_behaviour needs 'index' (names as strings, positions as integers from 0)"));
 }
+
+TEST_CASE("the studio adds and removes an actuator and wires a port, refusing a used actuator",
+          "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+
+  const auto used = studio.edit(R"({"op": "remove_actuator", "layer": "control", "name": "kick"})");
+  CHECK(used.first == 422);
+  // A scripted behaviour's writes: are not a binding the engine follows: validate's words say it.
+  CHECK(contains(Json::parse(used.second)["refused"], "kick"));
+
+  const auto added = studio.edit(
+      R"({"op": "add_actuator", "layer": "control", "name": "probe_out", "type": "double"})");
+  REQUIRE(added.first == 200);
+  CHECK(contains(Json::parse(added.second)["files"][0]["text"],
+                 "      kick: {type: bool}\n      probe_out: {type: double}\n"));
+  REQUIRE(studio
+              .edit(R"({"op": "add_behaviour", "layer": "control", "name": "probe",
+                        "type": "test.Probe"})")
+              .first == 200);
+  const auto wired = studio.edit(
+      R"({"op": "wire_port", "layer": "control", "behaviour": "probe", "port": "out",
+          "target": "probe_out"})");
+  REQUIRE(wired.first == 200);
+  const Json state = Json::parse(wired.second);
+  CHECK(contains(state["files"][0]["text"],
+                 "      probe: {type: test.Probe, ports: {out: probe_out}}\n"));
+  const auto still =
+      studio.edit(R"({"op": "remove_actuator", "layer": "control", "name": "probe_out"})");
+  CHECK(still.first == 422);
+  CHECK(Json::parse(still.second)["refused"] ==
+        "actuator 'probe_out' is still used: port 'out' of 'probe' is bound to it. Remove or "
+        "rebind those first");
+  CHECK(studio.edit(R"({"op": "wire_port", "layer": "control", "behaviour": "probe"})").first ==
+        400);
+}
