@@ -910,3 +910,62 @@ layers:
         replaced(json.text("ops.json"), R"("c": "test.Probe")",
                  R"("c": {"type": "test.Probe", "ports": {"out": "speed"}})"));
 }
+
+TEST_CASE("a state machine's queue gets a state with its params, loses one, and is reordered",
+          "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const Loaded& loaded = yaml.loaded();
+  const std::string& text = yaml.text("ops.yaml");
+  const std::string queue = "      - one\n      - two: {hold: 3}   # the second\n      - one\n";
+  CHECK(yaml.edited(add_queue_entry(loaded, "plan", "two", {{"hold", "4"}}, 0), "ops.yaml") ==
+        replaced(text, queue, "      - two: {hold: 4}\n" + queue));
+  CHECK(yaml.edited(add_queue_entry(loaded, "plan", "one", {}, kAtEnd), "ops.yaml") ==
+        replaced(text, queue, queue + "      - one\n"));
+  CHECK(yaml.edited(add_queue_entry(loaded, "flat", "y", {}, 1), "ops.yaml") ==
+        replaced(text, "queue: [x, y]", "queue: [x, y, y]"));
+  CHECK(yaml.edited(add_queue_entry(loaded, "flat", "x", {{"hold", "2"}}, 0), "ops.yaml") ==
+        replaced(text, "queue: [x, y]", "queue: [{x: {hold: 2}}, x, y]"));
+  CHECK(yaml.edited(remove_queue_entry(loaded, "plan", 1), "ops.yaml") ==
+        replaced(text, queue, "      - one\n      - one\n"));
+  CHECK(yaml.edited(remove_queue_entry(loaded, "flat", 0), "ops.yaml") ==
+        replaced(text, "queue: [x, y]", "queue: [y]"));
+  CHECK(yaml.edited(move_queue_entry(loaded, "plan", 1, 2), "ops.yaml") ==
+        replaced(text, queue, "      - one\n      - one\n      - two: {hold: 3}   # the second\n"));
+  CHECK(yaml.edited(move_queue_entry(loaded, "flat", 1, 0), "ops.yaml") ==
+        replaced(text, "queue: [x, y]", "queue: [y, x]"));
+
+  CHECK(add_queue_entry(loaded, "plan", "one", {}, 4).refused ==
+        "position 4 is past the end of the queue of state machine 'plan', which has 3 state(s): "
+        "positions count from 0");
+  CHECK(add_queue_entry(loaded, "nobody", "one", {}, 0).refused == "no state machine 'nobody'");
+  CHECK(add_queue_entry(loaded, "plan", "one", {{"Hold", "1"}}, 0).refused ==
+        "'Hold' is not a param's name: names are [a-z_][a-z0-9_]*");
+  CHECK(move_queue_entry(loaded, "plan", 0, 0).refused ==
+        "the state at position 0 is there already");
+  CHECK(remove_queue_entry(loaded, "plan", 3).refused ==
+        "position 3 is past the end of the queue of state machine 'plan', which has 3 state(s): "
+        "positions count from 0");
+  // A state the machine does not declare, or a param its class lacks: validate's words.
+  CHECK_THAT(yaml.refused(add_queue_entry(loaded, "plan", "three", {}, 0)),
+             Catch::Contains("three"));
+  CHECK_THAT(yaml.refused(add_queue_entry(loaded, "plan", "one", {{"speed", "1"}}, 0)),
+             Catch::Contains("speed"));
+
+  // The last item of a block queue: `queue:` alone would be null.
+  const std::string solo =
+      "arbiter: 1\nname: solo\nstate_machines:\n  solo:\n    states: {s: "
+      "scripted}\n    queue:\n      - s   # only\n    capacity: 4\n";
+  Workspace one({{"solo.yaml", solo}});
+  CHECK(one.edited(remove_queue_entry(one.loaded(), "solo", 0), "solo.yaml") ==
+        replaced(solo, "    queue:\n      - s   # only\n", "    queue: []\n"));
+
+  Workspace json({{"ops.json", kOpsJson}});
+  const std::string& json_text = json.text("ops.json");
+  CHECK(
+      json.edited(add_queue_entry(json.loaded(), "plan", "two", {{"hold", "2"}}, 1), "ops.json") ==
+      replaced(json_text, R"(["one", "two"])", R"(["one", {"two": {"hold": 2}}, "two"])"));
+  CHECK(json.edited(move_queue_entry(json.loaded(), "plan", 0, 1), "ops.json") ==
+        replaced(json_text, R"(["one", "two"])", R"(["two", "one"])"));
+  CHECK(json.edited(remove_queue_entry(json.loaded(), "plan", 1), "ops.json") ==
+        replaced(json_text, R"(["one", "two"])", R"(["one"])"));
+}

@@ -388,3 +388,47 @@ TEST_CASE("the studio adds and removes an actuator and wires a port, refusing a 
   CHECK(studio.edit(R"({"op": "wire_port", "layer": "control", "behaviour": "probe"})").first ==
         400);
 }
+
+TEST_CASE("the studio edits a state machine's queue: a state planned with params, moved, removed",
+          "[studio]") {
+  TempDir dir;
+  const std::string path =
+      dir.write("plan.yaml", read(ARBITER_SOURCE_DIR "/configs/paper/goalie_plan.yaml"));
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+  const std::string queue =
+      "    queue:\n"
+      "      - wait_for_button\n"
+      "      - walk_to_pose: {hold: 6}   # into the goal: (0.0, -4.2, 1.57)\n"
+      "      - obstacle_ahead\n"
+      "      - monitor_ball\n";
+  REQUIRE(contains(Json::parse(studio.state().second)["files"][0]["text"], queue));
+
+  const auto added = studio.edit(
+      R"({"op": "add_queue_entry", "machine": "goalie", "state": "walk_to_pose",
+          "params": {"hold": 2}})");
+  REQUIRE(added.first == 200);
+  CHECK(Json::parse(added.second)["edits"][0]["text"] == "\n      - walk_to_pose: {hold: 2}");
+  const auto moved =
+      studio.edit(R"({"op": "move_queue_entry", "machine": "goalie", "from": 1, "to": 0})");
+  REQUIRE(moved.first == 200);
+  const auto removed =
+      studio.edit(R"({"op": "remove_queue_entry", "machine": "goalie", "index": 2})");
+  REQUIRE(removed.first == 200);
+  CHECK(contains(Json::parse(removed.second)["files"][0]["text"],
+                 "    queue:\n"
+                 "      - walk_to_pose: {hold: 6}   # into the goal: (0.0, -4.2, 1.57)\n"
+                 "      - wait_for_button\n"
+                 "      - monitor_ball\n"
+                 "      - walk_to_pose: {hold: 2}\n"));
+
+  const auto unknown = studio.edit(
+      R"({"op": "add_queue_entry", "machine": "goalie", "state": "celebrate", "index": 0})");
+  CHECK(unknown.first == 422);
+  CHECK(contains(Json::parse(unknown.second)["refused"], "celebrate"));
+  CHECK(studio.edit(R"({"op": "move_queue_entry", "machine": "goalie", "from": 1})").first == 400);
+  CHECK(studio
+            .edit(R"({"op": "add_queue_entry", "machine": "goalie", "state": "dive",
+                        "params": [1]})")
+            .first == 400);
+}
