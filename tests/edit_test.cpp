@@ -5,8 +5,10 @@
 
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -597,8 +599,9 @@ layers:
   // The only inhibition of a flow sequence, as remove_inhibition removes it.
   CHECK(remove("pair", "h") == replaced(replaced(text, "      h: scripted\n", ""),
                                         "    inhibitions: [g => h]\n", "    inhibitions: []\n"));
-  CHECK(remove_behaviour(loaded, "flow", "e").refused ==
-        "'e' is declared in a flow mapping: remove it in the text");
+  // In a flow mapping: its text and one comma.
+  CHECK(remove("flow", "e") == replaced(text, "{e: scripted, f: scripted}", "{f: scripted}"));
+  CHECK(remove("flow", "f") == replaced(text, "{e: scripted, f: scripted}", "{e: scripted}"));
   CHECK(remove_behaviour(loaded, "block", "z").refused == "no behaviour 'z' in layer 'block'");
 }
 
@@ -968,4 +971,252 @@ TEST_CASE("a state machine's queue gets a state with its params, loses one, and 
         replaced(json_text, R"(["one", "two"])", R"(["two", "one"])"));
   CHECK(json.edited(remove_queue_entry(json.loaded(), "plan", 1), "ops.json") ==
         replaced(json_text, R"(["one", "two"])", R"(["one"])"));
+}
+
+namespace {
+
+/// One operation of the edit engine, applied to an element of a config chosen by `make` (none
+/// when the config has no such element). A refusal is accepted only when `may_refuse` says it is
+/// one of the documented reasons.
+struct Applied {
+  const char* name;
+  std::function<std::optional<EditResult>(const Loaded&, const Model&)> make;
+  bool reorders = false;  ///< a move: the same bytes, in another order
+  std::function<bool(const std::string&)> may_refuse = [](const std::string&) { return false; };
+  /// Accepted in some shipped config. Every actuator they declare is used, so each removal is
+  /// refused (with its uses named); an accepted one is tested on a config of its own above.
+  bool accepted_somewhere = true;
+};
+
+const LayerDecl* first_behaviour_layer(const Model& model) {
+  for (const auto& layer : model.layers) {
+    if (!layer.is_interface() && !layer.behaviours.empty()) return &layer;
+  }
+  return nullptr;
+}
+
+/// The bytes of `text`, sorted: what a move of its items leaves as it was.
+std::string sorted_bytes(std::string text) {
+  std::sort(text.begin(), text.end());
+  return text;
+}
+
+/// A removal of an actuator refused for its uses: named by remove_actuator, or in validate's
+/// words for a scripted behaviour's writes: to it.
+bool actuator_in_use(const std::string& why) {
+  return contains(why, "is still used") || (contains(why, "the edit would leave an error") &&
+                                            contains(why, "is not an actuator of layer"));
+}
+
+std::vector<Applied> every_operation() {
+  using Made = std::optional<EditResult>;
+  return {
+      {"rename behaviour",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         const LayerDecl* layer = first_behaviour_layer(model);
+         if (!layer) return std::nullopt;
+         Registry registry = builtin_registry();
+         const ConfigIndex index = index_config(loaded, &registry);
+         for (const auto& symbol : index.occurrences) {
+           if (symbol.definition && symbol.kind == SymbolKind::kBehaviour &&
+               symbol.scope == layer->name.text)
+             return rename_symbol(loaded, index, symbol, symbol.name + "_renamed");
+         }
+         return std::nullopt;
+       }},
+      {"flip the first inhibition",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         for (const auto& layer : model.layers) {
+           for (const auto& inhibition : layer.inhibitions)
+             return flip_chaining(
+                 loaded, {layer.name.text, inhibition.inhibitor.text, inhibition.inhibited.text});
+         }
+         return std::nullopt;
+       }},
+      {"remove the first inhibition",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         for (const auto& layer : model.layers) {
+           for (const auto& inhibition : layer.inhibitions)
+             return remove_inhibition(
+                 loaded, {layer.name.text, inhibition.inhibitor.text, inhibition.inhibited.text});
+         }
+         return std::nullopt;
+       }},
+      {"set activation of the first behaviour",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         for (const auto& layer : model.layers) {
+           for (const auto& behaviour : layer.behaviours) {
+             if (behaviour.params.find("activation") != nullptr)
+               return set_param(loaded, layer.name.text, behaviour.name.text, "activation", "1");
+           }
+         }
+         return std::nullopt;
+       }},
+      {"add a behaviour",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         const LayerDecl* layer = first_behaviour_layer(model);
+         if (!layer) return std::nullopt;
+         return add_behaviour(loaded, layer->name.text, "added_behaviour", "scripted");
+       }},
+      {"remove the last behaviour",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         const LayerDecl* layer = first_behaviour_layer(model);
+         if (!layer) return std::nullopt;
+         return remove_behaviour(loaded, layer->name.text, layer->behaviours.back().name.text);
+       },
+       false,
+       // What else names it (a port, a state machine's owner) is refused in validate's words.
+       [](const std::string& why) {
+         return contains(why, "the edit would leave an error") ||
+                contains(why, "is not written on a line of its own");
+       }},
+      {"move the last behaviour first",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         for (const auto& layer : model.layers) {
+           if (layer.behaviours.size() >= 2)
+             return move_behaviour(loaded, layer.name.text, layer.behaviours.back().name.text, "",
+                                   0);
+         }
+         return std::nullopt;
+       },
+       true},
+      {"move the last layer of a file first among its layers",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         if (model.layers.size() < 2) return std::nullopt;
+         // The first layer declared in the file that declares the last one.
+         const std::string& last = model.layers.back().name.text;
+         const SourceFile* file = nullptr;
+         for (const auto& source : loaded.files.files()) {
+           const Node* layers =
+               source->root && source->root->is_mapping() ? source->root->find("layers") : nullptr;
+           for (std::size_t i = 0; layers && layers->is_sequence() && i < layers->size(); ++i) {
+             const Node* name = layers->items()[i].find("name");
+             if (name && name->text() == last) file = source.get();
+           }
+         }
+         const Node& own = *file->root->find("layers");
+         if (own.size() < 2) return std::nullopt;
+         const std::string first = own.items().front().find("name")->text();
+         for (std::size_t i = 0; i < model.layers.size(); ++i) {
+           if (model.layers[i].name.text == first) return move_layer(loaded, last, i);
+         }
+         return std::nullopt;
+       },
+       true},
+      {"add an actuator",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         if (model.layers.empty()) return std::nullopt;
+         return add_actuator(loaded, model.layers.back().name.text, "added_actuator", "double");
+       }},
+      {"remove an actuator",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         // The first that nothing uses, else the first refusal that is not for a use, else the
+         // last.
+         Made last;
+         for (const auto& layer : model.layers) {
+           for (const auto& actuator : layer.actuators) {
+             Registry registry = builtin_registry();
+             last = checked(loaded, remove_actuator(loaded, layer.name.text, actuator.name.text),
+                            registry);
+             if (last->ok() || !actuator_in_use(last->refused)) return last;
+           }
+         }
+         return last;
+       },
+       false, &actuator_in_use, false},
+      {"wire the first bound port to its target by name",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         for (const auto& layer : model.layers) {
+           for (const auto& behaviour : layer.behaviours) {
+             for (const auto& binding : behaviour.ports) {
+               if (binding.port && !binding.target.empty() && binding.target == binding.port->name)
+                 return wire_port(loaded, layer.name.text, behaviour.name.text, binding.port->name,
+                                  binding.target);
+             }
+           }
+         }
+         return std::nullopt;
+       },
+       false, [](const std::string& why) { return contains(why, "already"); }},
+      {"plan the first state last",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         for (const auto& machine : model.state_machines) {
+           if (!machine.states.empty())
+             return add_queue_entry(loaded, machine.name.text, machine.states.front().name.text, {},
+                                    kAtEnd);
+         }
+         return std::nullopt;
+       }},
+      {"remove the first state of a queue",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         for (const auto& machine : model.state_machines) {
+           if (!machine.queue.empty()) return remove_queue_entry(loaded, machine.name.text, 0);
+         }
+         return std::nullopt;
+       }},
+      {"move the first state of a queue last",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         for (const auto& machine : model.state_machines) {
+           if (machine.queue.size() >= 2)
+             return move_queue_entry(loaded, machine.name.text, 0, machine.queue.size() - 1);
+         }
+         return std::nullopt;
+       },
+       true},
+  };
+}
+
+}  // namespace
+
+TEST_CASE(
+    "every operation applied to every shipped config leaves a valid config and every "
+    "untouched line",
+    "[edit]") {
+  const std::vector<Applied> operations = every_operation();
+  std::map<std::string, int> applied;
+  for (const auto& path : configs_under(kSourceDir / "configs")) {
+    if (!plugins_built(path)) continue;
+    Registry registry = builtin_registry();
+    const Loaded loaded = load_config(path.string(), registry);
+    if (!loaded.model || loaded.diagnostics.has_errors()) continue;
+    for (const auto& operation : operations) {
+      {
+        // No sections: each config and operation once, the counts below seeing every one.
+        INFO(operation.name << " in " << fs::relative(path, kSourceDir).string());
+        const std::optional<EditResult> made = operation.make(loaded, *loaded.model);
+        if (!made) continue;
+        Registry check = builtin_registry();
+        const EditResult result = checked(loaded, *made, check);
+        INFO(result.refused);
+        if (!result.ok()) {
+          CHECK(operation.may_refuse(result.refused));
+          continue;
+        }
+        CHECK_FALSE(result.edits.empty());
+        ++applied[operation.name];
+        Registry again = builtin_registry();
+        const EditedConfig after_edit = load_edited(loaded, result.edits, again);
+        const Loaded& edited = after_edit.loaded;
+        INFO(format(edited.diagnostics));
+        CHECK_FALSE(edited.diagnostics.has_errors());
+        for (const auto& file : loaded.files.files()) {
+          const SourceFile* after = edited.files.find(file->path);
+          CHECK(after != nullptr);
+          if (after == nullptr) continue;
+          INFO(after->text);
+          if (operation.reorders) {
+            check_untouched(file->text, after->text, result.edits, file->path);
+            CHECK(sorted_bytes(file->text) == sorted_bytes(after->text));
+          } else {
+            check_lines_kept(file->text, after->text, result.edits, file->path);
+          }
+        }
+      }
+    }
+  }
+  // Each operation found an element to apply to somewhere, and was accepted there.
+  for (const auto& operation : operations) {
+    INFO(operation.name);
+    CHECK((applied[operation.name] > 0) == operation.accepted_somewhere);
+  }
 }

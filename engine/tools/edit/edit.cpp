@@ -557,6 +557,13 @@ EditResult set_param(const Loaded& loaded, const std::string& layer, const std::
 
 namespace arbiter {
 
+namespace {
+
+/// The edit removing entry `at` of the flow mapping `mapping` of `file`, with one comma.
+TextEdit removed_flow_entry(const SourceFile& file, const Node& mapping, std::size_t at);
+
+}  // namespace
+
 EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const std::string& name,
                          const std::string& type) {
   if (!is_identifier(name))
@@ -591,11 +598,19 @@ EditResult remove_behaviour(const Loaded& loaded, const std::string& layer,
         const auto it = std::find_if(items.begin(), items.end(),
                                      [&](const Node::Entry& item) { return item.key == name; });
         if (it == items.end()) continue;
+        if (const std::size_t open = offset_at(*file, entry.value.location());
+            open < text.size() && text[open] == '{') {
+          // A flow mapping (and every JSON one): its text and a comma, not its lines.
+          result.edits.push_back(
+              removed_flow_entry(*file, entry.value, static_cast<std::size_t>(it - items.begin())));
+          continue;
+        }
         const std::size_t key = offset_at(*file, it->key_location);
         const std::size_t start = line_start(text, key);
         if (text.find_first_not_of(' ', start) != key)
-          return {{},
-                  fmt::format("'{}' is declared in a flow mapping: remove it in the text", name)};
+          return {
+              {},
+              fmt::format("'{}' is not written on a line of its own: remove it in the text", name)};
         // Its lines; with the key `behaviours:` when it was the only one.
         const bool only = items.size() == 1;
         const std::size_t from =
@@ -783,6 +798,10 @@ TextEdit removed_item(const Items& items, std::size_t at) {
   if (at > 0) return {items.file->path, items.spans[at - 1].second, end, {}};
   if (items.spans.size() > 1) return {items.file->path, begin, items.spans[1].first, {}};
   return {items.file->path, begin, end, {}};
+}
+
+TextEdit removed_flow_entry(const SourceFile& file, const Node& mapping, std::size_t at) {
+  return removed_item(items_of(file, mapping), at);
 }
 
 /// The entry `key` of `layer`'s mapping and its file, or a null entry.

@@ -137,8 +137,8 @@ EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const s
 
 /// Removes behaviour `name` of layer `layer`: its lines (with the `behaviours:` key when it was
 /// the only one) and every inhibition of the layer that names it. Other uses (a port bound to it,
-/// a state machine's owner) are left for checked() to refuse. Refused when it is declared in a
-/// flow mapping.
+/// a state machine's owner) are left for checked() to refuse. In a flow mapping (and so in JSON)
+/// its text goes with one comma. Refused when its key shares a line with another.
 EditResult remove_behaviour(const Loaded& loaded, const std::string& layer,
                             const std::string& name);
 
@@ -168,7 +168,8 @@ EditResult add_actuator(const Loaded& loaded, const std::string& layer, const st
 /// Removes actuator `name` of layer `layer` (its lines, and `actuators:` with its only one).
 /// Refused, naming every use, while anything uses it: a layer reading it as a sensor, a port
 /// bound to it (by a `ports:` entry or by name). Uses are not followed: dropping a sensor or
-/// unbinding a port changes what the graph does, which is the user's call.
+/// unbinding a port changes what the graph does, which is the user's call. A use in a class's
+/// own params (a scripted behaviour's `writes:`) is left for checked() to refuse.
 EditResult remove_actuator(const Loaded& loaded, const std::string& layer, const std::string& name);
 
 /// Binds port `port` of behaviour `behaviour` of layer `layer` to `target` (a sensor or actuator
