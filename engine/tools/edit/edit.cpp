@@ -782,11 +782,8 @@ TextEdit inserted_item(const Items& items, std::size_t at, const std::string& it
   if (at < count) {
     return {path, items.spans[at].first, items.spans[at].first, items.prefixes[at] + item + "\n"};
   }
-  std::string prefix = items.prefixes.back();
-  std::replace(prefix.begin(), prefix.end(), '-', ' ');
-  if (const auto dash = items.prefixes.back().rfind('-'); dash != std::string::npos)
-    prefix[dash] = '-';
-  return {path, items.spans.back().second, items.spans.back().second, "\n" + prefix + item};
+  return {path, items.spans.back().second, items.spans.back().second,
+          "\n" + items.prefixes.back() + item};
 }
 
 /// The edit that removes item `at`: its lines (with the comments above it), or in a flow
@@ -1115,7 +1112,10 @@ EditResult wire_port(const Loaded& loaded, const std::string& layer, const std::
     return {
         {},
         fmt::format("'{}: {}' is not a port binding: names are [a-z_][a-z0-9_]*", port, target)};
-  for (const auto& [file, declaration] : layers_named(loaded, layer)) {
+  for (const LayerSite& site : layers_named(loaded, layer)) {
+    // Named, not bound by a structured binding: a lambda below captures it.
+    const SourceFile* file = site.file;
+    const Node* declaration = site.layer;
     const Node* behaviours = declaration->find("behaviours");
     const Node* node =
         behaviours && behaviours->is_mapping() ? behaviours->find(behaviour) : nullptr;
