@@ -676,6 +676,7 @@ state_machines:
     states:
       one: {type: scripted, params: {hold: 2}}
       two: scripted
+      idle: scripted   # not planned
     queue:
       - one
       - two: {hold: 3}   # the second
@@ -1138,6 +1139,28 @@ std::vector<Applied> every_operation() {
          return std::nullopt;
        },
        false, [](const std::string& why) { return contains(why, "already"); }},
+      {"add a state",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         if (model.state_machines.empty()) return std::nullopt;
+         return add_state(loaded, model.state_machines.front().name.text, "added_state",
+                          "scripted");
+       }},
+      {"remove the last state",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         if (model.state_machines.empty()) return std::nullopt;
+         const auto& machine = model.state_machines.front();
+         Registry registry = builtin_registry();
+         return remove_state(loaded, index_config(loaded, &registry), machine.name.text,
+                             machine.states.back().name.text);
+       },
+       false,
+       // Named in the config, or planned by a class (the soccer goalie's dive), in validate's
+       // words. Every state of the shipped configs is one or the other; an accepted removal is
+       // tested on a config of its own above.
+       [](const std::string& why) {
+         return contains(why, "is still named at") || contains(why, "does not declare");
+       },
+       false},
       {"plan the first state last",
        [](const Loaded& loaded, const Model& model) -> Made {
          for (const auto& machine : model.state_machines) {
@@ -1219,4 +1242,42 @@ TEST_CASE(
     INFO(operation.name);
     CHECK((applied[operation.name] > 0) == operation.accepted_somewhere);
   }
+}
+
+TEST_CASE("a state is declared in its machine's states:, and removed unless something names it",
+          "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const Loaded& loaded = yaml.loaded();
+  const std::string& text = yaml.text("ops.yaml");
+  CHECK(yaml.edited(add_state(loaded, "plan", "three", "scripted"), "ops.yaml") ==
+        replaced(text, "# not planned\n", "# not planned\n      three: {type: scripted}\n"));
+  CHECK(yaml.edited(add_state(loaded, "flat", "z", "scripted"), "ops.yaml") ==
+        replaced(text, "{x: scripted, y: scripted}",
+                 "{x: scripted, y: scripted, z: {type: scripted}}"));
+  CHECK(add_state(loaded, "plan", "one", "scripted").refused ==
+        "'one' is already taken in state machine 'plan'");
+  CHECK(add_state(loaded, "none", "one", "scripted").refused == "no state machine 'none'");
+  CHECK_THAT(yaml.refused(add_state(loaded, "plan", "three", "no.Such")),
+             Catch::Contains("no.Such"));
+
+  Registry registry = make_test_registry();
+  const ConfigIndex index = index_config(loaded, &registry);
+  CHECK(yaml.edited(remove_state(loaded, index, "plan", "idle"), "ops.yaml") ==
+        replaced(text, "      idle: scripted   # not planned\n", ""));
+  const std::string path = loaded.files.files().front()->path;
+  CHECK(remove_state(loaded, index, "plan", "two").refused ==
+        fmt::format("state 'two' of state machine 'plan' is still named at {}:33:9: remove those "
+                    "first",
+                    path));
+  CHECK(remove_state(loaded, index, "flat", "x").refused ==
+        fmt::format("state 'x' of state machine 'flat' is still named at {}:37:13: remove those "
+                    "first",
+                    path));
+  CHECK(remove_state(loaded, index, "plan", "nobody").refused ==
+        "no state 'nobody' in state machine 'plan'");
+
+  Workspace json({{"ops.json", kOpsJson}});
+  CHECK(json.edited(add_state(json.loaded(), "plan", "three", "scripted"), "ops.json") ==
+        replaced(json.text("ops.json"), R"({"one": "scripted", "two": "scripted"})",
+                 R"({"one": "scripted", "two": "scripted", "three": {"type": "scripted"}})"));
 }

@@ -426,6 +426,28 @@ TEST_CASE("the studio edits a state machine's queue: a state planned with params
       R"({"op": "add_queue_entry", "machine": "goalie", "state": "celebrate", "index": 0})");
   CHECK(unknown.first == 422);
   CHECK(contains(Json::parse(unknown.second)["refused"], "celebrate"));
+
+  // The state declared, then planned; a state still planned is not removed.
+  REQUIRE(studio
+              .edit(R"({"op": "add_state", "machine": "goalie", "name": "celebrate",
+                        "type": "scripted"})")
+              .first == 200);
+  const auto planned = studio.edit(
+      R"({"op": "add_queue_entry", "machine": "goalie", "state": "celebrate", "index": 0})");
+  REQUIRE(planned.first == 200);
+  CHECK(contains(Json::parse(planned.second)["files"][0]["text"],
+                 "      celebrate: {type: scripted}\n    queue:\n      - celebrate\n"));
+  const auto named =
+      studio.edit(R"({"op": "remove_state", "machine": "goalie", "name": "celebrate"})");
+  CHECK(named.first == 422);
+  CHECK(contains(Json::parse(named.second)["refused"],
+                 "state 'celebrate' of state machine 'goalie' is still named at "));
+  REQUIRE(studio.edit(R"({"op": "remove_queue_entry", "machine": "goalie", "index": 0})").first ==
+          200);
+  const auto removed_state =
+      studio.edit(R"({"op": "remove_state", "machine": "goalie", "name": "celebrate"})");
+  REQUIRE(removed_state.first == 200);
+  CHECK(!contains(Json::parse(removed_state.second)["files"][0]["text"], "celebrate"));
   CHECK(studio.edit(R"({"op": "move_queue_entry", "machine": "goalie", "from": 1})").first == 400);
   CHECK(studio
             .edit(R"({"op": "add_queue_entry", "machine": "goalie", "state": "dive",

@@ -295,6 +295,14 @@ Reply Studio::edit(const std::string& body) {
     const auto index = position(request, "index", missing);
     if (!missing.empty()) return refusal(400, needs(op, missing));
     result = remove_queue_entry(loaded, machine, *index);
+  } else if (op == "add_state" || op == "remove_state") {
+    const std::string machine = field(request, "machine", missing);
+    const std::string name = field(request, "name", missing);
+    const std::string type = op == "add_state" ? field(request, "type", missing) : "";
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = op == "add_state"
+                 ? add_state(loaded, machine, name, type)
+                 : remove_state(loaded, index_config(loaded, &registry_), machine, name);
   } else if (op == "move_queue_entry") {
     const std::string machine = field(request, "machine", missing);
     const auto from = position(request, "from", missing);
@@ -307,8 +315,9 @@ Reply Studio::edit(const std::string& body) {
     return refusal(400, fmt::format("no operation '{}': add_inhibition, remove_inhibition, "
                                     "flip_chaining, set_param, add_behaviour, "
                                     "remove_behaviour, rename, move_behaviour, move_layer, "
-                                    "add_actuator, remove_actuator, wire_port, add_queue_entry, "
-                                    "remove_queue_entry or move_queue_entry",
+                                    "add_actuator, remove_actuator, wire_port, add_state, "
+                                    "remove_state, add_queue_entry, remove_queue_entry or "
+                                    "move_queue_entry",
                                     op));
   }
   // The same check every operation gets: an edit that would leave an error the config did not

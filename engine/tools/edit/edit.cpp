@@ -1245,4 +1245,59 @@ EditResult move_queue_entry(const Loaded& loaded, const std::string& machine, st
   return {{moved_item(queue.items, from, to)}, {}};
 }
 
+EditResult add_state(const Loaded& loaded, const std::string& machine, const std::string& name,
+                     const std::string& type) {
+  if (!is_identifier(name))
+    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  const MachineSite site = machine_named(loaded, machine);
+  if (!site.file) return {{}, fmt::format("no state machine '{}'", machine)};
+  const std::string& path = site.file->path;
+  const std::string entry = fmt::format("{}: {{{}: {}}}", quoted_in(path, name),
+                                        quoted_in(path, "type"), quoted_in(path, type));
+  const Node* states = site.machine->find("states");
+  if (!states)
+    return add_entry(*site.file, *site.machine, quoted_in(path, "states") + ": {" + entry + "}");
+  if (!states->is_mapping())
+    return {{}, fmt::format("the states: of state machine '{}' are not a mapping", machine)};
+  if (states->find(name))
+    return {{}, fmt::format("'{}' is already taken in state machine '{}'", name, machine)};
+  return add_entry(*site.file, *states, entry);
+}
+
+EditResult remove_state(const Loaded& loaded, const ConfigIndex& index, const std::string& machine,
+                        const std::string& name) {
+  const MachineSite site = machine_named(loaded, machine);
+  if (!site.file) return {{}, fmt::format("no state machine '{}'", machine)};
+  const EntrySite states = entry_of(*site.file, *site.machine, "states");
+  if (!states.entry || !states.entry->value.is_mapping() || !states.entry->value.find(name))
+    return {{}, fmt::format("no state '{}' in state machine '{}'", name, machine)};
+  // Where it is named (the queue, a pre-emption, a state's append: or prepend:) a plan would
+  // lose a step: which one to drop instead is the user's call.
+  std::string uses;
+  for (const auto& use : index.occurrences) {
+    if (use.definition || use.kind != SymbolKind::kState || use.scope != machine ||
+        use.name != name)
+      continue;
+    const SourceFile* file = loaded.files.find(use.file);
+    const std::string& text = file ? file->text : use.file;
+    const std::size_t at = std::min(use.begin, text.size());
+    const auto line =
+        1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+    uses += fmt::format("{}{}:{}:{}", uses.empty() ? "" : ", ", use.file, line,
+                        at - line_start(text, at) + 1);
+  }
+  if (!uses.empty())
+    return {{},
+            fmt::format("state '{}' of state machine '{}' is still named at {}: remove those "
+                        "first",
+                        name, machine, uses)};
+  const Items items = items_of(*site.file, states.entry->value);
+  if (!items.refused.empty())
+    return {{},
+            fmt::format("the states of state machine '{}' are not written one to a line ({}): "
+                        "remove it in the text",
+                        machine, items.refused)};
+  return {{removed_entry(items, *states.entry, index_of(states.entry->value, name))}, {}};
+}
+
 }  // namespace arbiter

@@ -200,6 +200,19 @@ EditResult remove_queue_entry(const Loaded& loaded, const std::string& machine, 
 EditResult move_queue_entry(const Loaded& loaded, const std::string& machine, std::size_t from,
                             std::size_t to);
 
+/// Declares state `name` of class `type` in state machine `machine`: `name: {type: TYPE}` after
+/// the last of its `states:`. Refused when `name` is not an identifier or is a state of the
+/// machine already.
+EditResult add_state(const Loaded& loaded, const std::string& machine, const std::string& name,
+                     const std::string& type);
+
+/// Removes state `name` of state machine `machine` (its lines, or its entry and comma). Refused,
+/// with the places (file:line:column), while the config names it (its queue, a pre-emption, a
+/// state's append: or prepend:, as `index` of `loaded` finds them); a state that a class plans
+/// by name (the soccer goalie's dive) is left for checked() to refuse.
+EditResult remove_state(const Loaded& loaded, const ConfigIndex& index, const std::string& machine,
+                        const std::string& name);
+
 /// Adds `entry` (`key: value`, as it is to be written) to the mapping `node` of `file`: before
 /// a flow mapping's closing brace, else as a line of its own after the last line of the block
 /// mapping, at its keys' indentation. Refused when the mapping's text is not where `node` says.
