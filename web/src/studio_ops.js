@@ -1,5 +1,5 @@
 // The studio's structure edits (docs/studio.md): moving a behaviour or a layer, adding and removing
-// an actuator, wiring a behaviour's ports and editing a state machine's queue. Each is a button or
+// an actuator, wiring a behaviour's ports and editing a state machine's states and queue. Each is a button or
 // a small form, so that the mouse and the keyboard (Tab, Enter) reach every one; each asks the
 // server for one operation, which the edit engine makes as a text edit and checks.
 import {html} from './dom.js';
@@ -101,7 +101,7 @@ function layerOps(box, graph, operation) {
   });
 }
 
-/** Each state machine's queue: reordered, an item removed, a state planned with params. */
+/** Each state machine's queue (reordered, an item removed, a state planned with params) and states. */
 function queueOps(box, graph, operation) {
   const machines = graph.state_machines || [];
   if (!machines.length) return;
@@ -122,6 +122,23 @@ function queueOps(box, graph, operation) {
         operation({op: 'remove_queue_entry', machine: machine.name, index},
                   `removed item ${index} of ${machine.name}'s queue`), {class: 'queue-remove'});
     });
+    // Its states: each with × (refused while something names it), and one to declare.
+    const states = html('div', {class: 'studio-op states-op', 'data-machine': machine.name}, box);
+    states.append(`${machine.name}'s states: `);
+    for (const declared of machine.states) {
+      const item = html('span', {class: 'state-op', 'data-state': declared.name}, states);
+      item.append(` ${declared.name} (${declared.class}) `);
+      button(item, '×', `remove state ${declared.name} (refused while something names it)`, () =>
+        operation({op: 'remove_state', machine: machine.name, name: declared.name},
+                  `removed state ${machine.name}/${declared.name}`), {class: 'remove-state'});
+    }
+    const {form: add, done: added} = form(box, `add-state-${machine.name}`, 'Add state', () =>
+      operation({op: 'add_state', machine: machine.name, name: stateName.value.trim(), type: stateClass.value.trim()},
+                `added state ${machine.name}/${stateName.value.trim()}`));
+    const stateName = html('input', {size: '12', placeholder: 'name', 'aria-label': `a new state of ${machine.name}`}, add);
+    add.append(' of class ');
+    const stateClass = html('input', {size: '14', value: 'scripted', 'aria-label': 'its class'}, add);
+    added();
     const {form: f, done} = form(box, `plan-${machine.name}`, 'Plan', () => {
       let params;
       try {

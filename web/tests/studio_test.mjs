@@ -298,7 +298,7 @@ test('two tabs on one studio see each other\'s edits and saves, and a file chang
   await second.close();
 });
 
-test('structure edits by mouse and keyboard: a behaviour moved, an actuator added and removed (a used one refused), a queue reordered and a state planned', async () => {
+test('structure edits by mouse and keyboard: a behaviour moved, an actuator added and removed (a used one refused), a queue reordered, a state planned, declared and removed', async () => {
   const file = copyOf('paper/walk_and_kick.yaml');
   const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
   const page = await open(url);
@@ -343,6 +343,18 @@ test('structure edits by mouse and keyboard: a behaviour moved, an actuator adde
   await queues.waitForFunction(() => document.querySelector('#text').value.includes(
       'queue: [kick_off, celebrate, {celebrate: {hold: 1}}]'));
   assert.match(await queueText(), /    queue: \[dribble, shoot\]\n/);
+  // A state declared by keyboard, then removed by mouse; one the queue names is refused.
+  await settled(queues);
+  await queues.fill('#add-state-attack_plan input >> nth=0', 'pass_ball');
+  await queues.press('#add-state-attack_plan input >> nth=0', 'Enter');
+  await queues.waitForSelector('.states-op[data-machine="attack_plan"] .state-op[data-state="pass_ball"]');
+  assert.match(await queueText(), /      shoot: scripted\n      pass_ball: \{type: scripted\}\n/);
+  await settled(queues);
+  await queues.click('.states-op[data-machine="attack_plan"] .state-op[data-state="shoot"] .remove-state');
+  await queues.waitForFunction(() => /refused: state 'shoot' of state machine 'attack_plan' is still named at/.test(
+      document.querySelector('#studio-message').textContent));
+  await queues.click('.states-op[data-machine="attack_plan"] .state-op[data-state="pass_ball"] .remove-state');
+  await queues.waitForFunction(() => !document.querySelector('#text').value.includes('pass_ball'));
   assert.deepEqual(queues.errors, []);
   await queues.close();
 });
