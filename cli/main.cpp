@@ -505,7 +505,10 @@ int main(int argc, char** argv) {
       "edit",
       "Serve the studio, a browser editor of a config: its graph beside its text, edited by\n"
       "mouse or keyboard, every problem 'arbiter validate' finds shown as you edit, saved on\n"
-      "request (docs/studio.md).");
+      "request (docs/studio.md). Its edits: add, remove, rename and move a behaviour; add, flip\n"
+      "and delete an inhibition; set a param; move a layer; add and remove an actuator; wire a\n"
+      "port; add and remove a state; plan, remove and reorder a state machine's queue; or type\n"
+      "in the text.");
   edit_cmd->add_option("FILE", options.file, "the config to edit")
       ->required()
       ->check(CLI::ExistingFile);

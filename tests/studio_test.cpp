@@ -316,3 +316,141 @@ layers:
         "+ inhibition control: kick_ball -> head_control\n"
         "~ behaviour control/head_control: params: activation [1.0] -> [0.25]\n");
 }
+
+TEST_CASE("the studio moves a behaviour and a layer, and refuses a move it cannot make",
+          "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  const std::string original = read(path);
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+
+  const auto moved =
+      studio.edit(R"({"op": "move_behaviour", "layer": "control", "name": "head_control",
+                      "index": 0})");
+  REQUIRE(moved.first == 200);
+  const Json reply = Json::parse(moved.second);
+  const std::string text = reply["files"][0]["text"];
+  CHECK(contains(text, "    behaviours:\n      head_control:\n        type: scripted\n"));
+  CHECK(reply["files"][0]["edited"] == true);
+  CHECK(read(path) == original);
+
+  const auto layer = studio.edit(R"({"op": "move_layer", "layer": "control", "index": 0})");
+  CHECK(layer.first == 422);
+  CHECK(Json::parse(layer.second)["refused"] == "layer 'control' is at position 0 already");
+  const auto across =
+      studio.edit(R"({"op": "move_behaviour", "layer": "control", "name": "kick_ball",
+                      "to_layer": "control", "index": 9})");
+  CHECK(across.first == 422);
+  CHECK(contains(Json::parse(across.second)["refused"], "position 9 is past the end"));
+  const auto no_index =
+      studio.edit(R"({"op": "move_behaviour", "layer": "control", "name": "kick_ball",
+                      "index": -1})");
+  CHECK(no_index.first == 400);
+  CHECK(contains(no_index.second,
+                 "move_behaviour needs 'index' (names as strings, positions as integers from 0)"));
+}
+
+TEST_CASE("the studio adds and removes an actuator and wires a port, refusing a used actuator",
+          "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+
+  const auto used = studio.edit(R"({"op": "remove_actuator", "layer": "control", "name": "kick"})");
+  CHECK(used.first == 422);
+  // A scripted behaviour's writes: are not a binding the engine follows: validate's words say it.
+  CHECK(contains(Json::parse(used.second)["refused"], "kick"));
+
+  const auto added = studio.edit(
+      R"({"op": "add_actuator", "layer": "control", "name": "probe_out", "type": "double"})");
+  REQUIRE(added.first == 200);
+  CHECK(contains(Json::parse(added.second)["files"][0]["text"],
+                 "      kick: {type: bool}\n      probe_out: {type: double}\n"));
+  REQUIRE(studio
+              .edit(R"({"op": "add_behaviour", "layer": "control", "name": "probe",
+                        "type": "test.Probe"})")
+              .first == 200);
+  const auto wired = studio.edit(
+      R"({"op": "wire_port", "layer": "control", "behaviour": "probe", "port": "out",
+          "target": "probe_out"})");
+  REQUIRE(wired.first == 200);
+  const Json state = Json::parse(wired.second);
+  CHECK(contains(state["files"][0]["text"],
+                 "      probe: {type: test.Probe, ports: {out: probe_out}}\n"));
+  const auto still =
+      studio.edit(R"({"op": "remove_actuator", "layer": "control", "name": "probe_out"})");
+  CHECK(still.first == 422);
+  CHECK(Json::parse(still.second)["refused"] ==
+        "actuator 'probe_out' is still used: port 'out' of 'probe' is bound to it. Remove or "
+        "rebind those first");
+  CHECK(studio.edit(R"({"op": "wire_port", "layer": "control", "behaviour": "probe"})").first ==
+        400);
+}
+
+TEST_CASE("the studio edits a state machine's queue: a state planned with params, moved, removed",
+          "[studio]") {
+  TempDir dir;
+  const std::string path =
+      dir.write("plan.yaml", read(ARBITER_SOURCE_DIR "/configs/paper/goalie_plan.yaml"));
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+  const std::string queue =
+      "    queue:\n"
+      "      - wait_for_button\n"
+      "      - walk_to_pose: {hold: 6}   # into the goal: (0.0, -4.2, 1.57)\n"
+      "      - obstacle_ahead\n"
+      "      - monitor_ball\n";
+  REQUIRE(contains(Json::parse(studio.state().second)["files"][0]["text"], queue));
+
+  const auto added = studio.edit(
+      R"({"op": "add_queue_entry", "machine": "goalie", "state": "walk_to_pose",
+          "params": {"hold": 2}})");
+  REQUIRE(added.first == 200);
+  CHECK(Json::parse(added.second)["edits"][0]["text"] == "\n      - walk_to_pose: {hold: 2}");
+  const auto moved =
+      studio.edit(R"({"op": "move_queue_entry", "machine": "goalie", "from": 1, "to": 0})");
+  REQUIRE(moved.first == 200);
+  const auto removed =
+      studio.edit(R"({"op": "remove_queue_entry", "machine": "goalie", "index": 2})");
+  REQUIRE(removed.first == 200);
+  CHECK(contains(Json::parse(removed.second)["files"][0]["text"],
+                 "    queue:\n"
+                 "      - walk_to_pose: {hold: 6}   # into the goal: (0.0, -4.2, 1.57)\n"
+                 "      - wait_for_button\n"
+                 "      - monitor_ball\n"
+                 "      - walk_to_pose: {hold: 2}\n"));
+
+  const auto unknown = studio.edit(
+      R"({"op": "add_queue_entry", "machine": "goalie", "state": "celebrate", "index": 0})");
+  CHECK(unknown.first == 422);
+  CHECK(contains(Json::parse(unknown.second)["refused"], "celebrate"));
+
+  // The state declared, then planned; a state still planned is not removed.
+  REQUIRE(studio
+              .edit(R"({"op": "add_state", "machine": "goalie", "name": "celebrate",
+                        "type": "scripted"})")
+              .first == 200);
+  const auto planned = studio.edit(
+      R"({"op": "add_queue_entry", "machine": "goalie", "state": "celebrate", "index": 0})");
+  REQUIRE(planned.first == 200);
+  CHECK(contains(Json::parse(planned.second)["files"][0]["text"],
+                 "      celebrate: {type: scripted}\n    queue:\n      - celebrate\n"));
+  const auto named =
+      studio.edit(R"({"op": "remove_state", "machine": "goalie", "name": "celebrate"})");
+  CHECK(named.first == 422);
+  CHECK(contains(Json::parse(named.second)["refused"],
+                 "state 'celebrate' of state machine 'goalie' is still named at "));
+  REQUIRE(studio.edit(R"({"op": "remove_queue_entry", "machine": "goalie", "index": 0})").first ==
+          200);
+  const auto removed_state =
+      studio.edit(R"({"op": "remove_state", "machine": "goalie", "name": "celebrate"})");
+  REQUIRE(removed_state.first == 200);
+  CHECK(!contains(Json::parse(removed_state.second)["files"][0]["text"], "celebrate"));
+  CHECK(studio.edit(R"({"op": "move_queue_entry", "machine": "goalie", "from": 1})").first == 400);
+  CHECK(studio
+            .edit(R"({"op": "add_queue_entry", "machine": "goalie", "state": "dive",
+                        "params": [1]})")
+            .first == 400);
+}

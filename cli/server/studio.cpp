@@ -74,6 +74,21 @@ std::string field(const Json& request, const char* key, std::string& missing) {
   return found->get<std::string>();
 }
 
+/// A position (an integer from 0) of a request, or nullopt (and `missing` names it).
+std::optional<std::size_t> position(const Json& request, const char* key, std::string& missing) {
+  const auto found = request.find(key);
+  if (found == request.end() || !found->is_number_unsigned()) {
+    if (missing.empty()) missing = key;
+    return std::nullopt;
+  }
+  return found->get<std::size_t>();
+}
+
+/// Why a request lacks a member, saying how the new operations' members are written.
+std::string needs(const std::string& op, const std::string& missing) {
+  return fmt::format("{} needs '{}' (names as strings, positions as integers from 0)", op, missing);
+}
+
 }  // namespace
 
 bool write_atomically(const std::string& path, const std::string& text, std::string& error) {
@@ -231,12 +246,78 @@ Reply Studio::edit(const std::string& body) {
     } else {
       result = rename_symbol(loaded, index, *symbol, to);
     }
+  } else if (op == "move_behaviour") {
+    const std::string layer = field(request, "layer", missing);
+    const std::string name = field(request, "name", missing);
+    const auto index = position(request, "index", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = move_behaviour(loaded, layer, name, request.value("to_layer", ""), *index);
+  } else if (op == "move_layer") {
+    const std::string layer = field(request, "layer", missing);
+    const auto index = position(request, "index", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = move_layer(loaded, layer, *index);
+  } else if (op == "add_actuator" || op == "remove_actuator") {
+    const std::string layer = field(request, "layer", missing);
+    const std::string name = field(request, "name", missing);
+    const std::string type = op == "add_actuator" ? field(request, "type", missing) : "";
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = op == "add_actuator" ? add_actuator(loaded, layer, name, type)
+                                  : remove_actuator(loaded, layer, name);
+  } else if (op == "wire_port") {
+    const std::string layer = field(request, "layer", missing);
+    const std::string behaviour = field(request, "behaviour", missing);
+    const std::string port = field(request, "port", missing);
+    const std::string target = field(request, "target", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = wire_port(loaded, layer, behaviour, port, target);
+  } else if (op == "add_queue_entry") {
+    const std::string machine = field(request, "machine", missing);
+    const std::string state = field(request, "state", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    std::vector<std::pair<std::string, std::string>> params;
+    if (request.contains("params")) {
+      if (!request["params"].is_object())
+        return refusal(400, "add_queue_entry's 'params' is not an object of param values");
+      // JSON is a YAML flow value too: one text serves both formats.
+      for (const auto& [param, value] : request["params"].items())
+        params.emplace_back(param, dump(value));
+    }
+    std::size_t index = kAtEnd;
+    if (request.contains("index")) {
+      const auto given = position(request, "index", missing);
+      if (!given) return refusal(400, needs(op, missing));
+      index = *given;
+    }
+    result = add_queue_entry(loaded, machine, state, params, index);
+  } else if (op == "remove_queue_entry") {
+    const std::string machine = field(request, "machine", missing);
+    const auto index = position(request, "index", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = remove_queue_entry(loaded, machine, *index);
+  } else if (op == "add_state" || op == "remove_state") {
+    const std::string machine = field(request, "machine", missing);
+    const std::string name = field(request, "name", missing);
+    const std::string type = op == "add_state" ? field(request, "type", missing) : "";
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = op == "add_state"
+                 ? add_state(loaded, machine, name, type)
+                 : remove_state(loaded, index_config(loaded, &registry_), machine, name);
+  } else if (op == "move_queue_entry") {
+    const std::string machine = field(request, "machine", missing);
+    const auto from = position(request, "from", missing);
+    const auto to = position(request, "to", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = move_queue_entry(loaded, machine, *from, *to);
   } else if (!missing.empty()) {
     return refusal(400, "an operation needs 'op'");
   } else {
     return refusal(400, fmt::format("no operation '{}': add_inhibition, remove_inhibition, "
                                     "flip_chaining, set_param, add_behaviour, "
-                                    "remove_behaviour or rename",
+                                    "remove_behaviour, rename, move_behaviour, move_layer, "
+                                    "add_actuator, remove_actuator, wire_port, add_state, "
+                                    "remove_state, add_queue_entry, remove_queue_entry or "
+                                    "move_queue_entry",
                                     op));
   }
   // The same check every operation gets: an edit that would leave an error the config did not

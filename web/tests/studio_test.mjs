@@ -411,3 +411,64 @@ test('a 200-behaviour graph: zoomed about the pointer, panned, a layer folded an
   assert.deepEqual(page.errors, []);
   await page.close();
 });
+
+test('structure edits by mouse and keyboard: a behaviour moved, an actuator added and removed (a used one refused), a queue reordered, a state planned, declared and removed', async () => {
+  const file = copyOf('paper/walk_and_kick.yaml');
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  const original = await text(page);
+  // By keyboard: head_control declared before search_for_ball.
+  await selectBehaviour(page, 'head_control');
+  await page.focus('#move-behaviour-up');
+  await page.keyboard.press('Enter');
+  await page.waitForFunction(() => /head_control:[^]*search_for_ball:\n/.test(document.querySelector('#text').value));
+  assert.match(await text(page), /      go_behind_ball:\n[^]*\n      head_control:\n        type: scripted\n        params:\n          activation: 1\n          writes: \{head_angle: -0\.5\}\n      search_for_ball:\n/);
+  // By mouse: an actuator added, then removed; one a behaviour writes is refused, with the reason.
+  await settled(page);
+  await page.fill('#add-actuator-control input', 'beep');
+  await page.selectOption('#add-actuator-control select', 'bool');
+  await page.click('#add-actuator-control button');
+  await page.waitForSelector('.actuator-op[data-actuator="beep"]');
+  assert.match(await text(page), /      kick: \{type: bool\}\n      beep: \{type: bool\}\n/);
+  await page.click('.actuator-op[data-actuator="beep"] .remove-actuator');
+  await page.waitForFunction(() => !document.querySelector('.actuator-op[data-actuator="beep"]'));
+  await settled(page);
+  await page.click('.actuator-op[data-actuator="kick"] .remove-actuator');
+  await page.waitForFunction(() => /refused: .*'kick'/.test(document.querySelector('#studio-message').textContent));
+  assert.match(await text(page), /      kick: \{type: bool\}\n/);
+  assert.equal(readFileSync(file, 'utf8'), original);
+  await page.close();
+
+  // A state machine's queue: an item moved later by mouse, a state planned with params by keyboard, one removed.
+  const plan = copyOf('paper/hierarchical.yaml');
+  const served = await serve(['edit', plan, '--serve', '127.0.0.1:0']);
+  const queues = await open(served.url);
+  const queueText = () => queues.inputValue('#text');
+  await queues.click('.queue-op[data-machine="match"] li:nth-child(1) .queue-down');
+  await queues.waitForFunction(() => document.querySelector('#text').value.includes('queue: [attack, kick_off, celebrate]'));
+  await settled(queues);
+  await queues.selectOption('#plan-match select', 'celebrate');
+  await queues.fill('#plan-match input', '{"hold": 1}');
+  await queues.press('#plan-match input', 'Enter');
+  await queues.waitForFunction(() => document.querySelector('#text').value.includes(
+      'queue: [attack, kick_off, celebrate, {celebrate: {hold: 1}}]'));
+  await settled(queues);
+  await queues.click('.queue-op[data-machine="match"] li:nth-child(1) .queue-remove');
+  await queues.waitForFunction(() => document.querySelector('#text').value.includes(
+      'queue: [kick_off, celebrate, {celebrate: {hold: 1}}]'));
+  assert.match(await queueText(), /    queue: \[dribble, shoot\]\n/);
+  // A state declared by keyboard, then removed by mouse; one the queue names is refused.
+  await settled(queues);
+  await queues.fill('#add-state-attack_plan input >> nth=0', 'pass_ball');
+  await queues.press('#add-state-attack_plan input >> nth=0', 'Enter');
+  await queues.waitForSelector('.states-op[data-machine="attack_plan"] .state-op[data-state="pass_ball"]');
+  assert.match(await queueText(), /      shoot: scripted\n      pass_ball: \{type: scripted\}\n/);
+  await settled(queues);
+  await queues.click('.states-op[data-machine="attack_plan"] .state-op[data-state="shoot"] .remove-state');
+  await queues.waitForFunction(() => /refused: state 'shoot' of state machine 'attack_plan' is still named at/.test(
+      document.querySelector('#studio-message').textContent));
+  await queues.click('.states-op[data-machine="attack_plan"] .state-op[data-state="pass_ball"] .remove-state');
+  await queues.waitForFunction(() => !document.querySelector('#text').value.includes('pass_ball'));
+  assert.deepEqual(queues.errors, []);
+  await queues.close();
+});

@@ -100,6 +100,19 @@ bool names(const Node& item, const InhibitionRef& which) {
          inhibitor->text() == which.inhibitor && inhibited->text() == which.inhibited;
 }
 
+/// The inhibitor and the inhibited an inhibition item names, as an arrow or a mapping ("" when
+/// it names none).
+std::pair<std::string, std::string> endpoints(const Node& item) {
+  if (item.is_scalar()) {
+    const Arrow arrow = read_arrow(item.text());
+    return {arrow.inhibitor, arrow.inhibited};
+  }
+  const Node* inhibitor = item.is_mapping() ? item.find("inhibitor") : nullptr;
+  const Node* inhibited = item.is_mapping() ? item.find("inhibited") : nullptr;
+  if (!inhibitor || !inhibited || !inhibitor->is_scalar() || !inhibited->is_scalar()) return {};
+  return {inhibitor->text(), inhibited->text()};
+}
+
 /// A layer's declaration, in the config's file or an include that declares it.
 struct LayerSite {
   const SourceFile* file;
@@ -544,6 +557,13 @@ EditResult set_param(const Loaded& loaded, const std::string& layer, const std::
 
 namespace arbiter {
 
+namespace {
+
+/// The edit removing entry `at` of the flow mapping `mapping` of `file`, with one comma.
+TextEdit removed_flow_entry(const SourceFile& file, const Node& mapping, std::size_t at);
+
+}  // namespace
+
 EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const std::string& name,
                          const std::string& type) {
   if (!is_identifier(name))
@@ -578,11 +598,19 @@ EditResult remove_behaviour(const Loaded& loaded, const std::string& layer,
         const auto it = std::find_if(items.begin(), items.end(),
                                      [&](const Node::Entry& item) { return item.key == name; });
         if (it == items.end()) continue;
+        if (const std::size_t open = offset_at(*file, entry.value.location());
+            open < text.size() && text[open] == '{') {
+          // A flow mapping (and every JSON one): its text and a comma, not its lines.
+          result.edits.push_back(
+              removed_flow_entry(*file, entry.value, static_cast<std::size_t>(it - items.begin())));
+          continue;
+        }
         const std::size_t key = offset_at(*file, it->key_location);
         const std::size_t start = line_start(text, key);
         if (text.find_first_not_of(' ', start) != key)
-          return {{},
-                  fmt::format("'{}' is declared in a flow mapping: remove it in the text", name)};
+          return {
+              {},
+              fmt::format("'{}' is not written on a line of its own: remove it in the text", name)};
         // Its lines; with the key `behaviours:` when it was the only one.
         const bool only = items.size() == 1;
         const std::size_t from =
@@ -593,16 +621,7 @@ EditResult remove_behaviour(const Loaded& loaded, const std::string& layer,
         // The inhibitions that name it go with it: all of them at once when none is left.
         std::vector<const Node*> naming;
         for (const auto& item : entry.value.items()) {
-          std::string inhibitor, inhibited;
-          if (item.is_scalar()) {
-            const Arrow arrow = read_arrow(item.text());
-            inhibitor = arrow.inhibitor;
-            inhibited = arrow.inhibited;
-          } else if (const Node* a = item.find("inhibitor"), *b = item.find("inhibited");
-                     item.is_mapping() && a && b && a->is_scalar() && b->is_scalar()) {
-            inhibitor = a->text();
-            inhibited = b->text();
-          }
+          const auto [inhibitor, inhibited] = endpoints(item);
           if (inhibitor == name || inhibited == name) naming.push_back(&item);
         }
         if (naming.empty()) continue;
@@ -636,6 +655,649 @@ EditResult remove_behaviour(const Loaded& loaded, const std::string& layer,
                           name)};
   }
   return result;
+}
+
+}  // namespace arbiter
+
+// Moving, actuators, ports and state queues: each an edit of one collection's items, as written.
+namespace arbiter {
+
+namespace {
+
+/// The items of a mapping (its entries) or a sequence as written in `file`: in a block
+/// collection, each item's lines (with the comment lines right above it, at its indentation)
+/// without the last newline; in a flow one, the item's own text (a mapping entry's key through
+/// its value). What lies between two items (blank lines, commas) belongs to neither.
+struct Items {
+  const SourceFile* file = nullptr;
+  bool flow = false;
+  std::size_t open = 0;  ///< a flow collection's opening bracket
+  std::vector<std::pair<std::size_t, std::size_t>> spans;
+  std::vector<std::string> prefixes;  ///< block: what starts the item's line (`      - `)
+  std::string refused;
+};
+
+/// The end of the value `node` that starts at `begin` in a flow collection, or npos.
+std::size_t flow_value_end(const std::string& text, std::size_t begin, const Node& node) {
+  if (begin < text.size() && (text[begin] == '{' || text[begin] == '[')) {
+    const std::size_t close = flow_close(text, begin);
+    return close == std::string::npos ? close : close + 1;
+  }
+  if (!node.is_scalar() && !node.is_null()) return std::string::npos;
+  return scalar_end(text, begin, node);
+}
+
+Items items_of(const SourceFile& file, const Node& node) {
+  Items items;
+  items.file = &file;
+  const std::string& text = file.text;
+  const std::size_t at = offset_at(file, node.location());
+  items.flow = at < text.size() && (text[at] == '{' || text[at] == '[');
+  items.open = at;
+  const bool mapping = node.is_mapping();
+  const std::size_t count = mapping ? node.entries().size() : node.items().size();
+  for (std::size_t i = 0; i < count; ++i) {
+    const Node& value = mapping ? node.entries()[i].value : node.items()[i];
+    const std::size_t begin = mapping ? offset_at(file, node.entries()[i].key_location)
+                                      : offset_at(file, value.location());
+    if (items.flow) {
+      const std::size_t end = flow_value_end(text, offset_at(file, value.location()), value);
+      if (end == std::string::npos) {
+        items.refused = "an item's end was not found in the text";
+        return items;
+      }
+      items.spans.emplace_back(begin, end);
+      continue;
+    }
+    const std::size_t start = line_start(text, begin);
+    std::size_t first = text.find_first_not_of(' ', start);
+    std::size_t column = begin - start;
+    if (!mapping) {
+      // `- item`: the dash first on its line, the item after it on the same line.
+      std::size_t dash = begin;
+      while (dash > start && text[dash - 1] == ' ') --dash;
+      if (dash == start || text[dash - 1] != '-' || first != dash - 1) {
+        items.refused = "an item is not a '- ' item on a line of its own";
+        return items;
+      }
+      first = dash - 1;
+    } else if (first != begin) {
+      items.refused = "an entry does not start its line";
+      return items;
+    }
+    // A mapping entry's value is indented deeper than its key; a sequence item's lines as deep
+    // as its first.
+    std::size_t end = block_end(text, begin, mapping ? column + 1 : column);
+    if (end > begin && text[end - 1] == '\n') --end;
+    std::size_t from = start;
+    const std::size_t indent = first - start;
+    while (from > 0) {
+      const std::size_t above = line_start(text, from - 1);
+      const std::size_t content = text.find_first_not_of(' ', above);
+      if (content >= from - 1 || content - above != indent || text[content] != '#') break;
+      from = above;
+    }
+    items.spans.emplace_back(from, end);
+    items.prefixes.push_back(text.substr(start, column));
+  }
+  return items;
+}
+
+/// The edit that puts item `from` at position `to`, the others keeping their order; what lies
+/// between the items stays where it was.
+TextEdit moved_item(const Items& items, std::size_t from, std::size_t to) {
+  const std::string& text = items.file->text;
+  const std::size_t low = std::min(from, to), high = std::max(from, to);
+  std::vector<std::size_t> order;
+  for (std::size_t i = low; i <= high; ++i) {
+    if (i != from) order.push_back(i);
+  }
+  order.insert(order.begin() + static_cast<std::ptrdiff_t>(to - low), from);
+  std::string moved;
+  for (std::size_t i = low; i <= high; ++i) {
+    const auto [begin, end] = items.spans[order[i - low]];
+    moved += text.substr(begin, end - begin);
+    if (i < high) {
+      moved += text.substr(items.spans[i].second, items.spans[i + 1].first - items.spans[i].second);
+    }
+  }
+  return {items.file->path, items.spans[low].first, items.spans[high].second, moved};
+}
+
+/// The edit that inserts `item` (written on one line: `name: {type: x}`, `- a => b` without its
+/// dash) before item `at` (after the last when `at` is their number): in a block collection a
+/// line like its neighbour's, in a flow one with the separator its items have.
+TextEdit inserted_item(const Items& items, std::size_t at, const std::string& item) {
+  const std::string& path = items.file->path;
+  const std::string& text = items.file->text;
+  const std::size_t count = items.spans.size();
+  if (items.flow) {
+    if (count == 0) return {path, items.open + 1, items.open + 1, item};
+    const std::string separator =
+        count > 1 ? text.substr(items.spans[0].second, items.spans[1].first - items.spans[0].second)
+                  : ", ";
+    if (at < count) return {path, items.spans[at].first, items.spans[at].first, item + separator};
+    return {path, items.spans.back().second, items.spans.back().second, separator + item};
+  }
+  if (at < count) {
+    return {path, items.spans[at].first, items.spans[at].first, items.prefixes[at] + item + "\n"};
+  }
+  return {path, items.spans.back().second, items.spans.back().second,
+          "\n" + items.prefixes.back() + item};
+}
+
+/// The edit that removes item `at`: its lines (with the comments above it), or in a flow
+/// collection its text and the separator before it (after it, for the first).
+TextEdit removed_item(const Items& items, std::size_t at) {
+  const std::string& text = items.file->text;
+  const auto [begin, end] = items.spans[at];
+  if (!items.flow) return {items.file->path, begin, std::min(text.size(), end + 1), {}};
+  if (at > 0) return {items.file->path, items.spans[at - 1].second, end, {}};
+  if (items.spans.size() > 1) return {items.file->path, begin, items.spans[1].first, {}};
+  return {items.file->path, begin, end, {}};
+}
+
+TextEdit removed_flow_entry(const SourceFile& file, const Node& mapping, std::size_t at) {
+  return removed_item(items_of(file, mapping), at);
+}
+
+/// The entry `key` of `layer`'s mapping and its file, or a null entry.
+struct EntrySite {
+  const SourceFile* file = nullptr;
+  const Node::Entry* entry = nullptr;
+};
+
+EntrySite entry_of(const SourceFile& file, const Node& mapping, const std::string& key) {
+  for (const auto& entry : mapping.entries()) {
+    if (entry.key == key) return {&file, &entry};
+  }
+  return {};
+}
+
+std::size_t index_of(const Node& mapping, const std::string& key) {
+  const auto& entries = mapping.entries();
+  const auto found = std::find_if(entries.begin(), entries.end(),
+                                  [&](const Node::Entry& entry) { return entry.key == key; });
+  return static_cast<std::size_t>(found - entries.begin());
+}
+
+std::string quoted_in(const std::string& path, const std::string& word) {
+  return format_of(path) == DocumentFormat::kJson ? "\"" + word + "\"" : word;
+}
+
+/// The edit removing entry `at` of the mapping that `entry` (`actuators:`, `behaviours:`) holds:
+/// with the key when it was the only one, since the key alone would be null.
+TextEdit removed_entry(const Items& items, const Node::Entry& entry, std::size_t at) {
+  if (items.flow || items.spans.size() > 1) return removed_item(items, at);
+  const std::string& text = items.file->text;
+  const std::size_t key = offset_of(text, entry.key_location.line(), entry.key_location.column());
+  const std::size_t start = line_start(text, key);
+  return {items.file->path, start, block_end(text, key, key - start + 1), {}};
+}
+
+/// A state machine's declaration, in the config's file or an include.
+struct MachineSite {
+  const SourceFile* file = nullptr;
+  const Node* machine = nullptr;
+};
+
+MachineSite machine_named(const Loaded& loaded, const std::string& machine) {
+  for (const auto& file : loaded.files.files()) {
+    const Node* machines =
+        file->root && file->root->is_mapping() ? file->root->find("state_machines") : nullptr;
+    const Node* found = machines && machines->is_mapping() ? machines->find(machine) : nullptr;
+    if (found && found->is_mapping()) return {file.get(), found};
+  }
+  return {};
+}
+
+/// The lines of a block item `span` of `file`, indented by `shift` more columns.
+std::string reindented(const std::string& text, std::pair<std::size_t, std::size_t> span,
+                       std::ptrdiff_t shift) {
+  std::string out;
+  for (std::size_t at = span.first; at < span.second;) {
+    std::size_t end = std::min(next_line(text, at), span.second);
+    std::string line = text.substr(at, end - at);
+    if (shift > 0) {
+      line.insert(0, static_cast<std::size_t>(shift), ' ');
+    } else {
+      line.erase(0, std::min(line.find_first_not_of(' '), static_cast<std::size_t>(-shift)));
+    }
+    out += line;
+    at = end;
+  }
+  return out;
+}
+
+}  // namespace
+
+EditResult move_behaviour(const Loaded& loaded, const std::string& layer, const std::string& name,
+                          const std::string& to_layer, std::size_t index) {
+  const std::string target = to_layer.empty() ? layer : to_layer;
+  const std::vector<LayerSite> from_sites = layers_named(loaded, layer);
+  if (from_sites.empty()) return {{}, fmt::format("no layer '{}'", layer)};
+  const LayerSite& from = from_sites.front();
+  const Node* behaviours = from.layer->find("behaviours");
+  if (!behaviours || !behaviours->is_mapping() || !behaviours->find(name))
+    return {{}, fmt::format("no behaviour '{}' in layer '{}'", name, layer)};
+  const Items source = items_of(*from.file, *behaviours);
+  if (!source.refused.empty())
+    return {{},
+            fmt::format("the behaviours of layer '{}' are not written one to a line ({}): "
+                        "move it in the text",
+                        layer, source.refused)};
+  const std::size_t at = index_of(*behaviours, name);
+  const std::size_t count = source.spans.size();
+  if (target == layer) {
+    if (index >= count)
+      return {{},
+              fmt::format("position {} is past the end of layer '{}', which has {} "
+                          "behaviour(s): positions count from 0",
+                          index, layer, count)};
+    if (index == at) return {{}, fmt::format("'{}' is at position {} already", name, index)};
+    return {{moved_item(source, at, index)}, {}};
+  }
+  // To another layer: the inhibitions of its old layer cannot follow it (an inhibition joins two
+  // behaviours of one layer), and are not dropped without the user's word.
+  const Node* inhibitions = from.layer->find("inhibitions");
+  for (std::size_t i = 0; inhibitions && inhibitions->is_sequence() && i < inhibitions->size();
+       ++i) {
+    const auto [inhibitor, inhibited] = endpoints(inhibitions->items()[i]);
+    if (inhibitor == name || inhibited == name)
+      return {{},
+              fmt::format("'{}' is named by the inhibition '{} -> {}' of layer '{}', which "
+                          "cannot follow it to another layer: remove it first",
+                          name, inhibitor, inhibited, layer)};
+  }
+  const std::vector<LayerSite> to_sites = layers_named(loaded, target);
+  if (to_sites.empty()) return {{}, fmt::format("no layer '{}'", target)};
+  const LayerSite& to = to_sites.front();
+  if (to.layer->find("interface"))
+    return {{}, fmt::format("layer '{}' is an interface layer: it has no behaviours", target)};
+  if (format_of(from.file->path) != format_of(to.file->path))
+    return {{},
+            fmt::format("layer '{}' is declared in {} and layer '{}' in {}, one JSON and one "
+                        "YAML: move it in the text",
+                        layer, from.file->path, target, to.file->path)};
+  const Node* into = to.layer->find("behaviours");
+  if (into && into->is_mapping() && into->find(name))
+    return {{}, fmt::format("'{}' is already taken in layer '{}'", name, target)};
+  const std::string& text = from.file->text;
+  const auto span = source.spans[at];
+  std::string entry = text.substr(span.first, span.second - span.first);
+  EditResult result;
+  result.edits.push_back(
+      removed_entry(source, *entry_of(*from.file, *from.layer, "behaviours").entry, at));
+  const std::size_t target_count = into && into->is_mapping() ? into->entries().size() : 0;
+  if (index > target_count)
+    return {{},
+            fmt::format("position {} is past the end of layer '{}', which has {} "
+                        "behaviour(s): positions count from 0",
+                        index, target, target_count)};
+  const bool one_line = entry.find('\n') == std::string::npos;
+  if (!into) {
+    if (!one_line)
+      return {{},
+              fmt::format("'{}' is written over several lines and layer '{}' has no "
+                          "behaviours: yet: move it in the text",
+                          name, target)};
+    const std::string key = entry.substr(entry.find_first_not_of(' '));
+    EditResult added =
+        add_entry(*to.file, *to.layer,
+                  fmt::format("{}: {{{}}}", quoted_in(to.file->path, "behaviours"), key));
+    if (!added.ok()) return added;
+    result.edits.push_back(added.edits.front());
+    return result;
+  }
+  if (!into->is_mapping())
+    return {{}, fmt::format("the behaviours: of layer '{}' are not a mapping", target)};
+  const Items destination = items_of(*to.file, *into);
+  if (!destination.refused.empty())
+    return {{},
+            fmt::format("the behaviours of layer '{}' are not written one to a line ({}): "
+                        "move it in the text",
+                        target, destination.refused)};
+  if (destination.flow || source.flow) {
+    if (!one_line)
+      return {{},
+              fmt::format("'{}' is written over several lines and layer '{}' declares its "
+                          "behaviours on one: move it in the text",
+                          name, destination.flow ? target : layer)};
+    entry = entry.substr(entry.find_first_not_of(' '));
+    result.edits.push_back(inserted_item(destination, index, entry));
+    return result;
+  }
+  // Block to block: its lines, indented as the target's entries are.
+  const std::size_t old_column = source.prefixes[at].size();
+  const std::size_t new_column = destination.prefixes.front().size();
+  entry =
+      reindented(text, span,
+                 static_cast<std::ptrdiff_t>(new_column) - static_cast<std::ptrdiff_t>(old_column));
+  entry = entry.substr(new_column);  // inserted_item writes the first line's indentation
+  result.edits.push_back(inserted_item(destination, index, entry));
+  return result;
+}
+
+EditResult move_layer(const Loaded& loaded, const std::string& layer, std::size_t index) {
+  if (!loaded.model) return {{}, "the config does not compile: its layers' order is not known"};
+  const auto& layers = loaded.model->layers;
+  const auto found = std::find_if(layers.begin(), layers.end(),
+                                  [&](const LayerDecl& decl) { return decl.name.text == layer; });
+  if (found == layers.end()) return {{}, fmt::format("no layer '{}'", layer)};
+  if (index >= layers.size())
+    return {{},
+            fmt::format("position {} is past the last layer: the config has {} layer(s), "
+                        "positions count from 0",
+                        index, layers.size())};
+  const std::size_t at = static_cast<std::size_t>(found - layers.begin());
+  if (index == at) return {{}, fmt::format("layer '{}' is at position {} already", layer, index)};
+  const std::vector<LayerSite> sites = layers_named(loaded, layer);
+  const std::vector<LayerSite> others = layers_named(loaded, layers[index].name.text);
+  if (sites.empty() || others.empty()) return {{}, fmt::format("no layer '{}' in the text", layer)};
+  // An include's layers come before the including file's own: a layer moves among its file's.
+  if (sites.front().file != others.front().file)
+    return {{},
+            fmt::format("position {} holds layer '{}' of {}, and layer '{}' is declared in {}: "
+                        "a file's layers keep their place among the included ones, so move "
+                        "it between the files in the text",
+                        index, layers[index].name.text, others.front().file->path, layer,
+                        sites.front().file->path)};
+  const SourceFile& file = *sites.front().file;
+  const Node& list = *file.root->find("layers");
+  const Items items = items_of(file, list);
+  if (!items.refused.empty())
+    return {{},
+            fmt::format("the layers of {} are not written one item after another ({}): move "
+                        "it in the text",
+                        file.path, items.refused)};
+  auto position = [&](const Node* node) {
+    return static_cast<std::size_t>(node - list.items().data());
+  };
+  return {{moved_item(items, position(sites.front().layer), position(others.front().layer))}, {}};
+}
+
+EditResult add_actuator(const Loaded& loaded, const std::string& layer, const std::string& name,
+                        const std::string& type) {
+  if (!is_identifier(name))
+    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  const std::vector<LayerSite> found = layers_named(loaded, layer);
+  if (found.empty()) return {{}, fmt::format("no layer '{}'", layer)};
+  // Actuator names are the manager's: unique across its layers.
+  for (const auto& file : loaded.files.files()) {
+    const Node* layers =
+        file->root && file->root->is_mapping() ? file->root->find("layers") : nullptr;
+    for (std::size_t i = 0; layers && layers->is_sequence() && i < layers->size(); ++i) {
+      const Node& other = layers->items()[i];
+      const Node* actuators = other.is_mapping() ? other.find("actuators") : nullptr;
+      const Node* owner = other.is_mapping() ? other.find("name") : nullptr;
+      if (actuators && actuators->is_mapping() && actuators->find(name))
+        return {{},
+                fmt::format("'{}' is already taken: layer '{}' declares an actuator of that "
+                            "name",
+                            name, owner ? owner->text() : "?")};
+    }
+  }
+  const SourceFile& file = *found.front().file;
+  const Node& declaration = *found.front().layer;
+  auto quoted = [&](const std::string& word) { return quoted_in(file.path, word); };
+  const std::string value = fmt::format("{{{}: {}}}", quoted("type"), quoted(type));
+  const Node* actuators = declaration.find("actuators");
+  if (!actuators)
+    return add_entry(file, declaration,
+                     fmt::format("{}: {{{}: {}}}", quoted("actuators"), quoted(name), value));
+  if (!actuators->is_mapping()) return {{}, "the layer's actuators: is not a mapping"};
+  return add_entry(file, *actuators, fmt::format("{}: {}", quoted(name), value));
+}
+
+EditResult remove_actuator(const Loaded& loaded, const std::string& layer,
+                           const std::string& name) {
+  const std::vector<LayerSite> found = layers_named(loaded, layer);
+  if (found.empty()) return {{}, fmt::format("no layer '{}'", layer)};
+  const SourceFile& file = *found.front().file;
+  const EntrySite list = entry_of(file, *found.front().layer, "actuators");
+  if (!list.entry || !list.entry->value.is_mapping() || !list.entry->value.find(name))
+    return {{}, fmt::format("no actuator '{}' in layer '{}'", name, layer)};
+  // What reads or writes it would be left unbound, or bound to nothing: that is the user's
+  // decision, so each use is named rather than followed.
+  if (!loaded.model)
+    return {{},
+            "the config does not compile: what uses the actuator is not known; fix its "
+            "errors first"};
+  std::vector<std::string> uses;
+  for (const auto& other : loaded.model->layers) {
+    for (const auto& sensor : other.sensors) {
+      if (sensor.text == name) uses.push_back(fmt::format("layer '{}' reads it", other.name.text));
+    }
+    for (const auto& binding : other.ports) {
+      if (binding.port && binding.target == name)
+        uses.push_back(fmt::format("port '{}' of the interface of layer '{}' is bound to it",
+                                   binding.port->name, other.name.text));
+    }
+    for (const auto& behaviour : other.behaviours) {
+      for (const auto& binding : behaviour.ports) {
+        if (binding.port && binding.target == name)
+          uses.push_back(fmt::format("port '{}' of '{}' is bound to it", binding.port->name,
+                                     behaviour.name.text));
+      }
+    }
+  }
+  for (const auto& machine : loaded.model->state_machines) {
+    for (const auto& state : machine.states) {
+      for (std::size_t i = 0; state.cls && i < state.cls->ports.size(); ++i) {
+        if (state.cls->ports[i].name == name)
+          uses.push_back(fmt::format("state '{}' of state machine '{}' binds its port by name",
+                                     state.name.text, machine.name.text));
+      }
+    }
+  }
+  if (!uses.empty()) {
+    std::string all;
+    for (const auto& use : uses) all += (all.empty() ? "" : "; ") + use;
+    return {
+        {},
+        fmt::format("actuator '{}' is still used: {}. Remove or rebind those first", name, all)};
+  }
+  const Items items = items_of(file, list.entry->value);
+  if (!items.refused.empty())
+    return {{},
+            fmt::format("the actuators of layer '{}' are not written one to a line ({}): "
+                        "remove it in the text",
+                        layer, items.refused)};
+  return {{removed_entry(items, *list.entry, index_of(list.entry->value, name))}, {}};
+}
+
+EditResult wire_port(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
+                     const std::string& port, const std::string& target) {
+  if (!is_identifier(port) || !is_identifier(target))
+    return {
+        {},
+        fmt::format("'{}: {}' is not a port binding: names are [a-z_][a-z0-9_]*", port, target)};
+  for (const LayerSite& site : layers_named(loaded, layer)) {
+    // Named, not bound by a structured binding: a lambda below captures it.
+    const SourceFile* file = site.file;
+    const Node* declaration = site.layer;
+    const Node* behaviours = declaration->find("behaviours");
+    const Node* node =
+        behaviours && behaviours->is_mapping() ? behaviours->find(behaviour) : nullptr;
+    if (!node) continue;
+    auto quoted = [&](const std::string& word) { return quoted_in(file->path, word); };
+    const std::string entry = quoted(port) + ": " + quoted(target);
+    const std::string& text = file->text;
+    if (node->is_scalar()) {
+      // `kick_ball: soccer.KickBall` becomes a mapping, to hold its ports.
+      const std::size_t begin = offset_at(*file, node->location());
+      const std::size_t end = scalar_end(text, begin, *node);
+      return {{{file->path, begin, end,
+                fmt::format("{{{}: {}, {}: {{{}}}}}", quoted("type"),
+                            text.substr(begin, end - begin), quoted("ports"), entry)}},
+              {}};
+    }
+    if (!node->is_mapping()) break;
+    const Node* ports = node->find("ports");
+    if (!ports) return add_entry(*file, *node, fmt::format("{}: {{{}}}", quoted("ports"), entry));
+    if (!ports->is_mapping())
+      return {{}, fmt::format("the ports: of '{}' are not a mapping", behaviour)};
+    const Node* current = ports->find(port);
+    if (!current) return add_entry(*file, *ports, entry);
+    if (!current->is_scalar())
+      return {{}, fmt::format("port '{}' of '{}' is not bound to a name", port, behaviour)};
+    if (current->text() == target)
+      return {{},
+              fmt::format("port '{}' of '{}' is bound to '{}' already", port, behaviour, target)};
+    const std::size_t begin = offset_at(*file, current->location());
+    return {{{file->path, begin, scalar_end(text, begin, *current), quoted(target)}}, {}};
+  }
+  return {{}, fmt::format("no behaviour '{}' in layer '{}'", behaviour, layer)};
+}
+
+namespace {
+
+/// The `queue:` of state machine `machine`, with its items as written; refused says why not.
+struct QueueSite {
+  MachineSite site;
+  const Node::Entry* queue = nullptr;
+  Items items;
+  std::string refused;
+};
+
+QueueSite queue_of(const Loaded& loaded, const std::string& machine) {
+  QueueSite found;
+  found.site = machine_named(loaded, machine);
+  if (!found.site.file) {
+    found.refused = fmt::format("no state machine '{}'", machine);
+    return found;
+  }
+  found.queue = entry_of(*found.site.file, *found.site.machine, "queue").entry;
+  if (!found.queue || !found.queue->value.is_sequence()) {
+    found.refused = fmt::format("state machine '{}' has no queue: list", machine);
+    return found;
+  }
+  found.items = items_of(*found.site.file, found.queue->value);
+  if (!found.items.refused.empty())
+    found.refused = fmt::format(
+        "the queue of state machine '{}' is not written one item after "
+        "another ({}): edit it in the text",
+        machine, found.items.refused);
+  return found;
+}
+
+std::string past_the_end(const std::string& machine, std::size_t index, std::size_t count) {
+  return fmt::format(
+      "position {} is past the end of the queue of state machine '{}', which has "
+      "{} state(s): positions count from 0",
+      index, machine, count);
+}
+
+}  // namespace
+
+EditResult add_queue_entry(const Loaded& loaded, const std::string& machine,
+                           const std::string& state,
+                           const std::vector<std::pair<std::string, std::string>>& params,
+                           std::size_t index) {
+  if (!is_identifier(state))
+    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", state)};
+  const QueueSite queue = queue_of(loaded, machine);
+  if (!queue.refused.empty()) return {{}, queue.refused};
+  const std::size_t count = queue.items.spans.size();
+  if (index == kAtEnd) index = count;
+  if (index > count) return {{}, past_the_end(machine, index, count)};
+  const std::string& path = queue.site.file->path;
+  std::string item = quoted_in(path, state);
+  if (!params.empty()) {
+    std::string values;
+    for (const auto& [param, value] : params) {
+      if (!is_identifier(param))
+        return {{}, fmt::format("'{}' is not a param's name: names are [a-z_][a-z0-9_]*", param)};
+      values += (values.empty() ? "" : ", ") + quoted_in(path, param) + ": " + value;
+    }
+    item += ": {" + values + "}";
+    // In a flow sequence (and so in JSON) an item with params is a mapping of its own.
+    if (queue.items.flow) item = "{" + item + "}";
+  }
+  return {{inserted_item(queue.items, index, item)}, {}};
+}
+
+EditResult remove_queue_entry(const Loaded& loaded, const std::string& machine, std::size_t index) {
+  const QueueSite queue = queue_of(loaded, machine);
+  if (!queue.refused.empty()) return {{}, queue.refused};
+  const std::size_t count = queue.items.spans.size();
+  if (index >= count) return {{}, past_the_end(machine, index, count)};
+  // A block queue without items would be null; an empty plan is written `queue: []`.
+  if (!queue.items.flow && count == 1) {
+    const std::size_t end = queue.items.spans.front().second;
+    const std::string& text = queue.site.file->text;
+    const std::size_t key =
+        offset_of(text, queue.queue->key_location.line(), queue.queue->key_location.column());
+    const std::size_t colon = text.find(':', key);
+    return {{{queue.site.file->path, colon + 1, std::min(text.size(), end), " []"}}, {}};
+  }
+  return {{removed_item(queue.items, index)}, {}};
+}
+
+EditResult move_queue_entry(const Loaded& loaded, const std::string& machine, std::size_t from,
+                            std::size_t to) {
+  const QueueSite queue = queue_of(loaded, machine);
+  if (!queue.refused.empty()) return {{}, queue.refused};
+  const std::size_t count = queue.items.spans.size();
+  if (from >= count) return {{}, past_the_end(machine, from, count)};
+  if (to >= count) return {{}, past_the_end(machine, to, count)};
+  if (from == to) return {{}, fmt::format("the state at position {} is there already", from)};
+  return {{moved_item(queue.items, from, to)}, {}};
+}
+
+EditResult add_state(const Loaded& loaded, const std::string& machine, const std::string& name,
+                     const std::string& type) {
+  if (!is_identifier(name))
+    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  const MachineSite site = machine_named(loaded, machine);
+  if (!site.file) return {{}, fmt::format("no state machine '{}'", machine)};
+  const std::string& path = site.file->path;
+  const std::string entry = fmt::format("{}: {{{}: {}}}", quoted_in(path, name),
+                                        quoted_in(path, "type"), quoted_in(path, type));
+  const Node* states = site.machine->find("states");
+  if (!states)
+    return add_entry(*site.file, *site.machine, quoted_in(path, "states") + ": {" + entry + "}");
+  if (!states->is_mapping())
+    return {{}, fmt::format("the states: of state machine '{}' are not a mapping", machine)};
+  if (states->find(name))
+    return {{}, fmt::format("'{}' is already taken in state machine '{}'", name, machine)};
+  return add_entry(*site.file, *states, entry);
+}
+
+EditResult remove_state(const Loaded& loaded, const ConfigIndex& index, const std::string& machine,
+                        const std::string& name) {
+  const MachineSite site = machine_named(loaded, machine);
+  if (!site.file) return {{}, fmt::format("no state machine '{}'", machine)};
+  const EntrySite states = entry_of(*site.file, *site.machine, "states");
+  if (!states.entry || !states.entry->value.is_mapping() || !states.entry->value.find(name))
+    return {{}, fmt::format("no state '{}' in state machine '{}'", name, machine)};
+  // Where it is named (the queue, a pre-emption, a state's append: or prepend:) a plan would
+  // lose a step: which one to drop instead is the user's call.
+  std::string uses;
+  for (const auto& use : index.occurrences) {
+    if (use.definition || use.kind != SymbolKind::kState || use.scope != machine ||
+        use.name != name)
+      continue;
+    const SourceFile* file = loaded.files.find(use.file);
+    const std::string& text = file ? file->text : use.file;
+    const std::size_t at = std::min(use.begin, text.size());
+    const auto line =
+        1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+    uses += fmt::format("{}{}:{}:{}", uses.empty() ? "" : ", ", use.file, line,
+                        at - line_start(text, at) + 1);
+  }
+  if (!uses.empty())
+    return {{},
+            fmt::format("state '{}' of state machine '{}' is still named at {}: remove those "
+                        "first",
+                        name, machine, uses)};
+  const Items items = items_of(*site.file, states.entry->value);
+  if (!items.refused.empty())
+    return {{},
+            fmt::format("the states of state machine '{}' are not written one to a line ({}): "
+                        "remove it in the text",
+                        machine, items.refused)};
+  return {{removed_entry(items, *states.entry, index_of(states.entry->value, name))}, {}};
 }
 
 }  // namespace arbiter

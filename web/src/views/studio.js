@@ -7,6 +7,7 @@ import {el, html} from '../dom.js';
 import {GraphView} from '../graph.js';
 import {navigate} from '../graph_nav.js';
 import {setStatus} from '../panels.js';
+import {showStructure} from '../studio_ops.js';
 
 const TYPING_PAUSE = 300;  // ms after the last key before the text is parsed again
 const POLL = 2000;         // ms between looks at the server's texts: another tab's edits and saves
@@ -375,6 +376,7 @@ export async function studio(info) {
   }
 
   function inspect() {
+    showStructure(state.graph, selected, operation);
     const box = ui.inspector;
     box.replaceChildren();
     const layer = selected && layerOf(selected.layer);

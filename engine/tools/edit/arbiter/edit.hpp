@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "arbiter/document.hpp"
@@ -136,10 +137,81 @@ EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const s
 
 /// Removes behaviour `name` of layer `layer`: its lines (with the `behaviours:` key when it was
 /// the only one) and every inhibition of the layer that names it. Other uses (a port bound to it,
-/// a state machine's owner) are left for checked() to refuse. Refused when it is declared in a
-/// flow mapping.
+/// a state machine's owner) are left for checked() to refuse. In a flow mapping (and so in JSON)
+/// its text goes with one comma. Refused when its key shares a line with another.
 EditResult remove_behaviour(const Loaded& loaded, const std::string& layer,
                             const std::string& name);
+
+/// Moves behaviour `name` of layer `layer` to position `index` (from 0) of the behaviours of
+/// `to_layer` (its own layer when empty), as a person would cut and paste its lines: in its own
+/// layer the others keep their order (the order of declaration breaks ties in the execution
+/// order); to another layer its lines are indented as that layer's behaviours are. Refused when
+/// the position is past the end or already its own, when an inhibition of its layer names it
+/// (an inhibition cannot join two layers: remove it first), when the other layer is an
+/// interface, or the name is taken there; ports that the new layer cannot bind are left for
+/// checked() to refuse.
+EditResult move_behaviour(const Loaded& loaded, const std::string& layer, const std::string& name,
+                          const std::string& to_layer, std::size_t index);
+
+/// Moves layer `layer` to position `index` (from 0) of the config's layer order, the others
+/// keeping theirs. An included file's layers come before the including file's, so a layer moves
+/// among the layers of the file that declares it: a position held by another file's layer is
+/// refused.
+EditResult move_layer(const Loaded& loaded, const std::string& layer, std::size_t index);
+
+/// Declares actuator `name` of value type `type` in layer `layer`: `name: {type: TYPE}` after
+/// the last of its `actuators:` (the key added when it has none). Refused when `name` is not an
+/// identifier or is an actuator of any layer already (actuator names are the manager's).
+EditResult add_actuator(const Loaded& loaded, const std::string& layer, const std::string& name,
+                        const std::string& type);
+
+/// Removes actuator `name` of layer `layer` (its lines, and `actuators:` with its only one).
+/// Refused, naming every use, while anything uses it: a layer reading it as a sensor, a port
+/// bound to it (by a `ports:` entry or by name). Uses are not followed: dropping a sensor or
+/// unbinding a port changes what the graph does, which is the user's call. A use in a class's
+/// own params (a scripted behaviour's `writes:`) is left for checked() to refuse.
+EditResult remove_actuator(const Loaded& loaded, const std::string& layer, const std::string& name);
+
+/// Binds port `port` of behaviour `behaviour` of layer `layer` to `target` (a sensor or actuator
+/// name): the `ports:` entry's value replaced, else the entry added (`ports:` added when
+/// missing). Whether the class has the port and the layer the name is left for checked().
+EditResult wire_port(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
+                     const std::string& port, const std::string& target);
+
+/// A position past every item: add_queue_entry appends there.
+inline constexpr std::size_t kAtEnd = static_cast<std::size_t>(-1);
+
+/// Plans state `state` at position `index` (from 0; the queue's length or kAtEnd appends) of the
+/// queue of state machine `machine`, with per-instance `params` (name, value as it is to be
+/// written):
+/// `- state` or `- state: {param: value}` in a block queue, `state` or `{state: {...}}` in a
+/// flow one.
+EditResult add_queue_entry(const Loaded& loaded, const std::string& machine,
+                           const std::string& state,
+                           const std::vector<std::pair<std::string, std::string>>& params,
+                           std::size_t index);
+
+/// Removes the item at position `index` of the queue of state machine `machine` (the last one
+/// leaves `queue: []`).
+EditResult remove_queue_entry(const Loaded& loaded, const std::string& machine, std::size_t index);
+
+/// Moves the queue item at position `from` of state machine `machine` to position `to`, its
+/// params and comments with it.
+EditResult move_queue_entry(const Loaded& loaded, const std::string& machine, std::size_t from,
+                            std::size_t to);
+
+/// Declares state `name` of class `type` in state machine `machine`: `name: {type: TYPE}` after
+/// the last of its `states:`. Refused when `name` is not an identifier or is a state of the
+/// machine already.
+EditResult add_state(const Loaded& loaded, const std::string& machine, const std::string& name,
+                     const std::string& type);
+
+/// Removes state `name` of state machine `machine` (its lines, or its entry and comma). Refused,
+/// with the places (file:line:column), while the config names it (its queue, a pre-emption, a
+/// state's append: or prepend:, as `index` of `loaded` finds them); a state that a class plans
+/// by name (the soccer goalie's dive) is left for checked() to refuse.
+EditResult remove_state(const Loaded& loaded, const ConfigIndex& index, const std::string& machine,
+                        const std::string& name);
 
 /// Adds `entry` (`key: value`, as it is to be written) to the mapping `node` of `file`: before
 /// a flow mapping's closing brace, else as a line of its own after the last line of the block
