@@ -23,6 +23,7 @@
 #include "benchmarks.hpp"
 #include "generator.hpp"
 #include "lsp_benchmarks.hpp"
+#include "studio_benchmarks.hpp"
 #if ARBITER_BENCH_PYTHON
 #include "python_benchmarks.hpp"
 #endif
@@ -138,6 +139,13 @@ int check_targets(const Collector& collector, std::ostream& out) {
     if (found != results.end()) {
       check(fmt::format("lsp/change/{}: diagnostics after an edit", n), found->second.cpu_time,
             limit, "ms");
+    }
+  }
+  for (const auto& [n, limit] : {std::pair<int, double>{200, 30.0}, {1000, 150.0}}) {
+    const auto found = results.find(fmt::format("studio/edit/{}", n));
+    if (found != results.end()) {
+      check(fmt::format("studio/edit/{}: an operation's edits and diagnostics", n),
+            found->second.cpu_time, limit, "ms");
     }
   }
   for (const char* graph : {"none", "chain", "dag", "layers"}) {
@@ -316,6 +324,7 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(count, forwarded.data())) return 2;
   arbiter::bench::register_benchmarks();
   arbiter::bench::register_lsp_benchmarks();
+  arbiter::bench::register_studio_benchmarks();
 #if ARBITER_BENCH_PYTHON
   arbiter::bench::register_python_benchmarks();
 #endif
