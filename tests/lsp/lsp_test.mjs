@@ -691,6 +691,24 @@ test('a code action on a selection of behaviours of a layer adds an inhibition b
   });
 });
 
+test('the inhibition added from a selection in JSON is a JSON string after the last one, as the studio adds it', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = json();
+    await client.open(uri, text);
+    const range = { start: positionOf(text, '"kick_ball": {', { skip: 1 }), end: positionOf(text, '"search_for_ball": {', { skip: 16 }) };
+    const actions = await client.request('textDocument/codeAction',
+      { textDocument: { uri }, range, context: { diagnostics: [] } });
+    const add = actions.find((a) => a.title === "Add the inhibition 'kick_ball -> search_for_ball'");
+    assert.ok(add, JSON.stringify(actions.map((a) => a.title)));
+    const added = applyEdits(text, add.edit.changes[uri]);
+    assert.equal(added, text.replace('"search_for_ball -> head_control"\n',
+      '"search_for_ball -> head_control", "kick_ball -> search_for_ball"\n'));
+    const file = path.join(tempDir(), path.basename(uri));
+    fs.writeFileSync(file, added);
+    assert.deepEqual(validated(file).filter((d) => d.severity === 1), []);
+  });
+});
+
 test("a code action on a layer's name adds a behaviour of a registered class, its edit checked when it is chosen", async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();
