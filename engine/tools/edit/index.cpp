@@ -264,7 +264,7 @@ class Indexer {
       for (std::size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at + 1))
         starts.push_back(at + 1);
     }
-    if (line < 1) return 0;
+    if (line < 1) return offset_of(text, line, column);
     const std::size_t l = static_cast<std::size_t>(line - 1);
     if (l >= starts.size()) return text.size();
     const std::size_t start = starts[l];
