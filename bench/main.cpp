@@ -23,6 +23,7 @@
 #include "benchmarks.hpp"
 #include "generator.hpp"
 #include "lsp_benchmarks.hpp"
+#include "studio_benchmarks.hpp"
 #if ARBITER_BENCH_PYTHON
 #include "python_benchmarks.hpp"
 #endif
@@ -139,6 +140,17 @@ int check_targets(const Collector& collector, std::ostream& out) {
       check(fmt::format("lsp/change/{}: diagnostics after an edit", n), found->second.cpu_time,
             limit, "ms");
     }
+  }
+  // Each operation alone, and all of them in turn (studio/edit/<N>, per operation), meet it.
+  for (const auto& [name, result] : results) {
+    if (name.rfind("studio/edit/", 0) != 0) continue;
+    const auto size = name.substr(name.rfind('/') + 1);
+    const double limit = size == "200" ? 30.0 : size == "1000" ? 150.0 : 0.0;
+    const auto operations = result.counters.find("operations");
+    const double per_operation = operations == result.counters.end()
+                                     ? result.cpu_time
+                                     : result.cpu_time / operations->second;
+    if (limit > 0) check(name + ": an operation", per_operation, limit, "ms");
   }
   for (const char* graph : {"none", "chain", "dag", "layers"}) {
     for (int n : {1000, 10000}) {
@@ -316,6 +328,7 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(count, forwarded.data())) return 2;
   arbiter::bench::register_benchmarks();
   arbiter::bench::register_lsp_benchmarks();
+  arbiter::bench::register_studio_benchmarks();
 #if ARBITER_BENCH_PYTHON
   arbiter::bench::register_python_benchmarks();
 #endif

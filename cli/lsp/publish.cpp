@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -41,6 +42,29 @@ std::optional<std::string> suggestion_of(const json& diagnostic) {
     if (std::regex_search(text, match, pattern)) return match[1].str();
   }
   return std::nullopt;
+}
+
+/// A behaviour's name for a class: its last part in snake case (`soccer.KickBall`: `kick_ball`).
+std::string behaviour_name_of(const std::string& cls) {
+  const auto dot = cls.rfind('.');
+  std::string name;
+  for (const char c : cls.substr(dot == std::string::npos ? 0 : dot + 1)) {
+    if (std::isupper(static_cast<unsigned char>(c))) {
+      if (!name.empty() && name.back() != '_') name += '_';
+      name += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    } else {
+      name += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+    }
+  }
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name.front()))) name = "b_" + name;
+  return name;
+}
+
+/// `name`, or `name_2`, `name_3`... : the first that `taken` does not hold.
+std::string unused_name(const std::string& name, const std::set<std::string>& taken) {
+  std::string candidate = name;
+  for (int n = 2; taken.count(candidate) != 0; ++n) candidate = fmt::format("{}_{}", name, n);
+  return candidate;
 }
 
 }  // namespace
@@ -238,13 +262,42 @@ json Server::code_actions(const json& params) const {
                       site->chaining ? "=>" : "->", which.inhibited),
           remove_inhibition(analysis->loaded, which));
   }
+  const json range = params.value("range", json::object());
+  // A selection over behaviours of one layer: an inhibition between its first and its last,
+  // either way, as the studio's drag from one onto the other.
+  if (analysis) {
+    const std::size_t from = lines.offset(range.value("start", json::object()));
+    const std::size_t to = lines.offset(range.value("end", json::object()));
+    std::vector<const Occurrence*> selected;
+    for (const auto& other : analysis->occurrences) {
+      if (other.file == path && other.definition && other.kind == SymbolKind::kBehaviour &&
+          from <= other.begin && other.end <= to)
+        selected.push_back(&other);
+    }
+    if (selected.size() >= 2 && selected.front()->scope == selected.back()->scope) {
+      Registry registry = make_registry_();
+      for (const auto& [a, b] :
+           {std::pair{selected.front(), selected.back()}, {selected.back(), selected.front()}}) {
+        for (const bool chaining : {true, false}) {
+          const InhibitionRef which{a->scope, a->name, b->name};
+          const EditResult added =
+              checked(analysis->loaded, add_inhibition(analysis->loaded, which, chaining), registry,
+                      options_);
+          if (!added.ok()) continue;
+          json changes = json::object();
+          add_changes(*analysis, added.edits, changes);
+          actions.push_back({{"title", fmt::format("Add the inhibition '{} {} {}'", a->name,
+                                                   chaining ? "=>" : "->", b->name)},
+                             {"kind", "refactor.rewrite"},
+                             {"edit", {{"changes", changes}}}});
+        }
+      }
+    }
+  }
   // On a behaviour's declaration: remove it, as the studio does, when nothing else names it.
   const Occurrence* item =
-      analysis && !site
-          ? analysis->at(
-                path,
-                lines.offset(params.value("range", json::object()).value("start", json::object())))
-          : nullptr;
+      analysis && !site ? analysis->at(path, lines.offset(range.value("start", json::object())))
+                        : nullptr;
   if (item && item->definition && item->kind == SymbolKind::kBehaviour) {
     Registry registry = make_registry_();
     const EditResult removed =
@@ -260,7 +313,53 @@ json Server::code_actions(const json& params) const {
            {"edit", {{"changes", changes}}}});
     }
   }
+  // On a layer's name: a behaviour of each class the config can use, as the studio's palette
+  // adds one. Its edit is computed when one is chosen (codeAction/resolve): checking every
+  // class's here would load the config once per class at each move of the cursor.
+  if (item && item->definition && item->kind == SymbolKind::kLayer) {
+    std::set<std::string> taken;
+    for (const auto& other : analysis->occurrences) {
+      if (other.definition && other.kind == SymbolKind::kBehaviour && other.scope == item->name)
+        taken.insert(other.name);
+    }
+    for (const auto& name : analysis->registry->class_names(ClassKind::kBehaviour)) {
+      const std::string behaviour = unused_name(behaviour_name_of(name), taken);
+      actions.push_back(
+          {{"title", fmt::format("Add a behaviour of class '{}' to layer '{}'", name, item->name)},
+           {"kind", "refactor.rewrite"},
+           {"data",
+            {{"op", "add_behaviour"},
+             {"uri", uri},
+             {"layer", item->name},
+             {"name", behaviour},
+             {"type", name}}}});
+    }
+  }
   return actions;
+}
+
+json Server::resolve_code_action(const json& action) const {
+  const json& data = action.at("data");
+  if (data.value("op", "") != "add_behaviour")
+    throw RequestError{kRequestFailed, "not a code action of this server to resolve"};
+  const std::string uri = data.at("uri");
+  const std::string path = uri_to_path(uri);
+  const std::string* text = text_of(path);
+  const Analysis* analysis = text ? analysis_of(path) : nullptr;
+  const Lines* analysed = analysis ? analysis->lines_of(path) : nullptr;
+  if (!analysed || analysed->text() != *text)
+    throw RequestError{kRequestFailed, "the file is not open, or not a config"};
+  Registry registry = make_registry_();
+  const EditResult added =
+      checked(analysis->loaded,
+              add_behaviour(analysis->loaded, data.at("layer"), data.at("name"), data.at("type")),
+              registry, options_);
+  if (!added.ok()) throw RequestError{kRequestFailed, added.refused};
+  json changes = json::object();
+  add_changes(*analysis, added.edits, changes);
+  json resolved = action;
+  resolved["edit"] = {{"changes", changes}};
+  return resolved;
 }
 
 }  // namespace arbiter::lsp

@@ -133,7 +133,8 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
               {"renameProvider", true},
               {"documentSymbolProvider", true},
               {"codeActionProvider",
-               {{"codeActionKinds", json::array({"quickfix", "refactor.rewrite"})}}}}},
+               {{"codeActionKinds", json::array({"quickfix", "refactor.rewrite"})},
+                {"resolveProvider", true}}}}},
             {"serverInfo", {{"name", "arbiter"}}}};
   }
   if (method == "initialized") {
@@ -219,6 +220,7 @@ json Server::dispatch(const std::string& method, const json& params, std::vector
   if (method == "textDocument/rename") return rename(params);
   if (method == "textDocument/documentSymbol") return symbols(params);
   if (method == "textDocument/codeAction") return code_actions(params);
+  if (method == "codeAction/resolve") return resolve_code_action(params);
   return {{"__method_not_found", true}};
 }
 

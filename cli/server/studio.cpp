@@ -166,7 +166,7 @@ std::string Studio::state_json(const std::string& extra_key, const std::string& 
   std::string out = dump(state);
   out.pop_back();  // its closing brace
   out += R"(,"graph":)";
-  out += loaded.program ? dump_json(*loaded.program) : "null";
+  out += loaded.program ? dump_json(*loaded.program, {}, -1) : "null";
   out += R"(,"diagnostics":)";
   out += format_json(loaded.diagnostics);
   if (!extra_key.empty()) out += fmt::format(R"(,"{}":{})", extra_key, extra);

@@ -665,6 +665,79 @@ test('a code action on a behaviour\'s declaration removes it with the inhibition
   });
 });
 
+test('a code action on a selection of behaviours of a layer adds an inhibition between the first and the last, either way the config allows', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const range = { start: positionOf(text, 'kick_ball: {type'), end: positionOf(text, 'search_for_ball: {type', { skip: 15 }) };
+    const actions = await client.request('textDocument/codeAction',
+      { textDocument: { uri }, range, context: { diagnostics: [] } });
+    const titles = actions.map((a) => a.title);
+    const add = actions.find((a) => a.title === "Add the inhibition 'kick_ball => search_for_ball'");
+    assert.ok(add, JSON.stringify(titles));
+    assert.ok(titles.includes("Add the inhibition 'kick_ball -> search_for_ball'"), JSON.stringify(titles));
+    // The other way closes a cycle through go_behind_ball: not offered.
+    assert.ok(!titles.some((t) => t.startsWith("Add the inhibition 'search_for_ball")), JSON.stringify(titles));
+    const added = applyEdits(text, add.edit.changes[uri]);
+    assert.equal(added, text.replace('      - search_for_ball -> head_control\n',
+      '      - search_for_ball -> head_control\n      - kick_ball => search_for_ball\n'));
+    const file = path.join(tempDir(), path.basename(uri));
+    fs.writeFileSync(file, added);
+    assert.deepEqual(validated(file).filter((d) => d.severity === 1), []);
+    // One behaviour alone: no inhibition to offer.
+    const one = await client.request('textDocument/codeAction',
+      { textDocument: { uri }, range: { start: range.start, end: range.start }, context: { diagnostics: [] } });
+    assert.ok(!one.some((a) => a.title.startsWith('Add the inhibition')));
+  });
+});
+
+test('the inhibition added from a selection in JSON is a JSON string after the last one, as the studio adds it', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = json();
+    await client.open(uri, text);
+    const range = { start: positionOf(text, '"kick_ball": {', { skip: 1 }), end: positionOf(text, '"search_for_ball": {', { skip: 16 }) };
+    const actions = await client.request('textDocument/codeAction',
+      { textDocument: { uri }, range, context: { diagnostics: [] } });
+    const add = actions.find((a) => a.title === "Add the inhibition 'kick_ball -> search_for_ball'");
+    assert.ok(add, JSON.stringify(actions.map((a) => a.title)));
+    const added = applyEdits(text, add.edit.changes[uri]);
+    assert.equal(added, text.replace('"search_for_ball -> head_control"\n',
+      '"search_for_ball -> head_control", "kick_ball -> search_for_ball"\n'));
+    const file = path.join(tempDir(), path.basename(uri));
+    fs.writeFileSync(file, added);
+    assert.deepEqual(validated(file).filter((d) => d.severity === 1), []);
+  });
+});
+
+test("a code action on a layer's name adds a behaviour of a registered class, its edit checked when it is chosen", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const at = positionOf(text, 'name: control', { skip: 7 });
+    const actions = await client.request('textDocument/codeAction',
+      { textDocument: { uri }, range: { start: at, end: at }, context: { diagnostics: [] } });
+    const titles = actions.map((a) => a.title);
+    // The config's plugin's classes with the built-ins.
+    assert.ok(titles.includes("Add a behaviour of class 'scripted' to layer 'control'"), JSON.stringify(titles));
+    const kick = actions.find((a) => a.title === "Add a behaviour of class 'soccer.KickBall' to layer 'control'");
+    assert.ok(kick, JSON.stringify(titles));
+    assert.equal(kick.edit, undefined);
+    const resolved = await client.request('codeAction/resolve', kick);
+    const added = applyEdits(text, resolved.edit.changes[uri]);
+    // kick_ball is taken: the next free name.
+    assert.equal(added, text.replace('      head_control: {type: soccer.HeadControl}\n',
+      '      head_control: {type: soccer.HeadControl}\n      kick_ball_2: {type: soccer.KickBall}\n'));
+    const file = path.join(tempDir(), path.basename(uri));
+    fs.writeFileSync(file, added);
+    assert.deepEqual(validated(file).filter((d) => d.severity === 1), []);
+    // A class the config cannot take as it is (the goalie's ports bind actuators the config does
+    // not have) is refused when it is chosen, with the error it would leave.
+    const goalie = actions.find((a) => a.title === "Add a behaviour of class 'soccer.Goalie' to layer 'control'");
+    assert.ok(goalie, JSON.stringify(titles));
+    await assert.rejects(client.request('codeAction/resolve', goalie), /would leave an error.*goalie/);
+  });
+});
+
 test('completion items replace the word typed, a dotted prefix included', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();

@@ -147,6 +147,40 @@ if vim.v.shell_error ~= 0 then fail('goalie_plan.yaml after the rename: ' .. out
 settle(plan, 'goalie_plan.yaml')
 if #vim.diagnostic.get(plan) ~= 0 then fail('goalie_plan.yaml: diagnostics after the rename') end
 
+-- The graph operations as code actions, chosen from the list Neovim shows (vim.ui.select, here
+-- answered by title): on a layer's name a behaviour of a class is added (its edit resolved when
+-- chosen, codeAction/resolve); on a selection from one behaviour to another, an inhibition.
+local paper = open('paper.yaml')
+settle(paper, 'paper.yaml')
+local function choose(title)
+  vim.ui.select = function(items, options, on_choice)
+    for _, item in ipairs(items) do
+      if options.format_item(item) == title then return on_choice(item) end
+    end
+    local titles = {}
+    for _, item in ipairs(items) do table.insert(titles, options.format_item(item)) end
+    fail('paper.yaml: no code action "' .. title .. '" in: ' .. table.concat(titles, ' | '))
+  end
+end
+local function wait_line(pattern, what)
+  if not vim.wait(15000, function() return vim.fn.search(pattern, 'nw') > 0 end, 50) then
+    fail('paper.yaml: ' .. what .. ' was not applied within 15 s')
+  end
+  settle(paper, 'paper.yaml')
+end
+vim.api.nvim_win_set_cursor(0, { vim.fn.search('^  - name: control$', 'w'), 10 })
+choose("Add a behaviour of class 'scripted' to layer 'control'")
+vim.lsp.buf.code_action()
+wait_line('^      scripted: {type: scripted}$', 'the added behaviour')
+local first = vim.fn.search('^      kick_ball:$', 'w')
+local last = vim.fn.search('^      search_for_ball:$', 'w')
+choose("Add the inhibition 'kick_ball -> search_for_ball'")
+vim.lsp.buf.range_code_action(nil, { first, 6 }, { last, 20 })
+wait_line('^      - kick_ball -> search_for_ball$', 'the added inhibition')
+vim.cmd('write')
+output = vim.fn.system({ 'arbiter', 'validate', project .. '/paper.yaml' })
+if vim.v.shell_error ~= 0 then fail('paper.yaml after the code actions: ' .. output) end
+
 -- <C-x><C-o> (vim.lsp.omnifunc) after `type: soccer.` replaces the dotted word the server says
 -- it replaces: soccer.GoBehindBall, not soccer.soccer.GoBehindBall. The keys are typed once this
 -- file has run, so the check polls on a timer.

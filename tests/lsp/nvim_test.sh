@@ -14,6 +14,7 @@ soccer=$source/configs/soccer/walk_and_kick.yaml
 sed 's/kick_ball => go_behind_ball/kick_bal => go_behind_ball/' "$soccer" >"$project/walk_and_kick.yaml"
 sed '/^plugins: \[soccer\]$/d' "$soccer" >"$project/without_plugins.yaml"
 cp "$source/configs/paper/goalie_plan.yaml" "$project/goalie_plan.yaml"
+cp "$source/configs/paper/walk_and_kick.yaml" "$project/paper.yaml"
 printf '{\n  "name": "web",\n  "version": "1.0.0",\n  "dependencies": {"layers": "2"}\n}\n' \
   >"$project/package.json"
 printf 'services:\n  web:\n    image: nginx\n' >"$project/docker-compose.yaml"

@@ -6,6 +6,9 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <string>
+#include <string_view>
+#include <unordered_map>
 
 #include "tools/dump/param_json.hpp"
 
@@ -419,8 +422,15 @@ void dot_controller_edges(const Program& program, const Controller& controller, 
 
 using Json = nlohmann::ordered_json;
 
+// The graph of a large config has tens of thousands of these objects: each is built key by key,
+// its values moved in, rather than from an initializer list, which builds every pair as an array
+// first and copies what it is not given as a temporary (a studio edit waits for the dump).
 Json location_json(const SourceLocation& location) {
-  return {{"file", location.file}, {"line", location.line}, {"column", location.column}};
+  Json out = Json::object();
+  out["file"] = location.file;
+  out["line"] = location.line;
+  out["column"] = location.column;
+  return out;
 }
 
 /// A value as written in the config: numbers, booleans and null as such, other scalars as
@@ -468,24 +478,35 @@ Json ports_json(const std::vector<PortBinding>& ports) {
 
 Json layer_json(const Program& program, std::uint32_t l) {
   const CompiledLayer& layer = program.layers[l];
+  // The layer's declarations by name, looked up once per behaviour.
+  std::unordered_map<std::string_view, const BehaviourDecl*> declarations;
+  if (const LayerDecl* declared = program.model ? program.model->find_layer(layer.name) : nullptr) {
+    for (const auto& behaviour : declared->behaviours) {
+      declarations.emplace(behaviour.name.text, &behaviour);
+    }
+  }
   Json behaviours = Json::array();
   for (auto b = layer.behaviour_begin; b < layer.behaviour_end; ++b) {
     const auto& behaviour = program.behaviours[b];
-    const BehaviourDecl* declared = declaration_of(program, b);
-    behaviours.push_back({{"name", behaviour.name},
-                          {"class", behaviour.cls->name},
-                          {"order", b - layer.behaviour_begin + 1},
-                          {"params", declared ? params_json(declared->params) : Json()},
-                          {"ports", declared ? ports_json(declared->ports) : Json()},
-                          {"location", location_json(behaviour.location)}});
+    const auto found = declarations.find(behaviour.name);
+    const BehaviourDecl* declared = found == declarations.end() ? nullptr : found->second;
+    Json item = Json::object();
+    item["name"] = behaviour.name;
+    item["class"] = behaviour.cls->name;
+    item["order"] = b - layer.behaviour_begin + 1;
+    item["params"] = declared ? params_json(declared->params) : Json();
+    item["ports"] = declared ? ports_json(declared->ports) : Json();
+    item["location"] = location_json(behaviour.location);
+    behaviours.push_back(std::move(item));
   }
   Json inhibitions = Json::array();
   for (const auto& inhibition : program.inhibitions) {
     if (program.behaviours[inhibition.inhibited].layer != l) continue;
-    Json item = {{"inhibitor", program.behaviours[inhibition.inhibitor].name},
-                 {"inhibited", program.behaviours[inhibition.inhibited].name},
-                 {"chaining", inhibition.chaining},
-                 {"implicit", inhibition.implicit}};
+    Json item = Json::object();
+    item["inhibitor"] = program.behaviours[inhibition.inhibitor].name;
+    item["inhibited"] = program.behaviours[inhibition.inhibited].name;
+    item["chaining"] = inhibition.chaining;
+    item["implicit"] = inhibition.implicit;
     if (inhibition.implicit) {
       item["via"] = names_of(program, program.chain(inhibition.inhibitor, inhibition.inhibited));
     } else {
@@ -590,7 +611,7 @@ std::string dump_dot(const Program& program, std::string_view only_layer) {
   return out;
 }
 
-std::string dump_json(const Program& program, std::string_view only_layer) {
+std::string dump_json(const Program& program, std::string_view only_layer, int indent) {
   Json layers = Json::array();
   for (std::uint32_t l = 0; l < program.layers.size(); ++l) {
     if (!only_layer.empty() && program.layers[l].name != only_layer) continue;
@@ -606,7 +627,7 @@ std::string dump_json(const Program& program, std::string_view only_layer) {
   if (program.steps > 0) dump["steps"] = program.steps;
   dump["layers"] = std::move(layers);
   dump["state_machines"] = std::move(machines);
-  return dump.dump(2) + "\n";
+  return dump.dump(indent) + "\n";
 }
 
 }  // namespace arbiter

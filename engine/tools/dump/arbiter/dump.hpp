@@ -28,7 +28,8 @@ std::string dump_dot(const Program& program, std::string_view layer = {});
 /// parent machine (`machine/state`); empty when it is standalone.
 std::string owner_of(const Program& program, const Controller& controller);
 
-/// The same graph as JSON (`{"arbiter_dump": 1, ...}`, described in docs/cli.md), for tools.
-std::string dump_json(const Program& program, std::string_view layer = {});
+/// The same graph as JSON (`{"arbiter_dump": 1, ...}`, described in docs/cli.md), for tools;
+/// `indent` as nlohmann::json::dump's (-1: on one line, for a page that parses it).
+std::string dump_json(const Program& program, std::string_view layer = {}, int indent = 2);
 
 }  // namespace arbiter
