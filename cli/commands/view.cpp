@@ -60,6 +60,12 @@ namespace {
   return format(diagnostic, options);
 }
 
+/// How far the view's explain answers look for an actuator's or a state's story: steps either
+/// side of the one asked for, and bytes of records either side (a large graph's records are
+/// large, and the answer is wanted while the pointer moves).
+constexpr std::uint64_t kStoryReach = 1000;
+constexpr std::size_t kStoryBytes = std::size_t{8} << 20;
+
 }  // namespace
 
 int view_trace(const Program& program, const std::string& trace_path, const ServeAddress& address,
@@ -129,13 +135,31 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
       return;
     }
     const std::uint64_t step = std::stoull(step_text);
-    // explain() reads a trace: give it the header and the records around the step.
-    const auto at = std::lower_bound(steps.begin(), steps.end(), step > 0 ? step - 1 : 0);
-    std::string excerpt = trace->header_line + "\n";
-    for (auto i = static_cast<std::size_t>(at - steps.begin());
-         i < steps.size() && steps[i] <= step + 1; ++i) {
-      excerpt += trace->lines[i] + "\n";
+    // explain() reads a trace: give it the header and the records around the step. An
+    // actuator's story goes back to the step that wrote the value it holds, a state's from the
+    // step its run was planned to the step it ended: for them, up to kStoryReach steps either
+    // side (fewer when the records are large), beyond which the answer says it cannot see.
+    Explanation unresolved;
+    const auto kind = resolve_target(program, target, unresolved);
+    const bool story = kind && (kind->kind == ExplainTarget::Kind::kActuator ||
+                                kind->kind == ExplainTarget::Kind::kState);
+    const std::uint64_t reach = story ? kStoryReach : 1;
+    const auto here = static_cast<std::size_t>(std::lower_bound(steps.begin(), steps.end(), step) -
+                                               steps.begin());
+    std::size_t begin = here;
+    std::size_t bytes = 0;
+    while (begin > 0 && steps[begin - 1] + reach >= step && bytes < kStoryBytes) {
+      bytes += trace->lines[--begin].size();
     }
+    std::size_t end = here;
+    bytes = 0;
+    const std::uint64_t after =
+        kind && kind->kind == ExplainTarget::Kind::kState ? reach : std::uint64_t{1};
+    while (end < steps.size() && steps[end] <= step + after && bytes < kStoryBytes) {
+      bytes += trace->lines[end++].size();
+    }
+    std::string excerpt = trace->header_line + "\n";
+    for (auto i = begin; i < end; ++i) excerpt += trace->lines[i] + "\n";
     std::istringstream in(excerpt);
     const auto [status, answer] = explanation_reply(explain(program, in, step, target));
     response.status = status;

@@ -13,6 +13,9 @@ const COLOURS = ['#1570ef', '#d92d20', '#12b76a', '#f79009', '#7a5af8', '#0e9384
 /** A number as a plot's legend writes it. */
 const formatNumber = (value) => (Number.isFinite(value) ? (Number.isInteger(value) ? String(value) : value.toFixed(3)) : '–');
 
+/** The actuator a plotted value is of: `gait_velocity` for `gait_velocity[0]`. */
+const actuatorOf = (key) => key.replace(/\[\d+\]$/, '');
+
 export class Plots {
   /**
    * @param {HTMLElement} section the plots' section
@@ -26,6 +29,8 @@ export class Plots {
     this.columns = columns;
     this.view = view;
     this.stripWidth = stripWidth;
+    /** Called with an actuator's name when its name in a legend is clicked. */
+    this.onActuator = (name) => {};
     /** @type {{box: HTMLElement, keys: string[], legend: HTMLElement, chart: uPlot | null}[]} */
     this.plots = [];
     this.fills = [];  // each select's refill
@@ -67,6 +72,12 @@ export class Plots {
     close.textContent = 'remove';
     const area = html('div', {class: 'plot-area'}, box);
     const plot = {box, keys: [], legend, area, chart: null};
+    // On the press, not the click: the legend is redrawn with each frame of a live run, which may
+    // come between the press and the release.
+    legend.addEventListener('pointerdown', (event) => {
+      const item = event.button === 0 && event.target.closest('.plot-name, .plot-swatch') && event.target.closest('li[data-series]');
+      if (item) this.onActuator(actuatorOf(item.dataset.series));
+    });
     this.plots.push(plot);
     more.addEventListener('change', () => {
       if (more.value && !plot.keys.includes(more.value)) this.setKeys(plot, [...plot.keys, more.value]);
@@ -130,7 +141,7 @@ export class Plots {
     plot.keys.forEach((key, i) => {
       const item = html('li', {'data-series': key}, plot.legend);
       html('span', {class: 'plot-swatch', style: `background: ${COLOURS[i % COLOURS.length]}`}, item);
-      html('span', {class: 'plot-name'}, item).textContent = key;
+      html('span', {class: 'plot-name', title: `explain ${actuatorOf(key)}`}, item).textContent = key;
       const value = exact ? this.columns.values.get(key)?.[index] : NaN;
       html('span', {class: 'plot-value'}, item).textContent = formatNumber(value);
       const remove = html('button', {type: 'button', class: 'plot-remove', title: `remove ${key}`}, item);

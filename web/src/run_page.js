@@ -37,6 +37,9 @@ export class RunPage {
       this.explain.pin(key);
       this.onPick(key);
     };
+    // Actuators and states are explained as `arbiter explain` names them: `actuators/name`,
+    // `machine/state`.
+    this.graph.onPort = (name) => this.explain.pin(`actuators/${name}`);
     this.explain.onPin = (key) => this.graph.highlight(key);
     this.controllers = new Controllers(document.getElementById('controllers'));
     this.reported = new Reported(document.getElementById('reported'), reportedKept);
@@ -44,6 +47,8 @@ export class RunPage {
     this.timelines = new Timelines(document.getElementById('timelines'), this.columns, this.time);
     this.timelines.queueAt = (machine) => this.current?.controllers?.[machine]?.queue ?? null;
     this.timelines.onLabel = (key) => this.explain.pin(key);
+    // A state's band clicked: the step is shown (onSeek) and the state explained there.
+    this.timelines.onState = (machine, state) => this.explain.pin(`${machine}/${state}`);
     // The filter by name finds behaviours in the graph too.
     this.timelines.onFilter = (words) => this.graph.mark(words);
     this.timelines.onFind = (words) => {
@@ -53,6 +58,14 @@ export class RunPage {
       this.explain.pin(key);
     };
     this.plots = new Plots(document.getElementById('plots'), this.columns, this.time, () => this.timelines.stripWidth);
+    this.plots.onActuator = (name) => this.explain.pin(`actuators/${name}`);
+    // The state in a state machine's panel.
+    document.getElementById('controllers').addEventListener('click', (event) => {
+      const state = event.target.closest('.controller[data-controller] .state');
+      if (state && state.textContent !== '(none)') {
+        this.explain.pin(`${state.closest('.controller').dataset.controller}/${state.textContent}`);
+      }
+    });
   }
 
   /** A record received, in step order: notes what it held and reported. */

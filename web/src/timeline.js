@@ -54,8 +54,10 @@ export class Timelines {
     this.visible = new Set();    // rows on the screen
     this.pointer = null;         // {strip, x, y}: where the pointer is, for the tip
     this.queueAt = () => null;   // the queue of a state machine at the cursor (from the record)
-    /** Called with 'layer/name' when a behaviour's label is clicked. */
+    /** Called with 'layer/name' when a behaviour's label is clicked, 'state_machines/name' a lane's. */
     this.onLabel = (key) => {};
+    /** Called with a state machine and its state when a band of its lane is clicked. */
+    this.onState = (machine, state) => {};
     /** Called with the filter's text (lower case) as it changes, and when Enter is pressed in it. */
     this.onFilter = (words) => {};
     this.onFind = (words) => {};
@@ -67,7 +69,7 @@ export class Timelines {
       this.view.changed();
     });
     view.subscribe(() => this.draw());
-    attachPointer(this.rows, view, () => this.strip());
+    attachPointer(this.rows, view, () => this.strip(), (step, event) => this.clicked(step, event));
     attachKeys(section, view);
     this.rows.addEventListener('pointermove', (event) => {
       const row = event.target.closest('[data-strip]');
@@ -134,9 +136,20 @@ export class Timelines {
       const strip = this.add('timeline-machine', machine.name, machine.name, this.rows, ROW_HEIGHT,
                              {'data-machine': machine.name});
       strip.note = html('div', {class: 'timeline-queue', 'data-machine': machine.name}, this.rows);
+      strip.row.querySelector('.label').onclick = () => this.onLabel(`state_machines/${machine.name}`);
     }
     this.add('timeline-events', '', 'reported', this.rows, ROW_HEIGHT);
     this.applyFilter();
+  }
+
+  /** A click that showed `step`: on a state machine's lane, its state there is explained. */
+  clicked(step, event) {
+    const row = document.elementFromPoint(event.clientX, event.clientY)?.closest('[data-strip]');
+    const strip = row ? this.strips[Number(row.dataset.strip)] : null;
+    if (!strip || strip.kind !== 'timeline-machine') return;
+    const index = this.columns.indexAtOrBefore(step);
+    const state = index >= 0 && this.columns.steps[index] === step ? this.columns.machines.get(strip.key)?.[index] : null;
+    if (state) this.onState(strip.key, state);
   }
 
   toggle(layer, group, head, collapse = !this.collapsed.has(layer)) {

@@ -932,6 +932,69 @@ test('the explain panel is pinned to a behaviour, readable, and follows the curs
   await page.close();
 });
 
+test('an actuator explained: clicked in the graph or a plot\'s legend, it follows the cursor', async () => {
+  const trace = path.join(scratch, 'soccer-explain-actuator.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '220', '--trace', trace, '-q'], {cwd: source});
+  const {url} = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
+  const page = await open(`${url}&step=180&plot=gait_velocity[0]`);
+  await page.locator('.port.actuator[data-actuator="kick"]').click();
+  const answer = (step, target) => page.waitForSelector(`#explain[data-step="${step}"][data-target="${target}"]`);
+  await answer(180, 'actuators/kick');
+  assert.match(await page.textContent('#explain-subject'), /pinned: actuators\/kick/);
+  // Held since the kick: the step whose value it keeps, from the steps before the one shown.
+  assert.equal(await page.textContent('#explain .explain-head'),
+               'actuator kick (layer control, the most active writer wins) at step 180: true, held');
+  assert.match(await page.textContent('#explain'), /keeps the value written at step 171 \(true\)/);
+  // It follows the step clicked in the timelines: at the kick, written by kick_ball.
+  const {x} = await xOfStep(page, 171);
+  await page.mouse.click(x, await yOfRow(page, '.timeline[data-name="control/head_control"]'));
+  await waitForStep(page, 171);
+  await answer(171, 'actuators/kick');
+  assert.equal(await page.textContent('#explain .explain-head'),
+               'actuator kick (layer control, the most active writer wins) at step 171: true, written');
+  assert.match(await page.textContent('#explain'), /written by kick_ball \(activation 1\)/);
+  // A plotted value's name explains its actuator: the writers and their weights, as a table.
+  await page.locator('.plot li[data-series="gait_velocity[0]"] .plot-name').click();
+  await answer(171, 'actuators/gait_velocity');
+  assert.match(await page.textContent('#explain .explain-head'), /^actuator gait_velocity \(layer control, aggregated\) at step 171: /);
+  const rows = await page.$$eval('#explain .explain-table tr', (trs) => trs.map((tr) => tr.cells[0].textContent.trim()));
+  assert.ok(rows.includes('kick_ball'), `the writers: ${rows}`);
+  await page.close();
+});
+
+test('a state explained: a band of its state machine\'s lane clicked, it follows the cursor', async () => {
+  const trace = path.join(scratch, 'goalie-explain.jsonl');
+  const goalie = 'configs/soccer/goalie.yaml';
+  execFileSync(arbiter, ['run', goalie, '--steps', '300', '--trace', trace, '-q'], {cwd: source});
+  const {url} = await serve(['view', goalie, '--trace', trace, '--serve', '0']);
+  const page = await open(`${url}&step=100`);
+  const lane = '.timeline-machine[data-machine="goalie"]';
+  const answer = (step, target) => page.waitForSelector(`#explain[data-step="${step}"][data-target="${target}"]`);
+  // The band of dive at step 215: that step is shown and the state explained there, from its
+  // start (planned and pre-empting monitor_ball) to its end.
+  await page.mouse.click((await xOfStep(page, 215)).x, await yOfRow(page, lane));
+  await waitForStep(page, 215);
+  await answer(215, 'goalie/dive');
+  assert.match(await page.textContent('#explain-subject'), /pinned: goalie\/dive/);
+  assert.equal(await page.textContent('#explain .explain-head'), 'state goalie/dive at step 215: running (cycle 215)');
+  const lines = await page.$$eval('#explain p', (ps) => ps.map((p) => p.textContent));
+  assert.deepEqual(lines, ['started at step 201: activated when monitor_ball ended: pre-empted by dive',
+                           'planned: in step 201 itself, as the state before it ended',
+                           'ended at step 231: proceeded']);
+  // Pinned, it follows the cursor: a click on another row explains dive at that step.
+  await page.mouse.click((await xOfStep(page, 150)).x, await yOfRow(page, '.timeline-events'));
+  await waitForStep(page, 150);
+  await answer(150, 'goalie/dive');
+  assert.match(await page.textContent('#explain .explain-head'), /^state goalie\/dive at step 150: /);
+  // The state in the state machine's panel, and the lane's label (the machine itself).
+  await page.locator('.controller[data-controller="goalie"] .state').click();
+  await answer(150, 'goalie/monitor_ball');
+  await page.locator(`${lane} .label`).click();
+  await answer(150, 'state_machines/goalie');
+  assert.match(await page.textContent('#explain .explain-head'), /^state machine goalie at step 150: /);
+  await page.close();
+});
+
 /// A config of `layers` × `perLayer` scripted behaviours at `rateHz`, each switching its level
 /// every few steps, with an inhibition between neighbours: a large graph that keeps changing.
 function largeConfig(layers, perLayer, rateHz) {
