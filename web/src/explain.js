@@ -50,6 +50,8 @@ export class ExplainPanel {
     this.pinned = null;
     this.pending = false;
     this.shown = '';      // 'step key' of the answer shown
+    /** Comparing two runs: {a, b}, their names; each is explained against its own config. */
+    this.compare = null;
     /** Called when the pinned behaviour changes. */
     this.onPin = (key) => {};
   }
@@ -94,10 +96,21 @@ export class ExplainPanel {
     if (asked === this.shown) return;
     this.pending = true;
     try {
-      const response = await fetch(`explain?step=${this.step}&target=${encodeURIComponent(target)}`);
-      const text = await response.text();
-      if (response.ok) renderAnswer(this.output, text);
-      else this.output.textContent = text;
+      const ask = (run) => fetch(`explain?step=${this.step}&target=${encodeURIComponent(target)}${run}`)
+        .then(async (response) => ({ok: response.ok, text: await response.text()}));
+      const answers = await Promise.all(this.compare ? [ask(''), ask('&run=b')] : [ask('')]);
+      const show = (box, {ok, text}) => {
+        if (ok) renderAnswer(box, text);
+        else box.textContent = text;
+      };
+      if (!this.compare) show(this.output, answers[0]);
+      else {
+        this.output.replaceChildren();
+        ['a', 'b'].forEach((run, i) => {
+          html('p', {class: 'explain-run'}, this.output).textContent = `in ${run.toUpperCase()} (${this.compare[run]})`;
+          show(html('div', {class: 'explain-answer', 'data-run': run}, this.output), answers[i]);
+        });
+      }
       this.output.dataset.step = String(this.step);
       this.output.dataset.target = target;
       this.shown = asked;

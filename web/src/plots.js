@@ -1,6 +1,7 @@
 // Plots of the actuators' values over the steps in view (uPlot): any number of plots, each of
 // any numeric actuators and vector components (`gait_velocity[0]`), under the timelines and on
-// the same scale of steps, with the same cursor, hover, zoom, pan and click to jump.
+// the same scale of steps, with the same cursor, hover, zoom, pan and click to jump. Comparing two
+// runs, each value of B is drawn dashed beside A's, named `value (B)`.
 import uPlot from 'uplot';
 import {html} from './dom.js';
 import {attachPointer} from './time_view.js';
@@ -31,6 +32,8 @@ export class Plots {
     this.stripWidth = stripWidth;
     /** Called with an actuator's name when its name in a legend is clicked. */
     this.onActuator = (name) => {};
+    this.compared = null;  // B's columns, when comparing
+    this.aligned = new Map();  // key -> B's values at A's steps
     /** @type {{box: HTMLElement, keys: string[], legend: HTMLElement, chart: uPlot | null}[]} */
     this.plots = [];
     this.fills = [];  // each select's refill
@@ -93,6 +96,26 @@ export class Plots {
     return plot;
   }
 
+  /** Compares with run B (its columns): each plot draws B's values too. */
+  setCompare(columns) {
+    this.compared = columns;
+    this.aligned.clear();
+  }
+
+  /** B's values of `key` at A's steps (null where B has no such step). */
+  valuesOfB(key) {
+    let values = this.aligned.get(key);
+    if (values && values.length === this.columns.length) return values;
+    const b = this.compared;
+    const series = b.values.get(key);
+    values = this.columns.steps.map((step) => {
+      const index = b.indexAtOrBefore(step);
+      return series && index >= 0 && b.steps[index] === step ? series[index] : null;
+    });
+    this.aligned.set(key, values);
+    return values;
+  }
+
   setKeys(plot, keys) {
     plot.keys = keys;
     plot.box.dataset.series = keys.join(' ');
@@ -108,7 +131,9 @@ export class Plots {
       // Step s is drawn at the middle of its slot, as in the timelines: from - 0.5 to to + 0.5.
       scales: {x: {time: false, auto: false, range: () => [view.from - 0.5, view.to + 0.5]}},
       axes: [{show: false}, {side: 1, size: AXIS_SIZE, font: '10.5px "DejaVu Sans", sans-serif', gap: 3}],
-      series: [{}, ...keys.map((key, i) => ({label: key, stroke: COLOURS[i % COLOURS.length], width: 1.5, points: {show: false}}))],
+      series: [{}, ...keys.map((key, i) => ({label: key, stroke: COLOURS[i % COLOURS.length], width: 1.5, points: {show: false}})),
+               ...(this.compared ? keys.map((key, i) => ({label: `${key} (B)`, stroke: COLOURS[i % COLOURS.length], width: 1.5,
+                                                          dash: [5, 3], points: {show: false}})) : [])],
       hooks: {draw: [(chart) => this.drawCursor(chart)]},
     };
     plot.chart = new uPlot(options, this.data(plot), plot.area);
@@ -126,7 +151,8 @@ export class Plots {
 
   data(plot) {
     const empty = () => new Array(this.columns.length).fill(null);
-    return [this.columns.steps, ...plot.keys.map((key) => this.columns.values.get(key) || empty())];
+    const a = plot.keys.map((key) => this.columns.values.get(key) || empty());
+    return [this.columns.steps, ...a, ...(this.compared ? plot.keys.map((key) => this.valuesOfB(key)) : [])];
   }
 
   /** Each series with its value at the hovered step, or else at the step shown. */
@@ -147,6 +173,13 @@ export class Plots {
       const remove = html('button', {type: 'button', class: 'plot-remove', title: `remove ${key}`}, item);
       remove.textContent = '×';
       remove.onclick = () => this.setKeys(plot, plot.keys.filter((other) => other !== key));
+    });
+    if (!this.compared) return;
+    plot.keys.forEach((key, i) => {
+      const item = html('li', {'data-series': key, 'data-run': 'b'}, plot.legend);
+      html('span', {class: 'plot-swatch dashed', style: `border-color: ${COLOURS[i % COLOURS.length]}`}, item);
+      html('span', {class: 'plot-name', title: `explain ${actuatorOf(key)}`}, item).textContent = `${key} (B)`;
+      html('span', {class: 'plot-value'}, item).textContent = formatNumber(exact ? this.valuesOfB(key)[index] : NaN);
     });
   }
 

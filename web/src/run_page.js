@@ -68,6 +68,23 @@ export class RunPage {
     });
   }
 
+  /**
+   * Shows run B over this one (`arbiter view A --compare B`): `records` are B's, `differences`
+   * the server's /compare. Before setGraph, which builds the rows.
+   */
+  compareWith(records, differences) {
+    this.columnsB = new Columns();
+    for (const record of records) this.columnsB.push(record);
+    this.differences = differences;
+    this.timelines.setCompare(this.columnsB, differences);
+    this.plots.setCompare(this.columnsB);
+    this.explain.compare = {a: differences.a, b: differences.b};
+    const steps = this.columnsB.steps;
+    if (steps.length) {
+      this.time.setExtent(Math.min(this.time.first, steps[0]), Math.max(this.time.last, steps[steps.length - 1]));
+    }
+  }
+
   /** A record received, in step order: notes what it held and reported. */
   add(record) {
     this.writes.track(record);

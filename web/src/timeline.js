@@ -3,6 +3,8 @@
 // requested a level but was inhibited), grouped by layer (a layer folds away), a lane per state
 // machine with its states as bands, and a lane of what code reported. The cursor marks the step
 // shown; hovering tells the values at a step; a filter keeps the rows whose name matches.
+// Comparing two runs (`arbiter view A --compare B`), each row of A has B's under it, and the
+// steps where they differ (as `arbiter diff` finds them) are marked on both and on the axis.
 import {ACTIVE, INHIBITED, lowerBound} from './columns.js';
 import {colour, html} from './dom.js';
 import {attachKeys, attachPointer} from './time_view.js';
@@ -48,8 +50,10 @@ export class Timelines {
     this.filter = section.querySelector('#timeline-filter');
     this.columns = columns;
     this.view = view;
-    /** @type {{kind: string, key: string, row: HTMLElement, canvas: HTMLCanvasElement, note?: HTMLElement}[]} */
+    /** @type {{kind: string, key: string, row: HTMLElement, canvas: HTMLCanvasElement, note?: HTMLElement, columns: object, marks?: number[][]}[]} */
     this.strips = [];
+    /** Comparing: {columns (B's), differ: {what: [[from, to], ...]}, steps: [[from, to], ...]}. */
+    this.compare = null;
     this.collapsed = new Set();  // layers folded away
     this.visible = new Set();    // rows on the screen
     this.pointer = null;         // {strip, x, y}: where the pointer is, for the tip
@@ -101,15 +105,35 @@ export class Timelines {
     return {left: box.left, width: Math.max(1, box.width)};
   }
 
-  add(kind, key, label, parent, height = ROW_HEIGHT, attributes = {}) {
+  add(kind, key, label, parent, height = ROW_HEIGHT, attributes = {}, columns = this.columns) {
     const row = html('div', {class: kind, 'data-strip': this.strips.length, ...attributes}, parent);
     html('span', {class: 'label', title: label}, row).textContent = label;
     const canvas = html('canvas', {height}, row);
     canvas.style.height = `${height}px`;
-    const strip = {kind, key, row, canvas};
+    const strip = {kind, key, row, canvas, columns};
     this.strips.push(strip);
     this.observer.observe(row);
     return strip;
+  }
+
+  /**
+   * Compares with run B: `columns` are B's, `differences` the server's /compare. Rebuilt by the
+   * next build().
+   */
+  setCompare(columns, differences) {
+    this.compare = {columns, differ: differences.differ, steps: differences.steps};
+  }
+
+  /** Under A's row of `key`, B's (comparing), its steps that differ marked on both. */
+  addCompared(kind, key, label, parent, attributes, what) {
+    const a = this.strips[this.strips.length - 1];
+    if (!this.compare) return a;
+    a.marks = what === null ? undefined : this.compare.differ[what] || [];
+    a.row.dataset.run = 'a';
+    a.row.querySelector('.label').textContent = `A ${label}`;
+    const b = this.add(kind, key, `B ${label}`, parent, ROW_HEIGHT, {...attributes, 'data-run': 'b'}, this.compare.columns);
+    b.marks = a.marks;
+    return b;
   }
 
   /** The rows of `graph` (the JSON dump): behaviours in execution order, then its state machines. */
@@ -130,15 +154,33 @@ export class Timelines {
         const key = `${layer.name}/${behaviour.name}`;
         const strip = this.add('timeline', key, key, group, ROW_HEIGHT, {'data-name': key});
         strip.row.querySelector('.label').onclick = () => this.onLabel(key);
+        this.addCompared('timeline', key, key, group, {'data-name': key}, key);
+      }
+    }
+    if (this.compare) {
+      // Behaviours only B's config has (A's only have an empty B row).
+      const inA = new Set(graph.layers.flatMap((layer) => layer.behaviours.map((b) => `${layer.name}/${b.name}`)));
+      const onlyB = [...this.compare.columns.behaviours.keys()].filter((key) => !inA.has(key));
+      if (onlyB.length) {
+        const group = html('div', {class: 'timeline-group', 'data-layer': ''}, this.rows);
+        html('span', {class: 'timeline-layer'}, group).textContent = `only in B (${onlyB.length})`;
+        for (const key of onlyB) {
+          const strip = this.add('timeline', key, `B ${key}`, group, ROW_HEIGHT, {'data-name': key, 'data-run': 'b'},
+                                 this.compare.columns);
+          strip.marks = this.compare.differ[key] || [];
+        }
       }
     }
     for (const machine of graph.state_machines || []) {
       const strip = this.add('timeline-machine', machine.name, machine.name, this.rows, ROW_HEIGHT,
                              {'data-machine': machine.name});
-      strip.note = html('div', {class: 'timeline-queue', 'data-machine': machine.name}, this.rows);
       strip.row.querySelector('.label').onclick = () => this.onLabel(`state_machines/${machine.name}`);
+      this.addCompared('timeline-machine', machine.name, machine.name, this.rows, {'data-machine': machine.name},
+                       `machine:${machine.name}`);
+      strip.note = html('div', {class: 'timeline-queue', 'data-machine': machine.name}, this.rows);
     }
     this.add('timeline-events', '', 'reported', this.rows, ROW_HEIGHT);
+    this.addCompared('timeline-events', '', 'reported', this.rows, {}, null);
     this.applyFilter();
   }
 
@@ -147,8 +189,9 @@ export class Timelines {
     const row = document.elementFromPoint(event.clientX, event.clientY)?.closest('[data-strip]');
     const strip = row ? this.strips[Number(row.dataset.strip)] : null;
     if (!strip || strip.kind !== 'timeline-machine') return;
-    const index = this.columns.indexAtOrBefore(step);
-    const state = index >= 0 && this.columns.steps[index] === step ? this.columns.machines.get(strip.key)?.[index] : null;
+    const {columns} = strip;
+    const index = columns.indexAtOrBefore(step);
+    const state = index >= 0 && columns.steps[index] === step ? columns.machines.get(strip.key)?.[index] : null;
     if (state) this.onState(strip.key, state);
   }
 
@@ -197,26 +240,48 @@ export class Timelines {
       const w = width / ratio;
       const h = height / ratio;
       context.clearRect(0, 0, w, h);
-      if (strip.kind === 'timeline') this.drawBehaviour(context, strip.key, w, h);
+      if (strip.kind === 'timeline') this.drawBehaviour(context, strip.columns, strip.key, w, h);
       else if (strip.kind === 'timeline-axis') this.drawAxis(context, w, h);
       else if (strip.kind === 'timeline-machine') this.drawMachine(context, strip, w, h);
-      else if (strip.kind === 'timeline-events') this.drawEvents(context, w, h);
+      else if (strip.kind === 'timeline-events') this.drawEvents(context, strip.columns, w, h);
+      if (strip.marks) this.drawMarks(context, strip.marks, w, h, strip.row.dataset.run === 'b');
+      else if (strip.kind === 'timeline-axis' && this.compare) this.drawMarks(context, this.compare.steps, w, h, false);
       this.drawCursor(context, w, h);
     }
     this.showTip();
   }
 
-  /** The indices of the steps in view. */
-  indices() {
-    const steps = this.columns.steps;
+  /** The indices of the steps in view in `columns`. */
+  indices(columns = this.columns) {
+    const steps = columns.steps;
     return [lowerBound(steps, this.view.from), lowerBound(steps, this.view.to + 1)];
   }
 
-  drawBehaviour(context, key, w, h) {
-    const series = this.columns.behaviours.get(key);
+  /**
+   * The steps where the compared runs differ (`runs`, [[from, to], ...]): an orange bar over
+   * them, and on B's row an orange wash. At least a pixel wide, so that one step stays seen.
+   */
+  drawMarks(context, runs, w, h, wash) {
+    const view = this.view;
+    let i = lowerBoundBy(runs.length, (index) => runs[index][1], view.from);
+    for (; i < runs.length && runs[i][0] <= view.to; ++i) {
+      const left = Math.floor(view.x(Math.max(runs[i][0], view.from), w));
+      const right = Math.max(left + 1, Math.ceil(view.x(Math.min(runs[i][1], view.to) + 1, w)));
+      if (wash) {
+        context.fillStyle = 'rgba(247, 144, 9, 0.22)';
+        context.fillRect(left, 0, right - left, h);
+      }
+      context.fillStyle = '#f79009';
+      context.fillRect(left, 0, right - left, 3);
+      if (!wash && h > ROW_HEIGHT) context.fillRect(left, h - 4, right - left, 4);
+    }
+  }
+
+  drawBehaviour(context, columns, key, w, h) {
+    const series = columns.behaviours.get(key);
     if (!series) return;
-    const {steps} = this.columns;
-    const [begin, end] = this.indices();
+    const {steps} = columns;
+    const [begin, end] = this.indices(columns);
     const view = this.view;
     // Many steps to a pixel: each pixel column shows the highest activation among its steps, and
     // a bar if any of them was active (or inhibited), so that no activation is lost to zooming out.
@@ -288,10 +353,10 @@ export class Timelines {
   }
 
   drawMachine(context, strip, w, h) {
-    const states = this.columns.machines.get(strip.key);
+    const states = strip.columns.machines.get(strip.key);
     if (states) {
-      const {steps} = this.columns;
-      const [begin, end] = this.indices();
+      const {steps} = strip.columns;
+      const [begin, end] = this.indices(strip.columns);
       context.font = '11px "DejaVu Sans", system-ui, sans-serif';
       context.textBaseline = 'middle';
       context.textAlign = 'left';
@@ -313,12 +378,13 @@ export class Timelines {
         i = j;
       }
     }
+    if (!strip.note) return;  // B's lane: the queue shown is A's
     const queue = this.queueAt(strip.key);
     strip.note.textContent = queue ? `queue: ${queue.length ? queue.join(', ') : '(empty)'}` : '';
   }
 
-  drawEvents(context, w, h) {
-    const events = this.columns.events;
+  drawEvents(context, columns, w, h) {
+    const events = columns.events;
     const stepsOf = (index) => events[index].step;
     let i = lowerBoundBy(events.length, stepsOf, this.view.from);
     context.font = '11px "DejaVu Sans", system-ui, sans-serif';
@@ -361,20 +427,24 @@ export class Timelines {
       return;
     }
     const step = view.hover;
-    const index = this.columns.indexAtOrBefore(step);
-    const lines = [`step ${step}  ${formatTime(this.columns.timeAt(step))}`];
     const {strip} = pointer;
-    if (strip.kind === 'timeline' && index >= 0 && this.columns.steps[index] === step) {
-      const series = this.columns.behaviours.get(strip.key);
+    const columns = strip.columns;
+    const index = columns.indexAtOrBefore(step);
+    const lines = [`step ${step}  ${formatTime(columns.timeAt(step))}`];
+    if (strip.kind === 'timeline' && index >= 0 && columns.steps[index] === step) {
+      const series = columns.behaviours.get(strip.key);
       if (series) {
         const state = series.state[index] === ACTIVE ? 'active' : series.state[index] === INHIBITED ? 'inhibited' : 'inactive';
         lines.push(`${strip.key}: activation ${series.activation[index].toFixed(2)}, ${state}`);
       }
     } else if (strip.kind === 'timeline-machine' && index >= 0) {
-      lines.push(`${strip.key}: ${this.columns.machines.get(strip.key)?.[index] ?? '(no state)'}`);
+      lines.push(`${strip.key}: ${columns.machines.get(strip.key)?.[index] ?? '(no state)'}`);
     } else if (strip.kind === 'timeline-events') {
-      for (const event of this.columns.events) if (event.step === step) lines.push(`${event.by}: ${event.text}`);
+      for (const event of columns.events) if (event.step === step) lines.push(`${event.by}: ${event.text}`);
     }
+    // Comparing: which run the row is, and what differs at the step.
+    if (strip.row.dataset.run) lines[1] = `${strip.row.dataset.run.toUpperCase()} ${lines[1] ?? ''}`.trimEnd();
+    if (strip.marks && strip.marks.some(([from, to]) => from <= step && step <= to)) lines.push('A and B differ here');
     this.tip.textContent = lines.join('\n');
     this.tip.hidden = false;
     const box = this.section.getBoundingClientRect();

@@ -995,6 +995,68 @@ test('a state explained: a band of its state machine\'s lane clicked, it follows
   await page.close();
 });
 
+test('two runs compared: the what-if without kick_ball over the run, the steps that differ marked', async () => {
+  // The docs' what-if (docs/replay.md): the recorded run replayed without kick_ball.
+  const config = path.join(scratch, 'compare.yaml');
+  const noKick = path.join(scratch, 'compare_no_kick.yaml');
+  copyFileSync(path.join(source, soccer), config);
+  writeFileSync(noKick, readFileSync(config, 'utf8').split('\n')
+    .filter((line) => !/kick_ball: \{type|kick_ball => go_behind_ball/.test(line)).join('\n'));
+  const run = path.join(scratch, 'compare.mcap');
+  const whatIf = path.join(scratch, 'compare_no_kick.mcap');
+  const env = {...process.env, ARBITER_PLUGIN_PATH: path.join(path.dirname(arbiter), '..', 'plugins')};
+  execFileSync(arbiter, ['run', config, '--steps', '220', '--record', run, '-q'], {cwd: source, env});
+  execFileSync(arbiter, ['replay', run, '--config', noKick, '--record', whatIf], {cwd: source, env});
+  const {url} = await serve(['view', '--trace', run, '--compare', whatIf, '--serve', '0']);
+  const page = await open(`${url}&step=100&plot=kick`);
+  // Where they first differ, and what: the kick, as `arbiter diff` finds it.
+  assert.equal(await page.textContent('#compare-what'),
+               'first differ at step 171: control/go_behind_ball, control/kick_ball, actuator:gait_velocity, actuator:kick');
+  assert.match(await page.textContent('#compare-runs'), /^A .*compare\.mcap · B .*compare_no_kick\.mcap$/);
+  // B's row of each behaviour under A's, named.
+  const rowA = '.timeline[data-run="a"][data-name="control/go_behind_ball"]';
+  const rowB = '.timeline[data-run="b"][data-name="control/go_behind_ball"]';
+  assert.equal(await page.textContent(`${rowA} .label`), 'A control/go_behind_ball');
+  assert.equal(await page.textContent(`${rowB} .label`), 'B control/go_behind_ball');
+  assert.equal(await page.locator('.timeline-machine, .timeline-events').count(), 2, 'a reported lane for each run');
+  // One button to the first difference.
+  await page.click('#compare-first');
+  await waitForStep(page, 171);
+  await nextFrame(page);
+  // Marked on the row where they differ, at that step and not before it.
+  const orange = (rgb) => { const [r, g, b] = rgb.split(',').map(Number); return r > 200 && g > 100 && g < 200 && b < 80; };
+  const top = (selector, x) => page.$eval(`${selector} canvas`, (canvas, x) => {
+    const box = canvas.getBoundingClientRect();
+    const ratio = canvas.width / box.width;
+    return [...canvas.getContext('2d').getImageData(Math.round((x - box.left) * ratio), Math.round(ratio), 1, 1).data.slice(0, 3)].join(',');
+  }, x);
+  await yOfRow(page, rowB);
+  assert.ok(orange(await top(rowB, (await xOfStep(page, 171)).x + 2)), 'step 171 marked on B\'s row');
+  assert.ok(!orange(await top(rowB, (await xOfStep(page, 150)).x)), 'step 150 not marked');
+  // The tip tells each run's values: inhibited in A, active in B.
+  const {x} = await xOfStep(page, 171);
+  await page.mouse.move(x, await yOfRow(page, rowA));
+  await page.waitForFunction(() => document.querySelector('#timeline-tip').textContent.startsWith('step 171 '));
+  assert.match(await page.textContent('#timeline-tip'), /\nA control\/go_behind_ball: activation 0\.00, inhibited\nA and B differ here$/);
+  await page.mouse.move(x, await yOfRow(page, rowB));
+  await page.waitForFunction(() => /\nB control/.test(document.querySelector('#timeline-tip').textContent));
+  assert.match(await page.textContent('#timeline-tip'), /\nB control\/go_behind_ball: activation 1\.00, active\n/);
+  // The plot draws B's value beside A's, named.
+  assert.equal(await page.textContent('.plot li[data-series="kick"]:not([data-run]) .plot-value'), '1');
+  assert.equal(await page.textContent('.plot li[data-series="kick"][data-run="b"] .plot-name'), 'kick (B)');
+  assert.equal(await page.textContent('.plot li[data-series="kick"][data-run="b"] .plot-value'), '0');
+  // The explain panel answers for each run against its own config.
+  await behaviour(page, 'go_behind_ball').click();
+  await page.waitForSelector('#explain[data-step="171"][data-target="control/go_behind_ball"]');
+  assert.deepEqual(await page.$$eval('#explain .explain-head', (heads) => heads.map((head) => head.textContent)),
+                   ['behaviour go_behind_ball (layer control) at step 171: inactive, activation 0',
+                    'behaviour go_behind_ball (layer control) at step 171: active, activation 1']);
+  // Next difference: kick differs from 171 to the end (held true in A).
+  await page.click('#compare-next');
+  await waitForStep(page, 172);
+  await page.close();
+});
+
 /// A config of `layers` × `perLayer` scripted behaviours at `rateHz`, each switching its level
 /// every few steps, with an inhibition between neighbours: a large graph that keeps changing.
 function largeConfig(layers, perLayer, rateHz) {
