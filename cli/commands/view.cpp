@@ -21,7 +21,7 @@
 namespace arbiter::cli {
 
 std::optional<TraceFile> read_trace_file(const std::string& path, std::string& error,
-                                         const FormatOptions& format_options) {
+                                         const FormatOptions& format_options, bool parse) {
   Diagnostic problem;
   auto read = read_trace(path, problem);
   if (!read) {
@@ -37,7 +37,8 @@ std::optional<TraceFile> read_trace_file(const std::string& path, std::string& e
                              nlohmann::ordered_json::parse(reload.header.text)});
   }
   for (auto& step : read->steps) {
-    trace.records.push_back(nlohmann::ordered_json::parse(step.text));
+    if (parse) trace.records.push_back(nlohmann::ordered_json::parse(step.text));
+    trace.steps.push_back(step.step);
     trace.lines.push_back(std::move(step.text));
   }
   trace.truncated = std::move(read->truncated);
@@ -74,15 +75,11 @@ struct ServedRun {
   const Program* program = nullptr;
   std::string no_program;  ///< why there is no program
   TraceFile trace;
-  std::vector<std::uint64_t> steps;
   std::string text;  ///< the trace as the page reads it: the header, then the step records
 };
 
 ServedRun served(std::string path, const Program* program, TraceFile trace) {
-  ServedRun run{std::move(path), program, {}, std::move(trace), {}, {}};
-  for (const auto& record : run.trace.records) {
-    run.steps.push_back(record["step"].get<std::uint64_t>());
-  }
+  ServedRun run{std::move(path), program, {}, std::move(trace), {}};
   run.text = run.trace.header_line + "\n";
   for (const auto& line : run.trace.lines) run.text += line + "\n";
   return run;
@@ -93,7 +90,7 @@ std::pair<int, std::string> explain_in(const ServedRun& run, std::uint64_t step,
                                        const std::string& target) {
   if (run.program == nullptr) return {404, run.no_program + "\n"};
   const Program& program = *run.program;
-  const auto& steps = run.steps;
+  const auto& steps = run.trace.steps;
   // explain() reads a trace: give it the header and the records around the step. An
   // actuator's story goes back to the step that wrote the value it holds, a state's from the
   // step its run was planned to the step it ended: for them, up to kStoryReach steps either
@@ -144,25 +141,26 @@ std::string compare_json(const ServedRun& a, const ServedRun& b) {
   std::uint64_t first_extra = 0;
   std::size_t i = 0;
   std::size_t j = 0;
-  while (i < a.steps.size() || j < b.steps.size()) {
-    const bool in_a = i < a.steps.size();
-    const bool in_b = j < b.steps.size();
-    if (in_a && in_b && a.steps[i] == b.steps[j]) {
-      differ.compare(a.steps[i], a.trace.lines[i], b.trace.lines[j]);
-      for (const auto& what : differ.differed()) mark(differ_at[what], a.steps[i]);
-      if (!differ.differed().empty()) mark(any, a.steps[i]);
+  while (i < a.trace.steps.size() || j < b.trace.steps.size()) {
+    const bool in_a = i < a.trace.steps.size();
+    const bool in_b = j < b.trace.steps.size();
+    if (in_a && in_b && a.trace.steps[i] == b.trace.steps[j]) {
+      differ.compare(a.trace.steps[i], a.trace.lines[i], b.trace.lines[j]);
+      for (const auto& what : differ.differed()) mark(differ_at[what], a.trace.steps[i]);
+      if (!differ.differed().empty()) mark(any, a.trace.steps[i]);
       ++i;
       ++j;
       continue;
     }
     // A step only one run has.
-    const std::uint64_t step =
-        !in_b || (in_a && a.steps[i] < b.steps[j]) ? a.steps[i++] : b.steps[j++];
+    const std::uint64_t step = !in_b || (in_a && a.trace.steps[i] < b.trace.steps[j])
+                                   ? a.trace.steps[i++]
+                                   : b.trace.steps[j++];
     if (first_extra == 0) first_extra = step;
     differ.unmatched(step);
     mark(any, step);
   }
-  const TraceDiff diff = differ.finish(a.steps.size(), b.steps.size(), first_extra);
+  const TraceDiff diff = differ.finish(a.trace.steps.size(), b.trace.steps.size(), first_extra);
   const auto runs_json = [](const Runs& runs) {
     Json out = Json::array();
     for (const auto& [from, to] : runs) out.push_back({from, to});
@@ -195,7 +193,8 @@ std::optional<TraceFile> trace_for_view(const Program& program, const std::strin
                                         std::string& no_program, std::ostream& err,
                                         const FormatOptions& format_options) {
   std::string error;
-  auto trace = read_trace_file(path, error, format_options);
+  // The page parses the records: the server serves them as they are.
+  auto trace = read_trace_file(path, error, format_options, false);
   if (!trace) {
     err << error << "\n";
     return std::nullopt;
@@ -247,7 +246,7 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
     other->no_program = no_program;
     compared = compare_json(trace, *other);
   }
-  const auto& steps = trace.steps;
+  const auto& steps = trace.trace.steps;
   if (open_step && !std::binary_search(steps.begin(), steps.end(), *open_step)) {
     err << fmt::format("arbiter view: --step {}: {}\n", *open_step,
                        steps.empty() ? fmt::format("{} has no step records", trace_path)
@@ -343,11 +342,11 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
   err << exposure_warning(address, "read the trace (with its token)");
   if (other) {
     out << fmt::format("viewing {} ({} steps of {}) compared with {} ({} steps) at {}\n",
-                       trace_path, trace.trace.records.size(), program.name, other->path,
-                       other->trace.records.size(), server.page_url());
+                       trace_path, trace.trace.steps.size(), program.name, other->path,
+                       other->trace.steps.size(), server.page_url());
   } else {
-    out << fmt::format("viewing {} ({} steps of {}) at {}\n", trace_path,
-                       trace.trace.records.size(), program.name, server.page_url());
+    out << fmt::format("viewing {} ({} steps of {}) at {}\n", trace_path, trace.trace.steps.size(),
+                       program.name, server.page_url());
   }
   out << "Ctrl-C stops.\n" << std::flush;
   while (!interrupted) std::this_thread::sleep_for(std::chrono::milliseconds(100));

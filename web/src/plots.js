@@ -3,6 +3,7 @@
 // the same scale of steps, with the same cursor, hover, zoom, pan and click to jump. Comparing two
 // runs, each value of B is drawn dashed beside A's, named `value (B)`.
 import uPlot from 'uplot';
+import {least, levelFor, lowerBound, most} from './columns.js';
 import {html} from './dom.js';
 import {attachPointer} from './time_view.js';
 import {formatTime} from './timeline.js';
@@ -131,11 +132,24 @@ export class Plots {
       // Step s is drawn at the middle of its slot, as in the timelines: from - 0.5 to to + 0.5.
       scales: {x: {time: false, auto: false, range: () => [view.from - 0.5, view.to + 0.5]}},
       axes: [{show: false}, {side: 1, size: AXIS_SIZE, font: '10.5px "DejaVu Sans", sans-serif', gap: 3}],
-      series: [{}, ...keys.map((key, i) => ({label: key, stroke: COLOURS[i % COLOURS.length], width: 1.5, points: {show: false}})),
-               ...(this.compared ? keys.map((key, i) => ({label: `${key} (B)`, stroke: COLOURS[i % COLOURS.length], width: 1.5,
-                                                          dash: [5, 3], points: {show: false}})) : [])],
+      series: [{}],
       hooks: {draw: [(chart) => this.drawCursor(chart)]},
     };
+    // A's values, then B's dashed. Zoomed out to many steps a pixel (dense), each value is the
+    // highest and the lowest of each block of steps, drawn as a bar from one to the other
+    // (drawDense): a line through every block's extremes would zigzag across the plot at each
+    // pixel, and a software rasteriser takes some hundred milliseconds a frame to fill it.
+    plot.dense = this.level() > 0;
+    const runs = this.compared ? [['', null], [' (B)', [5, 3]]] : [['', null]];
+    for (const [suffix, dash] of runs) {
+      keys.forEach((key, i) => {
+        const line = {label: `${key}${suffix}`, stroke: COLOURS[i % COLOURS.length], width: 1.5, points: {show: false},
+                      ...(dash ? {dash} : {}), ...(plot.dense ? {paths: () => null} : {})};
+        options.series.push(line);
+        if (plot.dense) options.series.push({...line, label: `${key}${suffix} lowest`});
+      });
+    }
+    if (plot.dense) options.hooks.draw.unshift((chart) => this.drawDense(chart, keys.length));
     plot.chart = new uPlot(options, this.data(plot), plot.area);
     attachPointer(plot.chart.over, view, () => {
       const box = plot.chart.over.getBoundingClientRect();
@@ -150,9 +164,38 @@ export class Plots {
   }
 
   data(plot) {
-    const empty = () => new Array(this.columns.length).fill(null);
-    const a = plot.keys.map((key) => this.columns.values.get(key) || empty());
-    return [this.columns.steps, ...a, ...(this.compared ? plot.keys.map((key) => this.valuesOfB(key)) : [])];
+    const columns = this.columns;
+    const empty = () => new Array(columns.length).fill(null);
+    const a = plot.keys.map((key) => columns.values.get(key) || empty());
+    const series = [...a, ...(this.compared ? plot.keys.map((key) => this.valuesOfB(key)) : [])];
+    const {steps} = columns;
+    const view = this.view;
+    const level = this.level();
+    if (!level || !plot.dense) return [steps, ...series];
+    // Many steps to a pixel: each block of steps a pixel or two wide is given to uPlot as its
+    // highest and lowest value, so that a frame of a long recording costs its pixels.
+    const size = 2 ** level;
+    const blocks = Math.ceil(steps.length / size);
+    const first = Math.max(0, Math.floor(lowerBound(steps, view.from) / size) - 1);
+    const last = Math.min(blocks - 1, Math.floor(lowerBound(steps, view.to + 1) / size) + 1);
+    const lows = series.map((values) => columns.pyramid(values, 'least', least).level(level));
+    const highs = series.map((values) => columns.pyramid(values, 'most', most).level(level));
+    const x = [];
+    const y = series.flatMap(() => [[], []]);
+    for (let block = first; block <= last; ++block) {
+      x.push((steps[block * size] + steps[Math.min((block + 1) * size, steps.length) - 1]) / 2);
+      series.forEach((values, s) => {
+        y[2 * s].push(highs[s][block]);
+        y[2 * s + 1].push(lows[s][block]);
+      });
+    }
+    return [x, ...y];
+  }
+
+  /** The Pyramid level the plots draw from for the steps in view: 0, every step. */
+  level() {
+    const view = this.view;
+    return levelFor((view.to - view.from + 1) / Math.max(1, this.stripWidth()));
   }
 
   /** Each series with its value at the hovered step, or else at the step shown. */
@@ -181,6 +224,36 @@ export class Plots {
       html('span', {class: 'plot-name', title: `explain ${actuatorOf(key)}`}, item).textContent = `${key} (B)`;
       html('span', {class: 'plot-value'}, item).textContent = formatNumber(exact ? this.valuesOfB(key)[index] : NaN);
     });
+  }
+
+  /**
+   * A dense plot's blocks of steps (data: x, then the highest and the lowest of each series), a
+   * bar each from the lowest to the highest, on whole pixels; B's paler.
+   */
+  drawDense(chart, count) {
+    const context = chart.ctx;
+    const [x, ...y] = chart.data;
+    const {left, width} = chart.bbox;
+    // Each bar from half way to the block before to half way to the next: no seams between.
+    const half = (x.length > 1 ? chart.valToPos(x[1], 'x', true) - chart.valToPos(x[0], 'x', true) : 1) / 2;
+    context.save();
+    for (let s = 0; 2 * s + 1 < y.length; ++s) {
+      const high = y[2 * s];
+      const low = y[2 * s + 1];
+      context.fillStyle = COLOURS[(s % count) % COLOURS.length];
+      context.globalAlpha = s < count ? 1 : 0.45;
+      for (let i = 0; i < x.length; ++i) {
+        if (high[i] === null || low[i] === null) continue;
+        const middle = chart.valToPos(x[i], 'x', true);
+        const px = Math.floor(middle - half);
+        const barWidth = Math.max(1, Math.floor(middle + half) - px);
+        if (px + barWidth < left || px > left + width) continue;
+        const top = Math.floor(chart.valToPos(high[i], 'y', true));
+        const bottom = Math.ceil(chart.valToPos(low[i], 'y', true));
+        context.fillRect(px, top - 1, barWidth, Math.max(2, bottom - top + 2));
+      }
+    }
+    context.restore();
   }
 
   drawCursor(chart) {
@@ -212,6 +285,8 @@ export class Plots {
     if (!this.plots.length) return;
     const width = this.width();
     for (const plot of this.plots) {
+      // Zoomed across the line between every step and blocks of them: the series change.
+      if (plot.dense !== this.level() > 0) this.setKeys(plot, plot.keys);
       const chart = plot.chart;
       if (chart.width !== width) chart.setSize({width, height: HEIGHT});
       chart.batch(() => {

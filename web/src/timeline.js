@@ -5,7 +5,7 @@
 // shown; hovering tells the values at a step; a filter keeps the rows whose name matches.
 // Comparing two runs (`arbiter view A --compare B`), each row of A has B's under it, and the
 // steps where they differ (as `arbiter diff` finds them) are marked on both and on the axis.
-import {ACTIVE, INHIBITED, lowerBound} from './columns.js';
+import {ACTIVE, INHIBITED, levelFor, lowerBound, most} from './columns.js';
 import {colour, html} from './dom.js';
 import {attachKeys, attachPointer} from './time_view.js';
 
@@ -283,45 +283,47 @@ export class Timelines {
     const {steps} = columns;
     const [begin, end] = this.indices(columns);
     const view = this.view;
-    // Many steps to a pixel: each pixel column shows the highest activation among its steps, and
-    // a bar if any of them was active (or inhibited), so that no activation is lost to zooming out.
-    // Columns start and end on whole pixels: no seams between steps. Runs of columns alike are
-    // drawn as one rectangle: a long recording zoomed out draws a few hundred, not a
-    // rectangle and a colour for each of its thousands of columns.
+    // Many steps to a pixel: each pixel column shows the highest activation among the steps that
+    // touch it, and a bar if any of them was active (or inhibited), so that no activation is lost
+    // to zooming out. Zoomed in, a step covers the pixels from the one its slot starts in to the
+    // one the next step's starts in: no seams between steps. Runs of columns alike are drawn as
+    // one rectangle: a long recording zoomed out draws a few hundred, not a rectangle and a
+    // colour for each of its thousands of columns.
     const runs = {level: [], active: [], inhibited: []};  // [left, right, value] each
     const extend = (list, left, right, value) => {
       const run = list[list.length - 1];
       if (run && run[1] === left && run[2] === value) run[1] = right;
       else list.push([left, right, value]);
     };
-    let left = -1;
-    let right = -1;
-    let top = 0;
-    let state = 0;
-    const flush = () => {
-      if (left < 0) return;
-      const end = Math.max(left + 1, right);
-      // 64 shades: enough for the eye, and runs of them join.
-      if (top > 0) extend(runs.level, left, end, Math.round(top * 64) / 64);
-      if (state & 1) extend(runs.active, left, end, 1);
-      else if (state & 2) extend(runs.inhibited, left, end, 1);
-    };
-    for (let i = begin; i < end; ++i) {
-      const here = Math.floor(view.x(steps[i], w));
-      if (here !== left) {
-        flush();
-        left = here;
-        top = 0;
-        state = 0;
+    const perPixel = (view.to - view.from + 1) / w;
+    const cover = perPixel > 1 ? Math.ceil : Math.floor;
+    const count = Math.ceil(w) + 1;
+    const tops = new Float32Array(count);
+    const states = new Uint8Array(count);
+    // Zoomed out to many steps a pixel, blocks of steps reduced beforehand (their highest
+    // activation, their states together), a few to a pixel: a frame costs the pixels, not the
+    // steps of a 100 000-step recording.
+    const level = levelFor(perPixel, 1);
+    const size = 2 ** level;
+    const activation = level ? columns.pyramid(series.activation, 'most', most).level(level) : series.activation;
+    const bits = level ? columns.pyramid(series.state, 'bits', (a, b) => a | b, stateBits).level(level) : null;
+    for (let block = Math.floor(begin / size); block * size < end; ++block) {
+      const i = block * size;
+      const from = Math.max(0, Math.floor(view.x(steps[i], w)));
+      const to = Math.min(count, Math.max(from + 1, cover(view.x(steps[Math.min(i + size, steps.length) - 1] + 1, w))));
+      const a = Math.min(1, activation[block]);
+      const state = bits ? bits[block] : stateBits(series.state[i]);
+      for (let p = from; p < to; ++p) {
+        if (a > tops[p]) tops[p] = a;
+        states[p] |= state;
       }
-      right = Math.floor(view.x(steps[i] + 1, w));
-      const a = series.activation[i];
-      if (a > top) top = Math.min(1, a);
-      const s = series.state[i];
-      if (s === ACTIVE) state |= 1;
-      else if (s === INHIBITED) state |= 2;
     }
-    flush();
+    for (let p = 0; p < count; ++p) {
+      // 64 shades: enough for the eye, and runs of them join.
+      if (tops[p] > 0) extend(runs.level, p, p + 1, Math.round(tops[p] * 64) / 64);
+      if (states[p] & 1) extend(runs.active, p, p + 1, 1);
+      else if (states[p] & 2) extend(runs.inhibited, p, p + 1, 1);
+    }
     let style = '';
     for (const [from, to, level] of runs.level) {
       const fill = colour(level);
@@ -452,6 +454,9 @@ export class Timelines {
     this.tip.style.top = `${pointer.y - box.top + 14}px`;
   }
 }
+
+/** A step's state as bits: 1 active, 2 inhibited (a block of steps ORs them). */
+const stateBits = (state) => (state === ACTIVE ? 1 : state === INHIBITED ? 2 : 0);
 
 /** The first index below `length` whose value (`valueAt`, ascending) is >= `value`. */
 function lowerBoundBy(length, valueAt, value) {
