@@ -108,7 +108,7 @@ _arbiter() {
     explain) options="--trace --step --help" ;;
     seek) options="--trace --from --help" ;;
     test) options="--junit --tolerance --help" ;;
-    view) options="--trace --serve --step --help" ;;
+    view) options="--trace --serve --step --compare --help" ;;
     edit) options="--serve --serve-token --help" ;;
     plot) options="--output --actuators --compare --help" ;;
     replay) options="--config --trace --record --record-flush --foxglove --steps --help" ;;

@@ -490,6 +490,13 @@ int main(int argc, char** argv) {
       ->add_option("--step", options.step,
                    "the step the page opens at, counting from 1 (default: the last step)")
       ->check(CLI::PositiveNumber);
+  view_cmd
+      ->add_option("--compare", options.compare_path,
+                   "a second run (trace or recording) shown over the first: its row of each "
+                   "behaviour, state machine and plotted value beside the first's, the steps "
+                   "where they differ marked (as 'arbiter diff' finds them)")
+      ->check(CLI::ExistingFile)
+      ->type_name("B");
   view_cmd->footer(
       std::string(
           examples +
@@ -497,7 +504,8 @@ int main(int argc, char** argv) {
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl\n"
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --serve 0\n"
           "  arbiter view configs/soccer/walk_and_kick.yaml --trace run.jsonl --step 171\n"
-          "  arbiter view --trace run.mcap                 # with the config it recorded\n\n"
+          "  arbiter view --trace run.mcap                 # with the config it recorded\n"
+          "  arbiter view --trace run.mcap --compare what_if.mcap\n\n"
           "Ctrl-C stops the server.\n") +
       kExitCodesTrace);
 

@@ -67,7 +67,7 @@ struct Options {
   std::string diff_a;                                       ///< `diff A B`
   std::string diff_b;
   double tolerance = 1e-9;     ///< `diff --tolerance`
-  std::string compare_path;    ///< `plot --compare`
+  std::string compare_path;    ///< `plot --compare`, `view --compare`
   std::string color = "auto";  ///< `--color`
   std::string new_name;        ///< `new plugin NAME [DIR]`
   std::string new_dir;

@@ -252,38 +252,18 @@ std::optional<TraceDiff::Divergence> inputs_in_steps(const std::string& a, const
   return std::nullopt;
 }
 
-/// The behaviour whose explanation says why `what` differs in a run of `program` at the step of
-/// `record`: the behaviour itself, a state machine itself, or for an actuator the behaviour that
-/// wrote it (the active one of its writers). Empty when there is none (an interface actuator).
-std::string explain_target(const Program& program, const std::string& what, const Json& record,
-                           std::string& because) {
+/// What explain() is asked about `what` (a name as the diff gives it) in a run of `program`: a
+/// behaviour itself, a state machine itself, an actuator itself (its writers, their weights and
+/// how they were aggregated, or the step whose value it holds). Empty when `program` has no such
+/// actuator.
+std::string explain_target(const Program& program, const std::string& what) {
   if (what.rfind("machine:", 0) == 0) return "state_machines/" + what.substr(8);
   if (what.rfind("actuator:", 0) != 0) return what;
   const std::string name = what.substr(9);
-  std::optional<std::uint32_t> actuator;
-  for (std::uint32_t a = 0; a < program.actuators.size(); ++a) {
-    if (program.actuators[a].name == name) actuator = a;
+  for (const auto& actuator : program.actuators) {
+    if (actuator.name == name) return "actuators/" + name;
   }
-  if (!actuator) return {};
-  std::vector<std::string> writers;
-  std::string active;
-  for (const auto& slot : program.slots) {
-    if (slot.actuator != *actuator || slot.owner == kNoBehaviour) continue;
-    const auto& behaviour = program.behaviours[slot.owner];
-    const std::string key = program.layers[behaviour.layer].name + "/" + behaviour.name;
-    writers.push_back(key);
-    if (active.empty() && member(entry_of(record, key), "active") == true) active = key;
-  }
-  if (writers.empty()) {
-    because = fmt::format("actuator {} is an input: interface layer {} writes it", name,
-                          program.layers[program.actuators[*actuator].layer].name);
-    return {};
-  }
-  const std::string target = active.empty() ? writers.front() : active;
-  because =
-      fmt::format("actuator {} is written by {}; {}: {}", name, join(writers, ", "),
-                  active.empty() ? "none of them is active, the first" : "the active one", target);
-  return target;
+  return {};
 }
 
 struct Why {
@@ -296,8 +276,7 @@ struct Why {
   std::string config_unknown;
   std::string target;  ///< what is explained
   struct Side {
-    std::string because;  ///< how `target` leads to what was explained
-    std::string text;     ///< the explanation, or why there is none
+    std::string text;  ///< the explanation, or why there is none
     bool explained = false;
   };
   Side a;
@@ -311,10 +290,9 @@ Why::Side explain_side(const Run& run, const std::string& what, std::uint64_t st
     return side;
   }
   const Program& program = *run.config.program;
-  const std::string target = explain_target(program, what, run.record, side.because);
+  const std::string target = explain_target(program, what);
   if (target.empty()) {
-    side.text = side.because.empty() ? fmt::format("{} has no {}", run.label, what) : side.because;
-    side.because.clear();
+    side.text = fmt::format("{} has no {}", run.label, what);
     return side;
   }
   const auto source = open_trace(run.path);
@@ -395,7 +373,7 @@ Why find_why(Run& a, Run& b, const TraceDiff& diff, double tolerance) {
   }
   std::stable_sort(candidates.begin(), candidates.end(),
                    [&](const auto& x, const auto& y) { return rank(x) < rank(y); });
-  // An input actuator has no behaviour to explain: the first candidate explained in a run.
+  // The first candidate explained in a run (one run's config may lack it).
   for (const auto& what : candidates) {
     Why::Side in_a = explain_side(a, what, first.step);
     Why::Side in_b = explain_side(b, what, first.step);
@@ -477,7 +455,6 @@ std::string text_of(const Run& a, const Run& b, const TraceDiff& diff, const Why
     for (const auto* side : {&why.a, &why.b}) {
       const Run& run = side == &why.a ? a : b;
       out += fmt::format("why {}, in {} ({}):\n", why.target, run.label, run.path);
-      if (!side->because.empty()) out += "  " + side->because + "\n";
       out += indented(side->text, "  ");
     }
   }
@@ -535,7 +512,6 @@ Json json_of(const Run& a, const Run& b, const TraceDiff& diff, const Why& why) 
     for (const auto* side : {&why.a, &why.b}) {
       Json item = Json::object();
       item["explained"] = side->explained;
-      if (!side->because.empty()) item["because"] = side->because;
       item["text"] = side->text;
       explained[side == &why.a ? "a" : "b"] = std::move(item);
     }

@@ -1,7 +1,7 @@
 // Arbiter's web app. The server's /info says which view to start; each view draws a run with the
 // shared graph, timeline and explain modules (run_page.js); the studio edits a config. A new view
-// (a comparison of two runs) is a module in views/ and an entry in VIEWS, with the mode its server
-// reports in /info.
+// is a module in views/ and an entry in VIEWS, with the mode its server reports in /info (two runs
+// compared are the trace view's, given /info's `compare`).
 import {setStatus} from './panels.js';
 import {holdLoad, snapshotAsked} from './snapshot.js';
 import {live} from './views/live.js';

@@ -14,6 +14,52 @@ export function lowerBound(array, value) {
   return low;
 }
 
+/**
+ * A series reduced by blocks of 2, 4, 8 ... values, built as asked (Columns.pyramid keeps it
+ * until the series changes): zoomed out to many steps a pixel, the timelines and plots draw from the level whose
+ * blocks are about a pixel wide, so that a frame costs its pixels rather than its steps.
+ */
+export class Pyramid {
+  /**
+   * @param {ArrayLike<number|null>} series
+   * @param {(a: any, b: any) => any} reduce of two values (or blocks) into one
+   * @param {(value: any) => any} [first] a value of the series as a block of one
+   */
+  constructor(series, reduce, first = (value) => value) {
+    this.series = series;
+    this.reduce = reduce;
+    this.first = first;
+    this.levels = [];  // levels[k - 1]: blocks of 2^k values
+  }
+
+  /** The blocks of 2^k values (k >= 1), the last one perhaps shorter. */
+  level(k) {
+    while (this.levels.length < k) {
+      const below = this.levels.length ? this.levels[this.levels.length - 1] : null;
+      const count = below ? below.length : this.series.length;
+      const at = below ? (i) => below[i] : (i) => this.first(this.series[i]);
+      const level = new Array(Math.ceil(count / 2));
+      for (let i = 0; i + 1 < count; i += 2) level[i >> 1] = this.reduce(at(i), at(i + 1));
+      if (count % 2) level[level.length - 1] = at(count - 1);
+      this.levels.push(level);
+    }
+    return this.levels[k - 1];
+  }
+}
+
+/** The larger of two numbers, a NaN or null being none. */
+export const most = (a, b) => (a === null || a !== a ? b : b === null || b !== b ? a : a > b ? a : b);
+/** The smaller of two numbers, a NaN or null being none. */
+export const least = (a, b) => (a === null || a !== a ? b : b === null || b !== b ? a : a < b ? a : b);
+
+/**
+ * The Pyramid level for `perPixel` steps to a pixel, `finer` levels under the one whose blocks
+ * are a pixel or two wide; 0 (the steps themselves) when few steps share a pixel.
+ */
+export function levelFor(perPixel, finer = 0) {
+  return perPixel >= 4 ? Math.max(0, Math.floor(Math.log2(perPixel)) - finer) : 0;
+}
+
 // A behaviour's state in a step, as the timelines colour it.
 export const IDLE = 0;
 export const ACTIVE = 1;
@@ -32,6 +78,24 @@ export class Columns {
     this.machines = new Map();
     /** @type {{step: number, by: string, text: string}[]} what code reported, in step order */
     this.events = [];
+    this.dropped = 0;  // steps dropped from the front: with the length, tells a Pyramid to rebuild
+    this.pyramids = new WeakMap();  // series -> {name: Pyramid}
+  }
+
+  /**
+   * The Pyramid of `series` (one of these columns' arrays) by `reduce`, under `name`, kept while
+   * the columns only grow.
+   */
+  pyramid(series, name, reduce, first) {
+    let mine = this.pyramids.get(series);
+    if (!mine) this.pyramids.set(series, (mine = {}));
+    let pyramid = mine[name];
+    const stamp = `${this.dropped}/${series.length}`;
+    if (!pyramid || pyramid.stamp !== stamp) {
+      pyramid = mine[name] = new Pyramid(series, reduce, first);
+      pyramid.stamp = stamp;
+    }
+    return pyramid;
   }
 
   get length() {
@@ -96,6 +160,7 @@ export class Columns {
   /** Drops the first `count` steps. */
   dropFront(count) {
     if (count <= 0) return;
+    this.dropped += count;
     const first = this.steps[Math.min(count, this.steps.length) - 1];
     this.steps.splice(0, count);
     this.t.splice(0, count);

@@ -1,9 +1,12 @@
 // The explain panel: the server's `explain` answer (the same as `arbiter explain`) for a
-// behaviour at the step shown, laid out to be read: the verdict as a heading, the inhibitors as
-// a table. Clicking a behaviour (in the graph or a timeline's label) pins the panel to it; hovering
-// another shows that one until the pointer leaves. It follows the step shown: a click in the
-// timelines explains that step.
+// behaviour, an actuator (`actuators/name`), a state machine or a state (`machine/state`) at the
+// step shown, laid out to be read: the verdict as a heading, the inhibitors as a table. Clicking
+// one (a behaviour or an actuator in the graph, a timeline's label, a state's band, a plotted
+// value's name) pins the panel to it; hovering another shows that one until the pointer leaves.
+// It follows the step shown: a click in the timelines explains that step.
 import {html} from './dom.js';
+
+const SUBJECT = 'Hover over a behaviour or an actuator, or click it (or a state in the timelines) to pin it here.';
 
 /**
  * The text of an answer as HTML in `box`: the first line a heading, each line of three or more
@@ -43,10 +46,12 @@ export class ExplainPanel {
     this.output = output;
     this.subject = subject;
     this.step = null;     // the step shown
-    this.hovered = null;  // 'layer/name'
-    this.pinned = null;   // 'layer/name'
+    this.hovered = null;  // 'layer/name', 'actuators/name', 'machine/state', ...: explain's names
+    this.pinned = null;
     this.pending = false;
     this.shown = '';      // 'step key' of the answer shown
+    /** Comparing two runs: {a, b}, their names; each is explained against its own config. */
+    this.compare = null;
     /** Called when the pinned behaviour changes. */
     this.onPin = (key) => {};
   }
@@ -55,7 +60,7 @@ export class ExplainPanel {
     return this.hovered || this.pinned;
   }
 
-  /** The behaviour hovered, or null: asks for its answer. */
+  /** What is hovered, or null: asks for its answer. */
   hover(key) {
     this.hovered = key;
     if (this.target) this.ask();
@@ -68,11 +73,11 @@ export class ExplainPanel {
     this.subject.replaceChildren();
     if (key) {
       this.subject.append(`pinned: ${key} `);
-      const unpin = html('button', {type: 'button', class: 'unpin', title: 'explain the behaviour hovered only'}, this.subject);
+      const unpin = html('button', {type: 'button', class: 'unpin', title: 'explain only what is hovered'}, this.subject);
       unpin.textContent = 'unpin';
       unpin.onclick = () => this.pin(null);
     } else {
-      this.subject.textContent = 'Hover over a behaviour, or click it to pin it here.';
+      this.subject.textContent = SUBJECT;
     }
     this.subject.parentElement.dataset.pinned = key || '';
     if (this.target) this.ask();
@@ -91,10 +96,21 @@ export class ExplainPanel {
     if (asked === this.shown) return;
     this.pending = true;
     try {
-      const response = await fetch(`explain?step=${this.step}&target=${encodeURIComponent(target)}`);
-      const text = await response.text();
-      if (response.ok) renderAnswer(this.output, text);
-      else this.output.textContent = text;
+      const ask = (run) => fetch(`explain?step=${this.step}&target=${encodeURIComponent(target)}${run}`)
+        .then(async (response) => ({ok: response.ok, text: await response.text()}));
+      const answers = await Promise.all(this.compare ? [ask(''), ask('&run=b')] : [ask('')]);
+      const show = (box, {ok, text}) => {
+        if (ok) renderAnswer(box, text);
+        else box.textContent = text;
+      };
+      if (!this.compare) show(this.output, answers[0]);
+      else {
+        this.output.replaceChildren();
+        ['a', 'b'].forEach((run, i) => {
+          html('p', {class: 'explain-run'}, this.output).textContent = `in ${run.toUpperCase()} (${this.compare[run]})`;
+          show(html('div', {class: 'explain-answer', 'data-run': run}, this.output), answers[i]);
+        });
+      }
       this.output.dataset.step = String(this.step);
       this.output.dataset.target = target;
       this.shown = asked;

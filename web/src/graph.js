@@ -203,6 +203,8 @@ export class GraphView {
     warmUp();
     this.words = '';    // marked (mark())
     this.highlighted = null;
+    /** Called with the actuator's name when its row is clicked. */
+    this.onPort = (name) => {};
     this.behaviours = new Map();  // 'layer/name' -> {group, rect, level, mark, name, inhibitors, ...}
     this.ports = new Map();       // actuator name -> {group, value, title, about}
     this.drawing = 0;
@@ -335,6 +337,10 @@ export class GraphView {
           actuatorAt.set(actuator.name, {x: x + 12 + size.actuatorW, y: y + (PORT_H - 4) / 2, right: x + width,
                                          layerIndex: index});
           this.ports.set(actuator.name, {group: g, value, title, about});
+          // Explained as `arbiter explain` names actuators.
+          g.addEventListener('mouseenter', () => this.onHover(`actuators/${actuator.name}`));
+          g.addEventListener('mouseleave', () => this.onHover(null));
+          g.addEventListener('click', () => this.onPort(actuator.name));
           y += PORT_H;
         }
       }
@@ -475,10 +481,11 @@ export class GraphView {
     else item.group.scrollIntoView({block: 'center', inline: 'center'});
   }
 
-  /** Marks the hovered behaviour ('layer/name', or null). */
+  /** Marks the hovered behaviour ('layer/name') or actuator ('actuators/name'), or none (null). */
   highlight(key) {
     this.highlighted = key;
     for (const [name, item] of this.behaviours) item.group.classList.toggle('hovered', name === key);
+    for (const [name, port] of this.ports) port.group.classList.toggle('hovered', `actuators/${name}` === key);
   }
 
   /**

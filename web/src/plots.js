@@ -1,7 +1,9 @@
 // Plots of the actuators' values over the steps in view (uPlot): any number of plots, each of
 // any numeric actuators and vector components (`gait_velocity[0]`), under the timelines and on
-// the same scale of steps, with the same cursor, hover, zoom, pan and click to jump.
+// the same scale of steps, with the same cursor, hover, zoom, pan and click to jump. Comparing two
+// runs, each value of B is drawn dashed beside A's, named `value (B)`.
 import uPlot from 'uplot';
+import {least, levelFor, lowerBound, most} from './columns.js';
 import {html} from './dom.js';
 import {attachPointer} from './time_view.js';
 import {formatTime} from './timeline.js';
@@ -12,6 +14,9 @@ const COLOURS = ['#1570ef', '#d92d20', '#12b76a', '#f79009', '#7a5af8', '#0e9384
 
 /** A number as a plot's legend writes it. */
 const formatNumber = (value) => (Number.isFinite(value) ? (Number.isInteger(value) ? String(value) : value.toFixed(3)) : '–');
+
+/** The actuator a plotted value is of: `gait_velocity` for `gait_velocity[0]`. */
+const actuatorOf = (key) => key.replace(/\[\d+\]$/, '');
 
 export class Plots {
   /**
@@ -26,6 +31,10 @@ export class Plots {
     this.columns = columns;
     this.view = view;
     this.stripWidth = stripWidth;
+    /** Called with an actuator's name when its name in a legend is clicked. */
+    this.onActuator = (name) => {};
+    this.compared = null;  // B's columns, when comparing
+    this.aligned = new Map();  // key -> B's values at A's steps
     /** @type {{box: HTMLElement, keys: string[], legend: HTMLElement, chart: uPlot | null}[]} */
     this.plots = [];
     this.fills = [];  // each select's refill
@@ -67,6 +76,12 @@ export class Plots {
     close.textContent = 'remove';
     const area = html('div', {class: 'plot-area'}, box);
     const plot = {box, keys: [], legend, area, chart: null};
+    // On the press, not the click: the legend is redrawn with each frame of a live run, which may
+    // come between the press and the release.
+    legend.addEventListener('pointerdown', (event) => {
+      const item = event.button === 0 && event.target.closest('.plot-name, .plot-swatch') && event.target.closest('li[data-series]');
+      if (item) this.onActuator(actuatorOf(item.dataset.series));
+    });
     this.plots.push(plot);
     more.addEventListener('change', () => {
       if (more.value && !plot.keys.includes(more.value)) this.setKeys(plot, [...plot.keys, more.value]);
@@ -80,6 +95,26 @@ export class Plots {
     };
     this.setKeys(plot, keys);
     return plot;
+  }
+
+  /** Compares with run B (its columns): each plot draws B's values too. */
+  setCompare(columns) {
+    this.compared = columns;
+    this.aligned.clear();
+  }
+
+  /** B's values of `key` at A's steps (null where B has no such step). */
+  valuesOfB(key) {
+    let values = this.aligned.get(key);
+    if (values && values.length === this.columns.length) return values;
+    const b = this.compared;
+    const series = b.values.get(key);
+    values = this.columns.steps.map((step) => {
+      const index = b.indexAtOrBefore(step);
+      return series && index >= 0 && b.steps[index] === step ? series[index] : null;
+    });
+    this.aligned.set(key, values);
+    return values;
   }
 
   setKeys(plot, keys) {
@@ -97,9 +132,24 @@ export class Plots {
       // Step s is drawn at the middle of its slot, as in the timelines: from - 0.5 to to + 0.5.
       scales: {x: {time: false, auto: false, range: () => [view.from - 0.5, view.to + 0.5]}},
       axes: [{show: false}, {side: 1, size: AXIS_SIZE, font: '10.5px "DejaVu Sans", sans-serif', gap: 3}],
-      series: [{}, ...keys.map((key, i) => ({label: key, stroke: COLOURS[i % COLOURS.length], width: 1.5, points: {show: false}}))],
+      series: [{}],
       hooks: {draw: [(chart) => this.drawCursor(chart)]},
     };
+    // A's values, then B's dashed. Zoomed out to many steps a pixel (dense), each value is the
+    // highest and the lowest of each block of steps, drawn as a bar from one to the other
+    // (drawDense): a line through every block's extremes would zigzag across the plot at each
+    // pixel, and a software rasteriser takes some hundred milliseconds a frame to fill it.
+    plot.dense = this.level() > 0;
+    const runs = this.compared ? [['', null], [' (B)', [5, 3]]] : [['', null]];
+    for (const [suffix, dash] of runs) {
+      keys.forEach((key, i) => {
+        const line = {label: `${key}${suffix}`, stroke: COLOURS[i % COLOURS.length], width: 1.5, points: {show: false},
+                      ...(dash ? {dash} : {}), ...(plot.dense ? {paths: () => null} : {})};
+        options.series.push(line);
+        if (plot.dense) options.series.push({...line, label: `${key}${suffix} lowest`});
+      });
+    }
+    if (plot.dense) options.hooks.draw.unshift((chart) => this.drawDense(chart, keys.length));
     plot.chart = new uPlot(options, this.data(plot), plot.area);
     attachPointer(plot.chart.over, view, () => {
       const box = plot.chart.over.getBoundingClientRect();
@@ -114,8 +164,38 @@ export class Plots {
   }
 
   data(plot) {
-    const empty = () => new Array(this.columns.length).fill(null);
-    return [this.columns.steps, ...plot.keys.map((key) => this.columns.values.get(key) || empty())];
+    const columns = this.columns;
+    const empty = () => new Array(columns.length).fill(null);
+    const a = plot.keys.map((key) => columns.values.get(key) || empty());
+    const series = [...a, ...(this.compared ? plot.keys.map((key) => this.valuesOfB(key)) : [])];
+    const {steps} = columns;
+    const view = this.view;
+    const level = this.level();
+    if (!level || !plot.dense) return [steps, ...series];
+    // Many steps to a pixel: each block of steps a pixel or two wide is given to uPlot as its
+    // highest and lowest value, so that a frame of a long recording costs its pixels.
+    const size = 2 ** level;
+    const blocks = Math.ceil(steps.length / size);
+    const first = Math.max(0, Math.floor(lowerBound(steps, view.from) / size) - 1);
+    const last = Math.min(blocks - 1, Math.floor(lowerBound(steps, view.to + 1) / size) + 1);
+    const lows = series.map((values) => columns.pyramid(values, 'least', least).level(level));
+    const highs = series.map((values) => columns.pyramid(values, 'most', most).level(level));
+    const x = [];
+    const y = series.flatMap(() => [[], []]);
+    for (let block = first; block <= last; ++block) {
+      x.push((steps[block * size] + steps[Math.min((block + 1) * size, steps.length) - 1]) / 2);
+      series.forEach((values, s) => {
+        y[2 * s].push(highs[s][block]);
+        y[2 * s + 1].push(lows[s][block]);
+      });
+    }
+    return [x, ...y];
+  }
+
+  /** The Pyramid level the plots draw from for the steps in view: 0, every step. */
+  level() {
+    const view = this.view;
+    return levelFor((view.to - view.from + 1) / Math.max(1, this.stripWidth()));
   }
 
   /** Each series with its value at the hovered step, or else at the step shown. */
@@ -130,13 +210,50 @@ export class Plots {
     plot.keys.forEach((key, i) => {
       const item = html('li', {'data-series': key}, plot.legend);
       html('span', {class: 'plot-swatch', style: `background: ${COLOURS[i % COLOURS.length]}`}, item);
-      html('span', {class: 'plot-name'}, item).textContent = key;
+      html('span', {class: 'plot-name', title: `explain ${actuatorOf(key)}`}, item).textContent = key;
       const value = exact ? this.columns.values.get(key)?.[index] : NaN;
       html('span', {class: 'plot-value'}, item).textContent = formatNumber(value);
       const remove = html('button', {type: 'button', class: 'plot-remove', title: `remove ${key}`}, item);
       remove.textContent = '×';
       remove.onclick = () => this.setKeys(plot, plot.keys.filter((other) => other !== key));
     });
+    if (!this.compared) return;
+    plot.keys.forEach((key, i) => {
+      const item = html('li', {'data-series': key, 'data-run': 'b'}, plot.legend);
+      html('span', {class: 'plot-swatch dashed', style: `border-color: ${COLOURS[i % COLOURS.length]}`}, item);
+      html('span', {class: 'plot-name', title: `explain ${actuatorOf(key)}`}, item).textContent = `${key} (B)`;
+      html('span', {class: 'plot-value'}, item).textContent = formatNumber(exact ? this.valuesOfB(key)[index] : NaN);
+    });
+  }
+
+  /**
+   * A dense plot's blocks of steps (data: x, then the highest and the lowest of each series), a
+   * bar each from the lowest to the highest, on whole pixels; B's paler.
+   */
+  drawDense(chart, count) {
+    const context = chart.ctx;
+    const [x, ...y] = chart.data;
+    const {left, width} = chart.bbox;
+    // Each bar from half way to the block before to half way to the next: no seams between.
+    const half = (x.length > 1 ? chart.valToPos(x[1], 'x', true) - chart.valToPos(x[0], 'x', true) : 1) / 2;
+    context.save();
+    for (let s = 0; 2 * s + 1 < y.length; ++s) {
+      const high = y[2 * s];
+      const low = y[2 * s + 1];
+      context.fillStyle = COLOURS[(s % count) % COLOURS.length];
+      context.globalAlpha = s < count ? 1 : 0.45;
+      for (let i = 0; i < x.length; ++i) {
+        if (high[i] === null || low[i] === null) continue;
+        const middle = chart.valToPos(x[i], 'x', true);
+        const px = Math.floor(middle - half);
+        const barWidth = Math.max(1, Math.floor(middle + half) - px);
+        if (px + barWidth < left || px > left + width) continue;
+        const top = Math.floor(chart.valToPos(high[i], 'y', true));
+        const bottom = Math.ceil(chart.valToPos(low[i], 'y', true));
+        context.fillRect(px, top - 1, barWidth, Math.max(2, bottom - top + 2));
+      }
+    }
+    context.restore();
   }
 
   drawCursor(chart) {
@@ -168,6 +285,8 @@ export class Plots {
     if (!this.plots.length) return;
     const width = this.width();
     for (const plot of this.plots) {
+      // Zoomed across the line between every step and blocks of them: the series change.
+      if (plot.dense !== this.level() > 0) this.setKeys(plot, plot.keys);
       const chart = plot.chart;
       if (chart.width !== width) chart.setSize({width, height: HEIGHT});
       chart.batch(() => {

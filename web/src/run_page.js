@@ -37,6 +37,9 @@ export class RunPage {
       this.explain.pin(key);
       this.onPick(key);
     };
+    // Actuators and states are explained as `arbiter explain` names them: `actuators/name`,
+    // `machine/state`.
+    this.graph.onPort = (name) => this.explain.pin(`actuators/${name}`);
     this.explain.onPin = (key) => this.graph.highlight(key);
     this.controllers = new Controllers(document.getElementById('controllers'));
     this.reported = new Reported(document.getElementById('reported'), reportedKept);
@@ -45,6 +48,8 @@ export class RunPage {
     this.timelines = new Timelines(document.getElementById('timelines'), this.columns, this.time, this.graph.folds);
     this.timelines.queueAt = (machine) => this.current?.controllers?.[machine]?.queue ?? null;
     this.timelines.onLabel = (key) => this.explain.pin(key);
+    // A state's band clicked: the step is shown (onSeek) and the state explained there.
+    this.timelines.onState = (machine, state) => this.explain.pin(`${machine}/${state}`);
     // The filter by name finds behaviours in the graph too.
     this.timelines.onFilter = (words) => this.graph.mark(words);
     this.timelines.onFind = (words) => {
@@ -54,6 +59,31 @@ export class RunPage {
       this.explain.pin(key);
     };
     this.plots = new Plots(document.getElementById('plots'), this.columns, this.time, () => this.timelines.stripWidth);
+    this.plots.onActuator = (name) => this.explain.pin(`actuators/${name}`);
+    // The state in a state machine's panel.
+    document.getElementById('controllers').addEventListener('click', (event) => {
+      const state = event.target.closest('.controller[data-controller] .state');
+      if (state && state.textContent !== '(none)') {
+        this.explain.pin(`${state.closest('.controller').dataset.controller}/${state.textContent}`);
+      }
+    });
+  }
+
+  /**
+   * Shows run B over this one (`arbiter view A --compare B`): `records` are B's, `differences`
+   * the server's /compare. Before setGraph, which builds the rows.
+   */
+  compareWith(records, differences) {
+    this.columnsB = new Columns();
+    for (const record of records) this.columnsB.push(record);
+    this.differences = differences;
+    this.timelines.setCompare(this.columnsB, differences);
+    this.plots.setCompare(this.columnsB);
+    this.explain.compare = {a: differences.a, b: differences.b};
+    const steps = this.columnsB.steps;
+    if (steps.length) {
+      this.time.setExtent(Math.min(this.time.first, steps[0]), Math.max(this.time.last, steps[steps.length - 1]));
+    }
   }
 
   /** A record received, in step order: notes what it held and reported. */

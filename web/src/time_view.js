@@ -106,8 +106,9 @@ export class TimeView {
  * @param {HTMLElement} element
  * @param {TimeView} view
  * @param {() => {left: number, width: number}} strip
+ * @param {(step: number, event: PointerEvent) => void} [clicked] after a click has shown `step`
  */
-export function attachPointer(element, view, strip) {
+export function attachPointer(element, view, strip, clicked = () => {}) {
   const at = (event) => {
     const {left, width} = strip();
     return {x: event.clientX - left, width};
@@ -152,7 +153,9 @@ export function attachPointer(element, view, strip) {
     drag = null;
     if (!moved && inside(event)) {
       const {x, width} = at(event);
-      view.onSeek(view.stepAt(x, width));
+      const step = view.stepAt(x, width);
+      view.onSeek(step);
+      clicked(step, event);
     }
   });
   element.addEventListener('pointerleave', () => {

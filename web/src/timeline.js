@@ -3,7 +3,9 @@
 // requested a level but was inhibited), grouped by layer (a layer folds away), a lane per state
 // machine with its states as bands, and a lane of what code reported. The cursor marks the step
 // shown; hovering tells the values at a step; a filter keeps the rows whose name matches.
-import {ACTIVE, INHIBITED, lowerBound} from './columns.js';
+// Comparing two runs (`arbiter view A --compare B`), each row of A has B's under it, and the
+// steps where they differ (as `arbiter diff` finds them) are marked on both and on the axis.
+import {ACTIVE, INHIBITED, levelFor, lowerBound, most} from './columns.js';
 import {colour, html} from './dom.js';
 import {Folds} from './folds.js';
 import {attachKeys, attachPointer} from './time_view.js';
@@ -50,15 +52,19 @@ export class Timelines {
     this.filter = section.querySelector('#timeline-filter');
     this.columns = columns;
     this.view = view;
-    /** @type {{kind: string, key: string, row: HTMLElement, canvas: HTMLCanvasElement, note?: HTMLElement}[]} */
+    /** @type {{kind: string, key: string, row: HTMLElement, canvas: HTMLCanvasElement, note?: HTMLElement, columns: object, marks?: number[][]}[]} */
     this.strips = [];
     this.folds = folds;
     this.groups = new Map();     // layer -> {group, head}
+    /** Comparing: {columns (B's), differ: {what: [[from, to], ...]}, steps: [[from, to], ...]}. */
+    this.compare = null;
     this.visible = new Set();    // rows on the screen
     this.pointer = null;         // {strip, x, y}: where the pointer is, for the tip
     this.queueAt = () => null;   // the queue of a state machine at the cursor (from the record)
-    /** Called with 'layer/name' when a behaviour's label is clicked. */
+    /** Called with 'layer/name' when a behaviour's label is clicked, 'state_machines/name' a lane's. */
     this.onLabel = (key) => {};
+    /** Called with a state machine and its state when a band of its lane is clicked. */
+    this.onState = (machine, state) => {};
     /** Called with the filter's text (lower case) as it changes, and when Enter is pressed in it. */
     this.onFilter = (words) => {};
     this.onFind = (words) => {};
@@ -71,7 +77,7 @@ export class Timelines {
     });
     view.subscribe(() => this.draw());
     folds.subscribe((layer) => this.showFold(layer));
-    attachPointer(this.rows, view, () => this.strip());
+    attachPointer(this.rows, view, () => this.strip(), (step, event) => this.clicked(step, event));
     attachKeys(section, view);
     this.rows.addEventListener('pointermove', (event) => {
       const row = event.target.closest('[data-strip]');
@@ -103,15 +109,35 @@ export class Timelines {
     return {left: box.left, width: Math.max(1, box.width)};
   }
 
-  add(kind, key, label, parent, height = ROW_HEIGHT, attributes = {}) {
+  add(kind, key, label, parent, height = ROW_HEIGHT, attributes = {}, columns = this.columns) {
     const row = html('div', {class: kind, 'data-strip': this.strips.length, ...attributes}, parent);
     html('span', {class: 'label', title: label}, row).textContent = label;
     const canvas = html('canvas', {height}, row);
     canvas.style.height = `${height}px`;
-    const strip = {kind, key, row, canvas};
+    const strip = {kind, key, row, canvas, columns};
     this.strips.push(strip);
     this.observer.observe(row);
     return strip;
+  }
+
+  /**
+   * Compares with run B: `columns` are B's, `differences` the server's /compare. Rebuilt by the
+   * next build().
+   */
+  setCompare(columns, differences) {
+    this.compare = {columns, differ: differences.differ, steps: differences.steps};
+  }
+
+  /** Under A's row of `key`, B's (comparing), its steps that differ marked on both. */
+  addCompared(kind, key, label, parent, attributes, what) {
+    const a = this.strips[this.strips.length - 1];
+    if (!this.compare) return a;
+    a.marks = what === null ? undefined : this.compare.differ[what] || [];
+    a.row.dataset.run = 'a';
+    a.row.querySelector('.label').textContent = `A ${label}`;
+    const b = this.add(kind, key, `B ${label}`, parent, ROW_HEIGHT, {...attributes, 'data-run': 'b'}, this.compare.columns);
+    b.marks = a.marks;
+    return b;
   }
 
   /** The rows of `graph` (the JSON dump): behaviours in execution order, then its state machines. */
@@ -134,15 +160,45 @@ export class Timelines {
         const key = `${layer.name}/${behaviour.name}`;
         const strip = this.add('timeline', key, key, group, ROW_HEIGHT, {'data-name': key});
         strip.row.querySelector('.label').onclick = () => this.onLabel(key);
+        this.addCompared('timeline', key, key, group, {'data-name': key}, key);
+      }
+    }
+    if (this.compare) {
+      // Behaviours only B's config has (A's only have an empty B row).
+      const inA = new Set(graph.layers.flatMap((layer) => layer.behaviours.map((b) => `${layer.name}/${b.name}`)));
+      const onlyB = [...this.compare.columns.behaviours.keys()].filter((key) => !inA.has(key));
+      if (onlyB.length) {
+        const group = html('div', {class: 'timeline-group', 'data-layer': ''}, this.rows);
+        html('span', {class: 'timeline-layer'}, group).textContent = `only in B (${onlyB.length})`;
+        for (const key of onlyB) {
+          const strip = this.add('timeline', key, `B ${key}`, group, ROW_HEIGHT, {'data-name': key, 'data-run': 'b'},
+                                 this.compare.columns);
+          strip.marks = this.compare.differ[key] || [];
+        }
       }
     }
     for (const machine of graph.state_machines || []) {
       const strip = this.add('timeline-machine', machine.name, machine.name, this.rows, ROW_HEIGHT,
                              {'data-machine': machine.name});
+      strip.row.querySelector('.label').onclick = () => this.onLabel(`state_machines/${machine.name}`);
+      this.addCompared('timeline-machine', machine.name, machine.name, this.rows, {'data-machine': machine.name},
+                       `machine:${machine.name}`);
       strip.note = html('div', {class: 'timeline-queue', 'data-machine': machine.name}, this.rows);
     }
     this.add('timeline-events', '', 'reported', this.rows, ROW_HEIGHT);
+    this.addCompared('timeline-events', '', 'reported', this.rows, {}, null);
     this.applyFilter();
+  }
+
+  /** A click that showed `step`: on a state machine's lane, its state there is explained. */
+  clicked(step, event) {
+    const row = document.elementFromPoint(event.clientX, event.clientY)?.closest('[data-strip]');
+    const strip = row ? this.strips[Number(row.dataset.strip)] : null;
+    if (!strip || strip.kind !== 'timeline-machine') return;
+    const {columns} = strip;
+    const index = columns.indexAtOrBefore(step);
+    const state = index >= 0 && columns.steps[index] === step ? columns.machines.get(strip.key)?.[index] : null;
+    if (state) this.onState(strip.key, state);
   }
 
   showFold(layer) {
@@ -191,66 +247,90 @@ export class Timelines {
       const w = width / ratio;
       const h = height / ratio;
       context.clearRect(0, 0, w, h);
-      if (strip.kind === 'timeline') this.drawBehaviour(context, strip.key, w, h);
+      if (strip.kind === 'timeline') this.drawBehaviour(context, strip.columns, strip.key, w, h);
       else if (strip.kind === 'timeline-axis') this.drawAxis(context, w, h);
       else if (strip.kind === 'timeline-machine') this.drawMachine(context, strip, w, h);
-      else if (strip.kind === 'timeline-events') this.drawEvents(context, w, h);
+      else if (strip.kind === 'timeline-events') this.drawEvents(context, strip.columns, w, h);
+      if (strip.marks) this.drawMarks(context, strip.marks, w, h, strip.row.dataset.run === 'b');
+      else if (strip.kind === 'timeline-axis' && this.compare) this.drawMarks(context, this.compare.steps, w, h, false);
       this.drawCursor(context, w, h);
     }
     this.showTip();
   }
 
-  /** The indices of the steps in view. */
-  indices() {
-    const steps = this.columns.steps;
+  /** The indices of the steps in view in `columns`. */
+  indices(columns = this.columns) {
+    const steps = columns.steps;
     return [lowerBound(steps, this.view.from), lowerBound(steps, this.view.to + 1)];
   }
 
-  drawBehaviour(context, key, w, h) {
-    const series = this.columns.behaviours.get(key);
-    if (!series) return;
-    const {steps} = this.columns;
-    const [begin, end] = this.indices();
+  /**
+   * The steps where the compared runs differ (`runs`, [[from, to], ...]): an orange bar over
+   * them, and on B's row an orange wash. At least a pixel wide, so that one step stays seen.
+   */
+  drawMarks(context, runs, w, h, wash) {
     const view = this.view;
-    // Many steps to a pixel: each pixel column shows the highest activation among its steps, and
-    // a bar if any of them was active (or inhibited), so that no activation is lost to zooming out.
-    // Columns start and end on whole pixels: no seams between steps. Runs of columns alike are
-    // drawn as one rectangle: a long recording zoomed out draws a few hundred, not a
-    // rectangle and a colour for each of its thousands of columns.
+    let i = lowerBoundBy(runs.length, (index) => runs[index][1], view.from);
+    for (; i < runs.length && runs[i][0] <= view.to; ++i) {
+      const left = Math.floor(view.x(Math.max(runs[i][0], view.from), w));
+      const right = Math.max(left + 1, Math.ceil(view.x(Math.min(runs[i][1], view.to) + 1, w)));
+      if (wash) {
+        context.fillStyle = 'rgba(247, 144, 9, 0.22)';
+        context.fillRect(left, 0, right - left, h);
+      }
+      context.fillStyle = '#f79009';
+      context.fillRect(left, 0, right - left, 3);
+      if (!wash && h > ROW_HEIGHT) context.fillRect(left, h - 4, right - left, 4);
+    }
+  }
+
+  drawBehaviour(context, columns, key, w, h) {
+    const series = columns.behaviours.get(key);
+    if (!series) return;
+    const {steps} = columns;
+    const [begin, end] = this.indices(columns);
+    const view = this.view;
+    // Many steps to a pixel: each pixel column shows the highest activation among the steps that
+    // touch it, and a bar if any of them was active (or inhibited), so that no activation is lost
+    // to zooming out. Zoomed in, a step covers the pixels from the one its slot starts in to the
+    // one the next step's starts in: no seams between steps. Runs of columns alike are drawn as
+    // one rectangle: a long recording zoomed out draws a few hundred, not a rectangle and a
+    // colour for each of its thousands of columns.
     const runs = {level: [], active: [], inhibited: []};  // [left, right, value] each
     const extend = (list, left, right, value) => {
       const run = list[list.length - 1];
       if (run && run[1] === left && run[2] === value) run[1] = right;
       else list.push([left, right, value]);
     };
-    let left = -1;
-    let right = -1;
-    let top = 0;
-    let state = 0;
-    const flush = () => {
-      if (left < 0) return;
-      const end = Math.max(left + 1, right);
-      // 64 shades: enough for the eye, and runs of them join.
-      if (top > 0) extend(runs.level, left, end, Math.round(top * 64) / 64);
-      if (state & 1) extend(runs.active, left, end, 1);
-      else if (state & 2) extend(runs.inhibited, left, end, 1);
-    };
-    for (let i = begin; i < end; ++i) {
-      const here = Math.floor(view.x(steps[i], w));
-      if (here !== left) {
-        flush();
-        left = here;
-        top = 0;
-        state = 0;
+    const perPixel = (view.to - view.from + 1) / w;
+    const cover = perPixel > 1 ? Math.ceil : Math.floor;
+    const count = Math.ceil(w) + 1;
+    const tops = new Float32Array(count);
+    const states = new Uint8Array(count);
+    // Zoomed out to many steps a pixel, blocks of steps reduced beforehand (their highest
+    // activation, their states together), a few to a pixel: a frame costs the pixels, not the
+    // steps of a 100 000-step recording.
+    const level = levelFor(perPixel, 1);
+    const size = 2 ** level;
+    const activation = level ? columns.pyramid(series.activation, 'most', most).level(level) : series.activation;
+    const bits = level ? columns.pyramid(series.state, 'bits', (a, b) => a | b, stateBits).level(level) : null;
+    for (let block = Math.floor(begin / size); block * size < end; ++block) {
+      const i = block * size;
+      const from = Math.max(0, Math.floor(view.x(steps[i], w)));
+      const to = Math.min(count, Math.max(from + 1, cover(view.x(steps[Math.min(i + size, steps.length) - 1] + 1, w))));
+      const a = Math.min(1, activation[block]);
+      const state = bits ? bits[block] : stateBits(series.state[i]);
+      for (let p = from; p < to; ++p) {
+        if (a > tops[p]) tops[p] = a;
+        states[p] |= state;
       }
-      right = Math.floor(view.x(steps[i] + 1, w));
-      const a = series.activation[i];
-      if (a > top) top = Math.min(1, a);
-      const s = series.state[i];
-      if (s === ACTIVE) state |= 1;
-      else if (s === INHIBITED) state |= 2;
     }
-    flush();
+    for (let p = 0; p < count; ++p) {
+      // 64 shades: enough for the eye, and runs of them join.
+      if (tops[p] > 0) extend(runs.level, p, p + 1, Math.round(tops[p] * 64) / 64);
+      if (states[p] & 1) extend(runs.active, p, p + 1, 1);
+      else if (states[p] & 2) extend(runs.inhibited, p, p + 1, 1);
+    }
     let style = '';
     for (const [from, to, level] of runs.level) {
       const fill = colour(level);
@@ -282,10 +362,10 @@ export class Timelines {
   }
 
   drawMachine(context, strip, w, h) {
-    const states = this.columns.machines.get(strip.key);
+    const states = strip.columns.machines.get(strip.key);
     if (states) {
-      const {steps} = this.columns;
-      const [begin, end] = this.indices();
+      const {steps} = strip.columns;
+      const [begin, end] = this.indices(strip.columns);
       context.font = '11px "DejaVu Sans", system-ui, sans-serif';
       context.textBaseline = 'middle';
       context.textAlign = 'left';
@@ -307,12 +387,13 @@ export class Timelines {
         i = j;
       }
     }
+    if (!strip.note) return;  // B's lane: the queue shown is A's
     const queue = this.queueAt(strip.key);
     strip.note.textContent = queue ? `queue: ${queue.length ? queue.join(', ') : '(empty)'}` : '';
   }
 
-  drawEvents(context, w, h) {
-    const events = this.columns.events;
+  drawEvents(context, columns, w, h) {
+    const events = columns.events;
     const stepsOf = (index) => events[index].step;
     let i = lowerBoundBy(events.length, stepsOf, this.view.from);
     context.font = '11px "DejaVu Sans", system-ui, sans-serif';
@@ -355,20 +436,24 @@ export class Timelines {
       return;
     }
     const step = view.hover;
-    const index = this.columns.indexAtOrBefore(step);
-    const lines = [`step ${step}  ${formatTime(this.columns.timeAt(step))}`];
     const {strip} = pointer;
-    if (strip.kind === 'timeline' && index >= 0 && this.columns.steps[index] === step) {
-      const series = this.columns.behaviours.get(strip.key);
+    const columns = strip.columns;
+    const index = columns.indexAtOrBefore(step);
+    const lines = [`step ${step}  ${formatTime(columns.timeAt(step))}`];
+    if (strip.kind === 'timeline' && index >= 0 && columns.steps[index] === step) {
+      const series = columns.behaviours.get(strip.key);
       if (series) {
         const state = series.state[index] === ACTIVE ? 'active' : series.state[index] === INHIBITED ? 'inhibited' : 'inactive';
         lines.push(`${strip.key}: activation ${series.activation[index].toFixed(2)}, ${state}`);
       }
     } else if (strip.kind === 'timeline-machine' && index >= 0) {
-      lines.push(`${strip.key}: ${this.columns.machines.get(strip.key)?.[index] ?? '(no state)'}`);
+      lines.push(`${strip.key}: ${columns.machines.get(strip.key)?.[index] ?? '(no state)'}`);
     } else if (strip.kind === 'timeline-events') {
-      for (const event of this.columns.events) if (event.step === step) lines.push(`${event.by}: ${event.text}`);
+      for (const event of columns.events) if (event.step === step) lines.push(`${event.by}: ${event.text}`);
     }
+    // Comparing: which run the row is, and what differs at the step.
+    if (strip.row.dataset.run) lines[1] = `${strip.row.dataset.run.toUpperCase()} ${lines[1] ?? ''}`.trimEnd();
+    if (strip.marks && strip.marks.some(([from, to]) => from <= step && step <= to)) lines.push('A and B differ here');
     this.tip.textContent = lines.join('\n');
     this.tip.hidden = false;
     const box = this.section.getBoundingClientRect();
@@ -376,6 +461,9 @@ export class Timelines {
     this.tip.style.top = `${pointer.y - box.top + 14}px`;
   }
 }
+
+/** A step's state as bits: 1 active, 2 inhibited (a block of steps ORs them). */
+const stateBits = (state) => (state === ACTIVE ? 1 : state === INHIBITED ? 2 : 0);
 
 /** The first index below `length` whose value (`valueAt`, ascending) is >= `value`. */
 function lowerBoundBy(length, valueAt, value) {

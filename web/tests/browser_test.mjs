@@ -14,7 +14,7 @@ import {copyFileSync, existsSync, mkdtempSync, readFileSync, rmSync, writeFileSy
 import {tmpdir} from 'node:os';
 import path from 'node:path';
 
-import {arbiter, largeConfig, launchChromium, source, startArbiter, stopAll} from './support.mjs';
+import {arbiter, frameWork, largeConfig, launchChromium, quantile, source, startArbiter, stopAll} from './support.mjs';
 
 // A minute per test, set here: Debian's node 18 has no --test-timeout.
 const test = (name, fn, timeout = 60000) => nodeTest(name, {timeout}, fn);
@@ -830,6 +830,28 @@ test('a value plot of gait_velocity[0] over a 3000-step recording, on the timeli
   const [from, to] = await timelineRange(page);
   assert.ok(to - from < 1500 && from <= 2400 && 2400 <= to, `zoomed from the plot: steps ${from} to ${to}`);
   if (process.env.ARBITER_SCREENSHOT_PLOT) await page.screenshot({path: process.env.ARBITER_SCREENSHOT_PLOT, fullPage: true});
+  // Zoomed out to many steps a pixel (the whole run in a narrow window: blocks of steps reduced
+  // beforehand), a one-step activation is still drawn: kick_ball's at each kick.
+  const kicks = readFileSync(trace, 'utf8').trim().split('\n').slice(1).map((line) => JSON.parse(line))
+    .filter((record) => record.layers.control.kick_ball.active).map((record) => record.step);
+  assert.ok(kicks.length > 3, `kicks at ${kicks}`);
+  await page.setViewportSize({width: 700, height: 900});
+  await page.focus('#timelines');
+  await page.keyboard.press('0');
+  await nextFrame(page);
+  await nextFrame(page);
+  assert.deepEqual(await timelineRange(page), [1, 3000]);
+  const row = '.timeline[data-name="control/kick_ball"]';
+  await yOfRow(page, row);
+  for (const kick of kicks) {
+    const green = await page.$eval(`${row} canvas`, (canvas, x) => {
+      const box = canvas.getBoundingClientRect();
+      const ratio = canvas.width / box.width;
+      const data = canvas.getContext('2d').getImageData(Math.floor((x - box.left) * ratio), canvas.height - Math.round(2 * ratio), 1, 1).data;
+      return data[1] > 100 && data[0] < 80 && data[2] < 100;
+    }, (await xOfStep(page, kick)).x);
+    assert.ok(green, `kick_ball active at step ${kick}, drawn among ${3000 / 400} steps a pixel`);
+  }
   await page.close();
 });
 
@@ -932,6 +954,130 @@ test('the explain panel is pinned to a behaviour, readable, and follows the curs
   await page.close();
 });
 
+test('an actuator explained: clicked in the graph or a plot\'s legend, it follows the cursor', async () => {
+  const trace = path.join(scratch, 'soccer-explain-actuator.jsonl');
+  execFileSync(arbiter, ['run', soccer, '--steps', '220', '--trace', trace, '-q'], {cwd: source});
+  const {url} = await serve(['view', soccer, '--trace', trace, '--serve', '0']);
+  const page = await open(`${url}&step=180&plot=gait_velocity[0]`);
+  await page.locator('.port.actuator[data-actuator="kick"]').click();
+  const answer = (step, target) => page.waitForSelector(`#explain[data-step="${step}"][data-target="${target}"]`);
+  await answer(180, 'actuators/kick');
+  assert.match(await page.textContent('#explain-subject'), /pinned: actuators\/kick/);
+  // Held since the kick: the step whose value it keeps, from the steps before the one shown.
+  assert.equal(await page.textContent('#explain .explain-head'),
+               'actuator kick (layer control, the most active writer wins) at step 180: true, held');
+  assert.match(await page.textContent('#explain'), /keeps the value written at step 171 \(true\)/);
+  // It follows the step clicked in the timelines: at the kick, written by kick_ball.
+  const {x} = await xOfStep(page, 171);
+  await page.mouse.click(x, await yOfRow(page, '.timeline[data-name="control/head_control"]'));
+  await waitForStep(page, 171);
+  await answer(171, 'actuators/kick');
+  assert.equal(await page.textContent('#explain .explain-head'),
+               'actuator kick (layer control, the most active writer wins) at step 171: true, written');
+  assert.match(await page.textContent('#explain'), /written by kick_ball \(activation 1\)/);
+  // A plotted value's name explains its actuator: the writers and their weights, as a table.
+  await page.locator('.plot li[data-series="gait_velocity[0]"] .plot-name').click();
+  await answer(171, 'actuators/gait_velocity');
+  assert.match(await page.textContent('#explain .explain-head'), /^actuator gait_velocity \(layer control, aggregated\) at step 171: /);
+  const rows = await page.$$eval('#explain .explain-table tr', (trs) => trs.map((tr) => tr.cells[0].textContent.trim()));
+  assert.ok(rows.includes('kick_ball'), `the writers: ${rows}`);
+  await page.close();
+});
+
+test('a state explained: a band of its state machine\'s lane clicked, it follows the cursor', async () => {
+  const trace = path.join(scratch, 'goalie-explain.jsonl');
+  const goalie = 'configs/soccer/goalie.yaml';
+  execFileSync(arbiter, ['run', goalie, '--steps', '300', '--trace', trace, '-q'], {cwd: source});
+  const {url} = await serve(['view', goalie, '--trace', trace, '--serve', '0']);
+  const page = await open(`${url}&step=100`);
+  const lane = '.timeline-machine[data-machine="goalie"]';
+  const answer = (step, target) => page.waitForSelector(`#explain[data-step="${step}"][data-target="${target}"]`);
+  // The band of dive at step 215: that step is shown and the state explained there, from its
+  // start (planned and pre-empting monitor_ball) to its end.
+  await page.mouse.click((await xOfStep(page, 215)).x, await yOfRow(page, lane));
+  await waitForStep(page, 215);
+  await answer(215, 'goalie/dive');
+  assert.match(await page.textContent('#explain-subject'), /pinned: goalie\/dive/);
+  assert.equal(await page.textContent('#explain .explain-head'), 'state goalie/dive at step 215: running (cycle 215)');
+  const lines = await page.$$eval('#explain p', (ps) => ps.map((p) => p.textContent));
+  assert.deepEqual(lines, ['started at step 201: activated when monitor_ball ended: pre-empted by dive',
+                           'planned: in step 201 itself, as the state before it ended',
+                           'ended at step 231: proceeded']);
+  // Pinned, it follows the cursor: a click on another row explains dive at that step.
+  await page.mouse.click((await xOfStep(page, 150)).x, await yOfRow(page, '.timeline-events'));
+  await waitForStep(page, 150);
+  await answer(150, 'goalie/dive');
+  assert.match(await page.textContent('#explain .explain-head'), /^state goalie\/dive at step 150: /);
+  // The state in the state machine's panel, and the lane's label (the machine itself).
+  await page.locator('.controller[data-controller="goalie"] .state').click();
+  await answer(150, 'goalie/monitor_ball');
+  await page.locator(`${lane} .label`).click();
+  await answer(150, 'state_machines/goalie');
+  assert.match(await page.textContent('#explain .explain-head'), /^state machine goalie at step 150: /);
+  await page.close();
+});
+
+test('two runs compared: the what-if without kick_ball over the run, the steps that differ marked', async () => {
+  // The docs' what-if (docs/replay.md): the recorded run replayed without kick_ball.
+  const config = path.join(scratch, 'compare.yaml');
+  const noKick = path.join(scratch, 'compare_no_kick.yaml');
+  copyFileSync(path.join(source, soccer), config);
+  writeFileSync(noKick, readFileSync(config, 'utf8').split('\n')
+    .filter((line) => !/kick_ball: \{type|kick_ball => go_behind_ball/.test(line)).join('\n'));
+  const run = path.join(scratch, 'compare.mcap');
+  const whatIf = path.join(scratch, 'compare_no_kick.mcap');
+  const env = {...process.env, ARBITER_PLUGIN_PATH: path.join(path.dirname(arbiter), '..', 'plugins')};
+  execFileSync(arbiter, ['run', config, '--steps', '220', '--record', run, '-q'], {cwd: source, env});
+  execFileSync(arbiter, ['replay', run, '--config', noKick, '--record', whatIf], {cwd: source, env});
+  const {url} = await serve(['view', '--trace', run, '--compare', whatIf, '--serve', '0']);
+  const page = await open(`${url}&step=100&plot=kick`);
+  // Where they first differ, and what: the kick, as `arbiter diff` finds it.
+  assert.equal(await page.textContent('#compare-what'),
+               'first differ at step 171: control/go_behind_ball, control/kick_ball, actuator:gait_velocity, actuator:kick');
+  assert.match(await page.textContent('#compare-runs'), /^A .*compare\.mcap · B .*compare_no_kick\.mcap$/);
+  // B's row of each behaviour under A's, named.
+  const rowA = '.timeline[data-run="a"][data-name="control/go_behind_ball"]';
+  const rowB = '.timeline[data-run="b"][data-name="control/go_behind_ball"]';
+  assert.equal(await page.textContent(`${rowA} .label`), 'A control/go_behind_ball');
+  assert.equal(await page.textContent(`${rowB} .label`), 'B control/go_behind_ball');
+  assert.equal(await page.locator('.timeline-machine, .timeline-events').count(), 2, 'a reported lane for each run');
+  // One button to the first difference.
+  await page.click('#compare-first');
+  await waitForStep(page, 171);
+  await nextFrame(page);
+  // Marked on the row where they differ, at that step and not before it.
+  const orange = (rgb) => { const [r, g, b] = rgb.split(',').map(Number); return r > 200 && g > 100 && g < 200 && b < 80; };
+  const top = (selector, x) => page.$eval(`${selector} canvas`, (canvas, x) => {
+    const box = canvas.getBoundingClientRect();
+    const ratio = canvas.width / box.width;
+    return [...canvas.getContext('2d').getImageData(Math.round((x - box.left) * ratio), Math.round(ratio), 1, 1).data.slice(0, 3)].join(',');
+  }, x);
+  await yOfRow(page, rowB);
+  assert.ok(orange(await top(rowB, (await xOfStep(page, 171)).x + 2)), 'step 171 marked on B\'s row');
+  assert.ok(!orange(await top(rowB, (await xOfStep(page, 150)).x)), 'step 150 not marked');
+  // The tip tells each run's values: inhibited in A, active in B.
+  const {x} = await xOfStep(page, 171);
+  await page.mouse.move(x, await yOfRow(page, rowA));
+  await page.waitForFunction(() => document.querySelector('#timeline-tip').textContent.startsWith('step 171 '));
+  assert.match(await page.textContent('#timeline-tip'), /\nA control\/go_behind_ball: activation 0\.00, inhibited\nA and B differ here$/);
+  await page.mouse.move(x, await yOfRow(page, rowB));
+  await page.waitForFunction(() => /\nB control/.test(document.querySelector('#timeline-tip').textContent));
+  assert.match(await page.textContent('#timeline-tip'), /\nB control\/go_behind_ball: activation 1\.00, active\n/);
+  // The plot draws B's value beside A's, named.
+  assert.equal(await page.textContent('.plot li[data-series="kick"]:not([data-run]) .plot-value'), '1');
+  assert.equal(await page.textContent('.plot li[data-series="kick"][data-run="b"] .plot-name'), 'kick (B)');
+  assert.equal(await page.textContent('.plot li[data-series="kick"][data-run="b"] .plot-value'), '0');
+  // The explain panel answers for each run against its own config.
+  await behaviour(page, 'go_behind_ball').click();
+  await page.waitForSelector('#explain[data-step="171"][data-target="control/go_behind_ball"]');
+  assert.deepEqual(await page.$$eval('#explain .explain-head', (heads) => heads.map((head) => head.textContent)),
+                   ['behaviour go_behind_ball (layer control) at step 171: inactive, activation 0',
+                    'behaviour go_behind_ball (layer control) at step 171: active, activation 1']);
+  // Next difference: kick differs from 171 to the end (held true in A).
+  await page.click('#compare-next');
+  await waitForStep(page, 172);
+  await page.close();
+});
 
 test('1000 behaviours streamed live at 100 Hz: the page stays responsive (median frame work within budget)', async () => {
   const config = path.join(scratch, 'large.yaml');
@@ -943,31 +1089,8 @@ test('1000 behaviours streamed live at 100 Hz: the page stays responsive (median
   await page.waitForFunction(() => Number(document.querySelector('#step').textContent) > 100);
   assert.equal(await page.locator('.behaviour').count(), 1000);
   await page.waitForTimeout(2000);  // past the first batch of 300 steps
-  // Each frame's work on the main thread: from its first animation callback to the end of its
-  // rendering (a message posted then runs after it), over 5 seconds of the stream.
-  const measure = () => page.evaluate(() => new Promise((resolve) => {
-    const work = [];
-    const intervals = [];
-    const steps = [Number(document.querySelector('#step').textContent)];
-    let last = null;
-    const channel = new MessageChannel();
-    let start = 0;
-    channel.port1.onmessage = () => work.push(performance.now() - start);
-    const end = performance.now() + 5000;
-    const frame = (now) => {
-      start = performance.now();
-      if (last !== null) intervals.push(now - last);
-      last = now;
-      channel.port2.postMessage(0);
-      if (performance.now() < end) requestAnimationFrame(frame);
-      else {
-        steps.push(Number(document.querySelector('#step').textContent));
-        resolve({work, intervals, steps});
-      }
-    };
-    requestAnimationFrame(frame);
-  }));
-  const quantile = (values, q) => [...values].sort((a, b) => a - b)[Math.min(values.length - 1, Math.floor(q * values.length))];
+  // Each frame's work on the main thread over 5 seconds of the stream (frameWork).
+  const measure = () => frameWork(page, 5000);
   // The machine the tests run on may be busy with other work: the best of three windows. (The
   // steps shown are reported, not checked: on a busy machine the engine itself falls behind.)
   // The target is 16 ms (docs/performance.md), met on a quiet machine; the test's machine is

@@ -14,16 +14,17 @@ export const children = [];
 
 /// Starts `arbiter ARGS` in the source tree and resolves, once its stdout matches `pattern`, with
 /// the match, the child, `output()` (stdout and stderr so far) and `exited` (resolves with the exit
-/// code and all it printed). Rejects when it exits first or prints no match within 30 s (a debug
-/// build loading a 1000-behaviour config on a busy machine takes more than 15).
-export function startArbiter(args, pattern) {
+/// code and all it printed). Rejects when it exits first or prints no match within `timeout` ms,
+/// by default 30 s (a debug build loading a 1000-behaviour config on a busy machine takes more
+/// than 15).
+export function startArbiter(args, pattern, timeout = 30000) {
   return new Promise((resolve, reject) => {
     const child = spawn(arbiter, args, {cwd: source, stdio: ['ignore', 'pipe', 'pipe']});
     children.push(child);
     let out = '';
     let err = '';
     const exited = new Promise((done) => child.on('exit', (code) => done({code, out, err})));
-    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), 30000);
+    const timer = setTimeout(() => reject(new Error(`no URL from arbiter ${args.join(' ')}:\n${out}${err}`)), timeout);
     child.stdout.on('data', (data) => {
       out += data;
       const found = out.match(pattern);
@@ -69,3 +70,41 @@ export function largeConfig(layers, perLayer, rateHz) {
   }
   return lines.join('\n') + '\n';
 }
+
+/// Each frame's work on the main thread of `page` over `milliseconds`: from the frame's first
+/// animation callback to the end of its rendering (a message posted then runs after it), so style,
+/// layout and paint count as well as the page's own drawing. `action`, the body of a function of
+/// the frame's number, runs at the start of each frame (a wheel turn, a pointer move), so that
+/// what it changes is drawn in the next. Resolves with {work, intervals} (ms each) and `steps`,
+/// the step shown before and after.
+export function frameWork(page, milliseconds, action = '') {
+  return page.evaluate(({milliseconds, action}) => new Promise((resolve) => {
+    // eslint-disable-next-line no-new-func
+    const act = new Function('frame', action);
+    const work = [];
+    const intervals = [];
+    const steps = [Number(document.querySelector('#step').textContent)];
+    let last = null;
+    let count = 0;
+    const channel = new MessageChannel();
+    let start = 0;
+    channel.port1.onmessage = () => work.push(performance.now() - start);
+    const end = performance.now() + milliseconds;
+    const frame = (now) => {
+      start = performance.now();
+      if (last !== null) intervals.push(now - last);
+      last = now;
+      act(count++);
+      channel.port2.postMessage(0);
+      if (performance.now() < end) requestAnimationFrame(frame);
+      else {
+        steps.push(Number(document.querySelector('#step').textContent));
+        resolve({work, intervals, steps});
+      }
+    };
+    requestAnimationFrame(frame);
+  }), {milliseconds, action});
+}
+
+/// The `q` quantile (0 to 1) of `values`.
+export const quantile = (values, q) => [...values].sort((a, b) => a - b)[Math.min(values.length - 1, Math.floor(q * values.length))];

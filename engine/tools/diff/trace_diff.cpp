@@ -135,6 +135,7 @@ void TraceDiffer::unmatched(std::uint64_t step) {
 }
 
 void TraceDiffer::compare(std::uint64_t step, const std::string& a, const std::string& b) {
+  differed_.clear();
   // Most steps of two runs compared are the same: those are told apart without parsing.
   if (const auto rest = after_timing(a); !rest.empty() && rest == after_timing(b)) return;
   const Json x = Json::parse(a);
@@ -173,9 +174,9 @@ void TraceDiffer::compare(std::uint64_t step, const std::string& a, const std::s
     const Json timeless_y = without_timing(y);
     if (timeless_x != timeless_y) what.push_back(first_difference(timeless_x, timeless_y, ""));
   }
-  const bool differs = !what.empty();
-  if (differs && !diff_.first_divergence) {
-    diff_.first_divergence = TraceDiff::Divergence{step, std::move(what)};
+  differed_ = std::move(what);
+  if (!differed_.empty() && !diff_.first_divergence) {
+    diff_.first_divergence = TraceDiff::Divergence{step, differed_};
   }
 }
 

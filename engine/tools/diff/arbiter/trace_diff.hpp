@@ -48,6 +48,9 @@ class TraceDiffer {
   /// Compares the records (step records, as the trace writer writes them) of a step both runs
   /// have.
   void compare(std::uint64_t step, const std::string& a, const std::string& b);
+  /// What differed in the step compare() compared last, named as Divergence::what names it;
+  /// empty when nothing did. A view marks each step's differences with it.
+  const std::vector<std::string>& differed() const { return differed_; }
   /// A step that one run has and the other lacks.
   void unmatched(std::uint64_t step);
   /// The result, given how many steps each run has and, when those differ and nothing else
@@ -58,6 +61,7 @@ class TraceDiffer {
   double tolerance_;
   bool exact_;
   TraceDiff diff_;
+  std::vector<std::string> differed_;
 };
 
 /// Aligns by step number the steps of a run `a`, read from its source as far as they are needed,
