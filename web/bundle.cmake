@@ -3,7 +3,8 @@
 #         -DMISSING_PAGE=cli/server/web_missing.html -DOUTPUT=BUILD/cli/web_assets.cpp -P web/bundle.cmake
 # `npm ci` installs the app's libraries into WORK_DIR/node_modules when package-lock.json changed
 # or they are missing (as tests/support/npm_ci.sh does, so the browser tests find them there too);
-# esbuild bundles web/src into WORK_DIR/dist; the files are written into OUTPUT as byte arrays.
+# esbuild bundles web/src into WORK_DIR/dist; the files, with ELK's worker script (elkjs's own
+# minified build, served as it is), are written into OUTPUT as byte arrays.
 # When the app cannot be built (LEFT_OUT says why the configure step left it out, or npm ci
 # fails: no network, no registry), OUTPUT holds a page that says so instead, and the build goes
 # on. A failed npm ci leaves WORK_DIR/bundle.stamp unwritten, so that the next build tries again.
@@ -113,7 +114,9 @@ if(NOT status EQUAL 0)
   message(FATAL_ERROR "esbuild could not bundle ${SOURCE_DIR}/src (above)")
 endif()
 write_assets(""
-  NAMES / /app.js /style.css
+  NAMES / /app.js /style.css /elk-worker.js
   FILES "${SOURCE_DIR}/index.html" "${WORK_DIR}/dist/app.js" "${WORK_DIR}/dist/style.css"
-  TYPES "text/html; charset=utf-8" "text/javascript; charset=utf-8" "text/css; charset=utf-8")
+        "${WORK_DIR}/node_modules/elkjs/lib/elk-worker.min.js"
+  TYPES "text/html; charset=utf-8" "text/javascript; charset=utf-8" "text/css; charset=utf-8"
+        "text/javascript; charset=utf-8")
 file(TOUCH "${WORK_DIR}/bundle.stamp")

@@ -1,7 +1,7 @@
 // The studio's speed in headless Chromium (docs/performance.md, "Studio"): the layout of a
 // generated graph (the page's `arbiter:layout` measures: text measured, ELK's layout, the SVG
 // built), as the page opens and after an edit, in wall time and in CPU time of the page's main
-// thread (from a Chrome trace); and the frames while the pointer drags on it, drawing an
+// thread and of ELK's web workers (from a Chrome trace); and the frames while the pointer drags on it, drawing an
 // inhibition from a behaviour and panning the background, at the scale the page opens at and at
 // the scale a search shows a behaviour at. A benchmark, run by hand (under a minute with the
 // defaults); it prints medians and 95th percentiles and checks nothing. CTest's
@@ -66,14 +66,16 @@ async function framesDuring(page, act) {
 }
 
 /**
- * The CPU time of the page's main thread within each `name` measure of the trace `events` (in ms):
- * the thread time of its tasks in that span, a task that overlaps the span in part counted in
- * proportion. On a shared machine the wall time of a measure includes the time the thread waited
- * for a core; its CPU time does not.
+ * The CPU time of the page's threads named `thread` (its main thread, or its web workers: ELK's)
+ * within each `name` measure of the trace `events` (in ms): the thread time of their tasks in that
+ * span, a task that overlaps the span in part counted in proportion. On a shared machine the wall
+ * time of a measure includes the time the thread waited for a core; its CPU time does not.
  */
-function cpuWithin(events, name) {
-  const main = events.find((e) => e.name === 'thread_name' && e.args?.name === 'CrRendererMain');
-  const tasks = events.filter((e) => e.ph === 'X' && e.pid === main.pid && e.tid === main.tid &&
+function cpuWithin(events, name, thread = 'CrRendererMain') {
+  const page = events.find((e) => e.name === 'thread_name' && e.args?.name === 'CrRendererMain').pid;
+  const threads = new Set(events.filter((e) => e.name === 'thread_name' && e.pid === page && e.args?.name === thread)
+                              .map((e) => e.tid));
+  const tasks = events.filter((e) => e.ph === 'X' && e.pid === page && threads.has(e.tid) &&
                                      e.cat.includes('toplevel') && e.tdur !== undefined);
   const spans = [];
   const open = new Map();
@@ -117,6 +119,7 @@ try {
   // 'open' (the page opened) and 'edit' (an inhibition added) -> part -> ms, per run
   const wall = {open: {}, edit: {}};
   const cpu = {open: {}, edit: {}};
+  const workerCpu = {open: [], edit: []};  // ELK's workers' CPU time in the layout
   const warmUp = [];
   const drags = {inhibition: {work: [], intervals: []}, pan: {work: [], intervals: []}};
   // The page's last layout while `act()` runs: its wall time (the page's measures) and its CPU time.
@@ -127,6 +130,7 @@ try {
     const {traceEvents} = JSON.parse(String(await browser.stopTracing()));
     for (const [part] of PARTS) {
       (cpu[when][part] ??= []).push(cpuWithin(traceEvents, `arbiter:layout${part}`).at(-1));
+      if (!part) workerCpu[when].push(cpuWithin(traceEvents, 'arbiter:layout', 'DedicatedWorker thread').at(-1));
       (wall[when][part] ??= []).push(await page.evaluate((name) => performance.getEntriesByName(name).at(-1).duration,
                                                          `arbiter:layout${part}`));
     }
@@ -176,6 +180,7 @@ try {
     for (const [part, label] of PARTS) {
       console.log(`  ${label}: CPU time of the page's main thread ${figures(cpu[when][part])}; wall ${figures(wall[when][part])}`);
     }
+    console.log(`  CPU time of ELK's web workers in the layout (both together): ${figures(workerCpu[when])}`);
   }
   for (const [name, label] of [['inhibition', 'drawing an inhibition'], ['pan', 'panning']]) {
     console.log(`dragging, ${label}: frame interval ${figures(drags[name].intervals)}; frame work ${figures(drags[name].work)}`);

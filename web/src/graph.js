@@ -4,7 +4,7 @@
 // the columns. Boxes are sized to the text they hold, measured in the page's font, and ELK keeps
 // edges off the boxes, so no label lies under an edge. A click on a layer's title folds its
 // behaviours away (folds.js); graph_nav.js adds zoom, pan and search.
-import ELK from 'elkjs/lib/elk.bundled.js';
+import ELK from 'elkjs/lib/elk-api.js';
 
 import {colour, el, formatValue, text} from './dom.js';
 import {Folds} from './folds.js';
@@ -23,8 +23,43 @@ const LARGE = 200;            // behaviours: from here, only those on the screen
 const LARGE_PERIOD = 100;     // and at most every this many ms
 const FOLD_MARK = 14;         // room for the ▾ before a layer's title
 
-// ELK's own build without a web worker: layouts of a few dozen boxes take milliseconds.
-const elk = new ELK();
+// ELK lays out in web workers (elk-worker.js, served beside app.js): a layer of 50 behaviours
+// costs it tens of milliseconds of CPU, which the page's thread would spend not answering. Two
+// workers lay out two layers at once on two cores; more would mostly wait for one.
+const WORKERS = 2;
+let pool = null;
+/** The workers, started at the first call: [{elk, failed, pending}]. */
+function workers() {
+  pool ??= Array.from({length: WORKERS}, () => {
+    // A worker that cannot load (its script not served) would leave its layouts waiting for
+    // ever: `failed` rejects instead, and the drawing fails with the reason.
+    let fail;
+    const failed = new Promise((resolve, reject) => { fail = reject; });
+    failed.catch(() => {});
+    const elk = new ELK({
+      workerUrl: 'elk-worker.js',
+      workerFactory: (url) => {
+        const worker = new Worker(url);
+        worker.addEventListener('error', (event) =>
+          fail(new Error(`ELK's worker (${url}) failed: ${event.message || 'its script did not load'}`)));
+        return worker;
+      },
+    });
+    return {elk, failed, pending: 0};
+  });
+  return pool;
+}
+
+/** ELK's layout of `graph`, by the worker with the least work queued (counted in boxes and edges). */
+function elkLayout(graph) {
+  const worker = workers().reduce((a, b) => (b.pending < a.pending ? b : a));
+  const cost = graph.children.length + graph.edges.length;
+  worker.pending += cost;
+  const done = () => { worker.pending -= cost; };
+  const layout = worker.elk.layout(graph);
+  layout.then(done, done);
+  return Promise.race([layout, worker.failed]);
+}
 const LAYOUT = {
   'elk.algorithm': 'layered',
   'elk.direction': 'DOWN',
@@ -155,19 +190,24 @@ function layoutLayer(layer, size, laid) {
       ({id: `i:${index}`, sources: [`b:${inhibition.inhibitor}`], targets: [`b:${inhibition.inhibited}`]})),
   };
   const key = JSON.stringify(graph);
-  return {key, layout: laid.get(key) ?? elk.layout(graph)};
+  return {key, layout: laid.get(key) ?? elkLayout(graph)};
 }
 
-// ELK's code is compiled as it first runs, which makes a page's first layout cost more than twice
-// a later one: a view starts ELK on a graph of two boxes while it waits for its own graph.
+// ELK's code is loaded and compiled as it first runs, which makes a page's first layout cost more
+// than twice a later one: a view starts each worker on a small graph while it waits for its own.
+// Its inhibitions cross and skip rows, so that the code of those cases is compiled too.
+const WARM_UP = {
+  id: 'warm-up', layoutOptions: LAYOUT,
+  children: Array.from({length: 12}, (_, i) => ({id: `b${i}`, width: 100 + 10 * (i % 3), height: 40 + 12 * (i % 2)})),
+  edges: [[0, 1], [0, 3], [2, 5], [1, 4], [3, 6], [4, 7], [6, 8], [5, 9], [7, 10], [2, 11], [8, 11]]
+      .map(([a, b], i) => ({id: `e${i}`, sources: [`b${a}`], targets: [`b${b}`]})),
+};
 let warmed = null;
 function warmUp() {
   if (warmed) return;
   const started = performance.now();
-  warmed = elk.layout({id: 'warm-up', layoutOptions: LAYOUT,
-                       children: [{id: 'a', width: 10, height: 10}, {id: 'b', width: 10, height: 10}],
-                       edges: [{id: 'e', sources: ['a'], targets: ['b']}]})
-      .then(() => performance.measure('arbiter:layout:warm-up', {start: started}));
+  warmed = Promise.all(workers().map(({elk}) => elk.layout(WARM_UP)))
+      .then(() => performance.measure('arbiter:layout:warm-up', {start: started}), () => {});
 }
 
 // The points of an ELK edge, offset by (dx, dy).

@@ -306,6 +306,8 @@ test('a 200-behaviour graph: zoomed about the pointer, panned, a layer folded an
   const page = await open(url);
   await settled(page);
   assert.equal(await page.locator('.behaviour').count(), 200);
+  // Laid out by ELK in two web workers (two layers at once), the page's thread left free.
+  assert.deepEqual(page.workers().map((worker) => new URL(worker.url()).pathname), ['/elk-worker.js', '/elk-worker.js']);
   const stage = await page.locator('.graph-stage').boundingBox();
   const scale = () => page.evaluate(() => Number(document.querySelector('.graph-stage').dataset.scale));
   const boxOf = (key) => page.locator(`.behaviour[data-name="${key}"] rect`).boundingBox();
