@@ -561,7 +561,7 @@ TEST_CASE("drawing beyond a step's room drops and counts, without allocating", "
     CHECK(std::string(picture.frame(picture.primitives[0])) == "a frame name lo");
     std::string message;
     append_scene_update(0, picture, message);
-    CHECK(message.find(R"("metadata": [{"key": "dropped", "value": "73"}])") != std::string::npos);
+    CHECK(message.find(R"("metadata":[{"key":"dropped","value":"73"}])") != std::string::npos);
   }
   SECTION("more points than room: the line is dropped whole") {
     Manager manager(test::compile_text(config(3, Manager::kScenePointsPerStep + 1), registry));
@@ -600,8 +600,8 @@ TEST_CASE("a text cut to its room is cut between characters", "[scene]") {
   std::string message;
   append_scene_update(0, data.picture(), message);
   // 39 bytes fit: 19 whole characters, the first byte of the 20th left out.
-  CHECK(message.find("\"text\": \"" + long_text.substr(0, 38) + "\"") != std::string::npos);
-  CHECK(message.find(R"("text": "kick")") != std::string::npos);
+  CHECK(message.find("\"text\":\"" + long_text.substr(0, 38) + "\"") != std::string::npos);
+  CHECK(message.find(R"("text":"kick")") != std::string::npos);
 }
 
 namespace {

@@ -381,35 +381,33 @@ double fine(double value) {
 
 // foxglove.Pose: at (x, y) on the ground, turned by `yaw` about the vertical.
 void append_pose(double x, double y, double yaw, Buffer& out) {
-  fmt::format_to(
-      Out(out),
-      FMT_COMPILE(R"("pose": {{"position": {{"x": {}, "y": {}, "z": 0}}, "orientation": )"
-                  R"({{"x": 0, "y": 0, "z": {}, "w": {}}}}})"),
-      fine(x), fine(y), fine(std::sin(yaw / 2)), fine(std::cos(yaw / 2)));
+  fmt::format_to(Out(out),
+                 FMT_COMPILE(R"("pose":{{"position":{{"x":{},"y":{},"z":0}},"orientation":)"
+                             R"({{"x":0,"y":0,"z":{},"w":{}}}}})"),
+                 fine(x), fine(y), fine(std::sin(yaw / 2)), fine(std::cos(yaw / 2)));
 }
 
 void append_color(const SceneColor& c, Buffer& out) {
-  fmt::format_to(Out(out), FMT_COMPILE(R"("color": {{"r": {}, "g": {}, "b": {}, "a": {}}})"), c.r,
-                 c.g, c.b, c.a);
+  fmt::format_to(Out(out), FMT_COMPILE(R"("color":{{"r":{},"g":{},"b":{},"a":{}}})"), c.r, c.g, c.b,
+                 c.a);
 }
 
 // foxglove.LinePrimitive: a strip (0) or a loop (1) through `count` points given by `point(i)`.
 template <typename Point>
 void append_line(int type, double width, const SceneColor& color, std::size_t count, Point point,
                  Buffer& out) {
-  fmt::format_to(Out(out), FMT_COMPILE(R"({{"type": {}, )"), type);
+  fmt::format_to(Out(out), FMT_COMPILE(R"({{"type":{},)"), type);
   append_pose(0, 0, 0, out);
-  fmt::format_to(Out(out),
-                 FMT_COMPILE(R"(, "thickness": {}, "scale_invariant": false, "points": [)"),
+  fmt::format_to(Out(out), FMT_COMPILE(R"(,"thickness":{},"scale_invariant":false,"points":[)"),
                  fine(width));
   for (std::size_t i = 0; i < count; ++i) {
     const ScenePoint at = point(i);
-    fmt::format_to(Out(out), FMT_COMPILE(R"({}{{"x": {}, "y": {}, "z": 0}})"), i > 0 ? ", " : "",
+    fmt::format_to(Out(out), FMT_COMPILE(R"({}{{"x":{},"y":{},"z":0}})"), i > 0 ? "," : "",
                    fine(at.x), fine(at.y));
   }
-  put(out, "], ");
+  put(out, "],");
   append_color(color, out);
-  put(out, R"(, "colors": [], "indices": []})");
+  put(out, R"(,"colors":[],"indices":[]})");
 }
 
 // A circle's outline, as Foxglove has no circle: a loop of this many points.
@@ -445,21 +443,21 @@ void append_entity_id(std::string_view frame, bool still, Buffer& out);
 template <typename Primitives>
 void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame, bool still,
                    Primitives each, const ScenePicture& picture, std::size_t dropped, Buffer& out) {
-  fmt::format_to(Out(out), FMT_COMPILE(R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "frame_id": )"),
-                 sec, nsec);
+  fmt::format_to(Out(out), FMT_COMPILE(R"({{"timestamp":{{"sec":{},"nsec":{}}},"frame_id":)"), sec,
+                 nsec);
   put_name(out, frame);
-  put(out, R"(, "id": )");
+  put(out, R"(,"id":)");
   append_entity_id(frame, still, out);
-  put(out, R"(, "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [)");
+  put(out, R"(,"lifetime":{"sec":0,"nsec":0},"frame_locked":false,"metadata":[)");
   if (dropped > 0) {
-    fmt::format_to(Out(out), FMT_COMPILE(R"({{"key": "dropped", "value": "{}"}})"), dropped);
+    fmt::format_to(Out(out), FMT_COMPILE(R"({{"key":"dropped","value":"{}"}})"), dropped);
   }
   // The primitives `wanted`, separated by commas.
   const auto list = [&](auto wanted, auto append) {
     bool first = true;
     each([&](const ScenePrimitive& p) {
       if (!wanted(p)) return;
-      if (!first) put(out, ", ");
+      if (!first) put(out, ",");
       first = false;
       append(p);
     });
@@ -467,33 +465,32 @@ void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame
   const auto is = [](SceneShape shape) {
     return [shape](const ScenePrimitive& p) { return p.shape == shape; };
   };
-  put(out, R"(], "arrows": [)");
+  put(out, R"(],"arrows":[)");
   list(is(SceneShape::kArrow), [&](const ScenePrimitive& p) {
     const double length = std::hypot(p.x1 - p.x0, p.y1 - p.y0);
     const double head = std::min(0.4 * length, 3 * p.size);
     put(out, "{");
     append_pose(p.x0, p.y0, std::atan2(p.y1 - p.y0, p.x1 - p.x0), out);
     fmt::format_to(Out(out),
-                   FMT_COMPILE(R"(, "shaft_length": {}, "shaft_diameter": {}, "head_length": {}, )"
-                               R"("head_diameter": {}, )"),
+                   FMT_COMPILE(R"(,"shaft_length":{},"shaft_diameter":{},"head_length":{},)"
+                               R"("head_diameter":{},)"),
                    fine(length - head), fine(p.size), fine(head), fine(2.5 * p.size));
     append_color(p.color, out);
     put(out, "}");
   });
-  put(out, R"(], "cubes": [], "spheres": [], "cylinders": [)");
+  put(out, R"(],"cubes":[],"spheres":[],"cylinders":[)");
   list([](const ScenePrimitive& p) { return p.shape == SceneShape::kCircle && p.filled; },
        [&](const ScenePrimitive& p) {
          put(out, "{");
          append_pose(p.x0, p.y0, 0, out);
-         fmt::format_to(
-             Out(out),
-             FMT_COMPILE(R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
-                         R"("top_scale": 1, )"),
-             fine(2 * p.size), fine(2 * p.size));
+         fmt::format_to(Out(out),
+                        FMT_COMPILE(R"(,"size":{{"x":{},"y":{},"z":0.01}},"bottom_scale":1,)"
+                                    R"("top_scale":1,)"),
+                        fine(2 * p.size), fine(2 * p.size));
          append_color(p.color, out);
          put(out, "}");
        });
-  put(out, R"(], "lines": [)");
+  put(out, R"(],"lines":[)");
   list(
       [](const ScenePrimitive& p) {
         return p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon ||
@@ -514,20 +511,19 @@ void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame
               [&](std::size_t i) { return picture.points[p.point_begin + i]; }, out);
         }
       });
-  put(out, R"(], "triangles": [], "texts": [)");
+  put(out, R"(],"triangles":[],"texts":[)");
   list(is(SceneShape::kText), [&](const ScenePrimitive& p) {
     put(out, "{");
     append_pose(p.x0, p.y0, 0, out);
-    fmt::format_to(
-        Out(out),
-        FMT_COMPILE(R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )"),
-        fine(p.size));
+    fmt::format_to(Out(out),
+                   FMT_COMPILE(R"(,"billboard":true,"font_size":{},"scale_invariant":false,)"),
+                   fine(p.size));
     append_color(p.color, out);
-    put(out, R"(, "text": )");
+    put(out, R"(,"text":)");
     put_name(out, text_of(picture, p));
     put(out, "}");
   });
-  put(out, R"(], "models": []})");
+  put(out, R"(],"models":[]})");
 }
 
 // Whether two primitives draw alike (their points and texts compared by value, not by place).
@@ -636,31 +632,31 @@ void SceneUpdates::append(std::uint64_t time_ns, const ScenePicture& picture, st
     };
   };
 
-  put(out, R"({"deletions": [)");
+  put(out, R"({"deletions":[)");
   if (whole) {
-    fmt::format_to(
-        Out(out), FMT_COMPILE(R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 1, "id": ""}})"),
-        sec, nsec);
+    fmt::format_to(Out(out),
+                   FMT_COMPILE(R"({{"timestamp":{{"sec":{},"nsec":{}}},"type":1,"id":""}})"), sec,
+                   nsec);
     started_ = true;
     whole_at_ = time_ns;
   } else {
     bool first = true;
     each_frame(last_, [&](std::string_view frame) {
       if (!has(last_, frame, false) || has(now_, frame, false)) return;
-      fmt::format_to(
-          Out(out), FMT_COMPILE(R"({}{{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 0, "id": )"),
-          first ? "" : ", ", sec, nsec);
+      fmt::format_to(Out(out),
+                     FMT_COMPILE(R"({}{{"timestamp":{{"sec":{},"nsec":{}}},"type":0,"id":)"),
+                     first ? "" : ",", sec, nsec);
       append_entity_id(frame, false, out);
       put(out, "}");
       first = false;
     });
   }
-  put(out, R"(], "entities": [)");
+  put(out, R"(],"entities":[)");
   bool first = true;
   each_frame(now_, [&](std::string_view frame) {
     for (const bool still : {true, false}) {
       if ((still && !whole) || !has(now_, frame, still)) continue;
-      if (!first) put(out, ", ");
+      if (!first) put(out, ",");
       append_entity(sec, nsec, frame, still, part(frame, still), picture, first ? dropped : 0, out);
       first = false;
     }
