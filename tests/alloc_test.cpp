@@ -604,6 +604,44 @@ TEST_CASE("a text cut to its room is cut between characters", "[scene]") {
   CHECK(message.find(R"("text":"kick")") != std::string::npos);
 }
 
+TEST_CASE("a frame's name is written once a step, however many primitives are drawn in it",
+          "[scene]") {
+  ScenePrimitive primitives[8];
+  ScenePoint points[4];
+  char strings[8 * (ScenePrimitive::kFrameBytes + ScenePrimitive::kTextBytes)];
+  std::uint16_t frames[8];
+  detail::SceneData data;
+  data.primitives = primitives;
+  data.primitive_capacity = 8;
+  data.points = points;
+  data.point_capacity = 4;
+  data.strings = strings;
+  data.string_capacity = sizeof strings;
+  data.frames = frames;
+  data.frame_capacity = 8;
+  Scene field(data, "field");
+  Scene robot(data, "robot");
+  field.circle({0.0, 0.0}, 1.0, SceneColor{});
+  robot.circle({1.0, 0.0}, 0.1, SceneColor{});
+  field.line({0.0, 0.0}, {1.0, 1.0}, SceneColor{});
+  Scene field_again(data, "field");  // another Scene, the same frame
+  field_again.text({0.0, 0.0}, "kick", SceneColor{});
+  REQUIRE(data.primitive_count == 4);
+  CHECK(data.frame_count == 2);
+  // Two names of kFrameBytes, and the text's 4 bytes.
+  CHECK(data.string_size == 2 * ScenePrimitive::kFrameBytes + 4);
+  const auto picture = data.picture();
+  CHECK(std::string(picture.frame(primitives[0])) == "field");
+  CHECK(std::string(picture.frame(primitives[1])) == "robot");
+  CHECK(primitives[2].frame == primitives[0].frame);
+  CHECK(primitives[3].frame == primitives[0].frame);
+  CHECK(std::string(picture.text(primitives[3]), picture.text_size(primitives[3])) == "kick");
+  std::string message;
+  append_scene_update(0, picture, message);
+  CHECK(message.find(R"("frame_id":"robot")") != std::string::npos);
+  CHECK(message.find(R"("text":"kick")") != std::string::npos);
+}
+
 namespace {
 
 // Draws a field that stays and `moving` discs that move with the step, `moving` changing with the
