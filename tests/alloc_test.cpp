@@ -557,11 +557,11 @@ TEST_CASE("drawing beyond a step's room drops and counts, without allocating", "
     CHECK(manager.scene_dropped_total() == 49 * (201 - Manager::kScenePrimitivesPerStep));
     CHECK(manager.scene().primitives[5].x0 == 5.0);
     // The frame is copied, cut to its room.
-    CHECK(std::string(manager.scene().primitives[0].frame) == "a frame name lo");
+    const auto picture = manager.scene().picture();
+    CHECK(std::string(picture.frame(picture.primitives[0])) == "a frame name lo");
     std::string message;
-    append_scene_update(0, manager.scene().primitives, manager.scene_primitive_count(),
-                        manager.scene().points, manager.scene().dropped, message);
-    CHECK(message.find(R"("metadata": [{"key": "dropped", "value": "73"}])") != std::string::npos);
+    append_scene_update(0, picture, message);
+    CHECK(message.find(R"("metadata":[{"key":"dropped","value":"73"}])") != std::string::npos);
   }
   SECTION("more points than room: the line is dropped whole") {
     Manager manager(test::compile_text(config(3, Manager::kScenePointsPerStep + 1), registry));
@@ -581,21 +581,65 @@ TEST_CASE("drawing beyond a step's room drops and counts, without allocating", "
 TEST_CASE("a text cut to its room is cut between characters", "[scene]") {
   ScenePrimitive primitives[2];
   ScenePoint points[1];
+  char strings[2 * (ScenePrimitive::kFrameBytes + ScenePrimitive::kTextBytes)];
+  std::uint16_t frames[1];
   detail::SceneData data;
   data.primitives = primitives;
   data.primitive_capacity = 2;
   data.points = points;
   data.point_capacity = 1;
+  data.strings = strings;
+  data.string_capacity = sizeof strings;
+  data.frames = frames;
+  data.frame_capacity = 1;
   Scene scene(data, "field");
   std::string long_text;
   for (int i = 0; i < 30; ++i) long_text += "\xc3\xa9";  // é, two bytes
   scene.text({0.0, 0.0}, long_text.c_str(), SceneColor{});
   scene.text({0.0, 0.0}, "kick", SceneColor{});
   std::string message;
-  append_scene_update(0, primitives, data.primitive_count, points, data.dropped, message);
+  append_scene_update(0, data.picture(), message);
   // 39 bytes fit: 19 whole characters, the first byte of the 20th left out.
-  CHECK(message.find("\"text\": \"" + long_text.substr(0, 38) + "\"") != std::string::npos);
-  CHECK(message.find(R"("text": "kick")") != std::string::npos);
+  CHECK(message.find("\"text\":\"" + long_text.substr(0, 38) + "\"") != std::string::npos);
+  CHECK(message.find(R"("text":"kick")") != std::string::npos);
+}
+
+TEST_CASE("a frame's name is written once a step, however many primitives are drawn in it",
+          "[scene]") {
+  ScenePrimitive primitives[8];
+  ScenePoint points[4];
+  char strings[8 * (ScenePrimitive::kFrameBytes + ScenePrimitive::kTextBytes)];
+  std::uint16_t frames[8];
+  detail::SceneData data;
+  data.primitives = primitives;
+  data.primitive_capacity = 8;
+  data.points = points;
+  data.point_capacity = 4;
+  data.strings = strings;
+  data.string_capacity = sizeof strings;
+  data.frames = frames;
+  data.frame_capacity = 8;
+  Scene field(data, "field");
+  Scene robot(data, "robot");
+  field.circle({0.0, 0.0}, 1.0, SceneColor{});
+  robot.circle({1.0, 0.0}, 0.1, SceneColor{});
+  field.line({0.0, 0.0}, {1.0, 1.0}, SceneColor{});
+  Scene field_again(data, "field");  // another Scene, the same frame
+  field_again.text({0.0, 0.0}, "kick", SceneColor{});
+  REQUIRE(data.primitive_count == 4);
+  CHECK(data.frame_count == 2);
+  // Two names of kFrameBytes, and the text's 4 bytes.
+  CHECK(data.string_size == 2 * ScenePrimitive::kFrameBytes + 4);
+  const auto picture = data.picture();
+  CHECK(std::string(picture.frame(primitives[0])) == "field");
+  CHECK(std::string(picture.frame(primitives[1])) == "robot");
+  CHECK(primitives[2].frame == primitives[0].frame);
+  CHECK(primitives[3].frame == primitives[0].frame);
+  CHECK(std::string(picture.text(primitives[3]), picture.text_size(primitives[3])) == "kick");
+  std::string message;
+  append_scene_update(0, picture, message);
+  CHECK(message.find(R"("frame_id":"robot")") != std::string::npos);
+  CHECK(message.find(R"("text":"kick")") != std::string::npos);
 }
 
 namespace {
@@ -650,6 +694,7 @@ TEST_CASE("a chained capture gives the reader every step's whole picture", "[rec
                       step.scene.size() * sizeof(ScenePrimitive)) == 0);
     CHECK(std::memcmp(step.scene_points.data(), drawn.points,
                       step.scene_points.size() * sizeof(ScenePoint)) == 0);
+    CHECK(std::memcmp(step.scene_strings, drawn.strings, drawn.string_size) == 0);
   }
 }
 
@@ -668,8 +713,16 @@ class Filler final : public Interface {
     const std::size_t points = kPoints[steps_ % 6];
     for (std::size_t i = 0; i < points; ++i) line_[i] = {at, static_cast<double>(i)};
     scene.polyline(line_, points, SceneColor{});
+    // Texts of every length, in a frame of their own, among the circles: the strings' room
+    // varies too.
+    Scene other = ctx.scene("labels");
+    const char* const text = "a label longer than the room a text has in a picture";
     for (std::size_t i = 1; i < kPrimitives[steps_ % 6]; ++i) {
-      scene.circle({at, static_cast<double>(i)}, 0.1, SceneColor{});
+      if (i % 7 == 0) {
+        other.text({at, 0.0}, text + (steps_ + i) % 50, SceneColor{});
+      } else {
+        scene.circle({at, static_cast<double>(i)}, 0.1, SceneColor{});
+      }
     }
     ++steps_;
   }
@@ -695,6 +748,7 @@ TEST_CASE("the pictures of steps not yet read are never written over", "[record]
   struct Drawn {
     std::vector<ScenePrimitive> primitives;
     std::vector<ScenePoint> points;
+    std::string strings;
   };
   std::vector<Drawn> drawn;
   for (std::size_t i = 0; i < 200; ++i) {
@@ -705,7 +759,8 @@ TEST_CASE("the pictures of steps not yet read are never written over", "[record]
     const auto& scene = manager.scene();
     REQUIRE(scene.dropped == 0);
     drawn.push_back({{scene.primitives, scene.primitives + manager.scene_primitive_count()},
-                     {scene.points, scene.points + scene.point_count}});
+                     {scene.points, scene.points + scene.point_count},
+                     {scene.strings, scene.string_size}});
     if (i + 1 < count) continue;
     const auto read = i + 1 - count;  // the oldest step still waiting
     detail::StepSnapshot step(shape, generation.blocks[read % count]);
@@ -717,5 +772,6 @@ TEST_CASE("the pictures of steps not yet read are never written over", "[record]
                       step.scene.size() * sizeof(ScenePrimitive)) == 0);
     CHECK(std::memcmp(step.scene_points.data(), drawn[read].points.data(),
                       step.scene_points.size() * sizeof(ScenePoint)) == 0);
+    CHECK(std::string(step.scene_strings, drawn[read].strings.size()) == drawn[read].strings);
   }
 }

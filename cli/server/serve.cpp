@@ -586,6 +586,7 @@ void LiveView::on_start(const Manager& manager) {
     ring_[i].record.reserve(2 * scratch_.size() + 256);
     ring_[i].scene.reserve(2 * manager.scene_primitive_count() + 16);
     ring_[i].scene_points.reserve(2 * manager.scene().point_count + 64);
+    ring_[i].scene_strings.reserve(2 * manager.scene().string_size + 64);
   }
   rate_hz_ = manager.program().rate_hz;
   {
@@ -623,6 +624,7 @@ void LiveView::on_step(const Manager& manager) {
     const auto& scene = manager.scene();
     slot.scene.assign(scene.primitives, scene.primitives + manager.scene_primitive_count());
     slot.scene_points.assign(scene.points, scene.points + scene.point_count);
+    slot.scene_strings.assign(scene.strings, scene.strings + scene.string_size);
     slot.scene_dropped = scene.dropped;
   }
   newest_ = step;
@@ -644,6 +646,7 @@ bool LiveView::copy_record(std::uint64_t step, std::string& out) {
 bool LiveView::copy_scene(std::uint64_t step, std::string& out) {
   thread_local std::vector<ScenePrimitive> primitives;
   thread_local std::vector<ScenePoint> points;
+  thread_local std::vector<char> strings;
   std::size_t dropped = 0;
   {
     Slot& slot = ring_[step % kRingSize];
@@ -651,10 +654,12 @@ bool LiveView::copy_scene(std::uint64_t step, std::string& out) {
     if (slot.step != step || (slot.scene.empty() && slot.scene_dropped == 0)) return false;
     primitives = slot.scene;
     points = slot.scene_points;
+    strings = slot.scene_strings;
     dropped = slot.scene_dropped;
   }
   const auto time_ns = static_cast<std::uint64_t>(static_cast<double>(step) * 1e9 / rate_hz_);
-  append_scene_update(time_ns, primitives.data(), primitives.size(), points.data(), dropped, out);
+  append_scene_update(
+      time_ns, {primitives.data(), primitives.size(), points.data(), strings.data(), dropped}, out);
   return true;
 }
 

@@ -151,6 +151,7 @@ class LiveView : public Observer {
     // What the step drew (StepContext::scene), formatted by the stream that sends it.
     std::vector<ScenePrimitive> scene;
     std::vector<ScenePoint> scene_points;
+    std::vector<char> scene_strings;
     std::size_t scene_dropped = 0;
   };
   /// A request the stepping thread answers, as it reads the program: an explanation, or a

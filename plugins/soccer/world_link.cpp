@@ -52,11 +52,12 @@ void draw(const World& world, const Observation& seen, const StepContext& ctx) {
   }
   scene.circle(at(position), 0.15, kRobot, true);
   scene.arrow(at(position), at(position + 0.45 * unit(robot.theta)), kHeading, 0.05);
+  // What the camera sees: one polyline from one edge of its view to the other through the robot,
+  // where two lines would repeat the robot's position in every message.
   const double gaze = robot.theta + world.head_yaw();
-  for (const double side : {-1.0, 1.0}) {
-    scene.line(at(position), at(position + 1.5 * unit(gaze + side * c.camera_half_fov)), kView,
-               0.02);
-  }
+  const ScenePoint view[] = {at(position + 1.5 * unit(gaze - c.camera_half_fov)), at(position),
+                             at(position + 1.5 * unit(gaze + c.camera_half_fov))};
+  scene.polyline(view, 3, kView, 0.02);
 
   const Point ball = world.ball();
   scene.circle(at(ball), 0.075, kBall, true);

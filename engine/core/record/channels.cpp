@@ -334,11 +334,15 @@ void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view 
 
 namespace {
 
+bool has_points(const ScenePrimitive& p) {
+  return p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon;
+}
+
 bool finite_primitive(const ScenePrimitive& p, const ScenePoint* points) {
   bool ok = std::isfinite(p.x0) && std::isfinite(p.y0) && std::isfinite(p.x1) &&
             std::isfinite(p.y1) && std::isfinite(p.size) && std::isfinite(p.color.r) &&
             std::isfinite(p.color.g) && std::isfinite(p.color.b) && std::isfinite(p.color.a);
-  for (std::uint32_t i = 0; ok && i < p.point_count; ++i) {
+  for (std::uint32_t i = 0; ok && has_points(p) && i < p.point_count; ++i) {
     ok = std::isfinite(points[p.point_begin + i].x) && std::isfinite(points[p.point_begin + i].y);
   }
   return ok;
@@ -377,45 +381,43 @@ double fine(double value) {
 
 // foxglove.Pose: at (x, y) on the ground, turned by `yaw` about the vertical.
 void append_pose(double x, double y, double yaw, Buffer& out) {
-  fmt::format_to(
-      Out(out),
-      FMT_COMPILE(R"("pose": {{"position": {{"x": {}, "y": {}, "z": 0}}, "orientation": )"
-                  R"({{"x": 0, "y": 0, "z": {}, "w": {}}}}})"),
-      fine(x), fine(y), fine(std::sin(yaw / 2)), fine(std::cos(yaw / 2)));
+  fmt::format_to(Out(out),
+                 FMT_COMPILE(R"("pose":{{"position":{{"x":{},"y":{},"z":0}},"orientation":)"
+                             R"({{"x":0,"y":0,"z":{},"w":{}}}}})"),
+                 fine(x), fine(y), fine(std::sin(yaw / 2)), fine(std::cos(yaw / 2)));
 }
 
 void append_color(const SceneColor& c, Buffer& out) {
-  fmt::format_to(Out(out), FMT_COMPILE(R"("color": {{"r": {}, "g": {}, "b": {}, "a": {}}})"), c.r,
-                 c.g, c.b, c.a);
+  fmt::format_to(Out(out), FMT_COMPILE(R"("color":{{"r":{},"g":{},"b":{},"a":{}}})"), c.r, c.g, c.b,
+                 c.a);
 }
 
 // foxglove.LinePrimitive: a strip (0) or a loop (1) through `count` points given by `point(i)`.
 template <typename Point>
 void append_line(int type, double width, const SceneColor& color, std::size_t count, Point point,
                  Buffer& out) {
-  fmt::format_to(Out(out), FMT_COMPILE(R"({{"type": {}, )"), type);
+  fmt::format_to(Out(out), FMT_COMPILE(R"({{"type":{},)"), type);
   append_pose(0, 0, 0, out);
-  fmt::format_to(Out(out),
-                 FMT_COMPILE(R"(, "thickness": {}, "scale_invariant": false, "points": [)"),
+  fmt::format_to(Out(out), FMT_COMPILE(R"(,"thickness":{},"scale_invariant":false,"points":[)"),
                  fine(width));
   for (std::size_t i = 0; i < count; ++i) {
     const ScenePoint at = point(i);
-    fmt::format_to(Out(out), FMT_COMPILE(R"({}{{"x": {}, "y": {}, "z": 0}})"), i > 0 ? ", " : "",
+    fmt::format_to(Out(out), FMT_COMPILE(R"({}{{"x":{},"y":{},"z":0}})"), i > 0 ? "," : "",
                    fine(at.x), fine(at.y));
   }
-  put(out, "], ");
+  put(out, "],");
   append_color(color, out);
-  put(out, R"(, "colors": [], "indices": []})");
+  put(out, R"(,"colors":[],"indices":[]})");
 }
 
 // A circle's outline, as Foxglove has no circle: a loop of this many points.
 constexpr int kCirclePoints = 32;
 constexpr double kPi = 3.14159265358979323846;
 
-// A frame's or a text's bytes, as Scene copied them: cut to their room, perhaps inside a UTF-8
-// character, whose start is then left out too, so that the JSON stays valid UTF-8.
-std::string_view cut(const char* text, std::size_t bytes) {
-  std::size_t size = strnlen(text, bytes);
+// A frame's or a text's `size` bytes, as Scene copied them: cut to their room of `bytes` (its
+// NUL included), perhaps inside a UTF-8 character, whose start is then left out too, so that the
+// JSON stays valid UTF-8.
+std::string_view cut(const char* text, std::size_t size, std::size_t bytes) {
   if (size + 1 < bytes) return {text, size};
   std::size_t start = size;  // of the last character
   while (start > 0 && (static_cast<unsigned char>(text[start - 1]) & 0xC0) == 0x80) --start;
@@ -425,28 +427,37 @@ std::string_view cut(const char* text, std::size_t bytes) {
   return {text, start - 1 + length <= size ? size : start - 1};
 }
 
+std::string_view frame_of(const ScenePicture& picture, const ScenePrimitive& p) {
+  const char* frame = picture.frame(p);
+  return cut(frame, strnlen(frame, ScenePrimitive::kFrameBytes), ScenePrimitive::kFrameBytes);
+}
+
+std::string_view text_of(const ScenePicture& picture, const ScenePrimitive& p) {
+  return cut(picture.text(p), picture.text_size(p), ScenePrimitive::kTextBytes);
+}
+
 void append_entity_id(std::string_view frame, bool still, Buffer& out);
 
 // The entity of a frame's primitives that are `still` (unchanged since the step before the last
 // whole picture) or not: its id is the frame's name and "still" or "moving", "field/moving".
 template <typename Primitives>
 void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame, bool still,
-                   Primitives each, const ScenePoint* points, std::size_t dropped, Buffer& out) {
-  fmt::format_to(Out(out), FMT_COMPILE(R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "frame_id": )"),
-                 sec, nsec);
+                   Primitives each, const ScenePicture& picture, std::size_t dropped, Buffer& out) {
+  fmt::format_to(Out(out), FMT_COMPILE(R"({{"timestamp":{{"sec":{},"nsec":{}}},"frame_id":)"), sec,
+                 nsec);
   put_name(out, frame);
-  put(out, R"(, "id": )");
+  put(out, R"(,"id":)");
   append_entity_id(frame, still, out);
-  put(out, R"(, "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [)");
+  put(out, R"(,"lifetime":{"sec":0,"nsec":0},"frame_locked":false,"metadata":[)");
   if (dropped > 0) {
-    fmt::format_to(Out(out), FMT_COMPILE(R"({{"key": "dropped", "value": "{}"}})"), dropped);
+    fmt::format_to(Out(out), FMT_COMPILE(R"({{"key":"dropped","value":"{}"}})"), dropped);
   }
   // The primitives `wanted`, separated by commas.
   const auto list = [&](auto wanted, auto append) {
     bool first = true;
     each([&](const ScenePrimitive& p) {
       if (!wanted(p)) return;
-      if (!first) put(out, ", ");
+      if (!first) put(out, ",");
       first = false;
       append(p);
     });
@@ -454,33 +465,32 @@ void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame
   const auto is = [](SceneShape shape) {
     return [shape](const ScenePrimitive& p) { return p.shape == shape; };
   };
-  put(out, R"(], "arrows": [)");
+  put(out, R"(],"arrows":[)");
   list(is(SceneShape::kArrow), [&](const ScenePrimitive& p) {
     const double length = std::hypot(p.x1 - p.x0, p.y1 - p.y0);
     const double head = std::min(0.4 * length, 3 * p.size);
     put(out, "{");
     append_pose(p.x0, p.y0, std::atan2(p.y1 - p.y0, p.x1 - p.x0), out);
     fmt::format_to(Out(out),
-                   FMT_COMPILE(R"(, "shaft_length": {}, "shaft_diameter": {}, "head_length": {}, )"
-                               R"("head_diameter": {}, )"),
+                   FMT_COMPILE(R"(,"shaft_length":{},"shaft_diameter":{},"head_length":{},)"
+                               R"("head_diameter":{},)"),
                    fine(length - head), fine(p.size), fine(head), fine(2.5 * p.size));
     append_color(p.color, out);
     put(out, "}");
   });
-  put(out, R"(], "cubes": [], "spheres": [], "cylinders": [)");
+  put(out, R"(],"cubes":[],"spheres":[],"cylinders":[)");
   list([](const ScenePrimitive& p) { return p.shape == SceneShape::kCircle && p.filled; },
        [&](const ScenePrimitive& p) {
          put(out, "{");
          append_pose(p.x0, p.y0, 0, out);
-         fmt::format_to(
-             Out(out),
-             FMT_COMPILE(R"(, "size": {{"x": {}, "y": {}, "z": 0.01}}, "bottom_scale": 1, )"
-                         R"("top_scale": 1, )"),
-             fine(2 * p.size), fine(2 * p.size));
+         fmt::format_to(Out(out),
+                        FMT_COMPILE(R"(,"size":{{"x":{},"y":{},"z":0.01}},"bottom_scale":1,)"
+                                    R"("top_scale":1,)"),
+                        fine(2 * p.size), fine(2 * p.size));
          append_color(p.color, out);
          put(out, "}");
        });
-  put(out, R"(], "lines": [)");
+  put(out, R"(],"lines":[)");
   list(
       [](const ScenePrimitive& p) {
         return p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon ||
@@ -498,37 +508,38 @@ void append_entity(std::uint64_t sec, std::uint64_t nsec, std::string_view frame
         } else {
           append_line(
               p.shape == SceneShape::kPolygon ? 1 : 0, p.size, p.color, p.point_count,
-              [&](std::size_t i) { return points[p.point_begin + i]; }, out);
+              [&](std::size_t i) { return picture.points[p.point_begin + i]; }, out);
         }
       });
-  put(out, R"(], "triangles": [], "texts": [)");
+  put(out, R"(],"triangles":[],"texts":[)");
   list(is(SceneShape::kText), [&](const ScenePrimitive& p) {
     put(out, "{");
     append_pose(p.x0, p.y0, 0, out);
-    fmt::format_to(
-        Out(out),
-        FMT_COMPILE(R"(, "billboard": true, "font_size": {}, "scale_invariant": false, )"),
-        fine(p.size));
+    fmt::format_to(Out(out),
+                   FMT_COMPILE(R"(,"billboard":true,"font_size":{},"scale_invariant":false,)"),
+                   fine(p.size));
     append_color(p.color, out);
-    put(out, R"(, "text": )");
-    put_name(out, cut(p.text, ScenePrimitive::kTextBytes));
+    put(out, R"(,"text":)");
+    put_name(out, text_of(picture, p));
     put(out, "}");
   });
-  put(out, R"(], "models": []})");
+  put(out, R"(],"models":[]})");
 }
 
-// Whether two primitives draw alike (their points compared by value, not by place).
-bool same(const ScenePrimitive& a, const ScenePoint* a_points, const ScenePrimitive& b,
-          const ScenePoint* b_points) {
+// Whether two primitives draw alike (their points and texts compared by value, not by place).
+bool same(const ScenePrimitive& a, const ScenePicture& a_picture, const ScenePrimitive& b,
+          const ScenePicture& b_picture) {
   if (a.shape != b.shape || a.filled != b.filled || a.point_count != b.point_count ||
       a.x0 != b.x0 || a.y0 != b.y0 || a.x1 != b.x1 || a.y1 != b.y1 || a.size != b.size ||
       a.color.r != b.color.r || a.color.g != b.color.g || a.color.b != b.color.b ||
-      a.color.a != b.color.a || std::strncmp(a.text, b.text, ScenePrimitive::kTextBytes) != 0) {
+      a.color.a != b.color.a) {
     return false;
   }
+  if (a.shape == SceneShape::kText) return text_of(a_picture, a) == text_of(b_picture, b);
+  if (!has_points(a)) return true;
   for (std::uint32_t i = 0; i < a.point_count; ++i) {
-    const ScenePoint& pa = a_points[a.point_begin + i];
-    const ScenePoint& pb = b_points[b.point_begin + i];
+    const ScenePoint& pa = a_picture.points[a.point_begin + i];
+    const ScenePoint& pb = b_picture.points[b.point_begin + i];
     if (pa.x != pb.x || pa.y != pb.y) return false;
   }
   return true;
@@ -542,16 +553,15 @@ void append_entity_id(std::string_view frame, bool still, Buffer& out) {
 
 }  // namespace
 
-void SceneUpdates::place(const ScenePrimitive* primitives, std::size_t count,
-                         const ScenePoint* points, std::vector<Placed>& placed,
+void SceneUpdates::place(const ScenePicture& picture, std::vector<Placed>& placed,
                          std::size_t& dropped) {
   placed.clear();
-  for (std::size_t i = 0; i < count; ++i) {
-    if (!finite_primitive(primitives[i], points)) {
+  for (std::size_t i = 0; i < picture.count; ++i) {
+    if (!finite_primitive(picture.primitives[i], picture.points)) {
       ++dropped;
       continue;
     }
-    const auto frame = cut(primitives[i].frame, ScenePrimitive::kFrameBytes);
+    const auto frame = frame_of(picture, picture.primitives[i]);
     std::uint32_t rank = 0;
     for (auto it = placed.rbegin(); it != placed.rend(); ++it) {
       if (it->frame == frame) {
@@ -563,13 +573,15 @@ void SceneUpdates::place(const ScenePrimitive* primitives, std::size_t count,
   }
 }
 
-void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitives,
-                          std::size_t count, const ScenePoint* points, std::size_t dropped,
-                          std::string& text) {
+void SceneUpdates::append(std::uint64_t time_ns, const ScenePicture& picture, std::string& text) {
   thread_local Buffer out;  // reused: no allocation once grown
   out.clear();
   const auto sec = time_ns / 1000000000u, nsec = time_ns % 1000000000u;
-  place(primitives, count, points, now_, dropped);
+  std::size_t dropped = picture.dropped;
+  const ScenePrimitive* primitives = picture.primitives;
+  place(picture, now_, dropped);
+  const ScenePicture before{primitives_.data(), primitives_.size(), points_.data(), strings_.data(),
+                            dropped_};
   const auto find = [&](const Placed& at) -> const Placed* {
     for (const Placed& p : last_) {
       if (p.rank == at.rank && p.frame == at.frame) return &p;
@@ -584,10 +596,10 @@ void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitive
                dropped > 0 || dropped_ > 0;
   std::size_t still_now = 0;
   for (Placed& at : now_) {
-    const Placed* before = find(at);
-    at.same = before != nullptr &&
-              same(primitives[at.index], points, primitives_[before->index], points_.data());
-    at.still = before != nullptr && before->still;
+    const Placed* before_at = find(at);
+    at.same = before_at != nullptr &&
+              same(primitives[at.index], picture, primitives_[before_at->index], before);
+    at.still = before_at != nullptr && before_at->still;
     if (at.still) ++still_now;
     if (at.still && !at.same) whole = true;
   }
@@ -620,32 +632,32 @@ void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitive
     };
   };
 
-  put(out, R"({"deletions": [)");
+  put(out, R"({"deletions":[)");
   if (whole) {
-    fmt::format_to(
-        Out(out), FMT_COMPILE(R"({{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 1, "id": ""}})"),
-        sec, nsec);
+    fmt::format_to(Out(out),
+                   FMT_COMPILE(R"({{"timestamp":{{"sec":{},"nsec":{}}},"type":1,"id":""}})"), sec,
+                   nsec);
     started_ = true;
     whole_at_ = time_ns;
   } else {
     bool first = true;
     each_frame(last_, [&](std::string_view frame) {
       if (!has(last_, frame, false) || has(now_, frame, false)) return;
-      fmt::format_to(
-          Out(out), FMT_COMPILE(R"({}{{"timestamp": {{"sec": {}, "nsec": {}}}, "type": 0, "id": )"),
-          first ? "" : ", ", sec, nsec);
+      fmt::format_to(Out(out),
+                     FMT_COMPILE(R"({}{{"timestamp":{{"sec":{},"nsec":{}}},"type":0,"id":)"),
+                     first ? "" : ",", sec, nsec);
       append_entity_id(frame, false, out);
       put(out, "}");
       first = false;
     });
   }
-  put(out, R"(], "entities": [)");
+  put(out, R"(],"entities":[)");
   bool first = true;
   each_frame(now_, [&](std::string_view frame) {
     for (const bool still : {true, false}) {
       if ((still && !whole) || !has(now_, frame, still)) continue;
-      if (!first) put(out, ", ");
-      append_entity(sec, nsec, frame, still, part(frame, still), points, first ? dropped : 0, out);
+      if (!first) put(out, ",");
+      append_entity(sec, nsec, frame, still, part(frame, still), picture, first ? dropped : 0, out);
       first = false;
     }
   });
@@ -653,22 +665,19 @@ void SceneUpdates::append(std::uint64_t time_ns, const ScenePrimitive* primitive
   text.append(out.data(), out.size());
 
   // What the viewer now shows, to compare the next step's drawing with.
-  primitives_.assign(primitives, primitives + count);
-  std::size_t point_end = 0;
-  for (std::size_t i = 0; i < count; ++i) {
-    point_end =
-        std::max<std::size_t>(point_end, primitives[i].point_begin + primitives[i].point_count);
-  }
-  points_.assign(points, points + point_end);
+  primitives_.assign(primitives, primitives + picture.count);
+  points_.assign(picture.points, picture.points + picture.point_end());
+  strings_.assign(picture.strings, picture.strings + picture.string_end());
   last_.swap(now_);
-  for (Placed& p : last_) p.frame = std::string_view(primitives_[p.index].frame, p.frame.size());
+  for (Placed& p : last_) {
+    p.frame = std::string_view(strings_.data() + primitives_[p.index].frame, p.frame.size());
+  }
   dropped_ = dropped;
 }
 
-void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
-                         const ScenePoint* points, std::size_t dropped, std::string& out) {
+void append_scene_update(std::uint64_t time_ns, const ScenePicture& picture, std::string& out) {
   SceneUpdates fresh;
-  fresh.append(time_ns, primitives, count, points, dropped, out);
+  fresh.append(time_ns, picture, out);
 }
 
 }  // namespace arbiter

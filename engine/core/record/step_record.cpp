@@ -526,6 +526,7 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   scene_counts.points =
       static_cast<std::uint32_t>(std::min(scene.point_count, scene.point_capacity));
   scene_counts.dropped = static_cast<std::uint32_t>(scene.dropped);
+  scene_counts.string_bytes = static_cast<std::uint32_t>(scene.string_size);
   // Copied as drawn, whole lines (the manager's buffers have room for them), streamed after the
   // picture before: comparing it with that one is the reader's work (SceneUpdates), and the
   // pictures of consecutive steps share pages, where each block's own room would put every step
@@ -534,15 +535,19 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
       round_up(scene_counts.primitives * sizeof(ScenePrimitive), SnapshotShape::kChunk);
   const auto point_bytes =
       round_up(scene_counts.points * sizeof(ScenePoint), SnapshotShape::kChunk);
+  const auto string_bytes = round_up(scene_counts.string_bytes, SnapshotShape::kChunk);
   std::size_t scene_at = last != nullptr ? last->scene_cursor : 0;
-  if (scene_at + primitive_bytes + point_bytes > into.scene_bytes) scene_at = 0;
+  if (scene_at + primitive_bytes + point_bytes + string_bytes > into.scene_bytes) scene_at = 0;
   scene_line.primitives_at = scene_at;
   scene_line.points_at = scene_at + primitive_bytes;
+  scene_line.strings_at = scene_line.points_at + point_bytes;
   stream_lines(into.scene + scene_at, reinterpret_cast<const std::byte*>(scene.primitives),
                primitive_bytes);
   stream_lines(into.scene + scene_line.points_at, reinterpret_cast<const std::byte*>(scene.points),
                point_bytes);
-  if (last != nullptr) last->scene_cursor = scene_line.points_at + point_bytes;
+  stream_lines(into.scene + scene_line.strings_at,
+               reinterpret_cast<const std::byte*>(scene.strings), string_bytes);
+  if (last != nullptr) last->scene_cursor = scene_line.strings_at + string_bytes;
   stream_lines(block + shape.scene_line_at, reinterpret_cast<const std::byte*>(&scene_line),
                sizeof scene_line);
   if (shape.streamed) {
@@ -586,6 +591,7 @@ StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)
   const auto& line = *part_of<SnapshotShape::SceneLine>(b, s.scene_line_at);
   scene = {part_of<ScenePrimitive>(from.scene, line.primitives_at), line.counts.primitives};
   scene_points = {part_of<ScenePoint>(from.scene, line.points_at), line.counts.points};
+  scene_strings = part_of<char>(from.scene, line.strings_at);
   scene_dropped = line.counts.dropped;
 }
 

@@ -117,25 +117,28 @@ struct SnapshotShape {
   };
   using Arg = std::pair<std::uint32_t, ArgValue>;
   struct SceneCounts {
-    std::uint32_t primitives = 0, points = 0, dropped = 0;
+    std::uint32_t primitives = 0, points = 0, dropped = 0, string_bytes = 0;
   };
-  /// A step's picture as the manager lays it out: the room for its primitives, then for its
-  /// points. A capture copies only what was drawn, whole lines, into the blocks' picture ring
-  /// (SnapshotBlock::scene), each step's after the step before's: a reader compares it with the
-  /// picture before (SceneUpdates), not the stepping thread.
+  /// A step's picture as the manager lays it out: the room for its primitives, for its points
+  /// and for its strings (frames' names, texts). A capture copies only what was drawn, whole
+  /// lines, into the blocks' picture ring (SnapshotBlock::scene), each step's after the step
+  /// before's: a reader compares it with the picture before (SceneUpdates), not the stepping
+  /// thread.
   static constexpr std::size_t kScenePrimitiveBytes =
       Manager::kScenePrimitivesPerStep * sizeof(ScenePrimitive);
   static constexpr std::size_t kScenePointBytes = Manager::kScenePointsPerStep * sizeof(ScenePoint);
-  static constexpr std::size_t kSceneBytes = kScenePrimitiveBytes + kScenePointBytes;
-  static_assert(kScenePrimitiveBytes % kChunk == 0 && kScenePointBytes % kChunk == 0,
+  static constexpr std::size_t kSceneStringBytes = Manager::kSceneStringBytesPerStep;
+  static constexpr std::size_t kSceneBytes =
+      kScenePrimitiveBytes + kScenePointBytes + kSceneStringBytes;
+  static_assert(kScenePrimitiveBytes % kChunk == 0 && kScenePointBytes % kChunk == 0 &&
+                    kSceneStringBytes % kChunk == 0,
                 "the picture's parts are whole chunks, copied as whole cache lines");
   /// The picture's counts and where it lies in the picture ring: one line of the block,
   /// written whole (streamed) at every capture.
   struct alignas(64) SceneLine {
     SceneCounts counts;
-    std::uint32_t unused = 0;                        // no padding: the line is copied whole
-    std::uint64_t primitives_at = 0, points_at = 0;  ///< bytes into the picture ring
-    std::uint64_t unused_rest[4] = {};
+    std::uint64_t primitives_at = 0, points_at = 0, strings_at = 0;  ///< bytes into the ring
+    std::uint64_t unused_rest[3] = {};  // no padding: the line is copied whole
   };
   static_assert(sizeof(SceneLine) == kChunk);
 
@@ -319,7 +322,11 @@ struct StepSnapshot {
   /// What code drew (StepContext::scene), and how many primitives it dropped for want of room.
   Span<ScenePrimitive> scene;
   Span<ScenePoint> scene_points;
+  const char* scene_strings = nullptr;
   std::uint32_t scene_dropped = 0;
+  ScenePicture picture() const {
+    return {scene.data(), scene.size(), scene_points.data(), scene_strings, scene_dropped};
+  }
 
   const void* value(const StepLayout& layout, std::uint32_t actuator) const {
     return values + layout.actuators[actuator].offset;

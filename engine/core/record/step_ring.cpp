@@ -64,9 +64,7 @@ bool RingStep::drew() const {
 }
 
 void RingStep::append_scene(SceneUpdates& updates, std::uint64_t time_ns, std::string& out) const {
-  const auto& s = *snapshot_;
-  updates.append(time_ns, s.scene.data(), s.scene.size(), s.scene_points.data(), s.scene_dropped,
-                 out);
+  updates.append(time_ns, snapshot_->picture(), out);
 }
 
 std::size_t RingStep::report_count() const {

@@ -128,6 +128,12 @@ Manager::Manager(Program program, std::shared_ptr<spdlog::logger> logger)
   data_.scene.primitive_capacity = scene_primitives_.size();
   data_.scene.points = scene_points_.data();
   data_.scene.point_capacity = scene_points_.size();
+  scene_strings_.resize(kSceneStringBytesPerStep);
+  data_.scene.strings = scene_strings_.data();
+  data_.scene.string_capacity = scene_strings_.size();
+  scene_frames_.resize(kScenePrimitivesPerStep);  // a frame is drawn in by a primitive at least
+  data_.scene.frames = scene_frames_.data();
+  data_.scene.frame_capacity = scene_frames_.size();
   data_.step = 0;
   const auto first = prepare(std::move(program), detail::Carryover{});
   swap_in(*first);

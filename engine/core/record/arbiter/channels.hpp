@@ -63,13 +63,11 @@ void append_log_message(std::uint64_t time_ns, LogLevel level, std::string_view 
                         std::string& out);
 
 /// A whole picture as a message of the `/arbiter/scene` channel (Foxglove's foxglove.SceneUpdate)
-/// at `time_ns`: a deletion of all entities, then the `count` primitives a step drew (their
-/// points in `points`), in the entities SceneUpdates gives them. `dropped` primitives (for want
-/// of room, or with a coordinate that is not a finite number) are told in the first entity's
-/// metadata ("dropped"). Appended to `out`, without a newline. Allocates: off the stepping
-/// thread.
-void append_scene_update(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
-                         const ScenePoint* points, std::size_t dropped, std::string& out);
+/// at `time_ns`: a deletion of all entities, then the primitives a step drew, in the entities
+/// SceneUpdates gives them. The picture's `dropped` primitives (for want of room), and those
+/// with a coordinate that is not a finite number, are told in the first entity's metadata
+/// ("dropped"). Appended to `out`, without a newline. Allocates: off the stepping thread.
+void append_scene_update(std::uint64_t time_ns, const ScenePicture& picture, std::string& out);
 
 /// The `/arbiter/scene` messages of one recording, step after step. A frame's primitives are in
 /// two entities, with lifetime 0 (a viewer keeps them until they are replaced or deleted): what
@@ -84,8 +82,7 @@ class SceneUpdates {
   static constexpr std::uint64_t kWholeEveryNs = 1000000000;
 
   /// The message of a step at `time_ns`, as append_scene_update() takes it, appended to `out`.
-  void append(std::uint64_t time_ns, const ScenePrimitive* primitives, std::size_t count,
-              const ScenePoint* points, std::size_t dropped, std::string& out);
+  void append(std::uint64_t time_ns, const ScenePicture& picture, std::string& out);
   /// The next message gives the whole picture (a new program, a new file).
   void restart() { started_ = false; }
 
@@ -97,8 +94,7 @@ class SceneUpdates {
     bool same = false;       // as the step before drew it
     bool still = false;      // in the entity of what does not move
   };
-  static void place(const ScenePrimitive* primitives, std::size_t count, const ScenePoint* points,
-                    std::vector<Placed>& placed, std::size_t& dropped);
+  static void place(const ScenePicture& picture, std::vector<Placed>& placed, std::size_t& dropped);
 
   bool started_ = false;
   std::uint64_t whole_at_ = 0;  // the last whole picture's time
@@ -106,6 +102,7 @@ class SceneUpdates {
   // The last message's step: what a viewer shows now. Reused: no allocation once grown.
   std::vector<ScenePrimitive> primitives_;
   std::vector<ScenePoint> points_;
+  std::vector<char> strings_;
   std::vector<Placed> last_, now_;
 };
 

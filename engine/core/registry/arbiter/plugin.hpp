@@ -15,7 +15,7 @@
 #include "arbiter/registry.hpp"
 
 /// Bumped whenever a change to the engine's headers breaks plugins built against older ones.
-#define ARBITER_PLUGIN_API_VERSION 7
+#define ARBITER_PLUGIN_API_VERSION 8
 
 #define ARBITER_PLUGIN_EXPORT extern "C" __attribute__((visibility("default")))
 

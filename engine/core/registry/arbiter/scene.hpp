@@ -29,7 +29,9 @@ enum class SceneShape : std::uint8_t {
   kText = 4,     ///< `text` at (x0, y0), `size` high
 };
 
-/// One primitive, as the step wrote it. Frame and text are copied into it: a primitive holds no
+/// One primitive, as the step wrote it: one 64-byte cache line, so that an observer copies a
+/// step's picture in few lines. Its frame's name and its text are copied into the step's strings
+/// (SceneData::strings; read them with ScenePicture::frame() and text()): a primitive holds no
 /// pointer into plugin code, which a hot reload may unload.
 struct ScenePrimitive {
   static constexpr std::size_t kFrameBytes = 16;  ///< a longer frame name is cut
@@ -37,13 +39,53 @@ struct ScenePrimitive {
 
   SceneShape shape = SceneShape::kLine;
   bool filled = false;
-  std::uint16_t point_count = 0;  ///< kLine, kPolygon: in the step's points
-  std::uint32_t point_begin = 0;  ///< kLine, kPolygon: the first
+  std::uint16_t frame = 0;  ///< its frame's name: kFrameBytes in the step's strings, from here
+  std::uint16_t point_begin = 0;  ///< kLine, kPolygon: the first of the step's points; kText: the
+                                  ///< first byte of its text in the step's strings
+  std::uint16_t point_count = 0;  ///< kLine, kPolygon: how many points; kText: the text's bytes
   SceneColor color;
   double x0 = 0.0, y0 = 0.0, x1 = 0.0, y1 = 0.0;  ///< kCircle: x1 is its outline's width
   double size = 0.0;  ///< a line's width, a circle's radius, a text's height (m)
-  char frame[kFrameBytes] = {};
-  char text[kTextBytes] = {};
+};
+static_assert(sizeof(ScenePrimitive) == 64, "a primitive is one cache line");
+
+/// A step's picture as an observer reads it: the primitives, the points of their lines, the
+/// strings their frames and texts are in, and how many primitives were dropped.
+struct ScenePicture {
+  const ScenePrimitive* primitives = nullptr;
+  std::size_t count = 0;
+  const ScenePoint* points = nullptr;
+  const char* strings = nullptr;
+  std::size_t dropped = 0;
+
+  /// The name of `p`'s frame, as copied (cut to kFrameBytes - 1 bytes).
+  const char* frame(const ScenePrimitive& p) const { return strings + p.frame; }
+  /// The bytes of a kText's text, as copied (cut to kTextBytes - 1 bytes): not NUL-terminated.
+  const char* text(const ScenePrimitive& p) const { return strings + p.point_begin; }
+  std::size_t text_size(const ScenePrimitive& p) const { return p.point_count; }
+  /// The points and strings the primitives use: a copy of the picture needs no more of them.
+  std::size_t point_end() const {
+    std::size_t end = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto& p = primitives[i];
+      if (p.shape == SceneShape::kLine || p.shape == SceneShape::kPolygon) {
+        end = end > p.point_begin + p.point_count ? end : p.point_begin + p.point_count;
+      }
+    }
+    return end;
+  }
+  std::size_t string_end() const {
+    std::size_t end = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto& p = primitives[i];
+      const std::size_t frame_end = p.frame + ScenePrimitive::kFrameBytes;
+      end = end > frame_end ? end : frame_end;
+      if (p.shape == SceneShape::kText) {
+        end = end > p.point_begin + p.point_count ? end : p.point_begin + p.point_count;
+      }
+    }
+    return end;
+  }
 };
 
 namespace detail {
@@ -57,8 +99,23 @@ struct SceneData {
   ScenePoint* points = nullptr;
   std::size_t point_capacity = 0;
   std::size_t point_count = 0;
-  /// Primitives dropped this step: beyond the capacity, or their points beyond the points'.
+  /// The frames' names (kFrameBytes each, the rest zeroed) and the texts, in the order drawn.
+  char* strings = nullptr;
+  std::size_t string_capacity = 0;
+  std::size_t string_size = 0;
+  /// Where each frame drawn in this step has its name in the strings, in the order first drawn.
+  std::uint16_t* frames = nullptr;
+  std::size_t frame_capacity = 0;
+  std::size_t frame_count = 0;
+  /// Primitives dropped this step: beyond the capacity, or their points (or text, or frame)
+  /// beyond the room for them.
   std::size_t dropped = 0;
+
+  /// What was drawn, as an observer reads it.
+  ScenePicture picture() const {
+    return {primitives, primitive_count < primitive_capacity ? primitive_count : primitive_capacity,
+            points, strings, dropped};
+  }
 };
 
 }  // namespace detail
@@ -108,46 +165,92 @@ class Scene {
   }
   /// `text` (copied, cut to ScenePrimitive::kTextBytes - 1 bytes) at `at`, `height` metres high.
   void text(ScenePoint at, const char* text, SceneColor color, double height = 0.3) {
-    if (ScenePrimitive* p = add(SceneShape::kText, color)) {
-      p->x0 = at.x;
-      p->y0 = at.y;
-      p->size = height;
-      copy(text, p->text, ScenePrimitive::kTextBytes);
+    std::size_t size = 0;
+    while (text != nullptr && text[size] != '\0' && size + 1 < ScenePrimitive::kTextBytes) ++size;
+    ScenePrimitive* p = add(SceneShape::kText, color);
+    if (p == nullptr) return;
+    if (data_->string_size + size > data_->string_capacity ||
+        data_->string_size + size > UINT16_MAX) {
+      --data_->primitive_count;
+      ++data_->dropped;
+      return;
     }
+    p->x0 = at.x;
+    p->y0 = at.y;
+    p->size = height;
+    p->point_begin = static_cast<std::uint16_t>(data_->string_size);
+    p->point_count = static_cast<std::uint16_t>(size);
+    for (std::size_t i = 0; i < size; ++i) data_->strings[data_->string_size++] = text[i];
   }
 
  private:
-  static void copy(const char* from, char* to, std::size_t bytes) {
-    std::size_t i = 0;
-    for (; from != nullptr && from[i] != '\0' && i + 1 < bytes; ++i) to[i] = from[i];
-    to[i] = '\0';
+  static constexpr std::uint32_t kUnresolved = ~std::uint32_t{0};
+
+  // The step's place of this frame's name in the strings, added when first drawn in: false when
+  // there is no room for it. The name is read at every primitive, as it was copied into each.
+  bool resolve(std::uint16_t& at) {
+    char name[ScenePrimitive::kFrameBytes] = {};
+    for (std::size_t i = 0;
+         frame_ != nullptr && frame_[i] != '\0' && i + 1 < ScenePrimitive::kFrameBytes; ++i) {
+      name[i] = frame_[i];
+    }
+    const auto same = [&](std::size_t index) {
+      const char* known = data_->strings + data_->frames[index];
+      for (std::size_t i = 0; i < ScenePrimitive::kFrameBytes; ++i) {
+        if (known[i] != name[i]) return false;
+      }
+      return true;
+    };
+    if (frame_index_ < data_->frame_count && same(frame_index_)) {
+      at = data_->frames[frame_index_];
+      return true;
+    }
+    for (std::size_t index = 0; index < data_->frame_count; ++index) {
+      if (!same(index)) continue;
+      frame_index_ = static_cast<std::uint32_t>(index);
+      at = data_->frames[index];
+      return true;
+    }
+    if (data_->frame_count >= data_->frame_capacity ||
+        data_->string_size + ScenePrimitive::kFrameBytes > data_->string_capacity ||
+        data_->string_size + ScenePrimitive::kFrameBytes > UINT16_MAX) {
+      return false;
+    }
+    frame_index_ = static_cast<std::uint32_t>(data_->frame_count);
+    at = static_cast<std::uint16_t>(data_->string_size);
+    data_->frames[data_->frame_count++] = at;
+    for (std::size_t i = 0; i < ScenePrimitive::kFrameBytes; ++i) {
+      data_->strings[data_->string_size++] = name[i];
+    }
+    return true;
   }
   ScenePrimitive* add(SceneShape shape, SceneColor color) {
-    if (data_->primitive_count >= data_->primitive_capacity) {
+    std::uint16_t frame = 0;
+    if (data_->primitive_count >= data_->primitive_capacity || !resolve(frame)) {
       ++data_->dropped;
       return nullptr;
     }
     ScenePrimitive& p = data_->primitives[data_->primitive_count++];
     p.shape = shape;
     p.filled = false;
-    p.point_count = 0;
+    p.frame = frame;
     p.point_begin = 0;
+    p.point_count = 0;
     p.color = color;
     p.x0 = p.y0 = p.x1 = p.y1 = p.size = 0.0;
-    copy(frame_, p.frame, ScenePrimitive::kFrameBytes);
-    p.text[0] = '\0';
     return &p;
   }
   void add_points(SceneShape shape, const ScenePoint* points, std::size_t count, SceneColor color,
                   double width) {
     const std::size_t least = shape == SceneShape::kPolygon ? 3 : 2;
-    if (count < least || count > UINT16_MAX || data_->point_count + count > data_->point_capacity) {
+    if (count < least || count > UINT16_MAX || data_->point_count + count > data_->point_capacity ||
+        data_->point_count > UINT16_MAX) {
       ++data_->dropped;
       return;
     }
     ScenePrimitive* p = add(shape, color);
     if (p == nullptr) return;
-    p->point_begin = static_cast<std::uint32_t>(data_->point_count);
+    p->point_begin = static_cast<std::uint16_t>(data_->point_count);
     p->point_count = static_cast<std::uint16_t>(count);
     p->size = width;
     for (std::size_t i = 0; i < count; ++i) data_->points[data_->point_count++] = points[i];
@@ -155,6 +258,7 @@ class Scene {
 
   detail::SceneData* data_;
   const char* frame_;
+  std::uint32_t frame_index_ = kUnresolved;  // a guess: checked against the name at every draw
 };
 
 }  // namespace arbiter

@@ -80,6 +80,10 @@ class Manager {
   /// Primitives and their points drawn per step (StepContext::scene); later ones are dropped.
   static constexpr std::size_t kScenePrimitivesPerStep = 128;
   static constexpr std::size_t kScenePointsPerStep = 512;
+  /// Room for the frames' names and the texts of a step's picture: as much as the most
+  /// primitives may take, so that only the primitives and the points run out.
+  static constexpr std::size_t kSceneStringBytesPerStep =
+      kScenePrimitivesPerStep * (ScenePrimitive::kFrameBytes + ScenePrimitive::kTextBytes);
 
   /// Takes the program; run-time warnings go to `logger` (default: spdlog's default logger).
   explicit Manager(Program program, std::shared_ptr<spdlog::logger> logger = nullptr);
@@ -230,6 +234,7 @@ class Manager {
   void clear_scene() noexcept {
     scene_dropped_total_ += data_.scene.dropped;
     data_.scene.primitive_count = data_.scene.point_count = data_.scene.dropped = 0;
+    data_.scene.string_size = data_.scene.frame_count = 0;
   }
   void apply(Staged& staged);
   void end_replaced(Staged& staged);
@@ -259,6 +264,8 @@ class Manager {
   std::vector<char> report_text_;  ///< the text slots of formatted reports (StepContext::report)
   std::vector<ScenePrimitive> scene_primitives_;
   std::vector<ScenePoint> scene_points_;
+  std::vector<char> scene_strings_;
+  std::vector<std::uint16_t> scene_frames_;
   std::uint64_t scene_dropped_total_ = 0;
   detail::StepData data_;
 };
