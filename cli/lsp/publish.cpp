@@ -430,6 +430,9 @@ json Server::code_actions(const json& params) const {
 
 json Server::resolve_code_action(const json& action) const {
   const json& data = action.at("data");
+  // Another server's action (an unknown op is refused by operation_of).
+  if (!data.is_object() || !data.contains("uri") || !data.contains("op"))
+    throw RequestError{kRequestFailed, "not a code action of this server to resolve"};
   const std::string uri = data.at("uri");
   const std::string path = uri_to_path(uri);
   const std::string* text = text_of(path);
