@@ -1244,6 +1244,29 @@ TEST_CASE(
   }
 }
 
+TEST_CASE("the index gives each item of a queue by its position, a state queued twice at each",
+          "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const ConfigIndex index = index_config(yaml.loaded(), nullptr);
+  const std::string& text = yaml.text("ops.yaml");
+  std::vector<std::string> plan;
+  for (const auto& item : index.queue_items) {
+    if (item.machine != "plan") continue;
+    // The state's name, by which an editor finds the item under the cursor.
+    CHECK(text.substr(item.begin, item.end - item.begin) == item.state);
+    plan.push_back(fmt::format("{}@{}", item.state, item.index));
+  }
+  CHECK(plan == std::vector<std::string>{"one@0", "two@1", "one@2"});
+
+  Workspace json({{"ops.json", kOpsJson}});
+  std::vector<std::string> queued;
+  for (const auto& item : index_config(json.loaded(), nullptr).queue_items) {
+    CHECK(json.text("ops.json").substr(item.begin, item.end - item.begin) == item.state);
+    queued.push_back(fmt::format("{}@{}", item.state, item.index));
+  }
+  CHECK(queued == std::vector<std::string>{"one@0", "two@1"});
+}
+
 TEST_CASE("a state is declared in its machine's states:, and removed unless something names it",
           "[edit]") {
   Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});

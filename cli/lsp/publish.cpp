@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <map>
@@ -65,6 +66,26 @@ std::string unused_name(const std::string& name, const std::set<std::string>& ta
   std::string candidate = name;
   for (int n = 2; taken.count(candidate) != 0; ++n) candidate = fmt::format("{}_{}", name, n);
   return candidate;
+}
+
+/// The engine's operation a code action offered without an edit names in its `data`, with the
+/// studio's names for the operation and its fields (docs/studio.md): the one place both the
+/// offer (the operation alone, cheap: no load) and the resolve (checked) compute it.
+EditResult operation_of(const Loaded& loaded, const json& data) {
+  const std::string op = data.value("op", "");
+  auto text = [&](const char* key) { return data.value(key, std::string()); };
+  auto number = [&](const char* key) { return data.value(key, std::size_t{0}); };
+  if (op == "add_behaviour")
+    return add_behaviour(loaded, text("layer"), text("name"), text("type"));
+  if (op == "move_behaviour")
+    return move_behaviour(loaded, text("layer"), text("name"), {}, number("index"));
+  if (op == "move_layer") return move_layer(loaded, text("layer"), number("index"));
+  if (op == "remove_actuator") return remove_actuator(loaded, text("layer"), text("name"));
+  if (op == "move_queue_entry")
+    return move_queue_entry(loaded, text("machine"), number("from"), number("to"));
+  if (op == "remove_queue_entry")
+    return remove_queue_entry(loaded, text("machine"), number("index"));
+  throw RequestError{kRequestFailed, "not a code action of this server to resolve"};
 }
 
 }  // namespace
@@ -313,6 +334,75 @@ json Server::code_actions(const json& params) const {
            {"edit", {{"changes", changes}}}});
     }
   }
+  // The moves and removals whose edits are computed when one is chosen, as adding a behaviour's
+  // are (a checked edit loads the config again): offered when the operation alone gives edits.
+  auto offer_lazily = [&](const std::string& title, json data) {
+    data["uri"] = uri;
+    if (!operation_of(analysis->loaded, data).ok()) return;
+    actions.push_back({{"title", title}, {"kind", "refactor.rewrite"}, {"data", std::move(data)}});
+  };
+  // On a behaviour's declaration: up or down among its layer's behaviours.
+  if (item && item->definition && item->kind == SymbolKind::kBehaviour) {
+    std::size_t position = 0;
+    for (const auto& other : analysis->occurrences) {
+      if (&other == item) break;
+      if (other.definition && other.kind == SymbolKind::kBehaviour && other.scope == item->scope &&
+          other.file == item->file)
+        ++position;
+    }
+    json move = {{"op", "move_behaviour"}, {"layer", item->scope}, {"name", item->name}};
+    if (position > 0) {
+      move["index"] = position - 1;
+      offer_lazily(fmt::format("Move the behaviour '{}' up", item->name), move);
+    }
+    move["index"] = position + 1;
+    offer_lazily(fmt::format("Move the behaviour '{}' down", item->name), move);
+  }
+  // On a layer's name: up or down in the layer order, among the layers of its file.
+  if (item && item->definition && item->kind == SymbolKind::kLayer && analysis->loaded.model) {
+    const auto& layers = analysis->loaded.model->layers;
+    for (std::size_t at = 0; at < layers.size(); ++at) {
+      if (layers[at].name.text != item->name) continue;
+      json move = {{"op", "move_layer"}, {"layer", item->name}};
+      if (at > 0) {
+        move["index"] = at - 1;
+        offer_lazily(fmt::format("Move the layer '{}' up", item->name), move);
+      }
+      move["index"] = at + 1;
+      offer_lazily(fmt::format("Move the layer '{}' down", item->name), move);
+      break;
+    }
+  }
+  // On an actuator's declaration: remove it, offered when nothing uses it (the operation names
+  // the uses otherwise).
+  if (item && item->definition && item->kind == SymbolKind::kActuator && analysis->loaded.model) {
+    for (const auto& layer : analysis->loaded.model->layers) {
+      const bool declares = std::any_of(
+          layer.actuators.begin(), layer.actuators.end(),
+          [&](const ActuatorDecl& actuator) { return actuator.name.text == item->name; });
+      if (!declares) continue;
+      offer_lazily(fmt::format("Remove the actuator '{}'", item->name),
+                   {{"op", "remove_actuator"}, {"layer", layer.name.text}, {"name", item->name}});
+      break;
+    }
+  }
+  // On an item of a state machine's queue: up, down, or out of the queue.
+  const std::size_t at = lines.offset(range.value("start", json::object()));
+  for (std::size_t i = 0; analysis && i < analysis->queue_items.size(); ++i) {
+    const QueueItemSite& queued = analysis->queue_items[i];
+    if (queued.file != path || at < queued.begin || at > queued.end) continue;
+    json move = {{"op", "move_queue_entry"}, {"machine", queued.machine}, {"from", queued.index}};
+    if (queued.index > 0) {
+      move["to"] = queued.index - 1;
+      offer_lazily(fmt::format("Move '{}' up in the queue", queued.state), move);
+    }
+    move["to"] = queued.index + 1;
+    offer_lazily(fmt::format("Move '{}' down in the queue", queued.state), move);
+    offer_lazily(
+        fmt::format("Remove '{}' from the queue", queued.state),
+        {{"op", "remove_queue_entry"}, {"machine", queued.machine}, {"index", queued.index}});
+    break;
+  }
   // On a layer's name: a behaviour of each class the config can use, as the studio's palette
   // adds one. Its edit is computed when one is chosen (codeAction/resolve): checking every
   // class's here would load the config once per class at each move of the cursor.
@@ -340,7 +430,8 @@ json Server::code_actions(const json& params) const {
 
 json Server::resolve_code_action(const json& action) const {
   const json& data = action.at("data");
-  if (data.value("op", "") != "add_behaviour")
+  // Another server's action (an unknown op is refused by operation_of).
+  if (!data.is_object() || !data.contains("uri") || !data.contains("op"))
     throw RequestError{kRequestFailed, "not a code action of this server to resolve"};
   const std::string uri = data.at("uri");
   const std::string path = uri_to_path(uri);
@@ -350,13 +441,11 @@ json Server::resolve_code_action(const json& action) const {
   if (!analysed || analysed->text() != *text)
     throw RequestError{kRequestFailed, "the file is not open, or not a config"};
   Registry registry = make_registry_();
-  const EditResult added =
-      checked(analysis->loaded,
-              add_behaviour(analysis->loaded, data.at("layer"), data.at("name"), data.at("type")),
-              registry, options_);
-  if (!added.ok()) throw RequestError{kRequestFailed, added.refused};
+  const EditResult result =
+      checked(analysis->loaded, operation_of(analysis->loaded, data), registry, options_);
+  if (!result.ok()) throw RequestError{kRequestFailed, result.refused};
   json changes = json::object();
-  add_changes(*analysis, added.edits, changes);
+  add_changes(*analysis, result.edits, changes);
   json resolved = action;
   resolved["edit"] = {{"changes", changes}};
   return resolved;

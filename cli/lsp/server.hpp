@@ -87,7 +87,8 @@ class Server {
   json rename(const json& params) const;
   json symbols(const json& params) const;
   json code_actions(const json& params) const;
-  /// codeAction/resolve: the edit of an action offered without one (adding a behaviour).
+  /// codeAction/resolve: the edit of an action offered without one (adding a behaviour, the
+  /// moves, removing an actuator or a queue item), checked.
   json resolve_code_action(const json& action) const;
 
   std::function<Registry()> make_registry_;

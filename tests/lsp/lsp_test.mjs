@@ -738,6 +738,134 @@ test("a code action on a layer's name adds a behaviour of a registered class, it
   });
 });
 
+// The code actions at `needle` (plus `skip` characters) of an open file, by title.
+async function actionsAt(client, uri, text, needle, skip = 0) {
+  const at = positionOf(text, needle, { skip });
+  const actions = await client.request('textDocument/codeAction',
+    { textDocument: { uri }, range: { start: at, end: at }, context: { diagnostics: [] } });
+  return new Map(actions.map((a) => [a.title, a]));
+}
+
+// `text` with the edit of the resolved action `action` applied; the action came without one.
+async function resolved(client, uri, text, action) {
+  assert.ok(action);
+  assert.equal(action.edit, undefined);
+  const done = await client.request('codeAction/resolve', action);
+  return applyEdits(text, done.edit.changes[uri]);
+}
+
+test("code actions on a behaviour's declaration move it up and down its layer, as the studio does", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const actions = await actionsAt(client, uri, text, 'go_behind_ball: {type', 2);
+    const up = await resolved(client, uri, text, actions.get("Move the behaviour 'go_behind_ball' up"));
+    assert.equal(up, text.replace('      kick_ball: {type: soccer.KickBall}\n      go_behind_ball: {type: soccer.GoBehindBall}\n',
+      '      go_behind_ball: {type: soccer.GoBehindBall}\n      kick_ball: {type: soccer.KickBall}\n'));
+    const down = await resolved(client, uri, text, actions.get("Move the behaviour 'go_behind_ball' down"));
+    assert.equal(down, text.replace('      go_behind_ball: {type: soccer.GoBehindBall}\n      search_for_ball: {type: soccer.SearchForBall, params: {turn_rate: 0.6}}\n',
+      '      search_for_ball: {type: soccer.SearchForBall, params: {turn_rate: 0.6}}\n      go_behind_ball: {type: soccer.GoBehindBall}\n'));
+    for (const moved of [up, down]) {
+      const file = path.join(tempDir(), path.basename(uri));
+      fs.writeFileSync(file, moved);
+      assert.deepEqual(validated(file).filter((d) => d.severity === 1), []);
+    }
+    // The first has no place above it, the last none below.
+    const first = await actionsAt(client, uri, text, 'kick_ball: {type', 2);
+    assert.ok(!first.has("Move the behaviour 'kick_ball' up"), JSON.stringify([...first.keys()]));
+    assert.ok(first.has("Move the behaviour 'kick_ball' down"));
+    const last = await actionsAt(client, uri, text, 'head_control: {type', 2);
+    assert.ok(!last.has("Move the behaviour 'head_control' down"), JSON.stringify([...last.keys()]));
+    assert.ok(last.has("Move the behaviour 'head_control' up"));
+  });
+});
+
+test('a JSON behaviour moved down takes its lines and keeps the commas right', async () => {
+  await withClient(async (client) => {
+    const { uri, text } = json();
+    await client.open(uri, text);
+    const actions = await actionsAt(client, uri, text, '"search_for_ball": {', 1);
+    const moved = await resolved(client, uri, text, actions.get("Move the behaviour 'search_for_ball' down"));
+    const block = (name, next) => text.slice(text.indexOf(`        "${name}": {`), text.indexOf(next));
+    const search = block('search_for_ball', '        "head_control"');
+    const head = block('head_control', '      },\n      "inhibitions"');
+    assert.equal(moved, text.replace(search + head,
+      head.replace(/\n$/, ',\n') + search.replace(/,\n$/, '\n')));
+    assert.deepEqual(Object.keys(JSON.parse(moved).layers[0].behaviours),
+      ['kick_ball', 'go_behind_ball', 'head_control', 'search_for_ball']);
+    const file = path.join(tempDir(), path.basename(uri));
+    fs.writeFileSync(file, moved);
+    assert.deepEqual(validated(file).filter((d) => d.severity === 1), []);
+  });
+});
+
+test("code actions on a layer's name move it among its file's layers", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = yaml();
+    await client.open(uri, text);
+    const control = await actionsAt(client, uri, text, 'name: control', 7);
+    assert.ok(!control.has("Move the layer 'control' down"), JSON.stringify([...control.keys()]));
+    const moved = await resolved(client, uri, text, control.get("Move the layer 'control' up"));
+    const world = text.slice(text.indexOf('  - name: world'), text.indexOf('  - name: control'));
+    const rest = text.slice(text.indexOf('  - name: control'));
+    assert.equal(moved, text.replace(world + rest, rest + '\n' + world.replace(/\n\n$/, '\n')));
+    const top = await actionsAt(client, uri, text, 'name: world', 7);
+    assert.ok(top.has("Move the layer 'world' down"), JSON.stringify([...top.keys()]));
+    assert.ok(!top.has("Move the layer 'world' up"));
+  });
+});
+
+test('a code action on an actuator removes it when nothing uses it, and is refused with the error a use it cannot see would leave', async () => {
+  await withClient(async (client) => {
+    const original = yaml();
+    const uri = original.uri;
+    const spare = '      spare: {type: bool}   # not read by anything\n';
+    const text = original.text.replace('    behaviours:\n', spare + '    behaviours:\n');
+    await client.open(uri, text);
+    const actions = await actionsAt(client, uri, text, 'spare: {type', 1);
+    assert.equal(await resolved(client, uri, text, actions.get("Remove the actuator 'spare'")), original.text);
+    // The world layer reads kick: not offered.
+    const kick = await actionsAt(client, uri, text, 'kick: {type', 1);
+    assert.ok(![...kick.keys()].some((t) => t.startsWith('Remove the actuator')), JSON.stringify([...kick.keys()]));
+    // In JSON a scripted behaviour writes it, which only the check by loading finds.
+    const config = json();
+    await client.open(config.uri, config.text);
+    const written = await actionsAt(client, config.uri, config.text, '"kick": {"type"', 1);
+    const remove = written.get("Remove the actuator 'kick'");
+    assert.ok(remove, JSON.stringify([...written.keys()]));
+    await assert.rejects(client.request('codeAction/resolve', remove), /would leave an error.*kick/);
+  });
+});
+
+test("code actions on a state machine's queue item move it and take it out of the queue", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = read('configs/paper/goalie_plan.yaml');
+    await client.open(uri, text);
+    const actions = await actionsAt(client, uri, text, '- obstacle_ahead', 2);
+    const walk = "      - walk_to_pose: {hold: 6}   # into the goal: (0.0, -4.2, 1.57)\n";
+    const up = await resolved(client, uri, text, actions.get("Move 'obstacle_ahead' up in the queue"));
+    assert.equal(up, text.replace(walk + '      - obstacle_ahead\n', '      - obstacle_ahead\n' + walk));
+    const down = await resolved(client, uri, text, actions.get("Move 'obstacle_ahead' down in the queue"));
+    assert.equal(down, text.replace('      - obstacle_ahead\n      - monitor_ball\n', '      - monitor_ball\n      - obstacle_ahead\n'));
+    const removed = await resolved(client, uri, text, actions.get("Remove 'obstacle_ahead' from the queue"));
+    assert.equal(removed, text.replace('      - obstacle_ahead\n', ''));
+    for (const edited of [up, down, removed]) {
+      const file = path.join(tempDir(), path.basename(uri));
+      fs.writeFileSync(file, edited);
+      assert.deepEqual(validated(file).filter((d) => d.severity === 1), []);
+    }
+    // An item with params, found by its state's name; the last has no place below it.
+    const last = await actionsAt(client, uri, text, '      - monitor_ball', 8);
+    assert.ok(last.has("Move 'monitor_ball' up in the queue"), JSON.stringify([...last.keys()]));
+    assert.ok(!last.has("Move 'monitor_ball' down in the queue"));
+    const withParams = await actionsAt(client, uri, text, '- walk_to_pose: {hold: 6}', 2);
+    assert.ok(withParams.has("Remove 'walk_to_pose' from the queue"), JSON.stringify([...withParams.keys()]));
+    // A state named elsewhere than in the queue (a pre-emption) gets no queue action.
+    const preempt = await actionsAt(client, uri, text, 'go_to: wait_for_button', 6);
+    assert.ok(![...preempt.keys()].some((t) => t.includes('queue')), JSON.stringify([...preempt.keys()]));
+  });
+});
+
 test('completion items replace the word typed, a dotted prefix included', async () => {
   await withClient(async (client) => {
     const { uri, text } = yaml();

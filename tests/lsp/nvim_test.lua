@@ -149,7 +149,8 @@ if #vim.diagnostic.get(plan) ~= 0 then fail('goalie_plan.yaml: diagnostics after
 
 -- The graph operations as code actions, chosen from the list Neovim shows (vim.ui.select, here
 -- answered by title): on a layer's name a behaviour of a class is added (its edit resolved when
--- chosen, codeAction/resolve); on a selection from one behaviour to another, an inhibition.
+-- chosen, codeAction/resolve); on a selection from one behaviour to another, an inhibition; on
+-- a behaviour's declaration, a move (resolved too).
 local paper = open('paper.yaml')
 settle(paper, 'paper.yaml')
 local function choose(title)
@@ -164,7 +165,8 @@ local function choose(title)
 end
 local function wait_line(pattern, what)
   if not vim.wait(15000, function() return vim.fn.search(pattern, 'nw') > 0 end, 50) then
-    fail('paper.yaml: ' .. what .. ' was not applied within 15 s')
+    fail('paper.yaml: ' .. what .. ' was not applied within 15 s:\n' ..
+      table.concat(vim.api.nvim_buf_get_lines(paper, 0, -1, false), '\n'))
   end
   settle(paper, 'paper.yaml')
 end
@@ -177,6 +179,11 @@ local last = vim.fn.search('^      search_for_ball:$', 'w')
 choose("Add the inhibition 'kick_ball -> search_for_ball'")
 vim.lsp.buf.range_code_action(nil, { first, 6 }, { last, 20 })
 wait_line('^      - kick_ball -> search_for_ball$', 'the added inhibition')
+-- On the added behaviour's declaration, resolved when chosen: it moves above head_control.
+vim.api.nvim_win_set_cursor(0, { vim.fn.search('^      scripted: {type: scripted}$', 'w'), 8 })
+choose("Move the behaviour 'scripted' up")
+vim.lsp.buf.code_action()
+wait_line('^      scripted: {type: scripted}\\n      head_control:$', 'the moved behaviour')
 vim.cmd('write')
 output = vim.fn.system({ 'arbiter', 'validate', project .. '/paper.yaml' })
 if vim.v.shell_error ~= 0 then fail('paper.yaml after the code actions: ' .. output) end

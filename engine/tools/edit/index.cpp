@@ -240,7 +240,18 @@ class Indexer {
       read_queue_entry(entry, machine.key, states, file);
     };
     if (const Node* queue = machine.value.find("queue"); queue && queue->is_sequence()) {
-      for (const auto& entry : queue->items()) queue_entry(entry);
+      for (std::size_t i = 0; i < queue->size(); ++i) {
+        const Node& entry = queue->items()[i];
+        queue_entry(entry);
+        if (entry.is_scalar()) {
+          const auto at = span(entry);
+          a_.queue_items.push_back({machine.key, entry.text(), i, file, at.first, at.second});
+        } else if (entry.is_mapping() && entry.size() == 1) {
+          const auto at = key_span(entry.entries().front());
+          a_.queue_items.push_back(
+              {machine.key, entry.entries().front().key, i, file, at.first, at.second});
+        }
+      }
     }
     if (const Node* preempt = machine.value.find("preempt"); preempt && preempt->is_sequence()) {
       for (const auto& item : preempt->items()) {

@@ -75,9 +75,21 @@ struct PortOwner {
   const Node* node = nullptr;  ///< the behaviour's value, or the layer's mapping (in the Loaded)
 };
 
+/// An item of a state machine's `queue:` as written, by its position there: what the queue
+/// operations take (an editor finds it by place, a name can be queued twice).
+struct QueueItemSite {
+  std::string machine;
+  std::string state;
+  std::size_t index = 0;
+  std::string file;
+  std::size_t begin = 0;  ///< the state's name
+  std::size_t end = 0;
+};
+
 struct ConfigIndex {
   std::vector<Occurrence> occurrences;  ///< in the order of the files and their text
   std::vector<InhibitionSite> inhibitions;
+  std::vector<QueueItemSite> queue_items;
   std::vector<PortOwner> port_owners;
 };
 
