@@ -486,6 +486,22 @@ TEST_CASE("the studio adds and removes a layer and a state machine, refusing a n
   CHECK(again.first == 422);
   CHECK(Json::parse(again.second)["refused"] ==
         "'plan' is already taken: a state machine of that name is declared");
+  // A layer that reads another's actuator: the sensor added, the reader refused its removal.
+  REQUIRE(studio.edit(R"({"op": "add_sensor", "layer": "io", "name": "kick"})").first == 200);
+  const auto read_by = studio.edit(R"({"op": "remove_layer", "name": "control"})");
+  CHECK(read_by.first == 422);
+  CHECK(Json::parse(read_by.second)["refused"] ==
+        "layer 'control' is still used: layer 'io' reads its actuator 'kick'. Remove those "
+        "sensors first");
+  const auto unread = studio.edit(R"({"op": "remove_sensor", "layer": "io", "name": "kick"})");
+  REQUIRE(unread.first == 200);
+  CHECK(contains(Json::parse(unread.second)["files"][0]["text"],
+                 "  - name: io\n    interface: inputs\n    sensors: []\n"));
+  const auto no_plugin = studio.edit(R"({"op": "add_plugin", "name": "no_such_plugin"})");
+  CHECK(no_plugin.first == 422);
+  CHECK(contains(Json::parse(no_plugin.second)["refused"], "no_such_plugin"));
+  CHECK(studio.edit(R"({"op": "add_sensor", "layer": "io"})").first == 400);
+
   const auto removed = studio.edit(R"({"op": "remove_state_machine", "name": "plan"})");
   REQUIRE(removed.first == 200);
   CHECK(!contains(Json::parse(removed.second)["files"][0]["text"], "state_machines"));
