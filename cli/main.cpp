@@ -515,11 +515,28 @@ int main(int argc, char** argv) {
       "mouse or keyboard, every problem 'arbiter validate' finds shown as you edit, saved on\n"
       "request (docs/studio.md). Its edits: add, remove, rename and move a behaviour; add, flip\n"
       "and delete an inhibition; set a param; move a layer; add and remove an actuator; wire a\n"
-      "port; add and remove a state; plan, remove and reorder a state machine's queue; or type\n"
-      "in the text.");
-  edit_cmd->add_option("FILE", options.file, "the config to edit")
+      "port; add and remove a layer, a sensor, a state machine and a state; name a plugin; plan,\n"
+      "remove and reorder a state machine's queue; or type in the text. A FILE that does not\n"
+      "exist yet, or is empty, opens as a new config (arbiter: 1, its name from the file's,\n"
+      "layers: []), written on the first Save.");
+  edit_cmd
+      ->add_option("FILE", options.file,
+                   "the config to edit (a new one when it does not exist yet or is empty)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(
+          [](const std::string& file) -> std::string {
+            // A new config may be named: its directory must exist for Save to write it there.
+            namespace fs = std::filesystem;
+            std::error_code error;
+            if (fs::exists(file, error))
+              return fs::is_directory(file, error) ? "'" + file + "' is a directory" : "";
+            const fs::path dir = fs::path(file).parent_path();
+            if (!dir.empty() && !fs::is_directory(dir, error))
+              return "'" + file + "' does not exist, and neither does its directory '" +
+                     dir.string() + "'";
+            return "";
+          },
+          "FILE");
   edit_cmd
       ->add_option("--serve", options.edit_serve,
                    "serve on [ADDR:]PORT (ADDR defaults to 127.0.0.1, PORT 0 picks a free one)")
@@ -529,11 +546,13 @@ int main(int argc, char** argv) {
   add_serve_token_option(*edit_cmd, options,
                          "the token the page and every request must carry (default: a random "
                          "one, printed in the URL; also ARBITER_SERVE_TOKEN)");
-  edit_cmd->footer(examples +
-                   "  arbiter edit configs/soccer/walk_and_kick.yaml\n"
-                   "  arbiter edit robot.yaml --serve 0\n"
-                   "  arbiter run robot.yaml --serve 8080 --edit   # edit the running graph\n\n"
-                   "Ctrl-C stops the server. Nothing is written until Save.\n");
+  edit_cmd->footer(
+      examples +
+      "  arbiter edit configs/soccer/walk_and_kick.yaml\n"
+      "  arbiter edit robot.yaml --serve 0\n"
+      "  arbiter edit new_robot.yaml                   # a new config, built in the studio\n"
+      "  arbiter run robot.yaml --serve 8080 --edit   # edit the running graph\n\n"
+      "Ctrl-C stops the server. Nothing is written until Save.\n");
 
   auto* plot_cmd = app.add_subcommand(
       "plot",

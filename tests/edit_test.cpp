@@ -1059,6 +1059,34 @@ std::vector<Applied> every_operation() {
          if (!layer) return std::nullopt;
          return add_behaviour(loaded, layer->name.text, "added_behaviour", "scripted");
        }},
+      {"add a layer last",
+       [](const Loaded& loaded, const Model&) -> Made { return add_layer(loaded, "added_layer"); }},
+      {"remove the last layer",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         if (model.layers.empty()) return std::nullopt;
+         return remove_layer(loaded, model.layers.back().name.text);
+       },
+       false,
+       // Read by another layer, or owning a state machine whose states bind its ports.
+       [](const std::string& why) {
+         return contains(why, "is still used") || contains(why, "the edit would leave an error");
+       }},
+      {"add a state machine",
+       [](const Loaded& loaded, const Model&) -> Made {
+         return add_state_machine(loaded, "added_machine");
+       }},
+      {"remove the last state machine",
+       [](const Loaded& loaded, const Model& model) -> Made {
+         if (model.state_machines.empty()) return std::nullopt;
+         Registry registry = builtin_registry();
+         return remove_state_machine(loaded, index_config(loaded, &registry),
+                                     model.state_machines.back().name.text);
+       },
+       false,
+       // Owned by a behaviour or a state, or planned by a class.
+       [](const std::string& why) {
+         return contains(why, "is still named") || contains(why, "the edit would leave an error");
+       }},
       {"remove the last behaviour",
        [](const Loaded& loaded, const Model& model) -> Made {
          const LayerDecl* layer = first_behaviour_layer(model);
@@ -1303,4 +1331,161 @@ TEST_CASE("a state is declared in its machine's states:, and removed unless some
   CHECK(json.edited(add_state(json.loaded(), "plan", "three", "scripted"), "ops.json") ==
         replaced(json.text("ops.json"), R"({"one": "scripted", "two": "scripted"})",
                  R"({"one": "scripted", "two": "scripted", "three": {"type": "scripted"}})"));
+}
+
+/// One file's name and text, or several: a Workspace's files.
+using Files = std::vector<std::pair<std::string, std::string>>;
+
+TEST_CASE("a layer is added at its position, or as the first of a list, and removed unless read",
+          "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const Loaded& loaded = yaml.loaded();
+  const std::string& text = yaml.text("ops.yaml");
+  // The config's order: inc and inc2 (the include's), then top and low.
+  CHECK(yaml.edited(add_layer(loaded, "mid", 3), "ops.yaml") ==
+        replaced(text, "  # the lower layer\n", "  - name: mid\n  # the lower layer\n"));
+  CHECK(yaml.edited(add_layer(loaded, "io", kAtEnd, "inputs"), "ops.yaml") ==
+        replaced(text, "{d: scripted, e: test.Probe}\n",
+                 "{d: scripted, e: test.Probe}\n  - name: io\n    interface: inputs\n"));
+  CHECK(add_layer(loaded, "mid", 1).refused ==
+        "position 1 holds a layer of an included file: an included file's layers come first, so "
+        "the config's own start at position 2");
+  CHECK(add_layer(loaded, "mid", 5).refused ==
+        "position 5 is past the end: the config has 4 layer(s), positions count from 0");
+  CHECK(add_layer(loaded, "inc", kAtEnd).refused ==
+        "'inc' is already taken: a layer of that name is declared");
+  CHECK(add_layer(loaded, "Mid", kAtEnd).refused ==
+        "'Mid' is not a valid name: names are [a-z_][a-z0-9_]*");
+
+  // Removed with everything it declares and the comment above it; refused while another layer
+  // reads its actuators.
+  CHECK(yaml.edited(remove_layer(loaded, "low"), "ops.yaml") ==
+        replaced(text,
+                 "  # the lower layer\n  - name: low\n    sensors: [speed]\n    actuators: {out: "
+                 "{type: double}}\n    "
+                 "behaviours: {d: scripted, e: test.Probe}\n",
+                 ""));
+  CHECK(yaml.edited(remove_layer(loaded, "inc"), "part.yaml") ==
+        replaced(kOpsPart, "  - name: inc\n    behaviours:\n      p: scripted\n      q: scripted\n",
+                 ""));
+  CHECK(remove_layer(loaded, "top").refused ==
+        "layer 'top' is still used: layer 'low' reads its actuator 'speed'. Remove those sensors "
+        "first");
+  CHECK(remove_layer(loaded, "none").refused == "no layer 'none'");
+
+  // An empty list becomes a block list in YAML; a missing one is added.
+  Workspace empty(Files{{"empty.yaml", "arbiter: 1\nname: empty\nlayers: []  # none yet\n"}});
+  CHECK(empty.edited(add_layer(empty.loaded(), "top"), "empty.yaml") ==
+        "arbiter: 1\nname: empty\nlayers:\n  - name: top  # none yet\n");
+  Workspace none(Files{{"none.yaml", "arbiter: 1\nname: none\n"}});
+  CHECK(none.edited(add_layer(none.loaded(), "top", 0, "inputs"), "none.yaml") ==
+        "arbiter: 1\nname: none\nlayers:\n  - name: top\n    interface: inputs\n");
+  Workspace only(Files{{"only.yaml", "arbiter: 1\nname: only\nlayers:\n  - name: top\n"}});
+  CHECK(only.edited(remove_layer(only.loaded(), "top"), "only.yaml") ==
+        "arbiter: 1\nname: only\nlayers: []\n");
+
+  Workspace json({{"ops.json", kOpsJson}});
+  const std::string& json_text = json.text("ops.json");
+  CHECK(json.edited(add_layer(json.loaded(), "mid", 1), "ops.json") ==
+        replaced(json_text, "    },\n    {\"name\": \"low\"",
+                 "    },\n    {\"name\": \"mid\"},\n    {\"name\": \"low\""));
+  CHECK(json.edited(remove_layer(json.loaded(), "low"), "ops.json") ==
+        replaced(json_text,
+                 ",\n    {\"name\": \"low\", \"sensors\": [\"speed\"], \"actuators\": {\"spare\": "
+                 "{\"type\": \"int\"}}, \"behaviours\": {\"d\": \"scripted\"}}",
+                 ""));
+  Workspace json_empty(
+      Files{{"empty.json", "{\"arbiter\": 1, \"name\": \"empty\", \"layers\": []}\n"}});
+  CHECK(json_empty.edited(add_layer(json_empty.loaded(), "top", kAtEnd, "inputs"), "empty.json") ==
+        "{\"arbiter\": 1, \"name\": \"empty\", \"layers\": [{\"name\": \"top\", \"interface\": "
+        "\"inputs\"}]}\n");
+}
+
+TEST_CASE("a state machine is declared empty, and removed unless something names it", "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const Loaded& loaded = yaml.loaded();
+  const std::string& text = yaml.text("ops.yaml");
+  CHECK(yaml.edited(add_state_machine(loaded, "extra"), "ops.yaml") ==
+        text + "  extra:\n    states: {}\n    queue: []\n");
+  CHECK(add_state_machine(loaded, "plan").refused ==
+        "'plan' is already taken: a state machine of that name is declared");
+  CHECK(add_state_machine(loaded, "Plan").refused ==
+        "'Plan' is not a valid name: names are [a-z_][a-z0-9_]*");
+
+  Registry registry = make_test_registry();
+  const ConfigIndex index = index_config(loaded, &registry);
+  CHECK(yaml.edited(remove_state_machine(loaded, index, "flat"), "ops.yaml") ==
+        replaced(text, "  flat:\n    states: {x: scripted, y: scripted}\n    queue: [x, y]\n", ""));
+  CHECK(remove_state_machine(loaded, index, "none").refused == "no state machine 'none'");
+
+  // Refused while a behaviour owns it.
+  Workspace owned(Files{{"owned.yaml",
+                         "arbiter: 1\nname: owned\nlayers:\n  - name: top\n    behaviours:\n"
+                         "      run: {type: state_machine, params: {machine: plan}}\n"
+                         "state_machines:\n  plan: {states: {}, queue: []}\n"}});
+  const ConfigIndex owned_index = index_config(owned.loaded(), &registry);
+  CHECK(remove_state_machine(owned.loaded(), owned_index, "plan").refused ==
+        fmt::format("state machine 'plan' is still named at {}:6:52: remove those first",
+                    owned.loaded().files.files().front()->path));
+
+  // The key is added when missing, and goes with the last machine.
+  Workspace none(Files{{"none.yaml", "arbiter: 1\nname: none\n"}});
+  const std::string added = none.edited(add_state_machine(none.loaded(), "plan"), "none.yaml");
+  CHECK(added ==
+        "arbiter: 1\nname: none\nstate_machines:\n  plan:\n    states: {}\n    queue: []\n");
+  Workspace one(Files{{"one.yaml", added}});
+  const ConfigIndex one_index = index_config(one.loaded(), &registry);
+  CHECK(one.edited(remove_state_machine(one.loaded(), one_index, "plan"), "one.yaml") ==
+        "arbiter: 1\nname: none\n");
+
+  Workspace json({{"ops.json", kOpsJson}});
+  CHECK(json.edited(add_state_machine(json.loaded(), "extra"), "ops.json") ==
+        replaced(json.text("ops.json"), R"("queue": ["one", "two"]})",
+                 R"("queue": ["one", "two"]}, "extra": {"states": {}, "queue": []})"));
+  Workspace json_none(Files{{"none.json", "{\"arbiter\": 1, \"name\": \"none\"}\n"}});
+  CHECK(json_none.edited(add_state_machine(json_none.loaded(), "plan"), "none.json") ==
+        "{\"arbiter\": 1, \"name\": \"none\", \"state_machines\": {\"plan\": {\"states\": {}, "
+        "\"queue\": []}}}\n");
+}
+
+TEST_CASE("a plugin is named in plugins:, which is added when missing", "[edit]") {
+  Workspace none(Files{{"none.yaml", "arbiter: 1\nname: none\nlayers: []\n"}});
+  CHECK_THAT(none.refused(add_plugin(none.loaded(), "no_such_plugin")),
+             Catch::Contains("no_such_plugin"));
+  CHECK(add_plugin(none.loaded(), "So ccer").refused ==
+        "'So ccer' is not a plugin's name: names are [a-z_][a-z0-9_]*");
+  Workspace listed(Files{{"listed.yaml", "arbiter: 1\nname: listed\nplugins: [soccer]\n"}});
+  CHECK(add_plugin(listed.loaded(), "soccer").refused == "plugin 'soccer' is named already");
+  if (!plugins_built(kSourceDir / "configs/soccer/walk_and_kick.yaml")) return;
+  CHECK(none.edited(add_plugin(none.loaded(), "soccer"), "none.yaml") ==
+        "arbiter: 1\nname: none\nlayers: []\nplugins: [soccer]\n");
+  Workspace empty(Files{{"empty.yaml", "arbiter: 1\nname: empty\nplugins: []\n"}});
+  CHECK(empty.edited(add_plugin(empty.loaded(), "soccer"), "empty.yaml") ==
+        "arbiter: 1\nname: empty\nplugins: [soccer]\n");
+  Workspace json(Files{{"none.json", "{\"arbiter\": 1, \"name\": \"none\"}\n"}});
+  CHECK(json.edited(add_plugin(json.loaded(), "soccer"), "none.json") ==
+        "{\"arbiter\": 1, \"name\": \"none\", \"plugins\": [\"soccer\"]}\n");
+}
+
+TEST_CASE("a layer's sensors: list gets a sensor and loses one", "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const Loaded& loaded = yaml.loaded();
+  const std::string& text = yaml.text("ops.yaml");
+  CHECK(yaml.edited(add_sensor(loaded, "top", "out"), "ops.yaml") ==
+        replaced(text, "      - a => b\n", "      - a => b\n    sensors: [out]\n"));
+  CHECK(add_sensor(loaded, "low", "speed").refused == "layer 'low' reads 'speed' already");
+  CHECK_THAT(yaml.refused(add_sensor(loaded, "low", "nothing")), Catch::Contains("nothing"));
+  CHECK(yaml.edited(remove_sensor(loaded, "low", "speed"), "ops.yaml") ==
+        replaced(text, "    sensors: [speed]\n", "    sensors: []\n"));
+  CHECK(remove_sensor(loaded, "low", "out").refused == "layer 'low' does not read 'out'");
+
+  Workspace block(Files{{"block.yaml",
+                         "arbiter: 1\nname: block\nlayers:\n  - name: a\n    actuators: {x: "
+                         "bool, y: bool}\n  - name: b\n    sensors:\n      - x\n"}});
+  CHECK(block.edited(add_sensor(block.loaded(), "b", "y"), "block.yaml") ==
+        "arbiter: 1\nname: block\nlayers:\n  - name: a\n    actuators: {x: bool, y: bool}\n  - "
+        "name: b\n    sensors:\n      - x\n      - y\n");
+  CHECK(block.edited(remove_sensor(block.loaded(), "b", "x"), "block.yaml") ==
+        "arbiter: 1\nname: block\nlayers:\n  - name: a\n    actuators: {x: bool, y: bool}\n  - "
+        "name: b\n    sensors: []\n");
 }

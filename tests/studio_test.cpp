@@ -454,3 +454,85 @@ TEST_CASE("the studio edits a state machine's queue: a state planned with params
                         "params": [1]})")
             .first == 400);
 }
+
+TEST_CASE("the studio adds and removes a layer and a state machine, refusing a name taken",
+          "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+
+  const auto added = studio.edit(R"({"op": "add_layer", "name": "io", "interface": "inputs"})");
+  REQUIRE(added.first == 200);
+  CHECK(Json::parse(added.second)["edits"][0]["text"] == "\n  - name: io\n    interface: inputs");
+  const auto first = studio.edit(R"({"op": "add_layer", "name": "plan", "index": 0})");
+  REQUIRE(first.first == 200);
+  const Json layers = Json::parse(first.second)["graph"]["layers"];
+  REQUIRE(layers.size() == 3);
+  CHECK(layers[0]["name"] == "plan");
+  CHECK(layers[2]["name"] == "io");
+  REQUIRE(studio.edit(R"({"op": "remove_layer", "name": "plan"})").first == 200);
+  const auto taken = studio.edit(R"({"op": "add_layer", "name": "control"})");
+  CHECK(taken.first == 422);
+  CHECK(Json::parse(taken.second)["refused"] ==
+        "'control' is already taken: a layer of that name is declared");
+  CHECK(studio.edit(R"({"op": "add_layer", "name": "x", "index": "0"})").first == 400);
+
+  const auto machine = studio.edit(R"({"op": "add_state_machine", "name": "plan"})");
+  REQUIRE(machine.first == 200);
+  CHECK(contains(Json::parse(machine.second)["files"][0]["text"],
+                 "state_machines:\n  plan:\n    states: {}\n    queue: []\n"));
+  const auto again = studio.edit(R"({"op": "add_state_machine", "name": "plan"})");
+  CHECK(again.first == 422);
+  CHECK(Json::parse(again.second)["refused"] ==
+        "'plan' is already taken: a state machine of that name is declared");
+  // A layer that reads another's actuator: the sensor added, the reader refused its removal.
+  REQUIRE(studio.edit(R"({"op": "add_sensor", "layer": "io", "name": "kick"})").first == 200);
+  const auto read_by = studio.edit(R"({"op": "remove_layer", "name": "control"})");
+  CHECK(read_by.first == 422);
+  CHECK(Json::parse(read_by.second)["refused"] ==
+        "layer 'control' is still used: layer 'io' reads its actuator 'kick'. Remove those "
+        "sensors first");
+  const auto unread = studio.edit(R"({"op": "remove_sensor", "layer": "io", "name": "kick"})");
+  REQUIRE(unread.first == 200);
+  CHECK(contains(Json::parse(unread.second)["files"][0]["text"],
+                 "  - name: io\n    interface: inputs\n    sensors: []\n"));
+  const auto no_plugin = studio.edit(R"({"op": "add_plugin", "name": "no_such_plugin"})");
+  CHECK(no_plugin.first == 422);
+  CHECK(contains(Json::parse(no_plugin.second)["refused"], "no_such_plugin"));
+  CHECK(studio.edit(R"({"op": "add_sensor", "layer": "io"})").first == 400);
+
+  const auto removed = studio.edit(R"({"op": "remove_state_machine", "name": "plan"})");
+  REQUIRE(removed.first == 200);
+  CHECK(!contains(Json::parse(removed.second)["files"][0]["text"], "state_machines"));
+}
+
+TEST_CASE("the studio opens a config that does not exist yet as a valid one, written on save",
+          "[studio]") {
+  TempDir dir;
+  const std::string path = dir.file("My-Robot.yaml");
+  Registry registry = make_test_registry();
+  Studio studio(path, registry, with_lints());
+  const Json state = Json::parse(studio.state().second);
+  REQUIRE(state["files"].size() == 1);
+  CHECK(state["files"][0]["path"] == path);
+  CHECK(state["files"][0]["text"] == "arbiter: 1\nname: my_robot\nlayers: []\n");
+  CHECK(state["files"][0]["base"] == "");
+  CHECK(state["files"][0]["changed_on_disk"] == false);
+  CHECK(state["diagnostics"].empty());
+  CHECK_FALSE(std::filesystem::exists(path));  // nothing written on open
+
+  REQUIRE(studio.edit(R"({"op": "add_layer", "name": "control"})").first == 200);
+  const auto saved = studio.save(save_body(Json::parse(studio.state().second)));
+  REQUIRE(saved.first == 200);
+  CHECK(read(path) == "arbiter: 1\nname: my_robot\nlayers:\n  - name: control\n");
+
+  // An empty file opens the same way; a JSON one as JSON.
+  const std::string json = dir.write("9lives.json", "\n");
+  Studio empty(json, registry, with_lints());
+  const Json json_state = Json::parse(empty.state().second);
+  CHECK(json_state["files"][0]["text"] ==
+        "{\n  \"arbiter\": 1,\n  \"name\": \"_9lives\",\n  \"layers\": []\n}\n");
+  CHECK(json_state["files"][0]["base"] == "\n");
+  CHECK(json_state["diagnostics"].empty());
+}

@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -91,6 +92,25 @@ std::string needs(const std::string& op, const std::string& missing) {
 
 }  // namespace
 
+std::string new_config_text(const std::string& path) {
+  // The manager's name from the file's: an identifier, as names must be.
+  const auto slash = path.rfind('/');
+  std::string stem = path.substr(slash == std::string::npos ? 0 : slash + 1);
+  stem = stem.substr(0, stem.find('.'));
+  std::string name;
+  for (const char c : stem) {
+    const char lower = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    name += (std::islower(static_cast<unsigned char>(lower)) ||
+             std::isdigit(static_cast<unsigned char>(lower)) || lower == '_')
+                ? lower
+                : '_';
+  }
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name.front()))) name.insert(0, "_");
+  if (format_of(path) == DocumentFormat::kJson)
+    return fmt::format("{{\n  \"arbiter\": 1,\n  \"name\": \"{}\",\n  \"layers\": []\n}}\n", name);
+  return fmt::format("arbiter: 1\nname: {}\nlayers: []\n", name);
+}
+
 bool write_atomically(const std::string& path, const std::string& text, std::string& error) {
   const auto slash = path.rfind('/');
   const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash);
@@ -122,6 +142,14 @@ bool write_atomically(const std::string& path, const std::string& text, std::str
 
 Studio::Studio(std::string config, Registry& registry, LoadOptions options)
     : config_(std::move(config)), registry_(registry), options_(std::move(options)) {
+  // A config that does not exist yet, or is empty, opens as the smallest valid one, to be built
+  // in the studio: nothing is written before the first save.
+  const auto on_disk = read_disk(config_);
+  if (!on_disk || on_disk->find_first_not_of(" \t\r\n") == std::string::npos) {
+    order_.push_back(config_);
+    texts_[config_] = new_config_text(config_);
+    disk_[config_] = on_disk.value_or("");
+  }
   reload();
   saved_ = load_texts(config_, disk_, registry_, options_);
 }
@@ -145,13 +173,13 @@ std::string Studio::state_json(const std::string& extra_key, const std::string& 
   state["config"] = config_;
   Json files = Json::array();
   for (const auto& path : order_) {
-    const auto on_disk = read_disk(path);
+    const std::string on_disk = read_disk(path).value_or("");
     files.push_back({{"path", path},
                      {"text", texts_[path]},
                      {"base", disk_[path]},
                      {"edited", texts_[path] != disk_[path]},
                      // Changed by someone else since it was read or saved: a save would conflict.
-                     {"changed_on_disk", !on_disk || *on_disk != disk_[path]}});
+                     {"changed_on_disk", on_disk != disk_[path]}});
   }
   state["files"] = std::move(files);
   const Loaded& loaded = current_.loaded;
@@ -257,6 +285,36 @@ Reply Studio::edit(const std::string& body) {
     const auto index = position(request, "index", missing);
     if (!missing.empty()) return refusal(400, needs(op, missing));
     result = move_layer(loaded, layer, *index);
+  } else if (op == "add_layer") {
+    const std::string name = field(request, "name", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    std::size_t index = kAtEnd;
+    if (request.contains("index")) {
+      const auto given = position(request, "index", missing);
+      if (!given) return refusal(400, needs(op, missing));
+      index = *given;
+    }
+    result = add_layer(loaded, name, index, request.value("interface", ""));
+  } else if (op == "remove_layer") {
+    const std::string name = field(request, "name", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = remove_layer(loaded, name);
+  } else if (op == "add_sensor" || op == "remove_sensor") {
+    const std::string layer = field(request, "layer", missing);
+    const std::string name = field(request, "name", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result =
+        op == "add_sensor" ? add_sensor(loaded, layer, name) : remove_sensor(loaded, layer, name);
+  } else if (op == "add_plugin") {
+    const std::string name = field(request, "name", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = add_plugin(loaded, name);
+  } else if (op == "add_state_machine" || op == "remove_state_machine") {
+    const std::string name = field(request, "name", missing);
+    if (!missing.empty()) return refusal(400, needs(op, missing));
+    result = op == "add_state_machine"
+                 ? add_state_machine(loaded, name)
+                 : remove_state_machine(loaded, index_config(loaded, &registry_), name);
   } else if (op == "add_actuator" || op == "remove_actuator") {
     const std::string layer = field(request, "layer", missing);
     const std::string name = field(request, "name", missing);
@@ -315,9 +373,12 @@ Reply Studio::edit(const std::string& body) {
     return refusal(400, fmt::format("no operation '{}': add_inhibition, remove_inhibition, "
                                     "flip_chaining, set_param, add_behaviour, "
                                     "remove_behaviour, rename, move_behaviour, move_layer, "
-                                    "add_actuator, remove_actuator, wire_port, add_state, "
-                                    "remove_state, add_queue_entry, remove_queue_entry or "
-                                    "move_queue_entry",
+                                    "add_layer, remove_layer, add_actuator, remove_actuator, "
+                                    "add_sensor, remove_sensor, wire_port, add_plugin, "
+                                    "add_state_machine, "
+                                    "remove_state_machine, "
+                                    "add_state, remove_state, add_queue_entry, "
+                                    "remove_queue_entry or move_queue_entry",
                                     op));
   }
   // The same check every operation gets: an edit that would leave an error the config did not
@@ -387,8 +448,8 @@ Reply Studio::save(const std::string& body) {
     // Only the paths the config's load read, as it wrote them: no other file, however named.
     if (texts_.count(path) == 0)
       return refusal(403, fmt::format("refused: '{}' is not one of the config's files", path));
-    const auto on_disk = read_disk(path);
-    if (!on_disk || *on_disk != file["base"].get<std::string>()) {
+    // A new config's base is "": the file is not there yet, or is empty.
+    if (read_disk(path).value_or("") != file["base"].get<std::string>()) {
       return refusal(409, fmt::format("conflict: {} changed on the disk since it was opened; "
                                       "nothing was written (reload it to see the change)",
                                       path));

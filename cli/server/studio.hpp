@@ -79,6 +79,10 @@ class Studio {
   std::mutex mutex_;  // one request at a time: each reads and replaces the texts
 };
 
+/// What the studio opens for a config file that does not exist yet or is empty: `arbiter: 1`,
+/// a `name:` made from the file's name, and `layers: []`, in the file's format.
+std::string new_config_text(const std::string& path);
+
 /// Writes `text` to `path` atomically: a temporary file in its directory, flushed, with the
 /// file's permissions, renamed over it. False, with `error`, when it cannot.
 bool write_atomically(const std::string& path, const std::string& text, std::string& error);

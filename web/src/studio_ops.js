@@ -1,5 +1,5 @@
 // The studio's structure edits (docs/studio.md): moving a behaviour or a layer, adding and removing
-// an actuator, wiring a behaviour's ports and editing a state machine's states and queue. Each is a button or
+// a plugin, a layer, a state machine, an actuator or a sensor, wiring a behaviour's ports and editing a state machine's states and queue. Each is a button or
 // a small form, so that the mouse and the keyboard (Tab, Enter) reach every one; each asks the
 // server for one operation, which the edit engine makes as a text edit and checks.
 import {html} from './dom.js';
@@ -71,7 +71,7 @@ function behaviourOps(box, graph, layer, behaviour, operation) {
   for (const name of names_) html('option', {value: name}, list);
 }
 
-/** Every layer's place and actuators. */
+/** Every layer's place and actuators; a layer added or removed. */
 function layerOps(box, graph, operation) {
   html('h3', {}, box).textContent = 'Layers and actuators';
   graph.layers.forEach((layer, index) => {
@@ -98,15 +98,73 @@ function layerOps(box, graph, operation) {
     f.append(' ');
     const type = select(f, TYPES, {'aria-label': 'its type'});
     done();
+    // What it reads: actuators of other layers, each with ×, and one more by name.
+    if (!layer.interface || (layer.sensors || []).length) {
+      const reads = html('div', {class: 'studio-op sensors-op', 'data-layer': layer.name}, box);
+      reads.append(`${layer.name} reads: `);
+      for (const sensor of layer.sensors || []) {
+        const item = html('span', {class: 'sensor-op', 'data-sensor': sensor.name}, reads);
+        item.append(` ${sensor.name} `);
+        button(item, '×', `stop reading ${sensor.name} (refused while a port is bound to it)`, () =>
+          operation({op: 'remove_sensor', layer: layer.name, name: sensor.name}, `removed sensor ${sensor.name}`),
+               {class: 'remove-sensor'});
+      }
+    }
+    const others = graph.layers.filter((l) => l.name !== layer.name)
+        .flatMap((l) => (l.actuators || []).map((a) => a.name))
+        .filter((a) => !(layer.sensors || []).some((s) => s.name === a));
+    const {form: r, done: read} = form(box, `add-sensor-${layer.name}`, 'Read', () =>
+      operation({op: 'add_sensor', layer: layer.name, name: sensor.value.trim()},
+                `${layer.name} reads ${sensor.value.trim()}`));
+    r.classList.add('add-sensor');
+    r.append(`${layer.name} reads `);
+    const sensor = html('input', {size: '12', list: `sensor-names-${layer.name}`, placeholder: 'actuator',
+                                  'aria-label': `an actuator of another layer that ${layer.name} reads`}, r);
+    const names = html('datalist', {id: `sensor-names-${layer.name}`}, r);
+    for (const name of others) html('option', {value: name}, names);
+    read();
+    // Last in the row: removing a layer takes its behaviours, actuators and inhibitions with it.
+    button(row, '× layer', `remove layer ${layer.name} with its behaviours (refused while another layer reads it)`,
+           () => operation({op: 'remove_layer', name: layer.name}, `removed layer ${layer.name}`),
+           {class: 'remove-layer'});
   });
+  const {form: f, done} = form(box, 'new-layer', 'Add layer', () => {
+    const at = position.value.trim();
+    operation({op: 'add_layer', name: name.value.trim(), ...(at ? {index: Number(at)} : {}),
+               ...(iface.value.trim() ? {interface: iface.value.trim()} : {})},
+              `added layer ${name.value.trim()}`);
+  });
+  f.append('new layer ');
+  const name = html('input', {id: 'new-layer-name', size: '12', placeholder: 'name', 'aria-label': 'a new layer'}, f);
+  f.append(' at ');
+  const position = html('input', {id: 'new-layer-index', type: 'number', min: '0', size: '3', placeholder: 'end',
+                                  'aria-label': 'its position, from 0 (empty: last)'}, f);
+  f.append(' interface ');
+  const iface = html('input', {id: 'new-layer-interface', size: '12', placeholder: 'none',
+                               'aria-label': 'its interface class, for an interface layer'}, f);
+  done();
 }
 
-/** Each state machine's queue (reordered, an item removed, a state planned with params) and states. */
+/**
+ * State machines added and removed; each one's queue (reordered, an item removed, a state planned with
+ * params) and states.
+ */
 function queueOps(box, graph, operation) {
   const machines = graph.state_machines || [];
-  if (!machines.length) return;
-  html('h3', {}, box).textContent = 'State queues';
+  html('h3', {}, box).textContent = 'State machines';
+  const {form: add, done: added} = form(box, 'new-state-machine', 'Add state machine', () =>
+    operation({op: 'add_state_machine', name: machineName.value.trim()},
+              `added state machine ${machineName.value.trim()}`));
+  add.append('new state machine ');
+  const machineName = html('input', {id: 'new-state-machine-name', size: '12', placeholder: 'name',
+                                     'aria-label': 'a new state machine'}, add);
+  added();
   for (const machine of machines) {
+    const head = html('div', {class: 'studio-op machine-op', 'data-machine': machine.name}, box);
+    html('strong', {}, head).textContent = machine.name;
+    button(head, '× machine', `remove state machine ${machine.name} (refused while something owns it)`, () =>
+      operation({op: 'remove_state_machine', name: machine.name}, `removed state machine ${machine.name}`),
+           {class: 'remove-state-machine'});
     const list = html('ol', {class: 'queue-op', 'data-machine': machine.name, start: '0'}, box);
     const queue = machine.queue || [];
     queue.forEach((state, index) => {
@@ -181,6 +239,13 @@ export function showStructure(graph, selected, operation) {
   const layer = selected?.kind === 'behaviour' && graph.layers.find((l) => l.name === selected.layer);
   const behaviour = layer && layer.behaviours.find((b) => b.name === selected.name);
   if (behaviour) behaviourOps(box, graph, layer, behaviour, operation);
+  // A plugin's classes join the palette once the config names it.
+  const {form: f, done} = form(box, 'new-plugin', 'Add plugin', () =>
+    operation({op: 'add_plugin', name: plugin.value.trim()}, `added plugin ${plugin.value.trim()}`));
+  f.append('plugin ');
+  const plugin = html('input', {id: 'new-plugin-name', size: '12', placeholder: 'soccer',
+                                'aria-label': 'a plugin the config loads'}, f);
+  done();
   layerOps(box, graph, operation);
   queueOps(box, graph, operation);
 }

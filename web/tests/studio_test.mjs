@@ -3,7 +3,7 @@
 import {test as nodeTest, before, after} from 'node:test';
 import assert from 'node:assert/strict';
 import {spawnSync} from 'node:child_process';
-import {mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
+import {existsSync, mkdtempSync, readFileSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import path from 'node:path';
 
@@ -473,4 +473,108 @@ test('structure edits by mouse and keyboard: a behaviour moved, an actuator adde
   await queues.waitForFunction(() => !document.querySelector('#text').value.includes('pass_ball'));
   assert.deepEqual(queues.errors, []);
   await queues.close();
+});
+
+test('a graph built from a file that does not exist yet, without typing YAML: a plugin, two layers with actuators and sensors, behaviours from the palette, an inhibition dragged, a port wired, saved and valid', async () => {
+  const file = path.join(mkdtempSync(path.join(scratch, 'new-')), 'kicker.yaml');
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await browser.newPage({viewport: {width: 1500, height: 1000}});
+  page.setDefaultTimeout(15000);
+  page.errors = [];
+  page.on('pageerror', (error) => page.errors.push(String(error)));
+  await page.goto(url);
+  await page.waitForSelector('body[data-ready="true"][data-mode="studio"]');
+  assert.equal(await text(page), 'arbiter: 1\nname: kicker\nlayers: []\n');
+  assert.equal(existsSync(file), false, 'nothing is written before Save');
+  const textHas = (part) => page.waitForFunction((p) => document.querySelector('#text').value.includes(p), part);
+
+  // By keyboard: the soccer plugin, whose classes join the palette.
+  await settled(page);
+  await page.fill('#new-plugin-name', 'soccer');
+  await page.press('#new-plugin-name', 'Enter');
+  await page.waitForSelector('#add-class option[value="soccer.KickBall"]', {state: 'attached'});
+  // An interface layer fed from inputs, and its actuators, by mouse.
+  await settled(page);
+  await page.fill('#new-layer-name', 'world');
+  await page.fill('#new-layer-interface', 'inputs');
+  await page.click('#new-layer button');
+  await page.waitForSelector('#add-actuator-world');
+  for (const [name, type] of [['ball_visible', 'bool'], ['ball_position', 'vec2'], ['robot_pose', 'vec3']]) {
+    await settled(page);
+    await page.fill('#add-actuator-world input', name);
+    await page.selectOption('#add-actuator-world select', type);
+    await page.click('#add-actuator-world button');
+    await page.waitForSelector(`.actuator-op[data-actuator="${name}"]`);
+  }
+  // The control layer (by keyboard), its actuators and what it reads.
+  await settled(page);
+  await page.fill('#new-layer-name', 'control');
+  await page.press('#new-layer-name', 'Enter');
+  await page.waitForSelector('#add-actuator-control');
+  for (const [name, type] of [['gait_velocity', 'vec3'], ['head_angle', 'double'], ['kick', 'bool'], ['kick_request', 'bool']]) {
+    await settled(page);
+    await page.fill('#add-actuator-control input', name);
+    await page.selectOption('#add-actuator-control select', type);
+    await page.press('#add-actuator-control input', 'Enter');
+    await page.waitForSelector(`.actuator-op[data-actuator="${name}"]`);
+  }
+  for (const name of ['ball_visible', 'ball_position', 'robot_pose']) {
+    await settled(page);
+    await page.fill('#add-sensor-control input', name);
+    await page.click('#add-sensor-control button');
+    await page.waitForSelector(`.sensors-op[data-layer="control"] .sensor-op[data-sensor="${name}"]`);
+  }
+  // Behaviours from the palette.
+  for (const [name, cls] of [['kick_ball', 'soccer.KickBall'], ['go_behind_ball', 'soccer.GoBehindBall'],
+                             ['search_for_ball', 'soccer.SearchForBall'], ['head_control', 'soccer.HeadControl']]) {
+    await settled(page);
+    await page.selectOption('#add-layer', 'control');
+    await page.selectOption('#add-class', cls);
+    await page.fill('#add-name', name);
+    await page.click('#add-behaviour');
+    await page.waitForSelector(`.behaviour[data-name="control/${name}"]`);
+  }
+  // An inhibition dragged; a port wired in the selected behaviour's form.
+  // The graph grew past the view: fitted to it first.
+  await page.getByRole('button', {name: 'Fit'}).click();
+  await drag(page, 'kick_ball', 'go_behind_ball');
+  await page.waitForSelector('g.edge[data-from="kick_ball"][data-to="go_behind_ball"]');
+  await selectBehaviour(page, 'kick_ball');
+  await page.fill('#wire-kick input', 'kick_request');
+  await page.press('#wire-kick input', 'Enter');
+  await textHas('ports: {kick: kick_request}');
+  // A state machine added and removed again, by mouse; a layer added and removed.
+  await settled(page);
+  await page.fill('#new-state-machine-name', 'spare');
+  await page.click('#new-state-machine button');
+  await page.waitForSelector('.machine-op[data-machine="spare"]');
+  await settled(page);
+  await page.click('.machine-op[data-machine="spare"] .remove-state-machine');
+  await page.waitForFunction(() => !document.querySelector('#text').value.includes('state_machines'));
+  await settled(page);
+  await page.click('.layer-op[data-layer="world"] .remove-layer');
+  await page.waitForFunction(() => /refused: layer 'world' is still used: layer 'control' reads its actuator 'ball_visible'/.test(
+      document.querySelector('#studio-message').textContent));
+
+  await settled(page);
+  await page.click('#review');
+  await page.click('#save');
+  await page.waitForSelector('#studio-message[data-kind="saved"]');
+  assert.equal(readFileSync(file, 'utf8'), `arbiter: 1
+name: kicker
+layers:
+  - name: world
+    interface: inputs
+    actuators: {ball_visible: {type: bool}, ball_position: {type: vec2}, robot_pose: {type: vec3}}
+  - name: control
+    actuators: {gait_velocity: {type: vec3}, head_angle: {type: double}, kick: {type: bool}, kick_request: {type: bool}}
+    sensors: [ball_visible, ball_position, robot_pose]
+    behaviours: {kick_ball: {type: soccer.KickBall, ports: {kick: kick_request}}, go_behind_ball: {type: soccer.GoBehindBall}, search_for_ball: {type: soccer.SearchForBall}, head_control: {type: soccer.HeadControl}}
+    inhibitions: [kick_ball => go_behind_ball]
+plugins: [soccer]
+`);
+  const validate = spawnSync(arbiter, ['validate', file], {cwd: source, encoding: 'utf8'});
+  assert.equal(validate.status, 0, validate.stderr);
+  assert.deepEqual(page.errors, []);
+  await page.close();
 });

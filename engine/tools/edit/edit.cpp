@@ -378,7 +378,10 @@ EditResult add_entry(const SourceFile& file, const Node& node, const std::string
   }
   const std::size_t column = begin - line_start(text, begin);
   const std::size_t end = block_end(text, begin, column);
-  const std::string line = std::string(column, ' ') + entry;
+  // An entry of several lines (`machine:` and its keys) has each line at the keys' indentation.
+  std::string line = std::string(column, ' ') + entry;
+  for (std::size_t at = line.find('\n'); at != std::string::npos; at = line.find('\n', at + 1))
+    line.insert(at + 1, column, ' ');
   if (end == text.size() && (text.empty() || text.back() != '\n'))
     return {{{file.path, end, end, "\n" + line}}, {}};
   return {{{file.path, end, end, line + "\n"}}, {}};
@@ -835,6 +838,40 @@ TextEdit removed_entry(const Items& items, const Node::Entry& entry, std::size_t
   return {items.file->path, start, block_end(text, key, key - start + 1), {}};
 }
 
+/// The edit removing item `at` of the sequence that `entry` (`queue:`, `layers:`) holds: the
+/// last one of a block sequence leaves `[]`, since the key alone would be null.
+TextEdit removed_list_item(const Items& items, const Node::Entry& entry, std::size_t at) {
+  if (items.flow || items.spans.size() > 1) return removed_item(items, at);
+  const std::string& text = items.file->text;
+  const std::size_t key = offset_of(text, entry.key_location.line(), entry.key_location.column());
+  const std::size_t colon = text.find(':', key);
+  return {items.file->path, colon + 1, std::min(text.size(), items.spans.front().second), " []"};
+}
+
+/// Whether `node` of `file` is written as a flow collection (and so is every JSON one).
+bool flow_in(const SourceFile& file, const Node& node) {
+  const std::size_t at = offset_at(file, node.location());
+  return at < file.text.size() && (file.text[at] == '{' || file.text[at] == '[');
+}
+
+/// Where `index` finds uses (not the declaration) of `name` of `kind` in `scope`, as
+/// `file:line:column, ...` ("" when none).
+std::string uses_of(const Loaded& loaded, const ConfigIndex& index, SymbolKind kind,
+                    const std::string& scope, const std::string& name) {
+  std::string uses;
+  for (const auto& use : index.occurrences) {
+    if (use.definition || use.kind != kind || use.scope != scope || use.name != name) continue;
+    const SourceFile* file = loaded.files.find(use.file);
+    const std::string& text = file ? file->text : use.file;
+    const std::size_t at = std::min(use.begin, text.size());
+    const auto line =
+        1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+    uses += fmt::format("{}{}:{}:{}", uses.empty() ? "" : ", ", use.file, line,
+                        at - line_start(text, at) + 1);
+  }
+  return uses;
+}
+
 /// A state machine's declaration, in the config's file or an include.
 struct MachineSite {
   const SourceFile* file = nullptr;
@@ -1014,6 +1051,121 @@ EditResult move_layer(const Loaded& loaded, const std::string& layer, std::size_
     return static_cast<std::size_t>(node - list.items().data());
   };
   return {{moved_item(items, position(sites.front().layer), position(others.front().layer))}, {}};
+}
+
+EditResult add_layer(const Loaded& loaded, const std::string& name, std::size_t index,
+                     const std::string& interface) {
+  if (!is_identifier(name))
+    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  if (!layers_named(loaded, name).empty())
+    return {{}, fmt::format("'{}' is already taken: a layer of that name is declared", name)};
+  const auto& files = loaded.files.files();
+  if (files.empty() || !files.front()->root || !files.front()->root->is_mapping())
+    return {{}, "the config's file is not a mapping: add the layer in the text"};
+  const SourceFile& file = *files.front();
+  // The config's own layers come after its includes' layers.
+  std::size_t included = 0;
+  for (std::size_t i = 1; i < files.size(); ++i) {
+    const Node* layers =
+        files[i]->root && files[i]->root->is_mapping() ? files[i]->root->find("layers") : nullptr;
+    if (layers && layers->is_sequence()) included += layers->size();
+  }
+  const Node* layers = file.root->find("layers");
+  if (layers && !layers->is_sequence()) return {{}, "the config's layers: is not a list"};
+  const std::size_t own = layers ? layers->size() : 0;
+  if (index == kAtEnd) index = included + own;
+  if (index > included + own)
+    return {{},
+            fmt::format("position {} is past the end: the config has {} layer(s), positions "
+                        "count from 0",
+                        index, included + own)};
+  if (index < included)
+    return {{},
+            fmt::format("position {} holds a layer of an included file: an included file's "
+                        "layers come first, so the config's own start at position {}",
+                        index, included)};
+  auto quoted = [&](const std::string& word) { return quoted_in(file.path, word); };
+  if (!layers || layers->size() == 0 || flow_in(file, *layers)) {
+    const std::string flow =
+        "{" + quoted("name") + ": " + quoted(name) +
+        (interface.empty() ? "" : ", " + quoted("interface") + ": " + quoted(interface)) + "}";
+    if (format_of(file.path) == DocumentFormat::kJson || (layers && layers->size() > 0)) {
+      if (!layers) return add_entry(file, *file.root, quoted("layers") + ": [" + flow + "]");
+      const Items items = items_of(file, *layers);
+      if (!items.refused.empty()) return {{}, items.refused};
+      return {{inserted_item(items, index - included, flow)}, {}};
+    }
+    // A YAML file's first layer starts a block list, the form the layers of a config take.
+    std::string item = "  - name: " + name;
+    if (!interface.empty()) item += "\n    interface: " + interface;
+    if (!layers) return add_entry(file, *file.root, "layers:\n" + item);
+    const std::string& text = file.text;
+    const std::size_t open = offset_at(file, layers->location());
+    const std::size_t close = flow_close(text, open);
+    if (close == std::string::npos) return {{}, "the config's layers: [ has no closing bracket"};
+    const std::size_t key = line_start(text, open);
+    if (text.find_first_not_of(' ', key) != key)
+      return {{}, "the config's layers: is not a top-level key: add the layer in the text"};
+    std::size_t from = open;  // from the colon: `layers:` ends its line
+    while (from > 0 && text[from - 1] == ' ') --from;
+    return {{{file.path, from, close + 1, "\n" + item}}, {}};
+  }
+  const Items items = items_of(file, *layers);
+  if (!items.refused.empty())
+    return {{},
+            fmt::format("the layers of {} are not written one item after another ({}): add "
+                        "it in the text",
+                        file.path, items.refused)};
+  const std::size_t at = index - included;
+  const std::string indent(items.prefixes[std::min(at, own - 1)].size(), ' ');
+  std::string item = "name: " + name;
+  if (!interface.empty()) item += "\n" + indent + "interface: " + interface;
+  return {{inserted_item(items, at, item)}, {}};
+}
+
+EditResult remove_layer(const Loaded& loaded, const std::string& name) {
+  const std::vector<LayerSite> found = layers_named(loaded, name);
+  if (found.empty()) return {{}, fmt::format("no layer '{}'", name)};
+  const SourceFile& file = *found.front().file;
+  const Node* actuators = found.front().layer->find("actuators");
+  // A layer that reads its actuators would read nothing: which sensor to drop is the user's call.
+  std::string uses;
+  for (const auto& other : loaded.files.files()) {
+    const Node* layers =
+        other->root && other->root->is_mapping() ? other->root->find("layers") : nullptr;
+    for (std::size_t i = 0; actuators && actuators->is_mapping() && layers &&
+                            layers->is_sequence() && i < layers->size();
+         ++i) {
+      const Node& layer = layers->items()[i];
+      const Node* owner = layer.is_mapping() ? layer.find("name") : nullptr;
+      const Node* sensors = layer.is_mapping() ? layer.find("sensors") : nullptr;
+      if (!sensors || (owner && owner->is_scalar() && owner->text() == name)) continue;
+      std::vector<std::string> read;
+      if (sensors->is_sequence()) {
+        for (const auto& sensor : sensors->items())
+          if (sensor.is_scalar()) read.push_back(sensor.text());
+      } else if (sensors->is_mapping()) {
+        for (const auto& sensor : sensors->entries()) read.push_back(sensor.key);
+      }
+      for (const auto& sensor : read) {
+        if (actuators->find(sensor))
+          uses += fmt::format("{}layer '{}' reads its actuator '{}'", uses.empty() ? "" : "; ",
+                              owner && owner->is_scalar() ? owner->text() : "?", sensor);
+      }
+    }
+  }
+  if (!uses.empty())
+    return {{},
+            fmt::format("layer '{}' is still used: {}. Remove those sensors first", name, uses)};
+  const EntrySite list = entry_of(file, *file.root, "layers");
+  const Items items = items_of(file, list.entry->value);
+  if (!items.refused.empty())
+    return {{},
+            fmt::format("the layers of {} are not written one item after another ({}): remove "
+                        "it in the text",
+                        file.path, items.refused)};
+  const auto at = static_cast<std::size_t>(found.front().layer - list.entry->value.items().data());
+  return {{removed_list_item(items, *list.entry, at)}, {}};
 }
 
 EditResult add_actuator(const Loaded& loaded, const std::string& layer, const std::string& name,
@@ -1223,15 +1375,7 @@ EditResult remove_queue_entry(const Loaded& loaded, const std::string& machine, 
   const std::size_t count = queue.items.spans.size();
   if (index >= count) return {{}, past_the_end(machine, index, count)};
   // A block queue without items would be null; an empty plan is written `queue: []`.
-  if (!queue.items.flow && count == 1) {
-    const std::size_t end = queue.items.spans.front().second;
-    const std::string& text = queue.site.file->text;
-    const std::size_t key =
-        offset_of(text, queue.queue->key_location.line(), queue.queue->key_location.column());
-    const std::size_t colon = text.find(':', key);
-    return {{{queue.site.file->path, colon + 1, std::min(text.size(), end), " []"}}, {}};
-  }
-  return {{removed_item(queue.items, index)}, {}};
+  return {{removed_list_item(queue.items, *queue.queue, index)}, {}};
 }
 
 EditResult move_queue_entry(const Loaded& loaded, const std::string& machine, std::size_t from,
@@ -1273,19 +1417,7 @@ EditResult remove_state(const Loaded& loaded, const ConfigIndex& index, const st
     return {{}, fmt::format("no state '{}' in state machine '{}'", name, machine)};
   // Where it is named (the queue, a pre-emption, a state's append: or prepend:) a plan would
   // lose a step: which one to drop instead is the user's call.
-  std::string uses;
-  for (const auto& use : index.occurrences) {
-    if (use.definition || use.kind != SymbolKind::kState || use.scope != machine ||
-        use.name != name)
-      continue;
-    const SourceFile* file = loaded.files.find(use.file);
-    const std::string& text = file ? file->text : use.file;
-    const std::size_t at = std::min(use.begin, text.size());
-    const auto line =
-        1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
-    uses += fmt::format("{}{}:{}:{}", uses.empty() ? "" : ", ", use.file, line,
-                        at - line_start(text, at) + 1);
-  }
+  const std::string uses = uses_of(loaded, index, SymbolKind::kState, machine, name);
   if (!uses.empty())
     return {{},
             fmt::format("state '{}' of state machine '{}' is still named at {}: remove those "
@@ -1298,6 +1430,124 @@ EditResult remove_state(const Loaded& loaded, const ConfigIndex& index, const st
                         "remove it in the text",
                         machine, items.refused)};
   return {{removed_entry(items, *states.entry, index_of(states.entry->value, name))}, {}};
+}
+
+namespace {
+
+/// The edit appending `item` (a name) to the list `key` of `mapping` of `file`, or adding
+/// `key: [item]` when it is missing; refused (with `named`) when the list names it already.
+EditResult appended_name(const SourceFile& file, const Node& mapping, const std::string& key,
+                         const std::string& item, const std::string& named) {
+  const Node* list = mapping.find(key);
+  if (!list)
+    return add_entry(file, mapping,
+                     quoted_in(file.path, key) + ": [" + quoted_in(file.path, item) + "]");
+  if (!list->is_sequence()) return {{}, fmt::format("{}: is not a list", key)};
+  for (const auto& named_item : list->items()) {
+    if (named_item.is_scalar() && named_item.text() == item) return {{}, named};
+  }
+  const Items items = items_of(file, *list);
+  if (!items.refused.empty())
+    return {{},
+            fmt::format("the {}: list is not written one item after another ({}): add it in the "
+                        "text",
+                        key, items.refused)};
+  return {{inserted_item(items, items.spans.size(), quoted_in(file.path, item))}, {}};
+}
+
+}  // namespace
+
+EditResult add_plugin(const Loaded& loaded, const std::string& plugin) {
+  if (!is_identifier(plugin))
+    return {{}, fmt::format("'{}' is not a plugin's name: names are [a-z_][a-z0-9_]*", plugin)};
+  const auto& files = loaded.files.files();
+  if (files.empty() || !files.front()->root || !files.front()->root->is_mapping())
+    return {{}, "the config's file is not a mapping: add the plugin in the text"};
+  return appended_name(*files.front(), *files.front()->root, "plugins", plugin,
+                       fmt::format("plugin '{}' is named already", plugin));
+}
+
+EditResult add_sensor(const Loaded& loaded, const std::string& layer, const std::string& name) {
+  if (!is_identifier(name))
+    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  const std::vector<LayerSite> found = layers_named(loaded, layer);
+  if (found.empty()) return {{}, fmt::format("no layer '{}'", layer)};
+  const Node* sensors = found.front().layer->find("sensors");
+  if (sensors && sensors->is_mapping())
+    return {{},
+            fmt::format("the sensors of layer '{}' are written with their types: add it in "
+                        "the text",
+                        layer)};
+  return appended_name(*found.front().file, *found.front().layer, "sensors", name,
+                       fmt::format("layer '{}' reads '{}' already", layer, name));
+}
+
+EditResult remove_sensor(const Loaded& loaded, const std::string& layer, const std::string& name) {
+  const std::vector<LayerSite> found = layers_named(loaded, layer);
+  if (found.empty()) return {{}, fmt::format("no layer '{}'", layer)};
+  const SourceFile& file = *found.front().file;
+  const EntrySite list = entry_of(file, *found.front().layer, "sensors");
+  if (!list.entry || !list.entry->value.is_sequence())
+    return {{}, fmt::format("layer '{}' does not read '{}'", layer, name)};
+  const auto& items = list.entry->value.items();
+  const auto it = std::find_if(items.begin(), items.end(), [&](const Node& item) {
+    return item.is_scalar() && item.text() == name;
+  });
+  if (it == items.end()) return {{}, fmt::format("layer '{}' does not read '{}'", layer, name)};
+  const Items written = items_of(file, list.entry->value);
+  if (!written.refused.empty())
+    return {{},
+            fmt::format("the sensors of layer '{}' are not written one item after another "
+                        "({}): remove it in the text",
+                        layer, written.refused)};
+  return {{removed_list_item(written, *list.entry, static_cast<std::size_t>(it - items.begin()))},
+          {}};
+}
+
+EditResult add_state_machine(const Loaded& loaded, const std::string& name) {
+  if (!is_identifier(name))
+    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  if (machine_named(loaded, name).file)
+    return {{},
+            fmt::format("'{}' is already taken: a state machine of that name is declared", name)};
+  const auto& files = loaded.files.files();
+  if (files.empty() || !files.front()->root || !files.front()->root->is_mapping())
+    return {{}, "the config's file is not a mapping: add the state machine in the text"};
+  const SourceFile& file = *files.front();
+  auto quoted = [&](const std::string& word) { return quoted_in(file.path, word); };
+  const std::string flow =
+      fmt::format("{}: {{{}: {{}}, {}: []}}", quoted(name), quoted("states"), quoted("queue"));
+  const Node* machines = file.root->find("state_machines");
+  // In a block mapping the machine's keys go on lines of their own, where its states and queue
+  // will grow.
+  const std::string block = name + ":\n  states: {}\n  queue: []";
+  if (!machines) {
+    if (flow_in(file, *file.root))
+      return add_entry(file, *file.root, quoted("state_machines") + ": {" + flow + "}");
+    return add_entry(file, *file.root,
+                     fmt::format("state_machines:\n  {}:\n    states: {{}}\n    queue: []", name));
+  }
+  if (!machines->is_mapping()) return {{}, "the config's state_machines: is not a mapping"};
+  return add_entry(file, *machines, flow_in(file, *machines) ? flow : block);
+}
+
+EditResult remove_state_machine(const Loaded& loaded, const ConfigIndex& index,
+                                const std::string& name) {
+  const MachineSite site = machine_named(loaded, name);
+  if (!site.file) return {{}, fmt::format("no state machine '{}'", name)};
+  // An owner would step nothing: whether to remove it too is the user's call.
+  const std::string uses = uses_of(loaded, index, SymbolKind::kMachine, {}, name);
+  if (!uses.empty())
+    return {{},
+            fmt::format("state machine '{}' is still named at {}: remove those first", name, uses)};
+  const EntrySite machines = entry_of(*site.file, *site.file->root, "state_machines");
+  const Items items = items_of(*site.file, machines.entry->value);
+  if (!items.refused.empty())
+    return {{},
+            fmt::format("the state machines of {} are not written one to a line ({}): remove "
+                        "it in the text",
+                        site.file->path, items.refused)};
+  return {{removed_entry(items, *machines.entry, index_of(machines.entry->value, name))}, {}};
 }
 
 }  // namespace arbiter

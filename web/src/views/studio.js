@@ -279,7 +279,12 @@ export async function studio(info) {
     else say(done || (state.graph ? 'ok' : 'the text does not compile: see the problems below'), '');
     return !json.refused;
   }
-  const operation = (body, done) => change(() => call('studio/edit', body), done);
+  // A plugin named in the config brings its classes: the palette lists them from then on.
+  const operation = async (body, done) => {
+    const ok = await change(() => call('studio/edit', body), done);
+    if (ok && body.op === 'add_plugin') await loadClasses();
+    return ok;
+  };
   const setTexts = (texts) => call('studio/texts', {texts});
 
   async function step(from, to) {
@@ -620,11 +625,17 @@ export async function studio(info) {
   };
 
   setStatus(info.live ? 'editing the running engine' : 'editing', 'live');
-  const [catalog, first] = await Promise.all([call('studio/classes'), call('studio/state')]);
-  classes = new Map(catalog.json.classes.map((c) => [c.name, c]));
-  for (const c of catalog.json.classes.filter((c) => c.kind === 'behaviour')) {
-    html('option', {value: c.name, title: c.description}, ui.paletteClass).textContent = c.name;
+  async function loadClasses() {
+    const catalog = await call('studio/classes');
+    classes = new Map(catalog.json.classes.map((c) => [c.name, c]));
+    const chosen = ui.paletteClass.value;
+    ui.paletteClass.replaceChildren();
+    for (const c of catalog.json.classes.filter((c) => c.kind === 'behaviour')) {
+      html('option', {value: c.name, title: c.description}, ui.paletteClass).textContent = c.name;
+    }
+    if (classes.has(chosen)) ui.paletteClass.value = chosen;
   }
+  const [, first] = await Promise.all([loadClasses(), call('studio/state')]);
   await show(first.json);
   if (!state.graph) say('the config does not compile: its text and problems are below', 'error');
 }

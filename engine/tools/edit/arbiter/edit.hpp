@@ -171,6 +171,24 @@ EditResult move_behaviour(const Loaded& loaded, const std::string& layer, const 
 /// refused.
 EditResult move_layer(const Loaded& loaded, const std::string& layer, std::size_t index);
 
+/// A position past every item: add_layer and add_queue_entry append there.
+inline constexpr std::size_t kAtEnd = static_cast<std::size_t>(-1);
+
+/// Declares layer `name` at position `index` (from 0; the number of layers or kAtEnd appends)
+/// of the config's layer order, in the config's own file: `- name: NAME` (with `interface:
+/// CLASS` for an interface layer, when `interface` is not empty), which is a valid layer with no
+/// behaviours yet; a `layers: []` of a YAML file becomes a block list, and `layers:` is added
+/// when missing. Refused when `name` is not an identifier or is a layer already, or the
+/// position is past the end or holds an included file's layer (they come first).
+EditResult add_layer(const Loaded& loaded, const std::string& name, std::size_t index = kAtEnd,
+                     const std::string& interface = {});
+
+/// Removes layer `name` with everything it declares (behaviours, actuators, inhibitions): its
+/// item of `layers:` (the last one leaves `layers: []`). Refused, naming them, while other
+/// layers read its actuators as sensors; what else would be left dangling (a state machine its
+/// behaviour owned) is left for checked() to refuse.
+EditResult remove_layer(const Loaded& loaded, const std::string& name);
+
 /// Declares actuator `name` of value type `type` in layer `layer`: `name: {type: TYPE}` after
 /// the last of its `actuators:` (the key added when it has none). Refused when `name` is not an
 /// identifier or is an actuator of any layer already (actuator names are the manager's).
@@ -189,9 +207,6 @@ EditResult remove_actuator(const Loaded& loaded, const std::string& layer, const
 /// missing). Whether the class has the port and the layer the name is left for checked().
 EditResult wire_port(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
                      const std::string& port, const std::string& target);
-
-/// A position past every item: add_queue_entry appends there.
-inline constexpr std::size_t kAtEnd = static_cast<std::size_t>(-1);
 
 /// Plans state `state` at position `index` (from 0; the queue's length or kAtEnd appends) of the
 /// queue of state machine `machine`, with per-instance `params` (name, value as it is to be
@@ -224,6 +239,33 @@ EditResult add_state(const Loaded& loaded, const std::string& machine, const std
 /// by name (the soccer goalie's dive) is left for checked() to refuse.
 EditResult remove_state(const Loaded& loaded, const ConfigIndex& index, const std::string& machine,
                         const std::string& name);
+
+/// Names plugin `plugin` (a name looked up on the plugin path) in the config's `plugins:`, after
+/// its last (`plugins: [NAME]` added when missing), so that its classes can be used. Refused when
+/// it is named already or is not a plugin name; whether it is found is left for checked().
+EditResult add_plugin(const Loaded& loaded, const std::string& plugin);
+
+/// Makes layer `layer` read actuator `name` of another layer: `name` appended to its `sensors:`
+/// list (`sensors: [NAME]` added when missing). Refused when it reads it already or its sensors
+/// are written as a mapping with types; whether `name` is an actuator it may read is left for
+/// checked().
+EditResult add_sensor(const Loaded& loaded, const std::string& layer, const std::string& name);
+
+/// Removes `name` from the `sensors:` list of layer `layer` (the last one leaves `sensors: []`).
+/// A port bound to it is left for checked() to refuse.
+EditResult remove_sensor(const Loaded& loaded, const std::string& layer, const std::string& name);
+
+/// Declares state machine `name` with no states and an empty plan, `name: {states: {}, queue:
+/// []}` (in a block `state_machines:` its keys on lines of their own), in the config's own file
+/// (`state_machines:` added when missing). Refused when `name` is not an identifier or is a
+/// state machine already.
+EditResult add_state_machine(const Loaded& loaded, const std::string& name);
+
+/// Removes state machine `name` with its states and queue. Refused, with the places
+/// (file:line:column), while the config names it (a `state_machine` behaviour's or a state's
+/// `machine:`, as `index` of `loaded` finds them).
+EditResult remove_state_machine(const Loaded& loaded, const ConfigIndex& index,
+                                const std::string& name);
 
 /// Adds `entry` (`key: value`, as it is to be written) to the mapping `node` of `file`: before
 /// a flow mapping's closing brace, else as a line of its own after the last line of the block
