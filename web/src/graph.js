@@ -529,25 +529,64 @@ export class GraphView {
   }
 
   /**
-   * Large graphs are redrawn only where they are on the screen: a behaviour scrolled into view
-   * is brought up to the step shown then. (Small ones are redrawn whole: nothing to gain.)
+   * Large graphs are redrawn only where they are on the screen: a behaviour scrolled (or panned)
+   * into view is brought up to the step shown then. (Small ones are redrawn whole: nothing to
+   * gain.) Where each box lies in the SVG is measured once a drawing; what is on the screen is
+   * then computed from two rectangles, the SVG's and what clips it. An IntersectionObserver of
+   * every box did the same, but cost the browser some milliseconds every frame at 1000 boxes.
    */
   watchScreen() {
-    this.observer?.disconnect();
-    this.observer = null;
-    if (this.behaviours.size < LARGE) return;
-    const items = new Map([...this.behaviours.values()].map((item) => [item.group, item]));
-    this.observer = new IntersectionObserver((entries) => {
-      for (const entry of entries) {
-        const item = items.get(entry.target);
-        item.onScreen = entry.isIntersecting;
-        if (item.onScreen && this.record) this.showBehaviour(item.key, item, this.record);
+    this.large = this.behaviours.size >= LARGE;
+    this.measured = false;
+    if (!this.large || this.screenWatched) return;
+    this.screenWatched = true;
+    // Capturing: the panel's own horizontal scroll as well as the page's.
+    document.addEventListener('scroll', () => this.screenChanged(), {capture: true, passive: true});
+    window.addEventListener('resize', () => this.screenChanged());
+  }
+
+  /** Measures where each box lies, in the SVG's units; false while the SVG is not laid out. */
+  measureBoxes() {
+    const svg = this.svg.getBoundingClientRect();
+    const width = Number(this.svg.getAttribute('width'));
+    if (!svg.width || !width) return false;
+    const scale = svg.width / width;
+    for (const item of this.behaviours.values()) {
+      const box = item.group.getBoundingClientRect();
+      // Folded away: never on the screen.
+      item.box = box.width ? [(box.left - svg.left) / scale, (box.top - svg.top) / scale,
+                              (box.right - svg.left) / scale, (box.bottom - svg.top) / scale] : null;
+    }
+    this.measured = true;
+    return true;
+  }
+
+  /** Whether a box is on the screen now, as a function of the box; null: all are. */
+  onScreen() {
+    if (!this.large) return null;
+    if (!this.measured && !this.measureBoxes()) return () => false;
+    const svg = this.svg.getBoundingClientRect();
+    const clip = this.svg.parentElement.getBoundingClientRect();
+    const scale = svg.width / Number(this.svg.getAttribute('width'));
+    // The screen's part of what clips the SVG, in the SVG's units.
+    const left = (Math.max(0, clip.left) - svg.left) / scale;
+    const top = (Math.max(0, clip.top) - svg.top) / scale;
+    const right = (Math.min(window.innerWidth, clip.right) - svg.left) / scale;
+    const bottom = (Math.min(window.innerHeight, clip.bottom) - svg.top) / scale;
+    return (item) => !!item.box && item.box[2] > left && item.box[0] < right && item.box[3] > top && item.box[1] < bottom;
+  }
+
+  /** The page scrolled or the graph moved: the boxes come into view at the step shown. */
+  screenChanged() {
+    if (!this.large || this.revealing) return;
+    this.revealing = requestAnimationFrame(() => {
+      this.revealing = 0;
+      if (!this.record || !this.large) return;
+      const visible = this.onScreen();
+      for (const [key, item] of this.behaviours) {
+        if (visible(item)) this.showBehaviour(key, item, this.record);
       }
     });
-    for (const item of this.behaviours.values()) {
-      item.onScreen = false;
-      this.observer.observe(item.group);
-    }
   }
 
   /**
@@ -557,7 +596,7 @@ export class GraphView {
    */
   show(record) {
     this.record = record;
-    if (this.observer) {
+    if (this.large) {
       const wait = this.shownAt + LARGE_PERIOD - performance.now();
       if (wait > 0) {
         this.trailing ??= setTimeout(() => {
@@ -568,8 +607,9 @@ export class GraphView {
       }
       this.shownAt = performance.now();
     }
+    const visible = this.onScreen();
     for (const [key, item] of this.behaviours) {
-      if (this.observer && !item.onScreen) continue;
+      if (visible && !visible(item)) continue;
       this.showBehaviour(key, item, record);
     }
     for (const [name, port] of this.ports) showActuator(port, record, name);

@@ -25,6 +25,8 @@ export class Viewport {
     this.x = 0;  // px: where the graph's (0, 0) is in the stage
     this.y = 0;
     this.fitted = false;  // once: a graph drawn again keeps the view it had
+    /** Called when the graph moved in the stage (panned, zoomed). */
+    this.onMove = () => {};
     stage.addEventListener('wheel', (event) => {
       event.preventDefault();
       const sideways = Math.abs(event.deltaX) > Math.abs(event.deltaY);
@@ -97,6 +99,7 @@ export class Viewport {
   apply() {
     this.svg.style.transform = `translate(${this.x}px, ${this.y}px) scale(${this.scale})`;
     this.stage.dataset.scale = String(this.scale);
+    this.onMove();
   }
 
   moveTo(x, y) {
@@ -174,6 +177,7 @@ export function navigate(graph, panel, onFind = () => {}) {
   stage.appendChild(svg);
   const view = new Viewport(stage, svg, (target) => !target.closest('g.behaviour, g.layer-head'));
   graph.view = view;
+  view.onMove = () => graph.screenChanged();
 
   const search = html('input', {id: 'graph-search', type: 'search', placeholder: 'find a behaviour', size: '22',
                                 'aria-label': 'find a behaviour by name; Enter shows the next match, Shift+Enter the previous'}, tools);

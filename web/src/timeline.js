@@ -58,7 +58,10 @@ export class Timelines {
     this.groups = new Map();     // layer -> {group, head}
     /** Comparing: {columns (B's), differ: {what: [[from, to], ...]}, steps: [[from, to], ...]}. */
     this.compare = null;
-    this.visible = new Set();    // rows on the screen
+    // Rows outside a layer's group and the groups themselves on the screen: the rows of a
+    // group are told apart by their rectangles as they are drawn. An IntersectionObserver of
+    // every row cost the browser some milliseconds every frame at 1000 rows.
+    this.visible = new Set();
     this.pointer = null;         // {strip, x, y}: where the pointer is, for the tip
     this.queueAt = () => null;   // the queue of a state machine at the cursor (from the record)
     /** Called with 'layer/name' when a behaviour's label is clicked, 'state_machines/name' a lane's. */
@@ -75,6 +78,8 @@ export class Timelines {
       }
       this.view.changed();
     });
+    // Scrolled within a group on the screen: its rows that came into view are drawn.
+    document.addEventListener('scroll', () => this.view.changed(), {capture: true, passive: true});
     view.subscribe(() => this.draw());
     folds.subscribe((layer) => this.showFold(layer));
     attachPointer(this.rows, view, () => this.strip(), (step, event) => this.clicked(step, event));
@@ -114,9 +119,9 @@ export class Timelines {
     html('span', {class: 'label', title: label}, row).textContent = label;
     const canvas = html('canvas', {height}, row);
     canvas.style.height = `${height}px`;
-    const strip = {kind, key, row, canvas, columns};
+    const strip = {kind, key, row, canvas, columns, group: parent === this.rows ? null : parent};
     this.strips.push(strip);
-    this.observer.observe(row);
+    if (!strip.group) this.observer.observe(row);
     return strip;
   }
 
@@ -142,7 +147,7 @@ export class Timelines {
 
   /** The rows of `graph` (the JSON dump): behaviours in execution order, then its state machines. */
   build(graph) {
-    for (const strip of this.strips) this.observer.unobserve(strip.row);
+    this.observer.disconnect();
     this.rows.replaceChildren();
     this.strips = [];
     this.groups.clear();
@@ -151,6 +156,7 @@ export class Timelines {
     for (const layer of graph.layers) {
       if (!layer.behaviours.length) continue;
       const group = html('div', {class: 'timeline-group', 'data-layer': layer.name}, this.rows);
+      this.observer.observe(group);
       const head = html('button', {type: 'button', class: 'timeline-layer', 'aria-expanded': 'true'}, group);
       head.textContent = `${layer.name} (${layer.behaviours.length})`;
       head.onclick = () => this.folds.set(layer.name);
@@ -169,6 +175,7 @@ export class Timelines {
       const onlyB = [...this.compare.columns.behaviours.keys()].filter((key) => !inA.has(key));
       if (onlyB.length) {
         const group = html('div', {class: 'timeline-group', 'data-layer': ''}, this.rows);
+        this.observer.observe(group);
         html('span', {class: 'timeline-layer'}, group).textContent = `only in B (${onlyB.length})`;
         for (const key of onlyB) {
           const strip = this.add('timeline', key, `B ${key}`, group, ROW_HEIGHT, {'data-name': key, 'data-run': 'b'},
@@ -222,9 +229,28 @@ export class Timelines {
     this.view.changed();
   }
 
+  /**
+   * The rows on the screen: those outside groups as the observer says, and the rows of the groups
+   * on the screen by their rectangles, read before anything is drawn (the page is laid out once).
+   */
+  onScreen() {
+    const shown = [];
+    const bottom = window.innerHeight;
+    for (const strip of this.strips) {
+      if (!strip.group) {
+        if (this.visible.has(strip.row)) shown.push(strip);
+      } else if (this.visible.has(strip.group) && !strip.row.hidden && !strip.group.classList.contains('collapsed')) {
+        const box = strip.row.getBoundingClientRect();
+        if (box.bottom > 0 && box.top < bottom) shown.push(strip);
+      }
+    }
+    return shown;
+  }
+
   /** Redraws the rows on the screen. */
   draw() {
     const view = this.view;
+    const shown = this.strips.length ? this.onScreen() : [];
     this.range.textContent = this.columns.length ? `steps ${view.from} to ${view.to}` : '';
     this.section.dataset.from = String(view.from);
     this.section.dataset.to = String(view.to);
@@ -234,8 +260,7 @@ export class Timelines {
     if (!width) return;
     // Only the rows on the screen: a row filtered out or folded away is not displayed, and so
     // not intersecting.
-    for (const strip of this.strips) {
-      if (!this.visible.has(strip.row)) continue;
+    for (const strip of shown) {
       const canvas = strip.canvas;
       const height = Math.round(Number(canvas.getAttribute('height')) * ratio);
       if (canvas.width !== width || canvas.height !== height) {
