@@ -36,6 +36,14 @@ std::string config_copy(const TempDir& dir) {
   return dir.write("robot.yaml", read(ARBITER_SOURCE_DIR "/configs/paper/walk_and_kick.yaml"));
 }
 
+/// The studio on a copy of the paper's walk_and_kick config, as most cases start.
+struct StudioOnACopy {
+  TempDir dir;
+  std::string path = config_copy(dir);
+  Registry registry = make_test_registry();
+  Studio studio{path, registry, with_lints()};
+};
+
 /// The save request for the studio's texts as they are now.
 std::string save_body(const Json& state) {
   Json files = Json::array();
@@ -47,15 +55,12 @@ std::string save_body(const Json& state) {
 
 }  // namespace
 
-TEST_CASE(
+TEST_CASE_METHOD(
+    StudioOnACopy,
     "a studio operation answers with its edits, the texts and the diagnostics, and writes "
     "nothing",
     "[studio]") {
-  TempDir dir;
-  const std::string path = config_copy(dir);
   const std::string original = read(path);
-  Registry registry = make_test_registry();
-  Studio studio(path, registry, with_lints());
 
   const auto [status, body] = studio.edit(
       R"({"op": "add_inhibition", "layer": "control", "inhibitor": "kick_ball",
@@ -96,12 +101,9 @@ TEST_CASE(
   CHECK(read(path) == original);
 }
 
-TEST_CASE("a studio edit that validate would reject is refused with validate's message",
-          "[studio]") {
-  TempDir dir;
-  const std::string path = config_copy(dir);
-  Registry registry = make_test_registry();
-  Studio studio(path, registry, with_lints());
+TEST_CASE_METHOD(StudioOnACopy,
+                 "a studio edit that validate would reject is refused with validate's message",
+                 "[studio]") {
   const auto [status, body] = studio.edit(
       R"({"op": "set_param", "layer": "control", "behaviour": "head_control",
           "param": "activation", "value": 3})");
@@ -188,13 +190,11 @@ TEST_CASE(
   CHECK(entries == 2);
 }
 
-TEST_CASE("the studio's API over HTTP needs the token, and edits and saves need its own origin",
-          "[studio]") {
-  TempDir dir;
-  const std::string path = config_copy(dir);
+TEST_CASE_METHOD(
+    StudioOnACopy,
+    "the studio's API over HTTP needs the token, and edits and saves need its own origin",
+    "[studio]") {
   const std::string original = read(path);
-  Registry registry = make_test_registry();
-  Studio studio(path, registry, with_lints());
   WebServer server;
   studio.attach(server.http());
   std::string error;
@@ -317,13 +317,10 @@ layers:
         "~ behaviour control/head_control: params: activation [1.0] -> [0.25]\n");
 }
 
-TEST_CASE("the studio moves a behaviour and a layer, and refuses a move it cannot make",
-          "[studio]") {
-  TempDir dir;
-  const std::string path = config_copy(dir);
+TEST_CASE_METHOD(StudioOnACopy,
+                 "the studio moves a behaviour and a layer, and refuses a move it cannot make",
+                 "[studio]") {
   const std::string original = read(path);
-  Registry registry = make_test_registry();
-  Studio studio(path, registry, with_lints());
 
   const auto moved =
       studio.edit(R"({"op": "move_behaviour", "layer": "control", "name": "head_control",
@@ -351,13 +348,10 @@ TEST_CASE("the studio moves a behaviour and a layer, and refuses a move it canno
                  "move_behaviour needs 'index' (names as strings, positions as integers from 0)"));
 }
 
-TEST_CASE("the studio adds and removes an actuator and wires a port, refusing a used actuator",
-          "[studio]") {
-  TempDir dir;
-  const std::string path = config_copy(dir);
-  Registry registry = make_test_registry();
-  Studio studio(path, registry, with_lints());
-
+TEST_CASE_METHOD(
+    StudioOnACopy,
+    "the studio adds and removes an actuator and wires a port, refusing a used actuator",
+    "[studio]") {
   const auto used = studio.edit(R"({"op": "remove_actuator", "layer": "control", "name": "kick"})");
   CHECK(used.first == 422);
   // A scripted behaviour's writes: are not a binding the engine follows: validate's words say it.
@@ -455,13 +449,9 @@ TEST_CASE("the studio edits a state machine's queue: a state planned with params
             .first == 400);
 }
 
-TEST_CASE("the studio adds and removes a layer and a state machine, refusing a name taken",
-          "[studio]") {
-  TempDir dir;
-  const std::string path = config_copy(dir);
-  Registry registry = make_test_registry();
-  Studio studio(path, registry, with_lints());
-
+TEST_CASE_METHOD(StudioOnACopy,
+                 "the studio adds and removes a layer and a state machine, refusing a name taken",
+                 "[studio]") {
   const auto added = studio.edit(R"({"op": "add_layer", "name": "io", "interface": "inputs"})");
   REQUIRE(added.first == 200);
   CHECK(Json::parse(added.second)["edits"][0]["text"] == "\n  - name: io\n    interface: inputs");
