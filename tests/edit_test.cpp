@@ -996,6 +996,15 @@ const LayerDecl* first_behaviour_layer(const Model& model) {
   return nullptr;
 }
 
+/// The config's first inhibition, in the order of its layers; none when it has none.
+std::optional<InhibitionRef> first_inhibition(const Model& model) {
+  for (const auto& layer : model.layers) {
+    for (const auto& inhibition : layer.inhibitions)
+      return InhibitionRef{layer.name.text, inhibition.inhibitor.text, inhibition.inhibited.text};
+  }
+  return std::nullopt;
+}
+
 /// The bytes of `text`, sorted: what a move of its items leaves as it was.
 std::string sorted_bytes(std::string text) {
   std::sort(text.begin(), text.end());
@@ -1027,21 +1036,15 @@ std::vector<Applied> every_operation() {
        }},
       {"flip the first inhibition",
        [](const Loaded& loaded, const Model& model) -> Made {
-         for (const auto& layer : model.layers) {
-           for (const auto& inhibition : layer.inhibitions)
-             return flip_chaining(
-                 loaded, {layer.name.text, inhibition.inhibitor.text, inhibition.inhibited.text});
-         }
-         return std::nullopt;
+         const auto inhibition = first_inhibition(model);
+         if (!inhibition) return std::nullopt;
+         return flip_chaining(loaded, *inhibition);
        }},
       {"remove the first inhibition",
        [](const Loaded& loaded, const Model& model) -> Made {
-         for (const auto& layer : model.layers) {
-           for (const auto& inhibition : layer.inhibitions)
-             return remove_inhibition(
-                 loaded, {layer.name.text, inhibition.inhibitor.text, inhibition.inhibited.text});
-         }
-         return std::nullopt;
+         const auto inhibition = first_inhibition(model);
+         if (!inhibition) return std::nullopt;
+         return remove_inhibition(loaded, *inhibition);
        }},
       {"set activation of the first behaviour",
        [](const Loaded& loaded, const Model& model) -> Made {
