@@ -18,7 +18,7 @@ doc=$2
 name=$(basename "$doc")
 work=$(mktemp -d)
 server=
-trap '[ -n "$server" ] && kill -- -"$server" 2>/dev/null; rm -rf "$work"' EXIT
+trap '[[ $BASHPID == "$$" ]] || exit; [ -n "$server" ] && kill -- -"$server" 2>/dev/null; rm -rf "$work"' EXIT
 export PATH="$prefix/bin:$PATH"
 unset ARBITER_PLUGIN_PATH CMAKE_PREFIX_PATH
 set -m  # a served block runs in a process group of its own, which Ctrl-C (SIGINT) goes to

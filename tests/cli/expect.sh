@@ -6,7 +6,9 @@
 work=$(mktemp -d)
 pid=
 pids=()
-trap 'for p in $pid "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; rm -rf "$work"' EXIT
+# A background job killed between its fork and its exec is still a copy of this shell, and runs
+# this trap as it dies: only the script's own shell may clean up, or the copy removes `work`.
+trap '[[ $BASHPID == "$$" ]] || exit; for p in $pid "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; rm -rf "$work"' EXIT
 
 fail() {
   echo "FAIL: $*"
@@ -46,6 +48,9 @@ printed() {
 serve_until() {
   local pattern=$1
   shift
+  # Emptied first: what the previous command wrote must not pass for this one's PATTERN.
+  : >"$work/out.txt"
+  : >"$work/err.txt"
   "$@" >"$work/out.txt" 2>"$work/err.txt" &
   pid=$!
   for _ in $(seq 600); do
@@ -61,6 +66,7 @@ serve_until() {
 # to $work/run.mcap (output in $work/out.txt); once STARTED is in its output, edits the config
 # with `sed -i EDIT`, and stops the run (SIGINT) a few steps after RELOADED is.
 record_reload() {
+  : >"$work/out.txt"
   "$cli" run "$work/robot.yaml" --watch --realtime --record "$work/run.mcap" \
     >"$work/out.txt" 2>"$work/err.txt" &
   pid=$!
