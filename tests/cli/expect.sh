@@ -12,7 +12,7 @@ trap '[[ $BASHPID == "$$" ]] || exit; for p in $pid "${pids[@]}"; do kill "$p" 2
 
 fail() {
   echo "FAIL: $*"
-  for f in "$work"/*.txt; do echo "--- $f"; cat "$f"; done
+  for f in "$work"/*.txt; do [[ -e $f ]] && { echo "--- $f"; cat "$f"; }; done
   exit 1
 }
 expect_exit() {  # CODE COMMAND...
