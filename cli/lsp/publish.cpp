@@ -68,6 +68,24 @@ std::string unused_name(const std::string& name, const std::set<std::string>& ta
   return candidate;
 }
 
+/// A queue item is named by its position, as the engine's queue operations take it, and by the
+/// state it held when the action was offered: an edit between the offer and the resolve that
+/// moved the queue's items must not make the action move or remove another one.
+void check_queue_item(const Loaded& loaded, const json& data, std::size_t index) {
+  if (!loaded.model) return;  // the operation reports the config that does not load
+  const std::string machine = data.value("machine", std::string());
+  const std::string state = data.value("state", std::string());
+  for (const auto& declared : loaded.model->state_machines) {
+    if (declared.name.text != machine) continue;
+    if (index < declared.queue.size() && declared.queue[index].state.text == state) return;
+    throw RequestError{kRequestFailed,
+                       fmt::format("the queue of state machine '{}' changed since the action "
+                                   "was offered (item {} is no longer '{}'): ask for the code "
+                                   "actions again",
+                                   machine, index + 1, state)};
+  }
+}
+
 /// The engine's operation a code action offered without an edit names in its `data`, with the
 /// studio's names for the operation and its fields (docs/studio.md): the one place both the
 /// offer (the operation alone, cheap: no load) and the resolve (checked) compute it.
@@ -81,10 +99,14 @@ EditResult operation_of(const Loaded& loaded, const json& data) {
     return move_behaviour(loaded, text("layer"), text("name"), {}, number("index"));
   if (op == "move_layer") return move_layer(loaded, text("layer"), number("index"));
   if (op == "remove_actuator") return remove_actuator(loaded, text("layer"), text("name"));
-  if (op == "move_queue_entry")
+  if (op == "move_queue_entry") {
+    check_queue_item(loaded, data, number("from"));
     return move_queue_entry(loaded, text("machine"), number("from"), number("to"));
-  if (op == "remove_queue_entry")
+  }
+  if (op == "remove_queue_entry") {
+    check_queue_item(loaded, data, number("index"));
     return remove_queue_entry(loaded, text("machine"), number("index"));
+  }
   throw RequestError{kRequestFailed, "not a code action of this server to resolve"};
 }
 
@@ -338,7 +360,11 @@ json Server::code_actions(const json& params) const {
   // are (a checked edit loads the config again): offered when the operation alone gives edits.
   auto offer_lazily = [&](const std::string& title, json data) {
     data["uri"] = uri;
-    if (!operation_of(analysis->loaded, data).ok()) return;
+    try {
+      if (!operation_of(analysis->loaded, data).ok()) return;
+    } catch (const RequestError&) {
+      return;  // the index and the model disagree about the item: nothing sure to offer
+    }
     actions.push_back({{"title", title}, {"kind", "refactor.rewrite"}, {"data", std::move(data)}});
   };
   // On a behaviour's declaration: up or down among its layer's behaviours.
@@ -391,16 +417,21 @@ json Server::code_actions(const json& params) const {
   for (std::size_t i = 0; analysis && i < analysis->queue_items.size(); ++i) {
     const QueueItemSite& queued = analysis->queue_items[i];
     if (queued.file != path || at < queued.begin || at > queued.end) continue;
-    json move = {{"op", "move_queue_entry"}, {"machine", queued.machine}, {"from", queued.index}};
+    json move = {{"op", "move_queue_entry"},
+                 {"machine", queued.machine},
+                 {"state", queued.state},
+                 {"from", queued.index}};
     if (queued.index > 0) {
       move["to"] = queued.index - 1;
       offer_lazily(fmt::format("Move '{}' up in the queue", queued.state), move);
     }
     move["to"] = queued.index + 1;
     offer_lazily(fmt::format("Move '{}' down in the queue", queued.state), move);
-    offer_lazily(
-        fmt::format("Remove '{}' from the queue", queued.state),
-        {{"op", "remove_queue_entry"}, {"machine", queued.machine}, {"index", queued.index}});
+    offer_lazily(fmt::format("Remove '{}' from the queue", queued.state),
+                 {{"op", "remove_queue_entry"},
+                  {"machine", queued.machine},
+                  {"state", queued.state},
+                  {"index", queued.index}});
     break;
   }
   // On a layer's name: a behaviour of each class the config can use, as the studio's palette

@@ -849,6 +849,12 @@ test("code actions on a state machine's queue item move it and take it out of th
     assert.equal(down, text.replace('      - obstacle_ahead\n      - monitor_ball\n', '      - monitor_ball\n      - obstacle_ahead\n'));
     const removed = await resolved(client, uri, text, actions.get("Remove 'obstacle_ahead' from the queue"));
     assert.equal(removed, text.replace('      - obstacle_ahead\n', ''));
+    // Offered, then the queue edited before the choice: the item at its position is another
+    // state now, and the action is refused rather than made on it.
+    await client.change(uri, up);
+    await assert.rejects(client.request('codeAction/resolve', actions.get("Remove 'obstacle_ahead' from the queue")),
+                         /queue of state machine 'goalie' changed since the action was offered/);
+    await client.change(uri, text);
     for (const edited of [up, down, removed]) {
       const file = path.join(tempDir(), path.basename(uri));
       fs.writeFileSync(file, edited);
