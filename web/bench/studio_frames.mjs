@@ -1,6 +1,7 @@
 // The studio's speed in headless Chromium (docs/performance.md, "Studio"): the layout of a
 // generated graph (the page's `arbiter:layout` measures: text measured, ELK's layout, the SVG
-// built), as the page opens and after an edit, in wall time and in CPU time of the page's main
+// built), as the page opens, as every layer is reloaded from the disk (ELK loaded) and after an
+// edit, in wall time and in CPU time of the page's main
 // thread and of ELK's web workers (from a Chrome trace); and the frames while the pointer drags on it, drawing an
 // inhibition from a behaviour and panning the background, at the scale the page opens at and at
 // the scale a search shows a behaviour at. A benchmark, run by hand (under a minute with the
@@ -34,6 +35,8 @@ const layers = Number(options.layers);
 const perLayer = Math.round(Number(options.behaviours) / layers);
 const runs = Number(options.runs);
 const seconds = Number(options.seconds);
+// Each run's reload adds `b_L_1 => b_L_(4 + 2 * run)` to every layer (below).
+if (4 + 2 * (runs - 1) >= perLayer) throw new Error(`--runs ${runs} needs more than ${4 + 2 * (runs - 1)} behaviours a layer`);
 
 const quantile = (values, q) => [...values].sort((a, b) => a - b)[Math.min(values.length - 1, Math.floor(q * values.length))];
 const figures = (values) => `median ${quantile(values, 0.5).toFixed(1)} ms, p95 ${quantile(values, 0.95).toFixed(1)} ms, ` +
@@ -117,9 +120,9 @@ try {
   const PARTS = [['', 'layout'], [':text', '  of which text measured'], [':elk', '  of which ELK'],
                  [':svg', '  of which SVG built']];
   // 'open' (the page opened) and 'edit' (an inhibition added) -> part -> ms, per run
-  const wall = {open: {}, edit: {}};
-  const cpu = {open: {}, edit: {}};
-  const workerCpu = {open: [], edit: []};  // ELK's workers' CPU time in the layout
+  const wall = {open: {}, reload: {}, edit: {}};
+  const cpu = {open: {}, reload: {}, edit: {}};
+  const workerCpu = {open: [], reload: [], edit: []};  // ELK's workers' CPU time in the layout
   const warmUp = [];
   const drags = {inhibition: {work: [], intervals: []}, pan: {work: [], intervals: []}};
   // The page's last layout while `act()` runs: its wall time (the page's measures) and its CPU time.
@@ -136,6 +139,7 @@ try {
     }
   };
   const middle = Math.floor(perLayer / 2);
+  const original = largeConfig(layers, perLayer, 10);
   let url = found[0];
   for (let run = 0; run < runs; ++run) {
     await layoutDuring('open', async () => {
@@ -146,6 +150,17 @@ try {
     warmUp.push(await page.evaluate(() => performance.getEntriesByName('arbiter:layout:warm-up')[0].duration));
     const count = await page.locator('.behaviour').count();
     if (count !== layers * perLayer) throw new Error(`${count} behaviours drawn, not ${layers * perLayer}`);
+    // The file changed on the disk in every layer (a checkout while the studio is open) and
+    // Reload from disk: the whole graph laid out again, by workers whose ELK is loaded and warm.
+    // Each run adds another inhibition to each layer, so that no layer keeps its last layout.
+    let layer = 0;
+    const target = 4 + 2 * run;
+    writeFileSync(config, original.replace(/^ {4}inhibitions:\n/gm,
+                                           (line) => `${line}      - b_${layer}_1 => b_${layer++}_${target}\n`));
+    await layoutDuring('reload', async () => {
+      await page.click('#revert');
+      await page.waitForSelector(`g.edge[data-from="b_${layers - 1}_1"][data-to="b_${layers - 1}_${target}"]`);
+    });
     // At the scale the studio opens it (the whole graph fitted), then at the scale a search shows
     // a behaviour at (0.8).
     for (const zoom of ['fit', 'search']) {
@@ -175,7 +190,8 @@ try {
   console.log(`studio, ${layers} layers of ${perLayer} behaviours (${layers * perLayer}), ${runs} runs; ` +
               `load average ${one.toFixed(2)} ${five.toFixed(2)} ${fifteen.toFixed(2)}`);
   console.log(`ELK's warm-up while the page waits for its graph: wall ${figures(warmUp)}`);
-  for (const [when, title] of [['open', 'the page opened'], ['edit', 'an inhibition added in one layer']]) {
+  for (const [when, title] of [['open', 'the page opened'], ['reload', 'every layer changed on the disk, reloaded'],
+                               ['edit', 'an inhibition added in one layer']]) {
     console.log(`${title}:`);
     for (const [part, label] of PARTS) {
       console.log(`  ${label}: CPU time of the page's main thread ${figures(cpu[when][part])}; wall ${figures(wall[when][part])}`);
