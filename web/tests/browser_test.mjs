@@ -85,6 +85,23 @@ test('the live page shows every behaviour and inhibition of the config', async (
   assert.equal((await fetch(`${base}favicon.ico`)).status, 204);
 });
 
+test('a page opened again revalidates its scripts, ELK\'s worker too, instead of fetching them whole', async () => {
+  const {url} = await serve(['run', paper, '--serve', '0', '--paused', '--steps', '1000', '-q']);
+  const page = await open(url);
+  const received = [];  // [the script's name, the bytes of its body received], at the second opening
+  page.on('requestfinished', async (request) => {
+    const name = new URL(request.url()).pathname;
+    if (name.endsWith('.js')) received.push([name, (await request.sizes()).responseBodySize]);
+  });
+  await page.reload();
+  await page.waitForSelector('.behaviour');
+  await page.waitForFunction(() => document.querySelectorAll('#graph .edge').length === 4);
+  await page.waitForTimeout(200);
+  // The page starts two of ELK's workers: each asks for the script, and neither gets it again.
+  assert.deepEqual(received.sort(), [['/app.js', 0], ['/elk-worker.js', 0], ['/elk-worker.js', 0]]);
+  await page.close();
+});
+
 /// Resolves when `child` has exited and closed its output, with all it printed.
 const exited = (child, output) => new Promise((resolve) => {
   child.on('close', () => resolve(output()));
