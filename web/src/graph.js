@@ -28,7 +28,7 @@ const FOLD_MARK = 14;         // room for the ▾ before a layer's title
 // workers lay out two layers at once on two cores; more would mostly wait for one.
 const WORKERS = 2;
 let pool = null;
-/** The workers, started at the first call: [{elk, failed, pending}]. */
+/** The workers, started at the first call: [{elk, failed, pending, layouts}]. */
 function workers() {
   pool ??= Array.from({length: WORKERS}, () => {
     // A worker that cannot load (its script not served) would leave its layouts waiting for
@@ -45,16 +45,19 @@ function workers() {
         return worker;
       },
     });
-    return {elk, failed, pending: 0};
+    return {elk, failed, pending: 0, layouts: 0};
   });
   return pool;
 }
 
-/** ELK's layout of `graph`, by the worker with the least work queued (counted in boxes and edges). */
-function elkLayout(graph) {
-  const worker = workers().reduce((a, b) => (b.pending < a.pending ? b : a));
+/**
+ * ELK's layout of `graph`, by `worker` or else the one with the least work queued (counted in
+ * boxes and edges).
+ */
+function elkLayout(graph, worker = workers().reduce((a, b) => (b.pending < a.pending ? b : a))) {
   const cost = graph.children.length + graph.edges.length;
   worker.pending += cost;
+  ++worker.layouts;
   const done = () => { worker.pending -= cost; };
   const layout = worker.elk.layout(graph);
   layout.then(done, done);
@@ -210,6 +213,37 @@ function warmUp() {
       .then(() => performance.measure('arbiter:layout:warm-up', {start: started}), () => {});
 }
 
+// V8 optimises ELK's code only after it has run many times: in a worker, a layer of 50
+// behaviours took 280 ms to lay out the first time, 90 ms the fourth and 30-50 ms from about the
+// tenth on. So after the first drawing, each worker goes on laying out the drawing's largest layers
+// while it has nothing else to do, until it has done WARM_LAYOUTS layouts: the layouts of the
+// edits that follow then cost their warmed price. A layout asked for meanwhile goes to the other
+// worker if it is idle, else waits for the one in progress.
+const WARM_LAYOUTS = 12;
+let keptWarm = false;
+function keepWarm(keys) {
+  if (keptWarm || keys.length === 0) return;
+  keptWarm = true;
+  const graphs = keys.map((key) => JSON.parse(key)).sort((a, b) => b.children.length - a.children.length).slice(0, 2);
+  const started = performance.now();
+  let working = 0;
+  for (const worker of workers()) {
+    ++working;
+    const next = () => {
+      if (worker.layouts >= WARM_LAYOUTS) {
+        if (--working === 0) performance.measure('arbiter:layout:kept-warm', {start: started});
+        return;
+      }
+      if (worker.pending > 0) {
+        setTimeout(next, 50);
+        return;
+      }
+      elkLayout(graphs[worker.layouts % graphs.length], worker).then(() => setTimeout(next, 0), () => {});
+    };
+    next();
+  }
+}
+
 // The points of an ELK edge, offset by (dx, dy).
 function edgePoints(edge, dx, dy) {
   const points = [];
@@ -282,6 +316,7 @@ export class GraphView {
     performance.measure('arbiter:layout:text', {start: started, end: measured});
     performance.measure('arbiter:layout:elk', {start: measured, end: laidOut});
     performance.measure('arbiter:layout:svg', {start: laidOut});
+    keepWarm([...laid.keys()]);
     return true;
   }
 
