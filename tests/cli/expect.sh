@@ -16,12 +16,13 @@ fail() {
   exit 1
 }
 expect_exit() {  # CODE COMMAND...
-  local code=$1
+  local code=$1 errexit=$-
   shift
   set +e
   "$@" >"$work/out.txt" 2>"$work/err.txt"
   local got=$?
-  set -e
+  # Back as the script had it: a script without set -e does not get it from here.
+  [[ $errexit != *e* ]] || set -e
   [[ $got -eq $code ]] || fail "exit $got, not $code: $*"
 }
 wait_for() {  # PATTERN FILE
