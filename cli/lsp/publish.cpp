@@ -68,24 +68,18 @@ std::string unused_name(const std::string& name, const std::set<std::string>& ta
   return candidate;
 }
 
-/// The engine's operation a code action offered without an edit names in its `data`, with the
-/// studio's names for the operation and its fields (docs/studio.md): the one place both the
-/// offer (the operation alone, cheap: no load) and the resolve (checked) compute it.
-EditResult operation_of(const Loaded& loaded, const json& data) {
-  const std::string op = data.value("op", "");
-  auto text = [&](const char* key) { return data.value(key, std::string()); };
-  auto number = [&](const char* key) { return data.value(key, std::size_t{0}); };
-  if (op == "add_behaviour")
-    return add_behaviour(loaded, text("layer"), text("name"), text("type"));
-  if (op == "move_behaviour")
-    return move_behaviour(loaded, text("layer"), text("name"), {}, number("index"));
-  if (op == "move_layer") return move_layer(loaded, text("layer"), number("index"));
-  if (op == "remove_actuator") return remove_actuator(loaded, text("layer"), text("name"));
-  if (op == "move_queue_entry")
-    return move_queue_entry(loaded, text("machine"), number("from"), number("to"));
-  if (op == "remove_queue_entry")
-    return remove_queue_entry(loaded, text("machine"), number("index"));
-  throw RequestError{kRequestFailed, "not a code action of this server to resolve"};
+/// The engine's operation a code action offered without an edit names in its `data`, in the
+/// studio's words (apply_operation): the one place both the offer (the operation alone, cheap:
+/// no load) and the resolve (checked) compute it.
+EditResult operation_of(const Analysis& analysis, const json& data) {
+  OperationResult operation =
+      apply_operation(analysis.loaded, data.dump(-1, ' ', false, json::error_handler_t::replace),
+                      analysis.registry.get(), &analysis);
+  if (!operation.invalid.empty()) {
+    throw RequestError{kRequestFailed,
+                       "not a code action of this server to resolve: " + operation.invalid};
+  }
+  return std::move(operation.result);
 }
 
 }  // namespace
@@ -338,7 +332,7 @@ json Server::code_actions(const json& params) const {
   // are (a checked edit loads the config again): offered when the operation alone gives edits.
   auto offer_lazily = [&](const std::string& title, json data) {
     data["uri"] = uri;
-    if (!operation_of(analysis->loaded, data).ok()) return;
+    if (!operation_of(*analysis, data).ok()) return;
     actions.push_back({{"title", title}, {"kind", "refactor.rewrite"}, {"data", std::move(data)}});
   };
   // On a behaviour's declaration: up or down among its layer's behaviours.
@@ -442,7 +436,7 @@ json Server::resolve_code_action(const json& action) const {
     throw RequestError{kRequestFailed, "the file is not open, or not a config"};
   Registry registry = make_registry_();
   const EditResult result =
-      checked(analysis->loaded, operation_of(analysis->loaded, data), registry, options_);
+      checked(analysis->loaded, operation_of(*analysis, data), registry, options_);
   if (!result.ok()) throw RequestError{kRequestFailed, result.refused};
   json changes = json::object();
   add_changes(*analysis, result.edits, changes);
