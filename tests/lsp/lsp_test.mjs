@@ -656,7 +656,9 @@ test('a code action on a behaviour\'s declaration removes it with the inhibition
       { textDocument: { uri }, range: { start: at, end: at }, context: { diagnostics: [] } });
     const remove = actions.find((a) => a.title === "Remove the behaviour 'head_control' and the inhibitions that name it");
     assert.ok(remove, JSON.stringify(actions.map((a) => a.title)));
-    const removed = applyEdits(text, remove.edit.changes[uri]);
+    // Offered without its edit, which loads the config again to check it: computed when chosen.
+    assert.equal(remove.edit, undefined);
+    const removed = applyEdits(text, (await client.request('codeAction/resolve', remove)).edit.changes[uri]);
     assert.equal(removed, text.replace(/      head_control: \{type: soccer\.HeadControl\}\n/, '')
       .replace('      - search_for_ball -> head_control\n', ''));
     const file = path.join(tempDir(), path.basename(uri));
