@@ -77,9 +77,9 @@ void change_beside(benchmark::State& state) {
 }
 
 // lsp/code_action/<N>: what an editor asks at each move of the cursor onto a behaviour's
-// declaration (the middle one's, in the config of N behaviours): the actions there, the moves
-// offered without their edit. lsp/resolve_move/<N>: choosing "Move ... up", whose edit is
-// checked by loading the config with it.
+// declaration (the middle one's, in the config of N behaviours): the actions there, the removal
+// and the moves offered without their edit. lsp/resolve_move/<N>: choosing "Move ... up", whose
+// edit is checked by loading the config with it.
 void code_action(benchmark::State& state, bool resolve) {
   GeneratorOptions options;
   options.graph = Graph::kDag;

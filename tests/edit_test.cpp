@@ -1492,3 +1492,69 @@ TEST_CASE("a layer's sensors: list gets a sensor and loses one", "[edit]") {
         "arbiter: 1\nname: block\nlayers:\n  - name: a\n    actuators: {x: bool, y: bool}\n  - "
         "name: b\n    sensors: []\n");
 }
+
+TEST_CASE(
+    "an operation named by a JSON request is applied, and a request that is not one is "
+    "refused naming what it lacks",
+    "[edit]") {
+  Workspace yaml({{"ops.yaml", kOpsYaml}, {"part.yaml", kOpsPart}});
+  const Loaded& loaded = yaml.loaded();
+  const std::string& text = yaml.text("ops.yaml");
+  Registry registry = make_test_registry();
+  const auto apply = [&](const std::string& request) {
+    return apply_operation(loaded, request, &registry);
+  };
+
+  const OperationResult added = apply(R"({"op": "add_layer", "name": "mid", "index": 3})");
+  CHECK(added.invalid.empty());
+  CHECK(yaml.edited(added.result, "ops.yaml") ==
+        replaced(text, "  # the lower layer\n", "  - name: mid\n  # the lower layer\n"));
+  // A value is written as the request gives it, an object's keys in its order.
+  const OperationResult set = apply(
+      R"({"op": "set_param", "layer": "top", "behaviour": "c", "param": "p", "value": {"z": 1, "a": [true]}})");
+  REQUIRE(set.result.edits.size() == 1);
+  CHECK_THAT(set.result.edits[0].text, Catch::Contains(R"(p: {"z":1,"a":[true]})"));
+  // The operation's own refusal is its result's, not the request's.
+  const OperationResult used = apply(R"({"op": "remove_layer", "name": "top"})");
+  CHECK(used.invalid.empty());
+  CHECK(used.result.refused ==
+        "layer 'top' is still used: layer 'low' reads its actuator 'speed'. Remove those sensors "
+        "first");
+  CHECK(apply(R"({"op": "rename", "kind": "behaviour", "name": "nobody", "to": "x"})")
+            .result.refused == "no behaviour 'nobody' is declared");
+
+  const std::map<std::string, std::string> invalid = {
+      {"[1]", "the body is not a JSON object"},
+      {"not json", "the body is not a JSON object"},
+      {R"({"name": "x"})", "an operation needs 'op'"},
+      {R"({"op": "add_inhibition", "layer": "top"})", "add_inhibition needs 'inhibitor'"},
+      {R"({"op": "set_param", "layer": "top", "behaviour": "a", "param": "p"})",
+       "set_param needs 'value'"},
+      {R"({"op": "add_behaviour", "layer": "top", "name": "", "type": "scripted"})",
+       "add_behaviour needs 'name'"},
+      {R"({"op": "move_layer", "layer": "top", "index": -1})",
+       "move_layer needs 'index' (names as strings, positions as integers from 0)"},
+      {R"({"op": "remove_layer", "name": 3})",
+       "remove_layer needs 'name' (names as strings, positions as integers from 0)"},
+      {R"({"op": "add_layer", "name": "x", "index": "0"})",
+       "add_layer needs 'index' (names as strings, positions as integers from 0)"},
+      {R"({"op": "add_layer", "name": "x", "interface": 3})",
+       "add_layer's 'interface' is not a string"},
+      {R"({"op": "add_inhibition", "layer": "top", "inhibitor": "c", "inhibited": "b", "chaining": "yes"})",
+       "add_inhibition's 'chaining' is not true or false"},
+      {R"({"op": "add_queue_entry", "machine": "plan", "state": "one", "params": [1]})",
+       "add_queue_entry's 'params' is not an object of param values"},
+      {R"({"op": "rename", "kind": "file", "name": "a", "to": "x"})",
+       "cannot rename a 'file': a behaviour, actuator, layer, state or machine can be renamed"},
+  };
+  for (const auto& [request, message] : invalid) {
+    INFO(request);
+    const OperationResult result = apply(request);
+    CHECK(result.invalid == message);
+    CHECK(result.result.edits.empty());
+  }
+  const OperationResult unknown = apply(R"({"op": "explode"})");
+  CHECK_THAT(unknown.invalid,
+             Catch::StartsWith("no operation 'explode': add_inhibition, remove_inhibition,") &&
+                 Catch::EndsWith("remove_queue_entry or move_queue_entry"));
+}

@@ -120,6 +120,13 @@ TEST_CASE_METHOD(StudioOnACopy,
   CHECK(studio.edit(R"({"op": "explode"})").first == 400);
   CHECK(studio.edit(R"({"op": "add_inhibition", "layer": "control"})").first == 400);
   CHECK(studio.edit("not json").first == 400);
+  // An optional member of the wrong type is named, not thrown on.
+  const auto mistyped = studio.edit(
+      R"({"op": "add_inhibition", "layer": "control", "inhibitor": "kick_ball",
+          "inhibited": "head_control", "chaining": "yes"})");
+  CHECK(mistyped.first == 400);
+  CHECK(Json::parse(mistyped.second)["error"] ==
+        "add_inhibition's 'chaining' is not true or false");
 
   // A text that does not parse is held all the same, with its errors and no graph.
   const auto broken = studio.set_texts(Json{{"texts", {{path, "layers: [\n"}}}}.dump());

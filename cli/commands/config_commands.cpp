@@ -35,41 +35,13 @@ bool check_layer(const arbiter::Program& program, const Options& options) {
   return false;
 }
 
-/// The names of the plugins on the search path (`arbiter_NAME.so`), each once: the first
-/// directory that has it wins, as when a config names it.
-std::vector<std::string> plugins_on_path(const arbiter::PluginOptions& plugin_options) {
-  namespace fs = std::filesystem;
-  std::vector<std::string> names;
-  std::set<std::string> seen;
-  for (const auto& dir : arbiter::plugin_search_path(plugin_options)) {
-    std::error_code error;
-    std::vector<std::string> here;
-    for (const auto& entry : fs::directory_iterator(dir, error)) {
-      const std::string file = entry.path().filename().string();
-      constexpr std::string_view kPrefix = "arbiter_";
-      constexpr std::string_view kSuffix = ".so";
-      if (!entry.is_regular_file(error) || file.size() <= kPrefix.size() + kSuffix.size() ||
-          file.compare(0, kPrefix.size(), kPrefix) != 0 ||
-          file.compare(file.size() - kSuffix.size(), kSuffix.size(), kSuffix) != 0) {
-        continue;
-      }
-      here.push_back(file.substr(kPrefix.size(), file.size() - kPrefix.size() - kSuffix.size()));
-    }
-    std::sort(here.begin(), here.end());
-    for (auto& name : here) {
-      if (seen.insert(name).second) names.push_back(std::move(name));
-    }
-  }
-  return names;
-}
-
 /// The built-ins, plus the plugins named with --load, or else every plugin on the path (none
 /// with --builtin). A plugin that fails to load is reported; false then.
 bool registry_for_listing(const Options& options, const char* command,
                           arbiter::Registry& registry) {
   if (options.builtin_only) return true;
   const auto plugin_options = load_options_of(options).plugins;
-  const auto names = options.load.empty() ? plugins_on_path(plugin_options) : options.load;
+  const auto names = options.load.empty() ? arbiter::plugins_on_path(plugin_options) : options.load;
   arbiter::Diagnostics diagnostics;
   const arbiter::SourceLocation where{fmt::format("arbiter {}", command), 0, 0};
   bool ok = true;

@@ -10,7 +10,9 @@
 #include <optional>
 #include <regex>
 #include <set>
+#include <utility>
 
+#include "arbiter/catalog.hpp"
 #include "lsp/analysis.hpp"
 #include "lsp/server.hpp"
 
@@ -86,28 +88,64 @@ void check_queue_item(const Loaded& loaded, const json& data, std::size_t index)
   }
 }
 
-/// The engine's operation a code action offered without an edit names in its `data`, with the
-/// studio's names for the operation and its fields (docs/studio.md): the one place both the
-/// offer (the operation alone, cheap: no load) and the resolve (checked) compute it.
-EditResult operation_of(const Loaded& loaded, const json& data) {
+/// The root of `path`'s text as `analysis` parsed it, or nullptr.
+const Node* root_of(const Analysis& analysis, const std::string& path) {
+  const SourceFile* file = analysis.loaded.files.find(path);
+  return file && file->root ? &*file->root : nullptr;
+}
+
+/// Bytes of the token at `where` (a quoted string with its quotes) in `lines`' text.
+std::pair<std::size_t, std::size_t> token_at(const Lines& lines, const SourceLocation& where) {
+  const std::size_t begin = lines.offset(where.line, std::max(1, where.column));
+  return {begin, lines.token_end(begin)};
+}
+
+/// The layer whose `sensors:` list holds `sensor` (a use of an actuator there), or "".
+std::string layer_reading(const Analysis& analysis, const Lines& lines, const Occurrence& sensor) {
+  const Node* root = root_of(analysis, sensor.file);
+  const Node* layers = root && root->is_mapping() ? root->find("layers") : nullptr;
+  if (!layers || !layers->is_sequence()) return {};
+  for (const auto& layer : layers->items()) {
+    const Node* name = layer.is_mapping() ? layer.find("name") : nullptr;
+    const Node* sensors = layer.is_mapping() ? layer.find("sensors") : nullptr;
+    if (!name || !name->is_scalar() || !sensors || !sensors->is_sequence()) continue;
+    for (const auto& item : sensors->items()) {
+      const auto [begin, end] = token_at(lines, item.location());
+      if (begin <= sensor.begin && sensor.end <= end) return name->text();
+    }
+  }
+  return {};
+}
+
+/// Whether `offset` of `path` is on a key of its root mapping (`layers:`, `plugins:`, ...).
+bool on_top_level_key(const Analysis& analysis, const std::string& path, const Lines& lines,
+                      std::size_t offset) {
+  const Node* root = root_of(analysis, path);
+  if (!root || !root->is_mapping()) return false;
+  return std::any_of(root->entries().begin(), root->entries().end(), [&](const Node::Entry& entry) {
+    const auto [begin, end] = token_at(lines, entry.key_location);
+    return begin <= offset && offset <= end;
+  });
+}
+
+/// The engine's operation a code action offered without an edit names in its `data`, in the
+/// studio's words (apply_operation): the one place both the offer (the operation alone, cheap:
+/// no load) and the resolve (checked) compute it.
+EditResult operation_of(const Analysis& analysis, const json& data) {
   const std::string op = data.value("op", "");
-  auto text = [&](const char* key) { return data.value(key, std::string()); };
-  auto number = [&](const char* key) { return data.value(key, std::size_t{0}); };
-  if (op == "add_behaviour")
-    return add_behaviour(loaded, text("layer"), text("name"), text("type"));
-  if (op == "move_behaviour")
-    return move_behaviour(loaded, text("layer"), text("name"), {}, number("index"));
-  if (op == "move_layer") return move_layer(loaded, text("layer"), number("index"));
-  if (op == "remove_actuator") return remove_actuator(loaded, text("layer"), text("name"));
   if (op == "move_queue_entry") {
-    check_queue_item(loaded, data, number("from"));
-    return move_queue_entry(loaded, text("machine"), number("from"), number("to"));
+    check_queue_item(analysis.loaded, data, data.value("from", std::size_t{0}));
+  } else if (op == "remove_queue_entry") {
+    check_queue_item(analysis.loaded, data, data.value("index", std::size_t{0}));
   }
-  if (op == "remove_queue_entry") {
-    check_queue_item(loaded, data, number("index"));
-    return remove_queue_entry(loaded, text("machine"), number("index"));
+  OperationResult operation =
+      apply_operation(analysis.loaded, data.dump(-1, ' ', false, json::error_handler_t::replace),
+                      analysis.registry.get(), &analysis);
+  if (!operation.invalid.empty()) {
+    throw RequestError{kRequestFailed,
+                       "not a code action of this server to resolve: " + operation.invalid};
   }
-  throw RequestError{kRequestFailed, "not a code action of this server to resolve"};
+  return std::move(operation.result);
 }
 
 }  // namespace
@@ -337,38 +375,35 @@ json Server::code_actions(const json& params) const {
       }
     }
   }
-  // On a behaviour's declaration: remove it, as the studio does, when nothing else names it.
   const Occurrence* item =
       analysis && !site ? analysis->at(path, lines.offset(range.value("start", json::object())))
                         : nullptr;
-  if (item && item->definition && item->kind == SymbolKind::kBehaviour) {
-    Registry registry = make_registry_();
-    const EditResult removed =
-        checked(analysis->loaded, remove_behaviour(analysis->loaded, item->scope, item->name),
-                registry, options_);
-    if (removed.ok()) {
-      json changes = json::object();
-      add_changes(*analysis, removed.edits, changes);
-      actions.push_back(
-          {{"title",
-            fmt::format("Remove the behaviour '{}' and the inhibitions that name it", item->name)},
-           {"kind", "refactor.rewrite"},
-           {"edit", {{"changes", changes}}}});
+  // The operations whose edits are computed when one is chosen, as adding a behaviour's are (a
+  // checked edit loads the config again): offered when the operation alone gives edits.
+  const std::size_t at = lines.offset(range.value("start", json::object()));
+  // The names declared of a kind, for a new element's name.
+  auto defined = [&](SymbolKind kind) {
+    std::set<std::string> names;
+    for (const auto& other : analysis->occurrences) {
+      if (other.definition && other.kind == kind) names.insert(other.name);
     }
-  }
-  // The moves and removals whose edits are computed when one is chosen, as adding a behaviour's
-  // are (a checked edit loads the config again): offered when the operation alone gives edits.
+    return names;
+  };
   auto offer_lazily = [&](const std::string& title, json data) {
     data["uri"] = uri;
     try {
-      if (!operation_of(analysis->loaded, data).ok()) return;
+      if (!operation_of(*analysis, data).ok()) return;
     } catch (const RequestError&) {
       return;  // the index and the model disagree about the item: nothing sure to offer
     }
     actions.push_back({{"title", title}, {"kind", "refactor.rewrite"}, {"data", std::move(data)}});
   };
-  // On a behaviour's declaration: up or down among its layer's behaviours.
+  // On a behaviour's declaration: remove it, as the studio does, with the inhibitions that name
+  // it; up or down among its layer's behaviours.
   if (item && item->definition && item->kind == SymbolKind::kBehaviour) {
+    offer_lazily(
+        fmt::format("Remove the behaviour '{}' and the inhibitions that name it", item->name),
+        {{"op", "remove_behaviour"}, {"layer", item->scope}, {"name", item->name}});
     std::size_t position = 0;
     for (const auto& other : analysis->occurrences) {
       if (&other == item) break;
@@ -387,17 +422,64 @@ json Server::code_actions(const json& params) const {
   // On a layer's name: up or down in the layer order, among the layers of its file.
   if (item && item->definition && item->kind == SymbolKind::kLayer && analysis->loaded.model) {
     const auto& layers = analysis->loaded.model->layers;
-    for (std::size_t at = 0; at < layers.size(); ++at) {
-      if (layers[at].name.text != item->name) continue;
+    for (std::size_t index = 0; index < layers.size(); ++index) {
+      if (layers[index].name.text != item->name) continue;
       json move = {{"op", "move_layer"}, {"layer", item->name}};
-      if (at > 0) {
-        move["index"] = at - 1;
+      if (index > 0) {
+        move["index"] = index - 1;
         offer_lazily(fmt::format("Move the layer '{}' up", item->name), move);
       }
-      move["index"] = at + 1;
+      move["index"] = index + 1;
       offer_lazily(fmt::format("Move the layer '{}' down", item->name), move);
+      // Removed when no other layer reads its actuators (the operation names the readers
+      // otherwise); a new layer below it, named for a rename to follow.
+      offer_lazily(fmt::format("Remove the layer '{}'", item->name),
+                   {{"op", "remove_layer"}, {"name", item->name}});
+      offer_lazily(fmt::format("Add a layer after '{}'", item->name),
+                   {{"op", "add_layer"},
+                    {"name", unused_name("layer", defined(SymbolKind::kLayer))},
+                    {"index", index + 1}});
+      // Each actuator of another layer that it does not read yet, as a sensor.
+      for (const auto& other : layers) {
+        if (other.name.text == item->name) continue;
+        for (const auto& actuator : other.actuators) {
+          offer_lazily(
+              fmt::format("Add the sensor '{}' to layer '{}'", actuator.name.text, item->name),
+              {{"op", "add_sensor"}, {"layer", item->name}, {"name", actuator.name.text}});
+        }
+      }
       break;
     }
+  }
+  // On a sensor in a layer's `sensors:` list: remove it from the list.
+  if (item && !item->definition && item->kind == SymbolKind::kActuator &&
+      item->detail == "sensor") {
+    if (const std::string layer = layer_reading(*analysis, lines, *item); !layer.empty()) {
+      offer_lazily(fmt::format("Remove the sensor '{}' from layer '{}'", item->name, layer),
+                   {{"op", "remove_sensor"}, {"layer", layer}, {"name", item->name}});
+    }
+  }
+  // On a state machine's name: remove it when nothing names it (the operation gives the places
+  // otherwise), or add another, empty, named for a rename to follow.
+  if (item && item->definition && item->kind == SymbolKind::kMachine) {
+    offer_lazily(fmt::format("Remove the state machine '{}'", item->name),
+                 {{"op", "remove_state_machine"}, {"name", item->name}});
+    offer_lazily("Add a state machine",
+                 {{"op", "add_state_machine"},
+                  {"name", unused_name("machine", defined(SymbolKind::kMachine))}});
+  }
+  // On a top-level key of the config's own file, where the additions to the whole config go:
+  // a layer at the end, a state machine, each plugin on the plugin path that it does not name.
+  if (analysis && path == analysis->root && on_top_level_key(*analysis, path, lines, at)) {
+    offer_lazily(
+        "Add a layer at the end",
+        {{"op", "add_layer"}, {"name", unused_name("layer", defined(SymbolKind::kLayer))}});
+    offer_lazily("Add a state machine",
+                 {{"op", "add_state_machine"},
+                  {"name", unused_name("machine", defined(SymbolKind::kMachine))}});
+    for (const auto& plugin : plugins_on_path(options_.plugins))
+      offer_lazily(fmt::format("Add the plugin '{}'", plugin),
+                   {{"op", "add_plugin"}, {"name", plugin}});
   }
   // On an actuator's declaration: remove it, offered when nothing uses it (the operation names
   // the uses otherwise).
@@ -413,7 +495,6 @@ json Server::code_actions(const json& params) const {
     }
   }
   // On an item of a state machine's queue: up, down, or out of the queue.
-  const std::size_t at = lines.offset(range.value("start", json::object()));
   for (std::size_t i = 0; analysis && i < analysis->queue_items.size(); ++i) {
     const QueueItemSite& queued = analysis->queue_items[i];
     if (queued.file != path || at < queued.begin || at > queued.end) continue;
@@ -473,7 +554,7 @@ json Server::resolve_code_action(const json& action) const {
     throw RequestError{kRequestFailed, "the file is not open, or not a config"};
   Registry registry = make_registry_();
   const EditResult result =
-      checked(analysis->loaded, operation_of(analysis->loaded, data), registry, options_);
+      checked(analysis->loaded, operation_of(*analysis, data), registry, options_);
   if (!result.ok()) throw RequestError{kRequestFailed, result.refused};
   json changes = json::object();
   add_changes(*analysis, result.edits, changes);

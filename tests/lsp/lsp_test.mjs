@@ -656,7 +656,9 @@ test('a code action on a behaviour\'s declaration removes it with the inhibition
       { textDocument: { uri }, range: { start: at, end: at }, context: { diagnostics: [] } });
     const remove = actions.find((a) => a.title === "Remove the behaviour 'head_control' and the inhibitions that name it");
     assert.ok(remove, JSON.stringify(actions.map((a) => a.title)));
-    const removed = applyEdits(text, remove.edit.changes[uri]);
+    // Offered without its edit, which loads the config again to check it: computed when chosen.
+    assert.equal(remove.edit, undefined);
+    const removed = applyEdits(text, (await client.request('codeAction/resolve', remove)).edit.changes[uri]);
     assert.equal(removed, text.replace(/      head_control: \{type: soccer\.HeadControl\}\n/, '')
       .replace('      - search_for_ball -> head_control\n', ''));
     const file = path.join(tempDir(), path.basename(uri));
@@ -869,6 +871,118 @@ test("code actions on a state machine's queue item move it and take it out of th
     // A state named elsewhere than in the queue (a pre-emption) gets no queue action.
     const preempt = await actionsAt(client, uri, text, 'go_to: wait_for_button', 6);
     assert.ok(![...preempt.keys()].some((t) => t.includes('queue')), JSON.stringify([...preempt.keys()]));
+  });
+});
+
+test("code actions on a layer's name remove it when no other layer reads it and add a layer after it", async () => {
+  await withClient(async (client) => {
+    const original = yaml();
+    const uri = original.uri;
+    // The world and control layers read each other's actuators: neither is offered.
+    await client.open(uri, original.text);
+    const control = await actionsAt(client, uri, original.text, 'name: control', 7);
+    assert.ok(!control.has("Remove the layer 'control'"), JSON.stringify([...control.keys()]));
+    const added = await resolved(client, uri, original.text, control.get("Add a layer after 'control'"));
+    assert.equal(added, original.text + '  - name: layer\n');
+    const world = await actionsAt(client, uri, original.text, 'name: world', 7);
+    const between = await resolved(client, uri, original.text, world.get("Add a layer after 'world'"));
+    assert.equal(between, original.text.replace('\n  - name: control', '\n  - name: layer\n  - name: control'));
+    for (const edited of [added, between]) {
+      const file = path.join(tempDir(), path.basename(uri));
+      fs.writeFileSync(file, edited);
+      assert.deepEqual(validated(file).filter((d) => d.severity === 1), []);
+    }
+    // A layer nothing reads goes with its lines.
+    const spare = '  - name: spare\n    actuators: {probe: {type: bool}}\n';
+    const text = original.text + spare;
+    await client.change(uri, text);
+    const actions = await actionsAt(client, uri, text, 'name: spare', 7);
+    const remove = actions.get("Remove the layer 'spare'");
+    assert.equal(await resolved(client, uri, text, remove), original.text);
+    // Chosen after the text changed so that another layer reads it: refused with the readers.
+    const read = text.replace('sensors: [ball_visible, ball_position, robot_pose]', 'sensors: [ball_visible, ball_position, robot_pose, probe]');
+    await client.change(uri, read);
+    await assert.rejects(client.request('codeAction/resolve', remove),
+      { message: "layer 'spare' is still used: layer 'control' reads its actuator 'probe'. Remove those sensors first" });
+  });
+});
+
+test("code actions add another layer's actuator as a sensor on a layer's name and remove a sensor on its name, refused while a port binds it", async () => {
+  await withClient(async (client) => {
+    const original = yaml();
+    const uri = original.uri;
+    const text = original.text.replace('      robot_pose: {type: vec3}      # x, y, heading on the field\n',
+      '      robot_pose: {type: vec3}      # x, y, heading on the field\n      spare: {type: bool}\n');
+    await client.open(uri, text);
+    const control = await actionsAt(client, uri, text, 'name: control', 7);
+    const sensors = [...control.keys()].filter((t) => t.startsWith('Add the sensor'));
+    // The only actuator of another layer that control does not read yet; none of its own.
+    assert.deepEqual(sensors, ["Add the sensor 'spare' to layer 'control'"]);
+    const reading = text.replace('sensors: [ball_visible, ball_position, robot_pose]', 'sensors: [ball_visible, ball_position, robot_pose, spare]');
+    assert.equal(await resolved(client, uri, text, control.get(sensors[0])), reading);
+    await client.change(uri, reading);
+    const unread = await actionsAt(client, uri, reading, 'robot_pose, spare]', 12);
+    assert.equal(await resolved(client, uri, reading, unread.get("Remove the sensor 'spare' from layer 'control'")), text);
+    // The control layer's behaviours bind ball_visible by name: refused with the error it would leave.
+    const bound = await actionsAt(client, uri, reading, 'sensors: [ball_visible', 10);
+    const remove = bound.get("Remove the sensor 'ball_visible' from layer 'control'");
+    assert.ok(remove, JSON.stringify([...bound.keys()]));
+    await assert.rejects(client.request('codeAction/resolve', remove), /would leave an error.*ball_visible/);
+    // In JSON, the sensor goes with its comma.
+    const file = path.join(tempDir(), 'pair.json');
+    const pair = '{\n  "arbiter": 1,\n  "name": "pair",\n  "layers": [\n' +
+      '    {"name": "top", "actuators": {"a": {"type": "bool"}, "b": {"type": "bool"}}},\n' +
+      '    {"name": "low", "sensors": ["a", "b"]}\n  ]\n}\n';
+    fs.writeFileSync(file, pair);
+    await client.open(uriOf(file), pair);
+    const low = await actionsAt(client, uriOf(file), pair, '["a", "b"]', 2);
+    assert.equal(await resolved(client, uriOf(file), pair, low.get("Remove the sensor 'a' from layer 'low'")),
+      pair.replace('["a", "b"]', '["b"]'));
+  });
+});
+
+test("code actions on a state machine's name remove it when nothing names it and add another", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = read('configs/paper/goalie_plan.yaml');
+    await client.open(uri, text);
+    const actions = await actionsAt(client, uri, text, '  goalie:', 2);
+    const removed = await resolved(client, uri, text, actions.get("Remove the state machine 'goalie'"));
+    assert.equal(removed, text.slice(0, text.indexOf('\nstate_machines:') + 1));
+    const added = await resolved(client, uri, text, actions.get('Add a state machine'));
+    assert.equal(added, text + '  machine:\n    states: {}\n    queue: []\n');
+    for (const edited of [removed, added]) {
+      const file = path.join(tempDir(), path.basename(uri));
+      fs.writeFileSync(file, edited);
+      assert.deepEqual(validated(file).filter((d) => d.severity === 1), []);
+    }
+    // A machine a behaviour or a state steps is not offered for removal.
+    const hierarchical = read('configs/paper/hierarchical.yaml');
+    await client.open(hierarchical.uri, hierarchical.text);
+    for (const machine of ['match', 'attack_plan']) {
+      const named = await actionsAt(client, hierarchical.uri, hierarchical.text, `  ${machine}:\n`, 2);
+      assert.ok(named.has('Add a state machine'), JSON.stringify([...named.keys()]));
+      assert.ok(!named.has(`Remove the state machine '${machine}'`), JSON.stringify([...named.keys()]));
+    }
+  });
+});
+
+test("code actions on a top-level key add a layer at the end, a state machine, and a plugin the config does not name", async () => {
+  await withClient(async (client) => {
+    const { uri, text } = read('configs/paper/goalie_plan.yaml');
+    await client.open(uri, text);
+    const actions = await actionsAt(client, uri, text, 'rate_hz: 10', 2);
+    assert.equal(await resolved(client, uri, text, actions.get('Add the plugin \'soccer\'')),
+      text + 'plugins: [soccer]\n');
+    assert.equal(await resolved(client, uri, text, actions.get('Add a layer at the end')),
+      text + 'layers:\n  - name: layer\n');
+    assert.ok(actions.has('Add a state machine'), JSON.stringify([...actions.keys()]));
+    // Not on a value, and a plugin named already is not offered again.
+    assert.ok(!(await actionsAt(client, uri, text, 'rate_hz: 10', 9)).has('Add a state machine'));
+    const soccer = yaml();
+    await client.open(soccer.uri, soccer.text);
+    const named = await actionsAt(client, soccer.uri, soccer.text, 'plugins: [soccer]', 1);
+    assert.ok(named.has('Add a layer at the end'), JSON.stringify([...named.keys()]));
+    assert.ok(!named.has("Add the plugin 'soccer'"), JSON.stringify([...named.keys()]));
   });
 });
 

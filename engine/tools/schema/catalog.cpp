@@ -2,7 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <nlohmann/json.hpp>
+#include <set>
+#include <string_view>
 
 #include "tools/dump/param_json.hpp"
 
@@ -126,6 +130,32 @@ std::string catalog_json(const Registry& registry) {
   }
   const Json out = {{"classes", std::move(classes)}, {"value_types", std::move(types)}};
   return out.dump(2) + "\n";
+}
+
+std::vector<std::string> plugins_on_path(const PluginOptions& options) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::set<std::string> seen;
+  for (const auto& dir : plugin_search_path(options)) {
+    std::error_code error;
+    std::vector<std::string> here;
+    for (const auto& entry : fs::directory_iterator(dir, error)) {
+      const std::string file = entry.path().filename().string();
+      constexpr std::string_view kPrefix = "arbiter_";
+      constexpr std::string_view kSuffix = ".so";
+      if (!entry.is_regular_file(error) || file.size() <= kPrefix.size() + kSuffix.size() ||
+          file.compare(0, kPrefix.size(), kPrefix) != 0 ||
+          file.compare(file.size() - kSuffix.size(), kSuffix.size(), kSuffix) != 0) {
+        continue;
+      }
+      here.push_back(file.substr(kPrefix.size(), file.size() - kPrefix.size() - kSuffix.size()));
+    }
+    std::sort(here.begin(), here.end());
+    for (auto& name : here) {
+      if (seen.insert(name).second) names.push_back(std::move(name));
+    }
+  }
+  return names;
 }
 
 }  // namespace arbiter

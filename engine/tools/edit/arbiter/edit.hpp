@@ -2,7 +2,8 @@
 // engine/tools/edit: changes to a behaviour graph made as edits of its configs' text, each what a
 // person would have typed: the lines an operation does not need to change stay byte for byte as
 // they were, comments and key order included, in YAML and JSON alike, in the file that declares
-// the element. The language server's rename and code actions use them.
+// the element. The language server's rename and code actions and the studio's edits use them,
+// the last two naming an operation and its arguments as a JSON request (apply_operation).
 
 #include <cstddef>
 #include <memory>
@@ -266,6 +267,25 @@ EditResult add_state_machine(const Loaded& loaded, const std::string& name);
 /// `machine:`, as `index` of `loaded` finds them).
 EditResult remove_state_machine(const Loaded& loaded, const ConfigIndex& index,
                                 const std::string& name);
+
+/// What apply_operation gives: why the request is not an operation it can apply (`invalid`:
+/// not a JSON object, an unknown op, a member missing or of the wrong type; then no result), or
+/// the operation's result.
+struct OperationResult {
+  std::string invalid;
+  EditResult result;
+};
+
+/// Applies the operation that `request` names, a JSON object in the studio's words
+/// (docs/studio.md, `POST /studio/edit`): `{"op": "add_layer", "name": "io", "index": 0}`,
+/// names as strings, positions as integers from 0, a param's value as a JSON value (written as
+/// it is, JSON being a YAML flow value too); members it does not read are ignored. `invalid`
+/// names the first member missing or mistyped and what it must be (`move_layer needs 'index'
+/// (names as strings, positions as integers from 0)`), or lists the operations for an unknown
+/// op. The operations that look names up (rename, remove_state, remove_state_machine) read
+/// `index`, or index_config(loaded, registry) when it is null. The result is not checked().
+OperationResult apply_operation(const Loaded& loaded, const std::string& request,
+                                const Registry* registry, const ConfigIndex* index = nullptr);
 
 /// Adds `entry` (`key: value`, as it is to be written) to the mapping `node` of `file`: before
 /// a flow mapping's closing brace, else as a line of its own after the last line of the block

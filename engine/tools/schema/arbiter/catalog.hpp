@@ -5,7 +5,9 @@
 // described, so the listing cannot drift from what is checked.
 
 #include <string>
+#include <vector>
 
+#include "arbiter/plugin.hpp"
 #include "arbiter/registry.hpp"
 
 namespace arbiter {
@@ -15,5 +17,9 @@ std::string catalog_text(const Registry& registry);
 
 /// For tools: `{"classes": [...], "value_types": [...]}`, described in docs/cli.md.
 std::string catalog_json(const Registry& registry);
+
+/// The names of the plugins on the search path (`arbiter_NAME.so`), each once: the first
+/// directory that has it wins, as when a config names it.
+std::vector<std::string> plugins_on_path(const PluginOptions& options);
 
 }  // namespace arbiter
