@@ -2,7 +2,8 @@
 // generated graph (the page's `arbiter:layout` measures: text measured, ELK's layout, the SVG
 // built), as the page opens and after an edit, in wall time and in CPU time of the page's main
 // thread and of ELK's web workers (from a Chrome trace); and the frames while the pointer drags on it, drawing an
-// inhibition from a behaviour and panning the background, at the scale the page opens at and at
+// inhibition from a behaviour, moving a behaviour by its grip (the drop indicator following) and
+// panning the background, at the scale the page opens at and at
 // the scale a search shows a behaviour at. A benchmark, run by hand (under a minute with the
 // defaults); it prints medians and 95th percentiles and checks nothing. CTest's
 // `bench.studio_frames` runs it briefly, to keep it working.
@@ -121,7 +122,7 @@ try {
   const cpu = {open: {}, edit: {}};
   const workerCpu = {open: [], edit: []};  // ELK's workers' CPU time in the layout
   const warmUp = [];
-  const drags = {inhibition: {work: [], intervals: []}, pan: {work: [], intervals: []}};
+  const drags = {inhibition: {work: [], intervals: []}, move: {work: [], intervals: []}, pan: {work: [], intervals: []}};
   // The page's last layout while `act()` runs: its wall time (the page's measures) and its CPU time.
   const layoutDuring = async (when, act) => {
     await browser.startTracing(page, {categories: ['toplevel', 'blink.user_timing', '__metadata']});
@@ -157,8 +158,10 @@ try {
       const target = await page.locator(`.behaviour[data-name="layer_1/b_1_${middle}"] rect`).boundingBox();
       const from = {x: target.x + target.width / 2, y: target.y + target.height / 2};
       const inhibition = await framesDuring(page, () => dragAbout(page, from.x, from.y, 200));
+      // By its grip, over its own and the next layers' columns, and back where it was: no edit.
+      const move = await framesDuring(page, () => dragAbout(page, target.x + 3, from.y, 200));
       const pan = await framesDuring(page, () => dragAbout(page, stage.x + 4, stage.y + 4, 200));
-      for (const [name, frames] of [['inhibition', inhibition], ['pan', pan]]) {
+      for (const [name, frames] of [['inhibition', inhibition], ['move', move], ['pan', pan]]) {
         drags[name].work.push(...frames.work.slice(1));
         drags[name].intervals.push(...frames.intervals.slice(1));
       }
@@ -182,7 +185,7 @@ try {
     }
     console.log(`  CPU time of ELK's web workers in the layout (both together): ${figures(workerCpu[when])}`);
   }
-  for (const [name, label] of [['inhibition', 'drawing an inhibition'], ['pan', 'panning']]) {
+  for (const [name, label] of [['inhibition', 'drawing an inhibition'], ['move', 'moving a behaviour'], ['pan', 'panning']]) {
     console.log(`dragging, ${label}: frame interval ${figures(drags[name].intervals)}; frame work ${figures(drags[name].work)}`);
   }
   await page.close();

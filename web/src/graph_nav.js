@@ -161,9 +161,9 @@ export class Viewport {
 
 /**
  * Gives `graph` (a GraphView drawn in `panel`) its zoom, pan and search: a bar of tools above it
- * and a stage around its SVG. A drag pans when it starts off a behaviour (a view that drags
- * behaviours, the studio, keeps that drag). `onFind('layer/name')` is called with each match
- * the search brings into view.
+ * and a stage around its SVG. A drag pans when it starts off a behaviour and a layer's title (a
+ * view that drags them, the studio, keeps those drags). `onFind('layer/name')` is called with
+ * each match the search brings into view.
  * @param {import('./graph.js').GraphView} graph
  * @param {HTMLElement} panel
  * @param {(key: string) => void} [onFind]
@@ -175,7 +175,7 @@ export function navigate(graph, panel, onFind = () => {}) {
   const stage = html('div', {class: 'graph-stage', tabindex: '0', 'aria-label': 'the graph: wheel or + − to zoom, drag or arrow keys to pan, 0 to fit'});
   panel.insertBefore(stage, svg);
   stage.appendChild(svg);
-  const view = new Viewport(stage, svg, (target) => !target.closest('g.behaviour, g.layer-head'));
+  const view = new Viewport(stage, svg, (target) => !target.closest('g.behaviour, g.layer-head, .layer-title'));
   graph.view = view;
   view.onMove = () => graph.screenChanged();
 

@@ -347,7 +347,7 @@ test('a 200-behaviour graph: zoomed about the pointer, panned, a layer folded an
   await page.mouse.up();
   const moved = await boxOf('layer_0/b_0_0');
   near({x: moved.x, y: moved.y}, {x: still.x + 120, y: still.y + 80}, 'panned by the drag');
-  assert.equal(await page.textContent('#inspector p'), 'Click a behaviour or an inhibition. Drag from one behaviour to another to add an inhibition.');
+  assert.match(await page.textContent('#inspector p'), /^Click a behaviour or an inhibition\. Drag from one behaviour to another to add an inhibition;/);
   await page.focus('.graph-stage');
   await page.keyboard.press('ArrowRight');
   const keyed = await boxOf('layer_0/b_0_0');
@@ -575,6 +575,115 @@ plugins: [soccer]
 `);
   const validate = spawnSync(arbiter, ['validate', file], {cwd: source, encoding: 'utf8'});
   assert.equal(validate.status, 0, validate.stderr);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('a behaviour moved by dragging its grip within its layer and into another, a layer by its title; a refused move says why', async () => {
+  const dir = mkdtempSync(path.join(scratch, 'moves-'));
+  const file = path.join(dir, 'moves.yaml');
+  writeFileSync(file, `arbiter: 1
+name: moves
+layers:
+  - name: low
+    actuators: {x: {type: double}}
+    behaviours:
+      a: scripted
+      b: scripted
+      c: scripted
+    inhibitions:
+      - a -> b
+  - name: high
+    actuators: {y: {type: double}}
+    behaviours:
+      d: scripted
+      e: scripted
+`);
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  const boxOf = async (key) => {
+    await settled(page);
+    return page.locator(`.behaviour[data-name="${key}"] rect`).boundingBox();
+  };
+  const grip = (b) => ({x: b.x + 4, y: b.y + b.height / 2});
+  // Pressed at `from`, moved in steps to `to`; released once `check()` (while dragging) is done.
+  const dragTo = async (from, to, check = async () => {}) => {
+    await page.mouse.move(from.x, from.y);
+    await page.mouse.down();
+    await page.mouse.move(to.x, to.y, {steps: 10});
+    await check();
+    await page.mouse.up();
+  };
+  const indicator = () => page.evaluate(() => {
+    const line = document.querySelector('line.drop-indicator');
+    return line && line.getAttribute('visibility') !== 'hidden' ? line.getBoundingClientRect().toJSON() : null;
+  });
+  assert.match(await page.textContent('.behaviour[data-name="low/c"] .grip title'), /drag to move it/);
+
+  // c, by its grip, onto the top edge of a: first in its layer. While dragging, one line shows
+  // where it lands, just above a; no inhibition is drawn.
+  const a = await boxOf('low/a');
+  await dragTo(grip(await boxOf('low/c')), {x: a.x + a.width / 2, y: a.y - 5}, async () => {
+    const line = await indicator();
+    assert.ok(line, 'the drop indicator is shown');
+    assert.ok(line.bottom <= a.y && line.bottom > a.y - 20 && line.left < a.x + a.width / 2 && line.right > a.x + a.width / 2,
+              `the indicator above a: ${JSON.stringify(line)} against ${JSON.stringify(a)}`);
+    assert.equal(await page.locator('line.drag-line').count(), 0);
+  });
+  await page.waitForFunction(() => /behaviours:\n      c: scripted\n      a: scripted\n      b: scripted\n/.test(document.querySelector('#text').value));
+  assert.equal(await page.locator('line.drop-indicator').count(), 0, 'the indicator is gone once dropped');
+
+  // c again, into the other layer below e: its last behaviour.
+  const e = await boxOf('high/e');
+  await dragTo(grip(await boxOf('low/c')), {x: e.x + e.width / 2, y: e.y + e.height + 15});
+  await page.waitForSelector('.behaviour[data-name="high/c"]');
+  assert.match(await text(page), /behaviours:\n      a: scripted\n      b: scripted\n    inhibitions:/);
+  assert.match(await text(page), /behaviours:\n      d: scripted\n      e: scripted\n      c: scripted\n/);
+
+  // b with Alt held, into the other layer: refused, as a -> b cannot follow it; nothing changes.
+  const before = await text(page);
+  const d = await boxOf('high/d');
+  const b = await boxOf('low/b');
+  await page.keyboard.down('Alt');
+  await dragTo({x: b.x + b.width / 2, y: b.y + b.height / 2}, {x: d.x + d.width / 2, y: d.y - 5});
+  await page.keyboard.up('Alt');
+  await page.waitForFunction(() => /refused: 'b' is named by the inhibition 'a -> b' of layer 'low', which cannot follow it to another layer: remove it first/
+      .test(document.querySelector('#studio-message').textContent));
+  assert.equal(await text(page), before);
+  assert.equal(await page.locator('g.edge[data-from="b"]').count(), 0, 'no inhibition drawn');
+
+  // The layer high, by its title, before low; a click on the title still folds it.
+  await settled(page);
+  const title = await page.locator('g.layer[data-layer="high"] .layer-title').boundingBox();
+  const low = await page.locator('g.layer[data-layer="low"] rect.layer-box').boundingBox();
+  await dragTo({x: title.x + title.width / 2, y: title.y + title.height / 2}, {x: low.x + 10, y: title.y + 40});
+  await page.waitForFunction(() => /layers:\n  - name: high\n[^]*\n  - name: low\n/.test(document.querySelector('#text').value));
+  await settled(page);
+  assert.deepEqual(await page.$$eval('g.layer', (layers) => layers.map((l) => l.dataset.layer)), ['high', 'low']);
+  assert.equal(await page.locator('g.layer.folded').count(), 0, 'the drag did not fold it');
+  await page.click('g.layer[data-layer="low"] .layer-title');
+  await page.waitForSelector('g.layer.folded[data-layer="low"]');
+
+  await page.click('#review');
+  await page.click('#save');
+  await page.waitForSelector('#studio-message[data-kind="saved"]');
+  assert.equal(readFileSync(file, 'utf8'), `arbiter: 1
+name: moves
+layers:
+  - name: high
+    actuators: {y: {type: double}}
+    behaviours:
+      d: scripted
+      e: scripted
+      c: scripted
+  - name: low
+    actuators: {x: {type: double}}
+    behaviours:
+      a: scripted
+      b: scripted
+    inhibitions:
+      - a -> b
+`);
   assert.deepEqual(page.errors, []);
   await page.close();
 });
