@@ -534,9 +534,8 @@ test('a graph built from a file that does not exist yet, without typing YAML: a 
     await page.click('#add-behaviour');
     await page.waitForSelector(`.behaviour[data-name="control/${name}"]`);
   }
-  // An inhibition dragged; a port wired in the selected behaviour's form.
-  // The graph grew past the view: fitted to it first.
-  await page.getByRole('button', {name: 'Fit'}).click();
+  // An inhibition dragged; a port wired in the selected behaviour's form (the graph grew past the
+  // view, which was fitted to it again).
   await drag(page, 'kick_ball', 'go_behind_ball');
   await page.waitForSelector('g.edge[data-from="kick_ball"][data-to="go_behind_ball"]');
   await selectBehaviour(page, 'kick_ball');
@@ -684,6 +683,67 @@ layers:
     inhibitions:
       - a -> b
 `);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('the view follows the graph as it grows: fitted again past the right edge, a new layer brought into a view zoomed by hand, kept when it shows the change', async () => {
+  const dir = mkdtempSync(path.join(scratch, 'grows-'));
+  const file = path.join(dir, 'grows.yaml');
+  writeFileSync(file, `arbiter: 1
+name: grows
+layers:
+  - name: one
+    actuators: {x: {type: double}}
+    behaviours: {a: scripted}
+  - name: two
+    actuators: {y: {type: double}}
+    behaviours: {b: scripted}
+  - name: three
+    actuators: {z: {type: double}}
+    behaviours: {c: scripted}
+`);
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  await settled(page);
+  const stage = await page.locator('.graph-stage').boundingBox();
+  const scale = () => page.evaluate(() => Number(document.querySelector('.graph-stage').dataset.scale));
+  const transform = () => page.evaluate(() => document.querySelector('#graph').style.transform);
+  const column = (layer) => page.locator(`g.layer[data-layer="${layer}"] rect.layer-box`).boundingBox();
+  const inStage = (b) => b.x >= stage.x - 1 && b.y >= stage.y - 1 && b.x + b.width <= stage.x + stage.width + 1 &&
+                         b.y + b.height <= stage.y + stage.height + 1;
+  const addLayer = async (name) => {
+    await settled(page);
+    await page.fill('#new-layer-name', name);
+    await page.press('#new-layer-name', 'Enter');
+    await page.waitForSelector(`g.layer[data-layer="${name}"]`);
+    await settled(page);
+  };
+  // Three columns fit at full size; a fourth does not: the view is fitted again, all in view.
+  assert.equal(await scale(), 1);
+  await addLayer('four');
+  assert.ok(await scale() < 1, `fitted again at ${await scale()}`);
+  assert.ok(inStage(await page.locator('#graph').boundingBox()), 'the whole graph in view');
+  assert.ok(inStage(await column('four')), 'the new layer in view');
+
+  // Zoomed in by hand, the right edge out of view: a fifth layer is brought into the middle, at
+  // the scale chosen.
+  await page.click('#zoom-in');
+  await page.click('#zoom-in');
+  const zoomed = await scale();
+  await addLayer('five');
+  assert.equal(await scale(), zoomed);
+  assert.ok(inStage(await column('five')), `the new layer in view: ${JSON.stringify(await column('five'))}`);
+
+  // A behaviour added where the view already shows it: the view does not move.
+  const kept = await transform();
+  await page.selectOption('#add-layer', 'five');
+  await page.fill('#add-name', 'e');
+  await page.click('#add-behaviour');
+  await page.waitForSelector('.behaviour[data-name="five/e"]');
+  await settled(page);
+  assert.ok(inStage(await page.locator('.behaviour[data-name="five/e"] rect').boundingBox()));
+  assert.equal(await transform(), kept);
   assert.deepEqual(page.errors, []);
   await page.close();
 });
