@@ -568,7 +568,11 @@ layers:
   - name: control
     actuators: {gait_velocity: {type: vec3}, head_angle: {type: double}, kick: {type: bool}, kick_request: {type: bool}}
     sensors: [ball_visible, ball_position, robot_pose]
-    behaviours: {kick_ball: {type: soccer.KickBall, ports: {kick: kick_request}}, go_behind_ball: {type: soccer.GoBehindBall}, search_for_ball: {type: soccer.SearchForBall}, head_control: {type: soccer.HeadControl}}
+    behaviours:
+      kick_ball: {type: soccer.KickBall, ports: {kick: kick_request}}
+      go_behind_ball: {type: soccer.GoBehindBall}
+      search_for_ball: {type: soccer.SearchForBall}
+      head_control: {type: soccer.HeadControl}
     inhibitions: [kick_ball => go_behind_ball]
 plugins: [soccer]
 `);
