@@ -2,7 +2,7 @@
 // generated graph (the page's `arbiter:layout` measures: text measured, ELK's layout, the SVG
 // built), as the page opens and after an edit, in wall time and in CPU time of the page's main
 // thread and of ELK's web workers (from a Chrome trace); and the frames while the pointer drags on it, drawing an
-// inhibition from a behaviour, moving a behaviour by its grip (the drop indicator following) and
+// inhibition from a behaviour, moving a behaviour (Alt+drag: the drop indicator following) and
 // panning the background, at the scale the page opens at and at
 // the scale a search shows a behaviour at. A benchmark, run by hand (under a minute with the
 // defaults); it prints medians and 95th percentiles and checks nothing. CTest's
@@ -94,14 +94,18 @@ function cpuWithin(events, name, thread = 'CrRendererMain') {
   });
 }
 
-/** Moves the pressed pointer from (x, y) round a circle of `radius` and back, for `seconds`. */
-async function dragAbout(page, x, y, radius) {
+/**
+ * Moves the pressed pointer from (x, y) round a circle of `radius` and back, for `seconds`;
+ * `during()` is awaited once on the way.
+ */
+async function dragAbout(page, x, y, radius, during = async () => {}) {
   await page.mouse.move(x, y);
   await page.mouse.down();
   const end = Date.now() + seconds * 1000;
-  for (let i = 0; Date.now() < end; ++i) {
+  for (let i = 0; Date.now() < end || i <= 10; ++i) {
     const angle = i / 20;
     await page.mouse.move(x + radius * Math.sin(angle), y + radius * (1 - Math.cos(angle)) / 2);
+    if (i === 10) await during();
     await new Promise((resolve) => setTimeout(resolve, 4));
   }
   await page.mouse.move(x, y);
@@ -158,8 +162,13 @@ try {
       const target = await page.locator(`.behaviour[data-name="layer_1/b_1_${middle}"] rect`).boundingBox();
       const from = {x: target.x + target.width / 2, y: target.y + target.height / 2};
       const inhibition = await framesDuring(page, () => dragAbout(page, from.x, from.y, 200));
-      // By its grip, over its own and the next layers' columns, and back where it was: no edit.
-      const move = await framesDuring(page, () => dragAbout(page, target.x + 3, from.y, 200));
+      // With Alt (its grip is a few pixels wide at the fitted scale), over its own and the next
+      // layers' columns, and back where it was: no edit.
+      await page.keyboard.down('Alt');
+      const move = await framesDuring(page, () => dragAbout(page, from.x, from.y, 200, async () => {
+        if (!await page.locator('line.drop-indicator').count()) throw new Error('no drop indicator while moving');
+      }));
+      await page.keyboard.up('Alt');
       const pan = await framesDuring(page, () => dragAbout(page, stage.x + 4, stage.y + 4, 200));
       for (const [name, frames] of [['inhibition', inhibition], ['move', move], ['pan', pan]]) {
         drags[name].work.push(...frames.work.slice(1));

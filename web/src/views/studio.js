@@ -631,7 +631,6 @@ export async function studio(info) {
         drag.columns = columnsDrawn();
         drag.line = el('line', {class: 'drop-indicator'}, svg);
         drag.box?.classList.add('moving');
-        document.body.classList.add('moving');
       }
     }
     if (drag.kind === 'inhibition') {
@@ -661,7 +660,6 @@ export async function studio(info) {
     drag = null;
     was.line?.remove();
     was.box?.classList.remove('moving');
-    document.body.classList.remove('moving');
     return was;
   }
   window.addEventListener('pointerup', async (event) => {
