@@ -636,8 +636,19 @@ layers:
   await page.waitForFunction(() => /behaviours:\n      c: scripted\n      a: scripted\n      b: scripted\n/.test(document.querySelector('#text').value));
   assert.equal(await page.locator('line.drop-indicator').count(), 0, 'the indicator is gone once dropped');
 
-  // c again, into the other layer below e: its last behaviour.
+  // Escape while dragging: nothing moves, the indicator goes.
+  const unmoved = await text(page);
   const e = await boxOf('high/e');
+  await dragTo(grip(await boxOf('low/c')), {x: e.x + e.width / 2, y: e.y + e.height + 15}, async () => {
+    assert.ok(await indicator(), 'the drop indicator is shown');
+    await page.keyboard.press('Escape');
+    assert.equal(await page.locator('line.drop-indicator').count(), 0);
+  });
+  await settled(page);
+  assert.equal(await text(page), unmoved);
+  assert.equal(await page.locator('.behaviour.moving').count(), 0);
+
+  // c again, into the other layer below e: its last behaviour.
   await dragTo(grip(await boxOf('low/c')), {x: e.x + e.width / 2, y: e.y + e.height + 15});
   await page.waitForSelector('.behaviour[data-name="high/c"]');
   assert.match(await text(page), /behaviours:\n      a: scripted\n      b: scripted\n    inhibitions:/);

@@ -662,6 +662,9 @@ export async function studio(info) {
     was.box?.classList.remove('moving');
     return was;
   }
+  window.addEventListener('pointercancel', () => {
+    if (drag) cancelDrag();
+  });
   window.addEventListener('pointerup', async (event) => {
     if (!drag) return;
     const was = cancelDrag();
