@@ -507,8 +507,10 @@ TEST_CASE("renaming each name of each shipped config renames every use and nothi
   CHECK(refused < renamed / 4);
 }
 
-TEST_CASE("a behaviour is added after the layer's last one, or with the behaviours: key",
-          "[edit]") {
+TEST_CASE(
+    "a behaviour is added after the layer's last one, or with the behaviours: key in the "
+    "layer's style",
+    "[edit]") {
   const std::string yaml = R"(arbiter: 1
 name: add
 layers:
@@ -523,6 +525,7 @@ layers:
     behaviours: {c: scripted}
   - name: none
     actuators: {x: {type: double}}
+  - {name: flat, actuators: {w: {type: double}}}
 )";
   test::TempDir dir;
   Registry registry = builtin_registry();
@@ -539,9 +542,22 @@ layers:
                                          "        type: scripted\n      wave: {type: scripted}\n"));
   CHECK(add("flow", "wave") ==
         replaced(yaml, "{c: scripted}", "{c: scripted, wave: {type: scripted}}"));
+  // A layer without behaviours: gets the key in the style the layer is written in, in a block
+  // layer on a line of its own with the behaviour under it.
   CHECK(add("none", "wave") ==
         replaced(yaml, "{x: {type: double}}\n",
-                 "{x: {type: double}}\n    behaviours: {wave: {type: scripted}}\n"));
+                 "{x: {type: double}}\n    behaviours:\n      wave: {type: scripted}\n"));
+  CHECK(add("flat", "wave") ==
+        replaced(yaml, "{w: {type: double}}}",
+                 "{w: {type: double}}, behaviours: {wave: {type: scripted}}}"));
+  // So does one moved into it.
+  const EditResult moved =
+      checked(loaded, move_behaviour(loaded, "flow", "c", "none", 0), registry);
+  INFO(moved.refused);
+  REQUIRE(moved.ok());
+  CHECK(apply_edits(yaml, loaded.files.files().front()->path, moved.edits) ==
+        replaced(replaced(yaml, "{c: scripted}", "{}"), "{x: {type: double}}\n",
+                 "{x: {type: double}}\n    behaviours:\n      c: scripted\n"));
   CHECK(add_behaviour(loaded, "block", "a", "scripted").refused == "'a' is already taken");
   CHECK(add_behaviour(loaded, "block", "A b", "scripted").refused ==
         "'A b' is not a valid name: names are [a-z_][a-z0-9_]*");

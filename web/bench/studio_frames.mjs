@@ -3,7 +3,8 @@
 // built), as the page opens, as every layer is reloaded from the disk (ELK loaded) and after an
 // edit, in wall time and in CPU time of the page's main
 // thread and of ELK's web workers (from a Chrome trace); and the frames while the pointer drags on it, drawing an
-// inhibition from a behaviour and panning the background, at the scale the page opens at and at
+// inhibition from a behaviour, moving a behaviour (Alt+drag: the drop indicator following) and
+// panning the background, at the scale the page opens at and at
 // the scale a search shows a behaviour at. A benchmark, run by hand (under a minute with the
 // defaults); it prints medians and 95th percentiles and checks nothing. CTest's
 // `bench.studio_frames` runs it briefly, to keep it working.
@@ -96,14 +97,18 @@ function cpuWithin(events, name, thread = 'CrRendererMain') {
   });
 }
 
-/** Moves the pressed pointer from (x, y) round a circle of `radius` and back, for `seconds`. */
-async function dragAbout(page, x, y, radius) {
+/**
+ * Moves the pressed pointer from (x, y) round a circle of `radius` and back, for `seconds`;
+ * `during()` is awaited once on the way.
+ */
+async function dragAbout(page, x, y, radius, during = async () => {}) {
   await page.mouse.move(x, y);
   await page.mouse.down();
   const end = Date.now() + seconds * 1000;
-  for (let i = 0; Date.now() < end; ++i) {
+  for (let i = 0; Date.now() < end || i <= 10; ++i) {
     const angle = i / 20;
     await page.mouse.move(x + radius * Math.sin(angle), y + radius * (1 - Math.cos(angle)) / 2);
+    if (i === 10) await during();
     await new Promise((resolve) => setTimeout(resolve, 4));
   }
   await page.mouse.move(x, y);
@@ -125,7 +130,7 @@ try {
   const workerCpu = {open: [], reload: [], edit: []};  // ELK's workers' CPU time in the layout
   const warmUp = [];
   const keptWarm = [];
-  const drags = {inhibition: {work: [], intervals: []}, pan: {work: [], intervals: []}};
+  const drags = {inhibition: {work: [], intervals: []}, move: {work: [], intervals: []}, pan: {work: [], intervals: []}};
   // The page's last layout while `act()` runs: its wall time (the page's measures) and its CPU time.
   const layoutDuring = async (when, act) => {
     await browser.startTracing(page, {categories: ['toplevel', 'blink.user_timing', '__metadata']});
@@ -178,8 +183,15 @@ try {
       const target = await page.locator(`.behaviour[data-name="layer_1/b_1_${middle}"] rect`).boundingBox();
       const from = {x: target.x + target.width / 2, y: target.y + target.height / 2};
       const inhibition = await framesDuring(page, () => dragAbout(page, from.x, from.y, 200));
+      // With Alt (its grip is a few pixels wide at the fitted scale), over its own and the next
+      // layers' columns, and back where it was: no edit.
+      await page.keyboard.down('Alt');
+      const move = await framesDuring(page, () => dragAbout(page, from.x, from.y, 200, async () => {
+        if (!await page.locator('line.drop-indicator').count()) throw new Error('no drop indicator while moving');
+      }));
+      await page.keyboard.up('Alt');
       const pan = await framesDuring(page, () => dragAbout(page, stage.x + 4, stage.y + 4, 200));
-      for (const [name, frames] of [['inhibition', inhibition], ['pan', pan]]) {
+      for (const [name, frames] of [['inhibition', inhibition], ['move', move], ['pan', pan]]) {
         drags[name].work.push(...frames.work.slice(1));
         drags[name].intervals.push(...frames.intervals.slice(1));
       }
@@ -205,7 +217,7 @@ try {
     }
     console.log(`  CPU time of ELK's web workers in the layout (both together): ${figures(workerCpu[when])}`);
   }
-  for (const [name, label] of [['inhibition', 'drawing an inhibition'], ['pan', 'panning']]) {
+  for (const [name, label] of [['inhibition', 'drawing an inhibition'], ['move', 'moving a behaviour'], ['pan', 'panning']]) {
     console.log(`dragging, ${label}: frame interval ${figures(drags[name].intervals)}; frame work ${figures(drags[name].work)}`);
   }
   await page.close();

@@ -244,6 +244,17 @@ function keepWarm(keys) {
   }
 }
 
+/** The layers (by name) and behaviours ('layer/name') of the program `after` that `before` has not. */
+function addedTo(before, after) {
+  const layers = new Set(before.layers.map((layer) => layer.name));
+  const behaviours = new Set(before.layers.flatMap((layer) => layer.behaviours.map((b) => `${layer.name}/${b.name}`)));
+  return {
+    layers: new Set(after.layers.map((layer) => layer.name).filter((name) => !layers.has(name))),
+    behaviours: new Set(after.layers.flatMap((layer) => layer.behaviours.map((b) => `${layer.name}/${b.name}`))
+        .filter((key) => !behaviours.has(key))),
+  };
+}
+
 // The points of an ELK edge, offset by (dx, dy).
 function edgePoints(edge, dx, dy) {
   const points = [];
@@ -310,8 +321,9 @@ export class GraphView {
     if (drawing !== this.drawing) return false;
     this.laid = laid;
     const laidOut = performance.now();
+    const before = this.drawn?.graph;
     this.drawn = {graph, sizes, layouts};
-    this.rebuild();
+    this.rebuild(before ? addedTo(before, graph) : {layers: new Set(), behaviours: new Set()});
     performance.measure('arbiter:layout', {start: started});
     performance.measure('arbiter:layout:text', {start: started, end: measured});
     performance.measure('arbiter:layout:elk', {start: measured, end: laidOut});
@@ -320,8 +332,11 @@ export class GraphView {
     return true;
   }
 
-  /** Draws what draw() laid out again, as the folds are now. */
-  rebuild() {
+  /**
+   * Draws what draw() laid out again, as the folds are now; `added` (the layers and behaviours new
+   * in a new drawing) when draw() calls it.
+   */
+  rebuild(added = null) {
     if (!this.drawn) return;
     const {graph, sizes, layouts} = this.drawn;
     this.build(graph, sizes, layouts);
@@ -329,8 +344,29 @@ export class GraphView {
     this.mark(this.words);
     this.highlight(this.highlighted);
     if (this.record) this.show(this.record);
-    this.view?.contentChanged();
+    this.view?.contentChanged(!!added, added && this.boundsOf(added));
     this.onBuilt();
+  }
+
+  /** The rectangle (SVG user units) round the columns and boxes drawn of `added`; null: none drawn. */
+  boundsOf(added) {
+    const rects = [];
+    for (const column of this.svg.querySelectorAll('g.layer')) {
+      if (added.layers.has(column.dataset.layer)) rects.push(column.querySelector('rect.layer-box'));
+    }
+    for (const key of added.behaviours) {
+      const item = this.behaviours.get(key);
+      if (item) rects.push(item.rect);
+    }
+    if (!rects.length) return null;
+    const edges = rects.map((r) => {
+      const [x, y, width, height] = ['x', 'y', 'width', 'height'].map((name) => Number(r.getAttribute(name)));
+      return [x, y, x + width, y + height];
+    });
+    const left = Math.min(...edges.map((e) => e[0]));
+    const top = Math.min(...edges.map((e) => e[1]));
+    return {x: left, y: top, width: Math.max(...edges.map((e) => e[2])) - left,
+            height: Math.max(...edges.map((e) => e[3])) - top};
   }
 
   build(graph, sizes, layouts) {

@@ -2,7 +2,8 @@
 // button), pan (a drag on empty space, the arrow keys, Shift+wheel), fit the whole graph (0, a
 // button), and a search by name that marks the matches and brings each into view in turn (Enter,
 // Shift+Enter). The graph is moved by a CSS transform of its SVG inside a stage that clips it:
-// panning and zooming change one style, not the drawing.
+// panning and zooming change one style, not the drawing. A graph that grows past the view (an
+// edit) is fitted again, or what it added is brought into view once the view was moved by hand.
 import {html} from './dom.js';
 
 const MIN_SCALE = 0.05;
@@ -25,6 +26,7 @@ export class Viewport {
     this.x = 0;  // px: where the graph's (0, 0) is in the stage
     this.y = 0;
     this.fitted = false;  // once: a graph drawn again keeps the view it had
+    this.byHand = false;  // zoomed or panned since the graph was last fitted
     /** Called when the graph moved in the stage (panned, zoomed). */
     this.onMove = () => {};
     stage.addEventListener('wheel', (event) => {
@@ -51,6 +53,7 @@ export class Viewport {
         stage.setPointerCapture(event.pointerId);
         stage.classList.add('panning');
       }
+      this.byHand = true;
       this.moveTo(drag.x + dx, drag.y + dy);
     });
     const end = () => {
@@ -109,12 +112,14 @@ export class Viewport {
   }
 
   pan(dx, dy) {
+    this.byHand = true;
     this.moveTo(this.x + dx, this.y + dy);
   }
 
   /** Zooms by `factor` about (px, py) of the stage (its middle by default), which stays put. */
   zoom(factor, px = this.box().width / 2, py = this.box().height / 2) {
     const scale = Math.min(MAX_SCALE, Math.max(MIN_SCALE, this.scale * factor));
+    this.byHand = true;
     const at = this.toGraph(px, py);
     this.scale = scale;
     this.moveTo(px - at.x * scale, py - at.y * scale);
@@ -127,6 +132,7 @@ export class Viewport {
     const box = this.box();
     this.scale = Math.max(MIN_SCALE, Math.min(1, (box.width - 2 * MARGIN) / width, (box.height - 2 * MARGIN) / height));
     this.moveTo((box.width - width * this.scale) / 2, Math.max(MARGIN, (box.height - height * this.scale) / 2));
+    this.byHand = false;
   }
 
   /** `rect` (SVG user units) in the middle of the stage, at a scale it can be read at. */
@@ -136,34 +142,55 @@ export class Viewport {
   }
 
   centre(rect) {
+    this.byHand = true;
     const box = this.box();
     this.moveTo(box.width / 2 - (rect.x + rect.width / 2) * this.scale,
                 box.height / 2 - (rect.y + rect.height / 2) * this.scale);
   }
 
-  /** `rect` (SVG user units) in the middle of the stage unless it is in it already. */
-  include(rect) {
+  /** Whether `rect` (SVG user units) lies wholly in the stage. */
+  shows(rect) {
     const box = this.box();
     const left = this.x + rect.x * this.scale;
     const top = this.y + rect.y * this.scale;
-    if (left < 0 || top < 0 || left + rect.width * this.scale > box.width || top + rect.height * this.scale > box.height) {
-      this.centre(rect);
-    }
+    return left >= 0 && top >= 0 && left + rect.width * this.scale <= box.width + 0.5 &&
+           top + rect.height * this.scale <= box.height + 0.5;
   }
 
-  /** The graph was drawn (again): fitted the first time, else left where it was. */
-  contentChanged() {
-    if (this.fitted) return;
-    this.fitted = true;
-    this.fit();
+  /** `rect` (SVG user units) in the middle of the stage unless it is in it already. */
+  include(rect) {
+    if (!this.shows(rect)) this.centre(rect);
+  }
+
+  /**
+   * The graph was drawn (again): fitted the first time. After that a new graph (an edit, a
+   * reload) that no longer fits in the stage is fitted again if the view is still the last fit,
+   * else what it added (`added`, SVG user units; null: nothing, or nothing drawn) is brought into
+   * the middle when it is out of the view; a view that shows it is kept as it is. A layer folded or
+   * unfolded (`redrawn` false) keeps the view.
+   */
+  contentChanged(redrawn = false, added = null) {
+    if (!this.fitted) {
+      this.fitted = true;
+      this.fit();
+      return;
+    }
+    if (!redrawn) return;
+    if (!this.byHand) {
+      const whole = {x: 0, y: 0, width: Number(this.svg.getAttribute('width')) || 1,
+                     height: Number(this.svg.getAttribute('height')) || 1};
+      if (!this.shows(whole)) this.fit();
+    } else if (added) {
+      this.include(added);
+    }
   }
 }
 
 /**
  * Gives `graph` (a GraphView drawn in `panel`) its zoom, pan and search: a bar of tools above it
- * and a stage around its SVG. A drag pans when it starts off a behaviour (a view that drags
- * behaviours, the studio, keeps that drag). `onFind('layer/name')` is called with each match
- * the search brings into view.
+ * and a stage around its SVG. A drag pans when it starts off a behaviour and a layer's title (a
+ * view that drags them, the studio, keeps those drags). `onFind('layer/name')` is called with
+ * each match the search brings into view.
  * @param {import('./graph.js').GraphView} graph
  * @param {HTMLElement} panel
  * @param {(key: string) => void} [onFind]
@@ -175,7 +202,7 @@ export function navigate(graph, panel, onFind = () => {}) {
   const stage = html('div', {class: 'graph-stage', tabindex: '0', 'aria-label': 'the graph: wheel or + − to zoom, drag or arrow keys to pan, 0 to fit'});
   panel.insertBefore(stage, svg);
   stage.appendChild(svg);
-  const view = new Viewport(stage, svg, (target) => !target.closest('g.behaviour, g.layer-head'));
+  const view = new Viewport(stage, svg, (target) => !target.closest('g.behaviour, g.layer-head, .layer-title'));
   graph.view = view;
   view.onMove = () => graph.screenChanged();
 

@@ -347,7 +347,7 @@ test('a 200-behaviour graph: zoomed about the pointer, panned, a layer folded an
   await page.mouse.up();
   const moved = await boxOf('layer_0/b_0_0');
   near({x: moved.x, y: moved.y}, {x: still.x + 120, y: still.y + 80}, 'panned by the drag');
-  assert.equal(await page.textContent('#inspector p'), 'Click a behaviour or an inhibition. Drag from one behaviour to another to add an inhibition.');
+  assert.match(await page.textContent('#inspector p'), /^Click a behaviour or an inhibition\. Drag from one behaviour to another to add an inhibition;/);
   await page.focus('.graph-stage');
   await page.keyboard.press('ArrowRight');
   const keyed = await boxOf('layer_0/b_0_0');
@@ -534,9 +534,8 @@ test('a graph built from a file that does not exist yet, without typing YAML: a 
     await page.click('#add-behaviour');
     await page.waitForSelector(`.behaviour[data-name="control/${name}"]`);
   }
-  // An inhibition dragged; a port wired in the selected behaviour's form.
-  // The graph grew past the view: fitted to it first.
-  await page.getByRole('button', {name: 'Fit'}).click();
+  // An inhibition dragged; a port wired in the selected behaviour's form (the graph grew past the
+  // view, which was fitted to it again).
   await drag(page, 'kick_ball', 'go_behind_ball');
   await page.waitForSelector('g.edge[data-from="kick_ball"][data-to="go_behind_ball"]');
   await selectBehaviour(page, 'kick_ball');
@@ -569,12 +568,197 @@ layers:
   - name: control
     actuators: {gait_velocity: {type: vec3}, head_angle: {type: double}, kick: {type: bool}, kick_request: {type: bool}}
     sensors: [ball_visible, ball_position, robot_pose]
-    behaviours: {kick_ball: {type: soccer.KickBall, ports: {kick: kick_request}}, go_behind_ball: {type: soccer.GoBehindBall}, search_for_ball: {type: soccer.SearchForBall}, head_control: {type: soccer.HeadControl}}
+    behaviours:
+      kick_ball: {type: soccer.KickBall, ports: {kick: kick_request}}
+      go_behind_ball: {type: soccer.GoBehindBall}
+      search_for_ball: {type: soccer.SearchForBall}
+      head_control: {type: soccer.HeadControl}
     inhibitions: [kick_ball => go_behind_ball]
 plugins: [soccer]
 `);
   const validate = spawnSync(arbiter, ['validate', file], {cwd: source, encoding: 'utf8'});
   assert.equal(validate.status, 0, validate.stderr);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('a behaviour moved by dragging its grip within its layer and into another, a layer by its title; a refused move says why', async () => {
+  const dir = mkdtempSync(path.join(scratch, 'moves-'));
+  const file = path.join(dir, 'moves.yaml');
+  writeFileSync(file, `arbiter: 1
+name: moves
+layers:
+  - name: low
+    actuators: {x: {type: double}}
+    behaviours:
+      a: scripted
+      b: scripted
+      c: scripted
+    inhibitions:
+      - a -> b
+  - name: high
+    actuators: {y: {type: double}}
+    behaviours:
+      d: scripted
+      e: scripted
+`);
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  const boxOf = async (key) => {
+    await settled(page);
+    return page.locator(`.behaviour[data-name="${key}"] rect`).boundingBox();
+  };
+  const grip = (b) => ({x: b.x + 4, y: b.y + b.height / 2});
+  // Pressed at `from`, moved in steps to `to`; released once `check()` (while dragging) is done.
+  const dragTo = async (from, to, check = async () => {}) => {
+    await page.mouse.move(from.x, from.y);
+    await page.mouse.down();
+    await page.mouse.move(to.x, to.y, {steps: 10});
+    await check();
+    await page.mouse.up();
+  };
+  const indicator = () => page.evaluate(() => {
+    const line = document.querySelector('line.drop-indicator');
+    return line && line.getAttribute('visibility') !== 'hidden' ? line.getBoundingClientRect().toJSON() : null;
+  });
+  assert.match(await page.textContent('.behaviour[data-name="low/c"] .grip title'), /drag to move it/);
+
+  // c, by its grip, onto the top edge of a: first in its layer. While dragging, one line shows
+  // where it lands, just above a; no inhibition is drawn.
+  const a = await boxOf('low/a');
+  await dragTo(grip(await boxOf('low/c')), {x: a.x + a.width / 2, y: a.y - 5}, async () => {
+    const line = await indicator();
+    assert.ok(line, 'the drop indicator is shown');
+    assert.ok(line.bottom <= a.y && line.bottom > a.y - 20 && line.left < a.x + a.width / 2 && line.right > a.x + a.width / 2,
+              `the indicator above a: ${JSON.stringify(line)} against ${JSON.stringify(a)}`);
+    assert.equal(await page.locator('line.drag-line').count(), 0);
+  });
+  await page.waitForFunction(() => /behaviours:\n      c: scripted\n      a: scripted\n      b: scripted\n/.test(document.querySelector('#text').value));
+  assert.equal(await page.locator('line.drop-indicator').count(), 0, 'the indicator is gone once dropped');
+
+  // Escape while dragging: nothing moves, the indicator goes.
+  const unmoved = await text(page);
+  const e = await boxOf('high/e');
+  await dragTo(grip(await boxOf('low/c')), {x: e.x + e.width / 2, y: e.y + e.height + 15}, async () => {
+    assert.ok(await indicator(), 'the drop indicator is shown');
+    await page.keyboard.press('Escape');
+    assert.equal(await page.locator('line.drop-indicator').count(), 0);
+  });
+  await settled(page);
+  assert.equal(await text(page), unmoved);
+  assert.equal(await page.locator('.behaviour.moving').count(), 0);
+
+  // c again, into the other layer below e: its last behaviour.
+  await dragTo(grip(await boxOf('low/c')), {x: e.x + e.width / 2, y: e.y + e.height + 15});
+  await page.waitForSelector('.behaviour[data-name="high/c"]');
+  assert.match(await text(page), /behaviours:\n      a: scripted\n      b: scripted\n    inhibitions:/);
+  assert.match(await text(page), /behaviours:\n      d: scripted\n      e: scripted\n      c: scripted\n/);
+
+  // b with Alt held, into the other layer: refused, as a -> b cannot follow it; nothing changes.
+  const before = await text(page);
+  const d = await boxOf('high/d');
+  const b = await boxOf('low/b');
+  await page.keyboard.down('Alt');
+  await dragTo({x: b.x + b.width / 2, y: b.y + b.height / 2}, {x: d.x + d.width / 2, y: d.y - 5});
+  await page.keyboard.up('Alt');
+  await page.waitForFunction(() => /refused: 'b' is named by the inhibition 'a -> b' of layer 'low', which cannot follow it to another layer: remove it first/
+      .test(document.querySelector('#studio-message').textContent));
+  assert.equal(await text(page), before);
+  assert.equal(await page.locator('g.edge[data-from="b"]').count(), 0, 'no inhibition drawn');
+
+  // The layer high, by its title, before low; a click on the title still folds it.
+  await settled(page);
+  const title = await page.locator('g.layer[data-layer="high"] .layer-title').boundingBox();
+  const low = await page.locator('g.layer[data-layer="low"] rect.layer-box').boundingBox();
+  await dragTo({x: title.x + title.width / 2, y: title.y + title.height / 2}, {x: low.x + 10, y: title.y + 40});
+  await page.waitForFunction(() => /layers:\n  - name: high\n[^]*\n  - name: low\n/.test(document.querySelector('#text').value));
+  await settled(page);
+  assert.deepEqual(await page.$$eval('g.layer', (layers) => layers.map((l) => l.dataset.layer)), ['high', 'low']);
+  assert.equal(await page.locator('g.layer.folded').count(), 0, 'the drag did not fold it');
+  await page.click('g.layer[data-layer="low"] .layer-title');
+  await page.waitForSelector('g.layer.folded[data-layer="low"]');
+
+  await page.click('#review');
+  await page.click('#save');
+  await page.waitForSelector('#studio-message[data-kind="saved"]');
+  assert.equal(readFileSync(file, 'utf8'), `arbiter: 1
+name: moves
+layers:
+  - name: high
+    actuators: {y: {type: double}}
+    behaviours:
+      d: scripted
+      e: scripted
+      c: scripted
+  - name: low
+    actuators: {x: {type: double}}
+    behaviours:
+      a: scripted
+      b: scripted
+    inhibitions:
+      - a -> b
+`);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('the view follows the graph as it grows: fitted again past the right edge, a new layer brought into a view zoomed by hand, kept when it shows the change', async () => {
+  const dir = mkdtempSync(path.join(scratch, 'grows-'));
+  const file = path.join(dir, 'grows.yaml');
+  writeFileSync(file, `arbiter: 1
+name: grows
+layers:
+  - name: one
+    actuators: {x: {type: double}}
+    behaviours: {a: scripted}
+  - name: two
+    actuators: {y: {type: double}}
+    behaviours: {b: scripted}
+  - name: three
+    actuators: {z: {type: double}}
+    behaviours: {c: scripted}
+`);
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  await settled(page);
+  const stage = await page.locator('.graph-stage').boundingBox();
+  const scale = () => page.evaluate(() => Number(document.querySelector('.graph-stage').dataset.scale));
+  const transform = () => page.evaluate(() => document.querySelector('#graph').style.transform);
+  const column = (layer) => page.locator(`g.layer[data-layer="${layer}"] rect.layer-box`).boundingBox();
+  const inStage = (b) => b.x >= stage.x - 1 && b.y >= stage.y - 1 && b.x + b.width <= stage.x + stage.width + 1 &&
+                         b.y + b.height <= stage.y + stage.height + 1;
+  const addLayer = async (name) => {
+    await settled(page);
+    await page.fill('#new-layer-name', name);
+    await page.press('#new-layer-name', 'Enter');
+    await page.waitForSelector(`g.layer[data-layer="${name}"]`);
+    await settled(page);
+  };
+  // Three columns fit at full size; a fourth does not: the view is fitted again, all in view.
+  assert.equal(await scale(), 1);
+  await addLayer('four');
+  assert.ok(await scale() < 1, `fitted again at ${await scale()}`);
+  assert.ok(inStage(await page.locator('#graph').boundingBox()), 'the whole graph in view');
+  assert.ok(inStage(await column('four')), 'the new layer in view');
+
+  // Zoomed in by hand, the right edge out of view: a fifth layer is brought into the middle, at
+  // the scale chosen.
+  await page.click('#zoom-in');
+  await page.click('#zoom-in');
+  const zoomed = await scale();
+  await addLayer('five');
+  assert.equal(await scale(), zoomed);
+  assert.ok(inStage(await column('five')), `the new layer in view: ${JSON.stringify(await column('five'))}`);
+
+  // A behaviour added where the view already shows it: the view does not move.
+  const kept = await transform();
+  await page.selectOption('#add-layer', 'five');
+  await page.fill('#add-name', 'e');
+  await page.click('#add-behaviour');
+  await page.waitForSelector('.behaviour[data-name="five/e"]');
+  await settled(page);
+  assert.ok(inStage(await page.locator('.behaviour[data-name="five/e"] rect').boundingBox()));
+  assert.equal(await transform(), kept);
   assert.deepEqual(page.errors, []);
   await page.close();
 });

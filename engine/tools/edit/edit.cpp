@@ -565,6 +565,9 @@ namespace {
 /// The edit removing entry `at` of the flow mapping `mapping` of `file`, with one comma.
 TextEdit removed_flow_entry(const SourceFile& file, const Node& mapping, std::size_t at);
 
+/// The edit adding `behaviours:` to `layer` of `file`, with its first entry `entry` (one line).
+EditResult first_behaviour(const SourceFile& file, const Node& layer, const std::string& entry);
+
 }  // namespace
 
 EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const std::string& name,
@@ -584,8 +587,7 @@ EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const s
   const std::string value = fmt::format("{{{}: {}}}", quoted("type"), quoted(type));
   const Node* behaviours = found.front().layer->find("behaviours");
   if (!behaviours)
-    return add_entry(file, *found.front().layer,
-                     fmt::format("{}: {{{}: {}}}", quoted("behaviours"), quoted(name), value));
+    return first_behaviour(file, *found.front().layer, fmt::format("{}: {}", quoted(name), value));
   if (!behaviours->is_mapping()) return {{}, "the layer's behaviours: is not a mapping"};
   return add_entry(file, *behaviours, fmt::format("{}: {}", quoted(name), value));
 }
@@ -854,6 +856,15 @@ bool flow_in(const SourceFile& file, const Node& node) {
   return at < file.text.size() && (file.text[at] == '{' || file.text[at] == '[');
 }
 
+EditResult first_behaviour(const SourceFile& file, const Node& layer, const std::string& entry) {
+  // As a person writes it: a block-style layer gets the key on a line of its own and the entry
+  // under it, where the next behaviours will go; a flow-style one (and JSON) keeps one line.
+  if (flow_in(file, layer))
+    return add_entry(file, layer,
+                     fmt::format("{}: {{{}}}", quoted_in(file.path, "behaviours"), entry));
+  return add_entry(file, layer, "behaviours:\n  " + entry);
+}
+
 /// Where `index` finds uses (not the declaration) of `name` of `kind` in `scope`, as
 /// `file:line:column, ...` ("" when none).
 std::string uses_of(const Loaded& loaded, const ConfigIndex& index, SymbolKind kind,
@@ -979,9 +990,7 @@ EditResult move_behaviour(const Loaded& loaded, const std::string& layer, const 
                           "behaviours: yet: move it in the text",
                           name, target)};
     const std::string key = entry.substr(entry.find_first_not_of(' '));
-    EditResult added =
-        add_entry(*to.file, *to.layer,
-                  fmt::format("{}: {{{}}}", quoted_in(to.file->path, "behaviours"), key));
+    EditResult added = first_behaviour(*to.file, *to.layer, key);
     if (!added.ok()) return added;
     result.edits.push_back(added.edits.front());
     return result;

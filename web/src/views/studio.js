@@ -11,6 +11,7 @@ import {showStructure} from '../studio_ops.js';
 
 const TYPING_PAUSE = 300;  // ms after the last key before the text is parsed again
 const POLL = 2000;         // ms between looks at the server's texts: another tab's edits and saves
+const GRIP = 9;            // px: the width of a behaviour's grip, the strip on its left edge that moves it
 
 // Requests under way and graphs being laid out: `data-busy` on the body says when the page has
 // settled (tests, screenshots).
@@ -44,6 +45,7 @@ async function request(path, body) {
   return {status: reply.status, json};
 }
 
+const number = (node, name) => Number(node.getAttribute(name));
 const textsOf = (state) => Object.fromEntries(state.files.map((file) => [file.path, file.text]));
 const sameTexts = (a, b) => Object.keys(a).every((path) => a[path] === b[path]);
 
@@ -257,6 +259,16 @@ export async function studio(info) {
       const line = edge.querySelector('path');
       if (line) el('path', {class: 'edge-hit', d: line.getAttribute('d')}, edge);
     }
+    // A behaviour is moved by its grip, a layer by its title (the drags below).
+    for (const item of graph.behaviours.values()) {
+      const r = item.rect;
+      const d = `M${number(r, 'x')},${number(r, 'y')} h${GRIP} v${number(r, 'height')} h${-GRIP} z`;
+      const grip = el('path', {class: 'grip', d}, item.group);
+      el('title', {}, grip).textContent = 'drag to move it: to another place in its layer, or into another layer (or Alt+drag the box)';
+    }
+    for (const head of svg.querySelectorAll('g.layer-head, g.layer > text.layer-title')) {
+      el('title', {}, head).textContent = head.matches('g') ? 'click to fold; drag to move the layer' : 'drag to move the layer';
+    }
     markSelected();
     markProblems();
   }
@@ -306,6 +318,8 @@ export async function studio(info) {
       else ui.undo.click();
     } else if ((event.key === 'Delete' || event.key === 'Backspace') && selected?.kind === 'inhibition') {
       removeInhibition(selected);
+    } else if (event.key === 'Escape' && drag) {
+      cancelDrag();
     } else if (event.key === 'Escape') {
       select(null);
     }
@@ -387,7 +401,8 @@ export async function studio(info) {
     const layer = selected && layerOf(selected.layer);
     if (!selected || !layer) {
       html('p', {class: 'empty'}, box).textContent =
-          'Click a behaviour or an inhibition. Drag from one behaviour to another to add an inhibition.';
+          'Click a behaviour or an inhibition. Drag from one behaviour to another to add an inhibition; ' +
+          'drag a behaviour by its grip (its left edge), or with Alt, to move it; drag a layer by its title to move the layer.';
       return;
     }
     if (selected.kind === 'inhibition') {
@@ -520,36 +535,160 @@ export async function studio(info) {
                      `added ${inhibitor} ${chaining ? '=>' : '->'} ${inhibited}`);
   }
 
-  // Mouse: a click selects; a drag from one behaviour to another adds an inhibition.
+  // Mouse: a click selects; a drag from one behaviour to another adds an inhibition; a drag by a
+  // behaviour's grip (its left edge), or with Alt held, moves it, and a drag by a layer's title
+  // moves the layer. While a move is dragged, one line shows where it would land: the drop is
+  // computed from the boxes as drawn, and nothing is laid out until the server has moved it.
   const toSvg = (event) => {
     const point = new DOMPoint(event.clientX, event.clientY).matrixTransform(svg.getScreenCTM().inverse());
     return point;
   };
+  // The columns as drawn, in the graph's order, each with its behaviours' boxes in declaration order.
+  function columnsDrawn() {
+    const layers = graph.drawn.graph.layers;
+    return [...svg.querySelectorAll('g.layer')].map((column, index) => {
+      const box = column.querySelector('rect.layer-box');
+      const names = layers[index].behaviours.map((b) => b.name);
+      const boxes = [];
+      for (const name of names) {
+        const rect = graph.behaviours.get(`${column.dataset.layer}/${name}`)?.rect;
+        if (rect) boxes.push({name, x: number(rect, 'x'), y: number(rect, 'y'), w: number(rect, 'width'), h: number(rect, 'height')});
+      }
+      return {layer: column.dataset.layer, x: number(box, 'x'), w: number(box, 'width'), names, boxes};
+    });
+  }
+  const columnAt = (columns, x) => columns.reduce((best, c) => {
+    const distance = Math.max(c.x - x, x - c.x - c.w, 0);
+    return !best || distance < best.distance ? {column: c, distance} : best;
+  }, null).column;
+  // Where a behaviour dropped at `at` lands: its layer and position, and the indicator's line.
+  function behaviourDrop(move, at) {
+    const column = columnAt(move.columns, at.x);
+    let slot = column.names.length;
+    let line = [column.x + 12, 46, column.x + column.w - 12, 46];
+    let nearest = null;
+    for (const b of column.boxes) {
+      const dx = Math.max(b.x - at.x, at.x - b.x - b.w, 0);
+      const dy = Math.max(b.y - at.y, at.y - b.y - b.h, 0);
+      const distance = Math.hypot(dx, dy);
+      if (!nearest || distance < nearest.distance) nearest = {b, distance, beside: dy === 0};
+    }
+    if (nearest) {
+      const {b, beside} = nearest;
+      // Beside a box (in its row): before or after it by the side; above or below it, by height.
+      const after = beside ? at.x > b.x + b.w / 2 : at.y > b.y + b.h / 2;
+      slot = column.names.indexOf(b.name) + (after ? 1 : 0);
+      if (beside) {
+        const x = after ? b.x + b.w + 10 : b.x - 10;
+        line = [x, b.y - 2, x, b.y + b.h + 2];
+      } else {
+        const y = after ? b.y + b.h + 9 : b.y - 9;
+        line = [b.x - 4, y, b.x + b.w + 4, y];
+      }
+    }
+    if (column.layer !== move.layer) return {layer: column.layer, index: slot, line};
+    const from = column.names.indexOf(move.name);
+    const index = slot > from ? slot - 1 : slot;
+    return index === from ? null : {layer: column.layer, index, line};
+  }
+  // Where a layer dropped at `at` lands: before the first column whose middle is right of it.
+  function layerDrop(move, at) {
+    const columns = move.columns;
+    let gap = columns.findIndex((c) => at.x < c.x + c.w / 2);
+    if (gap < 0) gap = columns.length;
+    const from = columns.findIndex((c) => c.layer === move.layer);
+    const index = gap > from ? gap - 1 : gap;
+    if (index === from) return null;
+    const x = gap < columns.length ? columns[gap].x - 10 : columns.at(-1).x + columns.at(-1).w + 10;
+    return {index, line: [x, 4, x, number(svg, 'height')]};
+  }
   let drag = null;
+  let dragged = false;  // a drag just ended: the click that follows it is not a click
   svg.addEventListener('pointerdown', (event) => {
-    const box = event.target.closest('g.behaviour');
-    if (!box || event.button !== 0) return;
-    const [layer, name] = box.dataset.name.split('/');
+    if (event.button !== 0) return;
     const start = toSvg(event);
-    drag = {layer, name, key: box.dataset.name, start, moved: false, line: null};
+    const head = event.target.closest('g.layer-head, text.layer-title');
+    if (head) {
+      drag = {kind: 'layer', layer: head.closest('g.layer').dataset.layer, start, moved: false, line: null};
+      return;  // a click on the title still folds the layer
+    }
+    const box = event.target.closest('g.behaviour');
+    if (!box) return;
+    const [layer, name] = box.dataset.name.split('/');
+    const kind = event.target.closest('.grip') || event.altKey ? 'behaviour' : 'inhibition';
+    drag = {kind, layer, name, key: box.dataset.name, box, start, moved: false, line: null};
     event.preventDefault();
   });
   window.addEventListener('pointermove', (event) => {
     if (!drag) return;
     const at = toSvg(event);
     if (!drag.moved && Math.hypot(at.x - drag.start.x, at.y - drag.start.y) < 5) return;
-    drag.moved = true;
-    drag.line ??= el('line', {class: 'drag-line', x1: drag.start.x, y1: drag.start.y}, svg);
-    drag.line.setAttribute('x2', at.x);
-    drag.line.setAttribute('y2', at.y);
+    if (!drag.moved) {
+      drag.moved = true;
+      if (drag.kind === 'inhibition') {
+        drag.line = el('line', {class: 'drag-line', x1: drag.start.x, y1: drag.start.y}, svg);
+      } else {
+        drag.columns = columnsDrawn();
+        drag.line = el('line', {class: 'drop-indicator'}, svg);
+        drag.box?.classList.add('moving');
+      }
+    }
+    if (drag.kind === 'inhibition') {
+      drag.line.setAttribute('x2', at.x);
+      drag.line.setAttribute('y2', at.y);
+      return;
+    }
+    drag.drop = drag.kind === 'layer' ? layerDrop(drag, at) : behaviourDrop(drag, at);
+    if (!drag.drop) {
+      drag.line.setAttribute('visibility', 'hidden');
+      return;
+    }
+    const [x1, y1, x2, y2] = drag.drop.line;
+    drag.line.setAttribute('visibility', 'visible');
+    drag.line.setAttribute('x1', x1);
+    drag.line.setAttribute('y1', y1);
+    drag.line.setAttribute('x2', x2);
+    drag.line.setAttribute('y2', y2);
   });
-  window.addEventListener('pointerup', (event) => {
-    if (!drag) return;
+  svg.addEventListener('click', (event) => {
+    if (!dragged) return;
+    event.stopPropagation();
+    event.preventDefault();
+  }, {capture: true});
+  function cancelDrag() {
     const was = drag;
     drag = null;
     was.line?.remove();
+    was.box?.classList.remove('moving');
+    return was;
+  }
+  window.addEventListener('pointercancel', () => {
+    if (drag) cancelDrag();
+  });
+  window.addEventListener('pointerup', async (event) => {
+    if (!drag) return;
+    const was = cancelDrag();
     if (!was.moved) {
-      select({kind: 'behaviour', layer: was.layer, name: was.name, key: was.key});
+      if (was.kind !== 'layer') select({kind: 'behaviour', layer: was.layer, name: was.name, key: was.key});
+      return;
+    }
+    dragged = true;
+    setTimeout(() => { dragged = false; }, 0);
+    if (was.kind === 'layer') {
+      if (was.drop) {
+        await operation({op: 'move_layer', layer: was.layer, index: was.drop.index},
+                        `moved layer ${was.layer} to position ${was.drop.index}`);
+      }
+      return;
+    }
+    if (was.kind === 'behaviour') {
+      const to = was.drop;
+      if (!to) return;
+      const moved = await operation(
+          {op: 'move_behaviour', layer: was.layer, name: was.name, index: to.index,
+           ...(to.layer !== was.layer ? {to_layer: to.layer} : {})},
+          `moved ${was.key} to ${to.layer} position ${to.index}`);
+      if (moved) select({kind: 'behaviour', layer: to.layer, name: was.name, key: `${to.layer}/${was.name}`});
       return;
     }
     const target = document.elementFromPoint(event.clientX, event.clientY)?.closest('g.behaviour');
