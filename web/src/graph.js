@@ -5,6 +5,7 @@
 // edges off the boxes, so no label lies under an edge. A click on a layer's title folds its
 // behaviours away (folds.js); graph_nav.js adds zoom, pan and search.
 import ELK from 'elkjs/lib/elk-api.js';
+import {version as elkVersion} from 'elkjs/package.json';
 
 import {colour, el, formatValue, text} from './dom.js';
 import {Folds} from './folds.js';
@@ -193,7 +194,57 @@ function layoutLayer(layer, size, laid) {
       ({id: `i:${index}`, sources: [`b:${inhibition.inhibitor}`], targets: [`b:${inhibition.inhibited}`]})),
   };
   const key = JSON.stringify(graph);
-  return {key, layout: laid.get(key) ?? elkLayout(graph)};
+  const known = laid.get(key);
+  if (known) return {key, layout: known};
+  const stored = storedLayout(key);
+  if (stored) return {key, layout: Promise.resolve(stored)};
+  const layout = elkLayout(graph);
+  layout.then((result) => storeLayout(key, result), () => {});
+  return {key, layout};
+}
+
+// Layouts kept in the browser's storage by the graph they are of, so that a page opened again on
+// the same graph (the studio's and the live view's address is the same each time, unless port 0
+// is asked for) draws it at once: the first layouts in a page wait for ELK's worker to load and
+// are its slowest (keepWarm()). ELK is deterministic: the same graph, sizes and options, which the
+// key holds, give the same layout. Each layout is an item of its own, found by a hash of its key
+// and checked against the key; the STORED_LAYOUTS most recently stored are kept.
+const STORED_LAYOUTS = 64;
+const STORE_PREFIX = `arbiter.layout.${elkVersion}.`;
+const STORE_INDEX = 'arbiter.layouts';
+function keyHash(key) {  // cyrb53: 53 bits, as a base-36 string
+  let h1 = 0xdeadbeef;
+  let h2 = 0x41c6ce57;
+  for (let i = 0; i < key.length; ++i) {
+    const c = key.charCodeAt(i);
+    h1 = Math.imul(h1 ^ c, 2654435761);
+    h2 = Math.imul(h2 ^ c, 1597334677);
+  }
+  h1 = Math.imul(h1 ^ (h1 >>> 16), 2246822507) ^ Math.imul(h2 ^ (h2 >>> 13), 3266489909);
+  h2 = Math.imul(h2 ^ (h2 >>> 16), 2246822507) ^ Math.imul(h1 ^ (h1 >>> 13), 3266489909);
+  return (4294967296 * (2097151 & h2) + (h1 >>> 0)).toString(36);
+}
+function storedLayout(key) {
+  try {
+    const item = localStorage.getItem(STORE_PREFIX + keyHash(key));
+    if (!item) return null;
+    const {graph, layout} = JSON.parse(item);
+    return graph === key ? layout : null;
+  } catch {
+    return null;  // no storage (a private window, storage turned off): ELK lays it out
+  }
+}
+function storeLayout(key, layout) {
+  try {
+    const name = STORE_PREFIX + keyHash(key);
+    const index = JSON.parse(localStorage.getItem(STORE_INDEX) || '[]').filter((other) => other !== name);
+    index.push(name);
+    while (index.length > STORED_LAYOUTS) localStorage.removeItem(index.shift());
+    localStorage.setItem(name, JSON.stringify({graph: key, layout}));
+    localStorage.setItem(STORE_INDEX, JSON.stringify(index));
+  } catch {
+    // Full or turned off: the layout is not kept, which costs only time.
+  }
 }
 
 // ELK's code is loaded and compiled as it first runs, which makes a page's first layout cost more

@@ -102,6 +102,27 @@ test('a page opened again revalidates its scripts, ELK\'s worker too, instead of
   await page.close();
 });
 
+test('a page opened again on the same graph draws it from the layouts the browser stored, without ELK', async () => {
+  const {url} = await serve(['run', soccer, '--serve', '0', '--paused', '--steps', '1000', '-q']);
+  const context = await browser.newContext({viewport: {width: 1400, height: 900}});
+  const page = await context.newPage();
+  const drawn = async () => {
+    await page.waitForSelector('body[data-ready="true"]');
+    await page.waitForSelector('#graph .behaviour');
+    return page.$eval('#graph', (svg) => [...svg.querySelectorAll('.behaviour rect, .edge path')]
+        .map((node) => `${node.closest('[data-name], [data-from]').outerHTML.slice(0, 60)} ${node.getAttribute('x')} ` +
+                       `${node.getAttribute('y')} ${node.getAttribute('d')}`));
+  };
+  await page.goto(url);
+  const first = await drawn();
+  assert.ok(first.length > 4);
+  // ELK's worker cannot load now: what is drawn comes from the browser's storage.
+  await page.route('**/elk-worker.js', (route) => route.abort());
+  await page.goto(url);
+  assert.deepEqual(await drawn(), first);
+  await context.close();
+});
+
 /// Resolves when `child` has exited and closed its output, with all it printed.
 const exited = (child, output) => new Promise((resolve) => {
   child.on('close', () => resolve(output()));
