@@ -1,13 +1,14 @@
 // The studio's speed in headless Chromium (docs/performance.md, "Studio"): the layout of a
 // generated graph (the page's `arbiter:layout` measures: text measured, ELK's layout, the SVG
-// built), as the page opens, as every layer is reloaded from the disk (ELK loaded) and after an
-// edit, in wall time and in CPU time of the page's main
-// thread and of ELK's web workers (from a Chrome trace); and the frames while the pointer drags on it, drawing an
-// inhibition from a behaviour, moving a behaviour (Alt+drag: the drop indicator following) and
-// panning the background, at the scale the page opens at and at
-// the scale a search shows a behaviour at. A benchmark, run by hand (under a minute with the
-// defaults); it prints medians and 95th percentiles and checks nothing. CTest's
-// `bench.studio_frames` runs it briefly, to keep it working.
+// built) as the page opens for the first time in a browser (a context of its own each run), as
+// every layer is reloaded from the disk (ELK loaded and warm), after an edit, and as the page is
+// opened again on the graph it showed (its layouts stored by the browser), in wall time and in
+// CPU time of the page's main thread and of ELK's web workers (from a Chrome trace); and the
+// frames while the pointer drags on it, drawing an inhibition from a behaviour, moving a
+// behaviour (Alt+drag: the drop indicator following) and panning the background, at the scale
+// the page opens at and at the scale a search shows a behaviour at. A benchmark, run by hand
+// (under a minute with the defaults); it prints medians and 95th percentiles and checks nothing.
+// CTest's `bench.studio_frames` runs it briefly, to keep it working.
 //
 //   node web/bench/studio_frames.mjs [--behaviours 200] [--layers 4] [--runs 3] [--seconds 1]
 //
@@ -121,13 +122,18 @@ try {
   const config = path.join(scratch, 'graph.yaml');
   writeFileSync(config, largeConfig(layers, perLayer, 10));
   const {found} = await startArbiter(['edit', config, '--serve', '127.0.0.1:0'], /http:\/\/127\.0\.0\.1:\d+\/\?token=[\w.-]+/);
-  const page = await browser.newPage({viewport: {width: 1500, height: 1000}});
+  let page;  // each run's, in a browser context of its own: the page opened for the first time
   const PARTS = [['', 'layout'], [':text', '  of which text measured'], [':elk', '  of which ELK'],
                  [':svg', '  of which SVG built']];
-  // 'open' (the page opened) and 'edit' (an inhibition added) -> part -> ms, per run
-  const wall = {open: {}, reload: {}, edit: {}};
-  const cpu = {open: {}, reload: {}, edit: {}};
-  const workerCpu = {open: [], reload: [], edit: []};  // ELK's workers' CPU time in the layout
+  // 'open' (the page opened for the first time), 'reload' (every layer changed), 'edit' (an
+  // inhibition added) and 'reopen' (the page opened again on the same graph) -> part -> ms, per run
+  const CASES = [['open', 'the page opened for the first time in this browser'],
+                 ['reload', 'every layer changed on the disk, reloaded'],
+                 ['edit', 'an inhibition added in one layer'],
+                 ['reopen', 'the page opened again on the graph it showed']];
+  const wall = Object.fromEntries(CASES.map(([when]) => [when, {}]));
+  const cpu = Object.fromEntries(CASES.map(([when]) => [when, {}]));
+  const workerCpu = Object.fromEntries(CASES.map(([when]) => [when, []]));  // ELK's workers' CPU time in the layout
   const warmUp = [];
   const keptWarm = [];
   const drags = {inhibition: {work: [], intervals: []}, move: {work: [], intervals: []}, pan: {work: [], intervals: []}};
@@ -146,14 +152,14 @@ try {
   };
   const middle = Math.floor(perLayer / 2);
   const original = largeConfig(layers, perLayer, 10);
-  let url = found[0];
   for (let run = 0; run < runs; ++run) {
+    const context = await browser.newContext({viewport: {width: 1500, height: 1000}});
+    page = await context.newPage();
     await layoutDuring('open', async () => {
-      await page.goto(url);
+      await page.goto(found[0]);
       await page.waitForSelector('body[data-ready="true"]');
     });
-    url = url.replace(/\?token=.*/, '');  // the cookie holds it now
-    warmUp.push(await page.evaluate(() => performance.getEntriesByName('arbiter:layout:warm-up')[0].duration));
+    warmUp.push(await page.evaluate(() => performance.getEntriesByName('arbiter:layout:warm-up')[0]?.duration ?? 0));
     const count = await page.locator('.behaviour').count();
     if (count !== layers * perLayer) throw new Error(`${count} behaviours drawn, not ${layers * perLayer}`);
     // The workers go on laying out the graph's largest layers until ELK's code is optimised
@@ -203,14 +209,19 @@ try {
       await page.click('#inspector .add-inhibition button');
       await page.waitForSelector(`g.edge[data-from="b_1_${middle}"][data-to="${inhibited}"]`);
     });
+    // Opened again (the cookie holds the token now): its layouts are the browser's stored ones.
+    await layoutDuring('reopen', async () => {
+      await page.goto(found[0].replace(/\?token=.*/, ''));
+      await page.waitForSelector('body[data-ready="true"]');
+    });
+    await context.close();
   }
   const [one, five, fifteen] = loadavg();
   console.log(`studio, ${layers} layers of ${perLayer} behaviours (${layers * perLayer}), ${runs} runs; ` +
               `load average ${one.toFixed(2)} ${five.toFixed(2)} ${fifteen.toFixed(2)}`);
   console.log(`ELK's warm-up while the page waits for its graph: wall ${figures(warmUp)}`);
   console.log(`ELK's workers kept warm after the first drawing, until optimised: wall ${figures(keptWarm)}`);
-  for (const [when, title] of [['open', 'the page opened'], ['reload', 'every layer changed on the disk, reloaded'],
-                               ['edit', 'an inhibition added in one layer']]) {
+  for (const [when, title] of CASES) {
     console.log(`${title}:`);
     for (const [part, label] of PARTS) {
       console.log(`  ${label}: CPU time of the page's main thread ${figures(cpu[when][part])}; wall ${figures(wall[when][part])}`);
@@ -220,7 +231,6 @@ try {
   for (const [name, label] of [['inhibition', 'drawing an inhibition'], ['move', 'moving a behaviour'], ['pan', 'panning']]) {
     console.log(`dragging, ${label}: frame interval ${figures(drags[name].intervals)}; frame work ${figures(drags[name].work)}`);
   }
-  await page.close();
 } finally {
   await browser.close();
   stopAll();
