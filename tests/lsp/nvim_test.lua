@@ -150,7 +150,8 @@ if #vim.diagnostic.get(plan) ~= 0 then fail('goalie_plan.yaml: diagnostics after
 -- The graph operations as code actions, chosen from the list Neovim shows (vim.ui.select, here
 -- answered by title): on a layer's name a behaviour of a class is added (its edit resolved when
 -- chosen, codeAction/resolve); on a selection from one behaviour to another, an inhibition; on
--- a behaviour's declaration, a move (resolved too).
+-- a behaviour's declaration, a move (resolved too); a layer added and removed, a state machine
+-- added.
 local paper = open('paper.yaml')
 settle(paper, 'paper.yaml')
 local function choose(title)
@@ -184,6 +185,23 @@ vim.api.nvim_win_set_cursor(0, { vim.fn.search('^      scripted: {type: scripted
 choose("Move the behaviour 'scripted' up")
 vim.lsp.buf.code_action()
 wait_line('^      scripted: {type: scripted}\\n      head_control:$', 'the moved behaviour')
+-- On the top-level key `layers:`, a layer at the end; on its name, removed again; on `name:`, a
+-- state machine.
+vim.api.nvim_win_set_cursor(0, { vim.fn.search('^layers:$', 'w'), 2 })
+choose('Add a layer at the end')
+vim.lsp.buf.code_action()
+wait_line('^  - name: layer$', 'the added layer')
+vim.api.nvim_win_set_cursor(0, { vim.fn.search('^  - name: layer$', 'w'), 10 })
+choose("Remove the layer 'layer'")
+vim.lsp.buf.code_action()
+if not vim.wait(15000, function() return vim.fn.search('^  - name: layer$', 'nw') == 0 end, 50) then
+  fail('paper.yaml: the removed layer is still there after 15 s')
+end
+settle(paper, 'paper.yaml')
+vim.api.nvim_win_set_cursor(0, { vim.fn.search('^name: ', 'w'), 1 })
+choose('Add a state machine')
+vim.lsp.buf.code_action()
+wait_line('^  machine:$', 'the added state machine')
 vim.cmd('write')
 output = vim.fn.system({ 'arbiter', 'validate', project .. '/paper.yaml' })
 if vim.v.shell_error ~= 0 then fail('paper.yaml after the code actions: ' .. output) end
