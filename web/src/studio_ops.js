@@ -220,11 +220,35 @@ function queueOps(box, graph, operation) {
 }
 
 /**
+ * A plugin named in the config, whose classes join the palette: one of `plugins` (on the plugin
+ * path, not named yet) chosen from a list, or another typed by name (a path, or one installed later).
+ */
+function pluginOps(box, plugins, operation) {
+  const {form: f, done} = form(box, 'new-plugin', 'Add plugin', () => {
+    const name = (choice?.value || typed.value).trim();
+    operation({op: 'add_plugin', name}, `added plugin ${name}`);
+  });
+  f.append('plugin ');
+  const choice = plugins.length ? html('select', {id: 'new-plugin-choice', 'aria-label': 'a plugin on the plugin path'}, f) : null;
+  if (choice) {
+    for (const name of plugins) html('option', {value: name}, choice).textContent = name;
+    html('option', {value: ''}, choice).textContent = 'another, by name:';
+    f.append(' ');
+  }
+  const typed = html('input', {id: 'new-plugin-name', size: '12', placeholder: plugins.length ? 'name' : 'soccer',
+                               'aria-label': 'a plugin the config loads, by name or path'}, f);
+  // A name typed is the one meant: the list says so rather than adding the plugin it shows.
+  if (choice) typed.oninput = () => { if (typed.value.trim()) choice.value = ''; };
+  done();
+}
+
+/**
  * Draws the structure edits for `graph` (the dump of the texts; null while they do not compile)
  * and the selection (`{kind: 'behaviour', layer, name}` or another), into a panel of the page's
- * side panel made on first use. `operation(body, done)` is the studio's: one edit request.
+ * side panel made on first use. `operation(body, done)` is the studio's: one edit request;
+ * `plugins` the ones on the plugin path that the config does not name (the state's `plugins_to_add`).
  */
-export function showStructure(graph, selected, operation) {
+export function showStructure(graph, selected, operation, plugins = []) {
   let box = document.getElementById('structure');
   if (!box) {
     const aside = document.querySelector('aside');
@@ -239,13 +263,7 @@ export function showStructure(graph, selected, operation) {
   const layer = selected?.kind === 'behaviour' && graph.layers.find((l) => l.name === selected.layer);
   const behaviour = layer && layer.behaviours.find((b) => b.name === selected.name);
   if (behaviour) behaviourOps(box, graph, layer, behaviour, operation);
-  // A plugin's classes join the palette once the config names it.
-  const {form: f, done} = form(box, 'new-plugin', 'Add plugin', () =>
-    operation({op: 'add_plugin', name: plugin.value.trim()}, `added plugin ${plugin.value.trim()}`));
-  f.append('plugin ');
-  const plugin = html('input', {id: 'new-plugin-name', size: '12', placeholder: 'soccer',
-                                'aria-label': 'a plugin the config loads'}, f);
-  done();
+  pluginOps(box, plugins, operation);
   layerOps(box, graph, operation);
   queueOps(box, graph, operation);
 }

@@ -582,6 +582,27 @@ plugins: [soccer]
   await page.close();
 });
 
+test('the plugins on the plugin path that the config does not name are offered in a list; the one chosen is added', async () => {
+  const file = copyOf('paper/walk_and_kick.yaml');
+  const before = readFileSync(file, 'utf8');
+  assert.doesNotMatch(before, /plugins/);
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  await settled(page);
+  const offered = () => page.$$eval('#new-plugin-choice option', (options) => options.map((o) => o.value));
+  assert.ok((await offered()).includes('soccer'), `soccer is offered: ${await offered()}`);
+  await page.selectOption('#new-plugin-choice', 'soccer');
+  await page.click('#new-plugin button[type="submit"]');
+  await page.waitForSelector('#add-class option[value="soccer.KickBall"]', {state: 'attached'});
+  assert.equal(await text(page), `${before}plugins: [soccer]\n`);
+  // Named now: no longer offered; a name off the path is still typed.
+  await settled(page);
+  assert.ok(!(await offered()).includes('soccer'));
+  assert.equal(await page.isVisible('#new-plugin-name'), true);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('a behaviour moved by dragging its grip within its layer and into another, a layer by its title; a refused move says why', async () => {
   const dir = mkdtempSync(path.join(scratch, 'moves-'));
   const file = path.join(dir, 'moves.yaml');

@@ -395,7 +395,7 @@ export async function studio(info) {
   }
 
   function inspect() {
-    showStructure(state.graph, selected, operation);
+    showStructure(state.graph, selected, operation, state.plugins_to_add);
     const box = ui.inspector;
     box.replaceChildren();
     const layer = selected && layerOf(selected.layer);
