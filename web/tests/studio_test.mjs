@@ -723,6 +723,62 @@ layers:
   await page.close();
 });
 
+test('a move dragged to the edge of the graph\'s frame pans the view until a layer off-screen is reached, without laying the graph out; the drop lands there', async () => {
+  const dir = mkdtempSync(path.join(scratch, 'edge-'));
+  const file = path.join(dir, 'edge.yaml');
+  writeFileSync(file, `arbiter: 1
+name: edge
+layers:
+  - name: low
+    actuators: {x: {type: double}}
+    behaviours:
+      a: scripted
+      b: scripted
+  - name: high
+    actuators: {y: {type: double}}
+    behaviours:
+      d: scripted
+`);
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  await settled(page);
+  const stage = await page.locator('.graph-stage').boundingBox();
+  const column = () => page.locator('g.layer[data-layer="high"] rect.layer-box').boundingBox();
+  const transform = () => page.evaluate(() => document.querySelector('#graph').style.transform);
+  // Zoomed in about b's left edge: the layer high is right of the frame.
+  let b = await page.locator('.behaviour[data-name="low/b"] rect').boundingBox();
+  await page.mouse.move(b.x + 2, b.y + b.height / 2);
+  for (let i = 0; i < 2; ++i) await page.mouse.wheel(0, -300);
+  await page.waitForFunction((right) => document.querySelector('g.layer[data-layer="high"] rect.layer-box')
+      .getBoundingClientRect().left > right, stage.x + stage.width);
+  b = await page.locator('.behaviour[data-name="low/b"] rect').boundingBox();
+  // Marked, to tell a graph drawn again (which replaces the boxes) from the same one panned.
+  await page.evaluate(() => { document.querySelector('g.layer[data-layer="high"]').dataset.seen = 'yes'; });
+
+  // b by its grip, held just inside the frame's right edge: the view pans until high is in it.
+  await page.mouse.move(b.x + 4, b.y + b.height / 2);
+  await page.mouse.down();
+  const edge = {x: stage.x + stage.width - 8, y: stage.y + stage.height / 2};
+  await page.mouse.move(edge.x, edge.y, {steps: 10});
+  await page.waitForFunction((right) => document.querySelector('g.layer[data-layer="high"] rect.layer-box')
+      .getBoundingClientRect().right < right, stage.x + stage.width, {timeout: 10000});
+  // Out of the band it stops: the view stays as it is.
+  const high = await column();
+  const target = {x: high.x + high.width / 2, y: high.y + high.height - 10};
+  assert.ok(target.x < edge.x - 40, `high's middle is out of the band: ${JSON.stringify(high)}`);
+  await page.mouse.move(target.x, target.y, {steps: 5});
+  const still = await transform();
+  await page.waitForTimeout(300);
+  assert.equal(await transform(), still, 'no panning away from the edge');
+  assert.equal(await page.locator('g.layer[data-layer="high"][data-seen="yes"]').count(), 1, 'not drawn again');
+  assert.ok(await page.locator('line.drop-indicator[visibility="visible"]').count(), 'the drop is shown');
+  await page.mouse.up();
+  await page.waitForSelector('.behaviour[data-name="high/b"]');
+  assert.match(await text(page), /behaviours:\n      d: scripted\n      b: scripted\n/);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('the view follows the graph as it grows: fitted again past the right edge, a new layer brought into a view zoomed by hand, kept when it shows the change', async () => {
   const dir = mkdtempSync(path.join(scratch, 'grows-'));
   const file = path.join(dir, 'grows.yaml');
