@@ -146,8 +146,70 @@ function layerOps(box, graph, operation) {
 }
 
 /**
- * State machines added and removed; each one's queue (reordered, an item removed, a state planned with
- * params) and states.
+ * The items of `list` reordered by dragging one (not by its buttons) above or below another: a line
+ * shows where it lands while dragging, and `move(from, to)` is called on the drop, `to` being its
+ * place once moved. Escape, or a drop where it is, moves nothing.
+ */
+function dragToReorder(list, move) {
+  let drag = null;
+  const items = () => [...list.children];
+  const clear = () => {
+    for (const item of items()) item.classList.remove('dragging', 'drop-before', 'drop-after');
+  };
+  // The gap before which the pointer at `y` drops: the first item whose middle is below it.
+  const gapAt = (y) => {
+    const gap = items().findIndex((item) => {
+      const box = item.getBoundingClientRect();
+      return y < box.top + box.height / 2;
+    });
+    return gap < 0 ? items().length : gap;
+  };
+  const end = () => {
+    drag = null;
+    clear();
+    window.removeEventListener('keydown', escape, true);
+  };
+  const escape = (event) => {
+    if (event.key !== 'Escape' || !drag) return;
+    event.stopPropagation();
+    end();
+  };
+  list.addEventListener('pointerdown', (event) => {
+    const item = event.target.closest('li');
+    if (event.button !== 0 || !item || event.target.closest('button')) return;
+    drag = {from: items().indexOf(item), y: event.clientY, moved: false, to: null};
+    event.preventDefault();
+  });
+  list.addEventListener('pointermove', (event) => {
+    if (!drag) return;
+    if (!drag.moved) {
+      if (Math.abs(event.clientY - drag.y) < 4) return;
+      drag.moved = true;
+      list.setPointerCapture(event.pointerId);
+      window.addEventListener('keydown', escape, true);
+    }
+    clear();
+    const all = items();
+    all[drag.from].classList.add('dragging');
+    const gap = gapAt(event.clientY);
+    const to = gap > drag.from ? gap - 1 : gap;
+    drag.to = to === drag.from ? null : to;
+    if (drag.to === null) return;
+    if (gap < all.length) all[gap].classList.add('drop-before');
+    else all[gap - 1].classList.add('drop-after');
+  });
+  list.addEventListener('pointerup', () => {
+    const was = drag;
+    if (!was) return;
+    end();
+    if (was.moved && was.to !== null) move(was.from, was.to);
+  });
+  list.addEventListener('pointercancel', end);
+}
+
+/**
+ * State machines added and removed; each one's queue (reordered by dragging or by buttons, an item
+ * removed, a state planned with params) and states.
  */
 function queueOps(box, graph, operation) {
   const machines = graph.state_machines || [];
@@ -167,8 +229,10 @@ function queueOps(box, graph, operation) {
            {class: 'remove-state-machine'});
     const list = html('ol', {class: 'queue-op', 'data-machine': machine.name, start: '0'}, box);
     const queue = machine.queue || [];
+    dragToReorder(list, (from, to) => operation({op: 'move_queue_entry', machine: machine.name, from, to},
+                                                `moved item ${from} of ${machine.name}'s queue to ${to}`));
     queue.forEach((state, index) => {
-      const item = html('li', {}, list);
+      const item = html('li', {title: 'drag to move it in the queue'}, list);
       item.append(`${typeof state === 'string' ? state : state.name || JSON.stringify(state)} `);
       const move = (to) => operation({op: 'move_queue_entry', machine: machine.name, from: index, to},
                                      `moved item ${index} of ${machine.name}'s queue to ${to}`);

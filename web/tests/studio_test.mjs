@@ -475,6 +475,45 @@ test('structure edits by mouse and keyboard: a behaviour moved, an actuator adde
   await queues.close();
 });
 
+test('a state machine\'s queue reordered by dragging its items in the Structure panel; Escape while dragging moves nothing', async () => {
+  const file = copyOf('paper/hierarchical.yaml');
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  const item = (n) => page.locator(`.queue-op[data-machine="match"] li:nth-child(${n})`).boundingBox();
+  // Pressed on an item's name (left of its buttons), moved in steps, released once `check()` is done.
+  const dragItem = async (from, to, check = async () => {}) => {
+    await settled(page);
+    await page.locator('.queue-op[data-machine="match"]').scrollIntoViewIfNeeded();
+    const a = await item(from);
+    const b = await item(to.n);
+    await page.mouse.move(a.x + 8, a.y + a.height / 2);
+    await page.mouse.down();
+    await page.mouse.move(b.x + 8, to.below ? b.y + b.height - 2 : b.y + 2, {steps: 8});
+    await check();
+    await page.mouse.up();
+  };
+  // kick_off below celebrate: the last; the line shows under celebrate while dragging.
+  await dragItem(1, {n: 3, below: true}, async () => {
+    assert.equal(await page.locator('.queue-op[data-machine="match"] li:nth-child(3).drop-after').count(), 1);
+  });
+  await page.waitForFunction(() => document.querySelector('#text').value.includes('queue: [attack, celebrate, kick_off]'));
+  // celebrate above attack: the first.
+  await dragItem(2, {n: 1, below: false});
+  await page.waitForFunction(() => document.querySelector('#text').value.includes('queue: [celebrate, attack, kick_off]'));
+  // Escape while dragging: nothing moves.
+  const before = await text(page);
+  await dragItem(1, {n: 3, below: true}, async () => {
+    await page.keyboard.press('Escape');
+    assert.equal(await page.locator('.queue-op li.drop-after, .queue-op li.drop-before').count(), 0);
+  });
+  await settled(page);
+  assert.equal(await text(page), before);
+  // The buttons stay.
+  assert.equal(await page.locator('.queue-op[data-machine="match"] li .queue-down').count(), 3);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('a graph built from a file that does not exist yet, without typing YAML: a plugin, two layers with actuators and sensors, behaviours from the palette, an inhibition dragged, a port wired, saved and valid', async () => {
   const file = path.join(mkdtempSync(path.join(scratch, 'new-')), 'kicker.yaml');
   const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
