@@ -1,7 +1,8 @@
 // The studio's structure edits (docs/studio.md): moving a behaviour or a layer, adding and removing
 // a plugin, a layer, a state machine, an actuator or a sensor, wiring a behaviour's ports and editing a state machine's states and queue. Each is a button or
-// a small form, so that the mouse and the keyboard (Tab, Enter) reach every one; each asks the
-// server for one operation, which the edit engine makes as a text edit and checks.
+// a small form, so that the mouse and the keyboard (Tab, Enter) reach every one (a queue's items are
+// dragged too); each asks the server for one operation, which the edit engine makes as a text edit
+// and checks.
 import {html} from './dom.js';
 
 const TYPES = ['double', 'bool', 'int', 'vec2', 'vec3', 'string'];
