@@ -390,6 +390,23 @@ TEST_CASE_METHOD(
         400);
 }
 
+TEST_CASE("the studio's state offers the plugins on the plugin path that the config does not name",
+          "[studio]") {
+  TempDir dir;
+  const std::string path = config_copy(dir);
+  Registry registry = make_test_registry();
+  LoadOptions options = with_lints();
+  options.plugins.path = {ARBITER_PLUGIN_DIR};
+  options.plugins.use_environment = false;
+  options.plugins.use_default_path = false;
+  Studio studio{path, registry, options};
+
+  CHECK(Json::parse(studio.state().second)["plugins_to_add"] == Json::array({"soccer"}));
+  const auto [status, body] = studio.edit(R"({"op": "add_plugin", "name": "soccer"})");
+  REQUIRE(status == 200);
+  CHECK(Json::parse(body)["plugins_to_add"] == Json::array());
+}
+
 TEST_CASE("the studio edits a state machine's queue: a state planned with params, moved, removed",
           "[studio]") {
   TempDir dir;

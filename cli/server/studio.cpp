@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
@@ -148,6 +149,15 @@ std::string Studio::state_json(const std::string& extra_key, const std::string& 
   state["files"] = std::move(files);
   const Loaded& loaded = current_.loaded;
   state["messages"] = format(loaded.diagnostics);
+  // What the Structure panel offers to add: a plugin the config names already is not offered.
+  Json plugins = Json::array();
+  for (auto& name : plugins_on_path(options_.plugins)) {
+    const bool named =
+        loaded.model && std::any_of(loaded.model->plugins.begin(), loaded.model->plugins.end(),
+                                    [&](const Name& n) { return n.text == name; });
+    if (!named) plugins.push_back(std::move(name));
+  }
+  state["plugins_to_add"] = std::move(plugins);
   const Loaded& base = saved_.loaded;
   if (loaded.program && base.program) {
     state["review"] = format(config_diff(*base.program, *loaded.program), "");

@@ -12,6 +12,8 @@ const STEP = 1.25;      // a key or button's zoom
 const READABLE = 0.8;   // a search brings its match to at least this scale
 const MARGIN = 16;      // px around the graph when it is fitted
 const MOVED = 4;        // px: a press that moves less is a click
+const EDGE = 40;        // px: a drag this near the stage's edge pans the view that way
+const EDGE_SPEED = 12;  // px a frame that it pans with the pointer at the edge itself
 
 export class Viewport {
   /**
@@ -81,6 +83,51 @@ export class Viewport {
       else return;
       event.preventDefault();
     });
+  }
+
+  /**
+   * While something is dragged (a behaviour, a layer): with the pointer (`clientX`, `clientY`)
+   * within EDGE px of the stage's edge, the view pans that way every frame, faster nearer the edge,
+   * until the graph's far side is in view, so that a drop off-screen can be reached. `moved()` runs
+   * after each step: the graph moved under a pointer that stayed put. Called with every pointer
+   * move of the drag; a pointer out of the band stops it, as stopEdgePan() does when the drag ends.
+   */
+  edgePan(clientX, clientY, moved) {
+    this.edge = {clientX, clientY, moved};
+    if (!this.edgeFrame) this.edgeFrame = requestAnimationFrame(() => this.edgeStep());
+  }
+
+  stopEdgePan() {
+    this.edge = null;
+    cancelAnimationFrame(this.edgeFrame);
+    this.edgeFrame = 0;
+  }
+
+  edgeStep() {
+    this.edgeFrame = 0;
+    if (!this.edge) return;
+    const [dx, dy] = this.edgeVelocity(this.edge.clientX, this.edge.clientY);
+    if (!dx && !dy) return;
+    this.pan(dx, dy);
+    this.edge.moved();
+    this.edgeFrame = requestAnimationFrame(() => this.edgeStep());
+  }
+
+  /** How far a frame of edgePan moves the graph, in px: [0, 0] away from the edges. */
+  edgeVelocity(clientX, clientY) {
+    const [px, py] = this.atPointer({clientX, clientY});
+    const {width, height} = this.box();
+    if (px < 0 || py < 0 || px > width || py > height) return [0, 0];
+    const speed = (distance) => (distance < EDGE ? Math.ceil(EDGE_SPEED * (1 - distance / EDGE)) : 0);
+    // Near the left edge the graph moves right, bringing in what is left of the view.
+    const dx = speed(px) - speed(width - px);
+    const dy = speed(py) - speed(height - py);
+    // Never past the graph's own side, which stops EDGE px inside the stage.
+    const right = this.x + (Number(this.svg.getAttribute('width')) || 1) * this.scale;
+    const bottom = this.y + (Number(this.svg.getAttribute('height')) || 1) * this.scale;
+    const limit = (d, near, far, size) =>
+      (d > 0 ? Math.min(d, Math.max(0, EDGE - near)) : Math.max(d, Math.min(0, size - EDGE - far)));
+    return [limit(dx, this.x, right, width), limit(dy, this.y, bottom, height)];
   }
 
   /** The stage's size, in px. */

@@ -1,7 +1,8 @@
 // The studio's structure edits (docs/studio.md): moving a behaviour or a layer, adding and removing
 // a plugin, a layer, a state machine, an actuator or a sensor, wiring a behaviour's ports and editing a state machine's states and queue. Each is a button or
-// a small form, so that the mouse and the keyboard (Tab, Enter) reach every one; each asks the
-// server for one operation, which the edit engine makes as a text edit and checks.
+// a small form, so that the mouse and the keyboard (Tab, Enter) reach every one (a queue's items are
+// dragged too); each asks the server for one operation, which the edit engine makes as a text edit
+// and checks.
 import {html} from './dom.js';
 
 const TYPES = ['double', 'bool', 'int', 'vec2', 'vec3', 'string'];
@@ -146,8 +147,70 @@ function layerOps(box, graph, operation) {
 }
 
 /**
- * State machines added and removed; each one's queue (reordered, an item removed, a state planned with
- * params) and states.
+ * The items of `list` reordered by dragging one (not by its buttons) above or below another: a line
+ * shows where it lands while dragging, and `move(from, to)` is called on the drop, `to` being its
+ * place once moved. Escape, or a drop where it is, moves nothing.
+ */
+function dragToReorder(list, move) {
+  let drag = null;
+  const items = () => [...list.children];
+  const clear = () => {
+    for (const item of items()) item.classList.remove('dragging', 'drop-before', 'drop-after');
+  };
+  // The gap before which the pointer at `y` drops: the first item whose middle is below it.
+  const gapAt = (y) => {
+    const gap = items().findIndex((item) => {
+      const box = item.getBoundingClientRect();
+      return y < box.top + box.height / 2;
+    });
+    return gap < 0 ? items().length : gap;
+  };
+  const end = () => {
+    drag = null;
+    clear();
+    window.removeEventListener('keydown', escape, true);
+  };
+  const escape = (event) => {
+    if (event.key !== 'Escape' || !drag) return;
+    event.stopPropagation();
+    end();
+  };
+  list.addEventListener('pointerdown', (event) => {
+    const item = event.target.closest('li');
+    if (event.button !== 0 || !item || event.target.closest('button')) return;
+    drag = {from: items().indexOf(item), y: event.clientY, moved: false, to: null};
+    event.preventDefault();
+  });
+  list.addEventListener('pointermove', (event) => {
+    if (!drag) return;
+    if (!drag.moved) {
+      if (Math.abs(event.clientY - drag.y) < 4) return;
+      drag.moved = true;
+      list.setPointerCapture(event.pointerId);
+      window.addEventListener('keydown', escape, true);
+    }
+    clear();
+    const all = items();
+    all[drag.from].classList.add('dragging');
+    const gap = gapAt(event.clientY);
+    const to = gap > drag.from ? gap - 1 : gap;
+    drag.to = to === drag.from ? null : to;
+    if (drag.to === null) return;
+    if (gap < all.length) all[gap].classList.add('drop-before');
+    else all[gap - 1].classList.add('drop-after');
+  });
+  list.addEventListener('pointerup', () => {
+    const was = drag;
+    if (!was) return;
+    end();
+    if (was.moved && was.to !== null) move(was.from, was.to);
+  });
+  list.addEventListener('pointercancel', end);
+}
+
+/**
+ * State machines added and removed; each one's queue (reordered by dragging or by buttons, an item
+ * removed, a state planned with params) and states.
  */
 function queueOps(box, graph, operation) {
   const machines = graph.state_machines || [];
@@ -167,8 +230,10 @@ function queueOps(box, graph, operation) {
            {class: 'remove-state-machine'});
     const list = html('ol', {class: 'queue-op', 'data-machine': machine.name, start: '0'}, box);
     const queue = machine.queue || [];
+    dragToReorder(list, (from, to) => operation({op: 'move_queue_entry', machine: machine.name, from, to},
+                                                `moved item ${from} of ${machine.name}'s queue to ${to}`));
     queue.forEach((state, index) => {
-      const item = html('li', {}, list);
+      const item = html('li', {title: 'drag to move it in the queue'}, list);
       item.append(`${typeof state === 'string' ? state : state.name || JSON.stringify(state)} `);
       const move = (to) => operation({op: 'move_queue_entry', machine: machine.name, from: index, to},
                                      `moved item ${index} of ${machine.name}'s queue to ${to}`);
@@ -220,11 +285,35 @@ function queueOps(box, graph, operation) {
 }
 
 /**
+ * A plugin named in the config, whose classes join the palette: one of `plugins` (on the plugin
+ * path, not named yet) chosen from a list, or another typed by name (a path, or one installed later).
+ */
+function pluginOps(box, plugins, operation) {
+  const {form: f, done} = form(box, 'new-plugin', 'Add plugin', () => {
+    const name = (choice?.value || typed.value).trim();
+    operation({op: 'add_plugin', name}, `added plugin ${name}`);
+  });
+  f.append('plugin ');
+  const choice = plugins.length ? html('select', {id: 'new-plugin-choice', 'aria-label': 'a plugin on the plugin path'}, f) : null;
+  if (choice) {
+    for (const name of plugins) html('option', {value: name}, choice).textContent = name;
+    html('option', {value: ''}, choice).textContent = 'another, by name:';
+    f.append(' ');
+  }
+  const typed = html('input', {id: 'new-plugin-name', size: '12', placeholder: plugins.length ? 'name' : 'soccer',
+                               'aria-label': 'a plugin the config loads, by name or path'}, f);
+  // A name typed is the one meant: the list says so rather than adding the plugin it shows.
+  if (choice) typed.oninput = () => { if (typed.value.trim()) choice.value = ''; };
+  done();
+}
+
+/**
  * Draws the structure edits for `graph` (the dump of the texts; null while they do not compile)
  * and the selection (`{kind: 'behaviour', layer, name}` or another), into a panel of the page's
- * side panel made on first use. `operation(body, done)` is the studio's: one edit request.
+ * side panel made on first use. `operation(body, done)` is the studio's: one edit request;
+ * `plugins` the ones on the plugin path that the config does not name (the state's `plugins_to_add`).
  */
-export function showStructure(graph, selected, operation) {
+export function showStructure(graph, selected, operation, plugins = []) {
   let box = document.getElementById('structure');
   if (!box) {
     const aside = document.querySelector('aside');
@@ -239,13 +328,7 @@ export function showStructure(graph, selected, operation) {
   const layer = selected?.kind === 'behaviour' && graph.layers.find((l) => l.name === selected.layer);
   const behaviour = layer && layer.behaviours.find((b) => b.name === selected.name);
   if (behaviour) behaviourOps(box, graph, layer, behaviour, operation);
-  // A plugin's classes join the palette once the config names it.
-  const {form: f, done} = form(box, 'new-plugin', 'Add plugin', () =>
-    operation({op: 'add_plugin', name: plugin.value.trim()}, `added plugin ${plugin.value.trim()}`));
-  f.append('plugin ');
-  const plugin = html('input', {id: 'new-plugin-name', size: '12', placeholder: 'soccer',
-                                'aria-label': 'a plugin the config loads'}, f);
-  done();
+  pluginOps(box, plugins, operation);
   layerOps(box, graph, operation);
   queueOps(box, graph, operation);
 }

@@ -475,6 +475,45 @@ test('structure edits by mouse and keyboard: a behaviour moved, an actuator adde
   await queues.close();
 });
 
+test('a state machine\'s queue reordered by dragging its items in the Structure panel; Escape while dragging moves nothing', async () => {
+  const file = copyOf('paper/hierarchical.yaml');
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  const item = (n) => page.locator(`.queue-op[data-machine="match"] li:nth-child(${n})`).boundingBox();
+  // Pressed on an item's name (left of its buttons), moved in steps, released once `check()` is done.
+  const dragItem = async (from, to, check = async () => {}) => {
+    await settled(page);
+    await page.locator('.queue-op[data-machine="match"]').scrollIntoViewIfNeeded();
+    const a = await item(from);
+    const b = await item(to.n);
+    await page.mouse.move(a.x + 8, a.y + a.height / 2);
+    await page.mouse.down();
+    await page.mouse.move(b.x + 8, to.below ? b.y + b.height - 2 : b.y + 2, {steps: 8});
+    await check();
+    await page.mouse.up();
+  };
+  // kick_off below celebrate: the last; the line shows under celebrate while dragging.
+  await dragItem(1, {n: 3, below: true}, async () => {
+    assert.equal(await page.locator('.queue-op[data-machine="match"] li:nth-child(3).drop-after').count(), 1);
+  });
+  await page.waitForFunction(() => document.querySelector('#text').value.includes('queue: [attack, celebrate, kick_off]'));
+  // celebrate above attack: the first.
+  await dragItem(2, {n: 1, below: false});
+  await page.waitForFunction(() => document.querySelector('#text').value.includes('queue: [celebrate, attack, kick_off]'));
+  // Escape while dragging: nothing moves.
+  const before = await text(page);
+  await dragItem(1, {n: 3, below: true}, async () => {
+    await page.keyboard.press('Escape');
+    assert.equal(await page.locator('.queue-op li.drop-after, .queue-op li.drop-before').count(), 0);
+  });
+  await settled(page);
+  assert.equal(await text(page), before);
+  // The buttons stay.
+  assert.equal(await page.locator('.queue-op[data-machine="match"] li .queue-down').count(), 3);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('a graph built from a file that does not exist yet, without typing YAML: a plugin, two layers with actuators and sensors, behaviours from the palette, an inhibition dragged, a port wired, saved and valid', async () => {
   const file = path.join(mkdtempSync(path.join(scratch, 'new-')), 'kicker.yaml');
   const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
@@ -578,6 +617,27 @@ plugins: [soccer]
 `);
   const validate = spawnSync(arbiter, ['validate', file], {cwd: source, encoding: 'utf8'});
   assert.equal(validate.status, 0, validate.stderr);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('the plugins on the plugin path that the config does not name are offered in a list; the one chosen is added', async () => {
+  const file = copyOf('paper/walk_and_kick.yaml');
+  const before = readFileSync(file, 'utf8');
+  assert.doesNotMatch(before, /plugins/);
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  await settled(page);
+  const offered = () => page.$$eval('#new-plugin-choice option', (options) => options.map((o) => o.value));
+  assert.ok((await offered()).includes('soccer'), `soccer is offered: ${await offered()}`);
+  await page.selectOption('#new-plugin-choice', 'soccer');
+  await page.click('#new-plugin button[type="submit"]');
+  await page.waitForSelector('#add-class option[value="soccer.KickBall"]', {state: 'attached'});
+  assert.equal(await text(page), `${before}plugins: [soccer]\n`);
+  // Named now: no longer offered; a name off the path is still typed.
+  await settled(page);
+  assert.ok(!(await offered()).includes('soccer'));
+  assert.equal(await page.isVisible('#new-plugin-name'), true);
   assert.deepEqual(page.errors, []);
   await page.close();
 });
@@ -698,6 +758,62 @@ layers:
     inhibitions:
       - a -> b
 `);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('a move dragged to the edge of the graph\'s frame pans the view until a layer off-screen is reached, without laying the graph out; the drop lands there', async () => {
+  const dir = mkdtempSync(path.join(scratch, 'edge-'));
+  const file = path.join(dir, 'edge.yaml');
+  writeFileSync(file, `arbiter: 1
+name: edge
+layers:
+  - name: low
+    actuators: {x: {type: double}}
+    behaviours:
+      a: scripted
+      b: scripted
+  - name: high
+    actuators: {y: {type: double}}
+    behaviours:
+      d: scripted
+`);
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  await settled(page);
+  const stage = await page.locator('.graph-stage').boundingBox();
+  const column = () => page.locator('g.layer[data-layer="high"] rect.layer-box').boundingBox();
+  const transform = () => page.evaluate(() => document.querySelector('#graph').style.transform);
+  // Zoomed in about b's left edge: the layer high is right of the frame.
+  let b = await page.locator('.behaviour[data-name="low/b"] rect').boundingBox();
+  await page.mouse.move(b.x + 2, b.y + b.height / 2);
+  for (let i = 0; i < 2; ++i) await page.mouse.wheel(0, -300);
+  await page.waitForFunction((right) => document.querySelector('g.layer[data-layer="high"] rect.layer-box')
+      .getBoundingClientRect().left > right, stage.x + stage.width);
+  b = await page.locator('.behaviour[data-name="low/b"] rect').boundingBox();
+  // Marked, to tell a graph drawn again (which replaces the boxes) from the same one panned.
+  await page.evaluate(() => { document.querySelector('g.layer[data-layer="high"]').dataset.seen = 'yes'; });
+
+  // b by its grip, held just inside the frame's right edge: the view pans until high is in it.
+  await page.mouse.move(b.x + 4, b.y + b.height / 2);
+  await page.mouse.down();
+  const edge = {x: stage.x + stage.width - 8, y: stage.y + stage.height / 2};
+  await page.mouse.move(edge.x, edge.y, {steps: 10});
+  await page.waitForFunction((right) => document.querySelector('g.layer[data-layer="high"] rect.layer-box')
+      .getBoundingClientRect().right < right, stage.x + stage.width, {timeout: 10000});
+  // Out of the band it stops: the view stays as it is.
+  const high = await column();
+  const target = {x: high.x + high.width / 2, y: high.y + high.height - 10};
+  assert.ok(target.x < edge.x - 40, `high's middle is out of the band: ${JSON.stringify(high)}`);
+  await page.mouse.move(target.x, target.y, {steps: 5});
+  const still = await transform();
+  await page.waitForTimeout(300);
+  assert.equal(await transform(), still, 'no panning away from the edge');
+  assert.equal(await page.locator('g.layer[data-layer="high"][data-seen="yes"]').count(), 1, 'not drawn again');
+  assert.ok(await page.locator('line.drop-indicator[visibility="visible"]').count(), 'the drop is shown');
+  await page.mouse.up();
+  await page.waitForSelector('.behaviour[data-name="high/b"]');
+  assert.match(await text(page), /behaviours:\n      d: scripted\n      b: scripted\n/);
   assert.deepEqual(page.errors, []);
   await page.close();
 });

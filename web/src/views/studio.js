@@ -395,7 +395,7 @@ export async function studio(info) {
   }
 
   function inspect() {
-    showStructure(state.graph, selected, operation);
+    showStructure(state.graph, selected, operation, state.plugins_to_add);
     const box = ui.inspector;
     box.replaceChildren();
     const layer = selected && layerOf(selected.layer);
@@ -633,6 +633,16 @@ export async function studio(info) {
         drag.box?.classList.add('moving');
       }
     }
+    follow(at);
+    // Near the frame's edge the view pans (nothing is laid out), and what is under the pointer
+    // changes with it.
+    drag.client = {clientX: event.clientX, clientY: event.clientY};
+    graph.view.edgePan(event.clientX, event.clientY, () => {
+      if (drag) follow(toSvg(drag.client));
+    });
+  });
+  // The drag's line to the pointer at `at` (SVG units), or where the move would land.
+  function follow(at) {
     if (drag.kind === 'inhibition') {
       drag.line.setAttribute('x2', at.x);
       drag.line.setAttribute('y2', at.y);
@@ -649,7 +659,7 @@ export async function studio(info) {
     drag.line.setAttribute('y1', y1);
     drag.line.setAttribute('x2', x2);
     drag.line.setAttribute('y2', y2);
-  });
+  }
   svg.addEventListener('click', (event) => {
     if (!dragged) return;
     event.stopPropagation();
@@ -658,6 +668,7 @@ export async function studio(info) {
   function cancelDrag() {
     const was = drag;
     drag = null;
+    graph.view.stopEdgePan();
     was.line?.remove();
     was.box?.classList.remove('moving');
     return was;
