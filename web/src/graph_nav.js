@@ -11,7 +11,7 @@ const MAX_SCALE = 4;
 const STEP = 1.25;      // a key or button's zoom
 const READABLE = 0.8;   // a search brings its match to at least this scale
 const MARGIN = 16;      // px around the graph when it is fitted
-const MOVED = 4;        // px: a press that moves less is a click
+export const MOVED = 4;  // px: a press that moves less is a click (the studio's drags too)
 const EDGE = 40;        // px: a drag this near the stage's edge pans the view that way
 const EDGE_SPEED = 12;  // px a frame that it pans with the pointer at the edge itself
 

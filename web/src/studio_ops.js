@@ -4,6 +4,7 @@
 // dragged too); each asks the server for one operation, which the edit engine makes as a text edit
 // and checks.
 import {html} from './dom.js';
+import {MOVED} from './graph_nav.js';
 
 const TYPES = ['double', 'bool', 'int', 'vec2', 'vec3', 'string'];
 
@@ -184,7 +185,7 @@ function dragToReorder(list, move) {
   list.addEventListener('pointermove', (event) => {
     if (!drag) return;
     if (!drag.moved) {
-      if (Math.abs(event.clientY - drag.y) < 4) return;
+      if (Math.abs(event.clientY - drag.y) < MOVED) return;
       drag.moved = true;
       list.setPointerCapture(event.pointerId);
       window.addEventListener('keydown', escape, true);
