@@ -386,6 +386,8 @@ test("the shipped soccer layout's panels name topics, message paths and a frame 
     } else if (id.startsWith("RosOut!")) {
       assert.equal(channel(config.topicToRender)?.schemaName, "foxglove.Log");
     } else {
+      // A panel's own title is read from this key (Lichtblick's util/layout.ts, as Foxglove's).
+      assert.ok(config.foxglovePanelTitle, `${id} has no foxglovePanelTitle`);
       for (const { value } of config.paths) {
         const [, topic, field] = value.match(/^(\/[\w/]+)\.(.+)$/);
         const c = channel(topic);
