@@ -272,7 +272,8 @@ class FoxgloveClient {
     client_.set_message_handler(
         [this](websocketpp::connection_hdl handle, Client::message_ptr message) {
           if (message->get_opcode() == websocketpp::frame::opcode::binary) {
-            ++received_;
+            // Message Data (opcode 1), not the server's clock (Time, opcode 2).
+            if (message->get_payload().front() == '\x01') ++received_;
             return;
           }
           const auto json = nlohmann::json::parse(message->get_payload(), nullptr, false);

@@ -91,6 +91,10 @@ struct FoxgloveServer::Impl {
   std::map<Handle, Client, std::owner_less<Handle>> clients;
   std::string header;  // the last /arbiter/header message, for clients that subscribe later
   std::uint64_t header_time = 0;
+  // The log time last sent as the server's clock (the `time` capability): a client stamps what it
+  // receives with it, so that its timeline is the run's own clock, as a recording's, and not the
+  // browser's (which a run flat out or a replay would not follow).
+  std::uint64_t clock_sent = 0;
   std::uint64_t wall_start = 0;
   bool paced = false;  // set before the run starts: the log times' clock (LogClock)
   std::uint64_t run_start = 0;
@@ -187,6 +191,22 @@ struct FoxgloveServer::Impl {
       }
     }
   }
+  /// Sends `time` as the server's clock to every client, when it is later than the last sent: a
+  /// clock that went back would make a client drop what it holds, as after a seek.
+  void advance_clock(std::uint64_t time) {
+    if (time <= clock_sent) return;
+    clock_sent = time;
+    for (auto& [handle, client] : clients) send_time(handle, time);
+  }
+  void send_time(Handle handle, std::uint64_t time) {
+    std::error_code error;
+    const auto connection = server.get_con_from_hdl(handle, error);
+    if (error || connection->get_buffered_amount() > kClientBacklog) return;
+    // Time: opcode 2 and the time (u64), little-endian.
+    frame.assign(1, '\x02');
+    for (int i = 0; i < 8; ++i) frame += static_cast<char>((time >> (8 * i)) & 0xff);
+    connection->send(frame, websocketpp::frame::opcode::binary);
+  }
   void send_data(Handle handle, Client& client, std::uint32_t subscription, std::uint64_t time,
                  const std::string& payload) {
     std::error_code error;
@@ -269,6 +289,7 @@ struct FoxgloveServer::Impl {
         }
         take_channels(ring.channels());
         scene_updates.restart();
+        advance_clock(header_time);
         broadcast(channel_at(kHeaderChannel), header_time, header);
       } else if (next == StepRing::Next::kStep) {
         send_step(ring.step());
@@ -280,6 +301,7 @@ struct FoxgloveServer::Impl {
     const auto wall =
         step.timed() ? run_start + static_cast<std::uint64_t>(step.time() * 1e9) : wall_ns();
     const auto time = clock.time(step.step(), wall);
+    advance_clock(time);
     const auto* log_channel = channel_at(kLogChannel);
     if (const auto gap = step.dropped_before(); gap > 0) {
       log.clear();
@@ -330,7 +352,7 @@ struct FoxgloveServer::Impl {
     spdlog::info("foxglove client {} connected ({} connected)", client.name, clients.size());
     send_text(handle, Json{{"op", "serverInfo"},
                            {"name", name},
-                           {"capabilities", Json::array()},
+                           {"capabilities", Json::array({"time"})},
                            {"supportedEncodings", Json::array()},
                            {"metadata", Json::object()},
                            {"sessionId", std::to_string(wall_start)}}
@@ -338,6 +360,7 @@ struct FoxgloveServer::Impl {
     std::vector<const Advertised*> all;
     for (const auto& advertised : channels) all.push_back(&advertised);
     if (!all.empty()) send_text(handle, advertise(all));
+    if (clock_sent > 0) send_time(handle, clock_sent);
   }
   void on_close(Handle handle) {
     const auto found = clients.find(handle);

@@ -81,6 +81,16 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   const server = await serve(['run', soccer, '--foxglove', '0', '--steps', '100000', '-q']);
   const {client, serverInfo, channels} = await connect(server.url);
   assert.match(serverInfo.name, /^arbiter /);
+  // The server publishes its clock, the run's log time: a viewer stamps what it receives with it
+  // (Lichtblick's FoxgloveWebSocketPlayer does), not with its own clock.
+  assert.deepEqual(serverInfo.capabilities, ['time']);
+  let clockTime = null;
+  const clockBack = [];
+  client.on('time', ({timestamp}) => {
+    if (clockTime !== null && timestamp <= clockTime) clockBack.push(`${timestamp} after ${clockTime}`);
+    clockTime = timestamp;
+  });
+  const stepsOffClock = [];
   // Exactly the channels of a recording (arbiter::channels()), in its order, JSON with JSON Schemas.
   const advertised = [...channels.values()].sort((a, b) => a.id - b.id);
   assert.deepEqual(advertised.map((channel) => `${channel.topic} ${channel.schemaName}`),
@@ -118,6 +128,7 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
     if (channel.topic === '/arbiter/step') {
       assert.ok(message.step > lastStep, `steps arrive in order: ${message.step} after ${lastStep}`);
       assert.ok(timestamp >= lastTime, 'log times do not go back');
+      if (timestamp !== clockTime) stepsOffClock.push(`step ${message.step} at ${timestamp}, the clock at ${clockTime}`);
       lastStep = message.step;
       lastTime = timestamp;
       if (!kickedAt && message.layers.control.kick_ball.active) kickedAt = message.step;
@@ -131,6 +142,8 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   console.log(`kick_ball active at step ${kickedAt}; messages per topic:`,
               Object.fromEntries(received));
   assert.deepEqual(invalid, []);
+  assert.deepEqual(clockBack, [], 'the server\'s clock never goes back');
+  assert.deepEqual(stepsOffClock, [], 'each step comes after the clock says its time');
   assert.ok(received.get('/arbiter/header') >= 1, 'the header is sent to a client that subscribes late');
   assert.ok(received.get('/arbiter/inputs') > 10);
   // The soccer world draws every step: the picture goes out live as it is recorded.
@@ -138,7 +151,13 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   // Scene messages carry what changed; a client that subscribes mid-run gets the whole picture
   // first (everything deleted, then what does not move too), not just what moved.
   assert.ok(firstScene.deletions.some((d) => d.type === 1), 'the first scene message deletes all');
-  assert.deepEqual(firstScene.entities.map((e) => e.id).sort(), ['field/moving', 'field/still']);
+  // Split as the world drew it: what moved since the step before (none, if the client subscribed
+  // before the first step) and what did not; together, the field with the robot and the ball.
+  const ids = firstScene.entities.map((e) => e.id);
+  assert.ok(ids.includes('field/still') && ids.every((id) => ['field/moving', 'field/still'].includes(id)), `${ids}`);
+  const all = (kind) => firstScene.entities.flatMap((e) => e[kind]);
+  assert.ok(all('arrows').length >= 1 && all('cylinders').length >= 2 && all('lines').length >= 4,
+            'the robot with its heading, the ball and the field lines');
   // What the world reported (the kick) is on /arbiter/log too, at its step's log time: a paced
   // run's, the wall clock.
   await waitFor('the kick reported', () => logs.some((log) => /kick/.test(log.text)), 10000);
