@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -403,6 +405,134 @@ TEST_CASE("a recording whose first step was dropped replays up to its gap", "[re
                  "runs up to there"));
   CHECK(contains(replayed.out, "replayed 0 steps"));
   fs::remove_all(dir);
+}
+
+namespace {
+
+// The `/arbiter/scene` messages of a recording, and what a viewer shows after each: per step
+// that drew, every primitive of the entities shown then, as its JSON, under its kind and frame.
+struct SceneShown {
+  std::vector<std::pair<std::uint64_t, Json>> messages;  // with their steps
+  std::map<std::uint64_t, std::vector<Json>> by_step;
+};
+
+// A number rounded, for an order that two pictures a rounding apart share.
+Json coarse(const Json& value) {
+  if (value.is_number_float()) return std::round(value.get<double>() * 1e3) / 1e3;
+  if (!value.is_structured()) return value;
+  Json out = value;
+  for (auto& item : out) item = coarse(item);
+  return out;
+}
+
+SceneShown scene_shown(const fs::path& recording) {
+  std::ifstream in(recording, std::ios::binary);
+  mcap::Reader reader(in);
+  mcap::Record record;
+  SceneShown shown;
+  std::map<std::string, Json> entities;  // by id, as a viewer keeps them
+  std::uint64_t step = 0;
+  while (reader.next(record)) {
+    if (record.kind != mcap::Record::Kind::kMessage) continue;
+    if (record.topic == "/arbiter/step")
+      step = Json::parse(record.data)["step"].get<std::uint64_t>();
+    if (record.topic != "/arbiter/scene") continue;
+    const auto message = Json::parse(record.data);
+    shown.messages.emplace_back(step, message);
+    for (const auto& deletion : message["deletions"]) {
+      if (deletion["type"] == 1) entities.clear();
+      if (deletion["type"] == 0) entities.erase(deletion["id"].get<std::string>());
+    }
+    for (const auto& entity : message["entities"]) entities[entity["id"]] = entity;
+    auto& primitives = shown.by_step[step];
+    primitives.clear();
+    for (const auto& [id, entity] : entities) {
+      for (const char* kind :
+           {"arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models"}) {
+        for (const auto& primitive : entity[kind]) {
+          primitives.push_back({{"kind", kind}, {"frame", entity["frame_id"]}, {"is", primitive}});
+        }
+      }
+    }
+    std::sort(primitives.begin(), primitives.end(), [](const Json& a, const Json& b) {
+      const auto ka = coarse(a).dump(), kb = coarse(b).dump();
+      return ka != kb ? ka < kb : a.dump() < b.dump();
+    });
+  }
+  REQUIRE(reader.error().empty());
+  return shown;
+}
+
+// A message without its times: a run and its replay started at different times.
+Json untimed(Json message) {
+  if (!message.is_structured()) return message;
+  if (message.is_object()) message.erase("timestamp");
+  for (auto& item : message) item = untimed(item);
+  return message;
+}
+
+// Whether two messages or primitives are alike, their numbers within `tolerance`.
+bool alike(const Json& a, const Json& b, double tolerance) {
+  if (a.is_number() && b.is_number()) {
+    return std::abs(a.get<double>() - b.get<double>()) <= tolerance;
+  }
+  if (a.type() != b.type() || a.size() != b.size()) return false;
+  if (a.is_object()) {
+    for (auto it = a.begin(); it != a.end(); ++it) {
+      if (!b.contains(it.key()) || !alike(it.value(), b[it.key()], tolerance)) return false;
+    }
+    return true;
+  }
+  if (a.is_array()) {
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      if (!alike(a[i], b[i], tolerance)) return false;
+    }
+    return true;
+  }
+  return a == b;
+}
+
+}  // namespace
+
+TEST_CASE("a replay draws the recorded picture: its recording shows what the run's showed",
+          "[replay][cli][soccer]") {
+  const auto dir =
+      fs::temp_directory_path() / ("arbiter_replay_scene_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto run = dir / "run.mcap";
+  const auto replay = dir / "replay.mcap";
+  // Long enough for a kick, a goal and the kick-off after it: texts come and go, the ball's
+  // motion arrow too.
+  REQUIRE(run_cli("run configs/soccer/walk_and_kick.yaml --steps 260 -q --record " + quoted(run))
+              .exit_code == 0);
+  const auto replayed = run_cli("replay " + quoted(run) + " --record " + quoted(replay));
+  INFO(replayed.err);
+  REQUIRE(replayed.exit_code == 0);
+  const auto original = scene_shown(run);
+  const auto again = scene_shown(replay);
+  fs::remove_all(dir);
+  // The soccer world draws in every step.
+  REQUIRE(original.by_step.size() == 260);
+  REQUIRE(again.by_step.size() == original.by_step.size());
+  // An arrow is written as a pose and lengths, each rounded to 1e-6, and drawn again from them:
+  // its numbers come back within a rounding or two.
+  constexpr double kRounding = 3e-6;
+  for (const auto& [step, primitives] : original.by_step) {
+    INFO("step " << step);
+    REQUIRE(again.by_step.count(step) == 1);
+    const auto& replayed_primitives = again.by_step.at(step);
+    REQUIRE(replayed_primitives.size() == primitives.size());
+    for (std::size_t i = 0; i < primitives.size(); ++i) {
+      INFO(primitives[i].dump() << "\nreplayed: " << replayed_primitives[i].dump());
+      CHECK(alike(primitives[i], replayed_primitives[i], kRounding));
+    }
+  }
+  // The first message, the whole picture, as the run wrote it (but for the time, the replay's
+  // own): the field's lines, the robot and the ball in one entity, in the same order.
+  REQUIRE(!again.messages.empty());
+  CHECK(alike(untimed(original.messages.front().second), untimed(again.messages.front().second),
+              kRounding));
+  CHECK(again.messages.size() == original.messages.size());
 }
 
 namespace {

@@ -158,7 +158,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   for (RecordingReader::Event first; run.next(first);) {
     const bool step_inputs = first.kind == RecordingReader::Event::Kind::kInputs;
     if (step_inputs) {
-      if (!inputs.load(first.step, first.text, diagnostics)) {
+      if (!inputs.load(first.step, first.text, diagnostics, first.scene, {options.recording})) {
         err << format(diagnostics);
         return 1;
       }
@@ -276,7 +276,8 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     const bool now = event.step == step;  // else the recording holds no inputs for the step
     if (loaded != step) {
       Diagnostics bad;
-      if (!inputs.load(step, now ? event.text : std::string(), bad)) {
+      if (!inputs.load(step, now ? event.text : std::string(), bad,
+                       now ? event.scene : std::string(), {options.recording})) {
         err << format(bad);
         return 1;
       }

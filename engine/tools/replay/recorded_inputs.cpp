@@ -107,6 +107,9 @@ class RecordedInputsLayer : public Interface {
 
   void input(WriteContext& ctx) override {
     if (ctx.step() < inputs_.first_held()) return;
+    // The world's picture at the start of the step, as the recorded world drew it when its
+    // layer read it.
+    if (ctx.step() == inputs_.first_held()) inputs_.draw(this, ctx);
     const auto index = ctx.step() - inputs_.first_held();
     if (index < reports_[kInputPass].size()) {
       for (const char* text : reports_[kInputPass][index]) ctx.report(text);
@@ -182,8 +185,15 @@ void RecordedInputs::add(std::uint64_t step, const std::string& text) {
   }
 }
 
-bool RecordedInputs::load(std::uint64_t step, const std::string& message,
-                          Diagnostics& diagnostics) {
+bool RecordedInputs::load(std::uint64_t step, const std::string& message, Diagnostics& diagnostics,
+                          const std::string& scene, const SourceLocation& scene_at) {
+  scene_now_ = !scene.empty();
+  std::string bad;
+  if (scene_now_ && !scene_.apply(scene, bad)) {
+    diagnostics.error(scene_at, "bad-recording",
+                      fmt::format("the /arbiter/scene message of step {}: {}", step, bad));
+    return false;
+  }
   first_ = step;
   steps_ = step;
   reported_.assign(1, {});
@@ -230,14 +240,24 @@ void RecordedInputs::on_reload(const Manager& manager) {
                                                      });
                                }),
                 layers_.end());
+  // The replaced program's layer that drew hands the picture on to the running program's.
+  if (std::find(layers_.begin(), layers_.end(), drawer_) == layers_.end()) {
+    drawer_ = layers_.empty() ? nullptr : layers_.front();
+  }
+}
+
+void RecordedInputs::draw(const RecordedInputsLayer* layer, const StepContext& ctx) const {
+  if (layer == drawer_ && scene_now_) scene_.draw(ctx);
 }
 
 void RecordedInputs::remember(RecordedInputsLayer* layer) const {
   layers_.push_back(layer);
+  if (drawer_ == nullptr) drawer_ = layer;
 }
 
 void RecordedInputs::forget(RecordedInputsLayer* layer) const {
   layers_.erase(std::remove(layers_.begin(), layers_.end(), layer), layers_.end());
+  if (drawer_ == layer) drawer_ = layers_.empty() ? nullptr : layers_.front();
 }
 
 const std::vector<RecordedInputs::Report>& RecordedInputs::reported(std::uint64_t step) const {
@@ -331,7 +351,8 @@ bool RecordingReader::next(Event& event) {
 
 bool RecordingReader::read(Event& event) {
   event = Event();
-  while (reader_->next(*record_)) {
+  while (held_ || (!ended_ && reader_->next(*record_))) {
+    held_ = false;
     if (record_->kind == mcap::Record::Kind::kMetadata) {
       if (record_->name == "arbiter.config") {
         config_ = true;
@@ -393,11 +414,32 @@ bool RecordingReader::read(Event& event) {
       }
       ++inputs_;
       event.text = std::move(record_->data);
+      read_step_rest(event, record_->log_time);
       return true;
     }
   }
+  ended_ = true;
   if (!reader_->error().empty()) fail(reader_->error());
   return false;
+}
+
+void RecordingReader::read_step_rest(Event& event, std::uint64_t log_time) {
+  // The recorder writes a step's record, its inputs, then its scene and log messages, at the
+  // step's log time. A scene after another is a stopping run's safe step, which no replay steps.
+  while (reader_->next(*record_)) {
+    if (record_->kind == mcap::Record::Kind::kMessage && record_->topic == "/arbiter/scene") {
+      if (event.scene.empty() && record_->log_time == log_time) {
+        event.scene = std::move(record_->data);
+        event.scene_offset = record_->offset;
+      }
+      continue;
+    }
+    if (record_->kind == mcap::Record::Kind::kMetadata || record_->topic == "/arbiter/inputs") {
+      held_ = true;
+      return;
+    }
+  }
+  ended_ = true;  // read() reports the reader's error, if any
 }
 
 std::string replay_cut(ReplayCut why, std::uint64_t after_step, std::uint64_t dropped,

@@ -19,6 +19,7 @@
 #include "arbiter/diagnostics.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/model.hpp"
+#include "arbiter/recorded_scene.hpp"
 #include "arbiter/recording.hpp"
 #include "arbiter/registry.hpp"
 
@@ -84,6 +85,10 @@ class RecordingReader {
     /// kInputs: the step; kReload, kGap: the last step before it
     std::uint64_t step = 0;
     std::string text;  ///< kInputs: the step's `/arbiter/inputs` message
+    /// kInputs: the step's `/arbiter/scene` message (empty when the step drew nothing), and the
+    /// byte of the file where it (or its chunk) starts
+    std::string scene;
+    std::uint64_t scene_offset = 0;
     std::vector<std::pair<std::string, std::string>> files;  ///< kReload: as RecordedRun::Reload
     std::uint64_t dropped = 0;                               ///< kGap: how many steps
   };
@@ -94,6 +99,9 @@ class RecordingReader {
  private:
   void fail(std::string message);
   bool read(Event& event);
+  // The records after a step's inputs that are the step's too (its scene message), up to the
+  // next event's first record, which is kept in record_ for read().
+  void read_step_rest(Event& event, std::uint64_t log_time);
 
   std::string path_;
   std::unique_ptr<std::istream> in_;
@@ -103,6 +111,8 @@ class RecordingReader {
   RecordingInfo info_;
   bool config_ = false;
   std::vector<Event> ahead_;
+  bool held_ = false;          // record_ holds a record read on past a step, not yet taken
+  bool ended_ = false;         // the reader has returned false
   std::uint64_t inputs_ = 0;   // inputs messages read
   std::uint64_t dropped_ = 0;  // steps the gaps read say were dropped
 };
@@ -138,10 +148,14 @@ class RecordedInputs : public Observer {
   std::uint64_t steps() const { return steps_; }
 
   /// In place of the step held: the inputs of `step`, its `/arbiter/inputs` message (empty when
-  /// the step has none), taken at once by every interface layer bound to interface_class().
-  /// False, with the error in `diagnostics`, when a value does not fit its actuator's type.
-  /// Call it between steps: it parses and allocates, so that the step itself does neither.
-  bool load(std::uint64_t step, const std::string& message, Diagnostics& diagnostics);
+  /// the step has none), taken at once by every interface layer bound to interface_class(),
+  /// and its `/arbiter/scene` message (empty when the step drew nothing), which the first of
+  /// those layers draws in the step as the recorded run's viewer showed it. False, with the
+  /// error in `diagnostics`, when a value does not fit its actuator's type, or the scene message
+  /// (from the recording `scene_at`) is not one a recorder writes. Call it between steps: it
+  /// parses and allocates, so that the step itself does neither.
+  bool load(std::uint64_t step, const std::string& message, Diagnostics& diagnostics,
+            const std::string& scene = std::string(), const SourceLocation& scene_at = {});
   /// The steps held: first_held() and the held() - 1 after it.
   std::uint64_t first_held() const { return first_; }
   std::uint64_t held() const { return reported_.size(); }
@@ -167,6 +181,9 @@ class RecordedInputs : public Observer {
   const std::vector<Report>& reported(std::uint64_t step) const;
   /// True for the first caller only: the layer that reports what a recording did not attribute.
   bool claim_unattributed() const;
+  /// Draws the recorded picture of the step held, if it drew, when `layer` is the one that draws.
+  /// Allocation-free.
+  void draw(const RecordedInputsLayer* layer, const StepContext& ctx) const;
   /// The layers that load() gives each step to.
   void remember(RecordedInputsLayer* layer) const;
   void forget(RecordedInputsLayer* layer) const;
@@ -190,6 +207,10 @@ class RecordedInputs : public Observer {
   std::uint64_t first_ = 1;
   std::uint64_t steps_ = 0;
   mutable std::vector<RecordedInputsLayer*> layers_;
+  RecordedScene scene_;     // what the recorded run's viewer showed after the step held
+  bool scene_now_ = false;  // the step held drew
+  // The layer that draws the picture: the first of layers_, so that it is drawn once.
+  mutable const RecordedInputsLayer* drawer_ = nullptr;
   bool running_ = false;
   std::vector<const Interface*> staged_;  // the interfaces of the program staged, until swapped in
   ClassInfo class_;
