@@ -78,6 +78,70 @@ class Fields {
 
 }  // namespace
 
+template <typename Visit>
+void RecordedScene::each(const Frame& frame, const std::vector<Entity>& entities, Visit visit) {
+  const Entity* parts[2] = {nullptr, nullptr};  // moving, still
+  for (std::size_t e = frame.begin; e < frame.end; ++e)
+    parts[entities[e].still ? 1 : 0] = &entities[e];
+  std::uint32_t next[2][4] = {}, end[2][4] = {};
+  for (std::size_t still = 0; still < 2; ++still) {
+    for (std::size_t kind = 0; kind < 4 && parts[still] != nullptr; ++kind) {
+      next[still][kind] = parts[still]->kinds[kind];
+      end[still][kind] = parts[still]->kinds[kind + 1];
+    }
+  }
+  for (const std::uint8_t slot : frame.order) {
+    const std::size_t still = slot % 2, kind = slot / 2;
+    if (next[still][kind] < end[still][kind]) {
+      visit(*parts[still], parts[still]->primitives[next[still][kind]++]);
+    }
+  }
+  for (const std::size_t still : {1, 0}) {
+    for (std::size_t kind = 0; kind < 4; ++kind) {
+      while (next[still][kind] < end[still][kind]) {
+        visit(*parts[still], parts[still]->primitives[next[still][kind]++]);
+      }
+    }
+  }
+}
+
+namespace {
+
+// Where a primitive is in its entity: arrows, filled circles, lines, texts.
+std::size_t kind_of(SceneShape shape) {
+  switch (shape) {
+    case SceneShape::kArrow:
+      return 0;
+    case SceneShape::kCircle:
+      return 1;
+    case SceneShape::kText:
+      return 3;
+    default:
+      return 2;
+  }
+}
+
+// Whether two primitives of entities draw alike, as SceneUpdates compares them.
+template <typename Entity, typename Primitive>
+bool alike(const Entity& a_entity, const Primitive& a, const Entity& b_entity, const Primitive& b) {
+  if (a.shape != b.shape || a.filled != b.filled || a.x0 != b.x0 || a.y0 != b.y0 || a.x1 != b.x1 ||
+      a.y1 != b.y1 || a.size != b.size || a.color.r != b.color.r || a.color.g != b.color.g ||
+      a.color.b != b.color.b || a.color.a != b.color.a) {
+    return false;
+  }
+  if (a.shape == SceneShape::kText) return a_entity.texts[a.begin] == b_entity.texts[b.begin];
+  if (a.shape != SceneShape::kLine && a.shape != SceneShape::kPolygon) return true;
+  if (a.count != b.count) return false;
+  for (std::uint32_t i = 0; i < a.count; ++i) {
+    const ScenePoint& pa = a_entity.points[a.begin + i];
+    const ScenePoint& pb = b_entity.points[b.begin + i];
+    if (pa.x != pb.x || pa.y != pb.y) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 bool RecordedScene::apply(const std::string& message, std::string& error) {
   error.clear();
   // nlohmann's parser recurses: a message nested deeper than a recording's never reaches it.
@@ -93,6 +157,7 @@ bool RecordedScene::apply(const std::string& message, std::string& error) {
   }
   Fields read(error);
   std::vector<Entity> next = entities_;
+  bool whole = false;  // everything deleted first
   const Json& deletions = read.array(json, "", "deletions");
   for (std::size_t i = 0; read.ok() && i < deletions.size(); ++i) {
     const auto path = fmt::format("deletions[{}]", i);
@@ -100,6 +165,7 @@ bool RecordedScene::apply(const std::string& message, std::string& error) {
     if (!read.ok()) break;
     if (type == 1) {  // ALL
       next.clear();
+      whole = true;
     } else if (type == 0) {  // MATCHING_ID
       const auto id = read.text(deletions[i], path, "id");
       next.erase(std::remove_if(next.begin(), next.end(),
@@ -223,46 +289,86 @@ bool RecordedScene::apply(const std::string& message, std::string& error) {
     }
   }
   if (!read.ok()) return false;
-  entities_ = std::move(next);
-  frames_.clear();
-  for (std::size_t i = 0; i < entities_.size(); ++i) {
-    if (i > 0 && entities_[i].frame == entities_[i - 1].frame) {
-      frames_.back().second = i + 1;
-    } else {
-      frames_.emplace_back(i, i + 1);
+
+  std::vector<Frame> frames;
+  for (std::size_t i = 0; i < next.size(); ++i) {
+    if (i > 0 && next[i].frame == next[i - 1].frame) {
+      frames.back().end = i + 1;
+      continue;
     }
+    Frame& frame = frames.emplace_back();
+    frame.name = next[i].frame;
+    frame.begin = i;
+    frame.end = i + 1;
   }
+  for (Frame& frame : frames) {
+    const auto old = std::find_if(frames_.begin(), frames_.end(),
+                                  [&](const Frame& known) { return known.name == frame.name; });
+    const Entity* still = nullptr;
+    for (std::size_t e = frame.begin; e < frame.end; ++e) {
+      if (next[e].still) still = &next[e];
+    }
+    if (old == frames_.end()) continue;  // the still ones first: at the start, all are
+    if (!whole) {
+      frame.order = old->order;
+      continue;
+    }
+    // A whole picture: its still primitives are those the recorded run drew alike in the place
+    // they had in the step before, which are the places they were drawn in here then. What
+    // comes new comes last.
+    std::uint32_t next_still[4] = {}, still_end[4] = {}, moving_left[4] = {};
+    for (std::size_t kind = 0; kind < 4 && still != nullptr; ++kind) {
+      next_still[kind] = still->kinds[kind];
+      still_end[kind] = still->kinds[kind + 1];
+    }
+    for (std::size_t e = frame.begin; e < frame.end; ++e) {
+      for (std::size_t kind = 0; kind < 4 && !next[e].still; ++kind) {
+        moving_left[kind] = next[e].kinds[kind + 1] - next[e].kinds[kind];
+      }
+    }
+    each(*old, entities_, [&](const Entity& entity, const Primitive& before) {
+      const std::size_t kind = kind_of(before.shape);
+      const auto slot = static_cast<std::uint8_t>(2 * kind);
+      if (next_still[kind] < still_end[kind] &&
+          alike(*still, still->primitives[next_still[kind]], entity, before)) {
+        frame.order.push_back(slot + 1);
+        ++next_still[kind];
+      } else if (moving_left[kind] > 0) {
+        frame.order.push_back(slot);
+        --moving_left[kind];
+      } else if (next_still[kind] < still_end[kind]) {
+        frame.order.push_back(slot + 1);
+        ++next_still[kind];
+      }
+    });
+  }
+  entities_ = std::move(next);
+  frames_ = std::move(frames);
   return true;
 }
 
 void RecordedScene::draw(const StepContext& ctx) const {
-  for (const auto& [begin, end] : frames_) {
-    Scene scene = ctx.scene(entities_[begin].frame.c_str());
-    for (std::size_t kind = 0; kind < 4; ++kind) {
-      for (std::size_t e = begin; e < end; ++e) {
-        const Entity& entity = entities_[e];
-        for (auto i = entity.kinds[kind]; i < entity.kinds[kind + 1]; ++i) {
-          const Primitive& p = entity.primitives[i];
-          switch (p.shape) {
-            case SceneShape::kLine:
-              scene.polyline(entity.points.data() + p.begin, p.count, p.color, p.size);
-              break;
-            case SceneShape::kPolygon:
-              scene.polygon(entity.points.data() + p.begin, p.count, p.color, p.size);
-              break;
-            case SceneShape::kCircle:
-              scene.circle({p.x0, p.y0}, p.size, p.color, p.filled, p.x1);
-              break;
-            case SceneShape::kArrow:
-              scene.arrow({p.x0, p.y0}, {p.x1, p.y1}, p.color, p.size);
-              break;
-            case SceneShape::kText:
-              scene.text({p.x0, p.y0}, entity.texts[p.begin].c_str(), p.color, p.size);
-              break;
-          }
-        }
+  for (const Frame& frame : frames_) {
+    Scene scene = ctx.scene(frame.name.c_str());
+    each(frame, entities_, [&](const Entity& entity, const Primitive& p) {
+      switch (p.shape) {
+        case SceneShape::kLine:
+          scene.polyline(entity.points.data() + p.begin, p.count, p.color, p.size);
+          break;
+        case SceneShape::kPolygon:
+          scene.polygon(entity.points.data() + p.begin, p.count, p.color, p.size);
+          break;
+        case SceneShape::kCircle:
+          scene.circle({p.x0, p.y0}, p.size, p.color, p.filled, p.x1);
+          break;
+        case SceneShape::kArrow:
+          scene.arrow({p.x0, p.y0}, {p.x1, p.y1}, p.color, p.size);
+          break;
+        case SceneShape::kText:
+          scene.text({p.x0, p.y0}, entity.texts[p.begin].c_str(), p.color, p.size);
+          break;
       }
-    }
+    });
   }
 }
 

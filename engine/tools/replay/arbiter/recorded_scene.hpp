@@ -6,7 +6,6 @@
 
 #include <cstdint>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "arbiter/behaviour.hpp"
@@ -29,10 +28,9 @@ class RecordedScene {
   bool empty() const { return entities_.empty(); }
 
   /// Draws what a viewer shows now into the step's picture, frame by frame: its arrows, filled
-  /// circles, lines and texts, each kind the still entity's then the moving one's, in the
-  /// messages' order. So a primitive keeps its place among its frame's when it starts or stops
-  /// moving, and the replay's SceneUpdates finds what moved as the recorded run's did, mostly
-  /// (docs/replay.md). Allocation-free.
+  /// circles, lines and texts, each kind's still and moving primitives in the order the recorded
+  /// run drew them, as far as its messages tell it (docs/replay.md), so that the replay's
+  /// SceneUpdates finds what moved as the recorded run's did. Allocation-free.
   void draw(const StepContext& ctx) const;
 
  private:
@@ -56,8 +54,19 @@ class RecordedScene {
     std::uint32_t kinds[5] = {};
   };
 
+  struct Frame {
+    std::string name;
+    std::size_t begin = 0, end = 0;  // its entities
+    // The order its primitives are drawn in, each slot the next one of a kind (the slot / 2),
+    // still (odd) or moving; those beyond come after, the still ones first, kind by kind.
+    std::vector<std::uint8_t> order;
+  };
+  // Visits the primitives of `frame` of `entities`, in the order drawn.
+  template <typename Visit>
+  static void each(const Frame& frame, const std::vector<Entity>& entities, Visit visit);
+
   std::vector<Entity> entities_;  // each frame's still one, then its moving one
-  std::vector<std::pair<std::size_t, std::size_t>> frames_;  // each frame's entities
+  std::vector<Frame> frames_;
 };
 
 }  // namespace arbiter
