@@ -183,16 +183,26 @@ test('replay --foxglove serves a recording at its pace, its messages as a run se
   const {client, channels} = await connect(server.url);
   const ajv = new Ajv2020({strict: false});
   const step = [...channels.values()].find((channel) => channel.topic === '/arbiter/step');
+  const scene = [...channels.values()].find((channel) => channel.topic === '/arbiter/scene');
   const validate = ajv.compile(JSON.parse(step.schema));
+  const validateScene = ajv.compile(JSON.parse(scene.schema));
   const steps = [];
   const times = [];
-  client.on('message', ({data, timestamp}) => {
+  const scenes = [];  // [{message, time}]
+  const subscriptions = new Map();
+  client.on('message', ({subscriptionId, data, timestamp}) => {
     const message = JSON.parse(new TextDecoder().decode(data));
+    if (subscriptions.get(subscriptionId) === '/arbiter/scene') {
+      assert.ok(validateScene(message), ajv.errorsText(validateScene.errors));
+      scenes.push({message, time: timestamp});
+      return;
+    }
     assert.ok(validate(message), ajv.errorsText(validate.errors));
     steps.push(message.step);
     times.push(timestamp);
   });
-  client.subscribe(step.id);
+  subscriptions.set(client.subscribe(step.id), '/arbiter/step');
+  subscriptions.set(client.subscribe(scene.id), '/arbiter/scene');
   await waitFor('the end of the replay', () => /the replay is over/.test(server.output().out), 20000);
   server.child.kill('SIGINT');
   const {code, out} = await server.exited;
@@ -208,6 +218,21 @@ test('replay --foxglove serves a recording at its pace, its messages as a run se
     assert.ok(Math.abs(Number(times[i] - times[i - 1]) - expected) <= 2,
               `steps ${steps[i - 1]} and ${steps[i]} are ${times[i] - times[i - 1]} ns apart`);
   }
+  // The recorded world's picture, as the run sent it: one message a step, at the step's time,
+  // the whole picture first (everything deleted, then the field that does not move and the
+  // robot and the ball that do), then what moved.
+  assert.ok(scenes.length >= steps.length - 1, `${scenes.length} scene messages for ${steps.length} steps`);
+  assert.ok(scenes.every(({time}) => times.includes(time)), 'each at a step\'s log time');
+  const first = scenes[0].message;
+  assert.ok(first.deletions.some((d) => d.type === 1), 'the first scene message deletes all');
+  const ids = first.entities.map((e) => e.id);
+  assert.ok(ids.includes('field/still') && ids.every((id) => ['field/moving', 'field/still'].includes(id)), `${ids}`);
+  const all = (kind) => first.entities.flatMap((e) => e[kind]);
+  assert.ok(all('arrows').length >= 1 && all('cylinders').length >= 2 && all('lines').length >= 4,
+            'the robot with its heading, the ball and the field lines');
+  assert.ok(scenes.slice(1).some(({message}) => message.deletions.length === 0 &&
+                                                message.entities.map((e) => e.id).join() === 'field/moving'),
+            'between whole pictures, only what moves');
 });
 
 test('a hot reload (--watch) sends the reloaded program\'s header, and the steps go on', async () => {
