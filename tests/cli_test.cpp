@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include "arbiter/catalog.hpp"
+#include "arbiter/recorded_inputs.hpp"
 #include "arbiter/recording.hpp"
 #include "arbiter/reload.hpp"
 #include "core/record/mcap.hpp"
@@ -537,6 +538,43 @@ TEST_CASE("a replay draws the recorded picture: its recording shows what the run
     CHECK(again.messages[i].first == step);
     CHECK(alike(untimed(message), untimed(again.messages[i].second), kRounding));
   }
+}
+
+TEST_CASE("a scene message that a recorder does not write stops a replay at its step and field",
+          "[replay]") {
+  // One line of two points, as SceneUpdates writes it; `point` is the second point's y.
+  const auto message = [](const std::string& id, const std::string& point,
+                          const std::string& more = "") {
+    return R"({"deletions":[{"timestamp":{"sec":0,"nsec":0},"type":1,"id":""}],"entities":[)"
+           R"({"timestamp":{"sec":0,"nsec":0},"frame_id":"field","id":")" +
+           id +
+           R"(","lifetime":{"sec":0,"nsec":0},"frame_locked":false,"metadata":[],"arrows":[],)"
+           R"("cubes":[],"spheres":[],"cylinders":[],"lines":[{"type":0,"pose":{"position":)"
+           R"({"x":0,"y":0,"z":0},"orientation":{"x":0,"y":0,"z":0,"w":1}},"thickness":0.05,)"
+           R"("scale_invariant":false,"points":[{"x":0,"y":0,"z":0},{"x":1,"y":)" +
+           point +
+           R"(,"z":0}],"color":{"r":1,"g":1,"b":1,"a":1},"colors":[],"indices":[]}],)"
+           R"("triangles":[],"texts":[],"models":[])" +
+           more + "}]}";
+  };
+  const auto error = [](const std::string& scene) {
+    RecordedInputs inputs;
+    Diagnostics diagnostics;
+    const bool loaded = inputs.load(7, "", diagnostics, scene, {"run.mcap"});
+    return loaded ? std::string("loaded") : format(diagnostics);
+  };
+  CHECK(error(message("field/still", "2")) == "loaded");
+  CHECK(contains(error(message("field/still", "\"two\"")),
+                 "run.mcap: error: the /arbiter/scene message of step 7: "
+                 "entities[0].lines[0].points[1].y: expected a number"));
+  CHECK(contains(error(message("robot/still", "2")),
+                 "entities[0].id: expected 'field/still' or 'field/moving', not 'robot/still'"));
+  CHECK(contains(error(message("field/still", "2", R"(,"extra":1)")), "loaded"));
+  CHECK(contains(error(R"({"deletions":[{"type":2}],"entities":[]})"),
+                 "deletions[0].type: expected 0 (an id) or 1 (all), not 2"));
+  CHECK(contains(error("{\"deletions\": ["), "step 7: not a JSON object"));
+  CHECK(contains(error(R"({"deletions":[],"entities":[{"frame_id":"f","id":"f/moving"}]})"),
+                 "entities[0].arrows: expected an array"));
 }
 
 namespace {
