@@ -26,6 +26,7 @@
 
 #include "arbiter/breakpoint.hpp"
 #include "arbiter/load.hpp"
+#include "arbiter/recorded_inputs.hpp"
 #include "arbiter/recording.hpp"
 #include "arbiter/substitute.hpp"
 #include "commands/timing.hpp"
@@ -303,6 +304,84 @@ layers:
     actuators: {measured: double}
     sensors: [gait, label, speed]
 )";
+
+TEST_CASE("a replay draws the recorded picture without allocating", "[alloc][replay][scene]") {
+  using Json = nlohmann::json;
+  const Json pose = {{"position", {{"x", 1}, {"y", 2}, {"z", 0}}},
+                     {"orientation", {{"x", 0}, {"y", 0}, {"z", 0}, {"w", 1}}}};
+  const Json color = {{"r", 1}, {"g", 0.5}, {"b", 0}, {"a", 1}};
+  const auto entity = [&](const std::string& id, double x) {
+    Json out = {{"frame_id", "field"},     {"id", id},
+                {"arrows", Json::array()}, {"cylinders", Json::array()},
+                {"lines", Json::array()},  {"texts", Json::array()}};
+    if (id == "field/still") {
+      out["lines"].push_back(
+          {{"type", 1},
+           {"thickness", 0.05},
+           {"points", {{{"x", 0}, {"y", 0}}, {{"x", 1}, {"y", 0}}, {{"x", 0}, {"y", 1}}}},
+           {"color", color}});
+      out["texts"].push_back(
+          {{"pose", pose}, {"font_size", 0.4}, {"color", color}, {"text", "0 : 0"}});
+    } else {
+      Json moved = pose;
+      moved["position"]["x"] = x;
+      out["arrows"].push_back({{"pose", moved},
+                               {"shaft_length", 0.3},
+                               {"head_length", 0.15},
+                               {"shaft_diameter", 0.05},
+                               {"color", color}});
+      out["cylinders"].push_back({{"pose", moved}, {"size", {{"x", 0.3}}}, {"color", color}});
+    }
+    return out;
+  };
+  const auto message = [&](bool whole, double x) {
+    Json out = {{"deletions", Json::array()}, {"entities", Json::array()}};
+    if (whole) {
+      out["deletions"].push_back({{"type", 1}, {"id", ""}});
+      out["entities"].push_back(entity("field/still", x));
+    }
+    out["entities"].push_back(entity("field/moving", x));
+    return out.dump();
+  };
+  Registry registry = test::make_test_registry();
+  Diagnostics diagnostics;
+  RecordedInputs inputs;
+  // The world's layer, replayed, writes its one actuator.
+  const auto recorded = [](std::uint64_t step) {
+    return R"({"step": )" + std::to_string(step) +
+           R"(, "inputs": {"measured": {"value": 1.5, "written": true}}})";
+  };
+  REQUIRE(inputs.load(1, recorded(1), diagnostics, message(true, 0.0)));
+  auto root = parse_document(kSafeValues, "safe.yaml", DocumentFormat::kYaml, diagnostics);
+  REQUIRE(root);
+  Model model = build_model(*root, registry, diagnostics);
+  inputs.replace_interfaces(model, diagnostics);
+  auto program = compile(model, registry, diagnostics);
+  INFO(format(diagnostics));
+  REQUIRE(program);
+  Manager manager(std::move(*program));
+  manager.step();
+  CHECK(manager.scene_primitive_count() == 4);
+  std::size_t made = 0;
+  for (std::uint64_t step = 2; step <= 30; ++step) {
+    REQUIRE(inputs.load(step, recorded(step), diagnostics, message(step % 15 == 0, 0.1 * step)));
+    allocations = 0;
+    counting = true;
+    manager.step();
+    counting = false;
+    made += allocations.load();
+    // The still line and text kept from the whole picture, the moving arrow and disc replaced.
+    CHECK(manager.scene_primitive_count() == 4);
+  }
+  CHECK(made == 0);
+  // The arrow, where the last step's message moved it.
+  const auto& scene = manager.scene();
+  const auto arrow =
+      std::find_if(scene.primitives, scene.primitives + 4,
+                   [](const ScenePrimitive& p) { return p.shape == SceneShape::kArrow; });
+  REQUIRE(arrow != scene.primitives + 4);
+  CHECK(arrow->x0 == Approx(3.0));
+}
 
 TEST_CASE("a step checked against breakpoints of every kind allocates nothing",
           "[alloc][breakpoint]") {
