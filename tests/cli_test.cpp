@@ -493,26 +493,38 @@ bool alike(const Json& a, const Json& b, double tolerance) {
   return a == b;
 }
 
-}  // namespace
-
-TEST_CASE("a replay draws the recorded picture: its recording shows what the run's showed",
-          "[replay][cli][soccer]") {
+// The scene messages of a replay of `config`'s recorded run of `steps` steps (`what_if`: with
+// the config again, as a what-if), and those of the run.
+std::pair<SceneShown, SceneShown> replayed_scene(const std::string& config, int steps,
+                                                 bool what_if) {
   const auto dir =
       fs::temp_directory_path() / ("arbiter_replay_scene_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const auto run = dir / "run.mcap";
   const auto replay = dir / "replay.mcap";
-  // Long enough for a kick and a goal: texts come and go, the ball's motion arrow too.
-  REQUIRE(run_cli("run configs/soccer/walk_and_kick.yaml --steps 300 -q --record " + quoted(run))
+  REQUIRE(run_cli(fmt::format("run {} --steps {} -q --record {}", config, steps, quoted(run)))
               .exit_code == 0);
-  const auto replayed = run_cli("replay " + quoted(run) + " --record " + quoted(replay));
+  const auto replayed = run_cli("replay " + quoted(run) + " --record " + quoted(replay) +
+                                (what_if ? " --config " + config : std::string()));
   INFO(replayed.err);
   REQUIRE(replayed.exit_code == 0);
-  const auto original = scene_shown(run);
-  const auto again = scene_shown(replay);
+  auto shown = std::make_pair(scene_shown(run), scene_shown(replay));
   fs::remove_all(dir);
+  return shown;
+}
+
+}  // namespace
+
+TEST_CASE("a replay draws the recorded picture: its recording shows what the run's showed",
+          "[replay][cli][soccer]") {
+  // The soccer demo, long enough for a kick and a goal: texts come and go, the ball's motion
+  // arrow too; the goalie, whose walks draw their targets.
+  const auto [config, steps] = GENERATE(std::make_pair("configs/soccer/walk_and_kick.yaml", 300),
+                                        std::make_pair("configs/soccer/goalie.yaml", 120));
+  INFO(config);
+  const auto [original, again] = replayed_scene(config, steps, false);
   // The soccer world draws in every step.
-  REQUIRE(original.by_step.size() == 300);
+  REQUIRE(original.by_step.size() == static_cast<std::size_t>(steps));
   REQUIRE(again.by_step.size() == original.by_step.size());
   // An arrow is written as a pose and lengths, each rounded to 1e-6, and drawn again from them:
   // its numbers come back within a rounding or two.
@@ -540,6 +552,25 @@ TEST_CASE("a replay draws the recorded picture: its recording shows what the run
   }
 }
 
+TEST_CASE("a what-if replay draws the recorded picture and what its behaviours draw beside it",
+          "[replay][cli][soccer]") {
+  // The goalie's walks draw their targets: in the recorded picture, and again by the what-if's
+  // own walks.
+  const auto [original, again] = replayed_scene("configs/soccer/goalie.yaml", 60, true);
+  REQUIRE(again.by_step.size() == original.by_step.size());
+  std::size_t more = 0;
+  for (const auto& [step, primitives] : original.by_step) {
+    INFO("step " << step);
+    const auto& replayed_primitives = again.by_step.at(step);
+    // Every recorded primitive is there.
+    for (const auto& primitive : primitives) {
+      CHECK(std::any_of(replayed_primitives.begin(), replayed_primitives.end(),
+                        [&](const Json& p) { return alike(primitive, p, 3e-6); }));
+    }
+    more += replayed_primitives.size() - primitives.size();
+  }
+  CHECK(more > 0);
+}
 TEST_CASE("a scene message that a recorder does not write stops a replay at its step and field",
           "[replay]") {
   // One line of two points, as SceneUpdates writes it; `point` is the second point's y.

@@ -191,6 +191,9 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   if (!program) return 1;
 
   Manager manager(std::move(*program), spdlog::default_logger());
+  // The recorded picture holds what the recorded behaviours drew: drawn again alike, it would be
+  // there twice. A what-if's behaviours draw beside it.
+  manager.keep_input_pass_scene_only(exact);
   manager.add_observer(inputs);   // for the recorded reloads: only the running layers are fed
   std::ostringstream trace_text;  // what the trace writer wrote in the last step, then emptied
   TraceWriter trace(trace_text);

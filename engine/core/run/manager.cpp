@@ -552,6 +552,7 @@ void Manager::step() {
     resolve_actuators(layer);
   }
   input_pass_events_ = event_count();
+  data_.scene.muted = input_pass_scene_only_;
 
   for (const auto& layer : program_.layers) {
     if (!layer.is_interface()) run_layer(layer);

@@ -110,6 +110,9 @@ struct SceneData {
   /// Primitives dropped this step: beyond the capacity, or their points (or text, or frame)
   /// beyond the room for them.
   std::size_t dropped = 0;
+  /// Drawing is ignored, and not counted as dropped: the rest of a step whose picture is a
+  /// recorded one (Manager::keep_input_pass_scene_only).
+  bool muted = false;
 
   /// What was drawn, as an observer reads it.
   ScenePicture picture() const {
@@ -225,6 +228,7 @@ class Scene {
     return true;
   }
   ScenePrimitive* add(SceneShape shape, SceneColor color) {
+    if (data_->muted) return nullptr;
     std::uint16_t frame = 0;
     if (data_->primitive_count >= data_->primitive_capacity || !resolve(frame)) {
       ++data_->dropped;
@@ -242,6 +246,7 @@ class Scene {
   }
   void add_points(SceneShape shape, const ScenePoint* points, std::size_t count, SceneColor color,
                   double width) {
+    if (data_->muted) return;
     const std::size_t least = shape == SceneShape::kPolygon ? 3 : 2;
     if (count < least || count > UINT16_MAX || data_->point_count + count > data_->point_capacity ||
         data_->point_count > UINT16_MAX) {

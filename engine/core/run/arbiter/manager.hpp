@@ -126,6 +126,12 @@ class Manager {
   /// The source of a break's event: event_source() names it "break".
   static constexpr std::uint32_t kBreakSource = kNoIndex - 1;
 
+  /// From the next step on, a step's picture is what interface layers draw in its input pass
+  /// alone: what behaviours, states and the output pass draw is ignored. A replay of the
+  /// recorded config sets it, as the recorded picture its interface draws holds what the
+  /// behaviours drew (docs/replay.md).
+  void keep_input_pass_scene_only(bool only) { input_pass_scene_only_ = only; }
+
   /// Times every step from now on (nullptr: none); not owned.
   void set_clock(StepClock* clock) { clock_ = clock; }
   bool timed() const { return clock_ != nullptr; }
@@ -235,6 +241,7 @@ class Manager {
     scene_dropped_total_ += data_.scene.dropped;
     data_.scene.primitive_count = data_.scene.point_count = data_.scene.dropped = 0;
     data_.scene.string_size = data_.scene.frame_count = 0;
+    data_.scene.muted = false;
   }
   void apply(Staged& staged);
   void end_replaced(Staged& staged);
@@ -267,6 +274,7 @@ class Manager {
   std::vector<char> scene_strings_;
   std::vector<std::uint16_t> scene_frames_;
   std::uint64_t scene_dropped_total_ = 0;
+  bool input_pass_scene_only_ = false;
   detail::StepData data_;
 };
 
