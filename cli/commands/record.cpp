@@ -152,13 +152,20 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   // A recording whose first steps were dropped holds a gap record before them: the first inputs
   // are read on to all the same, and what comes before them is kept for the step loop.
   RecordedInputs inputs;
+  // The recorded picture is drawn for whoever shows or records it: a replay that only checks
+  // that the run repeats itself does not parse it.
+  const bool draws = !options.record.empty() || !options.observers.empty();
+  static const std::string kNoScene;
+  const auto scene_of = [&](const RecordingReader::Event& event) -> const std::string& {
+    return draws ? event.scene : kNoScene;
+  };
   std::uint64_t loaded = 0;  // the step whose inputs are held
   Diagnostics diagnostics;
   std::deque<RecordingReader::Event> ahead;
   for (RecordingReader::Event first; run.next(first);) {
     const bool step_inputs = first.kind == RecordingReader::Event::Kind::kInputs;
     if (step_inputs) {
-      if (!inputs.load(first.step, first.text, diagnostics, first.scene, {options.recording})) {
+      if (!inputs.load(first.step, first.text, diagnostics, scene_of(first), {options.recording})) {
         err << format(diagnostics);
         return 1;
       }
@@ -280,7 +287,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
     if (loaded != step) {
       Diagnostics bad;
       if (!inputs.load(step, now ? event.text : std::string(), bad,
-                       now ? event.scene : std::string(), {options.recording})) {
+                       now ? scene_of(event) : kNoScene, {options.recording})) {
         err << format(bad);
         return 1;
       }
