@@ -583,7 +583,9 @@ int main(int argc, char** argv) {
       "replay",
       "Run a recorded behaviour system again, as fast as it can, with every interface layer\n"
       "replaced by the recorded inputs. Without --config it checks that the run repeats itself\n"
-      "(determinism); with --config it runs an edited graph on the same inputs (what if).");
+      "(determinism); with --config it runs an edited graph on the same inputs (what if).\n"
+      "The world is not simulated again: --record and --foxglove show the recorded picture\n"
+      "(/arbiter/scene), a what-if's behaviours drawing beside it.");
   replay_cmd->add_option("RUN", options.recording, "the recording (arbiter run --record)")
       ->required()
       ->check(CLI::ExistingFile);
