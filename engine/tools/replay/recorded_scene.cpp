@@ -81,8 +81,9 @@ class Fields {
 template <typename Visit>
 void RecordedScene::each(const Frame& frame, const std::vector<Entity>& entities, Visit visit) {
   const Entity* parts[2] = {nullptr, nullptr};  // moving, still
-  for (std::size_t e = frame.begin; e < frame.end; ++e)
+  for (std::size_t e = frame.begin; e < frame.end; ++e) {
     parts[entities[e].still ? 1 : 0] = &entities[e];
+  }
   std::uint32_t next[2][4] = {}, end[2][4] = {};
   for (std::size_t still = 0; still < 2; ++still) {
     for (std::size_t kind = 0; kind < 4 && parts[still] != nullptr; ++kind) {
@@ -197,7 +198,6 @@ bool RecordedScene::apply(const std::string& message, std::string& error) {
         read.fail(fmt::format("{}.{}: expected none (a recording draws no {})", path, none, none));
       }
     }
-    entity.kinds[0] = 0;
     const Json& arrows = read.array(item, path, "arrows");
     for (std::size_t j = 0; read.ok() && j < arrows.size(); ++j) {
       const auto at = fmt::format("{}.arrows[{}]", path, j);
