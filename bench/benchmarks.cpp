@@ -20,12 +20,6 @@
 #include <thread>
 #include <vector>
 
-#if ARBITER_HAS_FOXGLOVE
-#include <nlohmann/json.hpp>
-#include <websocketpp/client.hpp>
-#include <websocketpp/config/asio_no_tls_client.hpp>
-#endif
-
 #include "arbiter/lint.hpp"
 #include "arbiter/manager.hpp"
 #include "arbiter/recorded_inputs.hpp"
@@ -36,6 +30,9 @@
 #include "generator.hpp"
 #include "server/foxglove.hpp"
 #include "support.hpp"
+#if ARBITER_HAS_FOXGLOVE
+#include "foxglove_subscriber.hpp"
+#endif
 
 namespace arbiter::bench {
 
@@ -260,51 +257,6 @@ void record_paced(benchmark::State& state) {
 }
 
 #if ARBITER_HAS_FOXGLOVE
-/// A Foxglove client on its own thread: subscribes to every channel the server advertises and
-/// reads (and counts) every message, as a viewer keeping up does.
-class FoxgloveClient {
- public:
-  using Client = websocketpp::client<websocketpp::config::asio_client>;
-  explicit FoxgloveClient(const std::string& url) {
-    client_.clear_access_channels(websocketpp::log::alevel::all);
-    client_.clear_error_channels(websocketpp::log::elevel::all);
-    client_.init_asio();
-    client_.set_message_handler(
-        [this](websocketpp::connection_hdl handle, Client::message_ptr message) {
-          if (message->get_opcode() == websocketpp::frame::opcode::binary) {
-            // Message Data (opcode 1), not the server's clock (Time, opcode 2).
-            if (message->get_payload().front() == '\x01') ++received_;
-            return;
-          }
-          const auto json = nlohmann::json::parse(message->get_payload(), nullptr, false);
-          if (!json.is_object() || json.value("op", "") != "advertise") return;
-          auto subscribe =
-              nlohmann::json{{"op", "subscribe"}, {"subscriptions", nlohmann::json::array()}};
-          for (const auto& channel : json["channels"]) {
-            subscribe["subscriptions"].push_back({{"id", next_++}, {"channelId", channel["id"]}});
-          }
-          client_.send(handle, subscribe.dump(), websocketpp::frame::opcode::text);
-        });
-    std::error_code error;
-    auto connection = client_.get_connection(url, error);
-    if (error) return;
-    connection->add_subprotocol("foxglove.websocket.v1");
-    client_.connect(connection);
-    thread_ = std::thread([this] { client_.run(); });
-  }
-  ~FoxgloveClient() {
-    client_.stop();
-    if (thread_.joinable()) thread_.join();
-  }
-  std::uint64_t received() const { return received_; }
-
- private:
-  Client client_;
-  std::thread thread_;
-  std::atomic<std::uint64_t> received_{0};
-  std::uint32_t next_ = 0;
-};
-
 /// The soccer demo at a robot's pace, as record/soccer/paced: each step timed alone, the plain
 /// program and one served over the Foxglove WebSocket protocol (`arbiter run --foxglove`) to a
 /// client subscribed to every channel, in turn; medians.
@@ -326,7 +278,7 @@ void foxglove_paced(benchmark::State& state) {
   served.add_observer(*server);
   served.step();
   plain.step();
-  FoxgloveClient client(server->url());
+  test::FoxgloveSubscriber client(server->url());
   others_cpu.reset();
   // Subscribed once the steps reach the client.
   for (int i = 0; i < 2000 && client.received() == 0; ++i) {

@@ -16,11 +16,10 @@
 #include <thread>
 #include <vector>
 
-#if ARBITER_HAS_FOXGLOVE
 #include <nlohmann/json.hpp>
-#include <websocketpp/client.hpp>
-#include <websocketpp/config/asio_no_tls_client.hpp>
 
+#if ARBITER_HAS_FOXGLOVE
+#include "foxglove_subscriber.hpp"
 #include "server/foxglove.hpp"
 #endif
 
@@ -526,7 +525,6 @@ TEST_CASE("a recorded step allocates nothing on the stepping thread", "[alloc][r
 #if ARBITER_HAS_FOXGLOVE
 TEST_CASE("a step served to a subscribed Foxglove client allocates nothing on the stepping thread",
           "[alloc][foxglove]") {
-  using Client = websocketpp::client<websocketpp::config::asio_client>;
   Registry registry = test::make_test_registry();
   LoadOptions options;
   options.plugins.path.push_back(ARBITER_PLUGIN_DIR);
@@ -542,38 +540,13 @@ TEST_CASE("a step served to a subscribed Foxglove client allocates nothing on th
   REQUIRE(server);
   manager.add_observer(*server);
   manager.step();
-  // A client that subscribes to every channel it is advertised, and counts the messages.
-  Client client;
-  std::atomic<std::uint64_t> received{0};
-  client.clear_access_channels(websocketpp::log::alevel::all);
-  client.clear_error_channels(websocketpp::log::elevel::all);
-  client.init_asio();
-  client.set_message_handler([&](websocketpp::connection_hdl handle, Client::message_ptr message) {
-    if (message->get_opcode() == websocketpp::frame::opcode::binary) {
-      // Message Data (opcode 1), not the server's clock (Time, opcode 2).
-      if (message->get_payload().front() == '\x01') ++received;
-      return;
-    }
-    const auto json = nlohmann::json::parse(message->get_payload(), nullptr, false);
-    if (!json.is_object() || json.value("op", "") != "advertise") return;
-    auto subscribe =
-        nlohmann::json{{"op", "subscribe"}, {"subscriptions", nlohmann::json::array()}};
-    for (const auto& channel : json["channels"]) {
-      subscribe["subscriptions"].push_back({{"id", channel["id"]}, {"channelId", channel["id"]}});
-    }
-    client.send(handle, subscribe.dump(), websocketpp::frame::opcode::text);
-  });
-  std::error_code error;
-  auto connection = client.get_connection(server->url(), error);
-  REQUIRE(!error);
-  connection->add_subprotocol("foxglove.websocket.v1");
-  client.connect(connection);
-  std::thread reader([&] { client.run(); });
-  for (int i = 0; i < 2000 && received == 0; ++i) {
+  test::FoxgloveSubscriber client(server->url());
+  REQUIRE(client.connected());
+  for (int i = 0; i < 2000 && client.received() == 0; ++i) {
     manager.step();
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  REQUIRE(received > 0);  // subscribed: the steps are captured from here on
+  REQUIRE(client.received() > 0);  // subscribed: the steps are captured from here on
   const auto sent_before = server->counts().sent;
   allocations = 0;
   arbiter::test::only_thread = std::this_thread::get_id();  // not the server's or the client's
@@ -591,7 +564,6 @@ TEST_CASE("a step served to a subscribed Foxglove client allocates nothing on th
   const auto counts = server->counts();
   server->stop();
   client.stop();
-  reader.join();
   CHECK(counted == 0);
   CHECK(counts.sent > sent_before + 300);  // the steps went out, step records and inputs
   CHECK(counts.dropped_steps == 0);
@@ -658,20 +630,37 @@ TEST_CASE("drawing beyond a step's room drops and counts, without allocating", "
   }
 }
 
-TEST_CASE("a text cut to its room is cut between characters", "[scene]") {
-  ScenePrimitive primitives[2];
-  ScenePoint points[1];
-  char strings[2 * (ScenePrimitive::kFrameBytes + ScenePrimitive::kTextBytes)];
-  std::uint16_t frames[1];
+namespace {
+
+// A step's picture with room for `kPrimitives` primitives and `kPoints` points, laid out as a
+// Manager lays its own out, smaller: a text and a frame's name for each primitive.
+template <std::size_t kPrimitives, std::size_t kPoints>
+struct PictureRoom {
+  PictureRoom() {
+    data.primitives = primitives;
+    data.primitive_capacity = kPrimitives;
+    data.points = points;
+    data.point_capacity = kPoints;
+    data.strings = strings;
+    data.string_capacity = sizeof strings;
+    data.frames = frames;
+    data.frame_capacity = kPrimitives;
+  }
+  PictureRoom(const PictureRoom&) = delete;  // data points into this one
+  PictureRoom& operator=(const PictureRoom&) = delete;
+
+  ScenePrimitive primitives[kPrimitives];
+  ScenePoint points[kPoints];
+  char strings[kPrimitives * (ScenePrimitive::kFrameBytes + ScenePrimitive::kTextBytes)];
+  std::uint16_t frames[kPrimitives];
   detail::SceneData data;
-  data.primitives = primitives;
-  data.primitive_capacity = 2;
-  data.points = points;
-  data.point_capacity = 1;
-  data.strings = strings;
-  data.string_capacity = sizeof strings;
-  data.frames = frames;
-  data.frame_capacity = 1;
+};
+
+}  // namespace
+
+TEST_CASE("a text cut to its room is cut between characters", "[scene]") {
+  PictureRoom<2, 1> room;
+  auto& data = room.data;
   Scene scene(data, "field");
   std::string long_text;
   for (int i = 0; i < 30; ++i) long_text += "\xc3\xa9";  // é, two bytes
@@ -686,19 +675,9 @@ TEST_CASE("a text cut to its room is cut between characters", "[scene]") {
 
 TEST_CASE("a frame's name is written once a step, however many primitives are drawn in it",
           "[scene]") {
-  ScenePrimitive primitives[8];
-  ScenePoint points[4];
-  char strings[8 * (ScenePrimitive::kFrameBytes + ScenePrimitive::kTextBytes)];
-  std::uint16_t frames[8];
-  detail::SceneData data;
-  data.primitives = primitives;
-  data.primitive_capacity = 8;
-  data.points = points;
-  data.point_capacity = 4;
-  data.strings = strings;
-  data.string_capacity = sizeof strings;
-  data.frames = frames;
-  data.frame_capacity = 8;
+  PictureRoom<8, 4> room;
+  auto& data = room.data;
+  const ScenePrimitive* primitives = room.primitives;
   Scene field(data, "field");
   Scene robot(data, "robot");
   field.circle({0.0, 0.0}, 1.0, SceneColor{});
