@@ -81,24 +81,32 @@ const LAYOUT = {
 // Widths of text as the page draws it: a hidden probe inside `svg` carries the classes the CSS
 // sizes text by (`.behaviour .name`, `.port text`, ...). Each text is measured once, and the
 // texts prepare()d before the first width is read are laid out together: one layout of the page
-// for all of them, where one per text cost most of a large graph's drawing.
-function textMeasure(svg) {
+// for all of them, where one per text cost most of a large graph's drawing. `widths` (class,
+// class, text -> width) keeps them from one drawing to the next: an edit or a reload measures only
+// the texts it brings (the page's fonts are the system's, which do not change under it).
+const KEPT_WIDTHS = 20000;  // texts kept at most: a long session of renames does not grow them for ever
+function textMeasure(svg, widths = new Map()) {
   const probe = el('g', {visibility: 'hidden'}, svg);
-  const known = new Map();  // class, class, text -> its node, then its width once read
+  const known = new Map();  // class, class, text -> its node, until its width is read
+  if (widths.size > KEPT_WIDTHS) widths.clear();
   const prepare = (content, groupClass, textClass) => {
     const key = `${groupClass ?? ''}\n${textClass ?? ''}\n${content}`;
-    if (!known.has(key)) {
+    if (!widths.has(key) && !known.has(key)) {
       const group = el('g', groupClass ? {class: groupClass} : {}, probe);
       known.set(key, text('text', textClass ? {class: textClass, x: 0, y: 0} : {x: 0, y: 0}, content, group));
     }
     return key;
   };
+  let rendered = false;  // some text measured wider than 0: the graph is on the page
   const measure = (content, groupClass, textClass) => {
     const key = prepare(content, groupClass, textClass);
+    const kept = widths.get(key);
+    if (kept !== undefined) return kept;
     let width = known.get(key);
     if (typeof width !== 'number') {
       width = width.getComputedTextLength();
       known.set(key, width);
+      rendered ||= width > 0;
     }
     return width;
   };
@@ -107,7 +115,15 @@ function textMeasure(svg) {
     prepare(content, groupClass, textClass);
     return 0;
   };
-  measure.done = () => probe.remove();
+  measure.done = () => {
+    probe.remove();
+    // A text the CSS hides (the studio's levels) is 0 wide, and kept so; but when nothing was
+    // wider, the graph itself was not rendered (display: none), and nothing is kept.
+    if (!rendered) return;
+    for (const [key, width] of known) {
+      if (typeof width === 'number') widths.set(key, width);
+    }
+  };
   return measure;
 }
 
@@ -336,6 +352,7 @@ export class GraphView {
     folds.subscribe(() => this.rebuild());
     this.drawn = null;  // {graph, sizes, layouts}: what the SVG shows, to draw again when a layer folds
     this.laid = new Map();  // the layers' layouts of the last drawing, by their ELK graphs (layoutLayer())
+    this.textWidths = new Map();  // the texts measured in earlier drawings (textMeasure())
     warmUp();
     this.words = '';    // marked (mark())
     this.highlighted = null;
@@ -357,7 +374,7 @@ export class GraphView {
     // The layout's time, for the benchmark (web/bench/studio_frames.mjs): measured up to the SVG
     // built, not painted.
     const started = performance.now();
-    const measure = textMeasure(this.svg);
+    const measure = textMeasure(this.svg, this.textWidths);
     // Sized twice: first to gather the texts to measure, which are then measured together.
     for (const layer of graph.layers) sizeLayer(layer, measure.prepare);
     const sizes = graph.layers.map((layer) => sizeLayer(layer, measure));
@@ -425,7 +442,7 @@ export class GraphView {
     this.behaviours.clear();
     this.ports.clear();
     svg.replaceChildren();
-    const measure = textMeasure(svg);
+    const measure = textMeasure(svg, this.textWidths);
     const edges = el('g', {class: 'edges'});
     const flows = el('g', {class: 'flows'});
     const sensorAt = new Map();    // 'layer/actuator' -> {x, y, ...}

@@ -164,6 +164,40 @@ test('the soccer demo edited by mouse: an inhibition dragged, a param set in the
   await page.close();
 });
 
+test('boxes are sized to their texts at every drawing: a behaviour renamed to a long name and back', async () => {
+  const file = copyOf('soccer/walk_and_kick.yaml');
+  const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
+  const page = await open(url);
+  // Every text of every behaviour inside its box.
+  const overflowing = () => page.$$eval('.behaviour', (groups) => groups.flatMap((group) => {
+    const box = group.querySelector('rect').getBBox();
+    return [...group.querySelectorAll('text')].filter((label) => {
+      if (!label.textContent) return false;
+      const r = label.getBBox();
+      return r.x + r.width > box.x + box.width || r.y + r.height > box.y + box.height;
+    }).map((label) => `${group.dataset.name}: "${label.textContent}"`);
+  }));
+  const width = (name) => page.$eval(`.behaviour[data-name="control/${name}"] rect`, (rect) => rect.getBBox().width);
+  assert.deepEqual(await overflowing(), []);
+  const opened = await width('head_control');
+  const long = 'look_around_for_the_ball_and_then_for_both_goal_posts';
+  await selectBehaviour(page, 'head_control');
+  await page.fill('#rename-input', long);
+  await page.click('#rename');
+  await page.waitForSelector(`.behaviour[data-name="control/${long}"]`);
+  await settled(page);
+  assert.ok(await width(long) > opened + 100, `${await width(long)} against ${opened}`);
+  assert.deepEqual(await overflowing(), []);
+  // Back: the widths the page measured before give the box it had.
+  await page.click('#undo');
+  await page.waitForSelector('.behaviour[data-name="control/head_control"]');
+  await settled(page);
+  assert.equal(await width('head_control'), opened);
+  assert.deepEqual(await overflowing(), []);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('an edit in the text pane redraws the graph and shows its problems on the behaviour and in the list; an inhibition clicked is flipped and deleted', async () => {
   const file = copyOf('paper/walk_and_kick.yaml');
   const {url} = await serve(['edit', file, '--serve', '127.0.0.1:0']);
