@@ -6,9 +6,12 @@
 # (`make_seeds.sh DIR replay [ARBITER]`): the recordings there, a recording of each config of
 # configs/paper/ made with `ARBITER run --record` (default build/dev/cli/arbiter, skipped when
 # there is none), and the recorded run of tests/data/traces/ written again without chunks, so
-# that the fuzzer's mutations reach the messages rather than a compressed chunk's checksum.
+# that the fuzzer's mutations reach the messages rather than a compressed chunk's checksum. For
+# scene_fuzzer (`make_seeds.sh DIR scene`): the runs of scene messages of tests/data/scenes/, the
+# first `/arbiter/scene` messages of a soccer recording and those around its second whole picture,
+# one a line.
 set -euo pipefail
-dir=${1:?usage: make_seeds.sh DIR [config|trace|replay [ARBITER]]}
+dir=${1:?usage: make_seeds.sh DIR [config|trace|scene|replay [ARBITER]]}
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 mkdir -p "$dir"
 count=0
@@ -76,6 +79,14 @@ if [[ ${2:-config} == replay ]]; then
   else
     echo "no $arbiter: no fresh recordings among the seeds" >&2
   fi
+  echo "$count seeds in $dir"
+  exit 0
+fi
+if [[ ${2:-config} == scene ]]; then
+  for file in "$root"/tests/data/scenes/*; do
+    cp "$file" "$dir/$(basename "$file")"
+    count=$((count + 1))
+  done
   echo "$count seeds in $dir"
   exit 0
 fi

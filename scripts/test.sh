@@ -110,18 +110,22 @@ run_fuzz_smoke() {
       -DARBITER_WARNINGS_AS_ERRORS=ON \
       --log-level=WARNING
   cmake --build "$dir" --target arbiter_fuzz_config arbiter_fuzz_trace arbiter_fuzz_replay \
-      --parallel "$jobs"
-  # The config loader gets half of the time, the trace reader and replay a quarter each.
-  local config_seconds=$((seconds / 2))
-  local trace_seconds=$((seconds / 4))
-  local replay_seconds=$((seconds - config_seconds - trace_seconds))
-  echo "== fuzz: ${config_seconds} s config, ${trace_seconds} s trace, ${replay_seconds} s replay"
+      arbiter_fuzz_scene --parallel "$jobs"
+  # The config loader gets two fifths of the time; the trace reader, replay and the recorded
+  # picture a fifth each.
+  local config_seconds=$((seconds * 2 / 5))
+  local trace_seconds=$((seconds / 5))
+  local scene_seconds=$((seconds / 5))
+  local replay_seconds=$((seconds - config_seconds - trace_seconds - scene_seconds))
+  echo "== fuzz: ${config_seconds} s config, ${trace_seconds} s trace, ${replay_seconds} s replay," \
+       "${scene_seconds} s scene"
   work=$(mktemp -d)
   fuzz/make_seeds.sh "$work/seeds" >/dev/null
   fuzz/make_seeds.sh "$work/trace_seeds" trace >/dev/null
+  fuzz/make_seeds.sh "$work/scene_seeds" scene >/dev/null
   # Recordings made by the arbiter the plain job built.
   fuzz/make_seeds.sh "$work/replay_seeds" replay build/plain/cli/arbiter >/dev/null
-  mkdir -p "$work/corpus" "$work/trace_corpus" "$work/replay_corpus"
+  mkdir -p "$work/corpus" "$work/trace_corpus" "$work/replay_corpus" "$work/scene_corpus"
   "$dir/fuzz/arbiter_fuzz_config" -dict=fuzz/config.dict -max_total_time="$config_seconds" \
       -timeout=5 -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/" \
       "$work/corpus" "$work/seeds" </dev/null >"$work/fuzz.log" 2>&1 || status=$?
@@ -134,6 +138,11 @@ run_fuzz_smoke() {
     "$dir/fuzz/arbiter_fuzz_replay" -max_total_time="$replay_seconds" -timeout=5 \
         -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/" \
         "$work/replay_corpus" "$work/replay_seeds" </dev/null >>"$work/fuzz.log" 2>&1 || status=$?
+  fi
+  if [[ $status -eq 0 ]]; then
+    "$dir/fuzz/arbiter_fuzz_scene" -max_total_time="$scene_seconds" -timeout=5 \
+        -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/" \
+        "$work/scene_corpus" "$work/scene_seeds" </dev/null >>"$work/fuzz.log" 2>&1 || status=$?
   fi
   grep -E '^(stat::number_of_executed_units|stat::average_exec_per_sec|Done)' "$work/fuzz.log" || true
   if [[ $status -eq 0 ]]; then
