@@ -1543,6 +1543,7 @@ TEST_CASE(
       {"[1]", "the body is not a JSON object"},
       {"not json", "the body is not a JSON object"},
       {R"({"name": "x"})", "an operation needs 'op'"},
+      {R"({"op": 5})", "'op' is 5, not the name of an operation"},
       {R"({"op": "add_inhibition", "layer": "top"})", "add_inhibition needs 'inhibitor'"},
       {R"({"op": "set_param", "layer": "top", "behaviour": "a", "param": "p"})",
        "set_param needs 'value'"},
@@ -1569,6 +1570,13 @@ TEST_CASE(
     CHECK(result.invalid == message);
     CHECK(result.result.edits.empty());
   }
+  // A value nested 50 000 deep: printed for its edit, it would overflow the stack.
+  const std::string deep =
+      R"({"op": "set_param", "layer": "top", "behaviour": "a", "param": "p", "value": )" +
+      std::string(50000, '[') + std::string(50000, ']') + "}";
+  const OperationResult nested = apply(deep);
+  CHECK(nested.invalid == "the body is nested deeper than 200 levels (at byte 276)");
+  CHECK(nested.result.edits.empty());
   const OperationResult unknown = apply(R"({"op": "explode"})");
   CHECK_THAT(unknown.invalid,
              Catch::StartsWith("no operation 'explode': add_inhibition, remove_inhibition,") &&

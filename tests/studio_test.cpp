@@ -304,6 +304,20 @@ layers:
   CHECK(read(main) == main_text);
   CHECK(read(part) == state["files"][1]["text"]);
 
+  // The include taken out of the text: the studio still holds the part's text, but the config no
+  // longer reads it, and Save refuses to write it.
+  std::string without = main_text;
+  without.replace(without.find("include: [parts/control.yaml]\n"), 30, "");
+  REQUIRE(studio.set_texts(Json{{"texts", {{main, without}}}}.dump()).first == 200);
+  const std::string part_saved = read(part);
+  const Json stray = {
+      {"files",
+       Json::array({{{"path", part_path}, {"text", "OVERWRITTEN\n"}, {"base", part_saved}}})}};
+  const auto refused = studio.save(stray.dump());
+  CHECK(refused.first == 403);
+  CHECK(contains(refused.second, "is not one of the config's files"));
+  CHECK(read(part) == part_saved);
+
   // JSON: the inhibition as a JSON string, the param as a JSON member; the result loads.
   const std::string json =
       dir.write("robot.json", read(ARBITER_SOURCE_DIR "/configs/paper/walk_and_kick.json"));

@@ -19,6 +19,7 @@
 
 #include "arbiter/channels.hpp"
 #include "arbiter/diagnostics.hpp"
+#include "arbiter/document.hpp"
 #include "arbiter/recording.hpp"
 #include "arbiter/step_ring.hpp"
 #include "arbiter/trace.hpp"
@@ -132,6 +133,12 @@ struct FoxgloveServer::Impl {
   }
   void status(Handle handle, Client& client, StatusLevel level, const std::string& message) {
     log_client(client, message);
+    // A client that sends and never reads would otherwise have its answers pile up without end
+    // (one for each bad id of a message): as its data messages, they wait for it up to the
+    // backlog, and are dropped beyond.
+    std::error_code error;
+    const auto connection = server.get_con_from_hdl(handle, error);
+    if (error || connection->get_buffered_amount() > kClientBacklog) return;
     // The message quotes the client, whose text need not be UTF-8.
     send_text(handle, Json{{"op", "status"}, {"level", level}, {"message", message}}.dump(
                           -1, ' ', false, Json::error_handler_t::replace));
@@ -400,6 +407,14 @@ struct FoxgloveServer::Impl {
       return;
     }
     const std::string& text = message->get_payload();
+    // Printing or copying a JSON tree recurses once per level: a message nested 30 000 deep
+    // would overflow the stack of the server's thread, and end the run.
+    if (const auto deep = find_too_deep_json(text)) {
+      status(handle, client, kError,
+             fmt::format("a message nested deeper than {} levels (at byte {}): ignored",
+                         ReadLimits().max_depth, *deep));
+      return;
+    }
     const Json request = Json::parse(text, nullptr, false);
     const auto op = request.is_object() ? request.find("op") : request.end();
     if (!request.is_object() || op == request.end() || !op->is_string()) {

@@ -133,6 +133,13 @@ void Studio::adopt(EditedConfig loaded) {
   }
 }
 
+bool Studio::read_now(const std::string& path) const {
+  if (path == config_) return true;
+  const auto& files = current_.loaded.files.files();
+  return std::any_of(files.begin(), files.end(),
+                     [&](const auto& file) { return file->path == path; });
+}
+
 std::string Studio::state_json(const std::string& extra_key, const std::string& extra) {
   Json state;
   state["config"] = config_;
@@ -256,8 +263,9 @@ Reply Studio::save(const std::string& body) {
         !file["base"].is_string())
       return refusal(400, "each file needs 'path', 'text' and 'base', as strings");
     const std::string path = file["path"].get<std::string>();
-    // Only the paths the config's load read, as it wrote them: no other file, however named.
-    if (texts_.count(path) == 0)
+    // Only the config and the files its load reads now, as it wrote them: no other file,
+    // however named, nor one that an include no longer names (the studio still holds its text).
+    if (texts_.count(path) == 0 || !read_now(path))
       return refusal(403, fmt::format("refused: '{}' is not one of the config's files", path));
     // A new config's base is "": the file is not there yet, or is empty.
     if (read_disk(path).value_or("") != file["base"].get<std::string>()) {

@@ -56,7 +56,8 @@ class Studio {
   /// made on the disk (a save would be a conflict), or to drop the edits.
   Reply revert();
   /// {"files": [{"path", "text", "base"}, ...]}: each written (temp file, then rename) when every
-  /// path is one of the config's files (else 403) and every file still holds `base` (else 409);
+  /// path is the config or a file its current load reads (else 403) and every file still holds
+  /// `base` (else 409);
   /// nothing is written otherwise.
   Reply save(const std::string& body);
 
@@ -66,6 +67,8 @@ class Studio {
   /// `loaded` (of the texts) as the current load; files it newly reads join the texts.
   void adopt(EditedConfig loaded);
   std::string state_json(const std::string& extra_key = "", const std::string& extra = "");
+  /// `path` is the config or a file the current load reads (not one an include named before).
+  bool read_now(const std::string& path) const;
 
   std::string config_;
   Registry& registry_;

@@ -314,7 +314,10 @@ test('garbage frames, unknown channels and 100 connections are survived with a l
   send(JSON.stringify({op: 'unsubscribe', subscriptionIds: [12345]}));
   send(JSON.stringify({op: 'publish', data: 1}));
   send(Buffer.from([0x01, 0xff, 0xff, 0xff, 0xff, 0x00]));
-  await waitFor('a status message for each', () => statuses.length >= 9, 5000);
+  // Nested 30 000 deep, under the size limit: printing it for a status message once overflowed
+  // the server thread's stack and ended the run.
+  send(`{"op":"subscribe","subscriptions":[${'['.repeat(30000)}${']'.repeat(30000)}]}`);
+  await waitFor('a status message for each', () => statuses.length >= 10, 5000);
   console.log('statuses:', statuses.map((status) => status.message));
   // Raw garbage over TCP, not even a WebSocket handshake; and a frame too big to take.
   await new Promise((resolve) => {
@@ -350,12 +353,39 @@ test('garbage frames, unknown channels and 100 connections are survived with a l
   const {err} = await server.exited;
   console.log(err.split('\n').filter((line) => !/connected|left|End of File/.test(line)).join('\n'));
   assert.match(err, /malformed message/);
+  assert.match(err, /a message nested deeper than 200 levels \(at byte \d+\): ignored/);
   assert.match(err, /no channel has the id 9999/);
   assert.match(err, /a connection from .* failed: .*/);
   assert.match(err, /closed the connection of client .*: A message was too large/);
   assert.match(err, /client .* connected \(\d+ connected\)/);
   assert.doesNotMatch(err, /terminate|Segmentation|Aborted/);
   assert.equal(channels.size >= 3, true);
+});
+
+test('a client that sends and never reads does not make the server hold its answers without end', async () => {
+  const server = await serve(['run', soccer, '--foxglove', '0', '--steps', '1000000', '-q']);
+  const {client, ws} = await connect(server.url);
+  const megabytes = () =>
+    Number(/VmRSS:\s+(\d+)/.exec(readFileSync(`/proc/${server.child.pid}/status`, 'utf8'))[1]) / 1024;
+  ws._socket.pause();  // reads nothing from here on
+  const before = megabytes();
+  // Each id it does not know gets a status message: 2 000 000 of them, some 200 MB unread.
+  const unknown = JSON.stringify({op: 'unsubscribe', subscriptionIds: Array(20000).fill(7)});
+  for (let i = 0; i < 100; ++i) ws.send(unknown);
+  // Until the server has read them all: its memory no longer changes (within 20 s).
+  let last = before;
+  for (let steady = 0, i = 0; steady < 3 && i < 40; ++i) {
+    await new Promise((resolve) => setTimeout(resolve, 500));
+    const now = megabytes();
+    steady = Math.abs(now - last) < 1 ? steady + 1 : 0;
+    last = now;
+  }
+  const grown = megabytes() - before;
+  console.log(`the server's memory grew by ${grown.toFixed(1)} MB`);
+  assert.ok(grown < 50, `the server's memory grew by ${grown.toFixed(1)} MB`);
+  client.close();
+  server.child.kill('SIGINT');
+  await server.exited;
 });
 
 test('loopback unless another address is asked for, with a warning; a bad address is a usage error', async () => {

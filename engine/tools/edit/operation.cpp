@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "arbiter/document.hpp"
 #include "arbiter/edit.hpp"
 
 namespace arbiter {
@@ -307,15 +308,27 @@ OperationResult run(const Loaded& loaded, const Registry* registry, const Config
 
 OperationResult apply_operation(const Loaded& loaded, const std::string& request,
                                 const Registry* registry, const ConfigIndex* index) {
-  const Json json = Json::parse(request, nullptr, false);
   OperationResult out;
+  // A value is printed again for the edit it makes, and printing a JSON tree recurses once per
+  // level: a request nested 50 000 deep would overflow the stack and end the process (the
+  // running robot's, under `run --serve --edit`).
+  if (const auto deep = find_too_deep_json(request)) {
+    out.invalid = fmt::format("the body is nested deeper than {} levels (at byte {})",
+                              ReadLimits().max_depth, *deep);
+    return out;
+  }
+  const Json json = Json::parse(request, nullptr, false);
   if (!json.is_object()) {
     out.invalid = "the body is not a JSON object";
     return out;
   }
   const auto op = json.find("op");
-  if (op == json.end() || !op->is_string() || op->get<std::string>().empty()) {
+  if (op == json.end() || (op->is_string() && op->get<std::string>().empty())) {
     out.invalid = "an operation needs 'op'";
+    return out;
+  }
+  if (!op->is_string()) {
+    out.invalid = fmt::format("'op' is {}, not the name of an operation", op->dump());
     return out;
   }
   return run(loaded, registry, index, json, op->get<std::string>());
