@@ -228,6 +228,38 @@ TEST_CASE("a recording's inputs for a step far beyond its steps are an error, no
                         "it\n") != std::string::npos);
 }
 
+TEST_CASE("an inputs message that a recorder does not write stops a replay, not blamed on the run",
+          "[hostile]") {
+  TempDir dir;
+  record_run(dir / "run.jsonl", dir / "run.mcap");
+  const auto replaced = [&](const std::string& name, const std::string& text) {
+    rewrite_recording(dir / "run.mcap", dir / name,
+                      [&](const std::string& topic, int count, std::string& data) {
+                        if (topic == "/arbiter/inputs" && count == 3) data = text;
+                      });
+    return run_cli("replay " + arg(dir / name));
+  };
+  SECTION("not JSON, with no step number") {
+    const auto result = replaced("garbage.mcap", "GARBAGE");
+    CHECK_FALSE(result.signalled);
+    CHECK(result.exit_code == 1);
+    INFO(result.err);
+    CHECK(result.err.find("garbage.mcap: error: at byte ") != std::string::npos);
+    CHECK(result.err.find(": an inputs message without its \"step\" number, not one a recorder "
+                          "writes") != std::string::npos);
+    CHECK(result.err.find("not deterministic") == std::string::npos);
+  }
+  SECTION("a step number, but not JSON") {
+    const auto result = replaced("broken.mcap", "{\"step\": 3, \"inputs\": {\"x\": ");
+    CHECK_FALSE(result.signalled);
+    CHECK(result.exit_code == 1);
+    INFO(result.err);
+    CHECK(result.err.find("broken.mcap: error: the /arbiter/inputs message of step 3: not a JSON "
+                          "object with an \"inputs\" object") != std::string::npos);
+    CHECK(result.err.find("not deterministic") == std::string::npos);
+  }
+}
+
 TEST_CASE("a scenario file nested 100 000 levels deep is an error at its place, no crash",
           "[hostile]") {
   TempDir dir;

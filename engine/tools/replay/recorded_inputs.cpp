@@ -152,12 +152,10 @@ RecordedInputs::RecordedInputs() {
   class_.make_interface = [this] { return std::make_unique<RecordedInputsLayer>(*this); };
 }
 
-void RecordedInputs::add(std::uint64_t step, const std::string& text) {
+bool RecordedInputs::add(std::uint64_t step, const std::string& text) {
   const auto json = nlohmann::ordered_json::parse(text, nullptr, false);
-  if (step < first_ || step - first_ >= reported_.size() || !json.is_object() ||
-      !json.contains("inputs")) {
-    return;
-  }
+  if (!json.is_object() || !json.contains("inputs") || !json["inputs"].is_object()) return false;
+  if (step < first_ || step - first_ >= reported_.size()) return true;  // not a step held
   const auto index = step - first_;
   if (json.contains("reported") && json["reported"].is_array()) {
     for (const auto& item : json["reported"]) {
@@ -183,14 +181,15 @@ void RecordedInputs::add(std::uint64_t step, const std::string& text) {
     column->values[index] = entry.value("value", nlohmann::ordered_json()).dump();
     column->written[index] = entry.value("written", false) ? 1 : 0;
   }
+  return true;
 }
 
 bool RecordedInputs::load(std::uint64_t step, const std::string& message, Diagnostics& diagnostics,
-                          const std::string& scene, const SourceLocation& scene_at) {
+                          const std::string& scene, const SourceLocation& recording) {
   scene_now_ = !scene.empty();
   std::string bad;
   if (scene_now_ && !scene_.apply(scene, bad)) {
-    diagnostics.error(scene_at, "bad-recording",
+    diagnostics.error(recording, "bad-recording",
                       fmt::format("the /arbiter/scene message of step {}: {}", step, bad));
     return false;
   }
@@ -201,7 +200,15 @@ bool RecordedInputs::load(std::uint64_t step, const std::string& message, Diagno
     column.values.assign(1, std::string());
     column.written.assign(1, 0);
   }
-  if (!message.empty()) add(step, message);
+  // A message that is not one a recorder writes would leave the step's inputs unset, and the
+  // replay would differ from the recording with the run blamed for it.
+  if (!message.empty() && !add(step, message)) {
+    diagnostics.error(recording, "bad-recording",
+                      fmt::format("the /arbiter/inputs message of step {}: not a JSON object "
+                                  "with an \"inputs\" object",
+                                  step));
+    return false;
+  }
   std::string error;
   SourceLocation where;
   for (auto* layer : layers_) {
@@ -399,9 +406,15 @@ bool RecordingReader::read(Event& event) {
       }
       event.kind = Event::Kind::kInputs;
       const auto key = record_->data.find("\"step\": ");
-      event.step = key == std::string::npos
-                       ? 0
-                       : std::strtoull(record_->data.c_str() + key + 8, nullptr, 10);
+      const char* number = key == std::string::npos ? nullptr : record_->data.c_str() + key + 8;
+      if (number == nullptr || *number < '0' || *number > '9') {
+        fail(
+            fmt::format("at byte {}: an inputs message without its \"step\" number, not one a "
+                        "recorder writes",
+                        record_->offset));
+        return false;
+      }
+      event.step = std::strtoull(number, nullptr, 10);
       // Each step's inputs follow those of the step before it: a step beyond those the recording
       // holds (or says it dropped) is not a recorded run's, and a reader that keeps the inputs
       // per step would size that for nothing.

@@ -151,11 +151,11 @@ class RecordedInputs : public Observer {
   /// the step has none), taken at once by every interface layer bound to interface_class(),
   /// and its `/arbiter/scene` message (empty when the step drew nothing), which the first of
   /// those layers draws in the step as the recorded run's viewer showed it. False, with the
-  /// error in `diagnostics`, when a value does not fit its actuator's type, or the scene message
-  /// (from the recording `scene_at`) is not one a recorder writes. Call it between steps: it
+  /// error in `diagnostics`, when a value does not fit its actuator's type, or the inputs or
+  /// scene message (from `recording`) is not one a recorder writes. Call it between steps: it
   /// parses and allocates, so that the step itself does neither.
   bool load(std::uint64_t step, const std::string& message, Diagnostics& diagnostics,
-            const std::string& scene = std::string(), const SourceLocation& scene_at = {});
+            const std::string& scene = std::string(), const SourceLocation& recording = {});
   /// The steps held: first_held() and the held() - 1 after it.
   std::uint64_t first_held() const { return first_; }
   std::uint64_t held() const { return reported_.size(); }
@@ -200,7 +200,8 @@ class RecordedInputs : public Observer {
   void on_reload(const Manager& manager) override;
 
  private:
-  void add(std::uint64_t step, const std::string& message);
+  /// False when `message` is not a JSON object with an "inputs" object.
+  bool add(std::uint64_t step, const std::string& message);
 
   std::vector<Column> columns_;
   std::vector<std::vector<Report>> reported_;  // per held step
