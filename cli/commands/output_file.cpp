@@ -20,4 +20,13 @@ OutputPlace output_place(const std::string& path) {
   return {place.string(), fs::exists(status) && !fs::is_regular_file(status)};
 }
 
+bool same_file(const std::string& a, const std::string& b) {
+  std::error_code error;
+  if (fs::exists(a, error) && fs::exists(b, error)) return fs::equivalent(a, b, error);
+  const fs::path first = fs::weakly_canonical(a, error);
+  if (error) return false;
+  const fs::path second = fs::weakly_canonical(b, error);
+  return !error && first == second;
+}
+
 }  // namespace arbiter::cli

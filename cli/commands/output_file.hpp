@@ -16,4 +16,8 @@ struct OutputPlace {
 
 OutputPlace output_place(const std::string& path);
 
+/// Whether two paths name one file: the same file when both exist (through links and hard
+/// links), the same normal path otherwise.
+bool same_file(const std::string& a, const std::string& b);
+
 }  // namespace arbiter::cli

@@ -2,7 +2,8 @@
 # `arbiter replay --trace FILE` (and `--record FILE`) puts FILE in place once the replay has run:
 # a replay that fails part way (here, on a recording damaged in its middle) leaves FILE as it
 # was, and no partial file beside it. A symbolic link is written through and stays a link; a FIFO
-# is written to, not replaced.
+# is written to, not replaced. An output that is the recording itself (or the config of `run`) is
+# refused before anything is written.
 set -eu
 cli=$1
 source_dir=$2
@@ -54,3 +55,21 @@ wait "${pids[-1]}" || fail "the FIFO's reader got no trace"
 grep -q '"step": 5' "$work/from_fifo.jsonl" || fail "the FIFO's reader did not get the trace"
 leftover=$(find "$work" -name '*.partial')
 [[ -z $leftover ]] || fail "a partial file is left: $leftover"
+
+# An output that is the recording (by its name, or through a link) is refused, and it is kept.
+cp "$work/run.mcap" "$work/kept.mcap"
+ln -s kept.mcap "$work/alias.mcap"
+expect_exit 2 "$cli" replay "$work/kept.mcap" --record "$work/kept.mcap"
+grep -qF "'$work/kept.mcap' is the recording being replayed ('$work/kept.mcap')" "$work/err.txt" ||
+  fail "the refusal does not name the files"
+expect_exit 2 "$cli" replay "$work/kept.mcap" --trace "$work/alias.mcap"
+grep -qF "'$work/alias.mcap' is the recording being replayed ('$work/kept.mcap')" "$work/err.txt" ||
+  fail "the refusal does not name the files"
+cmp -s "$work/run.mcap" "$work/kept.mcap" || fail "the recording was written over"
+# So is a run's output that is its config.
+cp "$config" "$work/counter.yaml"
+expect_exit 2 "$cli" run "$work/counter.yaml" --steps 5 --record "$work/counter.yaml"
+grep -qF "'$work/counter.yaml' is the config being run" "$work/err.txt" || fail "no refusal"
+expect_exit 2 "$cli" run "$work/counter.yaml" --steps 5 --trace "$work/./counter.yaml"
+cmp -s "$config" "$work/counter.yaml" || fail "the config was written over"
+echo ok
