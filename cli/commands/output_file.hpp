@@ -9,8 +9,9 @@ struct OutputPlace {
   /// The file to replace: the path, or the file a symbolic link there leads to (followed through
   /// every link), so that a link stays a link and what it names gets the new text.
   std::string path;
-  /// The path exists and is not a regular file (a FIFO, a terminal, /dev/stdout): it is written
-  /// directly, as renaming a file over it would replace it.
+  /// The path exists and is not a regular file (a FIFO, a terminal, a pipe), or names an open
+  /// descriptor (/dev/stdout, /dev/fd/N): it is written directly, as renaming a file over it would
+  /// replace it.
   bool in_place = false;
 };
 

@@ -134,8 +134,6 @@ RecordingInfo recording_info(const std::string& config, const Registry& registry
 }
 
 int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err) {
-  // The recording is read as the replay goes, twice over (its inputs, and its steps to compare
-  // with), never whole: a replay's memory does not grow with the recording.
   for (const std::string* output : {&options.record, &options.trace}) {
     if (output->empty() || !same_file(*output, options.recording)) continue;
     err << fmt::format(
@@ -144,6 +142,8 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
         *output, options.recording);
     return 2;
   }
+  // The recording is read as the replay goes, twice over (its inputs, and its steps to compare
+  // with), never whole: a replay's memory does not grow with the recording.
   RecordingReader run(options.recording);
   if (run.error()) {
     err << format(*run.error());

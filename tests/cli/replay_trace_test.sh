@@ -53,6 +53,10 @@ expect_exit 0 "$cli" replay "$work/run.mcap" --steps 5 --trace "$work/fifo"
 wait "${pids[-1]}" || fail "the FIFO's reader got no trace"
 [[ -p $work/fifo ]] || fail "the FIFO was replaced"
 grep -q '"step": 5' "$work/from_fifo.jsonl" || fail "the FIFO's reader did not get the trace"
+# So is a pipe named through a descriptor (/dev/fd/1, as /dev/stdout is).
+"$cli" replay "$work/run.mcap" --steps 5 --trace /dev/fd/1 | cat >"$work/piped.jsonl"
+[[ ${PIPESTATUS[0]} -eq 0 ]] || fail "the replay to /dev/fd/1 failed"
+grep -q '"step": 5' "$work/piped.jsonl" || fail "the pipe did not get the trace"
 leftover=$(find "$work" -name '*.partial')
 [[ -z $leftover ]] || fail "a partial file is left: $leftover"
 
