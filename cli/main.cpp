@@ -592,11 +592,14 @@ int main(int argc, char** argv) {
   replay_cmd->add_option("--config", options.config, "an edited config to run instead")
       ->check(CLI::ExistingPath)
       ->type_name("FILE");
-  replay_cmd->add_option("--trace", options.trace_path, "write the replay's JSON-lines trace")
+  replay_cmd
+      ->add_option("--trace", options.trace_path,
+                   "write the replay's JSON-lines trace, put in place once the replay has run")
       ->type_name("OUT.jsonl");
   add_record_options(*replay_cmd, options,
-                     "record the replay as MCAP; a write that fails is reported at once and ends "
-                     "the recording, not the replay, which then exits 2",
+                     "record the replay as MCAP, put in place once the replay has run; a write "
+                     "that fails is reported at once and ends the recording, not the replay, "
+                     "which then exits 2",
                      "OUT.mcap",
                      "with --record: write the recording out to the disk at least every SECONDS; "
                      "0: only every 256 KiB of steps");

@@ -1,9 +1,11 @@
 // The studio's API (cli/server/studio.cpp, docs/studio.md): operations answer with their edits,
 // the new texts and validate's messages and write nothing; Save writes only the config's own
 // files, refuses another path (403) and a file changed on the disk since it was opened (409),
-// writing nothing then; over HTTP, the server's token and Origin checks guard it.
+// writing nothing then; it writes through a symbolic link, and a new file gets the usual mode;
+// over HTTP, the server's token and Origin checks guard it.
 
 #include <httplib.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -12,6 +14,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "arbiter/catalog.hpp"
 #include "server/serve.hpp"
@@ -569,4 +572,48 @@ TEST_CASE("the studio opens a config that does not exist yet as a valid one, wri
         "{\n  \"arbiter\": 1,\n  \"name\": \"_9lives\",\n  \"layers\": []\n}\n");
   CHECK(json_state["files"][0]["base"] == "\n");
   CHECK(json_state["diagnostics"].empty());
+}
+
+TEST_CASE("the studio's save writes through a symbolic link, which stays a link", "[studio]") {
+  TempDir dir;
+  const std::string real = config_copy(dir);
+  const std::string link = dir.file("link.yaml");
+  std::filesystem::create_symlink("robot.yaml", link);
+  Registry registry = make_test_registry();
+  Studio studio(link, registry, with_lints());
+  REQUIRE(studio
+              .edit(R"({"op": "add_inhibition", "layer": "control", "inhibitor": "kick_ball",
+                        "inhibited": "search_for_ball", "chaining": false})")
+              .first == 200);
+  REQUIRE(studio.save(save_body(Json::parse(studio.state().second))).first == 200);
+
+  CHECK(std::filesystem::is_symlink(link));
+  CHECK(contains(read(real), "      - kick_ball -> search_for_ball\n"));
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  CHECK(names == std::vector<std::string>{"link.yaml", "robot.yaml"});  // no temporary file left
+}
+
+TEST_CASE(
+    "a file the studio's save creates gets the mode of any new file, one it replaces keeps "
+    "its own",
+    "[studio]") {
+  TempDir dir;
+  Registry registry = make_test_registry();
+  const std::string created = dir.file("robot.yaml");
+  const std::string kept = dir.write("kept.yaml", "arbiter: 1\nname: kept\nlayers: []\n");
+  std::filesystem::permissions(kept, std::filesystem::perms(0640));
+  const ::mode_t umask = ::umask(022);
+  for (const auto& path : {created, kept}) {
+    Studio studio(path, registry, with_lints());
+    REQUIRE(studio.edit(R"({"op": "add_layer", "name": "control"})").first == 200);
+    REQUIRE(studio.save(save_body(Json::parse(studio.state().second))).first == 200);
+  }
+  ::umask(umask);
+  CHECK(std::filesystem::status(created).permissions() == std::filesystem::perms(0644));
+  CHECK(std::filesystem::status(kept).permissions() == std::filesystem::perms(0640));
+  CHECK(contains(read(kept), "  - name: control\n"));
 }

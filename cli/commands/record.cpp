@@ -22,6 +22,7 @@
 #include "arbiter/trace.hpp"
 #include "arbiter/trace_diff.hpp"
 #include "arbiter/trace_reader.hpp"
+#include "commands/output_file.hpp"
 
 namespace arbiter::cli {
 
@@ -67,32 +68,42 @@ class RecordedConfig {
   Overlay overlay_;
 };
 
-/// A file written under a temporary name beside its path and renamed over it once whole, so that
-/// a replay that fails leaves the file as it was, as when it wrote its trace only at its end.
+/// A file written under a temporary name beside its path (or beside the file a link there leads
+/// to) and renamed over it once whole, so that a replay that fails leaves the file as it was, as
+/// when it wrote its trace only at its end. A FIFO or a device is written directly.
 class PendingFile {
  public:
-  explicit PendingFile(std::string path)
-      : path_(std::move(path)), temp_(fmt::format("{}.{}.partial", path_, ::getpid())) {}
+  explicit PendingFile(const std::string& path)
+      : place_(output_place(path)),
+        temp_(place_.in_place ? place_.path
+                              : fmt::format("{}.{}.partial", place_.path, ::getpid())) {}
   PendingFile(const PendingFile&) = delete;
   PendingFile& operator=(const PendingFile&) = delete;
   ~PendingFile() {
-    if (!out_.is_open()) return;
-    out_.close();
+    if (out_.is_open()) out_.close();
+    if (done_ || place_.in_place) return;
     std::error_code ignored;
     fs::remove(temp_, ignored);
   }
+  /// Where the file is written until commit(), by open() or by a writer of its own.
+  const std::string& path() const { return temp_; }
   bool open() {
     out_.open(temp_, std::ios::binary | std::ios::trunc);
     return out_.is_open();
   }
-  bool is_open() const { return out_.is_open(); }
   std::ostream& stream() { return out_; }
   /// Puts the file in place; false (the file left as it was) when it could not be written.
   bool commit() {
-    out_.close();
+    done_ = true;
+    bool failed = false;
+    if (out_.is_open()) {
+      out_.close();
+      failed = out_.fail();
+    }
+    if (place_.in_place) return !failed;
     std::error_code error;
-    if (!out_.fail()) fs::rename(temp_, path_, error);
-    if (out_.fail() || error) {
+    if (!failed) fs::rename(temp_, place_.path, error);
+    if (failed || error) {
       fs::remove(temp_, error);
       return false;
     }
@@ -100,9 +111,10 @@ class PendingFile {
   }
 
  private:
-  std::string path_;
+  OutputPlace place_;
   std::string temp_;
   std::ofstream out_;
+  bool done_ = false;
 };
 
 }  // namespace
@@ -122,6 +134,14 @@ RecordingInfo recording_info(const std::string& config, const Registry& registry
 }
 
 int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err) {
+  for (const std::string* output : {&options.record, &options.trace}) {
+    if (output->empty() || !same_file(*output, options.recording)) continue;
+    err << fmt::format(
+        "arbiter replay: '{}' is the recording being replayed ('{}'): writing it would destroy "
+        "it\n",
+        *output, options.recording);
+    return 2;
+  }
   // The recording is read as the replay goes, twice over (its inputs, and its steps to compare
   // with), never whole: a replay's memory does not grow with the recording.
   RecordingReader run(options.recording);
@@ -213,10 +233,13 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       return 2;
     }
   }
+  // Written beside its path and put in place with the trace, for the same reason.
+  std::optional<PendingFile> record_file;
   std::unique_ptr<Recorder> recorder;
   if (!options.record.empty()) {
+    record_file.emplace(options.record);
     recorder = std::make_unique<Recorder>(
-        options.record,
+        record_file->path(),
         options.config.empty() ? run.info()
                                : recording_info(config, registry, options.load, options.version),
         Recorder::kSlots, RingFull::kWaitForWriter);  // a replay keeps no pace: it loses nothing
@@ -225,6 +248,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       return 2;
     }
     recorder->set_flush_interval(options.record_flush);
+    recorder->set_name(options.record);
     manager.add_observer(*recorder);
   }
   for (Observer* observer : options.observers) manager.add_observer(*observer);
@@ -325,6 +349,11 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   written_out();
   if (trace_file && !trace_file->commit()) {
     err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
+    return 2;
+  }
+  // A recording that failed part way is put in place too: it keeps what was written before.
+  if (record_file && !record_file->commit()) {
+    err << fmt::format("arbiter replay: cannot write '{}'\n", options.record);
     return 2;
   }
   const std::uint64_t steps = manager.steps();

@@ -19,6 +19,7 @@
 #include "arbiter/scenario_run.hpp"
 #include "arbiter/trace.hpp"
 #include "commands/command.hpp"
+#include "commands/output_file.hpp"
 #include "commands/record.hpp"
 #include "commands/run_report.hpp"
 #include "commands/timing.hpp"
@@ -30,6 +31,13 @@
 namespace arbiter::cli {
 
 int run_command(const Options& options) {
+  for (const std::string* output : {&options.record_path, &options.trace_path}) {
+    if (output->empty() || !same_file(*output, options.file)) continue;
+    std::cerr << fmt::format(
+        "arbiter run: '{}' is the config being run ('{}'): writing it would destroy it\n", *output,
+        options.file);
+    return kExitUsage;
+  }
   auto registry = make_registry();
   arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
   arbiter::Diagnostics load_diagnostics;  // its warnings go into the recording's log

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
@@ -18,6 +19,7 @@
 #include "arbiter/catalog.hpp"
 #include "arbiter/dump.hpp"
 #include "arbiter/reload.hpp"
+#include "commands/output_file.hpp"
 
 namespace arbiter::cli {
 
@@ -77,17 +79,30 @@ std::string new_config_text(const std::string& path) {
 }
 
 bool write_atomically(const std::string& path, const std::string& text, std::string& error) {
-  const auto slash = path.rfind('/');
-  const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash);
-  const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-  std::string temp = fmt::format("{}/.{}.arbiter-XXXXXX", dir, name);
-  const int fd = ::mkstemp(temp.data());
+  const OutputPlace place = output_place(path);
+  const auto slash = place.path.rfind('/');
+  const std::string dir = slash == std::string::npos ? "." : place.path.substr(0, slash);
+  const std::string name = slash == std::string::npos ? place.path : place.path.substr(slash + 1);
+  // Created with open() rather than mkstemp(), whose 0600 a new file would keep: a new file gets
+  // the mode any file created here gets (0666 less the umask), an existing one keeps its own.
+  static std::atomic<unsigned> serial{0};
+  std::string temp;
+  int fd = -1;
+  if (place.in_place) {
+    fd = ::open(place.path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  } else {
+    do {
+      temp = fmt::format("{}/.{}.arbiter-{}-{}", dir, name, ::getpid(), serial++);
+      fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    } while (fd < 0 && errno == EEXIST);
+  }
   if (fd < 0) {
-    error = fmt::format("cannot write in {}: {}", dir, std::strerror(errno));
+    error = place.in_place ? fmt::format("cannot write {}: {}", path, std::strerror(errno))
+                           : fmt::format("cannot write in {}: {}", dir, std::strerror(errno));
     return false;
   }
   struct stat info {};
-  if (::stat(path.c_str(), &info) == 0) ::fchmod(fd, info.st_mode & 07777);
+  if (!place.in_place && ::stat(place.path.c_str(), &info) == 0) ::fchmod(fd, info.st_mode & 07777);
   std::size_t done = 0;
   bool ok = true;
   while (ok && done < text.size()) {
@@ -96,12 +111,13 @@ bool write_atomically(const std::string& path, const std::string& text, std::str
     ok = written > 0;
     if (ok) done += static_cast<std::size_t>(written);
   }
-  ok = ok && ::fsync(fd) == 0;
+  // A FIFO or a terminal cannot be synced (EINVAL), nor does it need to be.
+  ok = ok && (place.in_place || ::fsync(fd) == 0);
   const int saved_errno = errno;
   ok = ::close(fd) == 0 && ok;
-  if (ok && ::rename(temp.c_str(), path.c_str()) == 0) return true;
+  if (ok && (place.in_place || ::rename(temp.c_str(), place.path.c_str()) == 0)) return true;
   error = fmt::format("cannot write {}: {}", path, std::strerror(ok ? errno : saved_errno));
-  ::unlink(temp.c_str());
+  if (!place.in_place) ::unlink(temp.c_str());
   return false;
 }
 

@@ -1,7 +1,9 @@
 #!/bin/bash
-# `arbiter replay --trace FILE` puts FILE in place once the replay has run: a replay that fails
-# part way (here, on a recording damaged in its middle) leaves FILE as it was, and no partial
-# file beside it.
+# `arbiter replay --trace FILE` (and `--record FILE`) puts FILE in place once the replay has run:
+# a replay that fails part way (here, on a recording damaged in its middle) leaves FILE as it
+# was, and no partial file beside it. A symbolic link is written through and stays a link; a FIFO
+# is written to, not replaced. An output that is the recording itself (or the config of `run`) is
+# refused before anything is written.
 set -eu
 cli=$1
 source_dir=$2
@@ -22,9 +24,56 @@ cp "$work/run.mcap" "$work/bad.mcap"
 head -c 30000 /dev/zero | tr '\0' '\377' |
   dd of="$work/bad.mcap" bs=1 seek=$((size / 3)) conv=notrunc 2>/dev/null
 echo previous >"$work/trace.jsonl"
-expect_exit 1 "$cli" replay "$work/bad.mcap" --trace "$work/trace.jsonl"
+echo previous >"$work/record.mcap"
+expect_exit 1 "$cli" replay "$work/bad.mcap" --trace "$work/trace.jsonl" --record "$work/record.mcap"
 grep -q "bad.mcap: error: at byte" "$work/err.txt" || fail "no error where the recording is damaged"
 [[ $(cat "$work/trace.jsonl") == previous ]] || fail "the failed replay changed the trace file"
+[[ $(cat "$work/record.mcap") == previous ]] || fail "the failed replay changed the recording file"
 leftover=$(find "$work" -name '*.partial')
 [[ -z $leftover ]] || fail "a partial trace is left: $leftover"
+
+# Through symbolic links: the files they lead to get the replay's outputs, the links stay links.
+echo previous >"$work/real.jsonl"
+ln -s real.jsonl "$work/link.jsonl"
+mkdir "$work/records"
+ln -s records/real.mcap "$work/link.mcap"  # to a file not there yet
+expect_exit 0 "$cli" replay "$work/run.mcap" --steps 5 --trace "$work/link.jsonl" \
+  --record "$work/link.mcap"
+[[ -L $work/link.jsonl && -L $work/link.mcap ]] || fail "a link was replaced by a file"
+grep -q '"step": 5' "$work/real.jsonl" || fail "the trace did not go where the link leads"
+expect_exit 0 "$cli" replay "$work/records/real.mcap"
+grep -q "replayed 5 steps" "$work/out.txt" || fail "the recording did not go where the link leads"
+
+# A FIFO is written to: its reader gets the trace, and it is still a FIFO.
+mkfifo "$work/fifo"
+# Bounded: a FIFO renamed away leaves its reader waiting for a writer that never comes.
+timeout 20 cat "$work/fifo" >"$work/from_fifo.jsonl" &
+pids+=($!)
+expect_exit 0 "$cli" replay "$work/run.mcap" --steps 5 --trace "$work/fifo"
+wait "${pids[-1]}" || fail "the FIFO's reader got no trace"
+[[ -p $work/fifo ]] || fail "the FIFO was replaced"
+grep -q '"step": 5' "$work/from_fifo.jsonl" || fail "the FIFO's reader did not get the trace"
+# So is a pipe named through a descriptor (/dev/fd/1, as /dev/stdout is).
+"$cli" replay "$work/run.mcap" --steps 5 --trace /dev/fd/1 | cat >"$work/piped.jsonl"
+[[ ${PIPESTATUS[0]} -eq 0 ]] || fail "the replay to /dev/fd/1 failed"
+grep -q '"step": 5' "$work/piped.jsonl" || fail "the pipe did not get the trace"
+leftover=$(find "$work" -name '*.partial')
+[[ -z $leftover ]] || fail "a partial file is left: $leftover"
+
+# An output that is the recording (by its name, or through a link) is refused, and it is kept.
+cp "$work/run.mcap" "$work/kept.mcap"
+ln -s kept.mcap "$work/alias.mcap"
+expect_exit 2 "$cli" replay "$work/kept.mcap" --record "$work/kept.mcap"
+grep -qF "'$work/kept.mcap' is the recording being replayed ('$work/kept.mcap')" "$work/err.txt" ||
+  fail "the refusal does not name the files"
+expect_exit 2 "$cli" replay "$work/kept.mcap" --trace "$work/alias.mcap"
+grep -qF "'$work/alias.mcap' is the recording being replayed ('$work/kept.mcap')" "$work/err.txt" ||
+  fail "the refusal does not name the files"
+cmp -s "$work/run.mcap" "$work/kept.mcap" || fail "the recording was written over"
+# So is a run's output that is its config.
+cp "$config" "$work/counter.yaml"
+expect_exit 2 "$cli" run "$work/counter.yaml" --steps 5 --record "$work/counter.yaml"
+grep -qF "'$work/counter.yaml' is the config being run" "$work/err.txt" || fail "no refusal"
+expect_exit 2 "$cli" run "$work/counter.yaml" --steps 5 --trace "$work/./counter.yaml"
+cmp -s "$config" "$work/counter.yaml" || fail "the config was written over"
 echo ok

@@ -78,6 +78,10 @@ class Recorder : public Observer {
   void set_flush_interval(double seconds) { flush_interval_ = seconds; }
   /// Where a failed write is reported (default: spdlog's default logger). Before the run starts.
   void set_logger(std::shared_ptr<spdlog::logger> logger) { logger_ = std::move(logger); }
+  /// The file as a failed write's report names it (default: the path it was opened with): one
+  /// written under a temporary name and renamed once whole is named as it will be. Before the
+  /// run starts.
+  void set_name(std::string name) { path_ = std::move(name); }
   /// True once a write to the file failed (any thread).
   bool failed() const { return failed_.load(std::memory_order_acquire); }
   /// Why, and at which step: "No space left on device (writing step 605)"; "" until failed().
