@@ -68,6 +68,16 @@ const waitFor = (what, predicate, ms = 60000) => new Promise((resolve, reject) =
   }, 20);
 });
 
+/// The soccer world's whole picture in one scene message: its frame's still and moving entities
+/// only, holding together the robot with its heading, the ball and the field lines.
+function assertWholeField(scene) {
+  const ids = scene.entities.map((e) => e.id);
+  assert.ok(ids.includes('field/still') && ids.every((id) => ['field/moving', 'field/still'].includes(id)), `${ids}`);
+  const all = (kind) => scene.entities.flatMap((e) => e[kind]);
+  assert.ok(all('arrows').length >= 1 && all('cylinders').length >= 2 && all('lines').length >= 4,
+            'the robot with its heading, the ball and the field lines');
+}
+
 /// The soccer demo at `rate` steps per second, in the scratch folder beside its includes.
 function soccerAt(rate) {
   const file = path.join(scratch, `soccer_${rate}.yaml`);
@@ -153,11 +163,7 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   assert.ok(firstScene.deletions.some((d) => d.type === 1), 'the first scene message deletes all');
   // Split as the world drew it: what moved since the step before (none, if the client subscribed
   // before the first step) and what did not; together, the field with the robot and the ball.
-  const ids = firstScene.entities.map((e) => e.id);
-  assert.ok(ids.includes('field/still') && ids.every((id) => ['field/moving', 'field/still'].includes(id)), `${ids}`);
-  const all = (kind) => firstScene.entities.flatMap((e) => e[kind]);
-  assert.ok(all('arrows').length >= 1 && all('cylinders').length >= 2 && all('lines').length >= 4,
-            'the robot with its heading, the ball and the field lines');
+  assertWholeField(firstScene);
   // What the world reported (the kick) is on /arbiter/log too, at its step's log time: a paced
   // run's, the wall clock.
   await waitFor('the kick reported', () => logs.some((log) => /kick/.test(log.text)), 10000);
@@ -225,11 +231,7 @@ test('replay --foxglove serves a recording at its pace, its messages as a run se
   assert.ok(scenes.every(({time}) => times.includes(time)), 'each at a step\'s log time');
   const first = scenes[0].message;
   assert.ok(first.deletions.some((d) => d.type === 1), 'the first scene message deletes all');
-  const ids = first.entities.map((e) => e.id);
-  assert.ok(ids.includes('field/still') && ids.every((id) => ['field/moving', 'field/still'].includes(id)), `${ids}`);
-  const all = (kind) => first.entities.flatMap((e) => e[kind]);
-  assert.ok(all('arrows').length >= 1 && all('cylinders').length >= 2 && all('lines').length >= 4,
-            'the robot with its heading, the ball and the field lines');
+  assertWholeField(first);
   assert.ok(scenes.slice(1).some(({message}) => message.deletions.length === 0 &&
                                                 message.entities.map((e) => e.id).join() === 'field/moving'),
             'between whole pictures, only what moves');
