@@ -9,6 +9,7 @@ import {version as elkVersion} from 'elkjs/package.json';
 
 import {colour, el, formatValue, text} from './dom.js';
 import {Folds} from './folds.js';
+import {quickLayout} from './quick_layout.js';
 import {levelsOf} from './records.js';
 
 const COLUMN = 270;   // the narrowest width of a layer's column
@@ -199,7 +200,7 @@ function sizeLayer(layer, measure) {
 // ELK's layout of a layer's behaviours and inhibitions, at (0, 0): the one in `laid` (key ->
 // layout) when the layer has the same boxes and edges as one laid out before, else a new one.
 // ELK takes tens of milliseconds for a layer of 50 behaviours: an edit lays out the layers it
-// changed, not all.
+// changed, not all. Returns {key, graph, layout: a promise of it, done: it, once it is known}.
 function layoutLayer(layer, size, laid) {
   const graph = {
     id: 'layer',
@@ -211,12 +212,15 @@ function layoutLayer(layer, size, laid) {
   };
   const key = JSON.stringify(graph);
   const known = laid.get(key);
-  if (known) return {key, layout: known};
+  if (known) return known;
   const stored = storedLayout(key);
-  if (stored) return {key, layout: Promise.resolve(stored)};
-  const layout = elkLayout(graph);
-  layout.then((result) => storeLayout(key, result), () => {});
-  return {key, layout};
+  if (stored) return {key, graph, layout: Promise.resolve(stored), done: stored};
+  const entry = {key, graph, layout: elkLayout(graph), done: null};
+  entry.layout.then((result) => {
+    entry.done = result;
+    storeLayout(key, result);
+  }, () => {});
+  return entry;
 }
 
 // Layouts kept in the browser's storage by the graph they are of, so that a page opened again on
@@ -381,16 +385,32 @@ export class GraphView {
     measure.done();
     const measured = performance.now();
     const laid = new Map();
-    const layouts = await Promise.all(graph.layers.map((layer, index) => {
-      const {key, layout} = layoutLayer(layer, sizes[index], this.laid);
-      laid.set(key, layout);
-      return layout;
-    }));
+    const entries = graph.layers.map((layer, index) => {
+      const entry = layoutLayer(layer, sizes[index], this.laid);
+      laid.set(entry.key, entry);
+      return entry;
+    });
+    // A page's first drawing does not wait for ELK's first layouts, its slowest (quick_layout.js):
+    // the graph is shown at once, laid out as ELK would lay out most layers, and drawn again with
+    // ELK's layouts when they come. A later drawing keeps the one shown until its layouts come.
+    const provisional = !this.drawn && entries.some((entry) => !entry.done);
+    if (provisional) {
+      this.drawn = {graph, sizes, layouts: entries.map((entry) => entry.done ?? quickLayout(entry.graph))};
+      this.svg.dataset.provisional = 'true';
+      this.rebuild({layers: new Set(), behaviours: new Set()});
+      performance.measure('arbiter:layout:provisional', {start: started});
+    }
+    // Layouts under way are found by the drawings that follow, not asked of ELK again.
+    for (const [key, entry] of laid) this.laid.set(key, entry);
+    const layouts = await Promise.all(entries.map((entry) => entry.layout));
     if (drawing !== this.drawing) return false;
     this.laid = laid;
     const laidOut = performance.now();
     const before = this.drawn?.graph;
     this.drawn = {graph, sizes, layouts};
+    delete this.svg.dataset.provisional;
+    // ELK's drawing in place of the provisional one is fitted again, unless the view was moved.
+    if (provisional) this.view?.refit();
     this.rebuild(before ? addedTo(before, graph) : {layers: new Set(), behaviours: new Set()});
     performance.measure('arbiter:layout', {start: started});
     performance.measure('arbiter:layout:text', {start: started, end: measured});

@@ -209,6 +209,11 @@ export class Viewport {
     if (!this.shows(rect)) this.centre(rect);
   }
 
+  /** The graph is laid out anew (ELK's layout after a provisional one): fitted again unless moved. */
+  refit() {
+    if (!this.byHand) this.fitted = false;
+  }
+
   /**
    * The graph was drawn (again): fitted the first time. After that a new graph (an edit, a
    * reload) that no longer fits in the stage is fitted again if the view is still the last fit,

@@ -44,6 +44,9 @@ async function serve(args) {
   return {url: found[0], base: found[1], token: found[3], child, output};
 }
 
+// The graph drawn with ELK's layouts, not the provisional drawing a page shows before them.
+const ELK_DRAWN = '#graph:not([data-provisional]) .behaviour';
+
 async function open(url, timeout = 10000) {
   const page = await browser.newPage({viewport: {width: 1400, height: 900}});
   page.setDefaultTimeout(timeout);
@@ -57,7 +60,7 @@ async function open(url, timeout = 10000) {
     throw new Error(`this arbiter was built without the web app: ${await page.textContent('body')}`);
   }
   await page.waitForSelector('body[data-ready="true"]');
-  await page.waitForSelector('.behaviour');
+  await page.waitForSelector(ELK_DRAWN);
   return page;
 }
 
@@ -94,7 +97,7 @@ test('a page opened again revalidates its scripts, ELK\'s worker too, instead of
     if (name.endsWith('.js')) received.push([name, (await request.sizes()).responseBodySize]);
   });
   await page.reload();
-  await page.waitForSelector('.behaviour');
+  await page.waitForSelector(ELK_DRAWN);
   await page.waitForFunction(() => document.querySelectorAll('#graph .edge').length === 4);
   await page.waitForFunction(() => performance.getEntriesByName('arbiter:layout:warm-up').length > 0);
   // Each request's sizes come a moment after it finished.
@@ -112,7 +115,7 @@ test('a page opened again on the same graph draws it from the layouts the browse
   const page = await context.newPage();
   const drawn = async () => {
     await page.waitForSelector('body[data-ready="true"]');
-    await page.waitForSelector('#graph .behaviour');
+    await page.waitForSelector(ELK_DRAWN);
     return page.$eval('#graph', (svg) => [...svg.querySelectorAll('.behaviour rect, .edge path')]
         .map((node) => `${node.closest('[data-name], [data-from]').outerHTML.slice(0, 60)} ${node.getAttribute('x')} ` +
                        `${node.getAttribute('y')} ${node.getAttribute('d')}`));
@@ -516,6 +519,59 @@ async function layoutProblems(page) {
     return problems;
   });
 }
+
+// Each behaviour box's place in the SVG, 'layer/name x y'.
+const boxPlaces = (page) => page.$$eval('#graph .behaviour', (groups) => groups.map((g) =>
+  `${g.dataset.name} ${g.querySelector('rect').getAttribute('x')} ${g.querySelector('rect').getAttribute('y')}`));
+
+/**
+ * Opens `url` in a new browser (no layouts stored) with ELK's worker script held back until
+ * `release()` is called: the page shows its provisional drawing until then.
+ */
+async function openWithElkHeld(url) {
+  const page = await browser.newPage({viewport: {width: 1400, height: 900}});
+  page.setDefaultTimeout(10000);
+  let release;
+  const held = new Promise((resolve) => { release = resolve; });
+  await page.route('**/elk-worker.js', async (route) => {
+    await held;
+    await route.continue();
+  });
+  await page.goto(url);
+  await page.waitForSelector('#graph[data-provisional="true"] .behaviour');
+  return {page, release};
+}
+
+for (const [config, what] of [[soccer, 'the soccer demo'], [paper, 'the paper\'s config'],
+                              ['web/tests/crowded.yaml', 'a crowded config']]) {
+  test(`a page opened in a new browser shows the graph before ELK has loaded, laid out apart, then ELK's: ${what}`, async () => {
+    const trace = path.join(scratch, `provisional-${path.basename(config)}.jsonl`);
+    execFileSync(arbiter, ['run', config, '--steps', '3', '--trace', trace, '-q'], {cwd: source});
+    const {url} = await serve(['view', config, '--trace', trace, '--serve', '0']);
+    const {page, release} = await openWithElkHeld(url);
+    // Drawn without ELK, and as ELK's is: every behaviour and inhibition, no box over another, no
+    // inhibition across a box, all in their layers.
+    assert.deepEqual(await layoutProblems(page), []);
+    assert.equal(await page.locator('body[data-ready="true"]').count(), 0, 'the page is ready with ELK\'s drawing, not before');
+    release();
+    await page.waitForSelector(ELK_DRAWN);
+    assert.deepEqual(await layoutProblems(page), []);
+    await page.close();
+  });
+}
+
+test('the provisional drawing of a layer of inhibited pairs is ELK\'s to the pixel: no box moves', async () => {
+  const config = path.join(scratch, 'pairs.yaml');
+  writeFileSync(config, largeConfig(2, 30, 10));
+  const {url} = await serve(['run', config, '--serve', '0', '--paused', '--steps', '1000', '-q']);
+  const {page, release} = await openWithElkHeld(url);
+  const provisional = await boxPlaces(page);
+  assert.equal(provisional.length, 60);
+  release();
+  await page.waitForSelector(ELK_DRAWN);
+  assert.deepEqual(await boxPlaces(page), provisional);
+  await page.close();
+});
 
 for (const [config, what] of [[soccer, 'the soccer demo'], ['tests/data/valid/twin.yaml', 'a config of two behaviour layers'],
                               [paper, 'the paper\'s config'], ['web/tests/crowded.yaml', 'a crowded config']]) {
