@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs what is missing, then builds and tests the project four ways; exits non-zero on any failure:
-#   plain  the build a packager runs (`cmake -S . -B build/plain -DCMAKE_BUILD_TYPE=Release`, no preset,
+#   plain  the build a packager or a newcomer runs (`cmake -S . -B build/plain`: no preset,
 #          no option, GCC): any compiler warning fails it; then the whole test suite;
 #   clang  the clang preset (Clang, Debug, warnings as errors) and the test suite;
 #   asan   the asan preset (AddressSanitizer and UndefinedBehaviorSanitizer) and the test suite, when
@@ -59,8 +59,14 @@ run_preset() {
 # presets see nothing (-Wmaybe-uninitialized).
 run_plain() {
   local dir=build/plain log status=0 warnings
-  echo "== plain: cmake -S . -B $dir -DCMAKE_BUILD_TYPE=Release && cmake --build $dir"
-  cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Release --log-level=WARNING
+  echo "== plain: cmake -S . -B $dir && cmake --build $dir"
+  cmake -S . -B "$dir" --log-level=WARNING
+  # With no build type given, the project builds Release (CMakeLists.txt), not unoptimised.
+  if ! grep -qx 'CMAKE_BUILD_TYPE:STRING=Release' "$dir/CMakeCache.txt"; then
+    echo "== plain: a build with no CMAKE_BUILD_TYPE is not Release: $(grep '^CMAKE_BUILD_TYPE:' "$dir/CMakeCache.txt")"
+    summaries+=("plain: the default build type is not Release")
+    return 1
+  fi
   log=$(mktemp)
   cmake --build "$dir" --parallel "$jobs" 2>&1 | tee "$log" || status=$?
   warnings=$(grep -c -E '(^|: )warning: ' "$log" || true)
