@@ -1,10 +1,15 @@
 // The server of a binary built without the web app (-DARBITER_WEB=OFF, or no npm or esbuild, or
 // the npm registry out of reach): it serves a page that says why, and how to get the app, and
 // the CLI notes it. Linked with the assets web/bundle.cmake writes when the app is left out.
-// And ARBITER_WEB_DIR, which serves the app's files from a directory instead.
+// And ARBITER_WEB_DIR, which serves the app's files from a directory instead, and the reasons
+// the server gives for what it refuses by itself.
 
+#include <arpa/inet.h>
 #include <httplib.h>
+#include <netinet/in.h>
 #include <stdlib.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -70,5 +75,50 @@ TEST_CASE("ARBITER_WEB_DIR serves the web app's files from a directory, read at 
   const auto missing = client.Get("/");
   CHECK(missing->status == 404);
   CHECK(contains(missing->body, "ARBITER_WEB_DIR: cannot read " + dir + "/index.html"));
+  server.stop();
+}
+
+TEST_CASE("what the server refuses by itself is answered with the reason, not a bare status",
+          "[web]") {
+  WebServer server;
+  std::string error;
+  REQUIRE(server.start(ServeAddress{}, LiveAccess{"fallback-token", false}, error));
+  const std::string url = server.url();
+  const int port = std::stoi(url.substr(url.rfind(':') + 1));
+  httplib::Client client("127.0.0.1", port);
+  const httplib::Headers token{{"X-Arbiter-Token", "fallback-token"}};
+
+  const auto missing = client.Get("/no-such-page", token);
+  REQUIRE(missing);
+  CHECK(missing->status == 404);
+  CHECK(missing->body == "not found: /no-such-page is not a page of this server\n");
+
+  const auto long_uri = client.Get("/" + std::string(9000, 'a'), token);
+  REQUIRE(long_uri);
+  CHECK(long_uri->status == 414);
+  CHECK(contains(long_uri->body, "the request's URI is longer than 8192 bytes"));
+
+  const auto form = client.Post("/control/pause", token, std::string(10000, 'a'),
+                                "application/x-www-form-urlencoded");
+  REQUIRE(form);
+  CHECK(form->status == 413);
+  CHECK(contains(form->body, "the request's body is too long"));
+
+  // A request that is not HTTP: read over a plain socket.
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  REQUIRE(fd >= 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  REQUIRE(::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0);
+  const std::string garbage = "NOT HTTP AT ALL\r\n\r\n";
+  REQUIRE(::write(fd, garbage.data(), garbage.size()) == static_cast<ssize_t>(garbage.size()));
+  std::string reply;
+  char buffer[4096];
+  for (ssize_t got; (got = ::read(fd, buffer, sizeof buffer)) > 0;) reply.append(buffer, got);
+  ::close(fd);
+  CHECK(contains(reply, "HTTP/1.1 400"));
+  CHECK(contains(reply, "bad request: not an HTTP request this server can read"));
   server.stop();
 }

@@ -204,6 +204,40 @@ WebServer::WebServer() : server_(std::make_unique<httplib::Server>()) {
   // Idle keep-alive connections hold a thread; a short timeout frees it (and speeds up stop()).
   server_->set_keep_alive_timeout(1);
   server_->set_read_timeout(kReadTimeoutSeconds);
+  // What httplib refuses by itself (a request it cannot read, a URI or a form too long, a path
+  // no handler serves) it answers with a status alone: the client is told why, as our own
+  // refusals tell it.
+  using Handled = httplib::Server::HandlerResponse;
+  server_->set_error_handler(httplib::Server::HandlerWithResponse(
+      [](const httplib::Request& request, httplib::Response& response) {
+        if (!response.body.empty()) return Handled::Unhandled;
+        std::string why;
+        switch (response.status) {
+          case 400:
+            why = "bad request: not an HTTP request this server can read";
+            break;
+          case 404:
+            why = fmt::format("not found: {} is not a page of this server", request.path);
+            break;
+          case 405:
+            why = fmt::format("method {} is not allowed here", request.method);
+            break;
+          case 413:
+            why = fmt::format(
+                "refused: the request's body is too long (a form's is limited to {} bytes)",
+                CPPHTTPLIB_FORM_URL_ENCODED_PAYLOAD_MAX_LENGTH);
+            break;
+          case 414:
+            why = fmt::format("refused: the request's URI is longer than {} bytes",
+                              CPPHTTPLIB_REQUEST_URI_MAX_LENGTH);
+            break;
+          default:
+            why = fmt::format("the request failed with status {}", response.status);
+            break;
+        }
+        reply_text(response, response.status, why + "\n");
+        return Handled::Handled;
+      }));
   // To develop the web app: its files from a directory, read at every request (docs/live_view.md).
   const char* dir = std::getenv("ARBITER_WEB_DIR");
   const std::string web_dir = dir != nullptr ? dir : "";
