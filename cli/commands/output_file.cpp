@@ -1,5 +1,13 @@
 #include "commands/output_file.hpp"
 
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 
 namespace arbiter::cli {
@@ -37,6 +45,109 @@ bool same_file(const std::string& a, const std::string& b) {
   if (error) return false;
   const fs::path second = fs::weakly_canonical(b, error);
   return !error && first == second;
+}
+
+namespace {
+
+/// What is held before it is written: a replay's trace comes a step at a time.
+constexpr std::size_t kBuffered = 64 * 1024;
+
+bool write_all(int fd, std::string_view text) {
+  while (!text.empty()) {
+    const auto written = ::write(fd, text.data(), text.size());
+    if (written < 0 && errno == EINTR) continue;
+    if (written <= 0) return false;
+    text.remove_prefix(static_cast<std::size_t>(written));
+  }
+  return true;
+}
+
+}  // namespace
+
+AtomicFile::AtomicFile(const std::string& path) : given_(path), place_(output_place(path)) {}
+
+AtomicFile::~AtomicFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!done_ && !place_.in_place && !temp_.empty()) ::unlink(temp_.c_str());
+}
+
+void AtomicFile::fail(const std::string& what, int error) {
+  if (error_.empty()) error_ = fmt::format("cannot write '{}': {}", what, std::strerror(error));
+}
+
+bool AtomicFile::open() {
+  if (place_.in_place) {
+    temp_ = place_.path;
+    fd_ = ::open(temp_.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  } else {
+    const auto slash = place_.path.rfind('/');
+    const std::string dir = slash == std::string::npos ? "." : place_.path.substr(0, slash);
+    const std::string name =
+        slash == std::string::npos ? place_.path : place_.path.substr(slash + 1);
+    // Created with open() rather than mkstemp(), whose 0600 a new file would keep: a new file
+    // gets the mode any file created there gets (0666 less the umask), an existing one keeps its
+    // own. Named by process and by count: two writers in one process (a trace and a recording,
+    // two saves) never meet.
+    static std::atomic<unsigned> serial{0};
+    do {
+      temp_ = fmt::format("{}/.{}.arbiter-{}-{}", dir, name, ::getpid(), serial++);
+      fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    } while (fd_ < 0 && errno == EEXIST);
+    struct stat info {};
+    if (fd_ >= 0 && ::stat(place_.path.c_str(), &info) == 0) ::fchmod(fd_, info.st_mode & 07777);
+  }
+  if (fd_ < 0) {
+    const int error = errno;
+    temp_.clear();  // nothing was created, nothing is to be removed
+    fail(given_, error);
+    return false;
+  }
+  return true;
+}
+
+bool AtomicFile::flush() {
+  if (!error_.empty()) return false;
+  if (!write_all(fd_, buffer_)) fail(given_, errno);
+  buffer_.clear();
+  return error_.empty();
+}
+
+bool AtomicFile::write(std::string_view text) {
+  if (!error_.empty()) return false;
+  buffer_ += text;
+  return buffer_.size() < kBuffered || flush();
+}
+
+bool AtomicFile::commit() {
+  done_ = true;
+  bool ok = fd_ >= 0 && flush();
+  // Synced before the rename: otherwise a crash soon after it can leave the name on a file whose
+  // text never reached the disk (an empty one, in place of the one replaced), which is what
+  // writing whole and renaming is for. One sync per file, at its end. A FIFO or a terminal cannot
+  // be synced (EINVAL), nor needs to be: nothing is replaced.
+  if (ok && !place_.in_place && ::fsync(fd_) != 0) {
+    fail(given_, errno);
+    ok = false;
+  }
+  if (fd_ >= 0 && ::close(fd_) != 0 && ok) {
+    fail(given_, errno);
+    ok = false;
+  }
+  fd_ = -1;
+  if (place_.in_place) return ok;
+  if (ok && ::rename(temp_.c_str(), place_.path.c_str()) != 0) {
+    fail(given_, errno);
+    ok = false;
+  }
+  if (!ok) ::unlink(temp_.c_str());
+  return ok;
+}
+
+bool write_atomically(const std::string& path, const std::string& text, std::string& error) {
+  AtomicFile file(path);
+  const bool ok = file.open() && file.write(text) && file.commit();
+  if (!ok) error = file.error();
+  return ok;
 }
 
 }  // namespace arbiter::cli

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 namespace arbiter::cli {
 
@@ -20,5 +21,46 @@ OutputPlace output_place(const std::string& path);
 /// Whether two paths name one file: the same file when both exist (through links and hard
 /// links), the same normal path otherwise.
 bool same_file(const std::string& a, const std::string& b);
+
+/// A file written whole or not at all: under a temporary name beside the file output_place()
+/// names, renamed over it by commit(), so that a command that fails part way leaves the file as it
+/// was. The file keeps the mode of the one it replaces; a new one gets the mode of any file
+/// created there (0666 less the umask). A file output_place() writes in place is written directly.
+/// Dropped before commit(), the temporary file is removed.
+class AtomicFile {
+ public:
+  explicit AtomicFile(const std::string& path);
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+  ~AtomicFile();
+
+  /// Creates the temporary file (opens the file written in place); false, with why in `error()`,
+  /// when it cannot.
+  bool open();
+  /// Where the text goes until commit(): for a writer that opens the file itself (a Recorder).
+  const std::string& path() const { return temp_; }
+  /// Appends `text` (buffered); false once a write has failed.
+  bool write(std::string_view text);
+  /// Puts the file in place; false, with why in `error()`, when it could not be written (the file
+  /// left as it was).
+  bool commit();
+  /// "cannot write PATH: REASON", naming the path as given.
+  const std::string& error() const { return error_; }
+
+ private:
+  bool flush();
+  void fail(const std::string& what, int error);
+
+  std::string given_;
+  OutputPlace place_;
+  std::string temp_;
+  int fd_ = -1;
+  std::string buffer_;
+  std::string error_;
+  bool done_ = false;
+};
+
+/// Writes `text` to `path` with an AtomicFile. False, with `error`, when it cannot.
+bool write_atomically(const std::string& path, const std::string& text, std::string& error);
 
 }  // namespace arbiter::cli

@@ -68,55 +68,6 @@ class RecordedConfig {
   Overlay overlay_;
 };
 
-/// A file written under a temporary name beside its path (or beside the file a link there leads
-/// to) and renamed over it once whole, so that a replay that fails leaves the file as it was, as
-/// when it wrote its trace only at its end. A FIFO or a device is written directly.
-class PendingFile {
- public:
-  explicit PendingFile(const std::string& path)
-      : place_(output_place(path)),
-        temp_(place_.in_place ? place_.path
-                              : fmt::format("{}.{}.partial", place_.path, ::getpid())) {}
-  PendingFile(const PendingFile&) = delete;
-  PendingFile& operator=(const PendingFile&) = delete;
-  ~PendingFile() {
-    if (out_.is_open()) out_.close();
-    if (done_ || place_.in_place) return;
-    std::error_code ignored;
-    fs::remove(temp_, ignored);
-  }
-  /// Where the file is written until commit(), by open() or by a writer of its own.
-  const std::string& path() const { return temp_; }
-  bool open() {
-    out_.open(temp_, std::ios::binary | std::ios::trunc);
-    return out_.is_open();
-  }
-  std::ostream& stream() { return out_; }
-  /// Puts the file in place; false (the file left as it was) when it could not be written.
-  bool commit() {
-    done_ = true;
-    bool failed = false;
-    if (out_.is_open()) {
-      out_.close();
-      failed = out_.fail();
-    }
-    if (place_.in_place) return !failed;
-    std::error_code error;
-    if (!failed) fs::rename(temp_, place_.path, error);
-    if (failed || error) {
-      fs::remove(temp_, error);
-      return false;
-    }
-    return true;
-  }
-
- private:
-  OutputPlace place_;
-  std::string temp_;
-  std::ofstream out_;
-  bool done_ = false;
-};
-
 }  // namespace
 
 RecordingInfo recording_info(const std::string& config, const Registry& registry,
@@ -225,19 +176,24 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   std::ostringstream trace_text;  // what the trace writer wrote in the last step, then emptied
   TraceWriter trace(trace_text);
   manager.add_observer(trace);
-  std::optional<PendingFile> trace_file;
+  // Each output is put in place once the replay has run: a replay that fails part way leaves the
+  // file as it was, as when it wrote its trace only at its end.
+  std::optional<AtomicFile> trace_file;
   if (!options.trace.empty()) {
     trace_file.emplace(options.trace);
     if (!trace_file->open()) {
-      err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
+      err << fmt::format("arbiter replay: {}\n", trace_file->error());
       return 2;
     }
   }
-  // Written beside its path and put in place with the trace, for the same reason.
-  std::optional<PendingFile> record_file;
+  std::optional<AtomicFile> record_file;
   std::unique_ptr<Recorder> recorder;
   if (!options.record.empty()) {
     record_file.emplace(options.record);
+    if (!record_file->open()) {
+      err << fmt::format("arbiter replay: {}\n", record_file->error());
+      return 2;
+    }
     recorder = std::make_unique<Recorder>(
         record_file->path(),
         options.config.empty() ? run.info()
@@ -260,7 +216,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   const auto written_out = [&] {
     const std::string text = trace_text.str();
     trace_text.str(std::string());
-    if (trace_file) trace_file->stream() << text;
+    if (trace_file) trace_file->write(text);
     return text;
   };
   while (!manager.stopped()) {
@@ -348,12 +304,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   manager.finish();
   written_out();
   if (trace_file && !trace_file->commit()) {
-    err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
+    err << fmt::format("arbiter replay: {}\n", trace_file->error());
     return 2;
   }
   // A recording that failed part way is put in place too: it keeps what was written before.
   if (record_file && !record_file->commit()) {
-    err << fmt::format("arbiter replay: cannot write '{}'\n", options.record);
+    err << fmt::format("arbiter replay: {}\n", record_file->error());
     return 2;
   }
   const std::uint64_t steps = manager.steps();

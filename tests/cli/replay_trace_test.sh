@@ -1,9 +1,9 @@
 #!/bin/bash
 # `arbiter replay --trace FILE` (and `--record FILE`) puts FILE in place once the replay has run:
 # a replay that fails part way (here, on a recording damaged in its middle) leaves FILE as it
-# was, and no partial file beside it. A symbolic link is written through and stays a link; a FIFO
-# is written to, not replaced. An output that is the recording itself (or the config of `run`) is
-# refused before anything is written.
+# was, and no partial file beside it; a file replaced keeps its mode. A symbolic link is written
+# through and stays a link; a FIFO is written to, not replaced. An output that is the recording
+# itself (or the config of `run`) is refused before anything is written.
 set -eu
 cli=$1
 source_dir=$2
@@ -29,8 +29,26 @@ expect_exit 1 "$cli" replay "$work/bad.mcap" --trace "$work/trace.jsonl" --recor
 grep -q "bad.mcap: error: at byte" "$work/err.txt" || fail "no error where the recording is damaged"
 [[ $(cat "$work/trace.jsonl") == previous ]] || fail "the failed replay changed the trace file"
 [[ $(cat "$work/record.mcap") == previous ]] || fail "the failed replay changed the recording file"
-leftover=$(find "$work" -name '*.partial')
+leftover=$(find "$work" -name '.*.arbiter-*')
 [[ -z $leftover ]] || fail "a partial trace is left: $leftover"
+
+# A file replaced keeps its mode; a new one gets the mode of any file created there.
+echo previous >"$work/kept.jsonl"
+echo previous >"$work/kept_record.mcap"
+chmod 0640 "$work/kept.jsonl" "$work/kept_record.mcap"
+(
+  umask 022
+  expect_exit 0 "$cli" replay "$work/run.mcap" --steps 5 --trace "$work/kept.jsonl" \
+    --record "$work/kept_record.mcap"
+  umask 077
+  expect_exit 0 "$cli" replay "$work/run.mcap" --steps 5 --trace "$work/new.jsonl" \
+    --record "$work/new.mcap"
+)
+[[ $(stat -c %a "$work/kept.jsonl") == 640 ]] || fail "the trace replaced lost its mode 0640"
+[[ $(stat -c %a "$work/kept_record.mcap") == 640 ]] || fail "the recording replaced lost its mode"
+grep -q '"step": 5' "$work/kept.jsonl" || fail "the trace was not replaced"
+[[ $(stat -c %a "$work/new.jsonl") == 600 ]] || fail "a new trace is not 0666 less the umask"
+[[ $(stat -c %a "$work/new.mcap") == 600 ]] || fail "a new recording is not 0666 less the umask"
 
 # Through symbolic links: the files they lead to get the replay's outputs, the links stay links.
 echo previous >"$work/real.jsonl"
@@ -57,7 +75,7 @@ grep -q '"step": 5' "$work/from_fifo.jsonl" || fail "the FIFO's reader did not g
 "$cli" replay "$work/run.mcap" --steps 5 --trace /dev/fd/1 | cat >"$work/piped.jsonl"
 [[ ${PIPESTATUS[0]} -eq 0 ]] || fail "the replay to /dev/fd/1 failed"
 grep -q '"step": 5' "$work/piped.jsonl" || fail "the pipe did not get the trace"
-leftover=$(find "$work" -name '*.partial')
+leftover=$(find "$work" -name '.*.arbiter-*')
 [[ -z $leftover ]] || fail "a partial file is left: $leftover"
 
 # An output that is the recording (by its name, or through a link) is refused, and it is kept.
