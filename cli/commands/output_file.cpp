@@ -47,6 +47,19 @@ bool same_file(const std::string& a, const std::string& b) {
   return !error && first == second;
 }
 
+bool outputs_spare_inputs(std::string_view command, const std::vector<std::string>& outputs,
+                          const std::vector<CommandInput>& inputs, std::ostream& err) {
+  for (const auto& output : outputs) {
+    for (const auto& input : inputs) {
+      if (output.empty() || input.path.empty() || !same_file(output, input.path)) continue;
+      err << fmt::format("arbiter {}: '{}' is {} ('{}'): writing it would destroy it\n", command,
+                         output, input.what, input.path);
+      return false;
+    }
+  }
+  return true;
+}
+
 namespace {
 
 /// What is held before it is written: a replay's trace comes a step at a time.

@@ -1,7 +1,9 @@
 #pragma once
 
+#include <ostream>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace arbiter::cli {
 
@@ -21,6 +23,18 @@ OutputPlace output_place(const std::string& path);
 /// Whether two paths name one file: the same file when both exist (through links and hard
 /// links), the same normal path otherwise.
 bool same_file(const std::string& a, const std::string& b);
+
+/// A file a command reads: its path, and what it is to the command ("the config being run").
+struct CommandInput {
+  std::string path;
+  std::string what;
+};
+
+/// False, with why on `err`, when one of `outputs` (the paths given: an empty one is not) is the
+/// same file as one of `inputs` (an empty path is not one): writing it would destroy the input.
+/// Before anything is written.
+bool outputs_spare_inputs(std::string_view command, const std::vector<std::string>& outputs,
+                          const std::vector<CommandInput>& inputs, std::ostream& err);
 
 /// A file written whole or not at all: under a temporary name beside the file output_place()
 /// names, renamed over it by commit(), so that a command that fails part way leaves the file as it

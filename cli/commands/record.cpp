@@ -85,12 +85,10 @@ RecordingInfo recording_info(const std::string& config, const Registry& registry
 }
 
 int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err) {
-  for (const std::string* output : {&options.record, &options.trace}) {
-    if (output->empty() || !same_file(*output, options.recording)) continue;
-    err << fmt::format(
-        "arbiter replay: '{}' is the recording being replayed ('{}'): writing it would destroy "
-        "it\n",
-        *output, options.recording);
+  if (!outputs_spare_inputs("replay", {options.record, options.trace},
+                            {{options.recording, "the recording being replayed"},
+                             {options.config, "the config replayed (--config)"}},
+                            err)) {
     return 2;
   }
   // The recording is read as the replay goes, twice over (its inputs, and its steps to compare

@@ -31,11 +31,10 @@
 namespace arbiter::cli {
 
 int run_command(const Options& options) {
-  for (const std::string* output : {&options.record_path, &options.trace_path}) {
-    if (output->empty() || !same_file(*output, options.file)) continue;
-    std::cerr << fmt::format(
-        "arbiter run: '{}' is the config being run ('{}'): writing it would destroy it\n", *output,
-        options.file);
+  if (!outputs_spare_inputs("run", {options.record_path, options.trace_path},
+                            {{options.file, "the config being run"},
+                             {options.inputs_path, "the inputs being fed (--inputs)"}},
+                            std::cerr)) {
     return kExitUsage;
   }
   auto registry = make_registry();

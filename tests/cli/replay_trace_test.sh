@@ -3,7 +3,7 @@
 # a replay that fails part way (here, on a recording damaged in its middle) leaves FILE as it
 # was, and no partial file beside it; a file replaced keeps its mode. A symbolic link is written
 # through and stays a link; a FIFO is written to, not replaced. An output that is the recording
-# itself (or the config of `run`) is refused before anything is written.
+# itself (or the config of `run`, or another input) is refused before anything is written.
 set -eu
 cli=$1
 source_dir=$2
@@ -93,5 +93,17 @@ cp "$config" "$work/counter.yaml"
 expect_exit 2 "$cli" run "$work/counter.yaml" --steps 5 --record "$work/counter.yaml"
 grep -qF "'$work/counter.yaml' is the config being run" "$work/err.txt" || fail "no refusal"
 expect_exit 2 "$cli" run "$work/counter.yaml" --steps 5 --trace "$work/./counter.yaml"
+cmp -s "$config" "$work/counter.yaml" || fail "the config was written over"
+# And one that is another of the command's inputs: a run's --inputs, a replay's --config.
+echo kept >"$work/inputs.jsonl"
+expect_exit 2 "$cli" run "$config" --steps 5 --inputs "$work/inputs.jsonl" \
+  --trace "$work/inputs.jsonl"
+grep -qF "'$work/inputs.jsonl' is the inputs being fed (--inputs)" "$work/err.txt" ||
+  fail "no refusal of a run's output over its --inputs"
+[[ $(cat "$work/inputs.jsonl") == kept ]] || fail "the inputs were written over"
+expect_exit 2 "$cli" replay "$work/kept.mcap" --config "$work/counter.yaml" \
+  --record "$work/counter.yaml"
+grep -qF "'$work/counter.yaml' is the config replayed (--config)" "$work/err.txt" ||
+  fail "no refusal of a replay's output over its --config"
 cmp -s "$config" "$work/counter.yaml" || fail "the config was written over"
 echo ok
