@@ -47,13 +47,25 @@ bool same_file(const std::string& a, const std::string& b) {
   return !error && first == second;
 }
 
-bool outputs_spare_inputs(std::string_view command, const std::vector<std::string>& outputs,
-                          const std::vector<CommandInput>& inputs, std::ostream& err) {
-  for (const auto& output : outputs) {
+bool outputs_allowed(std::string_view command, const std::vector<CommandOutput>& outputs,
+                     const std::vector<CommandInput>& inputs, std::ostream& err) {
+  for (auto output = outputs.begin(); output != outputs.end(); ++output) {
+    if (output->path.empty()) continue;
     for (const auto& input : inputs) {
-      if (output.empty() || input.path.empty() || !same_file(output, input.path)) continue;
+      if (input.path.empty() || !same_file(output->path, input.path)) continue;
       err << fmt::format("arbiter {}: '{}' is {} ('{}'): writing it would destroy it\n", command,
-                         output, input.what, input.path);
+                         output->path, input.what, input.path);
+      return false;
+    }
+    // A device (/dev/null, a terminal) keeps nothing to write over: two outputs may share it.
+    std::error_code error;
+    if (fs::is_character_file(output->path, error)) continue;
+    for (auto other = outputs.begin(); other != output; ++other) {
+      if (other->path.empty() || !same_file(output->path, other->path)) continue;
+      err << fmt::format(
+          "arbiter {}: {} '{}' and {} '{}' are the same file: one would write over the other; "
+          "give them different files\n",
+          command, other->option, other->path, output->option, output->path);
       return false;
     }
   }

@@ -30,11 +30,17 @@ struct CommandInput {
   std::string what;
 };
 
-/// False, with why on `err`, when one of `outputs` (the paths given: an empty one is not) is the
-/// same file as one of `inputs` (an empty path is not one): writing it would destroy the input.
-/// Before anything is written.
-bool outputs_spare_inputs(std::string_view command, const std::vector<std::string>& outputs,
-                          const std::vector<CommandInput>& inputs, std::ostream& err);
+/// A file a command writes: its path, and the option that names it ("--trace").
+struct CommandOutput {
+  std::string path;
+  std::string option;
+};
+
+/// False, with why on `err`, when one of `outputs` (those given: an empty path is not) is the
+/// same file as one of `inputs` (an empty path is not one), which writing it would destroy, or as
+/// another output, which it would write over. Before anything is written.
+bool outputs_allowed(std::string_view command, const std::vector<CommandOutput>& outputs,
+                     const std::vector<CommandInput>& inputs, std::ostream& err);
 
 /// A file written whole or not at all: under a temporary name beside the file output_place()
 /// names, renamed over it by commit(), so that a command that fails part way leaves the file as it

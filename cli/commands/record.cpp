@@ -85,10 +85,10 @@ RecordingInfo recording_info(const std::string& config, const Registry& registry
 }
 
 int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err) {
-  if (!outputs_spare_inputs("replay", {options.record, options.trace},
-                            {{options.recording, "the recording being replayed"},
-                             {options.config, "the config replayed (--config)"}},
-                            err)) {
+  if (!outputs_allowed("replay", {{options.trace, "--trace"}, {options.record, "--record"}},
+                       {{options.recording, "the recording being replayed"},
+                        {options.config, "the config replayed (--config)"}},
+                       err)) {
     return 2;
   }
   // The recording is read as the replay goes, twice over (its inputs, and its steps to compare

@@ -31,10 +31,10 @@
 namespace arbiter::cli {
 
 int run_command(const Options& options) {
-  if (!outputs_spare_inputs("run", {options.record_path, options.trace_path},
-                            {{options.file, "the config being run"},
-                             {options.inputs_path, "the inputs being fed (--inputs)"}},
-                            std::cerr)) {
+  if (!outputs_allowed("run", {{options.trace_path, "--trace"}, {options.record_path, "--record"}},
+                       {{options.file, "the config being run"},
+                        {options.inputs_path, "the inputs being fed (--inputs)"}},
+                       std::cerr)) {
     return kExitUsage;
   }
   auto registry = make_registry();

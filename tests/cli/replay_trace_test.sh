@@ -3,7 +3,8 @@
 # a replay that fails part way (here, on a recording damaged in its middle) leaves FILE as it
 # was, and no partial file beside it; a file replaced keeps its mode. A symbolic link is written
 # through and stays a link; a FIFO is written to, not replaced. An output that is the recording
-# itself (or the config of `run`, or another input) is refused before anything is written.
+# itself (or the config of `run`, or another input), or another output, is refused before
+# anything is written.
 set -eu
 cli=$1
 source_dir=$2
@@ -106,4 +107,19 @@ expect_exit 2 "$cli" replay "$work/kept.mcap" --config "$work/counter.yaml" \
 grep -qF "'$work/counter.yaml' is the config replayed (--config)" "$work/err.txt" ||
   fail "no refusal of a replay's output over its --config"
 cmp -s "$config" "$work/counter.yaml" || fail "the config was written over"
+
+# Two outputs that are one file (by name, or through a link) are refused, before anything runs.
+echo kept >"$work/both.out"
+ln -s both.out "$work/both_link.out"
+expect_exit 2 "$cli" run "$config" --steps 5 --trace "$work/both.out" --record "$work/both.out"
+grep -qF "arbiter run: --trace '$work/both.out' and --record '$work/both.out' are the same file" \
+  "$work/err.txt" || fail "a run's --trace and --record on one file are not refused"
+[[ ! -s $work/out.txt ]] || fail "the run ran"
+expect_exit 2 "$cli" replay "$work/run.mcap" --trace "$work/both_link.out" \
+  --record "$work/both.out"
+grep -qF "arbiter replay: --trace '$work/both_link.out' and --record '$work/both.out' are the same" \
+  "$work/err.txt" || fail "a replay's --trace and --record on one file are not refused"
+[[ $(cat "$work/both.out") == kept ]] || fail "the file was written"
+# A device keeps nothing to write over.
+expect_exit 0 "$cli" replay "$work/run.mcap" --steps 5 --trace /dev/null --record /dev/null
 echo ok
