@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
@@ -45,6 +46,17 @@ bool same_file(const std::string& a, const std::string& b) {
   if (error) return false;
   const fs::path second = fs::weakly_canonical(b, error);
   return !error && first == second;
+}
+
+bool is_standard_output(const std::string& path) {
+  struct stat out {};
+  struct stat file {};
+  return !path.empty() && ::fstat(STDOUT_FILENO, &out) == 0 && ::stat(path.c_str(), &file) == 0 &&
+         out.st_dev == file.st_dev && out.st_ino == file.st_ino;
+}
+
+bool writes_standard_output(const std::vector<std::string>& outputs) {
+  return std::any_of(outputs.begin(), outputs.end(), is_standard_output);
 }
 
 bool outputs_allowed(std::string_view command, const std::vector<CommandOutput>& outputs,
@@ -101,7 +113,13 @@ void AtomicFile::fail(const std::string& what, int error) {
 }
 
 bool AtomicFile::open() {
-  if (place_.in_place) {
+  if (is_standard_output(given_)) {
+    // Written through standard output's own open file (its offset, its O_APPEND), not one opened
+    // on it again.
+    place_ = {given_, true};
+    temp_ = given_;
+    fd_ = ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 0);
+  } else if (place_.in_place) {
     temp_ = place_.path;
     fd_ = ::open(temp_.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
   } else {

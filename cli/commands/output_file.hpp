@@ -24,6 +24,16 @@ OutputPlace output_place(const std::string& path);
 /// links), the same normal path otherwise.
 bool same_file(const std::string& a, const std::string& b);
 
+/// Whether `path` is the file standard output is (/dev/stdout, /dev/fd/1, the file or pipe the
+/// shell sent it to). Opened again, it would have an offset of its own (and be truncated, even
+/// when the shell appends): what the command prints there would write over it.
+bool is_standard_output(const std::string& path);
+
+/// Whether one of `outputs` (an empty path is not one) is standard output's file: what the
+/// command says besides (its report, its summary) goes to standard error then, so that standard
+/// output holds that output alone, as whoever reads it (a pipe to jq, a trace reader) needs.
+bool writes_standard_output(const std::vector<std::string>& outputs);
+
 /// A file a command reads: its path, and what it is to the command ("the config being run").
 struct CommandInput {
   std::string path;
@@ -45,7 +55,8 @@ bool outputs_allowed(std::string_view command, const std::vector<CommandOutput>&
 /// A file written whole or not at all: under a temporary name beside the file output_place()
 /// names, renamed over it by commit(), so that a command that fails part way leaves the file as it
 /// was. The file keeps the mode of the one it replaces; a new one gets the mode of any file
-/// created there (0666 less the umask). A file output_place() writes in place is written directly.
+/// created there (0666 less the umask). A file output_place() writes in place is written directly;
+/// standard output's file, through standard output.
 /// Dropped before commit(), the temporary file is removed.
 class AtomicFile {
  public:
