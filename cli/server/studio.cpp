@@ -232,6 +232,8 @@ Reply Studio::save(const std::string& body) {
     const std::string path = file["path"].get<std::string>();
     // Only the config and the files its load reads now, as it wrote them: no other file,
     // however named, nor one that an include no longer names (the studio still holds its text).
+    // Both: read_now() holds for the config by its name even when its load could not read it (too
+    // big, unreadable), and then the studio holds no text of it, has shown none, and writes none.
     if (texts_.count(path) == 0 || !read_now(path))
       return refusal(403, fmt::format("refused: '{}' is not one of the config's files", path));
     // A new config's base is "": the file is not there yet, or is empty.
