@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <thread>
@@ -48,24 +49,54 @@ std::string file_text(const std::string& path) {
 /// their place. A recorded hot reload puts its files over them.
 class RecordedConfig {
  public:
-  explicit RecordedConfig(const RecordingInfo& info)
-      : dir_(fs::temp_directory_path() / fmt::format("arbiter_replay_{}", ::getpid())) {
+  RecordedConfig(const RecordingInfo& info, std::string recording)
+      : dir_(fs::temp_directory_path() / fmt::format("arbiter_replay_{}", ::getpid())),
+        recording_(std::move(recording)) {
     set(info.files);
     root_ = path_of(info.files.front().first);
   }
   void set(const std::vector<std::pair<std::string, std::string>>& files) {
-    for (const auto& [name, text] : files) overlay_.set(path_of(name), text);
+    for (const auto& [name, text] : files) {
+      overlay_.set(path_of(name), text);
+      names_[path_of(name)] = name;
+    }
   }
   const std::string& root() const { return root_; }
   const FileSource& source() const { return overlay_; }
+  /// `diagnostics` as format() writes them, but with the recorded config's files named as the
+  /// user knows them, the recording's and their recorded names ("run.mcap: robot.yaml:11:7:"),
+  /// rather than by their paths here, under a directory that does not exist.
+  std::string format(const Diagnostics& diagnostics) const {
+    std::string out;
+    for (Diagnostic item : diagnostics.items()) {
+      const auto name = names_.find(fs::path(item.location.file).lexically_normal().string());
+      if (name != names_.end()) {
+        item.location.file = fmt::format("{}: {}", recording_, name->second);
+      }
+      // A message or a note may name a file too ("included from ...").
+      for (const auto& [path, recorded] : names_) {
+        replace_all(item.message, path, recorded);
+        for (auto& note : item.notes) replace_all(note.text, path, recorded);
+      }
+      out += arbiter::format(item);
+    }
+    return out;
+  }
 
  private:
   std::string path_of(const std::string& name) const {
     return (dir_ / fs::path(name).relative_path()).lexically_normal().string();
   }
+  static void replace_all(std::string& text, const std::string& from, const std::string& to) {
+    for (auto at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size())) {
+      text.replace(at, from.size(), to);
+    }
+  }
   fs::path dir_;
+  std::string recording_;
   std::string root_;
   Overlay overlay_;
+  std::map<std::string, std::string> names_;  // path here -> recorded name
 };
 
 }  // namespace
@@ -113,7 +144,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   std::optional<RecordedConfig> written;
   std::string config = options.config;
   if (config.empty()) {
-    written.emplace(run.info());
+    written.emplace(run.info(), options.recording);
     config = written->root();
   }
   // The first step's inputs are held before the config compiles, so that its interface layers
@@ -127,6 +158,10 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   static const std::string kNoScene;
   const auto scene_of = [&](const RecordingReader::Event& event) -> const std::string& {
     return draws ? event.scene : kNoScene;
+  };
+  // Diagnostics that may be located in the recorded config.
+  const auto described = [&](const Diagnostics& diagnostics) {
+    return written ? written->format(diagnostics) : format(diagnostics);
   };
   std::uint64_t loaded = 0;  // the step whose inputs are held
   Diagnostics diagnostics;
@@ -163,7 +198,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   // The recorded config reloads as the run did, at the same steps; an edited one runs alone.
   Reloader reloader(registry, load);
   auto program = reloader.load(config, diagnostics);
-  if (!diagnostics.empty()) err << format(diagnostics);
+  if (!diagnostics.empty()) err << described(diagnostics);
   if (!program) return 1;
 
   Manager manager(std::move(*program), spdlog::default_logger());
@@ -246,7 +281,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
         written->set(event.files);
         if (recorder) recorder->stage_files(event.files);
         const auto reloaded = reloader.reload(manager);
-        if (!reloaded.diagnostics.empty()) err << format(reloaded.diagnostics);
+        if (!reloaded.diagnostics.empty()) err << described(reloaded.diagnostics);
         if (!reloaded.staged) {
           err << fmt::format("{}: error: the config reloaded after step {} does not load\n",
                              options.recording, manager.steps());
@@ -266,7 +301,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       Diagnostics bad;
       if (!inputs.load(step, now ? event.text : std::string(), bad,
                        now ? scene_of(event) : kNoScene, {options.recording})) {
-        err << format(bad);
+        err << described(bad);
         return 1;
       }
       loaded = step;
