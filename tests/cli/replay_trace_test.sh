@@ -108,6 +108,15 @@ grep -qF "'$work/counter.yaml' is the config replayed (--config)" "$work/err.txt
   fail "no refusal of a replay's output over its --config"
 cmp -s "$config" "$work/counter.yaml" || fail "the config was written over"
 
+# An output that cannot be created is refused with the system's reason, before the replay runs.
+expect_exit 2 "$cli" replay "$work/run.mcap" --record "$work/no_such_dir/x.mcap"
+grep -qF "arbiter replay: cannot write '$work/no_such_dir/x.mcap': No such file or directory" \
+  "$work/err.txt" || fail "no reason why the recording cannot be written"
+expect_exit 2 "$cli" replay "$work/run.mcap" --trace "$work/no_such_dir/x.jsonl"
+grep -qF "arbiter replay: cannot write '$work/no_such_dir/x.jsonl': No such file or directory" \
+  "$work/err.txt" || fail "no reason why the trace cannot be written"
+[[ ! -s $work/out.txt ]] || fail "the replay ran"
+
 # Two outputs that are one file (by name, or through a link) are refused, before anything runs.
 echo kept >"$work/both.out"
 ln -s both.out "$work/both_link.out"
