@@ -22,6 +22,7 @@ cp "$work/out.txt" "$work/stdout.jsonl"
 expect_exit 0 "$cli" diff "$work/stdout.jsonl" "$work/direct.jsonl"
 grep -q "identical: 30 steps" "$work/out.txt" || fail "the trace on stdout is not the run's"
 # The file the shell opened, by its own name, is written through standard output too.
+# shellcheck disable=SC2094  # one file, as the output and as stdout, is what is tested
 "$cli" run "$config" --steps 30 --trace "$work/same.jsonl" >"$work/same.jsonl" 2>"$work/err.txt" ||
   fail "the run to its own stdout failed"
 expect_exit 0 "$cli" diff "$work/same.jsonl" "$work/direct.jsonl"
