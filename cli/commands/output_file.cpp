@@ -59,6 +59,13 @@ bool writes_standard_output(const std::vector<std::string>& outputs) {
   return std::any_of(outputs.begin(), outputs.end(), is_standard_output);
 }
 
+std::string why_not_writable(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
+  if (fd < 0) return std::strerror(errno);
+  ::close(fd);
+  return "it could be opened when tried again";
+}
+
 bool outputs_allowed(std::string_view command, const std::vector<CommandOutput>& outputs,
                      const std::vector<CommandInput>& inputs, std::ostream& err) {
   for (auto output = outputs.begin(); output != outputs.end(); ++output) {
@@ -108,8 +115,8 @@ AtomicFile::~AtomicFile() {
   if (!done_ && !place_.in_place && !temp_.empty()) ::unlink(temp_.c_str());
 }
 
-void AtomicFile::fail(const std::string& what, int error) {
-  if (error_.empty()) error_ = fmt::format("cannot write '{}': {}", what, std::strerror(error));
+void AtomicFile::fail(int error) {
+  if (error_.empty()) error_ = fmt::format("cannot write '{}': {}", given_, std::strerror(error));
 }
 
 bool AtomicFile::open() {
@@ -142,7 +149,7 @@ bool AtomicFile::open() {
   if (fd_ < 0) {
     const int error = errno;
     temp_.clear();  // nothing was created, nothing is to be removed
-    fail(given_, error);
+    fail(error);
     return false;
   }
   return true;
@@ -150,7 +157,7 @@ bool AtomicFile::open() {
 
 bool AtomicFile::flush() {
   if (!error_.empty()) return false;
-  if (!write_all(fd_, buffer_)) fail(given_, errno);
+  if (!write_all(fd_, buffer_)) fail(errno);
   buffer_.clear();
   return error_.empty();
 }
@@ -169,17 +176,17 @@ bool AtomicFile::commit() {
   // writing whole and renaming is for. One sync per file, at its end. A FIFO or a terminal cannot
   // be synced (EINVAL), nor needs to be: nothing is replaced.
   if (ok && !place_.in_place && ::fsync(fd_) != 0) {
-    fail(given_, errno);
+    fail(errno);
     ok = false;
   }
   if (fd_ >= 0 && ::close(fd_) != 0 && ok) {
-    fail(given_, errno);
+    fail(errno);
     ok = false;
   }
   fd_ = -1;
   if (place_.in_place) return ok;
   if (ok && ::rename(temp_.c_str(), place_.path.c_str()) != 0) {
-    fail(given_, errno);
+    fail(errno);
     ok = false;
   }
   if (!ok) ::unlink(temp_.c_str());

@@ -34,6 +34,10 @@ bool is_standard_output(const std::string& path);
 /// output holds that output alone, as whoever reads it (a pipe to jq, a trace reader) needs.
 bool writes_standard_output(const std::vector<std::string>& outputs);
 
+/// Why `path` cannot be opened for writing, as the system says it ("No such file or directory"),
+/// learnt by trying again: for a writer that does not say (an ofstream, the Recorder).
+std::string why_not_writable(const std::string& path);
+
 /// A file a command reads: its path, and what it is to the command ("the config being run").
 struct CommandInput {
   std::string path;
@@ -75,12 +79,13 @@ class AtomicFile {
   /// Puts the file in place; false, with why in `error()`, when it could not be written (the file
   /// left as it was).
   bool commit();
-  /// "cannot write PATH: REASON", naming the path as given.
+  /// "cannot write 'PATH': REASON", naming the path as given.
   const std::string& error() const { return error_; }
 
  private:
   bool flush();
-  void fail(const std::string& what, int error);
+  /// Keeps the first error: what follows it is its consequence.
+  void fail(int error);
 
   std::string given_;
   OutputPlace place_;

@@ -83,7 +83,8 @@ int run_command(const Options& options) {
   } else if (!options.trace_path.empty()) {
     trace_file.open(options.trace_path, std::ios::binary | std::ios::trunc);
     if (!trace_file) {
-      std::cerr << fmt::format("arbiter run: cannot write trace '{}'\n", options.trace_path);
+      std::cerr << fmt::format("arbiter run: cannot write trace '{}': {}\n", options.trace_path,
+                               why_not_writable(options.trace_path));
       return kExitUsage;
     }
     trace_out = &trace_file;
@@ -126,7 +127,8 @@ int run_command(const Options& options) {
         options.record_path, std::move(info), arbiter::Recorder::kSlots,
         options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
     if (!recorder->ok()) {
-      std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);
+      std::cerr << fmt::format("arbiter run: cannot write recording '{}': {}\n",
+                               options.record_path, why_not_writable(options.record_path));
       return kExitUsage;
     }
     recorder->set_flush_interval(options.record_flush);

@@ -116,6 +116,13 @@ expect_exit 2 "$cli" replay "$work/run.mcap" --trace "$work/no_such_dir/x.jsonl"
 grep -qF "arbiter replay: cannot write '$work/no_such_dir/x.jsonl': No such file or directory" \
   "$work/err.txt" || fail "no reason why the trace cannot be written"
 [[ ! -s $work/out.txt ]] || fail "the replay ran"
+# So does a run's.
+expect_exit 2 "$cli" run "$config" --steps 5 --record "$work/no_such_dir/x.mcap"
+grep -qF "arbiter run: cannot write recording '$work/no_such_dir/x.mcap': No such file or" \
+  "$work/err.txt" || fail "no reason why the run's recording cannot be written"
+expect_exit 2 "$cli" run "$config" --steps 5 --trace "$work/no_such_dir/x.jsonl"
+grep -qF "arbiter run: cannot write trace '$work/no_such_dir/x.jsonl': No such file or" \
+  "$work/err.txt" || fail "no reason why the run's trace cannot be written"
 
 # Two outputs that are one file (by name, or through a link) are refused, before anything runs.
 echo kept >"$work/both.out"
