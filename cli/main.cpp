@@ -14,6 +14,7 @@
 #include "arbiter/lint.hpp"
 #include "commands/command.hpp"
 #include "commands/new_project.hpp"
+#include "commands/output_file.hpp"
 #include "commands/record.hpp"
 #include "server/foxglove.hpp"
 #include "server/serve.hpp"
@@ -809,17 +810,20 @@ int main(int argc, char** argv) {
       replay.steps = replay_cmd->count("--steps") > 0 ? options.steps : 0;
       replay.load = load_options_of(options);
       replay.version = kVersion;
+      // What the replay says, on standard error when standard output is taken by an output.
+      std::ostream& out =
+          writes_standard_output({replay.trace, replay.record}) ? std::cerr : std::cout;
       std::unique_ptr<FoxgloveServer> foxglove;
       if (!options.foxglove.empty()) {
-        foxglove = open_foxglove(options.foxglove, "replay", std::cout, std::cerr);
+        foxglove = open_foxglove(options.foxglove, "replay", out, std::cerr);
         if (!foxglove) return kExitUsage;
         replay.observers.push_back(foxglove.get());
         replay.paced = true;
         replay.stop = &interrupted;
         install_interrupt_handlers();
       }
-      const int code = arbiter::cli::replay(replay, registry, std::cout, std::cerr);
-      if (foxglove) foxglove_after_run(*foxglove, "replay", std::cout, std::cerr);
+      const int code = arbiter::cli::replay(replay, registry, out, std::cerr);
+      if (foxglove) foxglove_after_run(*foxglove, "replay", out, std::cerr);
       return code;
     }
     if (diff_cmd->parsed()) {

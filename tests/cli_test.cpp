@@ -8,8 +8,10 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 #include "arbiter/catalog.hpp"
 #include "arbiter/recorded_inputs.hpp"
@@ -312,6 +314,92 @@ TEST_CASE("arbiter validate colours its diagnostics only when asked or in a term
   }
 }
 
+namespace {
+
+using AddMetadata = std::function<void(const std::string&,
+                                       const std::vector<std::pair<std::string, std::string>>&)>;
+
+// The recording `from` written again to `to`, by hand, records outside chunks, as MCAP allows
+// (https://mcap.dev/spec), with its metadata, and its messages but for the log, each given to
+// `edit` first: it may change the message's data, drop it (false), and add metadata before it.
+void rewrite_recording(
+    const fs::path& from, const fs::path& to,
+    const std::function<bool(const mcap::Record&, std::string& data, const AddMetadata&)>& edit) {
+  std::ifstream in(from, std::ios::binary);
+  mcap::Reader reader(in);
+  std::string out(mcap::kMagic);
+  const auto number = [](std::string& to, std::uint64_t value, int bytes) {
+    for (int i = 0; i < bytes; ++i) to += static_cast<char>((value >> (8 * i)) & 0xff);
+  };
+  const auto text = [&](std::string& to, std::string_view value) {
+    number(to, value.size(), 4);
+    to += value;
+  };
+  const auto add = [&](std::uint8_t op, const std::string& content) {
+    out += static_cast<char>(op);
+    number(out, content.size(), 8);
+    out += content;
+  };
+  const AddMetadata metadata = [&](const std::string& name,
+                                   const std::vector<std::pair<std::string, std::string>>& map) {
+    std::string content;
+    text(content, name);
+    std::string entries;
+    for (const auto& [key, value] : map) {
+      text(entries, key);
+      text(entries, value);
+    }
+    text(content, entries);
+    add(mcap::kMetadata, content);
+  };
+  std::string content;
+  text(content, "arbiter");
+  text(content, "arbiter");
+  add(mcap::kHeader, content);
+  std::map<std::string, std::uint16_t> channels;
+  for (const char* topic : {"/arbiter/header", "/arbiter/step", "/arbiter/inputs"}) {
+    const auto id = static_cast<std::uint16_t>(channels.size() + 1);
+    content.clear();
+    number(content, id, 2);
+    text(content, topic);
+    text(content, "jsonschema");
+    text(content, "{}");
+    add(mcap::kSchema, content);
+    content.clear();
+    number(content, id, 2);
+    number(content, id, 2);
+    text(content, topic);
+    text(content, "json");
+    number(content, 0, 4);  // no channel metadata
+    add(mcap::kChannel, content);
+    channels[topic] = id;
+  }
+  mcap::Record record;
+  while (reader.next(record)) {
+    if (record.kind == mcap::Record::Kind::kMetadata) {
+      metadata(record.name, record.metadata);
+      continue;
+    }
+    if (channels.count(record.topic) == 0) continue;  // the log is not needed to replay
+    std::string data = record.data;
+    if (!edit(record, data, metadata)) continue;
+    content.clear();
+    number(content, channels.at(record.topic), 2);
+    number(content, 0, 4);  // sequence
+    number(content, record.log_time, 8);
+    number(content, record.log_time, 8);
+    content += data;
+    add(mcap::kMessage, content);
+  }
+  REQUIRE(reader.error().empty());
+  add(mcap::kDataEnd, std::string(4, '\0'));  // no CRC
+  add(mcap::kFooter, std::string(20, '\0'));  // no summary
+  out += mcap::kMagic;
+  std::ofstream(to, std::ios::binary) << out;
+}
+
+}  // namespace
+
 TEST_CASE("a recording whose first step was dropped replays up to its gap", "[replay][cli]") {
   const auto dir = fs::temp_directory_path() / ("arbiter_gap_first_" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -323,81 +411,14 @@ TEST_CASE("a recording whose first step was dropped replays up to its gap", "[re
       run_cli("run tests/data/replay/counter.yaml --steps 5 -q --record " + quoted(whole) + plugins)
           .exit_code == 0);
   // The recording again, with step 1 dropped as a recorder whose writer fell behind drops it.
-  {
-    std::ifstream in(whole, std::ios::binary);
-    mcap::Reader reader(in);
-    // Written by hand, records outside chunks, as MCAP allows (https://mcap.dev/spec).
-    std::string out(mcap::kMagic);
-    const auto number = [](std::string& to, std::uint64_t value, int bytes) {
-      for (int i = 0; i < bytes; ++i) to += static_cast<char>((value >> (8 * i)) & 0xff);
-    };
-    const auto text = [&](std::string& to, std::string_view value) {
-      number(to, value.size(), 4);
-      to += value;
-    };
-    const auto add = [&](std::uint8_t op, const std::string& content) {
-      out += static_cast<char>(op);
-      number(out, content.size(), 8);
-      out += content;
-    };
-    const auto metadata = [&](const std::string& name,
-                              const std::vector<std::pair<std::string, std::string>>& map) {
-      std::string content;
-      text(content, name);
-      std::string entries;
-      for (const auto& [key, value] : map) {
-        text(entries, key);
-        text(entries, value);
-      }
-      text(content, entries);
-      add(mcap::kMetadata, content);
-    };
-    std::string content;
-    text(content, "arbiter");
-    text(content, "arbiter");
-    add(mcap::kHeader, content);
-    std::map<std::string, std::uint16_t> channels;
-    for (const char* topic : {"/arbiter/header", "/arbiter/step", "/arbiter/inputs"}) {
-      const auto id = static_cast<std::uint16_t>(channels.size() + 1);
-      content.clear();
-      number(content, id, 2);
-      text(content, topic);
-      text(content, "jsonschema");
-      text(content, "{}");
-      add(mcap::kSchema, content);
-      content.clear();
-      number(content, id, 2);
-      number(content, id, 2);
-      text(content, topic);
-      text(content, "json");
-      number(content, 0, 4);  // no channel metadata
-      add(mcap::kChannel, content);
-      channels[topic] = id;
-    }
-    mcap::Record record;
-    while (reader.next(record)) {
-      if (record.kind == mcap::Record::Kind::kMetadata) {
-        metadata(record.name, record.metadata);
-      } else if (record.data.rfind("{\"step\": 1,", 0) == 0) {
-        if (record.topic == "/arbiter/step") {
-          metadata("arbiter.gap", {{"after_step", "0"}, {"dropped", "1"}});
-        }
-      } else if (channels.count(record.topic) != 0) {  // the log is not needed to replay
-        content.clear();
-        number(content, channels.at(record.topic), 2);
-        number(content, 0, 4);  // sequence
-        number(content, record.log_time, 8);
-        number(content, record.log_time, 8);
-        content += record.data;
-        add(mcap::kMessage, content);
-      }
-    }
-    REQUIRE(reader.error().empty());
-    add(mcap::kDataEnd, std::string(4, '\0'));  // no CRC
-    add(mcap::kFooter, std::string(20, '\0'));  // no summary
-    out += mcap::kMagic;
-    std::ofstream(gap, std::ios::binary) << out;
-  }
+  rewrite_recording(whole, gap,
+                    [](const mcap::Record& record, std::string& data, const AddMetadata& metadata) {
+                      if (data.rfind("{\"step\": 1,", 0) != 0) return true;
+                      if (record.topic == "/arbiter/step") {
+                        metadata("arbiter.gap", {{"after_step", "0"}, {"dropped", "1"}});
+                      }
+                      return false;
+                    });
   const auto replayed = run_cli("replay " + quoted(gap) + plugins);
   INFO(replayed.err);
   CHECK_FALSE(contains(replayed.err, "the recording has no input"));
@@ -405,6 +426,36 @@ TEST_CASE("a recording whose first step was dropped replays up to its gap", "[re
                  "warning: the recording dropped 1 steps after step 0; the replay "
                  "runs up to there"));
   CHECK(contains(replayed.out, "replayed 0 steps"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a recorded input of the wrong type is located in the recording's config, as recorded",
+          "[replay][cli]") {
+  const auto dir = fs::temp_directory_path() / ("arbiter_bad_input_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto whole = dir / "run.mcap";
+  const auto bad = dir / "bad.mcap";
+  const std::string plugins = std::string(" --plugin-path ") + ARBITER_TEST_PLUGIN_DIR;
+  REQUIRE(
+      run_cli("run tests/data/replay/counter.yaml --steps 5 -q --record " + quoted(whole) + plugins)
+          .exit_code == 0);
+  // The count of step 3 recorded as a string.
+  rewrite_recording(whole, bad, [](const mcap::Record& record, std::string& data, const auto&) {
+    if (record.topic == "/arbiter/inputs" && data.rfind("{\"step\": 3,", 0) == 0) {
+      data = std::regex_replace(data, std::regex(R"("value": [-+.0-9eE]+)"), R"("value": "three")",
+                                std::regex_constants::format_first_only);
+    }
+    return true;
+  });
+  const auto replayed = run_cli("replay " + quoted(bad) + plugins);
+  INFO(replayed.err);
+  CHECK(replayed.exit_code == 1);
+  // Named by the recording and the config's name as recorded, not by where the replay put the
+  // recorded config's files (a directory that does not exist).
+  CHECK(contains(replayed.err, bad.string() +
+                                   ": tests/data/replay/counter.yaml:11:7: error: recorded input "
+                                   "'count' at step 3 is \"three\""));
+  CHECK_FALSE(contains(replayed.err, "arbiter_replay_"));
   fs::remove_all(dir);
 }
 

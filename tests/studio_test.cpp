@@ -574,6 +574,30 @@ TEST_CASE("the studio opens a config that does not exist yet as a valid one, wri
   CHECK(json_state["diagnostics"].empty());
 }
 
+TEST_CASE(
+    "the studio's save refuses the config when it holds no text of it (its load could not "
+    "read it)",
+    "[studio]") {
+  // The config's load reads it under the read limits: one too big is reported and not read, so
+  // the studio holds no text of it and shows none, though it is the config. A save of it (a
+  // request the page does not make) is refused: it would write a file the studio never showed.
+  TempDir dir;
+  const std::string text = "arbiter: 1\nname: big\nlayers: []\n# " + std::string(200, 'x') + "\n";
+  const std::string path = dir.write("robot.yaml", text);
+  Registry registry = make_test_registry();
+  LoadOptions options = with_lints();
+  options.limits.max_file_bytes = 64;
+  Studio studio(path, registry, options);
+  const Json state = Json::parse(studio.state().second);
+  CHECK(state["files"].empty());
+  const Json body = {
+      {"files", Json::array({{{"path", path}, {"text", "arbiter: 1\n"}, {"base", text}}})}};
+  const auto [status, reply] = studio.save(body.dump());
+  CHECK(status == 403);
+  CHECK(contains(reply, "is not one of the config's files"));
+  CHECK(read(path) == text);
+}
+
 TEST_CASE("the studio's save writes through a symbolic link, which stays a link", "[studio]") {
   TempDir dir;
   const std::string real = config_copy(dir);

@@ -1,6 +1,9 @@
 #pragma once
 
+#include <ostream>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace arbiter::cli {
 
@@ -20,5 +23,80 @@ OutputPlace output_place(const std::string& path);
 /// Whether two paths name one file: the same file when both exist (through links and hard
 /// links), the same normal path otherwise.
 bool same_file(const std::string& a, const std::string& b);
+
+/// Whether `path` is the file standard output is (/dev/stdout, /dev/fd/1, the file or pipe the
+/// shell sent it to). Opened again, it would have an offset of its own (and be truncated, even
+/// when the shell appends): what the command prints there would write over it.
+bool is_standard_output(const std::string& path);
+
+/// Whether one of `outputs` (an empty path is not one) is standard output's file: what the
+/// command says besides (its report, its summary) goes to standard error then, so that standard
+/// output holds that output alone, as whoever reads it (a pipe to jq, a trace reader) needs.
+bool writes_standard_output(const std::vector<std::string>& outputs);
+
+/// Why `path` cannot be opened for writing, as the system says it ("No such file or directory"),
+/// learnt by trying again: for a writer that does not say (an ofstream, the Recorder).
+std::string why_not_writable(const std::string& path);
+
+/// A file a command reads: its path, and what it is to the command ("the config being run").
+struct CommandInput {
+  std::string path;
+  std::string what;
+};
+
+/// A file a command writes: its path, and the option that names it ("--trace").
+struct CommandOutput {
+  std::string path;
+  std::string option;
+};
+
+/// False, with why on `err`, when one of `outputs` (those given: an empty path is not) is the
+/// same file as one of `inputs` (an empty path is not one), which writing it would destroy, or as
+/// another output, which it would write over. Before anything is written.
+bool outputs_allowed(std::string_view command, const std::vector<CommandOutput>& outputs,
+                     const std::vector<CommandInput>& inputs, std::ostream& err);
+
+/// A file written whole or not at all: under a temporary name beside the file output_place()
+/// names, renamed over it by commit(), so that a command that fails part way leaves the file as it
+/// was. The file keeps the mode of the one it replaces; a new one gets the mode of any file
+/// created there (0666 less the umask). A file output_place() writes in place is written directly;
+/// standard output's file, through standard output.
+/// Dropped before commit(), the temporary file is removed.
+class AtomicFile {
+ public:
+  explicit AtomicFile(const std::string& path);
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+  ~AtomicFile();
+
+  /// Creates the temporary file (opens the file written in place); false, with why in `error()`,
+  /// when it cannot.
+  bool open();
+  /// Where the text goes until commit(): for a writer that opens the file itself (a Recorder).
+  const std::string& path() const { return temp_; }
+  /// Appends `text` (buffered); false once a write has failed.
+  bool write(std::string_view text);
+  /// Puts the file in place; false, with why in `error()`, when it could not be written (the file
+  /// left as it was).
+  bool commit();
+  /// "cannot write 'PATH': REASON", naming the path as given.
+  const std::string& error() const { return error_; }
+
+ private:
+  bool flush();
+  /// Keeps the first error: what follows it is its consequence.
+  void fail(int error);
+
+  std::string given_;
+  OutputPlace place_;
+  std::string temp_;
+  int fd_ = -1;
+  std::string buffer_;
+  std::string error_;
+  bool done_ = false;
+};
+
+/// Writes `text` to `path` with an AtomicFile. False, with `error`, when it cannot.
+bool write_atomically(const std::string& path, const std::string& text, std::string& error);
 
 }  // namespace arbiter::cli

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <thread>
@@ -48,73 +49,54 @@ std::string file_text(const std::string& path) {
 /// their place. A recorded hot reload puts its files over them.
 class RecordedConfig {
  public:
-  explicit RecordedConfig(const RecordingInfo& info)
-      : dir_(fs::temp_directory_path() / fmt::format("arbiter_replay_{}", ::getpid())) {
+  RecordedConfig(const RecordingInfo& info, std::string recording)
+      : dir_(fs::temp_directory_path() / fmt::format("arbiter_replay_{}", ::getpid())),
+        recording_(std::move(recording)) {
     set(info.files);
     root_ = path_of(info.files.front().first);
   }
   void set(const std::vector<std::pair<std::string, std::string>>& files) {
-    for (const auto& [name, text] : files) overlay_.set(path_of(name), text);
+    for (const auto& [name, text] : files) {
+      overlay_.set(path_of(name), text);
+      names_[path_of(name)] = name;
+    }
   }
   const std::string& root() const { return root_; }
   const FileSource& source() const { return overlay_; }
+  /// `diagnostics` as format() writes them, but with the recorded config's files named as the
+  /// user knows them, the recording's and their recorded names ("run.mcap: robot.yaml:11:7:"),
+  /// rather than by their paths here, under a directory that does not exist.
+  std::string format(const Diagnostics& diagnostics) const {
+    std::string out;
+    for (Diagnostic item : diagnostics.items()) {
+      const auto name = names_.find(fs::path(item.location.file).lexically_normal().string());
+      if (name != names_.end()) {
+        item.location.file = fmt::format("{}: {}", recording_, name->second);
+      }
+      // A message or a note may name a file too ("included from ...").
+      for (const auto& [path, recorded] : names_) {
+        replace_all(item.message, path, recorded);
+        for (auto& note : item.notes) replace_all(note.text, path, recorded);
+      }
+      out += arbiter::format(item);
+    }
+    return out;
+  }
 
  private:
   std::string path_of(const std::string& name) const {
     return (dir_ / fs::path(name).relative_path()).lexically_normal().string();
   }
+  static void replace_all(std::string& text, const std::string& from, const std::string& to) {
+    for (auto at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size())) {
+      text.replace(at, from.size(), to);
+    }
+  }
   fs::path dir_;
+  std::string recording_;
   std::string root_;
   Overlay overlay_;
-};
-
-/// A file written under a temporary name beside its path (or beside the file a link there leads
-/// to) and renamed over it once whole, so that a replay that fails leaves the file as it was, as
-/// when it wrote its trace only at its end. A FIFO or a device is written directly.
-class PendingFile {
- public:
-  explicit PendingFile(const std::string& path)
-      : place_(output_place(path)),
-        temp_(place_.in_place ? place_.path
-                              : fmt::format("{}.{}.partial", place_.path, ::getpid())) {}
-  PendingFile(const PendingFile&) = delete;
-  PendingFile& operator=(const PendingFile&) = delete;
-  ~PendingFile() {
-    if (out_.is_open()) out_.close();
-    if (done_ || place_.in_place) return;
-    std::error_code ignored;
-    fs::remove(temp_, ignored);
-  }
-  /// Where the file is written until commit(), by open() or by a writer of its own.
-  const std::string& path() const { return temp_; }
-  bool open() {
-    out_.open(temp_, std::ios::binary | std::ios::trunc);
-    return out_.is_open();
-  }
-  std::ostream& stream() { return out_; }
-  /// Puts the file in place; false (the file left as it was) when it could not be written.
-  bool commit() {
-    done_ = true;
-    bool failed = false;
-    if (out_.is_open()) {
-      out_.close();
-      failed = out_.fail();
-    }
-    if (place_.in_place) return !failed;
-    std::error_code error;
-    if (!failed) fs::rename(temp_, place_.path, error);
-    if (failed || error) {
-      fs::remove(temp_, error);
-      return false;
-    }
-    return true;
-  }
-
- private:
-  OutputPlace place_;
-  std::string temp_;
-  std::ofstream out_;
-  bool done_ = false;
+  std::map<std::string, std::string> names_;  // path here -> recorded name
 };
 
 }  // namespace
@@ -134,12 +116,10 @@ RecordingInfo recording_info(const std::string& config, const Registry& registry
 }
 
 int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, std::ostream& err) {
-  for (const std::string* output : {&options.record, &options.trace}) {
-    if (output->empty() || !same_file(*output, options.recording)) continue;
-    err << fmt::format(
-        "arbiter replay: '{}' is the recording being replayed ('{}'): writing it would destroy "
-        "it\n",
-        *output, options.recording);
+  if (!outputs_allowed("replay", {{options.trace, "--trace"}, {options.record, "--record"}},
+                       {{options.recording, "the recording being replayed"},
+                        {options.config, "the config replayed (--config)"}},
+                       err)) {
     return 2;
   }
   // The recording is read as the replay goes, twice over (its inputs, and its steps to compare
@@ -164,7 +144,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   std::optional<RecordedConfig> written;
   std::string config = options.config;
   if (config.empty()) {
-    written.emplace(run.info());
+    written.emplace(run.info(), options.recording);
     config = written->root();
   }
   // The first step's inputs are held before the config compiles, so that its interface layers
@@ -178,6 +158,10 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   static const std::string kNoScene;
   const auto scene_of = [&](const RecordingReader::Event& event) -> const std::string& {
     return draws ? event.scene : kNoScene;
+  };
+  // Diagnostics that may be located in the recorded config.
+  const auto described = [&](const Diagnostics& diagnostics) {
+    return written ? written->format(diagnostics) : format(diagnostics);
   };
   std::uint64_t loaded = 0;  // the step whose inputs are held
   Diagnostics diagnostics;
@@ -214,7 +198,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   // The recorded config reloads as the run did, at the same steps; an edited one runs alone.
   Reloader reloader(registry, load);
   auto program = reloader.load(config, diagnostics);
-  if (!diagnostics.empty()) err << format(diagnostics);
+  if (!diagnostics.empty()) err << described(diagnostics);
   if (!program) return 1;
 
   Manager manager(std::move(*program), spdlog::default_logger());
@@ -225,26 +209,32 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   std::ostringstream trace_text;  // what the trace writer wrote in the last step, then emptied
   TraceWriter trace(trace_text);
   manager.add_observer(trace);
-  std::optional<PendingFile> trace_file;
+  // Each output is put in place once the replay has run: a replay that fails part way leaves the
+  // file as it was, as when it wrote its trace only at its end.
+  std::optional<AtomicFile> trace_file;
   if (!options.trace.empty()) {
     trace_file.emplace(options.trace);
     if (!trace_file->open()) {
-      err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
+      err << fmt::format("arbiter replay: {}\n", trace_file->error());
       return 2;
     }
   }
-  // Written beside its path and put in place with the trace, for the same reason.
-  std::optional<PendingFile> record_file;
+  std::optional<AtomicFile> record_file;
   std::unique_ptr<Recorder> recorder;
   if (!options.record.empty()) {
     record_file.emplace(options.record);
+    if (!record_file->open()) {
+      err << fmt::format("arbiter replay: {}\n", record_file->error());
+      return 2;
+    }
     recorder = std::make_unique<Recorder>(
         record_file->path(),
         options.config.empty() ? run.info()
                                : recording_info(config, registry, options.load, options.version),
         Recorder::kSlots, RingFull::kWaitForWriter);  // a replay keeps no pace: it loses nothing
     if (!recorder->ok()) {
-      err << fmt::format("arbiter replay: cannot write '{}'\n", options.record);
+      err << fmt::format("arbiter replay: cannot write '{}': {}\n", options.record,
+                         why_not_writable(record_file->path()));
       return 2;
     }
     recorder->set_flush_interval(options.record_flush);
@@ -260,7 +250,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   const auto written_out = [&] {
     const std::string text = trace_text.str();
     trace_text.str(std::string());
-    if (trace_file) trace_file->stream() << text;
+    if (trace_file) trace_file->write(text);
     return text;
   };
   while (!manager.stopped()) {
@@ -292,7 +282,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
         written->set(event.files);
         if (recorder) recorder->stage_files(event.files);
         const auto reloaded = reloader.reload(manager);
-        if (!reloaded.diagnostics.empty()) err << format(reloaded.diagnostics);
+        if (!reloaded.diagnostics.empty()) err << described(reloaded.diagnostics);
         if (!reloaded.staged) {
           err << fmt::format("{}: error: the config reloaded after step {} does not load\n",
                              options.recording, manager.steps());
@@ -312,7 +302,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       Diagnostics bad;
       if (!inputs.load(step, now ? event.text : std::string(), bad,
                        now ? scene_of(event) : kNoScene, {options.recording})) {
-        err << format(bad);
+        err << described(bad);
         return 1;
       }
       loaded = step;
@@ -348,12 +338,12 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
   manager.finish();
   written_out();
   if (trace_file && !trace_file->commit()) {
-    err << fmt::format("arbiter replay: cannot write '{}'\n", options.trace);
+    err << fmt::format("arbiter replay: {}\n", trace_file->error());
     return 2;
   }
   // A recording that failed part way is put in place too: it keeps what was written before.
   if (record_file && !record_file->commit()) {
-    err << fmt::format("arbiter replay: cannot write '{}'\n", options.record);
+    err << fmt::format("arbiter replay: {}\n", record_file->error());
     return 2;
   }
   const std::uint64_t steps = manager.steps();

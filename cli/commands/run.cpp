@@ -31,13 +31,16 @@
 namespace arbiter::cli {
 
 int run_command(const Options& options) {
-  for (const std::string* output : {&options.record_path, &options.trace_path}) {
-    if (output->empty() || !same_file(*output, options.file)) continue;
-    std::cerr << fmt::format(
-        "arbiter run: '{}' is the config being run ('{}'): writing it would destroy it\n", *output,
-        options.file);
+  if (!outputs_allowed("run", {{options.trace_path, "--trace"}, {options.record_path, "--record"}},
+                       {{options.file, "the config being run"},
+                        {options.inputs_path, "the inputs being fed (--inputs)"}},
+                       std::cerr)) {
     return kExitUsage;
   }
+  // The command's report and summary, on standard error when standard output is taken by the
+  // trace or the recording.
+  std::ostream& out =
+      writes_standard_output({options.trace_path, options.record_path}) ? std::cerr : std::cout;
   auto registry = make_registry();
   arbiter::Reloader reloader(registry, load_options_of(options));  // --watch
   arbiter::Diagnostics load_diagnostics;  // its warnings go into the recording's log
@@ -74,12 +77,17 @@ int run_command(const Options& options) {
       options.steps_given || options.watch || program->steps == 0 ? options.steps : program->steps;
 
   std::ofstream trace_file;
-  if (!options.trace_path.empty()) {
+  std::ostream* trace_out = nullptr;
+  if (is_standard_output(options.trace_path)) {
+    trace_out = &std::cout;
+  } else if (!options.trace_path.empty()) {
     trace_file.open(options.trace_path, std::ios::binary | std::ios::trunc);
     if (!trace_file) {
-      std::cerr << fmt::format("arbiter run: cannot write trace '{}'\n", options.trace_path);
+      std::cerr << fmt::format("arbiter run: cannot write trace '{}': {}\n", options.trace_path,
+                               why_not_writable(options.trace_path));
       return kExitUsage;
     }
+    trace_out = &trace_file;
   }
   arbiter::Manager manager(std::move(*program), spdlog::default_logger());
   // First among the observers: a reload re-resolves the breakpoints before the others see it.
@@ -88,9 +96,9 @@ int run_command(const Options& options) {
     manager.set_check(&breakpoints);
     manager.add_observer(breakpoints);
   }
-  arbiter::TraceWriter trace(trace_file);
-  if (trace_file.is_open()) manager.add_observer(trace);
-  RunReport report(std::cout, options.quiet);
+  arbiter::TraceWriter trace(trace_out != nullptr ? *trace_out : trace_file);
+  if (trace_out != nullptr) manager.add_observer(trace);
+  RunReport report(out, options.quiet);
   manager.add_observer(report);
   // In a terminal, a watched run keeps a status line on stderr: it shows an idle run is alive.
   std::optional<StatusLine> status;
@@ -119,7 +127,8 @@ int run_command(const Options& options) {
         options.record_path, std::move(info), arbiter::Recorder::kSlots,
         options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
     if (!recorder->ok()) {
-      std::cerr << fmt::format("arbiter run: cannot write recording '{}'\n", options.record_path);
+      std::cerr << fmt::format("arbiter run: cannot write recording '{}': {}\n",
+                               options.record_path, why_not_writable(options.record_path));
       return kExitUsage;
     }
     recorder->set_flush_interval(options.record_flush);
@@ -131,13 +140,13 @@ int run_command(const Options& options) {
   // After the recorder: a reload staged by the watcher is recorded with its files.
   std::optional<Watcher> watcher;
   if (options.watch)
-    watcher.emplace(reloader, manager, std::cout, std::cerr, options.quiet,
-                    options.diagnostic_format, status ? &*status : nullptr);
+    watcher.emplace(reloader, manager, out, std::cerr, options.quiet, options.diagnostic_format,
+                    status ? &*status : nullptr);
   std::optional<Studio> studio;  // --edit
   if (options.edit) {
     studio.emplace(options.file, registry, load_options_of(options));
     // On a server thread, one save at a time: the one reloading thread a Reloader allows.
-    studio->set_after_save([&reloader, &manager] {
+    studio->set_after_save([&reloader, &manager, &out] {
       const ReloadResult result = reloader.reload(manager);
       nlohmann::ordered_json applied;
       applied["staged"] = result.staged;
@@ -156,7 +165,7 @@ int run_command(const Options& options) {
       // As --watch reports it, in one piece: the run's own lines come from the stepping thread.
       const std::string summary = applied["summary"].get<std::string>() + "\n";
       if (result.staged) {
-        std::cout << summary + applied["diff"].get<std::string>() << std::flush;
+        out << summary + applied["diff"].get<std::string>() << std::flush;
       } else {
         std::cerr << applied["messages"].get<std::string>() + summary << std::flush;
       }
@@ -168,7 +177,7 @@ int run_command(const Options& options) {
     LiveAccess access;
     access.token = options.serve_token;
     access.readonly = options.serve_readonly;
-    live = LiveView::open(options.serve, options.paused, access, std::cout, std::cerr,
+    live = LiveView::open(options.serve, options.paused, access, out, std::cerr,
                           studio ? &*studio : nullptr);
     if (!live) return kExitUsage;
     manager.add_observer(*live);
@@ -176,7 +185,7 @@ int run_command(const Options& options) {
   }
   std::unique_ptr<FoxgloveServer> foxglove;  // --foxglove
   if (!options.foxglove.empty()) {
-    foxglove = open_foxglove(options.foxglove, "run", std::cout, std::cerr);
+    foxglove = open_foxglove(options.foxglove, "run", out, std::cerr);
     if (!foxglove) return kExitUsage;
     foxglove->set_paced(options.realtime);  // as the recording's log times (info.paced)
     manager.add_observer(*foxglove);
@@ -250,22 +259,22 @@ int run_command(const Options& options) {
   }
   if (!options.quiet) {
     const double wall = std::chrono::duration<double>(Clock::now() - started).count();
-    std::cout << fmt::format("{}simulated {:.2f} s at {} Hz in {} of wall time{}\n",
-                             interrupted ? "interrupted: " : "",
-                             static_cast<double>(manager.steps()) / rate_hz, rate_hz,
-                             wall_time(wall), options.realtime ? " (real time)" : "");
-    std::cout << timing.text(options.realtime) << std::flush;
+    out << fmt::format("{}simulated {:.2f} s at {} Hz in {} of wall time{}\n",
+                       interrupted ? "interrupted: " : "",
+                       static_cast<double>(manager.steps()) / rate_hz, rate_hz, wall_time(wall),
+                       options.realtime ? " (real time)" : "");
+    out << timing.text(options.realtime) << std::flush;
   }
   if (stopped_at_break != nullptr && !options.quiet) {
-    std::cout << fmt::format(
-                     "stopped at the break after step {}: {} (without --serve nothing can resume "
-                     "the run)\n",
-                     manager.steps(), arbiter::printable(stopped_at_break))
-              << std::flush;
+    out << fmt::format(
+               "stopped at the break after step {}: {} (without --serve nothing can resume "
+               "the run)\n",
+               manager.steps(), arbiter::printable(stopped_at_break))
+        << std::flush;
   }
   if (live) live->serve_until(manager, interrupted);
-  if (foxglove) foxglove_after_run(*foxglove, "run", std::cout, std::cerr);
-  if (trace_file.is_open() && !trace_file) {
+  if (foxglove) foxglove_after_run(*foxglove, "run", out, std::cerr);
+  if (trace_out != nullptr && !trace_out->flush()) {
     std::cerr << fmt::format("arbiter run: writing trace '{}' failed\n", options.trace_path);
     return kExitInvalid;
   }

@@ -51,6 +51,12 @@ std::uint64_t wall_ns() {
 // Who the server's own log messages are from.
 constexpr const char* kServerName = "Foxglove server";
 
+/// A client with more than kClientBacklog bytes unsent reads too slowly: what would be queued for
+/// it is dropped instead, so that what waits for it (and the server's memory) stays bounded.
+bool reads_too_slowly(const WsServer::connection_ptr& connection) {
+  return connection->get_buffered_amount() > FoxgloveServer::kClientBacklog;
+}
+
 }  // namespace
 
 struct FoxgloveServer::Impl {
@@ -138,7 +144,7 @@ struct FoxgloveServer::Impl {
     // backlog, and are dropped beyond.
     std::error_code error;
     const auto connection = server.get_con_from_hdl(handle, error);
-    if (error || connection->get_buffered_amount() > kClientBacklog) return;
+    if (error || reads_too_slowly(connection)) return;
     // The message quotes the client, whose text need not be UTF-8.
     send_text(handle, Json{{"op", "status"}, {"level", level}, {"message", message}}.dump(
                           -1, ' ', false, Json::error_handler_t::replace));
@@ -208,7 +214,7 @@ struct FoxgloveServer::Impl {
   void send_time(Handle handle, std::uint64_t time) {
     std::error_code error;
     const auto connection = server.get_con_from_hdl(handle, error);
-    if (error || connection->get_buffered_amount() > kClientBacklog) return;
+    if (error || reads_too_slowly(connection)) return;
     // Time: opcode 2 and the time (u64), little-endian.
     frame.assign(1, '\x02');
     for (int i = 0; i < 8; ++i) frame += static_cast<char>((time >> (8 * i)) & 0xff);
@@ -219,7 +225,7 @@ struct FoxgloveServer::Impl {
     std::error_code error;
     const auto connection = server.get_con_from_hdl(handle, error);
     if (error) return;
-    if (connection->get_buffered_amount() > kClientBacklog) {
+    if (reads_too_slowly(connection)) {
       ++client.dropped;
       dropped_for_clients.fetch_add(1, std::memory_order_relaxed);
       if (!client.dropping) {

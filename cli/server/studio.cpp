@@ -1,16 +1,10 @@
 #include "server/studio.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <httplib.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cctype>
-#include <cerrno>
-#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
@@ -76,49 +70,6 @@ std::string new_config_text(const std::string& path) {
   if (format_of(path) == DocumentFormat::kJson)
     return fmt::format("{{\n  \"arbiter\": 1,\n  \"name\": \"{}\",\n  \"layers\": []\n}}\n", name);
   return fmt::format("arbiter: 1\nname: {}\nlayers: []\n", name);
-}
-
-bool write_atomically(const std::string& path, const std::string& text, std::string& error) {
-  const OutputPlace place = output_place(path);
-  const auto slash = place.path.rfind('/');
-  const std::string dir = slash == std::string::npos ? "." : place.path.substr(0, slash);
-  const std::string name = slash == std::string::npos ? place.path : place.path.substr(slash + 1);
-  // Created with open() rather than mkstemp(), whose 0600 a new file would keep: a new file gets
-  // the mode any file created here gets (0666 less the umask), an existing one keeps its own.
-  static std::atomic<unsigned> serial{0};
-  std::string temp;
-  int fd = -1;
-  if (place.in_place) {
-    fd = ::open(place.path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
-  } else {
-    do {
-      temp = fmt::format("{}/.{}.arbiter-{}-{}", dir, name, ::getpid(), serial++);
-      fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    } while (fd < 0 && errno == EEXIST);
-  }
-  if (fd < 0) {
-    error = place.in_place ? fmt::format("cannot write {}: {}", path, std::strerror(errno))
-                           : fmt::format("cannot write in {}: {}", dir, std::strerror(errno));
-    return false;
-  }
-  struct stat info {};
-  if (!place.in_place && ::stat(place.path.c_str(), &info) == 0) ::fchmod(fd, info.st_mode & 07777);
-  std::size_t done = 0;
-  bool ok = true;
-  while (ok && done < text.size()) {
-    const auto written = ::write(fd, text.data() + done, text.size() - done);
-    if (written < 0 && errno == EINTR) continue;
-    ok = written > 0;
-    if (ok) done += static_cast<std::size_t>(written);
-  }
-  // A FIFO or a terminal cannot be synced (EINVAL), nor does it need to be.
-  ok = ok && (place.in_place || ::fsync(fd) == 0);
-  const int saved_errno = errno;
-  ok = ::close(fd) == 0 && ok;
-  if (ok && (place.in_place || ::rename(temp.c_str(), place.path.c_str()) == 0)) return true;
-  error = fmt::format("cannot write {}: {}", path, std::strerror(ok ? errno : saved_errno));
-  if (!place.in_place) ::unlink(temp.c_str());
-  return false;
 }
 
 Studio::Studio(std::string config, Registry& registry, LoadOptions options)
@@ -281,6 +232,8 @@ Reply Studio::save(const std::string& body) {
     const std::string path = file["path"].get<std::string>();
     // Only the config and the files its load reads now, as it wrote them: no other file,
     // however named, nor one that an include no longer names (the studio still holds its text).
+    // Both: read_now() holds for the config by its name even when its load could not read it (too
+    // big, unreadable), and then the studio holds no text of it, has shown none, and writes none.
     if (texts_.count(path) == 0 || !read_now(path))
       return refusal(403, fmt::format("refused: '{}' is not one of the config's files", path));
     // A new config's base is "": the file is not there yet, or is empty.

@@ -86,10 +86,4 @@ class Studio {
 /// a `name:` made from the file's name, and `layers: []`, in the file's format.
 std::string new_config_text(const std::string& path);
 
-/// Writes `text` to `path` atomically: a temporary file in its directory, flushed, with the
-/// file's permissions, renamed over it. A symbolic link is followed (the file it leads to is
-/// replaced, the link stays); a FIFO or a device is written directly. False, with `error`, when
-/// it cannot.
-bool write_atomically(const std::string& path, const std::string& text, std::string& error);
-
 }  // namespace arbiter::cli

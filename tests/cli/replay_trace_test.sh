@@ -1,9 +1,10 @@
 #!/bin/bash
 # `arbiter replay --trace FILE` (and `--record FILE`) puts FILE in place once the replay has run:
 # a replay that fails part way (here, on a recording damaged in its middle) leaves FILE as it
-# was, and no partial file beside it. A symbolic link is written through and stays a link; a FIFO
-# is written to, not replaced. An output that is the recording itself (or the config of `run`) is
-# refused before anything is written.
+# was, and no partial file beside it; a file replaced keeps its mode. A symbolic link is written
+# through and stays a link; a FIFO is written to, not replaced. An output that is the recording
+# itself (or the config of `run`, or another input), or another output, is refused before
+# anything is written.
 set -eu
 cli=$1
 source_dir=$2
@@ -29,8 +30,26 @@ expect_exit 1 "$cli" replay "$work/bad.mcap" --trace "$work/trace.jsonl" --recor
 grep -q "bad.mcap: error: at byte" "$work/err.txt" || fail "no error where the recording is damaged"
 [[ $(cat "$work/trace.jsonl") == previous ]] || fail "the failed replay changed the trace file"
 [[ $(cat "$work/record.mcap") == previous ]] || fail "the failed replay changed the recording file"
-leftover=$(find "$work" -name '*.partial')
+leftover=$(find "$work" -name '.*.arbiter-*')
 [[ -z $leftover ]] || fail "a partial trace is left: $leftover"
+
+# A file replaced keeps its mode; a new one gets the mode of any file created there.
+echo previous >"$work/kept.jsonl"
+echo previous >"$work/kept_record.mcap"
+chmod 0640 "$work/kept.jsonl" "$work/kept_record.mcap"
+(
+  umask 022
+  expect_exit 0 "$cli" replay "$work/run.mcap" --steps 5 --trace "$work/kept.jsonl" \
+    --record "$work/kept_record.mcap"
+  umask 077
+  expect_exit 0 "$cli" replay "$work/run.mcap" --steps 5 --trace "$work/new.jsonl" \
+    --record "$work/new.mcap"
+)
+[[ $(stat -c %a "$work/kept.jsonl") == 640 ]] || fail "the trace replaced lost its mode 0640"
+[[ $(stat -c %a "$work/kept_record.mcap") == 640 ]] || fail "the recording replaced lost its mode"
+grep -q '"step": 5' "$work/kept.jsonl" || fail "the trace was not replaced"
+[[ $(stat -c %a "$work/new.jsonl") == 600 ]] || fail "a new trace is not 0666 less the umask"
+[[ $(stat -c %a "$work/new.mcap") == 600 ]] || fail "a new recording is not 0666 less the umask"
 
 # Through symbolic links: the files they lead to get the replay's outputs, the links stay links.
 echo previous >"$work/real.jsonl"
@@ -57,7 +76,7 @@ grep -q '"step": 5' "$work/from_fifo.jsonl" || fail "the FIFO's reader did not g
 "$cli" replay "$work/run.mcap" --steps 5 --trace /dev/fd/1 | cat >"$work/piped.jsonl"
 [[ ${PIPESTATUS[0]} -eq 0 ]] || fail "the replay to /dev/fd/1 failed"
 grep -q '"step": 5' "$work/piped.jsonl" || fail "the pipe did not get the trace"
-leftover=$(find "$work" -name '*.partial')
+leftover=$(find "$work" -name '.*.arbiter-*')
 [[ -z $leftover ]] || fail "a partial file is left: $leftover"
 
 # An output that is the recording (by its name, or through a link) is refused, and it is kept.
@@ -76,4 +95,47 @@ expect_exit 2 "$cli" run "$work/counter.yaml" --steps 5 --record "$work/counter.
 grep -qF "'$work/counter.yaml' is the config being run" "$work/err.txt" || fail "no refusal"
 expect_exit 2 "$cli" run "$work/counter.yaml" --steps 5 --trace "$work/./counter.yaml"
 cmp -s "$config" "$work/counter.yaml" || fail "the config was written over"
+# And one that is another of the command's inputs: a run's --inputs, a replay's --config.
+echo kept >"$work/inputs.jsonl"
+expect_exit 2 "$cli" run "$config" --steps 5 --inputs "$work/inputs.jsonl" \
+  --trace "$work/inputs.jsonl"
+grep -qF "'$work/inputs.jsonl' is the inputs being fed (--inputs)" "$work/err.txt" ||
+  fail "no refusal of a run's output over its --inputs"
+[[ $(cat "$work/inputs.jsonl") == kept ]] || fail "the inputs were written over"
+expect_exit 2 "$cli" replay "$work/kept.mcap" --config "$work/counter.yaml" \
+  --record "$work/counter.yaml"
+grep -qF "'$work/counter.yaml' is the config replayed (--config)" "$work/err.txt" ||
+  fail "no refusal of a replay's output over its --config"
+cmp -s "$config" "$work/counter.yaml" || fail "the config was written over"
+
+# An output that cannot be created is refused with the system's reason, before the replay runs.
+expect_exit 2 "$cli" replay "$work/run.mcap" --record "$work/no_such_dir/x.mcap"
+grep -qF "arbiter replay: cannot write '$work/no_such_dir/x.mcap': No such file or directory" \
+  "$work/err.txt" || fail "no reason why the recording cannot be written"
+expect_exit 2 "$cli" replay "$work/run.mcap" --trace "$work/no_such_dir/x.jsonl"
+grep -qF "arbiter replay: cannot write '$work/no_such_dir/x.jsonl': No such file or directory" \
+  "$work/err.txt" || fail "no reason why the trace cannot be written"
+[[ ! -s $work/out.txt ]] || fail "the replay ran"
+# So does a run's.
+expect_exit 2 "$cli" run "$config" --steps 5 --record "$work/no_such_dir/x.mcap"
+grep -qF "arbiter run: cannot write recording '$work/no_such_dir/x.mcap': No such file or" \
+  "$work/err.txt" || fail "no reason why the run's recording cannot be written"
+expect_exit 2 "$cli" run "$config" --steps 5 --trace "$work/no_such_dir/x.jsonl"
+grep -qF "arbiter run: cannot write trace '$work/no_such_dir/x.jsonl': No such file or" \
+  "$work/err.txt" || fail "no reason why the run's trace cannot be written"
+
+# Two outputs that are one file (by name, or through a link) are refused, before anything runs.
+echo kept >"$work/both.out"
+ln -s both.out "$work/both_link.out"
+expect_exit 2 "$cli" run "$config" --steps 5 --trace "$work/both.out" --record "$work/both.out"
+grep -qF "arbiter run: --trace '$work/both.out' and --record '$work/both.out' are the same file" \
+  "$work/err.txt" || fail "a run's --trace and --record on one file are not refused"
+[[ ! -s $work/out.txt ]] || fail "the run ran"
+expect_exit 2 "$cli" replay "$work/run.mcap" --trace "$work/both_link.out" \
+  --record "$work/both.out"
+grep -qF "arbiter replay: --trace '$work/both_link.out' and --record '$work/both.out' are the same" \
+  "$work/err.txt" || fail "a replay's --trace and --record on one file are not refused"
+[[ $(cat "$work/both.out") == kept ]] || fail "the file was written"
+# A device keeps nothing to write over.
+expect_exit 0 "$cli" replay "$work/run.mcap" --steps 5 --trace /dev/null --record /dev/null
 echo ok
