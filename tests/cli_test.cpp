@@ -456,6 +456,8 @@ TEST_CASE("a recorded input of the wrong type is located in the recording's conf
                                    ": tests/data/replay/counter.yaml:11:7: error: recorded input "
                                    "'count' at step 3 is \"three\""));
   CHECK_FALSE(contains(replayed.err, "arbiter_replay_"));
+  // No config was edited: the reason says that the two disagree, not what an edit must keep.
+  CHECK(contains(replayed.err, "the recording and the config replayed disagree on its type"));
   fs::remove_all(dir);
 }
 

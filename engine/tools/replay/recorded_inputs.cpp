@@ -78,8 +78,9 @@ class RecordedInputsLayer : public Interface {
         if (!node || !feed.type->from_node(*node, feed.values.back().data(), expected)) {
           where = feed.location;
           error = fmt::format(
-              "recorded input '{}' at step {} is {}, not {} (a {}): the edited config must keep "
-              "the recorded inputs' types",
+              "recorded input '{}' at step {} is {}, not {} (a {}): the recording and the config "
+              "replayed disagree on its type (an edited config must keep the recorded inputs' "
+              "types)",
               feed.name, inputs_.first_held() + i, column->values[i], expected, feed.type->name);
           return false;
         }
