@@ -78,6 +78,7 @@ struct FoxgloveServer::Impl {
   std::string name;
   std::unique_ptr<asio::steady_timer> timer;
   std::atomic<bool> stopped{false};
+  std::uint64_t failed_connections = 0;  // on the server's thread
 
   // The steps on their way from the stepping thread to the server's thread, which frees a slot
   // within its poll. What waits for it gives up once the server has stopped.
@@ -532,8 +533,19 @@ struct FoxgloveServer::Impl {
       std::error_code error;
       const auto connection = server.get_con_from_hdl(handle, error);
       if (error) return;
-      spdlog::warn("foxglove: a connection from {} failed: {}", connection->get_remote_endpoint(),
+      // A port scanner, or a client retrying in a loop, fails connection after connection: the
+      // first few are logged, then that the rest are not, so that the log stays readable.
+      constexpr std::uint64_t kLoggedFailures = 20;
+      if (++failed_connections > kLoggedFailures) return;
+      // websocketpp says "Unknown" when the socket was gone before its address was read.
+      const std::string from = connection->get_remote_endpoint();
+      spdlog::warn("foxglove: a connection from {} failed: {}",
+                   from == "Unknown" ? "an address no longer known" : from,
                    connection->get_ec().message());
+      if (failed_connections == kLoggedFailures) {
+        spdlog::warn("foxglove: {} connections have failed; further failures are not logged",
+                     kLoggedFailures);
+      }
     });
     server.set_message_handler(
         [this](Handle handle, WsServer::message_ptr message) { on_message(handle, message); });

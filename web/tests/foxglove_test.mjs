@@ -321,19 +321,22 @@ test('garbage frames, unknown channels and 100 connections are survived with a l
   send(`{"op":"subscribe","subscriptions":[${'['.repeat(30000)}${']'.repeat(30000)}]}`);
   await waitFor('a status message for each', () => statuses.length >= 10, 5000);
   console.log('statuses:', statuses.map((status) => status.message));
-  // Raw garbage over TCP, not even a WebSocket handshake; and a frame too big to take.
-  await new Promise((resolve) => {
-    const socket = net.connect(Number(server.url.split(':')[2]), '127.0.0.1', () => {
-      socket.end('\x00\xff garbage\r\n\r\n');
+  // Raw garbage over TCP, not even a WebSocket handshake, 25 times (a scanner, a client retrying
+  // in a loop: the log tells the first 20); and a frame too big to take.
+  for (let i = 0; i < 25; ++i) {
+    await new Promise((resolve) => {
+      const socket = net.connect(Number(server.url.split(':')[2]), '127.0.0.1', () => {
+        socket.end('\x00\xff garbage\r\n\r\n');
+      });
+      socket.resume();  // reads the server's answer, to see it close the connection
+      socket.on('close', resolve);
+      socket.setTimeout(5000, () => {
+        socket.destroy();
+        resolve();
+      });
+      socket.on('error', resolve);
     });
-    socket.resume();  // reads the server's answer, to see it close the connection
-    socket.on('close', resolve);
-    socket.setTimeout(5000, () => {
-      socket.destroy();
-      resolve();
-    });
-    socket.on('error', resolve);
-  });
+  }
   ws.send('x'.repeat(200000));
   // 100 clients connect, subscribe and leave.
   const many = await Promise.all(Array.from({length: 100}, () => connect(server.url)));
@@ -358,6 +361,8 @@ test('garbage frames, unknown channels and 100 connections are survived with a l
   assert.match(err, /a message nested deeper than 200 levels \(at byte \d+\): ignored/);
   assert.match(err, /no channel has the id 9999/);
   assert.match(err, /a connection from .* failed: .*/);
+  assert.equal(err.match(/a connection from .* failed: /g).length, 20, 'the first 20 failed connections logged');
+  assert.match(err, /20 connections have failed; further failures are not logged/);
   assert.match(err, /closed the connection of client .*: A message was too large/);
   assert.match(err, /client .* connected \(\d+ connected\)/);
   assert.doesNotMatch(err, /terminate|Segmentation|Aborted/);
