@@ -408,9 +408,10 @@ export class GraphView {
     const laidOut = performance.now();
     const before = this.drawn?.graph;
     this.drawn = {graph, sizes, layouts};
+    // ELK's drawing in place of a provisional one (this drawing's, or that of one it replaced) is
+    // fitted again, unless the view was moved.
+    if (this.svg.dataset.provisional) this.view?.refit();
     delete this.svg.dataset.provisional;
-    // ELK's drawing in place of the provisional one is fitted again, unless the view was moved.
-    if (provisional) this.view?.refit();
     this.rebuild(before ? addedTo(before, graph) : {layers: new Set(), behaviours: new Set()});
     performance.measure('arbiter:layout', {start: started});
     performance.measure('arbiter:layout:text', {start: started, end: measured});
