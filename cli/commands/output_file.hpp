@@ -35,7 +35,7 @@ bool is_standard_output(const std::string& path);
 bool writes_standard_output(const std::vector<std::string>& outputs);
 
 /// Why `path` cannot be opened for writing, as the system says it ("No such file or directory"),
-/// learnt by trying again: for a writer that does not say (an ofstream, the Recorder).
+/// learnt by trying again: for a writer that does not say (an ofstream).
 std::string why_not_writable(const std::string& path);
 
 /// A file a command reads: its path, and what it is to the command ("the config being run").

@@ -234,7 +234,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
         Recorder::kSlots, RingFull::kWaitForWriter);  // a replay keeps no pace: it loses nothing
     if (!recorder->ok()) {
       err << fmt::format("arbiter replay: cannot write '{}': {}\n", options.record,
-                         why_not_writable(record_file->path()));
+                         recorder->error());
       return 2;
     }
     recorder->set_flush_interval(options.record_flush);

@@ -128,7 +128,7 @@ int run_command(const Options& options) {
         options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
     if (!recorder->ok()) {
       std::cerr << fmt::format("arbiter run: cannot write recording '{}': {}\n",
-                               options.record_path, why_not_writable(options.record_path));
+                               options.record_path, recorder->error());
       return kExitUsage;
     }
     recorder->set_flush_interval(options.record_flush);

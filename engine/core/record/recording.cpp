@@ -45,10 +45,22 @@ struct Recorder::Output {
   std::string step_schema, inputs_schema;  // of the channels written to last
 };
 
+namespace {
+
+/// `path` opened for writing, or -1 with the reason in `error`, taken before anything else can
+/// change errno.
+int open_for_writing(const std::string& path, int& error) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  error = fd < 0 ? errno : 0;
+  return fd;
+}
+
+}  // namespace
+
 Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots,
                    RingFull ring_full)
     : path_(path),
-      fd_(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)),
+      fd_(open_for_writing(path, open_errno_)),
       info_(std::move(info)),
       // At least one step may wait, or every step would drop and the end could never be
       // written.
@@ -70,6 +82,11 @@ Recorder::~Recorder() {
 
 bool Recorder::ok() const {
   return out_ != nullptr && !failed();  // out_ exists once the file is open
+}
+
+std::string Recorder::error() const {
+  if (out_ == nullptr) return std::generic_category().message(open_errno_);
+  return failed() ? error_ : std::string();
 }
 
 void Recorder::check_written(std::uint64_t step) {

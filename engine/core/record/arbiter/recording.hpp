@@ -84,8 +84,10 @@ class Recorder : public Observer {
   void set_name(std::string name) { path_ = std::move(name); }
   /// True once a write to the file failed (any thread).
   bool failed() const { return failed_.load(std::memory_order_acquire); }
-  /// Why, and at which step: "No space left on device (writing step 605)"; "" until failed().
-  std::string error() const { return failed() ? error_ : std::string(); }
+  /// Why the file could not be opened ("No such file or directory", ok() false from the start),
+  /// or why a write failed and at which step ("No space left on device (writing step 605)");
+  /// "" while neither happened.
+  std::string error() const;
 
   void on_start(const Manager& manager) override;
   void on_step(const Manager& manager) override;
@@ -149,6 +151,7 @@ class Recorder : public Observer {
   /// The sync thread: fdatasync, whenever asked, until told to stop.
   void sync_loop();
   std::string path_;
+  int open_errno_ = 0;  // why open() failed, before fd_ (whose initialiser sets it)
   int fd_ = -1;
   RecordingInfo info_;
   std::size_t slots_ = 0;
