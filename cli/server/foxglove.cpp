@@ -51,6 +51,16 @@ std::uint64_t wall_ns() {
 // Who the server's own log messages are from.
 constexpr const char* kServerName = "Foxglove server";
 
+constexpr std::uint64_t kMaxWarnings = 20;
+/// Logs the warning `what` the first kMaxWarnings times `count` counts, then `rest` (that the
+/// others are not logged): a client sending garbage in a loop, or a port scanner failing
+/// connection after connection, does not flood the log.
+void warn_at_most(std::uint64_t& count, const std::string& what, const std::string& rest) {
+  if (++count > kMaxWarnings) return;
+  spdlog::warn("{}", what);
+  if (count == kMaxWarnings) spdlog::warn("{}", rest);
+}
+
 /// A client with more than kClientBacklog bytes unsent reads too slowly: what would be queued for
 /// it is dropped instead, so that what waits for it (and the server's memory) stays bounded.
 bool reads_too_slowly(const WsServer::connection_ptr& connection) {
@@ -124,15 +134,11 @@ struct FoxgloveServer::Impl {
   }
 
   // The server's thread from here on.
-  /// A warning about `client`: the first kMaxWarnings, so that a client sending garbage in a
-  /// loop does not flood the log.
+  /// A warning about `client`: the first few (warn_at_most()).
   void log_client(Client& client, const std::string& what) {
-    constexpr std::uint64_t kMaxWarnings = 20;
-    if (++client.warnings <= kMaxWarnings)
-      spdlog::warn("foxglove client {}: {}", client.name, what);
-    if (client.warnings == kMaxWarnings) {
-      spdlog::warn("foxglove client {}: its further problems are not logged", client.name);
-    }
+    warn_at_most(
+        client.warnings, fmt::format("foxglove client {}: {}", client.name, what),
+        fmt::format("foxglove client {}: its further problems are not logged", client.name));
   }
   void send_text(Handle handle, const std::string& text) {
     std::error_code error;
@@ -533,19 +539,15 @@ struct FoxgloveServer::Impl {
       std::error_code error;
       const auto connection = server.get_con_from_hdl(handle, error);
       if (error) return;
-      // A port scanner, or a client retrying in a loop, fails connection after connection: the
-      // first few are logged, then that the rest are not, so that the log stays readable.
-      constexpr std::uint64_t kLoggedFailures = 20;
-      if (++failed_connections > kLoggedFailures) return;
       // websocketpp says "Unknown" when the socket was gone before its address was read.
       const std::string from = connection->get_remote_endpoint();
-      spdlog::warn("foxglove: a connection from {} failed: {}",
-                   from == "Unknown" ? "an address no longer known" : from,
-                   connection->get_ec().message());
-      if (failed_connections == kLoggedFailures) {
-        spdlog::warn("foxglove: {} connections have failed; further failures are not logged",
-                     kLoggedFailures);
-      }
+      warn_at_most(failed_connections,
+                   fmt::format("foxglove: a connection from {} failed: {}",
+                               from == "Unknown" ? "an address no longer known" : from,
+                               connection->get_ec().message()),
+                   fmt::format("foxglove: {} connections have failed; further failures are not "
+                               "logged",
+                               kMaxWarnings));
     });
     server.set_message_handler(
         [this](Handle handle, WsServer::message_ptr message) { on_message(handle, message); });
