@@ -52,12 +52,13 @@ export function quickLayout(graph) {
   const group = nodes.map((_, i) => i);
   const find = (i) => (group[i] === i ? i : (group[i] = find(group[i])));
   for (const edge of edges) group[find(edge.from)] = find(edge.to);
-  const groups = new Map();
+  const groups = new Map();  // root -> {members, skipping: the inhibitions that skip a row}
   nodes.forEach((_, i) => {
     const root = find(i);
-    if (!groups.has(root)) groups.set(root, []);
-    groups.get(root).push(i);
+    if (!groups.has(root)) groups.set(root, {members: [], skipping: []});
+    groups.get(root).members.push(i);
   });
+  for (const edge of edges) if (row[edge.to] > row[edge.from] + 1) groups.get(find(edge.from)).skipping.push(edge);
 
   // Each group laid out at (0, 0): its rows stacked, each centred on the widest; an inhibition that
   // skips a row runs down a lane of its own right of the group's boxes.
@@ -65,7 +66,7 @@ export function quickLayout(graph) {
   const y = new Array(nodes.length).fill(0);
   const rowBottom = new Array(nodes.length).fill(0);  // the bottom of each behaviour's row
   const lane = new Map();  // edge -> its lane's x, for those that skip a row
-  const laidGroups = [...groups.values()].map((members) => {
+  const laidGroups = [...groups.values()].map(({members, skipping}) => {
     const rows = [];
     for (const i of members) (rows[row[i]] ??= []).push(i);
     const widths = rows.map((r) => r.reduce((sum, i) => sum + nodes[i].width, 0) + NODE_GAP * (r.length - 1));
@@ -87,13 +88,9 @@ export function quickLayout(graph) {
       }
       top += height;
     });
-    const member = new Set(members);
-    let lanes = 0;
-    for (const edge of edges) {
-      if (member.has(edge.from) && row[edge.to] > row[edge.from] + 1) lane.set(edge, width + EDGE_GAP + LANE_GAP * lanes++);
-    }
-    if (lanes) width += EDGE_GAP + LANE_GAP * (lanes - 1);
-    return {members, width, height: top};
+    skipping.forEach((edge, k) => lane.set(edge, width + EDGE_GAP + LANE_GAP * k));
+    if (skipping.length) width += EDGE_GAP + LANE_GAP * (skipping.length - 1);
+    return {members, skipping, width, height: top};
   });
 
   // The groups packed left to right, the smallest first (by area; in execution order among equals),
@@ -117,7 +114,7 @@ export function quickLayout(graph) {
       y[i] += top;
       rowBottom[i] += top;
     }
-    for (const [edge, at] of lane) if (g.members.includes(edge.from)) lane.set(edge, at + left);
+    for (const edge of g.skipping) lane.set(edge, lane.get(edge) + left);
     width = Math.max(width, left + g.width);
     rowHeight = Math.max(rowHeight, g.height);
     left += g.width + GROUP_GAP;
