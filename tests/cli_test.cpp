@@ -398,18 +398,24 @@ void rewrite_recording(
   std::ofstream(to, std::ios::binary) << out;
 }
 
+// The test plugins tests/data/replay/counter.yaml loads.
+const std::string kCounterPlugins = std::string(" --plugin-path ") + ARBITER_TEST_PLUGIN_DIR;
+
+/// A recording of tests/data/replay/counter.yaml's first 5 steps, at `path`.
+void record_counter(const fs::path& path) {
+  REQUIRE(run_cli("run tests/data/replay/counter.yaml --steps 5 -q --record " + quoted(path) +
+                  kCounterPlugins)
+              .exit_code == 0);
+}
+
 }  // namespace
 
 TEST_CASE("a recording whose first step was dropped replays up to its gap", "[replay][cli]") {
-  const auto dir = fs::temp_directory_path() / ("arbiter_gap_first_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const TempDir dir;
   const auto whole = dir / "run.mcap";
   const auto gap = dir / "gap.mcap";
   // Its interface layer declares an actuator, whose recorded input must be there to compile.
-  const std::string plugins = std::string(" --plugin-path ") + ARBITER_TEST_PLUGIN_DIR;
-  REQUIRE(
-      run_cli("run tests/data/replay/counter.yaml --steps 5 -q --record " + quoted(whole) + plugins)
-          .exit_code == 0);
+  record_counter(whole);
   // The recording again, with step 1 dropped as a recorder whose writer fell behind drops it.
   rewrite_recording(whole, gap,
                     [](const mcap::Record& record, std::string& data, const AddMetadata& metadata) {
@@ -419,26 +425,21 @@ TEST_CASE("a recording whose first step was dropped replays up to its gap", "[re
                       }
                       return false;
                     });
-  const auto replayed = run_cli("replay " + quoted(gap) + plugins);
+  const auto replayed = run_cli("replay " + quoted(gap) + kCounterPlugins);
   INFO(replayed.err);
   CHECK_FALSE(contains(replayed.err, "the recording has no input"));
   CHECK(contains(replayed.err,
                  "warning: the recording dropped 1 steps after step 0; the replay "
                  "runs up to there"));
   CHECK(contains(replayed.out, "replayed 0 steps"));
-  fs::remove_all(dir);
 }
 
 TEST_CASE("a recorded input of the wrong type is located in the recording's config, as recorded",
           "[replay][cli]") {
-  const auto dir = fs::temp_directory_path() / ("arbiter_bad_input_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const TempDir dir;
   const auto whole = dir / "run.mcap";
   const auto bad = dir / "bad.mcap";
-  const std::string plugins = std::string(" --plugin-path ") + ARBITER_TEST_PLUGIN_DIR;
-  REQUIRE(
-      run_cli("run tests/data/replay/counter.yaml --steps 5 -q --record " + quoted(whole) + plugins)
-          .exit_code == 0);
+  record_counter(whole);
   // The count of step 3 recorded as a string.
   rewrite_recording(whole, bad, [](const mcap::Record& record, std::string& data, const auto&) {
     if (record.topic == "/arbiter/inputs" && data.rfind("{\"step\": 3,", 0) == 0) {
@@ -447,7 +448,7 @@ TEST_CASE("a recorded input of the wrong type is located in the recording's conf
     }
     return true;
   });
-  const auto replayed = run_cli("replay " + quoted(bad) + plugins);
+  const auto replayed = run_cli("replay " + quoted(bad) + kCounterPlugins);
   INFO(replayed.err);
   CHECK(replayed.exit_code == 1);
   // Named by the recording and the config's name as recorded, not by where the replay put the
@@ -458,7 +459,6 @@ TEST_CASE("a recorded input of the wrong type is located in the recording's conf
   CHECK_FALSE(contains(replayed.err, "arbiter_replay_"));
   // No config was edited: the reason says that the two disagree, not what an edit must keep.
   CHECK(contains(replayed.err, "the recording and the config replayed disagree on its type"));
-  fs::remove_all(dir);
 }
 
 namespace {
