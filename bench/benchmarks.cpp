@@ -257,13 +257,15 @@ void record_paced(benchmark::State& state) {
 }
 
 #if ARBITER_HAS_FOXGLOVE
-/// The soccer demo at a robot's pace, as record/soccer/paced: each step timed alone, the plain
+/// A program at a robot's pace, as record/soccer/paced: each step timed alone, the plain
 /// program and one served over the Foxglove WebSocket protocol (`arbiter run --foxglove`) to a
-/// client subscribed to every channel, in turn; medians.
-void foxglove_paced(benchmark::State& state) {
+/// client subscribed to every channel, in turn; medians. The soccer demo, or a generated graph
+/// of `state.range(0)` behaviours: the capture's cost is mostly fixed, so its share falls as a
+/// step grows.
+void foxglove_paced(benchmark::State& state, Graph graph, bool soccer) {
   std::optional<Program> programs[2];
   Registry soccer_registry = make_registry();
-  if (!load_twice(state, Graph::kLayers, true, soccer_registry, programs)) return;
+  if (!load_twice(state, graph, soccer, soccer_registry, programs)) return;
   Manager plain(std::move(*programs[0]), quiet());
   Manager served(std::move(*programs[1]), quiet());
   std::ostringstream said;
@@ -547,8 +549,14 @@ void register_benchmarks() {
       ->Iterations(5)
       ->UseRealTime();
 #if ARBITER_HAS_FOXGLOVE
-  benchmark::RegisterBenchmark("foxglove/soccer/paced", foxglove_paced)
+  benchmark::RegisterBenchmark("foxglove/soccer/paced", foxglove_paced, Graph::kLayers, true)
       ->ComputeStatistics("min", fastest)
+      ->Iterations(5)
+      ->UseRealTime();
+  benchmark::RegisterBenchmark("foxglove/layers/paced", foxglove_paced, Graph::kLayers, false)
+      ->ComputeStatistics("min", fastest)
+      ->Arg(100)
+      ->Arg(1000)
       ->Iterations(5)
       ->UseRealTime();
 #endif
