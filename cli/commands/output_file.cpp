@@ -168,6 +168,10 @@ bool AtomicFile::write(std::string_view text) {
   return buffer_.size() < kBuffered || flush();
 }
 
+int AtomicFile::duplicate() const {
+  return fd_ < 0 ? -1 : ::fcntl(fd_, F_DUPFD_CLOEXEC, 0);
+}
+
 bool AtomicFile::commit() {
   done_ = true;
   bool ok = fd_ >= 0 && flush();

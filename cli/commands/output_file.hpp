@@ -72,8 +72,10 @@ class AtomicFile {
   /// Creates the temporary file (opens the file written in place); false, with why in `error()`,
   /// when it cannot.
   bool open();
-  /// Where the text goes until commit(): for a writer that opens the file itself (a Recorder).
-  const std::string& path() const { return temp_; }
+  /// A descriptor of its own on the file open(), for a writer that writes it itself (a
+  /// Recorder), which closes it; -1 when the system has none to give. Standard output's file is
+  /// written at its offset, as appended to when the shell appends.
+  int duplicate() const;
   /// Appends `text` (buffered); false once a write has failed.
   bool write(std::string_view text);
   /// Puts the file in place; false, with why in `error()`, when it could not be written (the file

@@ -228,7 +228,7 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       return 2;
     }
     recorder = std::make_unique<Recorder>(
-        record_file->path(),
+        record_file->duplicate(), options.record,
         options.config.empty() ? run.info()
                                : recording_info(config, registry, options.load, options.version),
         Recorder::kSlots, RingFull::kWaitForWriter);  // a replay keeps no pace: it loses nothing
@@ -238,7 +238,6 @@ int replay(const ReplayOptions& options, Registry& registry, std::ostream& out, 
       return 2;
     }
     recorder->set_flush_interval(options.record_flush);
-    recorder->set_name(options.record);
     manager.add_observer(*recorder);
   }
   for (Observer* observer : options.observers) manager.add_observer(*observer);

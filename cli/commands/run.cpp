@@ -1,6 +1,7 @@
 // `arbiter run`: a config stepped, paced or flat out, with its trace, recording, report, watcher
 // live view and Foxglove server attached as observers of the manager.
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
@@ -123,9 +124,18 @@ int run_command(const Options& options) {
     auto info = recording_info(options.file, registry, load_options_of(options), kVersion);
     info.paced = options.realtime;  // logged on the wall clock; flat out, on the simulated one
     info.diagnostics = load_diagnostics.items();
-    recorder = std::make_unique<arbiter::Recorder>(
-        options.record_path, std::move(info), arbiter::Recorder::kSlots,
-        options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter);
+    const auto ring_full =
+        options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter;
+    if (is_standard_output(options.record_path)) {
+      // Through standard output's own open file: opened again, /dev/stdout would be truncated,
+      // and written from its start, where the shell appends.
+      recorder = std::make_unique<arbiter::Recorder>(
+          ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 0), options.record_path, std::move(info),
+          arbiter::Recorder::kSlots, ring_full);
+    } else {
+      recorder = std::make_unique<arbiter::Recorder>(options.record_path, std::move(info),
+                                                     arbiter::Recorder::kSlots, ring_full);
+    }
     if (!recorder->ok()) {
       std::cerr << fmt::format("arbiter run: cannot write recording '{}': {}\n",
                                options.record_path, recorder->error());

@@ -52,4 +52,18 @@ grep -q "simulated 3.00 s" "$work/err.txt" || fail "the run's summary is not on 
 expect_exit 0 "$cli" replay "$work/run2.mcap"
 grep -q "replayed 30 steps of .*: identical" "$work/out.txt" ||
   fail "the run's recording written to stdout does not replay"
+# A recording appended to standard output's file keeps what was there, and follows it whole, from
+# run and from replay.
+for command in "run $config --steps 30" "replay $work/run.mcap"; do
+  printf 'previous\n' >"$work/appended.bin"
+  # shellcheck disable=SC2086  # the command's words
+  "$cli" $command --record /dev/stdout >>"$work/appended.bin" 2>"$work/err.txt" ||
+    fail "$command, recording appended to stdout, failed"
+  [[ $(head -c 9 "$work/appended.bin") == previous ]] ||
+    fail "$command: the file appended to was truncated"
+  tail -c +10 "$work/appended.bin" >"$work/appended.mcap"
+  expect_exit 0 "$cli" replay "$work/appended.mcap"
+  grep -q "replayed 30 steps of .*: identical" "$work/out.txt" ||
+    fail "$command: the recording appended to stdout does not replay"
+done
 echo ok

@@ -47,20 +47,28 @@ struct Recorder::Output {
 
 namespace {
 
-/// `path` opened for writing, or -1 with the reason in `error`, taken before anything else can
-/// change errno.
-int open_for_writing(const std::string& path, int& error) {
+/// `path` opened for writing, or -1 with the reason, taken before anything else can change
+/// errno.
+std::pair<int, int> open_for_writing(const std::string& path) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  error = fd < 0 ? errno : 0;
-  return fd;
+  return {fd, fd < 0 ? errno : 0};
 }
 
 }  // namespace
 
 Recorder::Recorder(const std::string& path, RecordingInfo info, std::size_t slots,
                    RingFull ring_full)
-    : path_(path),
-      fd_(open_for_writing(path, open_errno_)),
+    : Recorder(path, open_for_writing(path), std::move(info), slots, ring_full) {}
+
+Recorder::Recorder(int fd, std::string name, RecordingInfo info, std::size_t slots,
+                   RingFull ring_full)
+    : Recorder(std::move(name), {fd, fd < 0 ? EBADF : 0}, std::move(info), slots, ring_full) {}
+
+Recorder::Recorder(std::string name, std::pair<int, int> opened, RecordingInfo info,
+                   std::size_t slots, RingFull ring_full)
+    : path_(std::move(name)),
+      open_errno_(opened.second),
+      fd_(opened.first),
       info_(std::move(info)),
       // At least one step may wait, or every step would drop and the end could never be
       // written.

@@ -64,6 +64,12 @@ class Recorder : public Observer {
   /// cannot be opened for writing.
   Recorder(const std::string& path, RecordingInfo info, std::size_t slots = kSlots,
            RingFull ring_full = RingFull::kDropStep);
+  /// Writes to `fd`, a descriptor open for writing that it takes over (and closes), naming the
+  /// file `name` in its reports: for a file that must not be opened again, such as standard
+  /// output's (a duplicate of it keeps its offset and O_APPEND, where opening /dev/stdout again
+  /// would truncate what the shell appends to). A negative `fd` fails as an open would.
+  Recorder(int fd, std::string name, RecordingInfo info, std::size_t slots = kSlots,
+           RingFull ring_full = RingFull::kDropStep);
   ~Recorder() override;
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
@@ -78,10 +84,6 @@ class Recorder : public Observer {
   void set_flush_interval(double seconds) { flush_interval_ = seconds; }
   /// Where a failed write is reported (default: spdlog's default logger). Before the run starts.
   void set_logger(std::shared_ptr<spdlog::logger> logger) { logger_ = std::move(logger); }
-  /// The file as a failed write's report names it (default: the path it was opened with): one
-  /// written under a temporary name and renamed once whole is named as it will be. Before the
-  /// run starts.
-  void set_name(std::string name) { path_ = std::move(name); }
   /// True once a write to the file failed (any thread).
   bool failed() const { return failed_.load(std::memory_order_acquire); }
   /// Why the file could not be opened ("No such file or directory", ok() false from the start),
@@ -150,8 +152,12 @@ class Recorder : public Observer {
   void request_sync(std::uint64_t step);
   /// The sync thread: fdatasync, whenever asked, until told to stop.
   void sync_loop();
+  /// `opened`: the descriptor, and why it could not be opened when it is -1.
+  Recorder(std::string name, std::pair<int, int> opened, RecordingInfo info, std::size_t slots,
+           RingFull ring_full);
+
   std::string path_;
-  int open_errno_ = 0;  // why open() failed, before fd_ (whose initialiser sets it)
+  int open_errno_ = 0;  // why open() failed
   int fd_ = -1;
   RecordingInfo info_;
   std::size_t slots_ = 0;
