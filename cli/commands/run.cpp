@@ -129,9 +129,9 @@ int run_command(const Options& options) {
     if (is_standard_output(options.record_path)) {
       // Through standard output's own open file: opened again, /dev/stdout would be truncated,
       // and written from its start, where the shell appends.
-      recorder = std::make_unique<arbiter::Recorder>(
-          ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 0), options.record_path, std::move(info),
-          arbiter::Recorder::kSlots, ring_full);
+      recorder = std::make_unique<arbiter::Recorder>(::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 0),
+                                                     options.record_path, std::move(info),
+                                                     arbiter::Recorder::kSlots, ring_full);
     } else {
       recorder = std::make_unique<arbiter::Recorder>(options.record_path, std::move(info),
                                                      arbiter::Recorder::kSlots, ring_full);
