@@ -560,7 +560,7 @@ layers:
                  "{x: {type: double}}\n    behaviours:\n      c: scripted\n"));
   CHECK(add_behaviour(loaded, "block", "a", "scripted").refused == "'a' is already taken");
   CHECK(add_behaviour(loaded, "block", "A b", "scripted").refused ==
-        "'A b' is not a valid name: names are [a-z_][a-z0-9_]*");
+        "'A b' is not a valid name: names are lower-case identifiers ([a-z_][a-z0-9_]*)");
   CHECK(add_behaviour(loaded, "other", "w", "scripted").refused == "no layer 'other'");
   // A class that does not exist: the check refuses it in validate's words.
   CHECK_THAT(checked(loaded, add_behaviour(loaded, "block", "w", "no.Such"), registry).refused,
@@ -843,7 +843,7 @@ TEST_CASE("an actuator is added and removed in its layer's actuators:, and refus
   CHECK(add_actuator(loaded, "low", "speed", "double").refused ==
         "'speed' is already taken: layer 'top' declares an actuator of that name");
   CHECK(add_actuator(loaded, "low", "Speed", "double").refused ==
-        "'Speed' is not a valid name: names are [a-z_][a-z0-9_]*");
+        "'Speed' is not a valid name: names are lower-case identifiers ([a-z_][a-z0-9_]*)");
   CHECK_THAT(yaml.refused(add_actuator(loaded, "low", "gain", "quaternion")),
              Catch::Contains("quaternion"));
 
@@ -917,7 +917,8 @@ layers:
   CHECK(wire_port(loaded, "l", "nobody", "out", "level").refused ==
         "no behaviour 'nobody' in layer 'l'");
   CHECK(wire_port(loaded, "l", "probe", "out", "Level").refused ==
-        "'out: Level' is not a port binding: names are [a-z_][a-z0-9_]*");
+        "'Level' is not a name in a port binding: names are lower-case identifiers "
+        "([a-z_][a-z0-9_]*)");
   // What validate refuses (a port the class does not have, a name the layer cannot bind) is
   // refused in its words.
   CHECK_THAT(ports.refused(wire_port(loaded, "l", "probe", "nope", "level")),
@@ -959,7 +960,7 @@ TEST_CASE("a state machine's queue gets a state with its params, loses one, and 
         "positions count from 0");
   CHECK(add_queue_entry(loaded, "nobody", "one", {}, 0).refused == "no state machine 'nobody'");
   CHECK(add_queue_entry(loaded, "plan", "one", {{"Hold", "1"}}, 0).refused ==
-        "'Hold' is not a param's name: names are [a-z_][a-z0-9_]*");
+        "'Hold' is not a param's name: names are lower-case identifiers ([a-z_][a-z0-9_]*)");
   CHECK(move_queue_entry(loaded, "plan", 0, 0).refused ==
         "the state at position 0 is there already");
   CHECK(remove_queue_entry(loaded, "plan", 3).refused ==
@@ -1374,7 +1375,12 @@ TEST_CASE("a layer is added at its position, or as the first of a list, and remo
   CHECK(add_layer(loaded, "inc", kAtEnd).refused ==
         "'inc' is already taken: a layer of that name is declared");
   CHECK(add_layer(loaded, "Mid", kAtEnd).refused ==
-        "'Mid' is not a valid name: names are [a-z_][a-z0-9_]*");
+        "'Mid' is not a valid name: names are lower-case identifiers ([a-z_][a-z0-9_]*)");
+  // A name pasted from a page: refused, and the refusal shows its start, not the page.
+  CHECK(add_layer(loaded, std::string(10 << 20, 'm'), kAtEnd).refused ==
+        "'" + std::string(32, 'm') +
+            "…' (10485760 characters) is not a valid name: names are at most 128 characters");
+  CHECK(add_layer(loaded, std::string(128, 'm'), kAtEnd).ok());
 
   // Removed with everything it declares and the comment above it; refused while another layer
   // reads its actuators.
@@ -1429,7 +1435,7 @@ TEST_CASE("a state machine is declared empty, and removed unless something names
   CHECK(add_state_machine(loaded, "plan").refused ==
         "'plan' is already taken: a state machine of that name is declared");
   CHECK(add_state_machine(loaded, "Plan").refused ==
-        "'Plan' is not a valid name: names are [a-z_][a-z0-9_]*");
+        "'Plan' is not a valid name: names are lower-case identifiers ([a-z_][a-z0-9_]*)");
 
   Registry registry = make_test_registry();
   const ConfigIndex index = index_config(loaded, &registry);
@@ -1472,7 +1478,7 @@ TEST_CASE("a plugin is named in plugins:, which is added when missing", "[edit]"
   CHECK_THAT(none.refused(add_plugin(none.loaded(), "no_such_plugin")),
              Catch::Contains("no_such_plugin"));
   CHECK(add_plugin(none.loaded(), "So ccer").refused ==
-        "'So ccer' is not a plugin's name: names are [a-z_][a-z0-9_]*");
+        "'So ccer' is not a plugin's name: names are lower-case identifiers ([a-z_][a-z0-9_]*)");
   Workspace listed(Files{{"listed.yaml", "arbiter: 1\nname: listed\nplugins: [soccer]\n"}});
   CHECK(add_plugin(listed.loaded(), "soccer").refused == "plugin 'soccer' is named already");
   if (!plugins_built(kSourceDir / "configs/soccer/walk_and_kick.yaml")) return;

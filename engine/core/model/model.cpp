@@ -40,12 +40,25 @@ const char* to_string(FaultPolicy policy) {
 }
 
 bool is_identifier(std::string_view text) {
-  if (text.empty()) return false;
+  if (text.empty() || text.size() > kMaxNameLength) return false;
   if (!(text[0] == '_' || (text[0] >= 'a' && text[0] <= 'z'))) return false;
   for (char c : text) {
     if (!(c == '_' || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9'))) return false;
   }
   return true;
+}
+
+std::string name_error(std::string_view text, std::string_view what) {
+  if (text.size() > kMaxNameLength) {
+    constexpr std::size_t kShown = 32;
+    std::size_t cut = kShown;
+    // Not inside a UTF-8 character: back to the start of the one at the cut.
+    while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
+    return fmt::format("'{}…' ({} characters) is not {}: names are at most {} characters",
+                       text.substr(0, cut), text.size(), what, kMaxNameLength);
+  }
+  return fmt::format("'{}' is not {}: names are lower-case identifiers ([a-z_][a-z0-9_]*)", text,
+                     what);
 }
 
 namespace detail {

@@ -92,11 +92,9 @@ std::optional<std::string> ModelBuilder::read_name(const Node& node, std::string
 bool ModelBuilder::check_identifier(const std::string& text, const SourceLocation& where,
                                     std::string_view what) {
   if (is_identifier(text)) return true;
-  auto& error = diagnostics_.error(
-      where, "bad-identifier",
-      fmt::format("'{}' is not a valid name for {}: names are lower-case identifiers "
-                  "([a-z_][a-z0-9_]*)",
-                  text, what));
+  auto& error = diagnostics_.error(where, "bad-identifier",
+                                   name_error(text, fmt::format("a valid name for {}", what)));
+  if (text.size() > kMaxNameLength) return false;
   if (const auto fixed = to_identifier(text); !fixed.empty() && fixed != text) {
     error.notes.push_back(fmt::format("did you mean '{}'?", fixed));
   }

@@ -398,8 +398,7 @@ EditResult rename_symbol(const Loaded& loaded, const ConfigIndex& index, const O
                          const std::string& name) {
   if (symbol.kind == SymbolKind::kClass || symbol.kind == SymbolKind::kInclude)
     return {{}, "only a behaviour, actuator, layer, state or state machine can be renamed"};
-  if (!is_identifier(name))
-    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  if (!is_identifier(name)) return {{}, name_error(name, "a valid name")};
   for (const auto& other : index.occurrences) {
     if (other.definition && other.kind == symbol.kind && other.scope == symbol.scope &&
         other.name == name)
@@ -572,8 +571,7 @@ EditResult first_behaviour(const SourceFile& file, const Node& layer, const std:
 
 EditResult add_behaviour(const Loaded& loaded, const std::string& layer, const std::string& name,
                          const std::string& type) {
-  if (!is_identifier(name))
-    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  if (!is_identifier(name)) return {{}, name_error(name, "a valid name")};
   const std::vector<LayerSite> found = layers_named(loaded, layer);
   if (found.empty()) return {{}, fmt::format("no layer '{}'", layer)};
   for (const auto& site : found) {
@@ -1064,8 +1062,7 @@ EditResult move_layer(const Loaded& loaded, const std::string& layer, std::size_
 
 EditResult add_layer(const Loaded& loaded, const std::string& name, std::size_t index,
                      const std::string& interface) {
-  if (!is_identifier(name))
-    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  if (!is_identifier(name)) return {{}, name_error(name, "a valid name")};
   if (!layers_named(loaded, name).empty())
     return {{}, fmt::format("'{}' is already taken: a layer of that name is declared", name)};
   const auto& files = loaded.files.files();
@@ -1179,8 +1176,7 @@ EditResult remove_layer(const Loaded& loaded, const std::string& name) {
 
 EditResult add_actuator(const Loaded& loaded, const std::string& layer, const std::string& name,
                         const std::string& type) {
-  if (!is_identifier(name))
-    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  if (!is_identifier(name)) return {{}, name_error(name, "a valid name")};
   const std::vector<LayerSite> found = layers_named(loaded, layer);
   if (found.empty()) return {{}, fmt::format("no layer '{}'", layer)};
   // Actuator names are the manager's: unique across its layers.
@@ -1270,9 +1266,7 @@ EditResult remove_actuator(const Loaded& loaded, const std::string& layer,
 EditResult wire_port(const Loaded& loaded, const std::string& layer, const std::string& behaviour,
                      const std::string& port, const std::string& target) {
   if (!is_identifier(port) || !is_identifier(target))
-    return {
-        {},
-        fmt::format("'{}: {}' is not a port binding: names are [a-z_][a-z0-9_]*", port, target)};
+    return {{}, name_error(is_identifier(port) ? target : port, "a name in a port binding")};
   for (const LayerSite& site : layers_named(loaded, layer)) {
     // Named, not bound by a structured binding: a lambda below captures it.
     const SourceFile* file = site.file;
@@ -1355,8 +1349,7 @@ EditResult add_queue_entry(const Loaded& loaded, const std::string& machine,
                            const std::string& state,
                            const std::vector<std::pair<std::string, std::string>>& params,
                            std::size_t index) {
-  if (!is_identifier(state))
-    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", state)};
+  if (!is_identifier(state)) return {{}, name_error(state, "a valid name")};
   const QueueSite queue = queue_of(loaded, machine);
   if (!queue.refused.empty()) return {{}, queue.refused};
   const std::size_t count = queue.items.spans.size();
@@ -1367,8 +1360,7 @@ EditResult add_queue_entry(const Loaded& loaded, const std::string& machine,
   if (!params.empty()) {
     std::string values;
     for (const auto& [param, value] : params) {
-      if (!is_identifier(param))
-        return {{}, fmt::format("'{}' is not a param's name: names are [a-z_][a-z0-9_]*", param)};
+      if (!is_identifier(param)) return {{}, name_error(param, "a param's name")};
       values += (values.empty() ? "" : ", ") + quoted_in(path, param) + ": " + value;
     }
     item += ": {" + values + "}";
@@ -1400,8 +1392,7 @@ EditResult move_queue_entry(const Loaded& loaded, const std::string& machine, st
 
 EditResult add_state(const Loaded& loaded, const std::string& machine, const std::string& name,
                      const std::string& type) {
-  if (!is_identifier(name))
-    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  if (!is_identifier(name)) return {{}, name_error(name, "a valid name")};
   const MachineSite site = machine_named(loaded, machine);
   if (!site.file) return {{}, fmt::format("no state machine '{}'", machine)};
   const std::string& path = site.file->path;
@@ -1467,8 +1458,7 @@ EditResult appended_name(const SourceFile& file, const Node& mapping, const std:
 }  // namespace
 
 EditResult add_plugin(const Loaded& loaded, const std::string& plugin) {
-  if (!is_identifier(plugin))
-    return {{}, fmt::format("'{}' is not a plugin's name: names are [a-z_][a-z0-9_]*", plugin)};
+  if (!is_identifier(plugin)) return {{}, name_error(plugin, "a plugin's name")};
   const auto& files = loaded.files.files();
   if (files.empty() || !files.front()->root || !files.front()->root->is_mapping())
     return {{}, "the config's file is not a mapping: add the plugin in the text"};
@@ -1477,8 +1467,7 @@ EditResult add_plugin(const Loaded& loaded, const std::string& plugin) {
 }
 
 EditResult add_sensor(const Loaded& loaded, const std::string& layer, const std::string& name) {
-  if (!is_identifier(name))
-    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  if (!is_identifier(name)) return {{}, name_error(name, "a valid name")};
   const std::vector<LayerSite> found = layers_named(loaded, layer);
   if (found.empty()) return {{}, fmt::format("no layer '{}'", layer)};
   const Node* sensors = found.front().layer->find("sensors");
@@ -1514,8 +1503,7 @@ EditResult remove_sensor(const Loaded& loaded, const std::string& layer, const s
 }
 
 EditResult add_state_machine(const Loaded& loaded, const std::string& name) {
-  if (!is_identifier(name))
-    return {{}, fmt::format("'{}' is not a valid name: names are [a-z_][a-z0-9_]*", name)};
+  if (!is_identifier(name)) return {{}, name_error(name, "a valid name")};
   if (machine_named(loaded, name).file)
     return {{},
             fmt::format("'{}' is already taken: a state machine of that name is declared", name)};

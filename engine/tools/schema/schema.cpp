@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "arbiter/lint.hpp"
+#include "arbiter/model.hpp"
 #include "tools/dump/param_json.hpp"
 
 namespace arbiter {
@@ -164,6 +165,7 @@ Json ports_schema(const ClassInfo& cls, const Registry& registry) {
     properties[port.name] = {{"title", port.name},
                              {"type", "string"},
                              {"pattern", kIdentifierPattern},
+                             {"maxLength", kMaxNameLength},
                              {"description", description}};
   }
   return {{"title", "Ports of " + cls.name},

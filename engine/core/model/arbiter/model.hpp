@@ -125,8 +125,18 @@ struct Model {
   const ActuatorDecl* find_actuator(std::string_view name) const;
 };
 
-/// Whether `text` is an identifier: `[a-z_][a-z0-9_]*`.
+/// The longest name, in characters: a longer one is text pasted where a name goes, and every
+/// view, trace record and recording schema repeats a name.
+constexpr std::size_t kMaxNameLength = 128;
+
+/// Whether `text` is a name: an identifier, `[a-z_][a-z0-9_]*`, of at most kMaxNameLength
+/// characters.
 bool is_identifier(std::string_view text);
+
+/// Why `text` is not a name, as an error says it: "'Kick' is not WHAT: names are lower-case
+/// identifiers ([a-z_][a-z0-9_]*)", where WHAT is "a valid name for a layer", say. A name over
+/// kMaxNameLength is shown by its start and its length only.
+std::string name_error(std::string_view text, std::string_view what);
 
 /// Validates per-instance params of a state (overrides may be null) against its class: the
 /// overrides must fit and, with the state's own params and the class defaults, supply every
