@@ -13,6 +13,67 @@
 
 namespace arbiter {
 
+namespace {
+
+/// A recorded value as the document node its JSON text reads as, without the text: the value a
+/// JSON config would give (strings quoted, numbers and booleans plain scalars in their JSON
+/// spelling).
+Node to_node(const nlohmann::ordered_json& value, const NodeLocation& at) {
+  switch (value.type()) {
+    case nlohmann::ordered_json::value_t::array: {
+      Node node(Node::Kind::kSequence, at);
+      for (const auto& item : value) node.push_item(to_node(item, at));
+      return node;
+    }
+    case nlohmann::ordered_json::value_t::object: {
+      Node node(Node::Kind::kMapping, at);
+      for (const auto& [key, item] : value.items()) node.add_entry(key, at, to_node(item, at));
+      return node;
+    }
+    case nlohmann::ordered_json::value_t::string: {
+      Node node(Node::Kind::kScalar, at);
+      node.set_scalar(value.get<std::string>(), true);
+      return node;
+    }
+    case nlohmann::ordered_json::value_t::null:
+    case nlohmann::ordered_json::value_t::discarded:
+      return Node(Node::Kind::kNull, at);
+    default: {
+      Node node(Node::Kind::kScalar, at);
+      node.set_scalar(value.dump(), false);
+      return node;
+    }
+  }
+}
+
+/// `node` (from to_node()) as JSON again, for a message.
+std::string json_text(const Node& node) {
+  switch (node.kind()) {
+    case Node::Kind::kNull:
+      return "null";
+    case Node::Kind::kScalar:
+      return node.quoted() ? nlohmann::json(node.text()).dump() : node.text();
+    case Node::Kind::kSequence: {
+      std::string text = "[";
+      for (const auto& item : node.items()) {
+        text += (text.size() > 1 ? "," : "") + json_text(item);
+      }
+      return text + "]";
+    }
+    case Node::Kind::kMapping: {
+      std::string text = "{";
+      for (const auto& entry : node.entries()) {
+        text += (text.size() > 1 ? "," : "") + nlohmann::json(entry.key).dump() + ":" +
+                json_text(entry.value);
+      }
+      return text + "}";
+    }
+  }
+  return "null";
+}
+
+}  // namespace
+
 /// Writes its layer's actuators from the recording: what the recorded run's interface wrote.
 /// Holds the steps RecordedInputs holds (all of them, or the one a streamed replay is at), their
 /// values converted to the actuators' types, so that the step loop parses and allocates nothing.
@@ -70,18 +131,16 @@ class RecordedInputsLayer : public Interface {
       for (std::size_t i = 0; i < held; ++i) {
         feed.values.emplace_back(*feed.type);
         feed.written.push_back(column != nullptr && column->written[i]);
-        if (column == nullptr || column->values[i].empty()) continue;
-        Diagnostics parsed;
-        const auto node =
-            parse_document(column->values[i], "recording", DocumentFormat::kJson, parsed);
+        if (column == nullptr || column->recorded[i] == 0) continue;
         std::string expected;
-        if (!node || !feed.type->from_node(*node, feed.values.back().data(), expected)) {
+        if (!feed.type->from_node(column->values[i], feed.values.back().data(), expected)) {
           where = feed.location;
           error = fmt::format(
               "recorded input '{}' at step {} is {}, not {} (a {}): the recording and the config "
               "replayed disagree on its type (an edited config must keep the recorded inputs' "
               "types)",
-              feed.name, inputs_.first_held() + i, column->values[i], expected, feed.type->name);
+              feed.name, inputs_.first_held() + i, json_text(column->values[i]), expected,
+              feed.type->name);
           return false;
         }
       }
@@ -177,9 +236,11 @@ bool RecordedInputs::add(std::uint64_t step, const std::string& text) {
       column = &columns_.emplace_back();
       column->name = name;
       column->values.resize(reported_.size());
+      column->recorded.resize(reported_.size());
       column->written.resize(reported_.size());
     }
-    column->values[index] = entry.value("value", nlohmann::ordered_json()).dump();
+    column->values[index] = to_node(entry.value("value", nlohmann::ordered_json()), recording_);
+    column->recorded[index] = 1;
     column->written[index] = entry.value("written", false) ? 1 : 0;
   }
   return true;
@@ -198,7 +259,8 @@ bool RecordedInputs::load(std::uint64_t step, const std::string& message, Diagno
   steps_ = step;
   reported_.assign(1, {});
   for (auto& column : columns_) {
-    column.values.assign(1, std::string());
+    column.values.assign(1, Node());
+    column.recorded.assign(1, 0);
     column.written.assign(1, 0);
   }
   // A message that is not one a recorder writes would leave the step's inputs unset, and the

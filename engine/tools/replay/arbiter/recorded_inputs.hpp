@@ -162,9 +162,10 @@ class RecordedInputs : public Observer {
 
   struct Column {
     std::string name;
-    /// Per held step (index step - first_held()): the value as JSON ("" where the step was not
-    /// recorded).
-    std::vector<std::string> values;
+    /// Per held step (index step - first_held()): the value, as a config's value reads (kNull
+    /// where the step recorded none, which `recorded` tells from a recorded null).
+    std::vector<Node> values;
+    std::vector<char> recorded;
     std::vector<char> written;
   };
   const Column* find(const std::string& name) const;
@@ -204,6 +205,8 @@ class RecordedInputs : public Observer {
   bool add(std::uint64_t step, const std::string& message);
 
   std::vector<Column> columns_;
+  // Where every recorded value is, for what reads it: the recording, as a whole.
+  NodeLocation recording_{std::make_shared<const std::string>("recording"), 1, 1};
   std::vector<std::vector<Report>> reported_;  // per held step
   std::uint64_t first_ = 1;
   std::uint64_t steps_ = 0;
