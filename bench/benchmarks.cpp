@@ -261,8 +261,9 @@ void record_paced(benchmark::State& state) {
 /// program and one served over the Foxglove WebSocket protocol (`arbiter run --foxglove`) to a
 /// client subscribed to every channel, in turn; medians. The soccer demo, or a generated graph
 /// of `state.range(0)` behaviours: the capture's cost is mostly fixed, so its share falls as a
-/// step grows.
-void foxglove_paced(benchmark::State& state, Graph graph, bool soccer) {
+/// step grows. Without `scene`, the client subscribes to every channel but the picture's, as one
+/// that only plots does, and the server copies no picture.
+void foxglove_paced(benchmark::State& state, Graph graph, bool soccer, bool scene) {
   std::optional<Program> programs[2];
   Registry soccer_registry = make_registry();
   if (!load_twice(state, graph, soccer, soccer_registry, programs)) return;
@@ -280,7 +281,7 @@ void foxglove_paced(benchmark::State& state, Graph graph, bool soccer) {
   served.add_observer(*server);
   served.step();
   plain.step();
-  test::FoxgloveSubscriber client(server->url());
+  test::FoxgloveSubscriber client(server->url(), scene ? "" : "/arbiter/scene");
   others_cpu.reset();
   // Subscribed once the steps reach the client.
   for (int i = 0; i < 2000 && client.received() == 0; ++i) {
@@ -549,11 +550,16 @@ void register_benchmarks() {
       ->Iterations(5)
       ->UseRealTime();
 #if ARBITER_HAS_FOXGLOVE
-  benchmark::RegisterBenchmark("foxglove/soccer/paced", foxglove_paced, Graph::kLayers, true)
+  benchmark::RegisterBenchmark("foxglove/soccer/paced", foxglove_paced, Graph::kLayers, true, true)
       ->ComputeStatistics("min", fastest)
       ->Iterations(5)
       ->UseRealTime();
-  benchmark::RegisterBenchmark("foxglove/layers/paced", foxglove_paced, Graph::kLayers, false)
+  benchmark::RegisterBenchmark("foxglove/soccer/paced/no_scene", foxglove_paced, Graph::kLayers,
+                               true, false)
+      ->ComputeStatistics("min", fastest)
+      ->Iterations(5)
+      ->UseRealTime();
+  benchmark::RegisterBenchmark("foxglove/layers/paced", foxglove_paced, Graph::kLayers, false, true)
       ->ComputeStatistics("min", fastest)
       ->Arg(100)
       ->Arg(1000)

@@ -100,8 +100,10 @@ struct FoxgloveServer::Impl {
   Waiter waiter{stopped};
   StepRing ring{kSlots, waiter};
   std::atomic<bool> started{false};
-  // Some client is subscribed to a channel that steps feed: only then are steps captured.
+  // Some client is subscribed to a channel that steps feed: only then are steps captured; and
+  // to the scene: only then is the step's picture copied with it.
   alignas(64) std::atomic<bool> wanted{false};
+  std::atomic<bool> picture_wanted{false};
 
   // The server thread's.
   std::vector<Advertised> channels;
@@ -127,7 +129,9 @@ struct FoxgloveServer::Impl {
 
   void capture(const Manager& manager) {
     if (wanted.load(std::memory_order_relaxed)) {
-      ring.capture(manager);
+      ring.capture(manager, false, false,
+                   picture_wanted.load(std::memory_order_relaxed) ? CapturePicture::kCopy
+                                                                  : CapturePicture::kLeaveOut);
     } else {
       ring.skip();
     }
@@ -191,12 +195,17 @@ struct FoxgloveServer::Impl {
     const auto* log_channel = channel_at(kLogChannel);
     const auto* scene_channel = channel_at(kSceneChannel);
     bool any = false;
+    bool picture = false;
     for (const auto& [handle, client] : clients) {
       for (const auto& [subscription, id] : client.subscriptions) {
         for (const auto* fed : {step, in, log_channel, scene_channel})
           any = any || (fed != nullptr && id == fed->id);
+        picture = picture || (scene_channel != nullptr && id == scene_channel->id);
       }
     }
+    // A step captured before the stepping thread sees a new scene subscriber's flag reads as one
+    // that drew nothing: the subscriber's first picture, whole, comes with the next.
+    picture_wanted.store(picture, std::memory_order_relaxed);
     wanted.store(any, std::memory_order_relaxed);
   }
 

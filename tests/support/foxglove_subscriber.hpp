@@ -19,12 +19,13 @@ namespace arbiter::test {
 class FoxgloveSubscriber {
  public:
   /// Connects to `url` (a server's url()); connected() says whether the connection could start.
-  explicit FoxgloveSubscriber(const std::string& url) {
+  /// Subscribes to every channel but the one on `left_out` (a topic), if any.
+  explicit FoxgloveSubscriber(const std::string& url, const std::string& left_out = "") {
     client_.clear_access_channels(websocketpp::log::alevel::all);
     client_.clear_error_channels(websocketpp::log::elevel::all);
     client_.init_asio();
-    client_.set_message_handler([this](websocketpp::connection_hdl handle,
-                                       Client::message_ptr message) {
+    client_.set_message_handler([this, left_out](websocketpp::connection_hdl handle,
+                                                 Client::message_ptr message) {
       if (message->get_opcode() == websocketpp::frame::opcode::binary) {
         // Message Data (opcode 1), not the server's clock (Time, opcode 2).
         if (message->get_payload().front() == '\x01') ++received_;
@@ -35,6 +36,7 @@ class FoxgloveSubscriber {
       auto subscribe =
           nlohmann::json{{"op", "subscribe"}, {"subscriptions", nlohmann::json::array()}};
       for (const auto& channel : json["channels"]) {
+        if (channel.value("topic", "") == left_out) continue;
         subscribe["subscriptions"].push_back({{"id", next_id_++}, {"channelId", channel["id"]}});
       }
       client_.send(handle, subscribe.dump(), websocketpp::frame::opcode::text);

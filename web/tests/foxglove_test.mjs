@@ -182,6 +182,38 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
   assert.equal((await server.exited).code, 0);
 });
 
+test('a client that subscribes to the steps, then to the scene, gets the whole picture first, then one each step', async () => {
+  // Without a scene subscriber the server leaves the picture out of what it copies each step; a
+  // subscriber that comes later must still get a whole picture, then every step's.
+  const server = await serve(['run', soccerAt(60), '--foxglove', '0', '--steps', '100000', '-q']);
+  const {client, channels} = await connect(server.url);
+  const byTopic = new Map([...channels.values()].map((channel) => [channel.topic, channel]));
+  const topics = new Map();
+  const steps = [];   // log times of the steps received
+  const scenes = [];  // [{time, message}]
+  client.on('message', ({subscriptionId, timestamp, data}) => {
+    const message = JSON.parse(new TextDecoder().decode(data));
+    if (topics.get(subscriptionId) === '/arbiter/step') steps.push(timestamp);
+    if (topics.get(subscriptionId) === '/arbiter/scene') scenes.push({time: timestamp, message});
+  });
+  topics.set(client.subscribe(byTopic.get('/arbiter/step').id), '/arbiter/step');
+  await waitFor('steps without the scene', () => steps.length >= 10, 10000);
+  assert.equal(scenes.length, 0);
+  topics.set(client.subscribe(byTopic.get('/arbiter/scene').id), '/arbiter/scene');
+  await waitFor('ten scene messages', () => scenes.length >= 10, 10000);
+  const first = scenes[0].message;
+  assert.ok(first.deletions.some((d) => d.type === 1), 'the first scene message deletes all');
+  assertWholeField(first);
+  // The soccer world draws every step: from the first picture on, each step has its scene message.
+  const from = steps.indexOf(scenes[0].time);
+  assert.ok(from >= 0, 'the first scene message is a step\'s');
+  const stepsSince = steps.slice(from, from + 9);
+  assert.deepEqual(scenes.slice(0, stepsSince.length).map((scene) => scene.time), stepsSince);
+  client.close();
+  server.child.kill('SIGINT');
+  assert.equal((await server.exited).code, 0);
+});
+
 test('replay --foxglove serves a recording at its pace, its messages as a run sends them', async () => {
   const recording = path.join(scratch, 'run.mcap');
   execFileSync(arbiter, ['run', soccer, '--steps', '30', '--record', recording, '-q'], {cwd: source});

@@ -393,8 +393,18 @@ void StepImage::reset(const SnapshotShape& shape) {
   scene_cursor = 0;
 }
 
+namespace {
+
+/// The step's picture, as drawn, into the block's room for pictures; where it lies, and its
+/// counts, into `scene_line`.
+void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last,
+                     SnapshotShape::SceneLine& scene_line);
+
+}  // namespace
+
 bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
-                  SnapshotBlock into, bool may_allocate, StepImage* last, bool chained) {
+                  SnapshotBlock into, bool may_allocate, StepImage* last, bool chained,
+                  CapturePicture picture) {
   const Program& program = manager.program();
   std::byte* block = into.main;
   // Written to the block last, whole: the block is cold, and never read here.
@@ -518,9 +528,26 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   header.input_reports =
       static_cast<std::uint32_t>(std::min(manager.input_pass_events(), report_count));
   header.text_size = text_size;
-  const auto& scene = manager.scene();
-  // Written whole at the end, streamed: the block's lines are cold.
+  // Written whole at the end, streamed: the block's lines are cold. Left out, the picture reads
+  // as none.
   SnapshotShape::SceneLine scene_line;
+  if (picture == CapturePicture::kCopy) capture_picture(manager, into, last, scene_line);
+  stream_lines(block + shape.scene_line_at, reinterpret_cast<const std::byte*>(&scene_line),
+               sizeof scene_line);
+  if (shape.streamed) {
+    stream_lines(block + shape.tracked_at[0], now, shape.tracked.allocated);
+    stream_lines(block, reinterpret_cast<const std::byte*>(&header), sizeof header);
+  } else {
+    std::memcpy(block, &header, sizeof header);
+  }
+  return true;
+}
+
+namespace {
+
+void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last,
+                     SnapshotShape::SceneLine& scene_line) {
+  const auto& scene = manager.scene();
   auto& scene_counts = scene_line.counts;
   scene_counts.primitives = static_cast<std::uint32_t>(manager.scene_primitive_count());
   scene_counts.points =
@@ -548,16 +575,9 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   stream_lines(into.scene + scene_line.strings_at,
                reinterpret_cast<const std::byte*>(scene.strings), string_bytes);
   if (last != nullptr) last->scene_cursor = scene_line.strings_at + string_bytes;
-  stream_lines(block + shape.scene_line_at, reinterpret_cast<const std::byte*>(&scene_line),
-               sizeof scene_line);
-  if (shape.streamed) {
-    stream_lines(block + shape.tracked_at[0], now, shape.tracked.allocated);
-    stream_lines(block, reinterpret_cast<const std::byte*>(&header), sizeof header);
-  } else {
-    std::memcpy(block, &header, sizeof header);
-  }
-  return true;
 }
+
+}  // namespace
 
 void fence_streamed_stores() {
 #if defined(__SSE2__)

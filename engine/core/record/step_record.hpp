@@ -262,7 +262,7 @@ struct SnapshotGeneration {
 /// copied: a reader brings its own image up to date with StepSnapshot::apply(), in order.
 bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
                   SnapshotBlock block, bool may_allocate = false, StepImage* last = nullptr,
-                  bool chained = false);
+                  bool chained = false, CapturePicture picture = CapturePicture::kCopy);
 
 /// Makes the streaming stores of the captures before (SnapshotShape::streamed) visible to
 /// other threads before the stores after it: a recorder calls it before it publishes a slot. Its

@@ -199,14 +199,15 @@ void StepRing::start(const Manager& manager, std::uint64_t wall_time, bool annou
   impl.publish_header(slot, manager.steps(), 0, wall_time, std::move(generation));
 }
 
-bool StepRing::capture(const Manager& manager, bool may_allocate, bool wait) {
+bool StepRing::capture(const Manager& manager, bool may_allocate, bool wait,
+                       CapturePicture picture) {
   auto& impl = *impl_;
   settle();
   Slot* slot = wait ? impl.claim_waiting() : impl.claim();
   const auto* g = impl.stepping;
   if (slot == nullptr ||
       !detail::capture_step(manager, g->layout, g->blocks.shape(), impl.block(*g, slot),
-                            may_allocate, &impl.stepping->last, impl.chained)) {
+                            may_allocate, &impl.stepping->last, impl.chained, picture)) {
     // No room, or more than a slot holds: the reader tells the gap.
     impl.dropped.fetch_add(1, std::memory_order_relaxed);
     ++impl.pending_drops;

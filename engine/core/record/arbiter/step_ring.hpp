@@ -84,6 +84,11 @@ class RingStep {
   std::uint64_t dropped_before_ = 0;
 };
 
+/// Whether a capture copies the step's picture. Its copy is most of a small program's capture,
+/// so a reader that nobody asks for the picture leaves it out: the step then reads as one that
+/// drew nothing (RingStep::drew() false).
+enum class CapturePicture { kCopy, kLeaveOut };
+
 /// The ring. One thread steps (start(), capture(), skip(), settle(), reload(), end()), one
 /// reads (next(), release() and what they give), one may stage (stage()).
 class StepRing {
@@ -113,7 +118,8 @@ class StepRing {
   /// Copies the manager's last step (or safe pass) into the next slot, handed over at the next
   /// call (settle()). False when it was dropped (counted): no free slot, unless `wait`, or more
   /// than a slot holds (`may_allocate`: a string value longer than its room is copied anyway).
-  bool capture(const Manager& manager, bool may_allocate = false, bool wait = false);
+  bool capture(const Manager& manager, bool may_allocate = false, bool wait = false,
+               CapturePicture picture = CapturePicture::kCopy);
   /// A step not captured (nobody wants it): the next capture copies every part whole.
   void skip();
   /// Hands the last capture's slot over to the reader, if it waits. A step's slot goes at the
