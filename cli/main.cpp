@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -40,6 +41,17 @@ std::string check_record_flush(const std::string& text) {
   }
   return fmt::format("must be a number of seconds from 0 to {:g}, found '{}'",
                      arbiter::Recorder::kMaxFlushInterval, text);
+}
+
+/// CLI11 check of `--tolerance X` (test, diff): CLI11's NonNegativeNumber lets `nan` through, which
+/// no difference is within, and names the largest double in full.
+std::string check_tolerance(const std::string& text) {
+  char* end = nullptr;
+  const double tolerance = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() && *end == '\0' && std::isfinite(tolerance) && tolerance >= 0.0) {
+    return {};
+  }
+  return fmt::format("must be a finite number from 0, found '{}'", arbiter::printable(text));
 }
 
 /// `--serve-token TOKEN`, also ARBITER_SERVE_TOKEN; checked, as it travels in URLs and cookies.
@@ -436,7 +448,7 @@ int main(int argc, char** argv) {
   test_cmd
       ->add_option("--tolerance", options.test.options.tolerance,
                    "how far a level or number may be from one expected as a single number")
-      ->check(CLI::NonNegativeNumber)
+      ->check(check_tolerance, "")
       ->capture_default_str();
   test_cmd
       ->add_option("--junit", options.test.junit,
@@ -637,7 +649,7 @@ int main(int argc, char** argv) {
   diff_cmd->add_option("A", options.diff_a, "the first run")->required()->check(CLI::ExistingFile);
   diff_cmd->add_option("B", options.diff_b, "the second run")->required()->check(CLI::ExistingFile);
   diff_cmd->add_option("--tolerance", options.tolerance, "numbers this close are equal")
-      ->check(CLI::NonNegativeNumber)
+      ->check(check_tolerance, "")
       ->capture_default_str();
   diff_cmd->add_option("--format", options.format, "text or json")
       ->check(CLI::IsMember({"text", "json"}))

@@ -252,6 +252,25 @@ TEST_CASE("a mistyped option gets the option meant, and unexpected words are ech
   CHECK(contains(command.err, "  note: 'valdate': did you mean 'validate'?\n"));
 }
 
+TEST_CASE("a --tolerance that is not a finite number from 0 is a usage error, said plainly",
+          "[cli]") {
+  const auto test_file =
+      quoted(kSourceDir / "tests/scenarios/paper/scripted_levels_by_step.test.yaml");
+  for (const std::string tolerance : {"nan", "inf", "-1", "1e400", "x"}) {
+    INFO(tolerance);
+    const auto test = run_cli("test " + test_file + " --tolerance " + tolerance);
+    CHECK(test.exit_code == 2);
+    CHECK(contains(test.err,
+                   "--tolerance: must be a finite number from 0, found '" + tolerance + "'"));
+    CHECK(test.out.empty());
+    const auto diff = run_cli("diff " + test_file + " " + test_file + " --tolerance " + tolerance);
+    CHECK(diff.exit_code == 2);
+    CHECK(contains(diff.err,
+                   "--tolerance: must be a finite number from 0, found '" + tolerance + "'"));
+  }
+  CHECK(run_cli("test " + test_file + " --tolerance 0.5").exit_code == 0);
+}
+
 TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
   SECTION("a valid config") {
     const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
