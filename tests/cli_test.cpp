@@ -12,6 +12,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 #include <string>
 #include "arbiter/catalog.hpp"
 #include "arbiter/recorded_inputs.hpp"
@@ -428,6 +429,31 @@ void record_counter(const fs::path& path) {
 }
 
 }  // namespace
+
+TEST_CASE("view --step of a step a trace lacks names the steps around it", "[view][cli]") {
+  const TempDir dir;
+  const std::string config = quoted(kSourceDir / "configs/paper/walk_and_kick.yaml");
+  const auto whole = dir / "whole.jsonl";
+  REQUIRE(run_cli("run " + config + " --steps 6 -q --trace " + quoted(whole)).exit_code == 0);
+  // Steps 3, 4 and 6 of it: a trace missing the steps a writer that fell behind dropped.
+  std::vector<std::string> lines;
+  std::istringstream in(read_text(whole));
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  REQUIRE(lines.size() == 7);
+  const auto gap = dir / "gap.jsonl";
+  write_text(gap, lines[0] + "\n" + lines[3] + "\n" + lines[4] + "\n" + lines[6] + "\n");
+  const auto view = [&](int step) {
+    return run_cli("view " + config + " --trace " + quoted(gap) + " --serve 0 --step " +
+                   std::to_string(step));
+  };
+  auto result = view(5);
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err,
+                 "--step 5: " + gap.string() + " has no step 5: it goes from step 4 to step 6\n"));
+  result = view(1);
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "--step 1: " + gap.string() + " has steps 3 to 6\n"));
+}
 
 TEST_CASE("a recording whose first step was dropped replays up to its gap", "[replay][cli]") {
   const TempDir dir;
