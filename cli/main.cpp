@@ -664,12 +664,15 @@ int main(int argc, char** argv) {
       "plugins",
       "List the registered classes (the built-ins, and the plugins on the plugin path) with\n"
       "their kind, origin, params (type, default, range, description) and ports.");
-  plugins_cmd
-      ->add_option("--load", options.load,
-                   "list the built-ins and this plugin (repeatable) instead of every plugin on "
-                   "the path")
-      ->type_name("NAME");
-  plugins_cmd->add_flag("--builtin", options.builtin_only, "list the built-in classes only");
+  auto* plugins_load =
+      plugins_cmd
+          ->add_option("--load", options.load,
+                       "list the built-ins and this plugin (repeatable) instead of every plugin on "
+                       "the path")
+          ->type_name("NAME");
+  // Together, one of them would be dropped without a word.
+  plugins_cmd->add_flag("--builtin", options.builtin_only, "list the built-in classes only")
+      ->excludes(plugins_load);
   plugins_cmd->add_option("--format", options.format, "text or json")
       ->check(CLI::IsMember({"text", "json"}))
       ->capture_default_str();
@@ -683,12 +686,14 @@ int main(int argc, char** argv) {
       "schema",
       "Print the JSON Schema (draft-07) of the config format, extended with the registered\n"
       "classes: 'type:' completes in editors and each class's params and ports are checked.");
-  schema_cmd
-      ->add_option("--load", options.load,
-                   "include the built-ins and this plugin (repeatable) instead of every plugin on "
-                   "the path")
-      ->type_name("NAME");
-  schema_cmd->add_flag("--builtin", options.builtin_only, "include the built-in classes only");
+  auto* schema_load =
+      schema_cmd
+          ->add_option("--load", options.load,
+                       "include the built-ins and this plugin (repeatable) instead of every plugin "
+                       "on the path")
+          ->type_name("NAME");
+  schema_cmd->add_flag("--builtin", options.builtin_only, "include the built-in classes only")
+      ->excludes(schema_load);
   schema_cmd->footer(
       examples +
       "  arbiter schema > arbiter.schema.json\n"

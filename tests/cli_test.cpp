@@ -272,6 +272,17 @@ TEST_CASE("a --tolerance that is not a finite number from 0 is a usage error, sa
   CHECK(run_cli("test " + test_file + " --tolerance 0.5").exit_code == 0);
 }
 
+TEST_CASE("plugins and schema refuse --builtin with --load, which one of them would drop",
+          "[plugins][cli]") {
+  for (const std::string command : {"plugins", "schema"}) {
+    INFO(command);
+    const auto result = run_cli(command + " --load soccer --builtin");
+    CHECK(result.exit_code == 2);
+    CHECK(contains(result.err, "--load excludes --builtin"));
+    CHECK(result.out.empty());
+  }
+}
+
 TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
   SECTION("a valid config") {
     const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
