@@ -350,7 +350,16 @@ int main(int argc, char** argv) {
       "Print the compiled graph: layers in order, behaviours in execution (topological) order,\n"
       "declared and implicit inhibitions, actuator → sensor wiring, state machines.");
   dump_cmd->add_option("FILE", options.file, "the config to dump")->required();
-  dump_cmd->add_option("--layer", options.layer, "only this layer");
+  dump_cmd->add_option("--layer", options.layer, "only this layer")
+      ->check(
+          [](const std::string& name) {
+            // An empty name is how "no --layer" is held: it would dump every layer unasked.
+            return name.empty() ? std::string(
+                                      "a layer's name cannot be empty: leave --layer out "
+                                      "to dump every layer")
+                                : std::string();
+          },
+          "");
   dump_cmd
       ->add_option("--format", options.format,
                    "text (for people), dot (Graphviz: chaining inhibitions double, non-chaining "

@@ -283,6 +283,18 @@ TEST_CASE("plugins and schema refuse --builtin with --load, which one of them wo
   }
 }
 
+TEST_CASE("dump --layer refuses an empty name, and shows an unknown one escaped", "[dump][cli]") {
+  const std::string config = quoted(kSourceDir / "configs/paper/walk_and_kick.yaml");
+  const auto empty = run_cli("dump " + config + " --layer ''");
+  CHECK(empty.exit_code == 2);
+  CHECK(empty.out.empty());
+  CHECK(contains(empty.err, "--layer: a layer's name cannot be empty"));
+  const auto escaped = run_cli("dump " + config + " --layer \"$(printf 'a\\033[31m')\"");
+  CHECK(escaped.exit_code == 2);
+  CHECK(contains(escaped.err, "no layer 'a\\x1b[31m' in "));
+  CHECK_FALSE(contains(escaped.err, "\x1b"));
+}
+
 TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
   SECTION("a valid config") {
     const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
