@@ -54,6 +54,13 @@ std::string check_tolerance(const std::string& text) {
   return fmt::format("must be a finite number from 0, found '{}'", arbiter::printable(text));
 }
 
+/// CLI11 check of an option that names a file: empty, it is how "not given" is held, and the
+/// file would be left out without a word.
+std::string refuse_empty_file(const std::string& text) {
+  return text.empty() ? "an empty name names no file: give a file, or leave the option out"
+                      : std::string();
+}
+
 /// `--serve-token TOKEN`, also ARBITER_SERVE_TOKEN; checked, as it travels in URLs and cookies.
 CLI::Option* add_serve_token_option(CLI::App& command, Options& options, const std::string& help) {
   return command.add_option("--serve-token", options.serve_token, help)
@@ -103,7 +110,9 @@ int report_extras(const CLI::App& app) {
 
 void add_record_options(CLI::App& command, Options& options, const std::string& record_help,
                         const std::string& record_type, const std::string& flush_help) {
-  command.add_option("--record", options.record_path, record_help)->type_name(record_type);
+  command.add_option("--record", options.record_path, record_help)
+      ->type_name(record_type)
+      ->check(refuse_empty_file, "");
   command.add_option("--record-flush", options.record_flush, flush_help)
       ->check(check_record_flush, "")
       ->type_name("SECONDS")
@@ -234,14 +243,17 @@ int main(int argc, char** argv) {
       ->check(refuse_zero_steps)
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40).description(""))
       ->type_name("N");
-  run_cmd->add_option("--trace", options.trace_path,
-                      "write a JSON-lines trace of every step to this file");
+  run_cmd
+      ->add_option("--trace", options.trace_path,
+                   "write a JSON-lines trace of every step to this file")
+      ->check(refuse_empty_file, "");
   run_cmd
       ->add_option("--inputs", options.inputs_path,
                    "feed the config's layers of the built-in class 'interface: inputs' from this "
                    "file: a list of {step: N, ACTUATOR: VALUE, ...}, each value held until a "
                    "later entry changes it (as a test's 'inputs:')")
-      ->type_name("FILE");
+      ->type_name("FILE")
+      ->check(refuse_empty_file, "");
   add_record_options(*run_cmd, options,
                      "record the run as MCAP (steps, interface inputs, the config) for "
                      "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
@@ -463,7 +475,8 @@ int main(int argc, char** argv) {
       ->add_option("--junit", options.test.junit,
                    "also write JUnit XML to FILE (one timed testcase per test file, its "
                    "classname the file; one failure per failed expectation), for CI systems")
-      ->type_name("FILE");
+      ->type_name("FILE")
+      ->check(refuse_empty_file, "");
   test_cmd->footer(
       examples +
       "  arbiter test tests/scenarios/soccer/kick_needs_a_close_ball.test.yaml\n"
@@ -584,7 +597,8 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   plot_cmd->add_option("--output,-o", options.output, "the SVG file to write (default: stdout)")
-      ->type_name("FILE");
+      ->type_name("FILE")
+      ->check(refuse_empty_file, "");
   plot_cmd->add_flag("--actuators", options.actuators, "add a row per actuator with its value");
   plot_cmd
       ->add_option("--compare", options.compare_path,
@@ -617,7 +631,8 @@ int main(int argc, char** argv) {
   replay_cmd
       ->add_option("--trace", options.trace_path,
                    "write the replay's JSON-lines trace, put in place once the replay has run")
-      ->type_name("OUT.jsonl");
+      ->type_name("OUT.jsonl")
+      ->check(refuse_empty_file, "");
   add_record_options(*replay_cmd, options,
                      "record the replay as MCAP, put in place once the replay has run; a write "
                      "that fails is reported at once and ends the recording, not the replay, "

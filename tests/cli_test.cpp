@@ -295,6 +295,28 @@ TEST_CASE("dump --layer refuses an empty name, and shows an unknown one escaped"
   CHECK_FALSE(contains(escaped.err, "\x1b"));
 }
 
+TEST_CASE("an option that names a file refuses an empty name instead of leaving the file out",
+          "[cli]") {
+  const TempDir dir;
+  const std::string config = quoted(kSourceDir / "configs/paper/walk_and_kick.yaml");
+  const auto trace = dir / "run.jsonl";
+  REQUIRE(run_cli("run " + config + " --steps 3 -q --trace " + quoted(trace)).exit_code == 0);
+  const std::string test_file =
+      quoted(kSourceDir / "tests/scenarios/paper/scripted_levels_by_step.test.yaml");
+  for (const auto& [command, option] : std::vector<std::pair<std::string, std::string>>{
+           {"run " + config + " --steps 3 -q", "--trace"},
+           {"run " + config + " --steps 3 -q", "--record"},
+           {"run " + config + " --steps 3 -q", "--inputs"},
+           {"plot " + quoted(trace), "-o"},
+           {"test " + test_file, "--junit"},
+       }) {
+    INFO(command << " " << option);
+    const auto result = run_cli(command + " " + option + " ''");
+    CHECK(result.exit_code == 2);
+    CHECK(contains(result.err, "an empty name names no file"));
+  }
+}
+
 TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
   SECTION("a valid config") {
     const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
