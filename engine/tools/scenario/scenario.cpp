@@ -459,6 +459,21 @@ class ScenarioReader {
         expectation.high = *high;
         return true;
       }
+      // Two numbers are a range: what is wrong with it is said, not that it is no level.
+      if (low && high) {
+        for (const Node& bound : node.items()) {
+          if (!in_unit(*bound.as_double())) {
+            diagnostics_.error(bound.location(), "out-of-range",
+                               fmt::format("a level is in [0, 1], found {}", bound.text()));
+            return false;
+          }
+        }
+        diagnostics_.error(
+            node.location(), "out-of-range",
+            fmt::format("'{}' of '{}' [{}, {}] ends below where it starts", key,
+                        expectation.target.text, node.items()[0].text(), node.items()[1].text()));
+        return false;
+      }
     }
     diagnostics_.error(node.location(), "wrong-type",
                        fmt::format("'{}' of '{}' must be a level in [0, 1] or a range [LOW, HIGH] "
