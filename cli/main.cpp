@@ -6,11 +6,16 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <limits>
 
 #include "arbiter/lint.hpp"
 #include "commands/command.hpp"
@@ -59,6 +64,26 @@ std::string check_tolerance(const std::string& text) {
 std::string refuse_empty_file(const std::string& text) {
   return text.empty() ? "an empty name names no file: give a file, or leave the option out"
                       : std::string();
+}
+
+/// CLI11 check of a step number (`--step`, `--from`): CLI11's PositiveNumber refuses 0 as "not in
+/// range 0 to" the largest double, and a number past 2^64 was taken as 2^64 - 1.
+std::function<std::string(const std::string&)> step_check(std::uint64_t lowest) {
+  return [lowest](const std::string& text) {
+    errno = 0;
+    char* end = nullptr;
+    const unsigned long long step = std::strtoull(text.c_str(), &end, 10);
+    const bool digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+      return std::isdigit(static_cast<unsigned char>(c)) != 0;
+    });
+    if (digits && errno != ERANGE && *end == '\0' && step >= lowest) return std::string();
+    if (digits && errno == ERANGE) {
+      return fmt::format("must be a step number, at most {}, found '{}'",
+                         std::numeric_limits<std::uint64_t>::max(), text);
+    }
+    return fmt::format("must be a step number, {} or more, found '{}'", lowest,
+                       arbiter::printable(text));
+  };
 }
 
 /// `--serve-token TOKEN`, also ARBITER_SERVE_TOKEN; checked, as it travels in URLs and cookies.
@@ -406,7 +431,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   explain_cmd->add_option("--step", options.step, "the step, counting from 1")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(step_check(1), "");
   explain_cmd->footer(
       std::string(examples +
                   "  arbiter run configs/paper/walk_and_kick.yaml --steps 20 --trace out.jsonl -q\n"
@@ -441,7 +466,8 @@ int main(int argc, char** argv) {
       ->add_option("--from", options.step,
                    "seek after this step (default 0: from the start); the steps before it "
                    "still count for a crossing")
-      ->type_name("N");
+      ->type_name("N")
+      ->check(step_check(0), "");
   seek_cmd->footer(
       std::string(examples +
                   "  arbiter run configs/soccer/walk_and_kick.yaml --steps 400 --record run.mcap "
@@ -524,7 +550,7 @@ int main(int argc, char** argv) {
   view_cmd
       ->add_option("--step", options.step,
                    "the step the page opens at, counting from 1 (default: the last step)")
-      ->check(CLI::PositiveNumber);
+      ->check(step_check(1), "");
   view_cmd
       ->add_option("--compare", options.compare_path,
                    "a second run (trace or recording) shown over the first: its row of each "

@@ -317,6 +317,32 @@ TEST_CASE("an option that names a file refuses an empty name instead of leaving 
   }
 }
 
+TEST_CASE("a step number that is 0, not a number or past 2^64 is a usage error that says so",
+          "[explain][cli]") {
+  const TempDir dir;
+  const std::string config = quoted(kSourceDir / "configs/paper/walk_and_kick.yaml");
+  const auto trace = quoted(dir / "run.jsonl");
+  REQUIRE(run_cli("run " + config + " --steps 3 -q --trace " + trace).exit_code == 0);
+  const std::string explain = "explain " + config + " --trace " + trace + " kick_ball --step ";
+  for (const std::string step : {"0", "-1", "1.5", "x"}) {
+    INFO(step);
+    const auto result = run_cli(explain + step);
+    CHECK(result.exit_code == 2);
+    CHECK(contains(result.err, "--step: must be a step number, 1 or more, found '" + step + "'"));
+  }
+  const std::string huge = "99999999999999999999999";
+  auto result = run_cli(explain + huge);
+  CHECK(result.exit_code == 2);
+  CHECK(contains(
+      result.err,
+      "--step: must be a step number, at most 18446744073709551615, found '" + huge + "'"));
+  result =
+      run_cli("seek " + config + " --trace " + trace + " 'kick_ball activates' --from " + huge);
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "--from: must be a step number, at most"));
+  CHECK(run_cli(explain + "2").exit_code == 0);
+}
+
 TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
   SECTION("a valid config") {
     const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
