@@ -343,6 +343,35 @@ TEST_CASE("a step number that is 0, not a number or past 2^64 is a usage error t
   CHECK(run_cli(explain + "2").exit_code == 0);
 }
 
+TEST_CASE("plot and test refuse to write their output over a file they read", "[cli]") {
+  const TempDir dir;
+  const auto config = dir / "robot.yaml";
+  fs::copy_file(kSourceDir / "configs/paper/walk_and_kick.yaml", config);
+  const std::string config_text = read_text(config);
+  const auto trace = dir / "run.jsonl";
+  REQUIRE(run_cli("run " + quoted(config) + " --steps 3 -q --trace " + quoted(trace)).exit_code ==
+          0);
+  const std::string trace_text = read_text(trace);
+  auto result = run_cli("plot " + quoted(trace) + " -o " + quoted(trace));
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "is the trace being plotted"));
+  CHECK(read_text(trace) == trace_text);
+
+  const auto test_file = dir / "robot.test.yaml";
+  const std::string test_text = "arbiter_test: 1\nconfig: robot.yaml\nexpect: []\nsteps: 2\n";
+  write_text(test_file, test_text);
+  result = run_cli("test " + quoted(test_file) + " --junit " + quoted(test_file));
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "is a test file"));
+  CHECK(read_text(test_file) == test_text);
+  result = run_cli("test " + quoted(test_file) + " --junit " + quoted(config));
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "names ('"));
+  CHECK(read_text(config) == config_text);
+  CHECK(run_cli("test " + quoted(test_file) + " --junit " + quoted(dir / "junit.xml")).exit_code ==
+        0);
+}
+
 TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
   SECTION("a valid config") {
     const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
