@@ -414,6 +414,22 @@ TEST_CASE("a step that a trace lacks is told with the steps the trace has, where
   CHECK(result.text == "the trace has steps 3 to 6, not step 9");
 }
 
+TEST_CASE("a trace whose activation is not a number is noted, not taken as agreeing", "[explain]") {
+  const Explained run(kWalkAndKick, 3);
+  std::string edited = run.trace;
+  const std::string recorded = "\"search_for_ball\": {\"requested\": 1.0, \"activation\": 1.0";
+  const auto at = edited.find(recorded, edited.find("\"step\": 2"));
+  REQUIRE(at != std::string::npos);
+  edited.replace(at, recorded.size(),
+                 "\"search_for_ball\": {\"requested\": 1.0, \"activation\": \"x\"");
+  const auto result = run.on(edited, 2, "search_for_ball");
+  REQUIRE(result.status == Explanation::Status::kOk);
+  CHECK(contains(result.text,
+                 "note: the trace records no activation level here (its 'activation' is a "
+                 "string): the recomputation above is not checked against it"));
+  CHECK_FALSE(contains(run.text_at(2, "search_for_ball"), "note:"));
+}
+
 TEST_CASE("explain reports what it cannot explain", "[explain]") {
   const Explained run(kWalkAndKick, 20);
   auto result = run.at(8, "search_for_bal");

@@ -416,6 +416,13 @@ Explanation explain_behaviour(const Program& program, std::uint32_t target, std:
           "of the config?\n",
           number(recorded), number(activation));
     }
+  } else {
+    // A trace edited by hand, or damaged: the recomputation stands, unchecked, and says so.
+    text += fmt::format(
+        "  note: the trace records no activation level here (its 'activation' is {}): the "
+        "recomputation above is not checked against it\n",
+        recorded_json.is_null() ? "missing or null"
+                                : std::string("a ") + recorded_json.type_name());
   }
   return out;
 }
