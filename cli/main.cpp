@@ -6,10 +6,16 @@
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <iostream>
+#include <limits>
 
 #include "arbiter/lint.hpp"
 #include "commands/command.hpp"
@@ -40,6 +46,44 @@ std::string check_record_flush(const std::string& text) {
   }
   return fmt::format("must be a number of seconds from 0 to {:g}, found '{}'",
                      arbiter::Recorder::kMaxFlushInterval, text);
+}
+
+/// CLI11 check of `--tolerance X` (test, diff): CLI11's NonNegativeNumber lets `nan` through, which
+/// no difference is within, and names the largest double in full.
+std::string check_tolerance(const std::string& text) {
+  char* end = nullptr;
+  const double tolerance = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() && *end == '\0' && std::isfinite(tolerance) && tolerance >= 0.0) {
+    return {};
+  }
+  return fmt::format("must be a finite number from 0, found '{}'", arbiter::printable(text));
+}
+
+/// CLI11 check of an option that names a file: empty, it is how "not given" is held, and the
+/// file would be left out without a word.
+std::string refuse_empty_file(const std::string& text) {
+  return text.empty() ? "an empty name names no file: give a file, or leave the option out"
+                      : std::string();
+}
+
+/// CLI11 check of a step number (`--step`, `--from`): CLI11's PositiveNumber refuses 0 as "not in
+/// range 0 to" the largest double, and a number past 2^64 was taken as 2^64 - 1.
+std::function<std::string(const std::string&)> step_check(std::uint64_t lowest) {
+  return [lowest](const std::string& text) {
+    errno = 0;
+    char* end = nullptr;
+    const unsigned long long step = std::strtoull(text.c_str(), &end, 10);
+    const bool digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+      return std::isdigit(static_cast<unsigned char>(c)) != 0;
+    });
+    if (digits && errno != ERANGE && *end == '\0' && step >= lowest) return std::string();
+    if (digits && errno == ERANGE) {
+      return fmt::format("must be a step number, at most {}, found '{}'",
+                         std::numeric_limits<std::uint64_t>::max(), text);
+    }
+    return fmt::format("must be a step number, {} or more, found '{}'", lowest,
+                       arbiter::printable(text));
+  };
 }
 
 /// `--serve-token TOKEN`, also ARBITER_SERVE_TOKEN; checked, as it travels in URLs and cookies.
@@ -91,7 +135,9 @@ int report_extras(const CLI::App& app) {
 
 void add_record_options(CLI::App& command, Options& options, const std::string& record_help,
                         const std::string& record_type, const std::string& flush_help) {
-  command.add_option("--record", options.record_path, record_help)->type_name(record_type);
+  command.add_option("--record", options.record_path, record_help)
+      ->type_name(record_type)
+      ->check(refuse_empty_file, "");
   command.add_option("--record-flush", options.record_flush, flush_help)
       ->check(check_record_flush, "")
       ->type_name("SECONDS")
@@ -222,14 +268,17 @@ int main(int argc, char** argv) {
       ->check(refuse_zero_steps)
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 40).description(""))
       ->type_name("N");
-  run_cmd->add_option("--trace", options.trace_path,
-                      "write a JSON-lines trace of every step to this file");
+  run_cmd
+      ->add_option("--trace", options.trace_path,
+                   "write a JSON-lines trace of every step to this file")
+      ->check(refuse_empty_file, "");
   run_cmd
       ->add_option("--inputs", options.inputs_path,
                    "feed the config's layers of the built-in class 'interface: inputs' from this "
                    "file: a list of {step: N, ACTUATOR: VALUE, ...}, each value held until a "
                    "later entry changes it (as a test's 'inputs:')")
-      ->type_name("FILE");
+      ->type_name("FILE")
+      ->check(refuse_empty_file, "");
   add_record_options(*run_cmd, options,
                      "record the run as MCAP (steps, interface inputs, the config) for "
                      "'arbiter replay', 'arbiter diff' and Foxglove; flat out, the run waits "
@@ -338,7 +387,16 @@ int main(int argc, char** argv) {
       "Print the compiled graph: layers in order, behaviours in execution (topological) order,\n"
       "declared and implicit inhibitions, actuator → sensor wiring, state machines.");
   dump_cmd->add_option("FILE", options.file, "the config to dump")->required();
-  dump_cmd->add_option("--layer", options.layer, "only this layer");
+  dump_cmd->add_option("--layer", options.layer, "only this layer")
+      ->check(
+          [](const std::string& name) {
+            // An empty name is how "no --layer" is held: it would dump every layer unasked.
+            return name.empty() ? std::string(
+                                      "a layer's name cannot be empty: leave --layer out "
+                                      "to dump every layer")
+                                : std::string();
+          },
+          "");
   dump_cmd
       ->add_option("--format", options.format,
                    "text (for people), dot (Graphviz: chaining inhibitions double, non-chaining "
@@ -373,7 +431,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   explain_cmd->add_option("--step", options.step, "the step, counting from 1")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(step_check(1), "");
   explain_cmd->footer(
       std::string(examples +
                   "  arbiter run configs/paper/walk_and_kick.yaml --steps 20 --trace out.jsonl -q\n"
@@ -408,7 +466,8 @@ int main(int argc, char** argv) {
       ->add_option("--from", options.step,
                    "seek after this step (default 0: from the start); the steps before it "
                    "still count for a crossing")
-      ->type_name("N");
+      ->type_name("N")
+      ->check(step_check(0), "");
   seek_cmd->footer(
       std::string(examples +
                   "  arbiter run configs/soccer/walk_and_kick.yaml --steps 400 --record run.mcap "
@@ -436,13 +495,14 @@ int main(int argc, char** argv) {
   test_cmd
       ->add_option("--tolerance", options.test.options.tolerance,
                    "how far a level or number may be from one expected as a single number")
-      ->check(CLI::NonNegativeNumber)
+      ->check(check_tolerance, "")
       ->capture_default_str();
   test_cmd
       ->add_option("--junit", options.test.junit,
                    "also write JUnit XML to FILE (one timed testcase per test file, its "
                    "classname the file; one failure per failed expectation), for CI systems")
-      ->type_name("FILE");
+      ->type_name("FILE")
+      ->check(refuse_empty_file, "");
   test_cmd->footer(
       examples +
       "  arbiter test tests/scenarios/soccer/kick_needs_a_close_ball.test.yaml\n"
@@ -490,7 +550,7 @@ int main(int argc, char** argv) {
   view_cmd
       ->add_option("--step", options.step,
                    "the step the page opens at, counting from 1 (default: the last step)")
-      ->check(CLI::PositiveNumber);
+      ->check(step_check(1), "");
   view_cmd
       ->add_option("--compare", options.compare_path,
                    "a second run (trace or recording) shown over the first: its row of each "
@@ -563,7 +623,8 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   plot_cmd->add_option("--output,-o", options.output, "the SVG file to write (default: stdout)")
-      ->type_name("FILE");
+      ->type_name("FILE")
+      ->check(refuse_empty_file, "");
   plot_cmd->add_flag("--actuators", options.actuators, "add a row per actuator with its value");
   plot_cmd
       ->add_option("--compare", options.compare_path,
@@ -596,7 +657,8 @@ int main(int argc, char** argv) {
   replay_cmd
       ->add_option("--trace", options.trace_path,
                    "write the replay's JSON-lines trace, put in place once the replay has run")
-      ->type_name("OUT.jsonl");
+      ->type_name("OUT.jsonl")
+      ->check(refuse_empty_file, "");
   add_record_options(*replay_cmd, options,
                      "record the replay as MCAP, put in place once the replay has run; a write "
                      "that fails is reported at once and ends the recording, not the replay, "
@@ -637,7 +699,7 @@ int main(int argc, char** argv) {
   diff_cmd->add_option("A", options.diff_a, "the first run")->required()->check(CLI::ExistingFile);
   diff_cmd->add_option("B", options.diff_b, "the second run")->required()->check(CLI::ExistingFile);
   diff_cmd->add_option("--tolerance", options.tolerance, "numbers this close are equal")
-      ->check(CLI::NonNegativeNumber)
+      ->check(check_tolerance, "")
       ->capture_default_str();
   diff_cmd->add_option("--format", options.format, "text or json")
       ->check(CLI::IsMember({"text", "json"}))
@@ -652,12 +714,15 @@ int main(int argc, char** argv) {
       "plugins",
       "List the registered classes (the built-ins, and the plugins on the plugin path) with\n"
       "their kind, origin, params (type, default, range, description) and ports.");
-  plugins_cmd
-      ->add_option("--load", options.load,
-                   "list the built-ins and this plugin (repeatable) instead of every plugin on "
-                   "the path")
-      ->type_name("NAME");
-  plugins_cmd->add_flag("--builtin", options.builtin_only, "list the built-in classes only");
+  auto* plugins_load =
+      plugins_cmd
+          ->add_option("--load", options.load,
+                       "list the built-ins and this plugin (repeatable) instead of every plugin on "
+                       "the path")
+          ->type_name("NAME");
+  // Together, one of them would be dropped without a word.
+  plugins_cmd->add_flag("--builtin", options.builtin_only, "list the built-in classes only")
+      ->excludes(plugins_load);
   plugins_cmd->add_option("--format", options.format, "text or json")
       ->check(CLI::IsMember({"text", "json"}))
       ->capture_default_str();
@@ -671,12 +736,14 @@ int main(int argc, char** argv) {
       "schema",
       "Print the JSON Schema (draft-07) of the config format, extended with the registered\n"
       "classes: 'type:' completes in editors and each class's params and ports are checked.");
-  schema_cmd
-      ->add_option("--load", options.load,
-                   "include the built-ins and this plugin (repeatable) instead of every plugin on "
-                   "the path")
-      ->type_name("NAME");
-  schema_cmd->add_flag("--builtin", options.builtin_only, "include the built-in classes only");
+  auto* schema_load =
+      schema_cmd
+          ->add_option("--load", options.load,
+                       "include the built-ins and this plugin (repeatable) instead of every plugin "
+                       "on the path")
+          ->type_name("NAME");
+  schema_cmd->add_flag("--builtin", options.builtin_only, "include the built-in classes only")
+      ->excludes(schema_load);
   schema_cmd->footer(
       examples +
       "  arbiter schema > arbiter.schema.json\n"

@@ -12,6 +12,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 #include <string>
 #include "arbiter/catalog.hpp"
 #include "arbiter/recorded_inputs.hpp"
@@ -252,6 +253,125 @@ TEST_CASE("a mistyped option gets the option meant, and unexpected words are ech
   CHECK(contains(command.err, "  note: 'valdate': did you mean 'validate'?\n"));
 }
 
+TEST_CASE("a --tolerance that is not a finite number from 0 is a usage error, said plainly",
+          "[cli]") {
+  const auto test_file =
+      quoted(kSourceDir / "tests/scenarios/paper/scripted_levels_by_step.test.yaml");
+  for (const std::string tolerance : {"nan", "inf", "-1", "1e400", "x"}) {
+    INFO(tolerance);
+    const auto test = run_cli("test " + test_file + " --tolerance " + tolerance);
+    CHECK(test.exit_code == 2);
+    CHECK(contains(test.err,
+                   "--tolerance: must be a finite number from 0, found '" + tolerance + "'"));
+    CHECK(test.out.empty());
+    const auto diff = run_cli("diff " + test_file + " " + test_file + " --tolerance " + tolerance);
+    CHECK(diff.exit_code == 2);
+    CHECK(contains(diff.err,
+                   "--tolerance: must be a finite number from 0, found '" + tolerance + "'"));
+  }
+  CHECK(run_cli("test " + test_file + " --tolerance 0.5").exit_code == 0);
+}
+
+TEST_CASE("plugins and schema refuse --builtin with --load, which one of them would drop",
+          "[plugins][cli]") {
+  for (const std::string command : {"plugins", "schema"}) {
+    INFO(command);
+    const auto result = run_cli(command + " --load soccer --builtin");
+    CHECK(result.exit_code == 2);
+    CHECK(contains(result.err, "--load excludes --builtin"));
+    CHECK(result.out.empty());
+  }
+}
+
+TEST_CASE("dump --layer refuses an empty name, and shows an unknown one escaped", "[dump][cli]") {
+  const std::string config = quoted(kSourceDir / "configs/paper/walk_and_kick.yaml");
+  const auto empty = run_cli("dump " + config + " --layer ''");
+  CHECK(empty.exit_code == 2);
+  CHECK(empty.out.empty());
+  CHECK(contains(empty.err, "--layer: a layer's name cannot be empty"));
+  const auto escaped = run_cli("dump " + config + " --layer \"$(printf 'a\\033[31m')\"");
+  CHECK(escaped.exit_code == 2);
+  CHECK(contains(escaped.err, "no layer 'a\\x1b[31m' in "));
+  CHECK_FALSE(contains(escaped.err, "\x1b"));
+}
+
+TEST_CASE("an option that names a file refuses an empty name instead of leaving the file out",
+          "[cli]") {
+  const TempDir dir;
+  const std::string config = quoted(kSourceDir / "configs/paper/walk_and_kick.yaml");
+  const auto trace = dir / "run.jsonl";
+  REQUIRE(run_cli("run " + config + " --steps 3 -q --trace " + quoted(trace)).exit_code == 0);
+  const std::string test_file =
+      quoted(kSourceDir / "tests/scenarios/paper/scripted_levels_by_step.test.yaml");
+  for (const auto& [command, option] : std::vector<std::pair<std::string, std::string>>{
+           {"run " + config + " --steps 3 -q", "--trace"},
+           {"run " + config + " --steps 3 -q", "--record"},
+           {"run " + config + " --steps 3 -q", "--inputs"},
+           {"plot " + quoted(trace), "-o"},
+           {"test " + test_file, "--junit"},
+       }) {
+    INFO(command << " " << option);
+    const auto result = run_cli(command + " " + option + " ''");
+    CHECK(result.exit_code == 2);
+    CHECK(contains(result.err, "an empty name names no file"));
+  }
+}
+
+TEST_CASE("a step number that is 0, not a number or past 2^64 is a usage error that says so",
+          "[explain][cli]") {
+  const TempDir dir;
+  const std::string config = quoted(kSourceDir / "configs/paper/walk_and_kick.yaml");
+  const auto trace = quoted(dir / "run.jsonl");
+  REQUIRE(run_cli("run " + config + " --steps 3 -q --trace " + trace).exit_code == 0);
+  const std::string explain = "explain " + config + " --trace " + trace + " kick_ball --step ";
+  for (const std::string step : {"0", "-1", "1.5", "x"}) {
+    INFO(step);
+    const auto result = run_cli(explain + step);
+    CHECK(result.exit_code == 2);
+    CHECK(contains(result.err, "--step: must be a step number, 1 or more, found '" + step + "'"));
+  }
+  const std::string huge = "99999999999999999999999";
+  auto result = run_cli(explain + huge);
+  CHECK(result.exit_code == 2);
+  CHECK(contains(
+      result.err,
+      "--step: must be a step number, at most 18446744073709551615, found '" + huge + "'"));
+  result =
+      run_cli("seek " + config + " --trace " + trace + " 'kick_ball activates' --from " + huge);
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "--from: must be a step number, at most"));
+  CHECK(run_cli(explain + "2").exit_code == 0);
+}
+
+TEST_CASE("plot and test refuse to write their output over a file they read", "[cli]") {
+  const TempDir dir;
+  const auto config = dir / "robot.yaml";
+  fs::copy_file(kSourceDir / "configs/paper/walk_and_kick.yaml", config);
+  const std::string config_text = read_text(config);
+  const auto trace = dir / "run.jsonl";
+  REQUIRE(run_cli("run " + quoted(config) + " --steps 3 -q --trace " + quoted(trace)).exit_code ==
+          0);
+  const std::string trace_text = read_text(trace);
+  auto result = run_cli("plot " + quoted(trace) + " -o " + quoted(trace));
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "is the trace being plotted"));
+  CHECK(read_text(trace) == trace_text);
+
+  const auto test_file = dir / "robot.test.yaml";
+  const std::string test_text = "arbiter_test: 1\nconfig: robot.yaml\nexpect: []\nsteps: 2\n";
+  write_text(test_file, test_text);
+  result = run_cli("test " + quoted(test_file) + " --junit " + quoted(test_file));
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "is a test file"));
+  CHECK(read_text(test_file) == test_text);
+  result = run_cli("test " + quoted(test_file) + " --junit " + quoted(config));
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "names ('"));
+  CHECK(read_text(config) == config_text);
+  CHECK(run_cli("test " + quoted(test_file) + " --junit " + quoted(dir / "junit.xml")).exit_code ==
+        0);
+}
+
 TEST_CASE("arbiter validate exits 0 when valid, 1 when invalid and 2 on a usage error", "[cli]") {
   SECTION("a valid config") {
     const auto result = run_cli("validate " + quoted(kDataDir / "valid" / "twin.yaml"));
@@ -409,6 +529,31 @@ void record_counter(const fs::path& path) {
 }
 
 }  // namespace
+
+TEST_CASE("view --step of a step a trace lacks names the steps around it", "[view][cli]") {
+  const TempDir dir;
+  const std::string config = quoted(kSourceDir / "configs/paper/walk_and_kick.yaml");
+  const auto whole = dir / "whole.jsonl";
+  REQUIRE(run_cli("run " + config + " --steps 6 -q --trace " + quoted(whole)).exit_code == 0);
+  // Steps 3, 4 and 6 of it: a trace missing the steps a writer that fell behind dropped.
+  std::vector<std::string> lines;
+  std::istringstream in(read_text(whole));
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  REQUIRE(lines.size() == 7);
+  const auto gap = dir / "gap.jsonl";
+  write_text(gap, lines[0] + "\n" + lines[3] + "\n" + lines[4] + "\n" + lines[6] + "\n");
+  const auto view = [&](int step) {
+    return run_cli("view " + config + " --trace " + quoted(gap) + " --serve 0 --step " +
+                   std::to_string(step));
+  };
+  auto result = view(5);
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err,
+                 "--step 5: " + gap.string() + " has no step 5: it goes from step 4 to step 6\n"));
+  result = view(1);
+  CHECK(result.exit_code == 2);
+  CHECK(contains(result.err, "--step 1: " + gap.string() + " has steps 3 to 6\n"));
+}
 
 TEST_CASE("a recording whose first step was dropped replays up to its gap", "[replay][cli]") {
   const TempDir dir;

@@ -444,6 +444,22 @@ void check_lines_kept(const std::string& before, const std::string& after,
 
 }  // namespace
 
+TEST_CASE("a rename to the name a symbol already has says so, not that the name is taken",
+          "[edit]") {
+  Registry registry = builtin_registry();
+  const Loaded loaded =
+      load_config((kSourceDir / "configs/paper/walk_and_kick.yaml").string(), registry);
+  const ConfigIndex index = index_config(loaded, &registry);
+  const auto kick = std::find_if(
+      index.occurrences.begin(), index.occurrences.end(),
+      [](const Occurrence& item) { return item.definition && item.name == "kick_ball"; });
+  REQUIRE(kick != index.occurrences.end());
+  CHECK(rename_symbol(loaded, index, *kick, "kick_ball").refused ==
+        "'kick_ball' is already its name");
+  CHECK(rename_symbol(loaded, index, *kick, "go_behind_ball").refused ==
+        "'go_behind_ball' is already taken");
+}
+
 TEST_CASE("renaming each name of each shipped config renames every use and nothing else",
           "[edit]") {
   int renamed = 0, refused = 0;

@@ -393,6 +393,43 @@ TEST_CASE("explain reads a trace of a run reloaded with --watch", "[explain][rel
   CHECK(mismatch.text == "the trace was written for 'hierarchical', not for 'walk_and_kick'");
 }
 
+TEST_CASE("a step that a trace lacks is told with the steps the trace has, wherever they start",
+          "[explain]") {
+  const Explained run(kWalkAndKick, 6);
+  // The header and steps 3, 4 and 6: a trace cut at its start, with a step left out.
+  std::vector<std::string> lines;
+  std::istringstream in(run.trace);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  REQUIRE(lines.size() >= 7);
+  const std::string cut = lines[0] + "\n" + lines[3] + "\n" + lines[4] + "\n" + lines[6] + "\n";
+  REQUIRE(run.on(cut, 4, "search_for_ball").status == Explanation::Status::kOk);
+  auto result = run.on(cut, 1, "search_for_ball");
+  CHECK(result.status == Explanation::Status::kNotFound);
+  CHECK(result.text == "the trace starts at step 3, after step 1");
+  result = run.on(cut, 5, "search_for_ball");
+  CHECK(result.status == Explanation::Status::kNotFound);
+  CHECK(result.text == "the trace has no step 5: it goes from step 4 to step 6");
+  result = run.on(cut, 9, "search_for_ball");
+  CHECK(result.status == Explanation::Status::kNotFound);
+  CHECK(result.text == "the trace has steps 3 to 6, not step 9");
+}
+
+TEST_CASE("a trace whose activation is not a number is noted, not taken as agreeing", "[explain]") {
+  const Explained run(kWalkAndKick, 3);
+  std::string edited = run.trace;
+  const std::string recorded = "\"search_for_ball\": {\"requested\": 1.0, \"activation\": 1.0";
+  const auto at = edited.find(recorded, edited.find("\"step\": 2"));
+  REQUIRE(at != std::string::npos);
+  edited.replace(at, recorded.size(),
+                 "\"search_for_ball\": {\"requested\": 1.0, \"activation\": \"x\"");
+  const auto result = run.on(edited, 2, "search_for_ball");
+  REQUIRE(result.status == Explanation::Status::kOk);
+  CHECK(contains(result.text,
+                 "note: the trace records no activation level here (its 'activation' is a "
+                 "string): the recomputation above is not checked against it"));
+  CHECK_FALSE(contains(run.text_at(2, "search_for_ball"), "note:"));
+}
+
 TEST_CASE("explain reports what it cannot explain", "[explain]") {
   const Explained run(kWalkAndKick, 20);
   auto result = run.at(8, "search_for_bal");

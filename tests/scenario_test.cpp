@@ -170,3 +170,23 @@ TEST_CASE(
   CHECK(lint.exit_code == 0);
   fs::remove(xml);
 }
+
+TEST_CASE("the JUnit XML stays well-formed when a test's file name is not UTF-8 or holds U+FFFF",
+          "[scenario]") {
+  const test::TempDir scratch;
+  // A file name is bytes: \xff is no UTF-8, and U+FFFF (EF BF BF) is no XML character.
+  const fs::path file = scratch.path() / "odd\xff\xef\xbf\xbf.test.yaml";
+  test::write_text(file, "arbiter_test: 1\nconfig: " +
+                             (kSourceDir / "configs/paper/walk_and_kick.yaml").string() +
+                             "\nexpect:\n  - {step: 1, active: [kick_ball]}\nsteps: 2\n");
+  const fs::path xml = scratch.path() / "junit.xml";
+  const auto result =
+      run_cli("test \"" + scratch.path().string() + "\" --junit \"" + xml.string() + "\"");
+  INFO(result.out << result.err);
+  CHECK(result.exit_code == 1);
+  const std::string text = test::read_text(xml);
+  CHECK(text.find("odd\\xff\\uffff.test.yaml") != std::string::npos);
+  const auto lint = test::run_captured("xmllint --noout \"" + xml.string() + "\"");
+  INFO(lint.err);
+  CHECK(lint.exit_code == 0);
+}

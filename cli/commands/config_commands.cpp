@@ -30,7 +30,8 @@ bool check_layer(const arbiter::Program& program, const Options& options) {
     if (layer.name == options.layer) return true;
     names.push_back(layer.name);
   }
-  std::cerr << fmt::format("arbiter dump: no layer '{}' in {}; {}\n", options.layer, options.file,
+  std::cerr << fmt::format("arbiter dump: no layer '{}' in {}; {}\n",
+                           arbiter::printable(options.layer), arbiter::printable(options.file),
                            arbiter::suggest(options.layer, names));
   return false;
 }

@@ -94,6 +94,12 @@ std::string plugin_name_error(std::string_view name) {
   if (name.find("__") != std::string_view::npos) {
     return "it has '__' in it, which C++ keeps for the implementation";
   }
+  if (name.back() == '_') {
+    return fmt::format(
+        "it ends with '_', which would put '__' in its C++ namespace, {}_plugin, "
+        "and C++ keeps that for the implementation",
+        name);
+  }
   const std::string word = " " + std::string(name) + " ";
   if (kCppKeywords.find(word) != std::string_view::npos) {
     return "it is a C++ keyword";
@@ -114,9 +120,9 @@ int new_plugin(const std::string& name, const std::string& dir_given, std::ostre
   constexpr const char* kCommand = "arbiter new plugin";
   if (const std::string why = plugin_name_error(name); !why.empty()) {
     err << fmt::format("{}: '{}' cannot name a plugin: {}\n", kCommand, printable(name), why);
-    err << "  note: the name becomes the plugin's file (arbiter_NAME.so), its C++ namespace, its "
-           "CMake target and the prefix of its classes (NAME.Stop): letters, digits and '_', "
-           "starting with a letter\n";
+    err << "  note: the name becomes the plugin's file (arbiter_NAME.so), its C++ namespace "
+           "(NAME_plugin), its CMake target and the prefix of its classes (NAME.Stop): letters, "
+           "digits and '_', starting with a letter\n";
     if (const std::string better = suggested_name(name); !better.empty() && better != name) {
       err << fmt::format("  note: did you mean '{}'?\n", better);
     }

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "commands/command.hpp"
+#include "commands/output_file.hpp"
 #include "commands/record.hpp"
 #include "commands/xml.hpp"
 
@@ -512,6 +513,13 @@ std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
 }
 
 int plot_command(const Options& options) {
+  if (options.output != "-" &&
+      !outputs_allowed("plot", {{options.output, "-o"}},
+                       {{options.trace_path, "the trace being plotted"},
+                        {options.compare_path, "the run compared (--compare)"}},
+                       std::cerr)) {
+    return kExitUsage;
+  }
   std::string error;
   const auto trace = read_trace_file(options.trace_path, error, options.diagnostic_format);
   if (!trace) {
@@ -540,7 +548,8 @@ int plot_command(const Options& options) {
   }
   std::ofstream out(options.output, std::ios::binary | std::ios::trunc);
   if (!(out << svg << std::flush)) {
-    std::cerr << fmt::format("arbiter plot: cannot write '{}'\n", options.output);
+    std::cerr << fmt::format("arbiter plot: cannot write '{}': {}\n", options.output,
+                             why_not_writable(options.output));
     return kExitUsage;
   }
   return kExitOk;

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "commands/command.hpp"
+#include "commands/output_file.hpp"
 #include "commands/xml.hpp"
 
 namespace arbiter::cli {
@@ -107,6 +108,10 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
   for (const auto& path : command.paths) {
     if (!expand(path, files, err)) return kExitUsage;
   }
+  std::vector<CommandInput> read;
+  for (const auto& file : files) read.push_back({file, "a test file"});
+  const std::vector<CommandOutput> written = {{command.junit, "--junit"}};
+  if (!outputs_allowed("test", written, read, err)) return kExitUsage;
   std::vector<ScenarioResult> results;
   std::size_t passed = 0;
   std::size_t failed = 0;
@@ -136,11 +141,18 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
     results.push_back(std::move(result));
   }
   out << fmt::format("{} passed, {} failed, {} invalid\n", passed, failed, invalid);
+  for (const auto& result : results) {
+    for (const auto& named : result.named_files) {
+      read.push_back({named, fmt::format("a file {} names", result.file)});
+    }
+  }
+  if (!outputs_allowed("test", written, read, err)) return kExitUsage;
   if (!command.junit.empty()) {
     std::ofstream xml(command.junit, std::ios::binary);
     xml << junit_xml(results);
     if (!xml) {
-      err << fmt::format("arbiter test: cannot write '{}'\n", command.junit);
+      err << fmt::format("arbiter test: cannot write '{}': {}\n", command.junit,
+                         why_not_writable(command.junit));
       return kExitUsage;
     }
   }

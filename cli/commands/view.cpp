@@ -248,10 +248,16 @@ int view_trace(const Program& program, const std::string& trace_path, const Serv
   }
   const auto& steps = trace.trace.steps;
   if (open_step && !std::binary_search(steps.begin(), steps.end(), *open_step)) {
-    err << fmt::format("arbiter view: --step {}: {}\n", *open_step,
-                       steps.empty() ? fmt::format("{} has no step records", trace_path)
-                                     : fmt::format("{} has steps {} to {}", trace_path,
-                                                   steps.front(), steps.back()));
+    std::string why = fmt::format("{} has no step records", trace_path);
+    if (!steps.empty() && (*open_step < steps.front() || *open_step > steps.back())) {
+      why = fmt::format("{} has steps {} to {}", trace_path, steps.front(), steps.back());
+    } else if (!steps.empty()) {
+      // A trace edited by hand may lack steps between its first and its last.
+      const auto after = std::upper_bound(steps.begin(), steps.end(), *open_step);
+      why = fmt::format("{} has no step {}: it goes from step {} to step {}", trace_path,
+                        *open_step, *(after - 1), *after);
+    }
+    err << fmt::format("arbiter view: --step {}: {}\n", *open_step, why);
     return 2;
   }
   // Without --step the page opens at the last step: the end of the run, with the timelines of

@@ -1,10 +1,23 @@
 #include "commands/xml.hpp"
 
+#include "arbiter/diagnostics.hpp"
+
 namespace arbiter::cli {
 
 std::string xml_escaped(std::string_view text) {
+  // XML 1.0 holds UTF-8 and no control characters but tab and line breaks: a file name or an
+  // event's text may have either, shown as the terminal shows them (\xff).
+  const std::string shown = printable(text, true);
   std::string out;
-  for (char c : text) {
+  for (std::size_t i = 0; i < shown.size(); ++i) {
+    const char c = shown[i];
+    // U+FFFE and U+FFFF are no XML characters either.
+    if (c == '\xEF' && i + 2 < shown.size() && shown[i + 1] == '\xBF' &&
+        (shown[i + 2] == '\xBE' || shown[i + 2] == '\xBF')) {
+      out += shown[i + 2] == '\xBE' ? "\\ufffe" : "\\uffff";
+      i += 2;
+      continue;
+    }
     switch (c) {
       case '&':
         out += "&amp;";
@@ -22,10 +35,7 @@ std::string xml_escaped(std::string_view text) {
         out += "&apos;";
         break;
       default:
-        // XML 1.0 allows no control characters but tab and line breaks.
-        if (static_cast<unsigned char>(c) >= 0x20 || c == '\t' || c == '\n' || c == '\r') {
-          out += c;
-        }
+        out += c;
     }
   }
   return out;

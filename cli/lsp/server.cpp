@@ -74,7 +74,7 @@ std::vector<json> Server::handle(const json& message) {
   const bool request = message.contains("id");
   const json id = request ? message["id"] : json();
   if (request && !(id.is_number_integer() || id.is_string())) {
-    error(nullptr, kInvalidRequest, "'id' must be a number or a string");
+    error(nullptr, kInvalidRequest, "'id' must be an integer or a string");
     return out;
   }
   const json params = message.value("params", json::object());
@@ -102,7 +102,14 @@ std::vector<json> Server::handle(const json& message) {
   } catch (const RequestError& failure) {
     if (request) error(id, failure.code, failure.message);
   } catch (const json::exception& failure) {
-    if (request) error(id, kInvalidParams, std::string("invalid params: ") + failure.what());
+    const std::string why = std::string("invalid params: ") + failure.what();
+    // A notification has no answer to carry it: a malformed didOpen would leave the document
+    // without diagnostics, and nobody told why.
+    if (request) {
+      error(id, kInvalidParams, why);
+    } else {
+      std::cerr << "arbiter lsp: " << printable(method) << ": " << printable(why) << "\n";
+    }
   } catch (const std::exception& failure) {
     std::cerr << "arbiter lsp: " << printable(method) << ": " << printable(failure.what()) << "\n";
     if (request) error(id, kRequestFailed, failure.what());

@@ -20,32 +20,34 @@ get_filename_component(cmake_bin "${CMAKE_COMMAND}" DIRECTORY)
 
 include("${CMAKE_CURRENT_LIST_DIR}/../support/run_checked.cmake")
 
-run_checked(output 0 "${PREFIX}/bin/arbiter" new plugin probe)
-run_checked(output 0 "${CMAKE_COMMAND}" -S probe -B probe/build -DCMAKE_BUILD_TYPE=Debug
+# A name the C library declares (random(), in <stdlib.h>): the project's namespace must not clash
+# with it.
+run_checked(output 0 "${PREFIX}/bin/arbiter" new plugin random)
+run_checked(output 0 "${CMAKE_COMMAND}" -S random -B random/build -DCMAKE_BUILD_TYPE=Debug
             "-DCMAKE_CXX_COMPILER=${CXX_COMPILER}"
             "-DCMAKE_CXX_FLAGS=-Wall -Wextra -Wpedantic -Werror")
 file(REAL_PATH "${PREFIX}" real_prefix)
-run_checked(output 0 "${CMAKE_COMMAND}" --build probe/build -j2)
-if(NOT EXISTS "${WORK_DIR}/probe/build/arbiter_probe.so")
-  message(FATAL_ERROR "the starter project built no arbiter_probe.so:\n${output}")
+run_checked(output 0 "${CMAKE_COMMAND}" --build random/build -j2)
+if(NOT EXISTS "${WORK_DIR}/random/build/arbiter_random.so")
+  message(FATAL_ERROR "the starter project built no arbiter_random.so:\n${output}")
 endif()
-file(READ "${WORK_DIR}/probe/build/CMakeCache.txt" cache)
+file(READ "${WORK_DIR}/random/build/CMakeCache.txt" cache)
 string(REGEX MATCH "arbiter_DIR:PATH=[^\n]*" found "${cache}")
 expect_in("${found}" "the SDK the starter project found" "^arbiter_DIR:PATH=${real_prefix}/")
 
-run_checked(output 0 "${cmake_bin}/ctest" --test-dir probe/build --output-on-failure)
-expect_in("${output}" "ctest in the starter project" "probe_scenarios/probe[ .]*Passed"
+run_checked(output 0 "${cmake_bin}/ctest" --test-dir random/build --output-on-failure)
+expect_in("${output}" "ctest in the starter project" "random_scenarios/random[ .]*Passed"
           "100% tests passed, 0 tests failed out of 1")
-run_checked(output 0 "${PREFIX}/bin/arbiter" test probe/tests --plugin-path probe/build)
+run_checked(output 0 "${PREFIX}/bin/arbiter" test random/tests --plugin-path random/build)
 expect_in("${output}" "arbiter test in the starter project"
-          "PASS probe/tests/probe.test.yaml \\([0-9]+ expectations, 30 steps\\)")
+          "PASS random/tests/random.test.yaml \\([0-9]+ expectations, 30 steps\\)")
 
-run_checked(output 0 "${PREFIX}/bin/arbiter" --plugin-path probe/build run probe/probe.yaml
+run_checked(output 0 "${PREFIX}/bin/arbiter" --plugin-path random/build run random/random.yaml
             --steps 50)
-expect_in("${output}" "arbiter run probe.yaml"
-  "running probe: 2 layers, 2 behaviours, 1 state machines"
+expect_in("${output}" "arbiter run random.yaml"
+  "running random: 2 layers, 2 behaviours, 1 state machines"
   "step    1  route: out \\(cycle 1; queued: back\\)"
   "State machine route: finished")
-run_checked(output 0 "${PREFIX}/bin/arbiter" --plugin-path probe/build plugins --load probe)
-expect_in("${output}" "arbiter plugins --load probe" "probe\\.Stop" "probe\\.Drive")
+run_checked(output 0 "${PREFIX}/bin/arbiter" --plugin-path random/build plugins --load random)
+expect_in("${output}" "arbiter plugins --load random" "random\\.Stop" "random\\.Drive")
 message(STATUS "the starter project built against ${PREFIX} and its test passed")

@@ -1263,6 +1263,9 @@ test('malformed messages get JSON-RPC errors and the server keeps serving', asyn
   await client.start();
   await assert.rejects(client.request('arbiter/nonsense', {}), (error) => error.code === -32601);
   await assert.rejects(client.request('textDocument/hover', { position: 3 }), (error) => error.code === -32602);
+  // A notification with params it cannot read has no answer: the server says so on stderr.
+  const notification = JSON.stringify({ jsonrpc: '2.0', method: 'textDocument/didOpen', params: 5 });
+  client.process.stdin.write(`Content-Length: ${notification.length}\r\n\r\n${notification}`);
   // Raw bytes: invalid JSON, valid JSON with a number no double holds, then a frame without
   // Content-Length.
   client.process.stdin.write('Content-Length: 5\r\n\r\n{bad}');
@@ -1273,6 +1276,7 @@ test('malformed messages get JSON-RPC errors and the server keeps serving', asyn
   assert.deepEqual(await client.open(uri, text), []);
   assert.equal(await client.stop(), 0);
   assert.doesNotMatch(client.stderr, /terminate|Segmentation/);
+  assert.match(client.stderr, /arbiter lsp: textDocument\/didOpen: invalid params: /);
 });
 
 test('after a malformed header or stray bytes between messages the server answers the next well-formed message', { timeout: 20000 }, async () => {

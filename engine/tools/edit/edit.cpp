@@ -399,6 +399,8 @@ EditResult rename_symbol(const Loaded& loaded, const ConfigIndex& index, const O
   if (symbol.kind == SymbolKind::kClass || symbol.kind == SymbolKind::kInclude)
     return {{}, "only a behaviour, actuator, layer, state or state machine can be renamed"};
   if (!is_identifier(name)) return {{}, name_error(name, "a valid name")};
+  // Else it would be "already taken", by itself.
+  if (name == symbol.name) return {{}, fmt::format("'{}' is already its name", name)};
   for (const auto& other : index.occurrences) {
     if (other.definition && other.kind == symbol.kind && other.scope == symbol.scope &&
         other.name == name)

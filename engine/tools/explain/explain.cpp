@@ -166,6 +166,10 @@ struct Records {
   Json current;
   Json next;
   std::uint64_t last_step = 0;
+  /// The first step record read, and the last one before the step asked for (0: none): a trace
+  /// need not start at step 1 (a run's own trace does), nor have every step (one edited by hand).
+  std::uint64_t first_step = 0;
+  std::uint64_t step_before = 0;
   /// When `history_of` is set (a member of every step record, e.g. {"actuators", "kick"}): that
   /// member of each step, from the first step to the step asked for, or to the end of the run
   /// with `history_to_end`. An actuator's and a state's story is told from the steps around it.
@@ -232,6 +236,8 @@ std::optional<Explanation> read_trace(TraceSource& source, std::uint64_t step, R
     }
     if (record.kind == TraceRecord::Kind::kSafe) continue;  // outputs values, steps nothing
     records.last_step = record.step;
+    if (records.first_step == 0) records.first_step = record.step;
+    if (record.step < step) records.step_before = record.step;
     Json* slot = record.step + 1 == step   ? &records.previous
                  : record.step == step     ? &records.current
                  : record.step == step + 1 ? &records.next
@@ -261,11 +267,19 @@ std::optional<Explanation> read_trace(const Program& program, TraceSource& sourc
   if (auto error = read_trace(source, step, records, header)) return error;
   if (auto error = check_header(program, header)) return error;
   if (records.current.is_null()) {
-    return failure(
-        Status::kNotFound,
-        records.last_step == 0
-            ? fmt::format("the trace has no step records, so no step {}", step)
-            : fmt::format("the trace has steps 1 to {}, not step {}", records.last_step, step));
+    std::string why;
+    if (records.last_step == 0) {
+      why = fmt::format("the trace has no step records, so no step {}", step);
+    } else if (step < records.first_step) {
+      why = fmt::format("the trace starts at step {}, after step {}", records.first_step, step);
+    } else if (step < records.last_step) {
+      why = fmt::format("the trace has no step {}: it goes from step {} to step {}", step,
+                        records.step_before, records.last_step);
+    } else {
+      why = fmt::format("the trace has steps {} to {}, not step {}", records.first_step,
+                        records.last_step, step);
+    }
+    return failure(Status::kNotFound, std::move(why));
   }
   return std::nullopt;
 }
@@ -402,6 +416,13 @@ Explanation explain_behaviour(const Program& program, std::uint32_t target, std:
           "of the config?\n",
           number(recorded), number(activation));
     }
+  } else {
+    // A trace edited by hand, or damaged: the recomputation stands, unchecked, and says so.
+    text += fmt::format(
+        "  note: the trace records no activation level here (its 'activation' is {}): the "
+        "recomputation above is not checked against it\n",
+        recorded_json.is_null() ? "missing or null"
+                                : std::string("a ") + recorded_json.type_name());
   }
   return out;
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <limits>
+#include <system_error>
 
 namespace arbiter {
 namespace {
@@ -154,13 +155,22 @@ class ScenarioReader {
     if (resolved.is_relative()) resolved = fs::path(scenario.file).parent_path() / resolved;
     resolved_path = resolved.lexically_normal().string();
     std::error_code error;
-    if (!fs::is_regular_file(resolved, error)) {
-      diagnostics_.error(
-          node.location(), "unreadable-file",
-          fmt::format("{} '{}' does not exist (looked for {})", what, *path, resolved_path));
-      return false;
+    const fs::file_status status = fs::status(resolved, error);
+    if (fs::is_regular_file(status)) return true;
+    // What is there, when something is: a directory or a device is no file to read (/dev/zero
+    // never ends), and a path that cannot be looked at has its reason.
+    const std::string at = printable(resolved_path);
+    std::string why = fmt::format("does not exist (looked for {})", at);
+    if (error && error != std::errc::no_such_file_or_directory) {
+      why = fmt::format("cannot be looked at (at {}): {}", at, error.message());
+    } else if (fs::is_directory(status)) {
+      why = fmt::format("is a directory (at {})", at);
+    } else if (fs::exists(status)) {
+      why = fmt::format("is not a regular file (a FIFO, socket or device at {})", at);
     }
-    return true;
+    diagnostics_.error(node.location(), "unreadable-file",
+                       fmt::format("{} '{}' {}", what, printable(*path), why));
+    return false;
   }
 
   void read_replay(const Node& node, const Node& root, Scenario& scenario) {
@@ -458,6 +468,21 @@ class ScenarioReader {
         expectation.low = *low;
         expectation.high = *high;
         return true;
+      }
+      // Two numbers are a range: what is wrong with it is said, not that it is no level.
+      if (low && high) {
+        for (const Node& bound : node.items()) {
+          if (!in_unit(*bound.as_double())) {
+            diagnostics_.error(bound.location(), "out-of-range",
+                               fmt::format("a level is in [0, 1], found {}", bound.text()));
+            return false;
+          }
+        }
+        diagnostics_.error(
+            node.location(), "out-of-range",
+            fmt::format("'{}' of '{}' [{}, {}] ends below where it starts", key,
+                        expectation.target.text, node.items()[0].text(), node.items()[1].text()));
+        return false;
       }
     }
     diagnostics_.error(node.location(), "wrong-type",

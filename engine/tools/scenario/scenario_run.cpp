@@ -155,6 +155,12 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
   ScenarioResult result;
   result.file = scenario.file;
   result.name = scenario.name;
+  for (const std::string& named : {scenario.config_path, scenario.replay_path}) {
+    if (!named.empty()) result.named_files.push_back(named);
+  }
+  for (const auto& expected : scenario.trace_expectations) {
+    if (!expected.path.empty()) result.named_files.push_back(expected.path);
+  }
   Diagnostics& diagnostics = result.diagnostics;
 
   // The input sources and the checks are separate pieces: each source substitutes its own

@@ -4,9 +4,11 @@
 
 #include <arbiter/registry.hpp>
 
-namespace @NAME@ {
+// The plugin's name alone could be a name the C library declares or defines as a macro (time,
+// random, linux): the namespace adds "_plugin" to it.
+namespace @NAME@_plugin {
 
 void register_stop(arbiter::Registry& registry);
 void register_drive(arbiter::Registry& registry);
 
-}  // namespace @NAME@
+}  // namespace @NAME@_plugin

@@ -4,7 +4,7 @@
 
 #include "classes.hpp"
 
-namespace @NAME@ {
+namespace @NAME@_plugin {
 namespace {
 
 /// A state: commands `speed` for `steps` executions, then proceeds to the next planned state.
@@ -20,7 +20,7 @@ class Drive final : public arbiter::State {
   }
 
  private:
-  friend void @NAME@::register_drive(arbiter::Registry& registry);
+  friend void @NAME@_plugin::register_drive(arbiter::Registry& registry);
   arbiter::StateParam<double> speed_param_;
   arbiter::StateParam<std::int64_t> steps_param_;
   arbiter::Output<double> speed_;
@@ -40,4 +40,4 @@ void register_drive(arbiter::Registry& registry) {
   info.port("speed", &Drive::speed_).describe("the commanded forward speed (m/s)");
 }
 
-}  // namespace @NAME@
+}  // namespace @NAME@_plugin

@@ -6,6 +6,6 @@
 #include "classes.hpp"
 
 ARBITER_PLUGIN(registry) {
-  @NAME@::register_stop(registry);
-  @NAME@::register_drive(registry);
+  @NAME@_plugin::register_stop(registry);
+  @NAME@_plugin::register_drive(registry);
 }

@@ -2,7 +2,7 @@
 
 #include "classes.hpp"
 
-namespace @NAME@ {
+namespace @NAME@_plugin {
 namespace {
 
 /// A behaviour: asks to be active while an obstacle is closer than `threshold`, and while active
@@ -20,7 +20,7 @@ class Stop final : public arbiter::Behaviour {
   }
 
  private:
-  friend void @NAME@::register_stop(arbiter::Registry& registry);
+  friend void @NAME@_plugin::register_stop(arbiter::Registry& registry);
   double threshold_ = 0.0;
   arbiter::Input<double> distance_;
   arbiter::Output<double> speed_;
@@ -39,4 +39,4 @@ void register_stop(arbiter::Registry& registry) {
   info.port("speed", &Stop::speed_).describe("the commanded forward speed (m/s)");
 }
 
-}  // namespace @NAME@
+}  // namespace @NAME@_plugin

@@ -65,6 +65,9 @@ struct ScenarioResult {
   Status status = Status::kInvalid;
   std::string file;
   std::string name;
+  /// The files the test file names (its config, recording, expected trace), resolved: a report
+  /// written over one of them would destroy it.
+  std::vector<std::string> named_files;
   Diagnostics diagnostics;  ///< why it could not run, and warnings
   std::vector<ScenarioFailure> failures;
   std::size_t expectations = 0;
