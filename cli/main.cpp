@@ -824,6 +824,10 @@ int main(int argc, char** argv) {
     }
   } catch (const CLI::ExtrasError&) {
     return report_extras(app);
+  } catch (const CLI::CallForHelp& error) {
+    // `arbiter xml --help`: help for a command there is not; the word is what needs telling.
+    if (app.get_subcommands().empty() && !app.remaining(true).empty()) return report_extras(app);
+    return app.exit(error) == 0 ? kExitOk : kExitUsage;
   } catch (const CLI::RequiredError& error) {
     // No command (or no kind of project after `new`), but words: a misspelt command, told as the
     // words it left over.

@@ -251,6 +251,12 @@ TEST_CASE("a mistyped option gets the option meant, and unexpected words are ech
   const auto command = run_cli("valdate configs/paper/walk_and_kick.yaml");
   CHECK(command.exit_code == 2);
   CHECK(contains(command.err, "  note: 'valdate': did you mean 'validate'?\n"));
+  // Help asked of a command there is not: the word is told, not the help of every command.
+  const auto help = run_cli("valdate --help");
+  CHECK(help.exit_code == 2);
+  CHECK(contains(help.err, "  note: 'valdate': did you mean 'validate'?\n"));
+  CHECK(help.out.empty());
+  CHECK(run_cli("validate --help").exit_code == 0);
 }
 
 TEST_CASE("a --tolerance that is not a finite number from 0 is a usage error, said plainly",
