@@ -97,14 +97,19 @@ CLI::Option* add_serve_token_option(CLI::App& command, Options& options, const s
 /// `--record FILE` and `--record-flush SECONDS` (which needs it), as run and replay share them.
 // Words the command line has left over, in the order they were written (CLI11 lists them
 // backwards), each option among them with the closest option the command takes.
-int report_extras(const CLI::App& app) {
-  // The innermost command given: `arbiter new plugin` is two deep.
+/// The innermost command given (`arbiter new plugin` is two deep), and its words.
+std::pair<const CLI::App*, std::string> command_given(const CLI::App& app) {
   const CLI::App* command = &app;
-  std::string prefix = "arbiter";
+  std::string words = "arbiter";
   for (auto given = app.get_subcommands(); !given.empty(); given = command->get_subcommands()) {
     command = given.back();
-    prefix += " " + command->get_name();
+    words += " " + command->get_name();
   }
+  return {command, words};
+}
+
+int report_extras(const CLI::App& app) {
+  const auto [command, prefix] = command_given(app);
   std::vector<std::string> names;
   std::vector<std::string> commands;
   for (const CLI::App* sub : command->get_subcommands({})) commands.push_back(sub->get_name());
@@ -840,11 +845,20 @@ int main(int argc, char** argv) {
                    "Run 'arbiter new --help' for more information.\n";
       return kExitUsage;
     }
-    return app.exit(error) == 0 ? kExitOk : kExitUsage;
+    // Said as the other usage errors are: by the command, with the help that command has.
+    const auto words = command_given(app).second;
+    std::cerr << fmt::format(
+        "{}: {}\nRun '{} --help' for more information.\n", words,
+        app.get_subcommands().empty() ? "say which command to run" : error.what(), words);
+    return kExitUsage;
   } catch (const CLI::ParseError& error) {
-    // --help and --version exit 0 through app.exit; every real parse error is a usage error.
-    const int code = app.exit(error);
-    return code == 0 ? kExitOk : kExitUsage;
+    // --help and --version exit 0 through app.exit; every real parse error is a usage error,
+    // said by its command.
+    if (error.get_exit_code() == 0) return app.exit(error) == 0 ? kExitOk : kExitUsage;
+    const auto words = command_given(app).second;
+    std::cerr << fmt::format("{}: {}\nRun '{} --help' for more information.\n", words, error.what(),
+                             words);
+    return kExitUsage;
   }
   try {
     auto logger = spdlog::stderr_color_mt("arbiter");

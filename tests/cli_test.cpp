@@ -257,6 +257,20 @@ TEST_CASE("a mistyped option gets the option meant, and unexpected words are ech
   CHECK(contains(help.err, "  note: 'valdate': did you mean 'validate'?\n"));
   CHECK(help.out.empty());
   CHECK(run_cli("validate --help").exit_code == 0);
+  // Every usage error is said by its command, with the help of that command.
+  const auto missing = run_cli("run");
+  CHECK(missing.exit_code == 2);
+  CHECK(missing.err ==
+        "arbiter run: FILE is required\nRun 'arbiter run --help' for more information.\n");
+  const auto no_value = run_cli("new plugin");
+  CHECK(no_value.exit_code == 2);
+  CHECK(no_value.err ==
+        "arbiter new plugin: NAME is required\nRun 'arbiter new plugin --help' "
+        "for more information.\n");
+  const auto no_command = run_cli("");
+  CHECK(no_command.exit_code == 2);
+  CHECK(no_command.err ==
+        "arbiter: say which command to run\nRun 'arbiter --help' for more information.\n");
 }
 
 TEST_CASE("a --tolerance that is not a finite number from 0 is a usage error, said plainly",
