@@ -102,7 +102,14 @@ std::vector<json> Server::handle(const json& message) {
   } catch (const RequestError& failure) {
     if (request) error(id, failure.code, failure.message);
   } catch (const json::exception& failure) {
-    const std::string why = std::string("invalid params: ") + failure.what();
+    // nlohmann's text without its "[json.exception.type_error.302] ", which tells a client
+    // nothing: "type must be string, but is number".
+    std::string_view text = failure.what();
+    if (const auto end = text.find("] ");
+        !text.empty() && text.front() == '[' && end != text.npos) {
+      text.remove_prefix(end + 2);
+    }
+    const std::string why = "invalid params: " + std::string(text);
     // A notification has no answer to carry it: a malformed didOpen would leave the document
     // without diagnostics, and nobody told why.
     if (request) {
