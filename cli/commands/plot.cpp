@@ -513,11 +513,12 @@ std::string plot_svg(const TraceFile& trace, const PlotOptions& options) {
 }
 
 int plot_command(const Options& options) {
-  if (options.output != "-" &&
-      !outputs_allowed("plot", {{options.output, "-o"}},
-                       {{options.trace_path, "the trace being plotted"},
-                        {options.compare_path, "the run compared (--compare)"}},
-                       std::cerr)) {
+  // Named, not braced into the call: GCC 12 at -O3 warns, falsely, that a braced temporary's
+  // string may be destroyed uninitialised.
+  const std::vector<CommandOutput> written = {{options.output, "-o"}};
+  const std::vector<CommandInput> read = {{options.trace_path, "the trace being plotted"},
+                                          {options.compare_path, "the run compared (--compare)"}};
+  if (options.output != "-" && !outputs_allowed("plot", written, read, std::cerr)) {
     return kExitUsage;
   }
   std::string error;
