@@ -239,8 +239,11 @@ test('replay --foxglove serves a recording at its pace, its messages as a run se
     steps.push(message.step);
     times.push(timestamp);
   });
-  subscriptions.set(client.subscribe(step.id), '/arbiter/step');
+  // The scene first: a step the server captures before it has the scene subscription carries no
+  // picture (the server copies pictures only for a scene subscriber), and this test compares the
+  // pictures with the steps.
   subscriptions.set(client.subscribe(scene.id), '/arbiter/scene');
+  subscriptions.set(client.subscribe(step.id), '/arbiter/step');
   await waitFor('the end of the replay', () => /the replay is over/.test(server.output().out), 20000);
   server.child.kill('SIGINT');
   const {code, out} = await server.exited;
