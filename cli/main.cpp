@@ -94,9 +94,6 @@ CLI::Option* add_serve_token_option(CLI::App& command, Options& options, const s
       ->check(token_error, "");
 }
 
-/// `--record FILE` and `--record-flush SECONDS` (which needs it), as run and replay share them.
-// Words the command line has left over, in the order they were written (CLI11 lists them
-// backwards), each option among them with the closest option the command takes.
 /// The innermost command given (`arbiter new plugin` is two deep), and its words.
 std::pair<const CLI::App*, std::string> command_given(const CLI::App& app) {
   const CLI::App* command = &app;
@@ -108,6 +105,15 @@ std::pair<const CLI::App*, std::string> command_given(const CLI::App& app) {
   return {command, words};
 }
 
+/// A usage error, said by the command given, with the help that command has.
+int report_usage(const CLI::App& app, std::string_view what) {
+  const auto words = command_given(app).second;
+  std::cerr << fmt::format("{}: {}\nRun '{} --help' for more information.\n", words, what, words);
+  return kExitUsage;
+}
+
+// Words the command line has left over, in the order they were written (CLI11 lists them
+// backwards), each option among them with the closest option the command takes.
 int report_extras(const CLI::App& app) {
   const auto [command, prefix] = command_given(app);
   std::vector<std::string> names;
@@ -138,6 +144,20 @@ int report_extras(const CLI::App& app) {
   return kExitUsage;
 }
 
+/// `--load NAME` and `--builtin`, which classes `plugins` and `schema` take (`verb` them: "list",
+/// "include"); exclusive, as together one of them would be dropped without a word.
+void add_class_choice_options(CLI::App& command, Options& options, const std::string& verb) {
+  auto* load = command
+                   .add_option("--load", options.load,
+                               verb +
+                                   " the built-ins and this plugin (repeatable) instead of "
+                                   "every plugin on the path")
+                   ->type_name("NAME");
+  command.add_flag("--builtin", options.builtin_only, verb + " the built-in classes only")
+      ->excludes(load);
+}
+
+/// `--record FILE` and `--record-flush SECONDS` (which needs it), as run and replay share them.
 void add_record_options(CLI::App& command, Options& options, const std::string& record_help,
                         const std::string& record_type, const std::string& flush_help) {
   command.add_option("--record", options.record_path, record_help)
@@ -719,15 +739,7 @@ int main(int argc, char** argv) {
       "plugins",
       "List the registered classes (the built-ins, and the plugins on the plugin path) with\n"
       "their kind, origin, params (type, default, range, description) and ports.");
-  auto* plugins_load =
-      plugins_cmd
-          ->add_option("--load", options.load,
-                       "list the built-ins and this plugin (repeatable) instead of every plugin on "
-                       "the path")
-          ->type_name("NAME");
-  // Together, one of them would be dropped without a word.
-  plugins_cmd->add_flag("--builtin", options.builtin_only, "list the built-in classes only")
-      ->excludes(plugins_load);
+  add_class_choice_options(*plugins_cmd, options, "list");
   plugins_cmd->add_option("--format", options.format, "text or json")
       ->check(CLI::IsMember({"text", "json"}))
       ->capture_default_str();
@@ -741,14 +753,7 @@ int main(int argc, char** argv) {
       "schema",
       "Print the JSON Schema (draft-07) of the config format, extended with the registered\n"
       "classes: 'type:' completes in editors and each class's params and ports are checked.");
-  auto* schema_load =
-      schema_cmd
-          ->add_option("--load", options.load,
-                       "include the built-ins and this plugin (repeatable) instead of every plugin "
-                       "on the path")
-          ->type_name("NAME");
-  schema_cmd->add_flag("--builtin", options.builtin_only, "include the built-in classes only")
-      ->excludes(schema_load);
+  add_class_choice_options(*schema_cmd, options, "include");
   schema_cmd->footer(
       examples +
       "  arbiter schema > arbiter.schema.json\n"
@@ -840,25 +845,13 @@ int main(int argc, char** argv) {
     if ((app.get_subcommands().empty() || no_kind) && !app.remaining(true).empty()) {
       return report_extras(app);
     }
-    if (no_kind) {
-      std::cerr << "arbiter new: say what to start: 'arbiter new plugin NAME [DIR]'\n"
-                   "Run 'arbiter new --help' for more information.\n";
-      return kExitUsage;
-    }
-    // Said as the other usage errors are: by the command, with the help that command has.
-    const auto words = command_given(app).second;
-    std::cerr << fmt::format(
-        "{}: {}\nRun '{} --help' for more information.\n", words,
-        app.get_subcommands().empty() ? "say which command to run" : error.what(), words);
-    return kExitUsage;
+    if (no_kind) return report_usage(app, "say what to start: 'arbiter new plugin NAME [DIR]'");
+    return report_usage(app,
+                        app.get_subcommands().empty() ? "say which command to run" : error.what());
   } catch (const CLI::ParseError& error) {
-    // --help and --version exit 0 through app.exit; every real parse error is a usage error,
-    // said by its command.
+    // --help and --version exit 0 through app.exit; every real parse error is a usage error.
     if (error.get_exit_code() == 0) return app.exit(error) == 0 ? kExitOk : kExitUsage;
-    const auto words = command_given(app).second;
-    std::cerr << fmt::format("{}: {}\nRun '{} --help' for more information.\n", words, error.what(),
-                             words);
-    return kExitUsage;
+    return report_usage(app, error.what());
   }
   try {
     auto logger = spdlog::stderr_color_mt("arbiter");
