@@ -398,7 +398,36 @@ namespace {
 /// The step's picture, as drawn, into the block's room for pictures; where it lies, and its
 /// counts, into `scene_line`.
 void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last,
-                     SnapshotShape::SceneLine& scene_line);
+                     SnapshotShape::SceneLine& scene_line) {
+  const auto& scene = manager.scene();
+  auto& scene_counts = scene_line.counts;
+  scene_counts.primitives = static_cast<std::uint32_t>(manager.scene_primitive_count());
+  scene_counts.points =
+      static_cast<std::uint32_t>(std::min(scene.point_count, scene.point_capacity));
+  scene_counts.dropped = static_cast<std::uint32_t>(scene.dropped);
+  scene_counts.string_bytes = static_cast<std::uint32_t>(scene.string_size);
+  // Copied as drawn, whole lines (the manager's buffers have room for them), streamed after the
+  // picture before: comparing it with that one is the reader's work (SceneUpdates), and the
+  // pictures of consecutive steps share pages, where each block's own room would put every step
+  // on pages of its own.
+  const auto primitive_bytes =
+      round_up(scene_counts.primitives * sizeof(ScenePrimitive), SnapshotShape::kChunk);
+  const auto point_bytes =
+      round_up(scene_counts.points * sizeof(ScenePoint), SnapshotShape::kChunk);
+  const auto string_bytes = round_up(scene_counts.string_bytes, SnapshotShape::kChunk);
+  std::size_t scene_at = last != nullptr ? last->scene_cursor : 0;
+  if (scene_at + primitive_bytes + point_bytes + string_bytes > into.scene_bytes) scene_at = 0;
+  scene_line.primitives_at = scene_at;
+  scene_line.points_at = scene_at + primitive_bytes;
+  scene_line.strings_at = scene_line.points_at + point_bytes;
+  stream_lines(into.scene + scene_at, reinterpret_cast<const std::byte*>(scene.primitives),
+               primitive_bytes);
+  stream_lines(into.scene + scene_line.points_at, reinterpret_cast<const std::byte*>(scene.points),
+               point_bytes);
+  stream_lines(into.scene + scene_line.strings_at,
+               reinterpret_cast<const std::byte*>(scene.strings), string_bytes);
+  if (last != nullptr) last->scene_cursor = scene_line.strings_at + string_bytes;
+}
 
 }  // namespace
 
@@ -542,42 +571,6 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   }
   return true;
 }
-
-namespace {
-
-void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last,
-                     SnapshotShape::SceneLine& scene_line) {
-  const auto& scene = manager.scene();
-  auto& scene_counts = scene_line.counts;
-  scene_counts.primitives = static_cast<std::uint32_t>(manager.scene_primitive_count());
-  scene_counts.points =
-      static_cast<std::uint32_t>(std::min(scene.point_count, scene.point_capacity));
-  scene_counts.dropped = static_cast<std::uint32_t>(scene.dropped);
-  scene_counts.string_bytes = static_cast<std::uint32_t>(scene.string_size);
-  // Copied as drawn, whole lines (the manager's buffers have room for them), streamed after the
-  // picture before: comparing it with that one is the reader's work (SceneUpdates), and the
-  // pictures of consecutive steps share pages, where each block's own room would put every step
-  // on pages of its own.
-  const auto primitive_bytes =
-      round_up(scene_counts.primitives * sizeof(ScenePrimitive), SnapshotShape::kChunk);
-  const auto point_bytes =
-      round_up(scene_counts.points * sizeof(ScenePoint), SnapshotShape::kChunk);
-  const auto string_bytes = round_up(scene_counts.string_bytes, SnapshotShape::kChunk);
-  std::size_t scene_at = last != nullptr ? last->scene_cursor : 0;
-  if (scene_at + primitive_bytes + point_bytes + string_bytes > into.scene_bytes) scene_at = 0;
-  scene_line.primitives_at = scene_at;
-  scene_line.points_at = scene_at + primitive_bytes;
-  scene_line.strings_at = scene_line.points_at + point_bytes;
-  stream_lines(into.scene + scene_at, reinterpret_cast<const std::byte*>(scene.primitives),
-               primitive_bytes);
-  stream_lines(into.scene + scene_line.points_at, reinterpret_cast<const std::byte*>(scene.points),
-               point_bytes);
-  stream_lines(into.scene + scene_line.strings_at,
-               reinterpret_cast<const std::byte*>(scene.strings), string_bytes);
-  if (last != nullptr) last->scene_cursor = scene_line.strings_at + string_bytes;
-}
-
-}  // namespace
 
 void fence_streamed_stores() {
 #if defined(__SSE2__)
