@@ -737,14 +737,22 @@ TEST_CASE("a chained capture gives the reader every step's whole picture", "[rec
   const auto& shape = generation.blocks.shape();
   for (std::size_t i = 0; i < 40; ++i) {
     manager.step();
-    // Step 10 is a whole capture again, as after a dropped step.
+    // Step 10 is a whole capture again, as after a dropped step. Every seventh leaves its
+    // picture out, as a Foxglove server's while no client shows the scene: the next picture is
+    // whole all the same.
     const bool chained = i > 0 && i != 10;
+    const auto picture = i % 7 == 3 ? CapturePicture::kLeaveOut : CapturePicture::kCopy;
     const auto block = generation.blocks[i % generation.blocks.size()];
     REQUIRE(detail::capture_step(manager, generation.layout, shape, block, false, &generation.last,
-                                 chained));
+                                 chained, picture));
     detail::fence_streamed_stores();
     detail::StepSnapshot step(shape, block);
     step.apply(image);
+    if (picture == CapturePicture::kLeaveOut) {
+      CHECK(step.scene.size() == 0);
+      CHECK(step.scene_points.size() == 0);
+      continue;
+    }
     const auto& drawn = manager.scene();
     REQUIRE(step.scene.size() == manager.scene_primitive_count());
     REQUIRE(step.scene_points.size() == drawn.point_count);

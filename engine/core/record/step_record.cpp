@@ -4,6 +4,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include <algorithm>
 #include <cstring>
@@ -193,6 +196,7 @@ void construct_part(std::byte* block, std::size_t at, std::size_t count) {
 }
 
 constexpr std::size_t kCacheLine = 64;
+constexpr std::size_t kHugePage = std::size_t{2} << 20;
 
 }  // namespace
 
@@ -247,7 +251,7 @@ void SnapshotBlocks::release() {
   for (std::size_t i = 0; i < count_; ++i) {
     for (const auto& [type, offset] : constructed_) type->destroy((*this)[i].main + offset);
   }
-  ::operator delete (data_, std::align_val_t{kCacheLine});
+  ::operator delete (data_, std::align_val_t{alignment_});
   data_ = nullptr;
   count_ = 0;
   constructed_.clear();
@@ -257,10 +261,22 @@ void SnapshotBlocks::reset(const StepLayout& layout, std::size_t text_bytes, std
   release();
   shape_ = SnapshotShape(layout, text_bytes);
   const auto& s = shape_;
-  data_ = static_cast<std::byte*>(
-      ::operator new ((s.bytes + s.extra_bytes) * count + (count + 1) * SnapshotShape::kSceneBytes,
-                      std::align_val_t{kCacheLine}));
   count_ = count;
+  std::size_t bytes = (s.bytes + s.extra_bytes) * count + scene_bytes();
+  // A recorder's or a server's blocks and their picture ring span megabytes, which the stepping
+  // thread walks through a few lines a step: on 4 KiB pages most captures met a page the TLB did
+  // not hold, and under a virtual machine's nested paging that miss cost a served step more
+  // than its copying. So whole 2 MiB pages, where the kernel gives them on request.
+  alignment_ = kCacheLine;
+  if (bytes >= kHugePage) {
+    bytes = round_up(bytes, kHugePage);
+    alignment_ = kHugePage;
+  }
+  data_ = static_cast<std::byte*>(::operator new (bytes, std::align_val_t{alignment_}));
+#if defined(MADV_HUGEPAGE)
+  // Before the pages are first written, below. Only advice: without it, or refused, 4 KiB pages.
+  if (alignment_ == kHugePage) madvise(data_, bytes, MADV_HUGEPAGE);
+#endif
   // Written here, so that the stepping thread's first pass through the picture ring finds its
   // pages mapped.
   construct_part<std::byte>((*this)[0].scene, 0, scene_bytes());

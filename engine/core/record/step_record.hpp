@@ -231,6 +231,7 @@ class SnapshotBlocks {
   SnapshotShape shape_;
   std::size_t count_ = 0;
   std::byte* data_ = nullptr;
+  std::size_t alignment_ = 0;  // data_'s
   // The values that are not plain bytes: constructed per type at these offsets of each block.
   std::vector<std::pair<const ValueType*, std::size_t>> constructed_;
 };
