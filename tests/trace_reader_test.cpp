@@ -15,6 +15,7 @@
 #include "arbiter/trace.hpp"
 #include "arbiter/trace_diff.hpp"
 #include "arbiter/trace_reader.hpp"
+#include "core/record/step_record.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -251,16 +252,18 @@ class ManualClock : public StepClock {
 };
 
 /// A layer wide enough that a recording copies its levels and values by the chunks that changed
-/// (more than SnapshotShape::kWhole bytes each): 80 behaviours whose scripted levels change at
-/// different steps, writing 40 numbers; with `strings`, a string too, beyond the small-string
-/// buffer.
+/// (more than SnapshotShape::kWhole bytes each): behaviours whose scripted levels change at
+/// different steps, each writing one of somewhat fewer numbers; with `strings`, a string too,
+/// beyond the small-string buffer.
 std::string wide_config(bool strings) {
+  constexpr int kNumbers = detail::SnapshotShape::kWhole / sizeof(double) + 20;
+  constexpr int kBehaviours = kNumbers + 20;
   std::string text = "arbiter: 1\nname: wide\nrate_hz: 100\nlayers:\n  - name: wide\n";
   text += "    actuators:\n      sum: {type: double, aggregate: true}\n";
   if (strings) text += "      mode: {type: string}\n";
-  for (int v = 0; v < 40; ++v) text += fmt::format("      v{}: {{type: double}}\n", v);
+  for (int v = 0; v < kNumbers; ++v) text += fmt::format("      v{}: {{type: double}}\n", v);
   text += "    behaviours:\n";
-  for (int b = 0; b < 80; ++b) {
+  for (int b = 0; b < kBehaviours; ++b) {
     std::string levels;
     for (int step = 0; step < 60; ++step) {
       const int held = step / (b % 5 + 1);  // behaviour b changes level every b % 5 + 1 steps
@@ -268,7 +271,7 @@ std::string wide_config(bool strings) {
     }
     text += fmt::format(
         "      b{}: {{type: scripted, params: {{activation: [{}], writes: {{sum: {}, v{}: {}", b,
-        levels, b, b % 40, b * 0.25);
+        levels, b, b % kNumbers, b * 0.25);
     if (strings) text += fmt::format(", mode: \"behaviour {} of the wide layer, writing\"", b);
     text += "}}}\n";
   }
