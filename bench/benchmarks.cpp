@@ -98,29 +98,27 @@ class PinnedTo {
   bool pinned_ = false;
 };
 
-/// Two copies of the program a recording benchmark steps: the soccer demo (its plugin built
-/// beside, its classes and value types in `soccer_registry`, which must outlive them), else the
-/// generated `graph` of state.range(0) behaviours. False, the benchmark skipped, when the demo
-/// does not load.
-bool load_twice(benchmark::State& state, Graph graph, bool soccer, Registry& soccer_registry,
-                std::optional<Program> (&programs)[2]) {
-  for (auto& program : programs) {
-    if (soccer) {
-      Diagnostics diagnostics;
-      LoadOptions options;
-      options.plugins.path = {ARBITER_BENCH_PLUGIN_DIR};
-      program = load(ARBITER_BENCH_SOCCER, soccer_registry, diagnostics, options);
-      if (!program) {
-        state.SkipWithError("the soccer demo does not load (is its plugin built?)");
-        return false;
-      }
-    } else {
-      GeneratorOptions options;
-      options.graph = graph;
-      options.behaviours = static_cast<std::size_t>(state.range(0));
-      options.behaviour_class = kTrivial;
-      program = compile_text(generate_config(options), registry());
+/// The program an observed benchmark steps: the soccer demo (its plugin built beside, its
+/// classes and value types in `soccer_registry`, which must outlive them), else the generated
+/// `graph` of state.range(0) behaviours. False, the benchmark skipped, when the demo does not
+/// load.
+bool load_program(benchmark::State& state, Graph graph, bool soccer, Registry& soccer_registry,
+                  std::optional<Program>& program) {
+  if (soccer) {
+    Diagnostics diagnostics;
+    LoadOptions options;
+    options.plugins.path = {ARBITER_BENCH_PLUGIN_DIR};
+    program = load(ARBITER_BENCH_SOCCER, soccer_registry, diagnostics, options);
+    if (!program) {
+      state.SkipWithError("the soccer demo does not load (is its plugin built?)");
+      return false;
     }
+  } else {
+    GeneratorOptions options;
+    options.graph = graph;
+    options.behaviours = static_cast<std::size_t>(state.range(0));
+    options.behaviour_class = kTrivial;
+    program = compile_text(generate_config(options), registry());
   }
   return true;
 }
@@ -144,7 +142,9 @@ void start_pinned(Manager& plain, Manager& recorded, std::optional<PinnedTo>& st
 void record(benchmark::State& state, Graph graph, bool soccer) {
   std::optional<Program> programs[2];
   Registry soccer_registry = make_registry();
-  if (!load_twice(state, graph, soccer, soccer_registry, programs)) return;
+  for (auto& program : programs) {
+    if (!load_program(state, graph, soccer, soccer_registry, program)) return;
+  }
   Manager plain(std::move(*programs[0]), quiet());
   Manager recorded(std::move(*programs[1]), quiet());
   const auto path = std::filesystem::temp_directory_path() / "arbiter_bench_record.mcap";
@@ -199,65 +199,7 @@ void record(benchmark::State& state, Graph graph, bool soccer) {
   std::filesystem::remove(path);
 }
 
-/// The soccer demo at a robot's pace: a step every 500 µs, the plain and the recorded program
-/// in turn, each step timed alone by the wall clock (a vDSO read here, about 27 ns). Between two
-/// steps the thread sleeps, as a paced run does, so a step does not find the caches as the step
-/// before left them: the recorder's cost where it runs. Medians, so that a step the writer's
-/// burst or an interrupt met does not count.
-void record_paced(benchmark::State& state) {
-  std::optional<Program> programs[2];
-  Registry soccer_registry = make_registry();
-  if (!load_twice(state, Graph::kLayers, true, soccer_registry, programs)) return;
-  Manager plain(std::move(*programs[0]), quiet());
-  Manager recorded(std::move(*programs[1]), quiet());
-  const auto path = std::filesystem::temp_directory_path() / "arbiter_bench_record_paced.mcap";
-  RecordingInfo info;
-  info.version = "bench";
-  constexpr std::size_t kSteps = 200;  // of each, per iteration
-  constexpr auto kPeriod = std::chrono::microseconds(500);
-  std::vector<double> plain_ns;
-  std::vector<double> recorded_ns;
-  plain_ns.reserve(kSteps * static_cast<std::size_t>(state.max_iterations));
-  recorded_ns.reserve(kSteps * static_cast<std::size_t>(state.max_iterations));
-  std::uint64_t dropped = 0;
-  {
-    std::optional<PinnedTo> stepping_cpu;
-    Recorder recorder(path.string(), info);
-    recorded.add_observer(recorder);
-    start_pinned(plain, recorded, stepping_cpu);
-    using Clock = std::chrono::steady_clock;
-    auto next = Clock::now();
-    const auto timed_step = [&](Manager& manager, std::vector<double>& ns) {
-      next += kPeriod;
-      std::this_thread::sleep_until(next);
-      const auto start = Clock::now();
-      manager.step();
-      ns.push_back(std::chrono::duration<double, std::nano>(Clock::now() - start).count());
-    };
-    for (auto _ : state) {
-      for (std::size_t i = 0; i < kSteps; ++i) {
-        timed_step(plain, plain_ns);
-        timed_step(recorded, recorded_ns);
-      }
-    }
-    recorded.finish();
-    dropped = recorder.dropped();
-  }
-  std::filesystem::remove(path);
-  const auto median = [](std::vector<double>& values) {
-    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-    return values[values.size() / 2];
-  };
-  const double plain_median = median(plain_ns);
-  const double recorded_median = median(recorded_ns);
-  state.counters["ns_per_step"] = plain_median;
-  state.counters["recorded_ns_per_step"] = recorded_median;
-  state.counters["overhead"] = recorded_median / plain_median - 1.0;
-  state.counters["dropped"] = static_cast<double>(dropped);
-}
-
-#if ARBITER_HAS_FOXGLOVE
-/// Hands the steps on to `to` only while open: one manager's steps, served and not in turn.
+/// Hands the steps on to `to` only while open: one manager's steps, observed and not in turn.
 struct GatedObserver : Observer {
   explicit GatedObserver(Observer& to_) : to(to_) {}
   void on_start(const Manager& manager) override { to.on_start(manager); }
@@ -273,24 +215,92 @@ struct GatedObserver : Observer {
   bool open = true;
 };
 
-/// A program at a robot's pace, as record/soccer/paced: each step timed alone, medians; every
-/// other step served over the Foxglove WebSocket protocol (`arbiter run --foxglove`) to a client
-/// subscribed to every channel, the steps between not. One manager takes both kinds of step:
-/// two managers, the same program in each, differ by where their memory lies, and that alone
-/// made one's step up to 12 % slower than the other's with nothing served at all. A served step
-/// carries what changed over two steps, a little more than a run serving every step copies.
-/// The soccer demo, or a generated graph of `state.range(0)` behaviours: the capture's cost is
-/// mostly fixed, so its share falls as a step grows. Without `scene`, the client subscribes to
-/// every channel but the picture's, as one that only plots does, and the server copies no
-/// picture.
-void foxglove_paced(benchmark::State& state, Graph graph, bool soccer, bool scene) {
-  std::optional<Program> programs[2];
+/// `manager`'s steps at a robot's pace, a step every 500 µs, each timed alone by the wall clock
+/// (a vDSO read here, about 27 ns), the one handed on by `gate` and the one not in turn, on CPU
+/// 0; counters: their medians and the overhead. Between two steps the thread sleeps, as a paced
+/// run does, so a step does not find the caches as the step before left them: an observer's
+/// cost where it runs. Medians, so that a step that an interrupt or the observer's other thread
+/// met does not count. One manager takes both kinds of step: two managers of the same program
+/// differ by where their memory lies, and that alone made one's step up to 12 % slower than the
+/// other's with nothing observed. An observed step carries what changed over two steps, a
+/// little more than one observing every step copies.
+void paced_steps(benchmark::State& state, Manager& manager, GatedObserver& gate) {
+  constexpr std::size_t kSteps = 200;  // of each, per iteration
+  constexpr auto kPeriod = std::chrono::microseconds(500);
+  std::vector<double> plain_ns;
+  std::vector<double> observed_ns;
+  plain_ns.reserve(kSteps * static_cast<std::size_t>(state.max_iterations));
+  observed_ns.reserve(kSteps * static_cast<std::size_t>(state.max_iterations));
+  {
+    PinnedTo stepping_cpu(0);
+    using Clock = std::chrono::steady_clock;
+    auto next = Clock::now();
+    const auto timed_step = [&](bool observed, std::vector<double>& ns) {
+      gate.open = observed;
+      next += kPeriod;
+      std::this_thread::sleep_until(next);
+      const auto start = Clock::now();
+      manager.step();
+      ns.push_back(std::chrono::duration<double, std::nano>(Clock::now() - start).count());
+    };
+    for (auto _ : state) {
+      for (std::size_t i = 0; i < kSteps; ++i) {
+        timed_step(false, plain_ns);
+        timed_step(true, observed_ns);
+      }
+    }
+  }
+  gate.open = true;
+  const auto median = [](std::vector<double>& values) {
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  };
+  const double plain_median = median(plain_ns);
+  const double observed_median = median(observed_ns);
+  state.counters["ns_per_step"] = plain_median;
+  state.counters["observed_ns_per_step"] = observed_median;
+  state.counters["overhead"] = observed_median / plain_median - 1.0;
+}
+
+/// The soccer demo recorded at a robot's pace (paced_steps()), the writer on CPU 1.
+void record_paced(benchmark::State& state) {
+  std::optional<Program> program;
   Registry soccer_registry = make_registry();
-  if (!load_twice(state, graph, soccer, soccer_registry, programs)) return;
-  Manager manager(std::move(*programs[0]), quiet());
+  if (!load_program(state, Graph::kLayers, true, soccer_registry, program)) return;
+  Manager manager(std::move(*program), quiet());
+  const auto path = std::filesystem::temp_directory_path() / "arbiter_bench_record_paced.mcap";
+  RecordingInfo info;
+  info.version = "bench";
+  std::uint64_t dropped = 0;
+  {
+    Recorder recorder(path.string(), info);
+    GatedObserver gate(recorder);
+    manager.add_observer(gate);
+    {
+      PinnedTo writer_cpu(1);  // the writer starts on the first recorded step, where its creator is
+      manager.step();
+    }
+    paced_steps(state, manager, gate);
+    manager.finish();
+    dropped = recorder.dropped();
+  }
+  std::filesystem::remove(path);
+  state.counters["dropped"] = static_cast<double>(dropped);
+}
+
+#if ARBITER_HAS_FOXGLOVE
+/// A program served over the Foxglove WebSocket protocol (`arbiter run --foxglove`) at a robot's
+/// pace (paced_steps()) to a client subscribed to every channel, the server's and the client's
+/// threads on CPU 1. The soccer demo, or a generated graph of `state.range(0)` behaviours: the
+/// capture's cost is mostly fixed, so its share falls as a step grows. Without `scene`, the
+/// client subscribes to every channel but the picture's, as one that only plots does, and the
+/// server copies no picture.
+void foxglove_paced(benchmark::State& state, Graph graph, bool soccer, bool scene) {
+  std::optional<Program> program;
+  Registry soccer_registry = make_registry();
+  if (!load_program(state, graph, soccer, soccer_registry, program)) return;
+  Manager manager(std::move(*program), quiet());
   std::ostringstream said;
-  // The server's and the client's threads on CPU 1, as start_pinned() puts a recorder's writer,
-  // and the stepping thread on CPU 0.
   std::optional<PinnedTo> others_cpu(1);
   auto server = cli::FoxgloveServer::open("127.0.0.1", 0, "bench", "arbiter bench", said, said);
   if (!server) {
@@ -311,45 +321,11 @@ void foxglove_paced(benchmark::State& state, Graph graph, bool soccer, bool scen
     state.SkipWithError("the client received nothing");
     return;
   }
-  constexpr std::size_t kSteps = 200;  // of each, per iteration
-  constexpr auto kPeriod = std::chrono::microseconds(500);
-  std::vector<double> plain_ns;
-  std::vector<double> served_ns;
-  plain_ns.reserve(kSteps * static_cast<std::size_t>(state.max_iterations));
-  served_ns.reserve(kSteps * static_cast<std::size_t>(state.max_iterations));
-  {
-    std::optional<PinnedTo> stepping_cpu;
-    stepping_cpu.emplace(0);
-    using Clock = std::chrono::steady_clock;
-    auto next = Clock::now();
-    const auto timed_step = [&](bool served, std::vector<double>& ns) {
-      gate.open = served;
-      next += kPeriod;
-      std::this_thread::sleep_until(next);
-      const auto start = Clock::now();
-      manager.step();
-      ns.push_back(std::chrono::duration<double, std::nano>(Clock::now() - start).count());
-    };
-    for (auto _ : state) {
-      for (std::size_t i = 0; i < kSteps; ++i) {
-        timed_step(false, plain_ns);
-        timed_step(true, served_ns);
-      }
-    }
-  }
+  paced_steps(state, manager, gate);
   const auto received = client.received();
   manager.finish();
   const auto counts = server->counts();
   server->stop();
-  const auto median = [](std::vector<double>& values) {
-    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-    return values[values.size() / 2];
-  };
-  const double plain_median = median(plain_ns);
-  const double served_median = median(served_ns);
-  state.counters["ns_per_step"] = plain_median;
-  state.counters["served_ns_per_step"] = served_median;
-  state.counters["overhead"] = served_median / plain_median - 1.0;
   state.counters["received"] = static_cast<double>(received);
   state.counters["dropped"] =
       static_cast<double>(counts.dropped_steps + counts.dropped_for_slow_clients);
