@@ -447,60 +447,63 @@ void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last
 
 }  // namespace
 
-bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
-                  SnapshotBlock into, bool may_allocate, StepImage* last, bool chained,
-                  CapturePicture picture) {
-  const Program& program = manager.program();
+// The parts of a capture that a small graph's step does not need, each a function of its own,
+// out of line: at a robot's pace the capture's code is cold, and each line of it the step runs
+// through costs a miss. Those that few steps need (reports, values that are not plain bytes),
+// apart from the rest of the code as well.
+#if defined(__GNUC__)
+#define ARBITER_OUT_OF_LINE __attribute__((noinline))
+#define ARBITER_SELDOM __attribute__((noinline, cold))
+#else
+#define ARBITER_OUT_OF_LINE
+#define ARBITER_SELDOM
+#endif
+
+namespace {
+
+ARBITER_OUT_OF_LINE void capture_changed_parts(const std::byte* now, const SnapshotShape& shape,
+                                               std::byte* block, StepImage& last,
+                                               SnapshotHeader& header) {
+  for (std::size_t part = 0; part < shape.tracked_parts(); ++part) {
+    const auto bytes = shape.tracked.bytes[part];
+    const std::byte* from = now + shape.tracked.at[part];
+    std::byte* to = block + shape.tracked_at[part];
+    if (!shape.chunked(part)) {
+      copy_bytes(to, from, bytes);  // whole at every capture: `last` has no use for it
+    } else {
+      // Compared where they are hot (the manager's and `last`), written to the block, which
+      // is cold, only by the chunk that changed.
+      header.changed_count[part] =
+          copy_changed(from, last.bytes.data() + shape.tracked.at[part], to, bytes,
+                       part_of<std::uint32_t>(block, shape.changed_at[part]));
+    }
+  }
+}
+
+// False when a string is longer than the copy's reserve and `may_allocate` is not set.
+ARBITER_SELDOM bool capture_values(const Manager& manager, const StepLayout& layout,
+                                        const SnapshotShape& shape, std::byte* block,
+                                        bool may_allocate) {
+  std::byte* values = block + shape.tracked_at[TrackedLayout::kValues];
+  for (std::uint32_t a = 0; a < shape.actuators; ++a) {
+    const auto& actuator = layout.actuators[a];
+    void* to = values + actuator.offset;
+    const void* from = manager.actuator_value(a);
+    // A string longer than the copy's reserve would allocate.
+    if (!may_allocate && *actuator.type->cpp_type == typeid(std::string) &&
+        static_cast<const std::string*>(from)->size() >
+            static_cast<const std::string*>(to)->capacity()) {
+      return false;
+    }
+    actuator.type->assign(to, from);
+  }
+  return true;
+}
+
+// False when the state machines hold more than the block has room for.
+ARBITER_OUT_OF_LINE bool capture_machines(const Program& program, const SnapshotShape& shape,
+                                          SnapshotBlock into) {
   std::byte* block = into.main;
-  // Written to the block last, whole: the block is cold, and never read here.
-  SnapshotHeader header;
-  header.step = manager.steps();
-  header.safe = manager.in_safe_pass();
-  header.timed = manager.timed();
-  header.t = manager.step_time();
-  header.duration = manager.step_duration();
-  const std::size_t actuators = shape.actuators;
-  const std::byte* now = manager.tracked_parts();
-  header.full = last == nullptr || !chained;
-  const std::size_t parts = shape.tracked_parts();
-  if (header.full || !shape.any_chunked) {
-    // Laid out as in the manager: a small graph's step is one move.
-    const std::size_t bytes = shape.tracked.end_of(parts);
-    // Streamed at the end, once nothing can fail: a failed capture leaves no streaming store in
-    // flight to a block the writer may free.
-    if (!shape.streamed) copy_bytes(block + shape.tracked_at[0], now, bytes);
-    if (last != nullptr && shape.any_chunked) std::memcpy(last->bytes.data(), now, bytes);
-  } else {
-    for (std::size_t part = 0; part < parts; ++part) {
-      const auto bytes = shape.tracked.bytes[part];
-      const std::byte* from = now + shape.tracked.at[part];
-      std::byte* to = block + shape.tracked_at[part];
-      if (!shape.chunked(part)) {
-        copy_bytes(to, from, bytes);  // whole at every capture: `last` has no use for it
-      } else {
-        // Compared where they are hot (the manager's and `last`), written to the block, which
-        // is cold, only by the chunk that changed.
-        header.changed_count[part] =
-            copy_changed(from, last->bytes.data() + shape.tracked.at[part], to, bytes,
-                         part_of<std::uint32_t>(block, shape.changed_at[part]));
-      }
-    }
-  }
-  if (!shape.plain_values) {
-    std::byte* values = block + shape.tracked_at[TrackedLayout::kValues];
-    for (std::uint32_t a = 0; a < actuators; ++a) {
-      const auto& actuator = layout.actuators[a];
-      void* to = values + actuator.offset;
-      const void* from = manager.actuator_value(a);
-      // A string longer than the copy's reserve would allocate.
-      if (!may_allocate && *actuator.type->cpp_type == typeid(std::string) &&
-          static_cast<const std::string*>(from)->size() >
-              static_cast<const std::string*>(to)->capacity()) {
-        return false;
-      }
-      actuator.type->assign(to, from);
-    }
-  }
   auto* machines = part_of<SnapshotShape::Machine>(block, shape.machines_at);
   auto* current_args = part_of<SnapshotShape::Arg>(block, shape.args_at);
   auto* queue = part_of<std::uint32_t>(block, shape.queue_at);
@@ -557,17 +560,60 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
     machine.events_count = event_index - machine.events_begin;
     machines[c] = machine;
   }
-  const auto report_count = std::min(manager.event_count(), Manager::kEventsPerStep);
-  auto* reports = part_of<SnapshotShape::Report>(into.extras, shape.reports_at);
-  auto* texts = part_of<char>(into.extras, shape.texts_at);
-  std::uint32_t text_size = 0;
-  for (std::size_t e = 0; e < report_count; ++e) {
+  return true;
+}
+
+// False when the texts are more than the block has room for; else their size.
+ARBITER_SELDOM bool capture_reports(const Manager& manager, const SnapshotShape& shape,
+                                         std::byte* extras, std::size_t count,
+                                         std::uint32_t& text_size) {
+  auto* reports = part_of<SnapshotShape::Report>(extras, shape.reports_at);
+  auto* texts = part_of<char>(extras, shape.texts_at);
+  for (std::size_t e = 0; e < count; ++e) {
     const auto& event = manager.event(e);
     const auto size = std::strlen(event.text);
     if (text_size + size > shape.text_bytes) return false;
     reports[e] = {event.source, text_size, static_cast<std::uint32_t>(size)};
     std::memcpy(texts + text_size, event.text, size);
     text_size += static_cast<std::uint32_t>(size);
+  }
+  return true;
+}
+
+}  // namespace
+
+bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
+                  SnapshotBlock into, bool may_allocate, StepImage* last, bool chained,
+                  CapturePicture picture) {
+  std::byte* block = into.main;
+  // Written to the block last, whole: the block is cold, and never read here.
+  SnapshotHeader header;
+  header.step = manager.steps();
+  header.safe = manager.in_safe_pass();
+  header.timed = manager.timed();
+  header.t = manager.step_time();
+  header.duration = manager.step_duration();
+  const std::byte* now = manager.tracked_parts();
+  header.full = last == nullptr || !chained;
+  if (header.full || !shape.any_chunked) {
+    // Laid out as in the manager: a small graph's step is one move.
+    const std::size_t bytes = shape.tracked.end_of(shape.tracked_parts());
+    // Streamed at the end, once nothing can fail: a failed capture leaves no streaming store in
+    // flight to a block the writer may free.
+    if (!shape.streamed) copy_bytes(block + shape.tracked_at[0], now, bytes);
+    if (last != nullptr && shape.any_chunked) std::memcpy(last->bytes.data(), now, bytes);
+  } else {
+    capture_changed_parts(now, shape, block, *last, header);
+  }
+  if (!shape.plain_values && !capture_values(manager, layout, shape, block, may_allocate)) {
+    return false;
+  }
+  if (shape.machines > 0 && !capture_machines(manager.program(), shape, into)) return false;
+  const auto report_count = std::min(manager.event_count(), Manager::kEventsPerStep);
+  std::uint32_t text_size = 0;
+  if (report_count > 0 &&
+      !capture_reports(manager, shape, into.extras, report_count, text_size)) {
+    return false;
   }
   header.report_count = static_cast<std::uint32_t>(report_count);
   header.input_reports =
