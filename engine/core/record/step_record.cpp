@@ -482,8 +482,8 @@ ARBITER_OUT_OF_LINE void capture_changed_parts(const std::byte* now, const Snaps
 
 // False when a string is longer than the copy's reserve and `may_allocate` is not set.
 ARBITER_SELDOM bool capture_values(const Manager& manager, const StepLayout& layout,
-                                        const SnapshotShape& shape, std::byte* block,
-                                        bool may_allocate) {
+                                   const SnapshotShape& shape, std::byte* block,
+                                   bool may_allocate) {
   std::byte* values = block + shape.tracked_at[TrackedLayout::kValues];
   for (std::uint32_t a = 0; a < shape.actuators; ++a) {
     const auto& actuator = layout.actuators[a];
@@ -565,8 +565,8 @@ ARBITER_OUT_OF_LINE bool capture_machines(const Program& program, const Snapshot
 
 // False when the texts are more than the block has room for; else their size.
 ARBITER_SELDOM bool capture_reports(const Manager& manager, const SnapshotShape& shape,
-                                         std::byte* extras, std::size_t count,
-                                         std::uint32_t& text_size) {
+                                    std::byte* extras, std::size_t count,
+                                    std::uint32_t& text_size) {
   auto* reports = part_of<SnapshotShape::Report>(extras, shape.reports_at);
   auto* texts = part_of<char>(extras, shape.texts_at);
   for (std::size_t e = 0; e < count; ++e) {
@@ -611,8 +611,7 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   if (shape.machines > 0 && !capture_machines(manager.program(), shape, into)) return false;
   const auto report_count = std::min(manager.event_count(), Manager::kEventsPerStep);
   std::uint32_t text_size = 0;
-  if (report_count > 0 &&
-      !capture_reports(manager, shape, into.extras, report_count, text_size)) {
+  if (report_count > 0 && !capture_reports(manager, shape, into.extras, report_count, text_size)) {
     return false;
   }
   header.report_count = static_cast<std::uint32_t>(report_count);
