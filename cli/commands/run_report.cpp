@@ -228,7 +228,8 @@ void RunReport::on_finish(const Manager& manager) {
   for (const auto& [event, count] : event_counts_) {
     print(fmt::format("{} ({} time{})\n", event, count, count == 1 ? "" : "s"));
   }
-  if (program.behaviours.empty()) return;
+  // Those a reload removed are listed too when it removed them all.
+  if (program.behaviours.empty() && removed_steps_.empty()) return;
   print("Active steps per behaviour:\n");
   for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
     print(fmt::format(
