@@ -2,11 +2,14 @@
 // (tests/data/scenarios/*/NAME.test.yaml beside NAME.expected), exit codes, directories, and the
 // JUnit XML that CI systems read.
 
+#include <unistd.h>
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "arbiter/scenario.hpp"
 #include "test_support.hpp"
@@ -189,4 +192,64 @@ TEST_CASE("the JUnit XML stays well-formed when a test's file name is not UTF-8 
   const auto lint = test::run_captured("xmllint --noout \"" + xml.string() + "\"");
   INFO(lint.err);
   CHECK(lint.exit_code == 0);
+}
+
+TEST_CASE(
+    "a --junit file that cannot be written is a usage error before any test runs, and leaves "
+    "nothing behind",
+    "[scenario]") {
+  const test::TempDir scratch;
+  fs::copy_file(kSourceDir / "configs/paper/walk_and_kick.yaml", scratch / "robot.yaml");
+  const std::string config_text = test::read_text(scratch / "robot.yaml");
+  const fs::path test_file = scratch / "robot.test.yaml";
+  test::write_text(test_file, "arbiter_test: 1\nconfig: robot.yaml\nexpect: []\nsteps: 2\n");
+  fs::create_directory(scratch / "a_directory");
+  const auto listing = [&] {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::recursive_directory_iterator(scratch.path())) {
+      names.push_back(entry.path().lexically_relative(scratch.path()).string());
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  const auto before = listing();
+  const auto junit = [&](const fs::path& xml) {
+    return run_cli("test \"" + test_file.string() + "\" --junit \"" + xml.string() + "\"");
+  };
+
+  std::vector<std::pair<fs::path, std::string>> unwritable = {
+      {scratch / "no_such_dir" / "junit.xml", "No such file or directory"},
+      {scratch / "a_directory", "Is a directory"},
+  };
+  // Root writes into a read-only directory all the same.
+  if (::geteuid() != 0) {
+    fs::create_directory(scratch / "read_only");
+    fs::permissions(scratch / "read_only", fs::perms::owner_read | fs::perms::owner_exec);
+    unwritable.emplace_back(scratch / "read_only" / "junit.xml", "Permission denied");
+  }
+  for (const auto& [xml, why] : unwritable) {
+    INFO(xml.string());
+    const auto result = junit(xml);
+    CHECK(result.exit_code == 2);
+    CHECK(result.err == "arbiter test: cannot write '" + xml.string() + "': " + why + "\n");
+    // Refused before the tests: not one of them ran (no line for it, no counts).
+    CHECK(result.out.empty());
+  }
+  if (::geteuid() != 0) fs::remove(scratch / "read_only");
+  CHECK(listing() == before);
+
+  // Refused after the tests ran, as the file is one a test names: the check made no file there.
+  const auto refused = junit(scratch / "robot.yaml");
+  CHECK(refused.exit_code == 2);
+  CHECK(refused.err.find("writing it would destroy it") != std::string::npos);
+  CHECK(test::read_text(scratch / "robot.yaml") == config_text);
+  CHECK(listing() == before);
+
+  CHECK(junit(scratch / "junit.xml").exit_code == 0);
+  auto written = before;
+  written.push_back("junit.xml");
+  std::sort(written.begin(), written.end());
+  CHECK(listing() == written);
+  CHECK(test::read_text(scratch / "junit.xml").find("<testcase name=\"robot\"") !=
+        std::string::npos);
 }

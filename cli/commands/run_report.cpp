@@ -76,10 +76,15 @@ void RunReport::on_reload(const Manager& manager) {
   active_steps_.assign(program.behaviours.size(), 0);
   was_active_.assign(program.behaviours.size(), 0);
   for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
-    const auto found = counted.find(keys_[b]);
-    if (found != counted.end()) {
+    if (const auto found = counted.find(keys_[b]); found != counted.end()) {
       active_steps_[b] = found->second;
       counted.erase(found);
+    } else if (const auto removed = removed_steps_.find(keys_[b]);
+               removed != removed_steps_.end()) {
+      // Added back after a reload removed it: one behaviour to the summary, its steps before
+      // counted with those to come, not listed again as removed.
+      active_steps_[b] = removed->second;
+      removed_steps_.erase(removed);
     }
     // The manager carries activity over for what it keeps: a change shows from the next step.
     was_active_[b] = manager.active(b) ? 1 : 0;
@@ -223,7 +228,8 @@ void RunReport::on_finish(const Manager& manager) {
   for (const auto& [event, count] : event_counts_) {
     print(fmt::format("{} ({} time{})\n", event, count, count == 1 ? "" : "s"));
   }
-  if (program.behaviours.empty()) return;
+  // Those a reload removed are listed too when it removed them all.
+  if (program.behaviours.empty() && removed_steps_.empty()) return;
   print("Active steps per behaviour:\n");
   for (std::uint32_t b = 0; b < program.behaviours.size(); ++b) {
     print(fmt::format(

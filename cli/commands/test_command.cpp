@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "commands/command.hpp"
 #include "commands/output_file.hpp"
@@ -112,6 +112,16 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
   for (const auto& file : files) read.push_back({file, "a test file"});
   const std::vector<CommandOutput> written = {{command.junit, "--junit"}};
   if (!outputs_allowed("test", written, read, err)) return kExitUsage;
+  // Opened before the tests run, which can take minutes, so that a place it cannot be written is
+  // said at once; put in place at the end, so that a refused run leaves no file there.
+  std::optional<AtomicFile> xml;
+  if (!command.junit.empty()) {
+    xml.emplace(command.junit);
+    if (!xml->open()) {
+      err << fmt::format("arbiter test: {}\n", xml->error());
+      return kExitUsage;
+    }
+  }
   std::vector<ScenarioResult> results;
   std::size_t passed = 0;
   std::size_t failed = 0;
@@ -147,12 +157,11 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
     }
   }
   if (!outputs_allowed("test", written, read, err)) return kExitUsage;
-  if (!command.junit.empty()) {
-    std::ofstream xml(command.junit, std::ios::binary);
-    xml << junit_xml(results);
-    if (!xml) {
-      err << fmt::format("arbiter test: cannot write '{}': {}\n", command.junit,
-                         why_not_writable(command.junit));
+  if (xml) {
+    // The report first: the file may be standard output's, written after what the run printed.
+    out.flush();
+    if (!xml->write(junit_xml(results)) || !xml->commit()) {
+      err << fmt::format("arbiter test: {}\n", xml->error());
       return kExitUsage;
     }
   }
