@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 
 #include "commands/command.hpp"
@@ -148,11 +147,9 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
   }
   if (!outputs_allowed("test", written, read, err)) return kExitUsage;
   if (!command.junit.empty()) {
-    std::ofstream xml(command.junit, std::ios::binary);
-    xml << junit_xml(results);
-    if (!xml) {
-      err << fmt::format("arbiter test: cannot write '{}': {}\n", command.junit,
-                         why_not_writable(command.junit));
+    OutputStream xml;
+    if (!xml.open(command.junit) || !(xml << junit_xml(results) << std::flush)) {
+      err << fmt::format("arbiter test: cannot write '{}': {}\n", command.junit, xml.error());
       return kExitUsage;
     }
   }
