@@ -6,23 +6,97 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
+#include <charconv>
 #include <cstring>
 #include <filesystem>
+#include <streambuf>
 
 namespace arbiter::cli {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+/// What is held before it is written: a replay's trace comes a step at a time.
+constexpr std::size_t kBuffered = 64 * 1024;
+
+bool write_all(int fd, std::string_view text) {
+  while (!text.empty()) {
+    const auto written = ::write(fd, text.data(), text.size());
+    if (written < 0 && errno == EINTR) continue;
+    if (written <= 0) return false;
+    text.remove_prefix(static_cast<std::size_t>(written));
+  }
+  return true;
+}
+
+/// The descriptor `name` (absolute) names by its form alone, or -1.
+int descriptor_by_name(const fs::path& name) {
+  const std::string text = name.lexically_normal().string();
+  constexpr std::array<std::string_view, 3> kStandard = {"/dev/stdin", "/dev/stdout",
+                                                         "/dev/stderr"};
+  for (std::size_t fd = 0; fd < kStandard.size(); ++fd) {
+    if (text == kStandard[fd]) return static_cast<int>(fd);
+  }
+  const std::string own = fmt::format("/proc/{}/fd/", ::getpid());
+  for (const std::string_view dir :
+       {std::string_view("/dev/fd/"), std::string_view("/proc/self/fd/"),
+        std::string_view("/proc/thread-self/fd/"), std::string_view(own)}) {
+    if (text.size() <= dir.size() || text.compare(0, dir.size(), dir) != 0) continue;
+    const char* first = text.data() + dir.size();
+    const char* last = text.data() + text.size();
+    int fd = -1;
+    const auto [end, error] = std::from_chars(first, last, fd);
+    // Digits alone: from_chars would take a sign.
+    if (*first >= '0' && *first <= '9' && error == std::errc() && end == last) return fd;
+  }
+  return -1;
+}
+
+}  // namespace
+
+int named_descriptor(const std::string& path) {
+  if (path.empty()) return -1;
+  // By the file too: the shell's `>FILE` with FILE named again is standard output's.
+  if (is_standard_output(path)) return STDOUT_FILENO;
+  std::error_code error;
+  fs::path place = fs::absolute(path, error);
+  if (error) return -1;
+  // Named before its link is read: /dev/fd/N reads as the file it is open on, which a path
+  // would open again.
+  for (int links = 0; links < 40; ++links) {
+    if (const int fd = descriptor_by_name(place); fd >= 0) return fd;
+    if (!fs::is_symlink(fs::symlink_status(place, error))) break;
+    const fs::path target = fs::read_symlink(place, error);
+    if (error) break;
+    place = target.is_absolute() ? target : place.parent_path() / target;
+  }
+  return -1;
+}
+
+int open_output(const std::string& path) {
+  const int named = named_descriptor(path);
+  if (named < 0) return ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  const int flags = ::fcntl(named, F_GETFL);
+  if (flags < 0) return -1;  // EBADF: not open
+  if ((flags & O_ACCMODE) == O_RDONLY) {
+    errno = EBADF;
+    return -1;
+  }
+  return ::fcntl(named, F_DUPFD_CLOEXEC, 0);
+}
+
 OutputPlace output_place(const std::string& path) {
+  if (named_descriptor(path) >= 0) return {path, true};
   std::error_code error;
   // Looked at through every link first: one to a pipe (/dev/stdout, /proc/self/fd/1 -> pipe:[N])
   // leads nowhere a name could be followed to, and is written as it is named.
   const auto status = fs::status(path, error);
   if (fs::exists(status) && !fs::is_regular_file(status)) return {path, true};
-  // An open file descriptor (/dev/stdout, /dev/fd/N, /proc/self/fd/N) names the file the shell
-  // opened, and what else the command prints goes there too: it is written, not replaced.
+  // Nor can another process's descriptor (/proc/PID/fd/N) be renamed over: it is written.
   const auto descriptor = [](const fs::path& name) {
     return name.string().rfind("/proc/", 0) == 0;
   };
@@ -59,11 +133,61 @@ bool writes_standard_output(const std::vector<std::string>& outputs) {
   return std::any_of(outputs.begin(), outputs.end(), is_standard_output);
 }
 
-std::string why_not_writable(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0666);
-  if (fd < 0) return std::strerror(errno);
-  ::close(fd);
-  return "it could be opened when tried again";
+class OutputStream::Buffer : public std::streambuf {
+ public:
+  explicit Buffer(int fd) : fd_(fd), data_(kBuffered, '\0') { reset(); }
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  ~Buffer() override {
+    sync();
+    ::close(fd_);
+  }
+  int error() const { return error_; }
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (sync() != 0) return traits_type::eof();
+    if (!traits_type::eq_int_type(c, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(c);
+      pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  int sync() override {
+    if (error_ == 0 && !write_all(fd_, {pbase(), static_cast<std::size_t>(pptr() - pbase())})) {
+      error_ = errno != 0 ? errno : EIO;
+    }
+    reset();
+    return error_ == 0 ? 0 : -1;
+  }
+
+ private:
+  void reset() { setp(data_.data(), data_.data() + data_.size()); }
+
+  int fd_;
+  std::string data_;
+  int error_ = 0;  // the first: what follows it is its consequence
+};
+
+OutputStream::OutputStream() : std::ostream(nullptr) {}
+
+OutputStream::~OutputStream() = default;
+
+bool OutputStream::open(const std::string& path) {
+  const int fd = open_output(path);
+  if (fd < 0) {
+    open_error_ = errno;
+    setstate(std::ios::badbit);
+    return false;
+  }
+  buffer_ = std::make_unique<Buffer>(fd);
+  rdbuf(buffer_.get());
+  return true;
+}
+
+std::string OutputStream::error() const {
+  const int error = open_error_ != 0 ? open_error_ : buffer_ ? buffer_->error() : 0;
+  return std::strerror(error);
 }
 
 bool outputs_allowed(std::string_view command, const std::vector<CommandOutput>& outputs,
@@ -91,23 +215,6 @@ bool outputs_allowed(std::string_view command, const std::vector<CommandOutput>&
   return true;
 }
 
-namespace {
-
-/// What is held before it is written: a replay's trace comes a step at a time.
-constexpr std::size_t kBuffered = 64 * 1024;
-
-bool write_all(int fd, std::string_view text) {
-  while (!text.empty()) {
-    const auto written = ::write(fd, text.data(), text.size());
-    if (written < 0 && errno == EINTR) continue;
-    if (written <= 0) return false;
-    text.remove_prefix(static_cast<std::size_t>(written));
-  }
-  return true;
-}
-
-}  // namespace
-
 AtomicFile::AtomicFile(const std::string& path) : given_(path), place_(output_place(path)) {}
 
 AtomicFile::~AtomicFile() {
@@ -120,15 +227,9 @@ void AtomicFile::fail(int error) {
 }
 
 bool AtomicFile::open() {
-  if (is_standard_output(given_)) {
-    // Written through standard output's own open file (its offset, its O_APPEND), not one opened
-    // on it again.
-    place_ = {given_, true};
-    temp_ = given_;
-    fd_ = ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 0);
-  } else if (place_.in_place) {
+  if (place_.in_place) {
     temp_ = place_.path;
-    fd_ = ::open(temp_.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+    fd_ = open_output(temp_);
   } else {
     const auto slash = place_.path.rfind('/');
     const std::string dir = slash == std::string::npos ? "." : place_.path.substr(0, slash);

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <iostream>
 #include <limits>
 
@@ -547,10 +546,9 @@ int plot_command(const Options& options) {
     std::cout << svg;
     return kExitOk;
   }
-  std::ofstream out(options.output, std::ios::binary | std::ios::trunc);
-  if (!(out << svg << std::flush)) {
-    std::cerr << fmt::format("arbiter plot: cannot write '{}': {}\n", options.output,
-                             why_not_writable(options.output));
+  OutputStream out;
+  if (!out.open(options.output) || !(out << svg << std::flush)) {
+    std::cerr << fmt::format("arbiter plot: cannot write '{}': {}\n", options.output, out.error());
     return kExitUsage;
   }
   return kExitOk;

@@ -1,14 +1,13 @@
 // `arbiter run`: a config stepped, paced or flat out, with its trace, recording, report, watcher
 // live view and Foxglove server attached as observers of the manager.
 
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <chrono>
-#include <fstream>
+#include <cstring>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -77,15 +76,15 @@ int run_command(const Options& options) {
   const std::uint64_t steps =
       options.steps_given || options.watch || program->steps == 0 ? options.steps : program->steps;
 
-  std::ofstream trace_file;
+  OutputStream trace_file;
   std::ostream* trace_out = nullptr;
   if (is_standard_output(options.trace_path)) {
+    // Through std::cout, which a watched run's status line is cleared from before it is written.
     trace_out = &std::cout;
   } else if (!options.trace_path.empty()) {
-    trace_file.open(options.trace_path, std::ios::binary | std::ios::trunc);
-    if (!trace_file) {
+    if (!trace_file.open(options.trace_path)) {
       std::cerr << fmt::format("arbiter run: cannot write trace '{}': {}\n", options.trace_path,
-                               why_not_writable(options.trace_path));
+                               trace_file.error());
       return kExitUsage;
     }
     trace_out = &trace_file;
@@ -126,19 +125,14 @@ int run_command(const Options& options) {
     info.diagnostics = load_diagnostics.items();
     const auto ring_full =
         options.realtime ? arbiter::RingFull::kDropStep : arbiter::RingFull::kWaitForWriter;
-    if (is_standard_output(options.record_path)) {
-      // Through standard output's own open file: opened again, /dev/stdout would be truncated,
-      // and written from its start, where the shell appends.
-      recorder = std::make_unique<arbiter::Recorder>(::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 0),
-                                                     options.record_path, std::move(info),
-                                                     arbiter::Recorder::kSlots, ring_full);
-    } else {
-      recorder = std::make_unique<arbiter::Recorder>(options.record_path, std::move(info),
-                                                     arbiter::Recorder::kSlots, ring_full);
-    }
+    const int fd = open_output(options.record_path);
+    const int open_error = errno;
+    recorder = std::make_unique<arbiter::Recorder>(fd, options.record_path, std::move(info),
+                                                   arbiter::Recorder::kSlots, ring_full);
     if (!recorder->ok()) {
       std::cerr << fmt::format("arbiter run: cannot write recording '{}': {}\n",
-                               options.record_path, recorder->error());
+                               options.record_path,
+                               fd < 0 ? std::strerror(open_error) : recorder->error());
       return kExitUsage;
     }
     recorder->set_flush_interval(options.record_flush);
@@ -285,7 +279,8 @@ int run_command(const Options& options) {
   if (live) live->serve_until(manager, interrupted);
   if (foxglove) foxglove_after_run(*foxglove, "run", out, std::cerr);
   if (trace_out != nullptr && !trace_out->flush()) {
-    std::cerr << fmt::format("arbiter run: writing trace '{}' failed\n", options.trace_path);
+    std::cerr << fmt::format("arbiter run: writing trace '{}' failed{}\n", options.trace_path,
+                             trace_out == &trace_file ? ": " + trace_file.error() : "");
     return kExitInvalid;
   }
   if (recorder && recorder->failed()) {

@@ -1,7 +1,8 @@
 #!/bin/bash
 # An output named as standard output (/dev/stdout, or the file the shell sent it to) is written
 # through it, whole, and alone: what the command says besides (its report, its summary) goes to
-# standard error, so that the file holds a trace or a recording that reads back.
+# standard error, so that the file holds a trace or a recording that reads back. One named as
+# another descriptor the shell opened (/dev/fd/3) is written through it too.
 set -eu
 cli=$1
 source_dir=$2
@@ -66,4 +67,76 @@ for command in "run $config --steps 30" "replay $work/run.mcap"; do
   grep -q "replayed 30 steps of .*: identical" "$work/out.txt" ||
     fail "$command: the recording appended to stdout does not replay"
 done
+
+# An output named by another descriptor the shell opened (/dev/fd/N, /proc/self/fd/N, a link to
+# one) is written through it, as standard output is: appended to when the shell appends (3>>FILE),
+# from where the shell left it otherwise (3>FILE); never opened again, nor renamed over. Twice, to
+# see the second run append to the first.
+for command in "run $config --steps 30 -q" "replay $work/run.mcap"; do
+  for name in /dev/fd/3 /proc/self/fd/3; do
+    echo previous >"$work/fd.jsonl"
+    for _ in 1 2; do
+      # shellcheck disable=SC2086  # the command's words
+      "$cli" $command --trace "$name" 3>>"$work/fd.jsonl" >"$work/out.txt" 2>"$work/err.txt" ||
+        fail "$command --trace $name 3>>FILE failed"
+    done
+    [[ $(head -1 "$work/fd.jsonl") == previous ]] ||
+      fail "$command --trace $name: the file appended to was truncated"
+    [[ $(grep -c '^{"arbiter_trace": 1' "$work/fd.jsonl") == 2 ]] ||
+      fail "$command --trace $name: the file does not hold both traces"
+    tail -n +2 "$work/fd.jsonl" | head -31 >"$work/fd_first.jsonl"
+    expect_exit 0 "$cli" diff "$work/fd_first.jsonl" "$work/direct.jsonl"
+    grep -q "identical: 30 steps" "$work/out.txt" ||
+      fail "$command --trace $name: the first trace appended is not whole"
+  done
+  printf 'previous\n' >"$work/fd.bin"
+  # shellcheck disable=SC2086  # the command's words
+  "$cli" $command --record /dev/fd/3 3>>"$work/fd.bin" >"$work/out.txt" 2>"$work/err.txt" ||
+    fail "$command --record /dev/fd/3 3>>FILE failed"
+  [[ $(head -c 9 "$work/fd.bin") == previous ]] ||
+    fail "$command: the recording's file was truncated"
+  tail -c +10 "$work/fd.bin" >"$work/fd.mcap"
+  expect_exit 0 "$cli" replay "$work/fd.mcap"
+  grep -q "replayed 30 steps of .*: identical" "$work/out.txt" ||
+    fail "$command: the recording appended to /dev/fd/3 does not replay"
+done
+# Opened by the shell without appending, written from where the shell left it.
+{
+  echo previous >&3
+  "$cli" run "$config" --steps 30 -q --trace /dev/fd/3 || fail "the run to 3>FILE failed"
+} 3>"$work/fd.jsonl"
+[[ $(head -1 "$work/fd.jsonl") == previous ]] ||
+  fail "what the shell wrote to 3>FILE was written over"
+tail -n +2 "$work/fd.jsonl" >"$work/fd_first.jsonl"
+expect_exit 0 "$cli" diff "$work/fd_first.jsonl" "$work/direct.jsonl"
+grep -q "identical: 30 steps" "$work/out.txt" || fail "the trace written to 3>FILE is not whole"
+# Through a link to /dev/fd/3, which stays a link.
+ln -s /dev/fd/3 "$work/fd_link"
+echo previous >"$work/fd.jsonl"
+"$cli" replay "$work/run.mcap" --trace "$work/fd_link" 3>>"$work/fd.jsonl" >/dev/null ||
+  fail "the replay to a link to /dev/fd/3 failed"
+[[ -L $work/fd_link && $(head -1 "$work/fd.jsonl") == previous ]] ||
+  fail "the link to /dev/fd/3 was replaced, or its file truncated"
+# A plot and a test's JUnit report too.
+echo previous >"$work/fd.svg"
+"$cli" plot "$work/direct.jsonl" -o /dev/fd/3 3>>"$work/fd.svg" || fail "the plot to 3>>FILE failed"
+[[ $(head -1 "$work/fd.svg") == previous ]] ||
+  fail "the file the plot was appended to was truncated"
+grep -q '</svg>' "$work/fd.svg" || fail "the plot appended is not whole"
+echo previous >"$work/fd.xml"
+"$cli" test "$source_dir/tests/scenarios/paper/scripted_levels_by_step.test.yaml" \
+  --junit /dev/fd/3 3>>"$work/fd.xml" >/dev/null || fail "the test with --junit 3>>FILE failed"
+[[ $(head -1 "$work/fd.xml") == previous ]] ||
+  fail "the file the JUnit report was appended to was truncated"
+grep -q '</testsuites>' "$work/fd.xml" || fail "the JUnit report appended is not whole"
+# A descriptor that is not open, or not for writing, is refused with why, before anything runs:
+# never the file it was opened on, opened again.
+expect_exit 2 "$cli" run "$config" --steps 5 --trace /dev/fd/9
+grep -qx "arbiter run: cannot write trace '/dev/fd/9': Bad file descriptor" "$work/err.txt" ||
+  fail "no reason why a closed descriptor cannot be written"
+echo kept >"$work/read_only.txt"
+expect_exit 2 "$cli" replay "$work/run.mcap" --record /dev/fd/3 3<"$work/read_only.txt"
+grep -qx "arbiter replay: cannot write '/dev/fd/3': Bad file descriptor" "$work/err.txt" ||
+  fail "no reason why a descriptor open for reading cannot be written"
+[[ $(cat "$work/read_only.txt") == kept ]] || fail "the file open for reading was written"
 echo ok
