@@ -158,7 +158,8 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
   }
   if (!outputs_allowed("test", written, read, err)) return kExitUsage;
   if (xml) {
-    // The report first: the file may be standard output's, written after what the run printed.
+    // The report first: the file may be where the report went (a file given as both), written
+    // after what the run printed.
     out.flush();
     if (!xml->write(junit_xml(results)) || !xml->commit()) {
       err << fmt::format("arbiter test: {}\n", xml->error());
@@ -175,7 +176,10 @@ int test_command(Options& options) {
   options.test.options.limits = load_options_of(options).limits;
   // The report is on stdout: coloured when that is a terminal.
   options.test.format = FormatOptions::readable(use_color(options.color, stdout));
-  return run_tests(options.test, registry, std::cout, std::cerr);
+  // The report on standard error when standard output is taken by the JUnit file, as run's with
+  // a trace there: `--junit /dev/stdout > results.xml` leaves XML alone in results.xml.
+  std::ostream& report = writes_standard_output({options.test.junit}) ? std::cerr : std::cout;
+  return run_tests(options.test, registry, report, std::cerr);
 }
 
 }  // namespace arbiter::cli

@@ -129,6 +129,13 @@ echo previous >"$work/fd.xml"
 [[ $(head -1 "$work/fd.xml") == previous ]] ||
   fail "the file the JUnit report was appended to was truncated"
 grep -q '</testsuites>' "$work/fd.xml" || fail "the JUnit report appended is not whole"
+# test: the JUnit report alone on standard output, the test's report on stderr.
+expect_exit 0 "$cli" test "$source_dir/tests/scenarios/paper/scripted_levels_by_step.test.yaml" \
+  --junit /dev/stdout
+[[ $(head -c 5 "$work/out.txt") == "<?xml" ]] || fail "the JUnit report on stdout is not XML alone"
+grep -q '</testsuites>' "$work/out.txt" || fail "the JUnit report on stdout is not whole"
+grep -q "^PASS " "$work/err.txt" || fail "the test's report is not on stderr"
+grep -q "1 passed, 0 failed, 0 invalid" "$work/err.txt" || fail "the test's counts are not on stderr"
 # A descriptor that is not open, or not for writing, is refused with why, before anything runs:
 # never the file it was opened on, opened again.
 expect_exit 2 "$cli" run "$config" --steps 5 --trace /dev/fd/9
