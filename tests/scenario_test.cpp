@@ -22,10 +22,11 @@ namespace {
 const fs::path kSourceDir = ARBITER_SOURCE_DIR;
 const fs::path kScenarios = kSourceDir / "tests" / "data" / "scenarios";
 
-/// Runs `arbiter ARGUMENTS` in the source directory, so that paths in the output are relative.
-test::CliResult run_cli(const std::string& arguments) {
-  return test::run_captured("cd \"" + kSourceDir.string() + "\" && \"" + std::string(ARBITER_CLI) +
-                            "\" " + arguments);
+/// Runs `arbiter ARGUMENTS` in the source directory, so that paths in the output are relative;
+/// `environment` (NAME=VALUE ...) before it.
+test::CliResult run_cli(const std::string& arguments, const std::string& environment = "") {
+  return test::run_captured("cd \"" + kSourceDir.string() + "\" && " + environment + "\"" +
+                            std::string(ARBITER_CLI) + "\" " + arguments);
 }
 
 std::vector<fs::path> scenarios_in(const fs::path& dir) {
@@ -252,4 +253,23 @@ TEST_CASE(
   CHECK(listing() == written);
   CHECK(test::read_text(scratch / "junit.xml").find("<testcase name=\"robot\"") !=
         std::string::npos);
+}
+
+TEST_CASE(
+    "a failing test is explained from its run's trace, kept in a temporary file that goes "
+    "with the test, or in memory where none can be made",
+    "[scenario]") {
+  // The trace of a test's run is kept for the explanations of what failed; a test of millions of
+  // steps must not hold it in memory.
+  const test::TempDir scratch;
+  const std::string failing = "tests/data/scenarios/failing/substituted_kick.test.yaml";
+  const std::string explained =
+      "behaviour go_behind_ball (layer control) at step 10: active, activation 1";
+  for (const fs::path& temp : {scratch.path(), scratch.path() / "no_such_dir"}) {
+    INFO("TMPDIR=" << temp.string());
+    const auto result = run_cli("test " + failing + " ", "TMPDIR=\"" + temp.string() + "\" ");
+    CHECK(result.exit_code == 1);
+    CHECK(result.out.find(explained) != std::string::npos);
+  }
+  CHECK(fs::is_empty(scratch.path()));
 }

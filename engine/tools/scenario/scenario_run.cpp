@@ -2,8 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <stdlib.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -22,12 +26,54 @@
 namespace arbiter {
 namespace {
 
-std::string explain_at(const Program& program, const std::string& trace, std::uint64_t step,
+// A test's trace, kept for explain() when an expectation fails: in a file of its own, removed
+// with it, not in memory, as a test may run millions of steps (some 700 bytes each for a small
+// config; 1.2 million steps held 800 MB). Where no temporary file can be made, in memory.
+class KeptTrace {
+ public:
+  KeptTrace() {
+    std::error_code error;
+    const auto directory = std::filesystem::temp_directory_path(error);
+    if (error) return;
+    std::string name = (directory / "arbiter-test-XXXXXX").string();
+    const int fd = ::mkstemp(name.data());
+    if (fd < 0) return;
+    ::close(fd);
+    path_ = name;
+    file_.open(path_, std::ios::binary | std::ios::trunc);
+    if (!file_) remove();
+  }
+  ~KeptTrace() { remove(); }
+  KeptTrace(const KeptTrace&) = delete;
+  KeptTrace& operator=(const KeptTrace&) = delete;
+
+  std::ostream& out() { return path_.empty() ? static_cast<std::ostream&>(memory_) : file_; }
+  /// The trace from its start; written up to here.
+  std::unique_ptr<std::istream> read() {
+    if (path_.empty()) return std::make_unique<std::istringstream>(memory_.str());
+    file_.flush();
+    return std::make_unique<std::ifstream>(path_, std::ios::binary);
+  }
+
+ private:
+  void remove() {
+    if (path_.empty()) return;
+    file_.close();
+    std::error_code error;
+    std::filesystem::remove(path_, error);
+    path_.clear();
+  }
+  std::string path_;
+  std::ofstream file_;
+  std::ostringstream memory_;
+};
+
+std::string explain_at(const Program& program, KeptTrace& trace, std::uint64_t step,
                        const std::vector<std::string>& targets) {
   std::string out;
   for (const auto& target : targets) {
-    std::istringstream in(trace);
-    const auto explanation = explain(program, in, step, target);
+    const auto in = trace.read();
+    const auto explanation = explain(program, *in, step, target);
     if (explanation.status == Explanation::Status::kOk) out += explanation.text;
   }
   return out;
@@ -246,8 +292,8 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
   result.expectations = checks.size() + traces.size();
 
   Manager manager(std::move(*program));
-  std::ostringstream trace;  // for explain(), when an expectation fails
-  TraceWriter writer(trace);
+  KeptTrace trace;  // for explain(), when an expectation fails
+  TraceWriter writer(trace.out());
   manager.add_observer(writer);
   while (manager.steps() < steps && !manager.stopped()) {
     manager.step();
@@ -259,7 +305,6 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
   result.steps = manager.steps();
   traces.finish(result.steps);
 
-  const std::string text = trace.str();
   for (const auto& failed : checks.failures()) {
     const Expectation& expectation = scenario.expectations[failed.expectation];
     result.failures.push_back(
@@ -267,7 +312,7 @@ ScenarioResult run_scenario(const Scenario& scenario, Registry& registry,
                    failed.explain.empty()
                        ? fmt::format("no behaviour that writes '{}' was active at step {}\n",
                                      expectation.target.text, failed.step)
-                       : explain_at(manager.program(), text, failed.step, failed.explain)));
+                       : explain_at(manager.program(), trace, failed.step, failed.explain)));
   }
   for (const auto& failed : traces.failures()) {
     const TraceExpectation& expectation = scenario.trace_expectations[failed.expectation];
