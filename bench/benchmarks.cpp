@@ -217,12 +217,12 @@ struct GatedObserver : Observer {
 
 /// `manager`'s steps at a robot's pace, a step every 500 µs, each timed alone by the wall clock
 /// (a vDSO read here, about 27 ns), the one handed on by `gate` and the one not in turn, on CPU
-/// 0; counters: their medians and the overhead. Between two steps the thread sleeps, as a paced
-/// run does, so a step does not find the caches as the step before left them: an observer's
-/// cost where it runs. Medians, so that a step that an interrupt or the observer's other thread
-/// met does not count. One manager takes both kinds of step: two managers of the same program
-/// differ by where their memory lies, and that alone made one's step up to 12 % slower than the
-/// other's with nothing observed. An observed step carries what changed over two steps, a
+/// 0; counters: their medians, the overhead and the paired overhead. Between two steps the thread
+/// sleeps, as a paced run does, so a step does not find the caches as the step before left them: an
+/// observer's cost where it runs. Medians, so that a step that an interrupt or the observer's other
+/// thread met does not count. One manager takes both kinds of step: two managers of the same
+/// program differ by where their memory lies, and that alone made one's step up to 12 % slower than
+/// the other's with nothing observed. An observed step carries what changed over two steps, a
 /// little more than one observing every step copies.
 void paced_steps(benchmark::State& state, Manager& manager, GatedObserver& gate) {
   constexpr std::size_t kSteps = 200;  // of each, per iteration
