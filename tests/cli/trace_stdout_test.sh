@@ -53,6 +53,14 @@ grep -q "simulated 3.00 s" "$work/err.txt" || fail "the run's summary is not on 
 expect_exit 0 "$cli" replay "$work/run2.mcap"
 grep -q "replayed 30 steps of .*: identical" "$work/out.txt" ||
   fail "the run's recording written to stdout does not replay"
+# FILE holds "previous", then a whole recording of 30 steps that replays as recorded.
+check_appended_recording() {  # WHAT FILE
+  [[ $(head -c 9 "$2") == previous ]] || fail "$1: the file appended to was truncated"
+  tail -c +10 "$2" >"$work/appended.mcap"
+  expect_exit 0 "$cli" replay "$work/appended.mcap"
+  grep -q "replayed 30 steps of .*: identical" "$work/out.txt" ||
+    fail "$1: the recording appended does not replay"
+}
 # A recording appended to standard output's file keeps what was there, and follows it whole, from
 # run and from replay.
 for command in "run $config --steps 30" "replay $work/run.mcap"; do
@@ -60,12 +68,7 @@ for command in "run $config --steps 30" "replay $work/run.mcap"; do
   # shellcheck disable=SC2086  # the command's words
   "$cli" $command --record /dev/stdout >>"$work/appended.bin" 2>"$work/err.txt" ||
     fail "$command, recording appended to stdout, failed"
-  [[ $(head -c 9 "$work/appended.bin") == previous ]] ||
-    fail "$command: the file appended to was truncated"
-  tail -c +10 "$work/appended.bin" >"$work/appended.mcap"
-  expect_exit 0 "$cli" replay "$work/appended.mcap"
-  grep -q "replayed 30 steps of .*: identical" "$work/out.txt" ||
-    fail "$command: the recording appended to stdout does not replay"
+  check_appended_recording "$command --record /dev/stdout" "$work/appended.bin"
 done
 
 # An output named by another descriptor the shell opened (/dev/fd/N, /proc/self/fd/N, a link to
@@ -93,12 +96,7 @@ for command in "run $config --steps 30 -q" "replay $work/run.mcap"; do
   # shellcheck disable=SC2086  # the command's words
   "$cli" $command --record /dev/fd/3 3>>"$work/fd.bin" >"$work/out.txt" 2>"$work/err.txt" ||
     fail "$command --record /dev/fd/3 3>>FILE failed"
-  [[ $(head -c 9 "$work/fd.bin") == previous ]] ||
-    fail "$command: the recording's file was truncated"
-  tail -c +10 "$work/fd.bin" >"$work/fd.mcap"
-  expect_exit 0 "$cli" replay "$work/fd.mcap"
-  grep -q "replayed 30 steps of .*: identical" "$work/out.txt" ||
-    fail "$command: the recording appended to /dev/fd/3 does not replay"
+  check_appended_recording "$command --record /dev/fd/3" "$work/fd.bin"
 done
 # Opened by the shell without appending, written from where the shell left it.
 {
