@@ -158,8 +158,8 @@ int run_tests(const TestCommand& command, Registry& registry, std::ostream& out,
   }
   if (!outputs_allowed("test", written, read, err)) return kExitUsage;
   if (xml) {
-    // The report first: the file may be where the report went (a file given as both), written
-    // after what the run printed.
+    // The report first: where both reach one file (`--junit /dev/stderr 2>&1`), it stays before
+    // the XML.
     out.flush();
     if (!xml->write(junit_xml(results)) || !xml->commit()) {
       err << fmt::format("arbiter test: {}\n", xml->error());
@@ -174,12 +174,13 @@ int test_command(Options& options) {
   auto registry = make_registry();
   options.test.options.plugins = load_options_of(options).plugins;
   options.test.options.limits = load_options_of(options).limits;
-  // The report is on stdout: coloured when that is a terminal.
-  options.test.format = FormatOptions::readable(use_color(options.color, stdout));
   // The report on standard error when standard output is taken by the JUnit file, as run's with
-  // a trace there: `--junit /dev/stdout > results.xml` leaves XML alone in results.xml.
-  std::ostream& report = writes_standard_output({options.test.junit}) ? std::cerr : std::cout;
-  return run_tests(options.test, registry, report, std::cerr);
+  // a trace there: `--junit /dev/stdout > results.xml` leaves XML alone in results.xml. Coloured
+  // when where it goes is a terminal.
+  const bool report_on_stderr = writes_standard_output({options.test.junit});
+  options.test.format =
+      FormatOptions::readable(use_color(options.color, report_on_stderr ? stderr : stdout));
+  return run_tests(options.test, registry, report_on_stderr ? std::cerr : std::cout, std::cerr);
 }
 
 }  // namespace arbiter::cli

@@ -134,6 +134,22 @@ expect_exit 0 "$cli" test "$source_dir/tests/scenarios/paper/scripted_levels_by_
 grep -q '</testsuites>' "$work/out.txt" || fail "the JUnit report on stdout is not whole"
 grep -q "^PASS " "$work/err.txt" || fail "the test's report is not on stderr"
 grep -q "1 passed, 0 failed, 0 invalid" "$work/err.txt" || fail "the test's counts are not on stderr"
+# Its colours follow where the report goes, as that is a terminal or not (a pty from script(1);
+# skipped where there is none): the JUnit file on a terminal's stdout sends the report, plain, to
+# a file on stderr; on a file's stdout, to the terminal on stderr, coloured.
+if command -v script >/dev/null && script -qec true /dev/null >/dev/null 2>&1; then
+  failing=$source_dir/tests/data/scenarios/failing/substituted_kick.test.yaml
+  # shellcheck disable=SC2016  # expanded by the shell script(1) starts
+  env -u NO_COLOR ARBITER_CLI="$cli" TEST="$failing" ERR="$work/report.txt" TERM=xterm script -qfec \
+    '"$ARBITER_CLI" test "$TEST" --junit /dev/stdout 2>"$ERR"' /dev/null >/dev/null || true
+  grep -q "^FAIL " "$work/report.txt" || fail "the report under a terminal's stdout is not on stderr"
+  ! grep -q $'\e\\[' "$work/report.txt" || fail "the report to a file on stderr is coloured"
+  # shellcheck disable=SC2016  # expanded by the shell script(1) starts
+  env -u NO_COLOR ARBITER_CLI="$cli" TEST="$failing" XML="$work/report.xml" TERM=xterm script -qfec \
+    '"$ARBITER_CLI" test "$TEST" --junit /dev/stdout >"$XML"' /dev/null >"$work/tty.txt" || true
+  grep -q $'\e\\[' "$work/tty.txt" || fail "the report to a terminal on stderr is not coloured"
+  [[ $(head -c 5 "$work/report.xml") == "<?xml" ]] || fail "the JUnit report on stdout is not XML"
+fi
 # A descriptor that is not open, or not for writing, is refused with why, before anything runs:
 # never the file it was opened on, opened again.
 expect_exit 2 "$cli" run "$config" --steps 5 --trace /dev/fd/9
