@@ -412,6 +412,20 @@ TEST_CASE("a step that a trace lacks is told with the steps the trace has, where
   result = run.on(cut, 9, "search_for_ball");
   CHECK(result.status == Explanation::Status::kNotFound);
   CHECK(result.text == "the trace has steps 3 to 6, not step 9");
+  // A state is told from the whole run, read to its end: the gap is still named by the steps
+  // around it.
+  const Explained goalie("configs/paper/goalie_plan.yaml", 12);
+  std::vector<std::string> goalie_lines;
+  std::istringstream goalie_in(goalie.trace);
+  for (std::string line; std::getline(goalie_in, line);) goalie_lines.push_back(line);
+  REQUIRE(goalie_lines.size() >= 13);
+  std::string gap;
+  for (std::size_t i = 0; i < goalie_lines.size(); ++i) {
+    if (i != 5) gap += goalie_lines[i] + "\n";
+  }
+  result = goalie.on(gap, 5, "goalie/walk_to_pose");
+  CHECK(result.status == Explanation::Status::kNotFound);
+  CHECK(result.text == "the trace has no step 5: it goes from step 4 to step 6");
 }
 
 TEST_CASE("a trace whose activation is not a number is noted, not taken as agreeing", "[explain]") {

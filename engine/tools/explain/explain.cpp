@@ -166,10 +166,12 @@ struct Records {
   Json current;
   Json next;
   std::uint64_t last_step = 0;
-  /// The first step record read, and the last one before the step asked for (0: none): a trace
-  /// need not start at step 1 (a run's own trace does), nor have every step (one edited by hand).
+  /// The first step record read, and those just before and after the step asked for (0: none):
+  /// a trace need not start at step 1 (a run's own trace does), nor have every step (one edited
+  /// by hand).
   std::uint64_t first_step = 0;
   std::uint64_t step_before = 0;
+  std::uint64_t step_after = 0;
   /// When `history_of` is set (a member of every step record, e.g. {"actuators", "kick"}): that
   /// member of each step, from the first step to the step asked for, or to the end of the run
   /// with `history_to_end`. An actuator's and a state's story is told from the steps around it.
@@ -238,6 +240,7 @@ std::optional<Explanation> read_trace(TraceSource& source, std::uint64_t step, R
     records.last_step = record.step;
     if (records.first_step == 0) records.first_step = record.step;
     if (record.step < step) records.step_before = record.step;
+    if (record.step > step && records.step_after == 0) records.step_after = record.step;
     Json* slot = record.step + 1 == step   ? &records.previous
                  : record.step == step     ? &records.current
                  : record.step == step + 1 ? &records.next
@@ -273,8 +276,9 @@ std::optional<Explanation> read_trace(const Program& program, TraceSource& sourc
     } else if (step < records.first_step) {
       why = fmt::format("the trace starts at step {}, after step {}", records.first_step, step);
     } else if (step < records.last_step) {
+      // The step after the gap, not the last read: a state's story reads to the end of the run.
       why = fmt::format("the trace has no step {}: it goes from step {} to step {}", step,
-                        records.step_before, records.last_step);
+                        records.step_before, records.step_after);
     } else {
       why = fmt::format("the trace has steps {} to {}, not step {}", records.first_step,
                         records.last_step, step);
