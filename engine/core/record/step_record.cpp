@@ -411,8 +411,8 @@ void StepImage::reset(const SnapshotShape& shape) {
 
 namespace {
 
-/// The step's picture, as drawn, into the block's room for pictures; where it lies, and its
-/// counts, into `scene_line`.
+/// The step's picture, as drawn, into the blocks' picture ring; where it lies, and its counts,
+/// into `scene_line`.
 void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last,
                      SnapshotShape::SceneLine& scene_line) {
   const auto& scene = manager.scene();
@@ -445,8 +445,6 @@ void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last
   if (last != nullptr) last->scene_cursor = scene_line.strings_at + string_bytes;
 }
 
-}  // namespace
-
 // The parts of a capture that a small graph's step does not need, each a function of its own,
 // out of line: at a robot's pace the capture's code is cold, and each line of it the step runs
 // through costs a miss. Those that few steps need (reports, values that are not plain bytes),
@@ -458,8 +456,6 @@ void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last
 #define ARBITER_OUT_OF_LINE
 #define ARBITER_SELDOM
 #endif
-
-namespace {
 
 ARBITER_OUT_OF_LINE void capture_changed_parts(const std::byte* now, const SnapshotShape& shape,
                                                std::byte* block, StepImage& last,
