@@ -895,7 +895,7 @@ int main(int argc, char** argv) {
       if (!options.foxglove.empty()) {
         foxglove = open_foxglove(options.foxglove, "replay", out, std::cerr);
         if (!foxglove) return kExitUsage;
-        replay.observers.push_back(foxglove.get());
+        replay.observers.push_back(&foxglove->observer());
         replay.paced = true;
         replay.stop = &interrupted;
         install_interrupt_handlers();

@@ -538,7 +538,7 @@ TEST_CASE("a step served to a subscribed Foxglove client allocates nothing on th
   std::ostringstream said;
   auto server = cli::FoxgloveServer::open("127.0.0.1", 0, "test", "arbiter test", said, said);
   REQUIRE(server);
-  manager.add_observer(*server);
+  manager.add_observer(server->observer());
   manager.step();
   test::FoxgloveSubscriber client(server->url());
   REQUIRE(client.connected());

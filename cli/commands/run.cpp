@@ -192,7 +192,7 @@ int run_command(const Options& options) {
     foxglove = open_foxglove(options.foxglove, "run", out, std::cerr);
     if (!foxglove) return kExitUsage;
     foxglove->set_paced(options.realtime);  // as the recording's log times (info.paced)
-    manager.add_observer(*foxglove);
+    manager.add_observer(foxglove->observer());
   }
   SteadyStepClock clock;
   manager.set_clock(&clock);

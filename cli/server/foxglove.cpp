@@ -42,12 +42,6 @@ constexpr auto kPoll = std::chrono::milliseconds(5);
 // The Foxglove WebSocket protocol's status levels.
 enum StatusLevel { kInfo = 0, kWarning = 1, kError = 2 };
 
-std::uint64_t wall_ns() {
-  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                        std::chrono::system_clock::now().time_since_epoch())
-                                        .count());
-}
-
 // Who the server's own log messages are from.
 constexpr const char* kServerName = "Foxglove server";
 
@@ -99,11 +93,9 @@ struct FoxgloveServer::Impl {
   };
   Waiter waiter{stopped};
   StepRing ring{kSlots, waiter};
-  std::atomic<bool> started{false};
-  // Some client is subscribed to a channel that steps feed: only then are steps captured; and
-  // to the scene: only then is the step's picture copied with it.
-  alignas(64) std::atomic<bool> wanted{false};
-  std::atomic<bool> picture_wanted{false};
+  // Captures a step only while some client is subscribed to a channel that steps feed, and its
+  // picture only while one is subscribed to the scene.
+  StepFeed feed{ring};
 
   // The server thread's.
   std::vector<Advertised> channels;
@@ -126,16 +118,6 @@ struct FoxgloveServer::Impl {
 
   std::atomic<std::size_t> connected{0};
   std::atomic<std::uint64_t> opened{0}, sent{0}, dropped_for_clients{0};
-
-  void capture(const Manager& manager) {
-    if (wanted.load(std::memory_order_relaxed)) {
-      ring.capture(manager, false, false,
-                   picture_wanted.load(std::memory_order_relaxed) ? CapturePicture::kCopy
-                                                                  : CapturePicture::kLeaveOut);
-    } else {
-      ring.skip();
-    }
-  }
 
   // The server's thread from here on.
   /// A warning about `client`: the first few (warn_at_most()).
@@ -205,8 +187,7 @@ struct FoxgloveServer::Impl {
     }
     // A step captured before the stepping thread sees a new scene subscriber's flag reads as one
     // that drew nothing: the subscriber's first picture, whole, comes with the next.
-    picture_wanted.store(picture, std::memory_order_relaxed);
-    wanted.store(any, std::memory_order_relaxed);
+    feed.want(any, picture);
   }
 
   /// Sends `payload` on `advertised` to every client subscribed to it, but to a client with
@@ -328,7 +309,7 @@ struct FoxgloveServer::Impl {
   }
   void send_step(const RingStep& step) {
     const auto wall =
-        step.timed() ? run_start + static_cast<std::uint64_t>(step.time() * 1e9) : wall_ns();
+        step.timed() ? run_start + static_cast<std::uint64_t>(step.time() * 1e9) : wall_clock_ns();
     const auto time = clock.time(step.step(), wall);
     advance_clock(time);
     const auto* log_channel = channel_at(kLogChannel);
@@ -629,7 +610,7 @@ std::unique_ptr<FoxgloveServer> FoxgloveServer::open(const std::string& host, in
                                                      std::ostream& err) {
   std::unique_ptr<FoxgloveServer> server(new FoxgloveServer());
   server->impl_->name = name;
-  server->impl_->wall_start = wall_ns();
+  server->impl_->wall_start = wall_clock_ns();
   std::string error;
   if (!server->impl_->start(host, port, error)) {
     err << fmt::format("arbiter {}: --foxglove: {}\n", command, error);
@@ -653,7 +634,7 @@ FoxgloveCounts FoxgloveServer::counts() const {
   counts.sent = impl_->sent.load();
   counts.dropped_for_slow_clients = impl_->dropped_for_clients.load();
   counts.dropped_steps = impl_->ring.dropped();
-  counts.started = impl_->started.load();
+  counts.started = impl_->feed.started();
   return counts;
 }
 
@@ -675,36 +656,8 @@ void FoxgloveServer::stop() {
   impl_->stop();
 }
 
-void FoxgloveServer::on_start(const Manager& manager) {
-  // Handed to the server's thread as a reload would be: it advertises the channels then.
-  impl_->ring.start(manager, wall_ns(), true);
-  impl_->started = true;
-}
-
-void FoxgloveServer::on_step(const Manager& manager) {
-  if (impl_->started) impl_->capture(manager);
-}
-
-void FoxgloveServer::on_safe(const Manager& manager) {
-  if (impl_->started) impl_->capture(manager);
-}
-
-void FoxgloveServer::on_staged(const Program& next, std::uint64_t stage) {
-  impl_->ring.stage(next, stage);
-}
-
-void FoxgloveServer::on_reload(const Manager& manager) {
-  // A header is never dropped: the steps after it are laid out by it.
-  if (impl_->started) impl_->ring.reload(manager, wall_ns());
-}
-
-void FoxgloveServer::on_retiring(const Program&) {
-  // The server's thread formats steps of the replaced program until it reaches the header.
-  impl_->ring.wait_for_headers();
-}
-
-void FoxgloveServer::on_finish(const Manager&) {
-  if (impl_->started) impl_->ring.settle();
+Observer& FoxgloveServer::observer() {
+  return impl_->feed;
 }
 
 }  // namespace arbiter::cli

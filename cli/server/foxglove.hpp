@@ -30,12 +30,12 @@ struct FoxgloveCounts {
   bool started = false;
 };
 
-/// The server. As an observer it only copies each step into a ring of slots laid out when the
-/// run starts (StepRing, the recorder's), and only while a client is subscribed; the server's own
-/// thread formats the step records and sends them. The stepping thread never waits for a client: a
-/// step finding the ring full is dropped, and a client that reads too slowly misses messages (both
-/// counted, the second also logged) rather than holding anything up.
-class FoxgloveServer : public Observer {
+/// The server. Its observer (observer()) only copies each step into a ring of slots laid out when
+/// the run starts (StepRing, the recorder's), and only while a client is subscribed; the server's
+/// own thread formats the step records and sends them. The stepping thread never waits for a
+/// client: a step finding the ring full is dropped, and a client that reads too slowly misses
+/// messages (both counted, the second also logged) rather than holding anything up.
+class FoxgloveServer {
  public:
   /// Steps that may wait for the server's thread.
   static constexpr std::size_t kSlots = 256;
@@ -50,7 +50,7 @@ class FoxgloveServer : public Observer {
   static std::unique_ptr<FoxgloveServer> open(const std::string& host, int port,
                                               std::string_view command, const std::string& name,
                                               std::ostream& out, std::ostream& err);
-  ~FoxgloveServer() override;
+  ~FoxgloveServer();
   FoxgloveServer(const FoxgloveServer&) = delete;
   FoxgloveServer& operator=(const FoxgloveServer&) = delete;
 
@@ -66,13 +66,9 @@ class FoxgloveServer : public Observer {
   /// Stops serving and closes every connection (the destructor does it too).
   void stop();
 
-  void on_start(const Manager& manager) override;
-  void on_step(const Manager& manager) override;
-  void on_safe(const Manager& manager) override;
-  void on_staged(const Program& next, std::uint64_t stage) override;
-  void on_reload(const Manager& manager) override;
-  void on_retiring(const Program& replaced) override;
-  void on_finish(const Manager& manager) override;
+  /// What to add to the manager (Manager::add_observer()) for the server to see its steps: a
+  /// StepFeed, the library's, so that a served step does not call into this code.
+  Observer& observer();
 
   struct Impl;
 

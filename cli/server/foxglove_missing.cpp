@@ -15,9 +15,13 @@ std::string foxglove_left_out() {
   return ARBITER_FOXGLOVE_LEFT_OUT;
 }
 
-struct FoxgloveServer::Impl {};
+struct FoxgloveServer::Impl {
+  struct Nothing : Observer {
+    void on_step(const Manager&) override {}
+  } nothing;
+};
 
-FoxgloveServer::FoxgloveServer() = default;
+FoxgloveServer::FoxgloveServer() : impl_(std::make_unique<Impl>()) {}
 FoxgloveServer::~FoxgloveServer() = default;
 
 std::unique_ptr<FoxgloveServer> FoxgloveServer::open(const std::string&, int,
@@ -40,12 +44,8 @@ std::string FoxgloveServer::summary(std::string_view) const {
   return "";
 }
 void FoxgloveServer::stop() {}
-void FoxgloveServer::on_start(const Manager&) {}
-void FoxgloveServer::on_step(const Manager&) {}
-void FoxgloveServer::on_safe(const Manager&) {}
-void FoxgloveServer::on_staged(const Program&, std::uint64_t) {}
-void FoxgloveServer::on_reload(const Manager&) {}
-void FoxgloveServer::on_retiring(const Program&) {}
-void FoxgloveServer::on_finish(const Manager&) {}
+Observer& FoxgloveServer::observer() {
+  return impl_->nothing;
+}
 
 }  // namespace arbiter::cli

@@ -14,6 +14,7 @@
 #include "arbiter/trace.hpp"
 #include "core/record/mcap.hpp"
 #include "core/record/step_record.hpp"
+#include "core/run/code_placement.hpp"
 
 namespace arbiter {
 
@@ -189,7 +190,7 @@ void Recorder::set_writer_period(const Program& program) {
   writer_period_us_.store(static_cast<std::int64_t>(period * 1e6));
 }
 
-void Recorder::on_step(const Manager& manager) {
+ARBITER_EVERY_STEP void Recorder::on_step(const Manager& manager) {
   if (!started_) return;
   ring_.capture(manager, false, ring_full_ == RingFull::kWaitForWriter);
 }

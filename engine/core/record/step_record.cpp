@@ -1,4 +1,5 @@
 #include "core/record/step_record.hpp"
+#include "core/run/code_placement.hpp"
 
 #include <fmt/format.h>
 #if defined(__SSE2__)
@@ -345,7 +346,7 @@ void copy_bytes(std::byte* to, const std::byte* from, std::size_t bytes) {
 
 // Whole cache lines from `from` to `to` (line-aligned), past the caches (SnapshotShape::streamed)
 // where the CPU can; else an ordinary copy.
-void stream_lines(std::byte* to, const std::byte* from, std::size_t bytes) {
+ARBITER_EVERY_STEP void stream_lines(std::byte* to, const std::byte* from, std::size_t bytes) {
 #if defined(__SSE2__)
   for (std::size_t line = 0; line < bytes; line += 64) {
     const auto* in = reinterpret_cast<const __m128i*>(from + line);
@@ -413,8 +414,8 @@ namespace {
 
 /// The step's picture, as drawn, into the blocks' picture ring; where it lies, and its counts,
 /// into `scene_line`.
-void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last,
-                     SnapshotShape::SceneLine& scene_line) {
+ARBITER_EVERY_STEP void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last,
+                                        SnapshotShape::SceneLine& scene_line) {
   const auto& scene = manager.scene();
   auto& scene_counts = scene_line.counts;
   scene_counts.primitives = static_cast<std::uint32_t>(manager.scene_primitive_count());
@@ -449,13 +450,6 @@ void capture_picture(const Manager& manager, SnapshotBlock into, StepImage* last
 // out of line: at a robot's pace the capture's code is cold, and each line of it the step runs
 // through costs a miss. Those that few steps need (reports, values that are not plain bytes),
 // apart from the rest of the code as well.
-#if defined(__GNUC__)
-#define ARBITER_OUT_OF_LINE __attribute__((noinline))
-#define ARBITER_SELDOM __attribute__((noinline, cold))
-#else
-#define ARBITER_OUT_OF_LINE
-#define ARBITER_SELDOM
-#endif
 
 ARBITER_OUT_OF_LINE void capture_changed_parts(const std::byte* now, const SnapshotShape& shape,
                                                std::byte* block, StepImage& last,
@@ -578,9 +572,10 @@ ARBITER_SELDOM bool capture_reports(const Manager& manager, const SnapshotShape&
 
 }  // namespace
 
-bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
-                  SnapshotBlock into, bool may_allocate, StepImage* last, bool chained,
-                  CapturePicture picture) {
+ARBITER_EVERY_STEP bool capture_step(const Manager& manager, const StepLayout& layout,
+                                     const SnapshotShape& shape, SnapshotBlock into,
+                                     bool may_allocate, StepImage* last, bool chained,
+                                     CapturePicture picture) {
   std::byte* block = into.main;
   // Written to the block last, whole: the block is cold, and never read here.
   SnapshotHeader header;
@@ -629,7 +624,7 @@ bool capture_step(const Manager& manager, const StepLayout& layout, const Snapsh
   return true;
 }
 
-void fence_streamed_stores() {
+ARBITER_EVERY_STEP void fence_streamed_stores() {
 #if defined(__SSE2__)
   _mm_sfence();
 #endif

@@ -9,6 +9,7 @@
 
 #include "arbiter/trace.hpp"
 #include "core/record/step_record.hpp"
+#include "core/run/code_placement.hpp"
 
 namespace arbiter {
 
@@ -199,8 +200,8 @@ void StepRing::start(const Manager& manager, std::uint64_t wall_time, bool annou
   impl.publish_header(slot, manager.steps(), 0, wall_time, std::move(generation));
 }
 
-bool StepRing::capture(const Manager& manager, bool may_allocate, bool wait,
-                       CapturePicture picture) {
+ARBITER_EVERY_STEP bool StepRing::capture(const Manager& manager, bool may_allocate, bool wait,
+                                          CapturePicture picture) {
   auto& impl = *impl_;
   settle();
   Slot* slot = wait ? impl.claim_waiting() : impl.claim();
@@ -228,7 +229,7 @@ void StepRing::skip() {
   impl_->chained = false;
 }
 
-void StepRing::settle() {
+ARBITER_EVERY_STEP void StepRing::settle() {
   auto& impl = *impl_;
   if (!impl.unpublished) return;
   detail::fence_streamed_stores();
@@ -371,6 +372,51 @@ std::uint64_t StepRing::header_reload() const {
 
 std::uint64_t StepRing::header_wall_time() const {
   return impl_->current->wall_time;
+}
+
+std::uint64_t wall_clock_ns() {
+  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::system_clock::now().time_since_epoch())
+                                        .count());
+}
+
+void StepFeed::on_start(const Manager& manager) {
+  // Handed to the reader as a reload would be: it learns the channels from the header.
+  ring_.start(manager, wall_clock_ns(), true);
+  started_.store(true, std::memory_order_release);
+}
+
+ARBITER_EVERY_STEP void StepFeed::on_step(const Manager& manager) {
+  if (!started_.load(std::memory_order_relaxed)) return;
+  if (wanted_.load(std::memory_order_relaxed)) {
+    ring_.capture(manager, false, false,
+                  picture_wanted_.load(std::memory_order_relaxed) ? CapturePicture::kCopy
+                                                                  : CapturePicture::kLeaveOut);
+  } else {
+    ring_.skip();
+  }
+}
+
+void StepFeed::on_safe(const Manager& manager) {
+  on_step(manager);  // captured as a step is
+}
+
+void StepFeed::on_staged(const Program& next, std::uint64_t stage) {
+  ring_.stage(next, stage);
+}
+
+void StepFeed::on_reload(const Manager& manager) {
+  // A header is never dropped: the steps after it are laid out by it.
+  if (started_.load(std::memory_order_relaxed)) ring_.reload(manager, wall_clock_ns());
+}
+
+void StepFeed::on_retiring(const Program&) {
+  // The reader formats steps of the replaced program until it reaches the header.
+  ring_.wait_for_headers();
+}
+
+void StepFeed::on_finish(const Manager&) {
+  if (started_.load(std::memory_order_relaxed)) ring_.settle();
 }
 
 }  // namespace arbiter

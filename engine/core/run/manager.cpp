@@ -2,6 +2,7 @@
 
 #include "core/compile/controller_builder.hpp"
 #include "core/run/carryover.hpp"
+#include "core/run/code_placement.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -45,11 +46,6 @@ bool is_finite(const void* value, std::uint8_t components) {
 
 }  // namespace
 
-#if defined(__GNUC__)
-#define ARBITER_NOINLINE __attribute__((noinline))
-#else
-#define ARBITER_NOINLINE
-#endif
 // GCC guesses that a virtual call goes to the one override it sees in this file (Inert) and
 // moves the real call out of line behind a comparison: for activation() that costs ~5 % of a
 // step (callgrind), while the same guess for update() (the base's no-op) saves the call.
@@ -613,7 +609,7 @@ void Manager::run_layer(const CompiledLayer& layer) {
 // Each pass over a layer's behaviours is a function of its own (never inlined into one big
 // one), so that its loop keeps its counters in registers across the calls into behaviour code.
 
-ARBITER_NOINLINE void Manager::update_behaviours(std::uint32_t begin, std::uint32_t end) {
+ARBITER_OUT_OF_LINE void Manager::update_behaviours(std::uint32_t begin, std::uint32_t end) {
   for (std::uint32_t b = begin; b < end; ++b) {
     const StepContext context(data_, b);
     ARBITER_GUARDED(b, Callback::kUpdate, run_.instances[b]->update(context));
@@ -627,7 +623,7 @@ ARBITER_NOINLINE void Manager::update_behaviours(std::uint32_t begin, std::uint3
 // instead of adding to them. a[b] = r[b] * Π (1 - a[i]) over b's closed inhibitors is computed
 // through b's recipe: the product Q[b] over its chained inhibitors from earlier behaviours' block
 // products, then the rest.
-ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_NOINLINE void Manager::request_and_refine(
+ARBITER_NO_SPECULATIVE_DEVIRTUALIZATION ARBITER_OUT_OF_LINE void Manager::request_and_refine(
     std::uint32_t begin, std::uint32_t end) {
   const auto& recipes = program_.inhibitions.recipes();
   const std::uint32_t* recipe = recipes.begin.data();
@@ -675,7 +671,7 @@ double Manager::non_finite_level(std::uint32_t b, double level) {
   return clamped;
 }
 
-ARBITER_NOINLINE void Manager::execute_behaviours(std::uint32_t begin, std::uint32_t end) {
+ARBITER_OUT_OF_LINE void Manager::execute_behaviours(std::uint32_t begin, std::uint32_t end) {
   for (std::uint32_t b = begin; b < end; ++b) {
     Behaviour& behaviour = *run_.instances[b];
     const bool was_active = run_.active[b] != 0;

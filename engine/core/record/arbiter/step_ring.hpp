@@ -174,4 +174,40 @@ class StepRing {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Nanoseconds since the Unix epoch on the wall clock: the time of a ring's headers.
+std::uint64_t wall_clock_ns();
+
+/// The stepping side of a ring whose reader wants the steps only at times (the live Foxglove
+/// server, whose clients subscribe and leave): the observer to add to the manager. Captures each
+/// step while the reader wants steps, with its picture while it wants that, and otherwise skips
+/// it; announces the start and every reload with a header. Kept with the ring in the library so
+/// that a served step goes from the manager into the capture without calling into other code: at
+/// a robot's pace each call into code elsewhere is a cold page.
+class StepFeed final : public Observer {
+ public:
+  explicit StepFeed(StepRing& ring) : ring_(ring) {}
+
+  /// The reader's: what it wants of the steps from the next capture on.
+  void want(bool steps, bool picture) {
+    picture_wanted_.store(picture, std::memory_order_relaxed);
+    wanted_.store(steps, std::memory_order_relaxed);
+  }
+  /// The run has started: the ring has its first header.
+  bool started() const { return started_.load(std::memory_order_acquire); }
+
+  void on_start(const Manager& manager) override;
+  void on_step(const Manager& manager) override;
+  void on_safe(const Manager& manager) override;
+  void on_staged(const Program& next, std::uint64_t stage) override;
+  void on_reload(const Manager& manager) override;
+  void on_retiring(const Program& replaced) override;
+  void on_finish(const Manager& manager) override;
+
+ private:
+  StepRing& ring_;
+  std::atomic<bool> started_{false};
+  std::atomic<bool> wanted_{false};
+  std::atomic<bool> picture_wanted_{false};
+};
+
 }  // namespace arbiter
