@@ -572,10 +572,10 @@ ARBITER_SELDOM bool capture_reports(const Manager& manager, const SnapshotShape&
 
 }  // namespace
 
-ARBITER_EVERY_STEP bool capture_step(const Manager& manager, const StepLayout& layout,
-                                     const SnapshotShape& shape, SnapshotBlock into,
-                                     bool may_allocate, StepImage* last, bool chained,
-                                     CapturePicture picture) {
+ARBITER_EVERY_STEP bool capture_step_in_library(const Manager& manager, const StepLayout& layout,
+                                                const SnapshotShape& shape, SnapshotBlock into,
+                                                bool may_allocate, StepImage* last, bool chained,
+                                                CapturePicture picture) {
   std::byte* block = into.main;
   // Written to the block last, whole: the block is cold, and never read here.
   SnapshotHeader header;
@@ -624,10 +624,11 @@ ARBITER_EVERY_STEP bool capture_step(const Manager& manager, const StepLayout& l
   return true;
 }
 
-ARBITER_EVERY_STEP void fence_streamed_stores() {
-#if defined(__SSE2__)
-  _mm_sfence();
-#endif
+bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
+                  SnapshotBlock into, bool may_allocate, StepImage* last, bool chained,
+                  CapturePicture picture) {
+  return capture_step_in_library(manager, layout, shape, into, may_allocate, last, chained,
+                                 picture);
 }
 
 StepSnapshot::StepSnapshot(const SnapshotShape& s, SnapshotBlock from)

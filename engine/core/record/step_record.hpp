@@ -6,6 +6,10 @@
 // thread). Both the trace writer and the recorder go through them, so their records are the same
 // bytes.
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -18,6 +22,7 @@
 #include "arbiter/manager.hpp"
 #include "arbiter/step_ring.hpp"
 #include "arbiter/trace.hpp"
+#include "core/run/code_placement.hpp"
 
 namespace arbiter::detail {
 
@@ -267,12 +272,21 @@ struct SnapshotGeneration {
 bool capture_step(const Manager& manager, const StepLayout& layout, const SnapshotShape& shape,
                   SnapshotBlock block, bool may_allocate = false, StepImage* last = nullptr,
                   bool chained = false, CapturePicture picture = CapturePicture::kCopy);
+/// capture_step() for the ring, which calls it at every observed step: bound within the library.
+ARBITER_LIBRARY_LOCAL bool capture_step_in_library(const Manager& manager, const StepLayout& layout,
+                                                   const SnapshotShape& shape, SnapshotBlock block,
+                                                   bool may_allocate, StepImage* last, bool chained,
+                                                   CapturePicture picture);
 
 /// Makes the streaming stores of the captures before (SnapshotShape::streamed) visible to
 /// other threads before the stores after it: a recorder calls it before it publishes a slot. Its
 /// cost is waiting for those stores to leave the core, so a recorder publishes a step's slot
-/// only at the next step, when they long have.
-void fence_streamed_stores();
+/// only at the next step, when they long have. Inline: no call at every step.
+inline void fence_streamed_stores() {
+#if defined(__SSE2__)
+  _mm_sfence();
+#endif
+}
 
 /// A contiguous run of T in a block, as a reader sees it.
 template <typename T>

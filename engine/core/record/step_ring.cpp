@@ -207,8 +207,8 @@ ARBITER_EVERY_STEP bool StepRing::capture(const Manager& manager, bool may_alloc
   Slot* slot = wait ? impl.claim_waiting() : impl.claim();
   const auto* g = impl.stepping;
   if (slot == nullptr ||
-      !detail::capture_step(manager, g->layout, g->blocks.shape(), impl.block(*g, slot),
-                            may_allocate, &impl.stepping->last, impl.chained, picture)) {
+      !detail::capture_step_in_library(manager, g->layout, g->blocks.shape(), impl.block(*g, slot),
+                                       may_allocate, &impl.stepping->last, impl.chained, picture)) {
     // No room, or more than a slot holds: the reader tells the gap.
     impl.dropped.fetch_add(1, std::memory_order_relaxed);
     ++impl.pending_drops;

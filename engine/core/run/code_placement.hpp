@@ -14,8 +14,13 @@
 #define ARBITER_OUT_OF_LINE __attribute__((noinline))
 /// Out of line and placed apart (.text.unlikely): what few steps need.
 #define ARBITER_SELDOM __attribute__((noinline, cold))
+/// Not exported from the library: a call to it from another of the library's files is direct,
+/// where one to an exported function goes through the PLT (an indirect jump through the GOT, a
+/// cold line and a dependent load at a robot's pace).
+#define ARBITER_LIBRARY_LOCAL __attribute__((visibility("hidden")))
 #else
 #define ARBITER_EVERY_STEP
 #define ARBITER_OUT_OF_LINE
 #define ARBITER_SELDOM
+#define ARBITER_LIBRARY_LOCAL
 #endif
