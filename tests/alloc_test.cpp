@@ -842,3 +842,42 @@ TEST_CASE("the pictures of steps not yet read are never written over", "[record]
     CHECK(std::string(step.scene_strings, drawn[read].strings.size()) == drawn[read].strings);
   }
 }
+
+TEST_CASE(
+    "a step feed captures the steps only while its reader wants them, the picture only "
+    "while it wants that",
+    "[record][scene]") {
+  Registry registry = test::make_test_registry();
+  registry.add_interface<Mover>("test.Mover");
+  Manager manager(test::compile_text(
+      "arbiter: 1\nname: moving\nlayers:\n  - name: world\n    interface: test.Mover\n", registry));
+  StepRing::Waiter waiter;
+  StepRing ring(16, waiter);
+  StepFeed feed(ring);
+  CHECK_FALSE(feed.started());
+  manager.add_observer(feed);
+  CHECK(feed.started());
+  // What the reader meets, after the start's header: the steps, and whether each drew.
+  const auto read = [&] {
+    ring.settle();
+    std::vector<std::pair<std::uint64_t, bool>> steps;
+    for (auto next = ring.next(); next != StepRing::Next::kNothing; next = ring.next()) {
+      if (next == StepRing::Next::kStep) steps.emplace_back(ring.step().step(), ring.step().drew());
+      ring.release();
+    }
+    return steps;
+  };
+  using Steps = std::vector<std::pair<std::uint64_t, bool>>;
+  for (int i = 0; i < 3; ++i) manager.step();  // nobody wants them
+  CHECK(read() == Steps{});
+  feed.want(true, false);  // a client that plots
+  manager.step();
+  manager.step();
+  CHECK(read() == Steps{{4, false}, {5, false}});
+  feed.want(true, true);  // and one that shows the scene
+  manager.step();
+  feed.want(false, false);  // both gone
+  manager.step();
+  CHECK(read() == Steps{{6, true}});
+  CHECK(ring.dropped() == 0);
+}
