@@ -118,10 +118,7 @@ void Recorder::fail(int error, std::uint64_t step, const char* doing) {
 
 void Recorder::on_start(const Manager& manager) {
   if (!out_) return;
-  wall_start_ns_ =
-      static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                     std::chrono::system_clock::now().time_since_epoch())
-                                     .count());
+  wall_start_ns_ = wall_clock_ns();
   auto& writer = out_->writer;
   writer.header("arbiter", "arbiter " + info_.version);
   ring_.start(manager, wall_start_ns_, false);
