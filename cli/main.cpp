@@ -27,6 +27,10 @@
 
 namespace {
 
+// `--foxglove-scene-rate`'s largest: far beyond any screen, and the server's thread polls the
+// steps 200 times a second.
+constexpr double kMaxSceneRate = 1000.0;
+
 using namespace arbiter::cli;
 
 /// CLI11 check of `--serve [ADDR:]PORT`.
@@ -46,6 +50,17 @@ std::string check_record_flush(const std::string& text) {
   }
   return fmt::format("must be a number of seconds from 0 to {:g}, found '{}'",
                      arbiter::Recorder::kMaxFlushInterval, text);
+}
+
+/// CLI11 check of `--foxglove-scene-rate HZ`.
+std::string check_scene_rate(const std::string& text) {
+  char* end = nullptr;
+  const double rate = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() && *end == '\0' && rate >= 0.0 && rate <= kMaxSceneRate) return {};
+  return fmt::format(
+      "must be a number of pictures a second from 0 (every step's) to {:g}, found "
+      "'{}'",
+      kMaxSceneRate, arbiter::printable(text));
 }
 
 /// CLI11 check of `--tolerance X` (test, diff): CLI11's NonNegativeNumber lets `nan` through, which
@@ -168,6 +183,19 @@ void add_record_options(CLI::App& command, Options& options, const std::string& 
       ->type_name("SECONDS")
       ->capture_default_str()
       ->needs("--record");
+}
+
+/// `--foxglove-scene-rate HZ` (which needs --foxglove), as run and replay share it.
+void add_scene_rate_option(CLI::App& command, Options& options) {
+  command
+      .add_option("--foxglove-scene-rate", options.foxglove_scene_rate,
+                  "with --foxglove: send the picture on /arbiter/scene at most HZ times a second "
+                  "(the next step's after each period; a viewer draws no faster than its screen), "
+                  "or every step's with 0; the other channels carry every step")
+      ->check(check_scene_rate, "")
+      ->type_name("HZ")
+      ->capture_default_str()
+      ->needs("--foxglove");
 }
 
 // What every option that reads a run takes.
@@ -347,6 +375,7 @@ int main(int argc, char** argv) {
                    "the last step until Ctrl-C")
       ->check(check_serve_address, "")
       ->type_name("[ADDR:]PORT");
+  add_scene_rate_option(*run_cmd, options);
   run_cmd
       ->add_flag("--paused", options.paused,
                  "with --serve: wait for the page's Step or Resume before the first step")
@@ -699,6 +728,7 @@ int main(int argc, char** argv) {
                    "last step until Ctrl-C")
       ->check(check_serve_address, "")
       ->type_name("[ADDR:]PORT");
+  add_scene_rate_option(*replay_cmd, options);
   replay_cmd
       ->add_option("--steps", options.steps,
                    "replay at most this many steps (the recording is read that far only)")
@@ -893,7 +923,7 @@ int main(int argc, char** argv) {
           writes_standard_output({replay.trace, replay.record}) ? std::cerr : std::cout;
       std::unique_ptr<FoxgloveServer> foxglove;
       if (!options.foxglove.empty()) {
-        foxglove = open_foxglove(options.foxglove, "replay", out, std::cerr);
+        foxglove = open_foxglove(options, "replay", out, std::cerr);
         if (!foxglove) return kExitUsage;
         replay.observers.push_back(&foxglove->observer());
         replay.paced = true;

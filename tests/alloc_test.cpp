@@ -568,6 +568,71 @@ TEST_CASE("a step served to a subscribed Foxglove client allocates nothing on th
   CHECK(counts.sent > sent_before + 300);  // the steps went out, step records and inputs
   CHECK(counts.dropped_steps == 0);
 }
+
+TEST_CASE("a live server sends the picture at its scene rate, or every step's when told 0",
+          "[foxglove][scene]") {
+  // The soccer demo draws every step; 400 steps a millisecond apart (more under load) against a
+  // client subscribed to every channel.
+  const auto serve = [](double scene_rate) {
+    Registry registry = test::make_test_registry();
+    LoadOptions options;
+    options.plugins.path.push_back(ARBITER_PLUGIN_DIR);
+    Diagnostics diagnostics;
+    auto program = load(std::string(ARBITER_SOURCE_DIR) + "/configs/soccer/walk_and_kick.yaml",
+                        registry, diagnostics, options);
+    REQUIRE(program);
+    Manager manager(std::move(*program));
+    std::ostringstream said;
+    auto server = cli::FoxgloveServer::open("127.0.0.1", 0, "test", "arbiter test", said, said);
+    REQUIRE(server);
+    server->set_scene_rate(scene_rate);
+    manager.add_observer(server->observer());
+    manager.step();
+    test::FoxgloveSubscriber client(server->url());
+    REQUIRE(client.connected());
+    for (int i = 0; i < 2000 && client.received("/arbiter/scene") == 0; ++i) {
+      manager.step();
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    REQUIRE(client.received("/arbiter/scene") > 0);
+    const auto steps_before = client.received("/arbiter/step");
+    const auto scenes_before = client.received("/arbiter/scene");
+    const auto start = std::chrono::steady_clock::now();
+    for (int i = 0; i < 400; ++i) {
+      manager.step();
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the last ones on their way
+    const auto counts = server->counts();
+    server->stop();
+    client.stop();
+    CHECK(counts.dropped_steps == 0);
+    CHECK(counts.dropped_for_slow_clients == 0);
+    struct Received {
+      std::uint64_t steps, scenes;
+      double seconds;
+    };
+    return Received{client.received("/arbiter/step") - steps_before,
+                    client.received("/arbiter/scene") - scenes_before, took.count()};
+  };
+  SECTION("20 pictures a second: every step's record, a picture every 50 ms") {
+    const auto received = serve(20.0);
+    INFO(received.steps << " steps, " << received.scenes << " pictures in " << received.seconds
+                        << " s");
+    CHECK(received.steps >= 400);
+    // The server's thread asks for a picture when it looks at the steps, every 5 ms.
+    CHECK(received.scenes >= 20.0 * received.seconds / 2);
+    CHECK(received.scenes <= 20.0 * received.seconds + 3);
+  }
+  SECTION("0: every step's picture") {
+    const auto received = serve(0.0);
+    INFO(received.steps << " steps, " << received.scenes << " pictures in " << received.seconds
+                        << " s");
+    CHECK(received.steps >= 400);
+    CHECK(received.scenes + 1 >= received.steps);
+  }
+}
 #endif
 namespace {
 
@@ -879,5 +944,25 @@ TEST_CASE(
   feed.want(false, false);  // both gone
   manager.step();
   CHECK(read() == Steps{{6, true}});
+  // A reader that shows the picture at a rate of its own asks for the next one: twice before a
+  // step is still one picture.
+  feed.want(true, false);
+  feed.want_next_picture();
+  feed.want_next_picture();
+  manager.step();
+  manager.step();
+  feed.want_next_picture();
+  manager.step();
+  CHECK(read() == Steps{{8, true}, {9, false}, {10, true}});
   CHECK(ring.dropped() == 0);
+  // Asked for while the ring is full, the picture comes with the first step captured after.
+  for (int i = 0; i < 16; ++i) manager.step();  // steps 11 to 26 fill the ring
+  feed.want_next_picture();
+  manager.step();  // dropped
+  CHECK(ring.dropped() == 1);
+  const auto full = read();
+  CHECK(full.size() == 16);
+  manager.step();
+  manager.step();
+  CHECK(read() == Steps{{28, true}, {29, false}});
 }

@@ -72,10 +72,10 @@ void install_interrupt_handlers() {
   std::signal(SIGTERM, on_interrupt);
 }
 
-std::unique_ptr<FoxgloveServer> open_foxglove(const std::string& text, std::string_view command,
+std::unique_ptr<FoxgloveServer> open_foxglove(const Options& options, std::string_view command,
                                               std::ostream& out, std::ostream& err) {
   std::string error;
-  const auto address = ServeAddress::parse(text, error);
+  const auto address = ServeAddress::parse(options.foxglove, error);
   if (!error.empty()) {
     err << fmt::format("arbiter {}: --foxglove: {}\n", command, error);
     return nullptr;
@@ -83,6 +83,7 @@ std::unique_ptr<FoxgloveServer> open_foxglove(const std::string& text, std::stri
   auto server = FoxgloveServer::open(address.host, address.port, command,
                                      fmt::format("arbiter {}", kVersion), out, err);
   if (server) {
+    server->set_scene_rate(options.foxglove_scene_rate);
     err << exposure_warning(address,
                             "watch the run: the Foxglove WebSocket protocol has no authentication");
   }

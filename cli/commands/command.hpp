@@ -19,6 +19,7 @@
 #include "arbiter/recording.hpp"
 #include "arbiter/registry.hpp"
 #include "commands/test_command.hpp"
+#include "server/foxglove.hpp"
 
 namespace arbiter::cli {
 
@@ -53,6 +54,8 @@ struct Options {
   std::string edit_serve = "127.0.0.1:8080";  ///< `edit --serve`
   bool edit = false;                          ///< `run --serve --edit`
   std::string output;                         ///< `plot -o`
+  /// `--foxglove-scene-rate`: pictures a second on `/arbiter/scene`
+  double foxglove_scene_rate = FoxgloveServer::kSceneRate;
   bool actuators = false;
   bool paused = false;              ///< `run --paused`
   std::vector<std::string> breaks;  ///< `run --break`
@@ -93,11 +96,10 @@ std::optional<Program> load_or_report(const std::string& path, Registry& registr
 extern std::atomic<bool> interrupted;
 void install_interrupt_handlers();
 
-class FoxgloveServer;
-/// The Foxglove WebSocket server of `--foxglove [ADDR:]PORT` (server/foxglove.hpp), warning on
-/// `err` when it can be reached from other machines; nullptr when it cannot serve (said on
-/// `err`, as `command`).
-std::unique_ptr<FoxgloveServer> open_foxglove(const std::string& address, std::string_view command,
+/// The Foxglove WebSocket server of `--foxglove [ADDR:]PORT` (server/foxglove.hpp), sending the
+/// picture at `--foxglove-scene-rate`, warning on `err` when it can be reached from other
+/// machines; nullptr when it cannot serve (said on `err`, as `command`).
+std::unique_ptr<FoxgloveServer> open_foxglove(const Options& options, std::string_view command,
                                               std::ostream& out, std::ostream& err);
 /// After a run or replay with `--foxglove`: says what was dropped, then serves on until
 /// interrupted, so that a viewer keeps its connection and what it received.

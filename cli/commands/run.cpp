@@ -189,7 +189,7 @@ int run_command(const Options& options) {
   }
   std::unique_ptr<FoxgloveServer> foxglove;  // --foxglove
   if (!options.foxglove.empty()) {
-    foxglove = open_foxglove(options.foxglove, "run", out, std::cerr);
+    foxglove = open_foxglove(options, "run", out, std::cerr);
     if (!foxglove) return kExitUsage;
     foxglove->set_paced(options.realtime);  // as the recording's log times (info.paced)
     manager.add_observer(foxglove->observer());

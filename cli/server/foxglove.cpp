@@ -94,8 +94,9 @@ struct FoxgloveServer::Impl {
   Waiter waiter{stopped};
   StepRing ring{kSlots, waiter};
   // Captures a step only while some client is subscribed to a channel that steps feed, and its
-  // picture only while one is subscribed to the scene.
+  // picture only while one is subscribed to the scene: every step's, or at the scene rate.
   StepFeed feed{ring};
+  std::atomic<double> scene_rate{FoxgloveServer::kSceneRate};  // 0: every step's picture
 
   // The server thread's.
   std::vector<Advertised> channels;
@@ -115,6 +116,8 @@ struct FoxgloveServer::Impl {
   // The scene messages carry what changed since the message before (channels.hpp); the next one
   // is the whole picture after a reload and when a client subscribes, which has seen none before.
   SceneUpdates scene_updates;
+  bool scene_subscribed = false;
+  std::chrono::steady_clock::time_point picture_due;  // when to ask for the next picture
 
   std::atomic<std::size_t> connected{0};
   std::atomic<std::uint64_t> opened{0}, sent{0}, dropped_for_clients{0};
@@ -187,7 +190,24 @@ struct FoxgloveServer::Impl {
     }
     // A step captured before the stepping thread sees a new scene subscriber's flag reads as one
     // that drew nothing: the subscriber's first picture, whole, comes with the next.
-    feed.want(any, picture);
+    feed.want(any, picture && scene_rate.load() <= 0.0);
+    if (picture && !scene_subscribed) picture_due = {};  // the first one at once
+    scene_subscribed = picture;
+    ask_for_picture();
+  }
+  // At the scene rate, the next step captured carries its picture: a viewer draws the picture at
+  // its screen's rate at most, and each scene message costs the link, the client and the stepping
+  // thread (the copy of its picture) more than a step record.
+  void ask_for_picture() {
+    const double rate = scene_rate.load();
+    if (!scene_subscribed || rate <= 0.0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now < picture_due) return;
+    feed.want_next_picture();
+    const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(1.0 / rate));
+    // Kept to the rate on average over the polls, but not caught up after a pause.
+    picture_due = now - picture_due > period ? now + period : picture_due + period;
   }
 
   /// Sends `payload` on `advertised` to every client subscribed to it, but to a client with
@@ -347,6 +367,7 @@ struct FoxgloveServer::Impl {
     timer->async_wait([this](const std::error_code& error) {
       if (error || stopped) return;
       pump();
+      ask_for_picture();
       schedule();
     });
   }
@@ -650,6 +671,10 @@ std::string FoxgloveServer::summary(std::string_view command) const {
 
 void FoxgloveServer::set_paced(bool paced) {
   impl_->paced = paced;
+}
+
+void FoxgloveServer::set_scene_rate(double pictures_per_second) {
+  impl_->scene_rate.store(pictures_per_second);
 }
 
 void FoxgloveServer::stop() {

@@ -43,6 +43,8 @@ class FoxgloveServer {
   static constexpr std::size_t kClientBacklog = std::size_t{1} << 20;
   /// Largest message a client may send: its requests are small JSON objects.
   static constexpr std::size_t kMaxClientMessage = std::size_t{64} << 10;
+  /// Pictures a second on `/arbiter/scene` (set_scene_rate()), unless told otherwise.
+  static constexpr double kSceneRate = 30.0;
 
   /// Serves on `host` (an IP address, or localhost) and `port` (0: a free one) and prints the
   /// URL to `out`; or says to `err`, as `command` (run, replay), why it cannot, and returns
@@ -63,6 +65,10 @@ class FoxgloveServer {
   /// their step, else at the run's simulated time, as a recording's (RecordingInfo::paced). Before
   /// the run starts.
   void set_paced(bool paced);
+  /// Sends a step's picture on `/arbiter/scene` at most `pictures_per_second` times a second
+  /// (the picture of the next step after each period), or every step's when 0. The other
+  /// channels carry every step. Before a client subscribes.
+  void set_scene_rate(double pictures_per_second);
   /// Stops serving and closes every connection (the destructor does it too).
   void stop();
 

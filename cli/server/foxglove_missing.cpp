@@ -43,6 +43,8 @@ FoxgloveCounts FoxgloveServer::counts() const {
 std::string FoxgloveServer::summary(std::string_view) const {
   return "";
 }
+void FoxgloveServer::set_paced(bool) {}
+void FoxgloveServer::set_scene_rate(double) {}
 void FoxgloveServer::stop() {}
 Observer& FoxgloveServer::observer() {
   return impl_->nothing;

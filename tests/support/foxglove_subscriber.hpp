@@ -10,9 +10,12 @@
 
 #include <atomic>
 #include <cstdint>
+#include <map>
+#include <mutex>
 #include <string>
 #include <system_error>
 #include <thread>
+#include <vector>
 
 namespace arbiter::test {
 
@@ -28,7 +31,16 @@ class FoxgloveSubscriber {
                                                  Client::message_ptr message) {
       if (message->get_opcode() == websocketpp::frame::opcode::binary) {
         // Message Data (opcode 1), not the server's clock (Time, opcode 2).
-        if (message->get_payload().front() == '\x01') ++received_;
+        const auto& payload = message->get_payload();
+        if (payload.front() != '\x01') return;
+        ++received_;
+        // Then the subscription id, a little-endian uint32.
+        std::uint32_t subscription = 0;
+        for (int i = 4; i >= 1 && payload.size() >= 5; --i) {
+          subscription = subscription << 8 | static_cast<unsigned char>(payload[i]);
+        }
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (subscription < topics_.size()) ++by_topic_[topics_[subscription]];
         return;
       }
       const auto json = nlohmann::json::parse(message->get_payload(), nullptr, false);
@@ -37,6 +49,11 @@ class FoxgloveSubscriber {
           nlohmann::json{{"op", "subscribe"}, {"subscriptions", nlohmann::json::array()}};
       for (const auto& channel : json["channels"]) {
         if (channel.value("topic", "") == left_out) continue;
+        {
+          std::lock_guard<std::mutex> lock(mutex_);
+          topics_.resize(next_id_ + 1);
+          topics_[next_id_] = channel.value("topic", "");
+        }
         subscribe["subscriptions"].push_back({{"id", next_id_++}, {"channelId", channel["id"]}});
       }
       client_.send(handle, subscribe.dump(), websocketpp::frame::opcode::text);
@@ -55,6 +72,12 @@ class FoxgloveSubscriber {
   bool connected() const { return thread_.joinable(); }
   /// The Message Data frames received so far (a step's messages on each channel subscribed).
   std::uint64_t received() const { return received_; }
+  /// Those on the channel of `topic`.
+  std::uint64_t received(const std::string& topic) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = by_topic_.find(topic);
+    return found == by_topic_.end() ? 0 : found->second;
+  }
   /// Stops the client and waits for its thread.
   void stop() {
     client_.stop();
@@ -67,6 +90,9 @@ class FoxgloveSubscriber {
   std::thread thread_;
   std::atomic<std::uint64_t> received_{0};
   std::uint32_t next_id_ = 0;  // the client's subscription ids
+  mutable std::mutex mutex_;
+  std::vector<std::string> topics_;  // by subscription id
+  std::map<std::string, std::uint64_t> by_topic_;
 };
 
 }  // namespace arbiter::test

@@ -184,8 +184,9 @@ test('a Foxglove client subscribes to every channel, every message fits its sche
 
 test('a client that subscribes to the steps, then to the scene, gets the whole picture first, then one each step', async () => {
   // Without a scene subscriber the server leaves the picture out of what it copies each step; a
-  // subscriber that comes later must still get a whole picture, then every step's.
-  const server = await serve(['run', soccerAt(60), '--foxglove', '0', '--steps', '100000', '-q']);
+  // subscriber that comes later must still get a whole picture, then every step's (scene rate 0).
+  const server = await serve(['run', soccerAt(60), '--foxglove', '0', '--foxglove-scene-rate', '0',
+    '--steps', '100000', '-q']);
   const {client, channels} = await connect(server.url);
   const byTopic = new Map([...channels.values()].map((channel) => [channel.topic, channel]));
   const topics = new Map();
@@ -212,6 +213,34 @@ test('a client that subscribes to the steps, then to the scene, gets the whole p
   client.close();
   server.child.kill('SIGINT');
   assert.equal((await server.exited).code, 0);
+});
+
+test('at its scene rate the server sends one step\'s picture a period, and every step\'s record', async () => {
+  const server = await serve(['run', soccerAt(120), '--foxglove', '0', '--foxglove-scene-rate', '20',
+    '--steps', '100000', '-q']);
+  const {client, channels} = await connect(server.url);
+  const byTopic = new Map([...channels.values()].map((channel) => [channel.topic, channel]));
+  const topics = new Map();
+  const steps = [];   // log times of the steps received
+  const scenes = [];  // log times of the scene messages
+  client.on('message', ({subscriptionId, timestamp}) => {
+    if (topics.get(subscriptionId) === '/arbiter/step') steps.push(timestamp);
+    if (topics.get(subscriptionId) === '/arbiter/scene') scenes.push(timestamp);
+  });
+  topics.set(client.subscribe(byTopic.get('/arbiter/scene').id), '/arbiter/scene');
+  topics.set(client.subscribe(byTopic.get('/arbiter/step').id), '/arbiter/step');
+  await waitFor('two seconds of steps', () => steps.length >= 240, 20000);
+  client.close();
+  server.child.kill('SIGINT');
+  assert.equal((await server.exited).code, 0);
+  const last = steps.at(-1);
+  const shown = scenes.filter((time) => time <= last);
+  const seconds = Number(last - steps[0]) / 1e9;
+  console.log(`${steps.length} steps and ${shown.length} pictures in ${seconds.toFixed(2)} s of log time`);
+  for (const time of shown) assert.ok(steps.includes(time), `a scene message at ${time} is a step's`);
+  // 20 a second, the server asking for one when it looks at the steps (every 5 ms).
+  assert.ok(shown.length >= 20 * seconds / 2, `${shown.length} pictures in ${seconds} s`);
+  assert.ok(shown.length <= 20 * seconds + 3, `${shown.length} pictures in ${seconds} s`);
 });
 
 test('replay --foxglove serves a recording at its pace, its messages as a run sends them', async () => {

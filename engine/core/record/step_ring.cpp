@@ -389,9 +389,13 @@ void StepFeed::on_start(const Manager& manager) {
 ARBITER_EVERY_STEP void StepFeed::on_step(const Manager& manager) {
   if (!started_.load(std::memory_order_relaxed)) return;
   if (wanted_.load(std::memory_order_relaxed)) {
-    ring_.capture(manager, false, false,
-                  picture_wanted_.load(std::memory_order_relaxed) ? CapturePicture::kCopy
-                                                                  : CapturePicture::kLeaveOut);
+    const auto asked = pictures_asked_.load(std::memory_order_relaxed);
+    const bool picture =
+        picture_wanted_.load(std::memory_order_relaxed) || asked != pictures_given_;
+    const bool captured = ring_.capture(
+        manager, false, false, picture ? CapturePicture::kCopy : CapturePicture::kLeaveOut);
+    // A step dropped for room leaves the picture asked for to the next one.
+    if (picture && captured) pictures_given_ = asked;
   } else {
     ring_.skip();
   }

@@ -179,19 +179,24 @@ std::uint64_t wall_clock_ns();
 
 /// The stepping side of a ring whose reader wants the steps only at times (the live Foxglove
 /// server, whose clients subscribe and leave): the observer to add to the manager. Captures each
-/// step while the reader wants steps, with its picture while it wants that, and otherwise skips
-/// it; announces the start and every reload with a header. Kept with the ring in the library so
-/// that a served step goes from the manager into the capture without calling into other code: at
-/// a robot's pace each call into code elsewhere is a cold page.
+/// step while the reader wants steps, with its picture while it wants every step's or has asked
+/// for the next one, and otherwise skips it; announces the start and every reload with a header.
+/// Kept with the ring in the library so that a served step goes from the manager into the capture
+/// without calling into other code: at a robot's pace each call into code elsewhere is a cold page.
 class StepFeed final : public Observer {
  public:
   explicit StepFeed(StepRing& ring) : ring_(ring) {}
 
-  /// The reader's: what it wants of the steps from the next capture on.
+  /// The reader's: what it wants of the steps from the next capture on, the picture of every
+  /// step or not.
   void want(bool steps, bool picture) {
     picture_wanted_.store(picture, std::memory_order_relaxed);
     wanted_.store(steps, std::memory_order_relaxed);
   }
+  /// The reader's: the next step captured carries its picture, even while the reader does not
+  /// want every step's (one that shows the picture at a rate of its own). Asked again before
+  /// that step, it is still one picture.
+  void want_next_picture() { pictures_asked_.fetch_add(1, std::memory_order_relaxed); }
   /// The run has started: the ring has its first header.
   bool started() const { return started_.load(std::memory_order_acquire); }
 
@@ -208,6 +213,8 @@ class StepFeed final : public Observer {
   std::atomic<bool> started_{false};
   std::atomic<bool> wanted_{false};
   std::atomic<bool> picture_wanted_{false};
+  std::atomic<std::uint64_t> pictures_asked_{0};
+  std::uint64_t pictures_given_ = 0;  // the stepping thread's: pictures_asked_ at the last one
 };
 
 }  // namespace arbiter
