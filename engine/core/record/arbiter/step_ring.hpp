@@ -183,7 +183,9 @@ std::uint64_t wall_clock_ns();
 /// for the next one, and otherwise skips it; announces the start and every reload with a header.
 /// Kept with the ring in the library so that a served step goes from the manager into the capture
 /// without calling into other code: at a robot's pace each call into code elsewhere is a cold page.
-class StepFeed final : public Observer {
+/// On cache lines of its own: the stepping thread reads its flags at every step, and a neighbour
+/// that another thread writes would take the line from it each time.
+class alignas(64) StepFeed final : public Observer {
  public:
   explicit StepFeed(StepRing& ring) : ring_(ring) {}
 
