@@ -47,6 +47,19 @@ std::string read_config(const std::string& relative) {
   return text.str();
 }
 
+/// A shipped config (`relative` to the source directory) loaded with the built plugins, which
+/// `registry` must outlive the program for.
+Program load_shipped(const std::string& relative, Registry& registry) {
+  LoadOptions options;
+  options.plugins.path.push_back(ARBITER_PLUGIN_DIR);
+  Diagnostics diagnostics;
+  auto program =
+      load(std::string(ARBITER_SOURCE_DIR) + "/" + relative, registry, diagnostics, options);
+  INFO(format(diagnostics));
+  REQUIRE(program);
+  return std::move(*program);
+}
+
 /// Allocations made by steps 2..steps of `manager`.
 std::size_t allocations_in_steps(Manager& manager, int steps) {
   manager.step();
@@ -526,13 +539,7 @@ TEST_CASE("a recorded step allocates nothing on the stepping thread", "[alloc][r
 TEST_CASE("a step served to a subscribed Foxglove client allocates nothing on the stepping thread",
           "[alloc][foxglove]") {
   Registry registry = test::make_test_registry();
-  LoadOptions options;
-  options.plugins.path.push_back(ARBITER_PLUGIN_DIR);
-  Diagnostics diagnostics;
-  auto program = load(std::string(ARBITER_SOURCE_DIR) + "/configs/soccer/walk_and_kick.yaml",
-                      registry, diagnostics, options);
-  REQUIRE(program);
-  Manager manager(std::move(*program));
+  Manager manager(load_shipped("configs/soccer/walk_and_kick.yaml", registry));
   CountingClock clock;
   manager.set_clock(&clock);
   std::ostringstream said;
@@ -575,13 +582,7 @@ TEST_CASE("a live server sends the picture at its scene rate, or every step's wh
   // client subscribed to every channel.
   const auto serve = [](double scene_rate) {
     Registry registry = test::make_test_registry();
-    LoadOptions options;
-    options.plugins.path.push_back(ARBITER_PLUGIN_DIR);
-    Diagnostics diagnostics;
-    auto program = load(std::string(ARBITER_SOURCE_DIR) + "/configs/soccer/walk_and_kick.yaml",
-                        registry, diagnostics, options);
-    REQUIRE(program);
-    Manager manager(std::move(*program));
+    Manager manager(load_shipped("configs/soccer/walk_and_kick.yaml", registry));
     std::ostringstream said;
     auto server = cli::FoxgloveServer::open("127.0.0.1", 0, "test", "arbiter test", said, said);
     REQUIRE(server);
