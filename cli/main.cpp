@@ -191,7 +191,8 @@ void add_scene_rate_option(CLI::App& command, Options& options) {
       .add_option("--foxglove-scene-rate", options.foxglove_scene_rate,
                   "with --foxglove: send the picture on /arbiter/scene at most HZ times a second "
                   "(the next step's after each period; a viewer draws no faster than its screen), "
-                  "or every step's with 0; the other channels carry every step")
+                  "or every step's with 0 or when the config's rate_hz is no faster; the other "
+                  "channels carry every step")
       ->check(check_scene_rate, "")
       ->type_name("HZ")
       ->capture_default_str()

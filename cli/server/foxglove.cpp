@@ -118,6 +118,7 @@ struct FoxgloveServer::Impl {
   SceneUpdates scene_updates;
   bool scene_subscribed = false;
   std::chrono::steady_clock::time_point picture_due;  // when to ask for the next picture
+  double run_rate_hz = 0.0;                           // the program's, from its header
 
   std::atomic<std::size_t> connected{0};
   std::atomic<std::uint64_t> opened{0}, sent{0}, dropped_for_clients{0};
@@ -190,17 +191,23 @@ struct FoxgloveServer::Impl {
     }
     // A step captured before the stepping thread sees a new scene subscriber's flag reads as one
     // that drew nothing: the subscriber's first picture, whole, comes with the next.
-    feed.want(any, picture && scene_rate.load() <= 0.0);
+    feed.want(any, picture && every_picture());
     if (picture && !scene_subscribed) picture_due = {};  // the first one at once
     scene_subscribed = picture;
     ask_for_picture();
+  }
+  // Every step's picture: asked for (rate 0), or a program whose rate_hz is no faster than the
+  // scene rate, which then does not depend on this thread asking in time between two steps.
+  bool every_picture() const {
+    const double rate = scene_rate.load();
+    return rate <= 0.0 || (run_rate_hz > 0.0 && run_rate_hz <= rate);
   }
   // At the scene rate, the next step captured carries its picture: a viewer draws the picture at
   // its screen's rate at most, and each scene message costs the link, the client and the stepping
   // thread (the copy of its picture) more than a step record.
   void ask_for_picture() {
+    if (!scene_subscribed || every_picture()) return;
     const double rate = scene_rate.load();
-    if (!scene_subscribed || rate <= 0.0) return;
     const auto now = std::chrono::steady_clock::now();
     if (now < picture_due) return;
     feed.want_next_picture();
@@ -317,6 +324,7 @@ struct FoxgloveServer::Impl {
         } else {
           header_time = clock.reload(ring.header_step(), ring.header_wall_time(), ring.rate_hz());
         }
+        run_rate_hz = ring.rate_hz();
         take_channels(ring.channels());
         scene_updates.restart();
         advance_clock(header_time);

@@ -66,8 +66,9 @@ class FoxgloveServer {
   /// the run starts.
   void set_paced(bool paced);
   /// Sends a step's picture on `/arbiter/scene` at most `pictures_per_second` times a second
-  /// (the picture of the next step after each period), or every step's when 0. The other
-  /// channels carry every step. Before a client subscribes.
+  /// (the picture of the next step after each period), or every step's when 0 or when the
+  /// program's rate_hz is no faster. The other channels carry every step. Before a client
+  /// subscribes.
   void set_scene_rate(double pictures_per_second);
   /// Stops serving and closes every connection (the destructor does it too).
   void stop();
