@@ -16,6 +16,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <regex>
 #include <sstream>
 #include <thread>
 #include <tuple>
@@ -104,12 +105,24 @@ class PinnedTo {
 /// `graph` of state.range(0) behaviours. False, the benchmark skipped, when the demo does not
 /// load.
 bool load_program(benchmark::State& state, Graph graph, bool soccer, Registry& soccer_registry,
-                  std::optional<Program>& program) {
+                  std::optional<Program>& program, double soccer_rate_hz = 0.0) {
   if (soccer) {
     Diagnostics diagnostics;
     LoadOptions options;
     options.plugins.path = {ARBITER_BENCH_PLUGIN_DIR};
-    program = load(ARBITER_BENCH_SOCCER, soccer_registry, diagnostics, options);
+    std::string path = ARBITER_BENCH_SOCCER;
+    if (soccer_rate_hz > 0.0) {
+      // The demo as a robot stepping at that pace declares it: its rate_hz (the config's is 15).
+      std::ifstream in(path);
+      std::stringstream text;
+      text << in.rdbuf();
+      const auto config = std::regex_replace(text.str(), std::regex("\nrate_hz: [0-9.]+\n"),
+                                             "\nrate_hz: " + std::to_string(soccer_rate_hz) + "\n");
+      path = (std::filesystem::temp_directory_path() / "arbiter_bench_soccer.yaml").string();
+      std::ofstream(path) << config;
+    }
+    program = load(path, soccer_registry, diagnostics, options);
+    if (soccer_rate_hz > 0.0) std::filesystem::remove(path);
     if (!program) {
       state.SkipWithError("the soccer demo does not load (is its plugin built?)");
       return false;
@@ -328,7 +341,9 @@ void foxglove_paced(benchmark::State& state, Graph graph, bool soccer, Pictures 
                     Pace pace) {
   std::optional<Program> program;
   Registry soccer_registry = make_registry();
-  if (!load_program(state, graph, soccer, soccer_registry, program)) return;
+  // At its pace: the server sends every picture of a program no faster than its scene rate.
+  const double rate_hz = 1e6 / static_cast<double>(period_of(pace).count());
+  if (!load_program(state, graph, soccer, soccer_registry, program, rate_hz)) return;
   Manager manager(std::move(*program), quiet());
   std::ostringstream said;
   std::optional<PinnedTo> others_cpu(1);
