@@ -40,37 +40,33 @@ std::string check_serve_address(const std::string& text) {
   return error;
 }
 
+/// Whether the whole of `text` is a number from `low` to `high` (NaN never is): what the checks
+/// of the numeric options below accept.
+bool number_within(const std::string& text, double low, double high) {
+  char* end = nullptr;
+  const double number = std::strtod(text.c_str(), &end);
+  return end != text.c_str() && *end == '\0' && number >= low && number <= high;
+}
+
 /// CLI11 check of `--record-flush SECONDS`.
 std::string check_record_flush(const std::string& text) {
-  char* end = nullptr;
-  const double seconds = std::strtod(text.c_str(), &end);
-  if (end != text.c_str() && *end == '\0' && seconds >= 0.0 &&
-      seconds <= arbiter::Recorder::kMaxFlushInterval) {
-    return {};
-  }
+  if (number_within(text, 0.0, arbiter::Recorder::kMaxFlushInterval)) return {};
   return fmt::format("must be a number of seconds from 0 to {:g}, found '{}'",
                      arbiter::Recorder::kMaxFlushInterval, text);
 }
 
 /// CLI11 check of `--foxglove-scene-rate HZ`.
 std::string check_scene_rate(const std::string& text) {
-  char* end = nullptr;
-  const double rate = std::strtod(text.c_str(), &end);
-  if (end != text.c_str() && *end == '\0' && rate >= 0.0 && rate <= kMaxSceneRate) return {};
+  if (number_within(text, 0.0, kMaxSceneRate)) return {};
   return fmt::format(
-      "must be a number of pictures a second from 0 (every step's) to {:g}, found "
-      "'{}'",
+      "must be a number of pictures a second from 0 (every step's) to {:g}, found '{}'",
       kMaxSceneRate, arbiter::printable(text));
 }
 
 /// CLI11 check of `--tolerance X` (test, diff): CLI11's NonNegativeNumber lets `nan` through, which
 /// no difference is within, and names the largest double in full.
 std::string check_tolerance(const std::string& text) {
-  char* end = nullptr;
-  const double tolerance = std::strtod(text.c_str(), &end);
-  if (end != text.c_str() && *end == '\0' && std::isfinite(tolerance) && tolerance >= 0.0) {
-    return {};
-  }
+  if (number_within(text, 0.0, std::numeric_limits<double>::max())) return {};
   return fmt::format("must be a finite number from 0, found '{}'", arbiter::printable(text));
 }
 
